@@ -1,0 +1,51 @@
+# sensor-rig: the two commands (demo, test), benchmarks and fuzzing. See README.md.
+JOBS      ?= $(shell nproc)
+BUILD     ?= build
+DURATION  ?= 0
+CMAKE_ARGS ?=
+
+.PHONY: all setup build demo test test-asan bench fuzz clean
+
+all: build
+
+setup:
+	@scripts/setup.sh
+
+$(BUILD)/CMakeCache.txt:
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo $(CMAKE_ARGS)
+
+build: setup $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j$(JOBS)
+
+# The whole rig on mock devices with a live status table; Ctrl-C or DURATION=s to stop.
+demo: build
+	$(BUILD)/rig demo --duration $(DURATION)
+
+# Installs, builds from scratch into build/, runs the whole suite; then the unit tests under ASan/UBSan.
+test: setup
+	rm -rf $(BUILD)
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo $(CMAKE_ARGS)
+	cmake --build $(BUILD) -j$(JOBS)
+	cd $(BUILD) && ctest --output-on-failure --timeout 300 -j$(JOBS)
+	$(MAKE) test-asan
+
+test-asan: setup
+	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DRIG_SANITIZE=ON -DRIG_BENCH=OFF
+	cmake --build build-asan -j$(JOBS)
+	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --output-on-failure -L unit -j$(JOBS)
+
+# Benchmarks: optimized build, figures go to BENCHMARKS.md (by hand, with machine and command).
+bench: setup
+	cmake -S . -B build-release -DCMAKE_BUILD_TYPE=Release -DRIG_TESTS=OFF $(CMAKE_ARGS)
+	cmake --build build-release -j$(JOBS)
+	scripts/bench.sh build-release
+
+# libFuzzer harnesses for the packet decoders and the DBC parser (clang).
+fuzz: setup
+	CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_FUZZ=ON -DRIG_TESTS=OFF -DRIG_BENCH=OFF
+	cmake --build build-fuzz -j$(JOBS)
+	scripts/fuzz.sh build-fuzz $(FUZZ_SECONDS)
+
+clean:
+	rm -rf build build-asan build-release build-fuzz

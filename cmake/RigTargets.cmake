@@ -1,0 +1,44 @@
+# Common compile settings for every sensor-rig target.
+add_library(rig_warnings INTERFACE)
+target_compile_options(rig_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Werror -Wshadow -Wconversion -Wno-sign-conversion
+  -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Woverloaded-virtual
+  -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough)
+
+if(RIG_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+# rig_library(NAME SOURCES... DEPS ...): a static library with the area's public include dir.
+function(rig_library name)
+  cmake_parse_arguments(A "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(${name} STATIC ${A_SOURCES})
+  target_include_directories(${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include
+                                     PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
+  target_link_libraries(${name} PUBLIC ${A_DEPS} PRIVATE rig_warnings ${A_PRIVATE_DEPS})
+  set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+endfunction()
+
+# rig_test(NAME LABEL SOURCES... DEPS ...): a GoogleTest executable registered with ctest.
+function(rig_test name)
+  cmake_parse_arguments(A "" "LABEL;TIMEOUT" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${A_SOURCES})
+  target_link_libraries(${name} PRIVATE ${A_DEPS} GTest::gtest GTest::gtest_main GTest::gmock rig_warnings)
+  if(NOT A_LABEL)
+    set(A_LABEL unit)
+  endif()
+  if(NOT A_TIMEOUT)
+    set(A_TIMEOUT 120)
+  endif()
+  add_test(NAME ${name} COMMAND ${name})
+  set_tests_properties(${name} PROPERTIES LABELS ${A_LABEL} TIMEOUT ${A_TIMEOUT}
+    ENVIRONMENT "RIG_TEST_DATA=${RIG_TEST_DATA};RIG_BIN=${CMAKE_BINARY_DIR}/rig;RIG_SOURCE_DIR=${CMAKE_SOURCE_DIR}")
+endfunction()
+
+# Where the real captures live; tests skip with a message when absent.
+if(DEFINED ENV{RIG_TEST_DATA})
+  set(RIG_TEST_DATA $ENV{RIG_TEST_DATA})
+else()
+  get_filename_component(RIG_TEST_DATA ${CMAKE_SOURCE_DIR}/../shared/data ABSOLUTE)
+endif()
