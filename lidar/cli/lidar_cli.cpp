@@ -1,8 +1,11 @@
-#include "sensor_rig/common/cli.hpp"
+// `rig lidar ...`: each tool lives in its own file and registers itself here.
+#include "lidar_commands.hpp"
 
 namespace sensor_rig::lidar {
-void register_cli(CLI::App& app, cli::Context& /*ctx*/) {
+void register_cli(CLI::App& app, cli::Context& ctx) {
   auto* lidar = app.add_subcommand("lidar", "LIDAR tools: decode captures, replay them as a mock sensor");
   lidar->require_subcommand(1);
+  register_decode_command(*lidar, ctx);
+  register_replay_command(*lidar, ctx);
 }
 }  // namespace sensor_rig::lidar
