@@ -10,8 +10,14 @@ namespace runtime { void register_cli(CLI::App& app, cli::Context& ctx); }
 
 inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
   runtime::register_cli(app, ctx);  // up, demo, config, monitor
+#ifdef RIG_HAVE_LIDAR
   lidar::register_cli(app, ctx);    // lidar decode|replay|...
+#endif
+#ifdef RIG_HAVE_DBW
   dbw::register_cli(app, ctx);      // can ..., dbw ..., mock paravan
+#endif
+#ifdef RIG_HAVE_BENCH
   bench::register_cli(app, ctx);    // perf ...
+#endif
 }
 }  // namespace sensor_rig

@@ -1,0 +1,51 @@
+#pragma once
+// RAII over Cyclone DDS C API handles. Only drivers/ (rig_dds) includes <dds/dds.h>.
+#include <dds/dds.h>
+
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace sensor_rig::dds {
+
+struct DdsError : std::runtime_error {
+  DdsError(const std::string& what, dds_return_t rc)
+      : std::runtime_error(what + ": " + dds_strretcode(rc)), code(rc) {}
+  dds_return_t code;
+};
+
+// Throws DdsError when `rc` is negative; returns it otherwise (entity handles are positive).
+inline dds_return_t check(dds_return_t rc, const char* what) {
+  if (rc < 0) throw DdsError(what, rc);
+  return rc;
+}
+
+// Owns one entity; deleting it deletes its children too (Cyclone semantics).
+class Entity {
+ public:
+  Entity() = default;
+  explicit Entity(dds_entity_t h) noexcept : h_(h) {}
+  Entity(const Entity&) = delete;
+  Entity& operator=(const Entity&) = delete;
+  Entity(Entity&& o) noexcept : h_(std::exchange(o.h_, 0)) {}
+  Entity& operator=(Entity&& o) noexcept {
+    if (this != &o) {
+      reset();
+      h_ = std::exchange(o.h_, 0);
+    }
+    return *this;
+  }
+  ~Entity() { reset(); }
+
+  [[nodiscard]] dds_entity_t handle() const noexcept { return h_; }
+  explicit operator bool() const noexcept { return h_ > 0; }
+  void reset() noexcept {
+    if (h_ > 0) dds_delete(h_);
+    h_ = 0;
+  }
+
+ private:
+  dds_entity_t h_ = 0;
+};
+
+}  // namespace sensor_rig::dds

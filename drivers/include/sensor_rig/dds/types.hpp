@@ -1,0 +1,43 @@
+#pragma once
+// The rig's message types registered for the typed wrapper. Generated headers come from msgs/.
+#include "builtin_interfaces.h"
+#include "diagnostic_msgs.h"
+#include "sensor_msgs.h"
+#include "sensor_rig_msgs.h"
+#include "std_msgs.h"
+#include "sensor_rig/dds/topic.hpp"
+
+namespace sensor_rig::msg {
+using PointCloud2 = sensor_msgs_msg_dds__PointCloud2_;
+using PointField = sensor_msgs_msg_dds__PointField_;
+using Image = sensor_msgs_msg_dds__Image_;
+using CameraInfo = sensor_msgs_msg_dds__CameraInfo_;
+using Imu = sensor_msgs_msg_dds__Imu_;
+using NavSatFix = sensor_msgs_msg_dds__NavSatFix_;
+using DiagnosticArray = diagnostic_msgs_msg_dds__DiagnosticArray_;
+using DiagnosticStatus = diagnostic_msgs_msg_dds__DiagnosticStatus_;
+using KeyValue = diagnostic_msgs_msg_dds__KeyValue_;
+using SourceStamps = sensor_rig_msgs_msg_dds__SourceStamps_;
+using Time = builtin_interfaces_msg_dds__Time_;
+}  // namespace sensor_rig::msg
+
+RIG_DDS_TYPE(sensor_rig::msg::PointCloud2, sensor_msgs_msg_dds__PointCloud2__desc);
+RIG_DDS_TYPE(sensor_rig::msg::Image, sensor_msgs_msg_dds__Image__desc);
+RIG_DDS_TYPE(sensor_rig::msg::CameraInfo, sensor_msgs_msg_dds__CameraInfo__desc);
+RIG_DDS_TYPE(sensor_rig::msg::Imu, sensor_msgs_msg_dds__Imu__desc);
+RIG_DDS_TYPE(sensor_rig::msg::NavSatFix, sensor_msgs_msg_dds__NavSatFix__desc);
+RIG_DDS_TYPE(sensor_rig::msg::DiagnosticArray, diagnostic_msgs_msg_dds__DiagnosticArray__desc);
+RIG_DDS_TYPE(sensor_rig::msg::SourceStamps, sensor_rig_msgs_msg_dds__SourceStamps__desc);
+
+namespace sensor_rig::msg {
+inline Time to_time(Nanos ns) {
+  Time t;
+  const Nanos s = ns >= 0 ? ns / 1'000'000'000 : (ns - 999'999'999) / 1'000'000'000;
+  t.sec = static_cast<std::int32_t>(s);
+  t.nanosec = static_cast<std::uint32_t>(ns - s * 1'000'000'000);
+  return t;
+}
+inline Nanos from_time(const Time& t) {
+  return static_cast<Nanos>(t.sec) * 1'000'000'000 + static_cast<Nanos>(t.nanosec);
+}
+}  // namespace sensor_rig::msg

@@ -1,0 +1,69 @@
+// The DDS wrapper: type names as rmw_cyclonedds registers them, and a round trip through Cyclone.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/dds/types.hpp"
+
+namespace sensor_rig::dds {
+namespace {
+
+TEST(DdsNames, RosTopicMapping) {
+  EXPECT_EQ(ros_to_dds_topic("/sensors/lidar/front/points"), "rt/sensors/lidar/front/points");
+  EXPECT_EQ(dds_to_ros_topic("rt/sensors/lidar/front/points"), "/sensors/lidar/front/points");
+}
+
+TEST(DdsNames, TypeNamesMatchRmwCycloneDds) {
+  EXPECT_STREQ(TypeSupport<msg::PointCloud2>::descriptor()->m_typename, "sensor_msgs::msg::dds_::PointCloud2_");
+  EXPECT_STREQ(TypeSupport<msg::DiagnosticArray>::descriptor()->m_typename,
+               "diagnostic_msgs::msg::dds_::DiagnosticArray_");
+  EXPECT_STREQ(TypeSupport<msg::Image>::descriptor()->m_typename, "sensor_msgs::msg::dds_::Image_");
+  EXPECT_EQ(TypeSupport<msg::PointCloud2>::descriptor()->m_nkeys, 0u);
+}
+
+TEST(DdsTime, RoundTrip) {
+  for (Nanos ns : {Nanos{0}, Nanos{1'700'000'000'123'456'789}, Nanos{-1}, Nanos{999'999'999}}) {
+    EXPECT_EQ(msg::from_time(msg::to_time(ns)), ns);
+    EXPECT_LT(msg::to_time(ns).nanosec, 1'000'000'000u);
+  }
+}
+
+TEST(DdsRoundTrip, PointCloudInProcessKeepsBytesAndSourceTimestamp) {
+  Participant p;
+  Topic<msg::PointCloud2> topic(p, "/test/wrapper/points");
+  Reader<msg::PointCloud2> reader(p, topic);
+  Writer<msg::PointCloud2> writer(p, topic);
+  ASSERT_TRUE(writer.wait_for_readers(1, 5000));
+
+  std::vector<std::uint8_t> bytes(100000);
+  for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 7);
+  msg::PointCloud2 pc{};
+  pc.header.stamp = msg::to_time(1'700'000'000'000'000'123);
+  pc.header.frame_id = const_cast<char*>("lidar");
+  pc.width = 1000;
+  pc.height = 1;
+  pc.point_step = 100;
+  pc.row_step = 100000;
+  pc.data._buffer = bytes.data();
+  pc.data._length = pc.data._maximum = static_cast<uint32_t>(bytes.size());
+  pc.data._release = false;
+  const Nanos ts = vehicle_now_ns();
+  ASSERT_EQ(writer.write(pc, ts), DDS_RETCODE_OK);
+
+  ASSERT_TRUE(reader.wait(5000));
+  int got = 0;
+  reader.take([&](const msg::PointCloud2& s, const dds_sample_info_t& info) {
+    ++got;
+    EXPECT_EQ(info.source_timestamp, ts);
+    EXPECT_EQ(msg::from_time(s.header.stamp), 1'700'000'000'000'000'123);
+    EXPECT_STREQ(s.header.frame_id, "lidar");
+    ASSERT_EQ(s.data._length, bytes.size());
+    EXPECT_EQ(std::memcmp(s.data._buffer, bytes.data(), bytes.size()), 0);
+  });
+  EXPECT_EQ(got, 1);
+}
+
+}  // namespace
+}  // namespace sensor_rig::dds
