@@ -1,0 +1,125 @@
+#include "sensor_rig/lidar/udp_source.hpp"
+
+#include <arpa/inet.h>
+#include <poll.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace sensor_rig::lidar {
+
+static_assert(sizeof(sockaddr_in) <= 64);
+
+SlotArena::SlotArena(std::size_t count, std::size_t slot_bytes)
+    : storage_(count * slot_bytes), slots_(count) {
+  if (count == 0 || slot_bytes == 0) throw std::invalid_argument("SlotArena needs count and slot_bytes > 0");
+  for (std::size_t i = 0; i < count; ++i) {
+    slots_[i].buffer = std::span<std::byte>(storage_).subspan(i * slot_bytes, slot_bytes);
+  }
+}
+
+const char* to_string(RecvStatus s) noexcept {
+  switch (s) {
+    case RecvStatus::kOk: return "ok";
+    case RecvStatus::kTimeout: return "timeout";
+    case RecvStatus::kInterrupted: return "interrupted";
+    case RecvStatus::kError: return "error";
+  }
+  return "unknown";
+}
+
+UdpSource::UdpSource(const UdpSourceConfig& config) : max_batch_(config.max_batch) {
+  if (config.max_batch == 0 || config.max_batch > 1024) {
+    throw std::invalid_argument("udp source: max_batch must be in 1..1024");
+  }
+  fd_ = UdpSocketBuilder{}
+            .reuse_address(config.reuse_address)
+            .receive_buffer(config.receive_buffer_bytes)
+            .kernel_timestamps()
+            .drop_counter()
+            .nonblocking()
+            .bind_to(config.bind)
+            .build();
+  port_ = local_port(fd_.get());
+  rcvbuf_ = effective_receive_buffer(fd_.get());
+  msgs_.resize(max_batch_);
+  iovs_.resize(max_batch_);
+  addrs_.resize(max_batch_);
+  control_.resize(max_batch_ * kControlBytes);
+}
+
+RecvResult UdpSource::receive(std::span<PacketSlot> out, int timeout_ms) noexcept {
+  if (out.empty()) return {0, RecvStatus::kOk, 0};
+  pollfd pfd{fd_.get(), POLLIN, 0};
+  const int ready = ::poll(&pfd, 1, timeout_ms);
+  if (ready == 0) {
+    ++stats_.timeouts;
+    return {0, RecvStatus::kTimeout, 0};
+  }
+  if (ready < 0) {
+    if (errno == EINTR) return {0, RecvStatus::kInterrupted, EINTR};
+    ++stats_.errors;
+    return {0, RecvStatus::kError, errno};
+  }
+
+  const std::size_t n = std::min(out.size(), max_batch_);
+  for (std::size_t i = 0; i < n; ++i) {
+    iovs_[i] = iovec{out[i].buffer.data(), out[i].buffer.size()};
+    msghdr& h = msgs_[i].msg_hdr;
+    h.msg_name = &addrs_[i];
+    h.msg_namelen = sizeof(sockaddr_in);
+    h.msg_iov = &iovs_[i];
+    h.msg_iovlen = 1;
+    h.msg_control = control_.data() + i * kControlBytes;
+    h.msg_controllen = kControlBytes;
+    h.msg_flags = 0;
+    msgs_[i].msg_len = 0;
+  }
+  const int got = ::recvmmsg(fd_.get(), msgs_.data(), static_cast<unsigned>(n), MSG_DONTWAIT, nullptr);
+  if (got < 0) {
+    if (errno == EAGAIN || errno == EWOULDBLOCK) {  // readiness without data (e.g. a checksum drop)
+      ++stats_.timeouts;
+      return {0, RecvStatus::kTimeout, 0};
+    }
+    if (errno == EINTR) return {0, RecvStatus::kInterrupted, EINTR};
+    ++stats_.errors;
+    return {0, RecvStatus::kError, errno};
+  }
+
+  Nanos fallback_ns = 0;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(got); ++i) {
+    PacketSlot& slot = out[i];
+    const msghdr& h = msgs_[i].msg_hdr;
+    slot.size = std::min<std::size_t>(msgs_[i].msg_len, slot.buffer.size());
+    slot.truncated = (h.msg_flags & MSG_TRUNC) != 0;
+    slot.src_addr = ntohl(addrs_[i].sin_addr.s_addr);
+    slot.src_port = ntohs(addrs_[i].sin_port);
+    slot.rx_ns = 0;
+    for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(const_cast<msghdr*>(&h), c)) {
+      if (c->cmsg_level != SOL_SOCKET) continue;
+      if (c->cmsg_type == SCM_TIMESTAMPNS && c->cmsg_len >= CMSG_LEN(sizeof(timespec))) {
+        timespec ts{};
+        std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+        slot.rx_ns = static_cast<Nanos>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
+      } else if (c->cmsg_type == SO_RXQ_OVFL && c->cmsg_len >= CMSG_LEN(sizeof(std::uint32_t))) {
+        std::uint32_t drops = 0;
+        std::memcpy(&drops, CMSG_DATA(c), sizeof drops);
+        stats_.kernel_drops = drops;
+      }
+    }
+    if (slot.rx_ns == 0) {
+      if (fallback_ns == 0) fallback_ns = vehicle_now_ns();
+      slot.rx_ns = fallback_ns;
+      ++stats_.missing_timestamps;
+    }
+    if (slot.truncated) ++stats_.truncated;
+    stats_.bytes += slot.size;
+  }
+  stats_.packets += static_cast<std::uint64_t>(got);
+  ++stats_.batches;
+  return {static_cast<std::size_t>(got), RecvStatus::kOk, 0};
+}
+
+}  // namespace sensor_rig::lidar
