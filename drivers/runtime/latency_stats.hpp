@@ -1,0 +1,38 @@
+#pragma once
+// Per-window latency samples for one stage, summarised as p50/p99/max (ms).
+#include <algorithm>
+#include <vector>
+
+namespace sensor_rig::runtime {
+
+struct Percentiles {
+  double p50 = 0, p99 = 0, max = 0;
+  std::size_t n = 0;
+};
+
+class LatencyWindow {
+ public:
+  void add(double ms) { samples_.push_back(ms); }
+  [[nodiscard]] bool empty() const { return samples_.empty(); }
+  // Nearest-rank percentiles of the current window; clears it.
+  Percentiles take() {
+    Percentiles p;
+    p.n = samples_.size();
+    if (samples_.empty()) return p;
+    std::sort(samples_.begin(), samples_.end());
+    auto rank = [&](double q) {
+      const auto i = static_cast<std::size_t>(q * static_cast<double>(samples_.size() - 1) + 0.5);
+      return samples_[std::min(i, samples_.size() - 1)];
+    };
+    p.p50 = rank(0.50);
+    p.p99 = rank(0.99);
+    p.max = samples_.back();
+    samples_.clear();
+    return p;
+  }
+
+ private:
+  std::vector<double> samples_;
+};
+
+}  // namespace sensor_rig::runtime

@@ -1,0 +1,254 @@
+#include "lidar_driver.hpp"
+
+#include <fstream>
+#include <sstream>
+
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/lidar/udp_source.hpp"
+#include "sensor_rig/lidar/velodyne/calibration.hpp"
+#include "sensor_rig/lidar/velodyne/decoder.hpp"
+#include "sensor_rig/lidar/velodyne/packet_info.hpp"
+#include "sensor_rig/lidar/velodyne/position_packet.hpp"
+#include "sensor_rig/timesync/clock_mapper.hpp"
+#include "stamps_writer.hpp"
+
+namespace sensor_rig::runtime {
+namespace vel = lidar::velodyne;
+
+namespace {
+
+vel::DecoderConfig decoder_config(const LidarConfig& c) {
+  vel::DecoderConfig d;
+  const auto model = vel::model_from_name(c.model);
+  if (!model) throw std::invalid_argument("lidar " + c.name + ": unknown model " + c.model);
+  d.model = *model;
+  if (!c.calibration.empty()) {
+    std::ifstream in(c.calibration);
+    if (!in) throw std::runtime_error("lidar " + c.name + ": cannot read calibration " + c.calibration);
+    std::stringstream text;
+    text << in.rdbuf();
+    d.calibration = vel::validate_for_model(vel::parse_calibration(text.str(), c.calibration), d.model);
+  }
+  d.returns = c.returns == "dual"   ? vel::ReturnSelection::kDual
+              : c.returns == "last" ? vel::ReturnSelection::kLast
+                                    : vel::ReturnSelection::kStrongest;
+  d.min_range_m = c.min_range_m;
+  d.max_range_m = c.max_range_m;
+  d.cut_angle_deg = c.cut_angle_deg;
+  return d;
+}
+
+// Duration of one data packet's firings: its first firing happened this long before the last.
+Nanos packet_span_ns(vel::Model m) {
+  const auto& info = vel::model_info(m);
+  return static_cast<Nanos>(info.block_us * 1000.0 * static_cast<double>(vel::kBlocksPerPacket));
+}
+
+}  // namespace
+
+struct LidarDriver::Impl {
+  LidarConfig cfg;
+  std::string topic_name;
+  vel::Decoder decoder;
+  lidar::UdpSource data;
+  std::unique_ptr<lidar::UdpSource> position;
+  lidar::SlotArena arena{64, 2048};
+  lidar::SlotArena position_arena{4, 1024};
+  dds::Topic<msg::PointCloud2> topic;
+  dds::Writer<msg::PointCloud2> writer;
+  StampsWriter& stamps;
+  timesync::ClockMapper mapper;
+  std::vector<msg::PointField> fields;
+  std::thread thread;
+  std::atomic<bool> stop_flag{false};
+
+  // Counters shared with status(); written by the driver thread only.
+  mutable std::mutex mutex;
+  std::uint64_t scans = 0;
+  std::uint64_t write_errors = 0;
+  std::uint64_t position_packets = 0;
+  vel::PpsStatus pps = vel::PpsStatus::kAbsent;
+  bool gprmc_valid = false;
+  Nanos gprmc_hour_ns = 0;
+  Nanos last_scan_host_ns = 0;
+  double scan_rate_hz = 0.0;
+  std::size_t last_points = 0;
+  std::string last_error;
+  vel::DecoderStats decoder_stats;
+  lidar::UdpSourceStats udp_stats;
+  timesync::ClockMapperStatus sync;
+
+  Impl(const LidarConfig& c, const dds::Participant& p, StampsWriter& s)
+      : cfg(c),
+        topic_name("/sensors/lidar/" + c.name + "/points"),
+        decoder(decoder_config(c)),
+        data(lidar::UdpSourceConfig{{c.host, static_cast<std::uint16_t>(c.port)}, c.receive_buffer_bytes, 64, true}),
+        topic(p, topic_name, c.qos),
+        writer(p, topic, c.qos),
+        stamps(s) {
+    if (c.position_port != 0)
+      position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
+          {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 4, true});
+    for (const auto& f : lidar::kPointFields) {
+      msg::PointField pf{};
+      pf.name = const_cast<char*>(f.name);
+      pf.offset = f.offset;
+      pf.datatype = f.datatype;
+      pf.count = 1;
+      fields.push_back(pf);
+    }
+  }
+
+  // Vehicle time of the packet's first firing.
+  Nanos packet_stamp(std::span<const std::byte> bytes, Nanos rx_ns) {
+    const Nanos span = packet_span_ns(decoder.config().model);
+    if (cfg.time_source == "host") return rx_ns - span;
+    const auto info = vel::read_packet_info(bytes);
+    if (!info) return rx_ns - span;
+    // GPS-disciplined sensor (PPS locked, valid GPRMC): its time is UTC, i.e. vehicle time.
+    if (pps == vel::PpsStatus::kLocked && gprmc_valid)
+      return gprmc_hour_ns + static_cast<Nanos>(info->sensor_time_us) * 1000;
+    // Free-running sensor clock: hour from the host, then offset and drift mapped robustly.
+    const Nanos sensor_ns = vel::sensor_time_to_ns(info->sensor_time_us, rx_ns);
+    mapper.observe(sensor_ns, rx_ns - span);
+    const auto mapped = mapper.map(sensor_ns);
+    return mapped.valid ? mapped.vehicle_ns : rx_ns - span;
+  }
+
+  void handle_position() {
+    if (!position) return;
+    const auto r = position->receive(position_arena.slots(), 0);
+    for (std::size_t i = 0; i < r.count; ++i) {
+      vel::PositionPacket pp;
+      if (vel::parse_position_packet(position_arena.slots()[i].bytes(), pp) != lidar::PacketStatus::kOk) continue;
+      std::lock_guard lock(mutex);
+      ++position_packets;
+      pps = pp.pps;
+      gprmc_valid = pp.nmea == vel::NmeaStatus::kOk && pp.fix.valid;
+      if (gprmc_valid) gprmc_hour_ns = pp.fix.hour_start_ns;
+    }
+  }
+
+  void publish(lidar::Scan& scan) {
+    const Nanos ready = vehicle_now_ns();
+    msg::PointCloud2 pc{};
+    pc.header.stamp = msg::to_time(scan.stamp);
+    pc.header.frame_id = const_cast<char*>(cfg.frame_id.c_str());
+    pc.height = 1;
+    pc.width = static_cast<std::uint32_t>(scan.points.size());
+    pc.fields._buffer = fields.data();
+    pc.fields._length = pc.fields._maximum = static_cast<std::uint32_t>(fields.size());
+    pc.is_bigendian = false;
+    pc.point_step = sizeof(lidar::PointXYZIRT);
+    pc.row_step = pc.point_step * pc.width;
+    // The decoder's buffer is the published buffer: no copy between decoding and the writer.
+    pc.data._buffer = reinterpret_cast<std::uint8_t*>(scan.points.data());
+    pc.data._length = pc.data._maximum = pc.row_step;
+    pc.is_dense = true;
+    const Nanos publish = vehicle_now_ns();
+    const auto rc = writer.write(pc, publish);
+    SampleStamps st{scan.stamp, scan.first_rx_ns, scan.last_rx_ns, ready, publish, scan.packets, scan.dropped,
+                    pc.row_step};
+    stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
+    std::lock_guard lock(mutex);
+    if (rc != DDS_RETCODE_OK) {
+      ++write_errors;
+      last_error = std::string("dds write: ") + dds_strretcode(rc);
+    }
+    ++scans;
+    last_points = scan.points.size();
+    if (last_scan_host_ns != 0) {
+      const double dt = static_cast<double>(publish - last_scan_host_ns) * 1e-9;
+      if (dt > 0) scan_rate_hz = scan_rate_hz == 0.0 ? 1.0 / dt : 0.8 * scan_rate_hz + 0.2 / dt;
+    }
+    last_scan_host_ns = publish;
+  }
+
+  void run() {
+    auto slots = arena.slots();
+    while (!stop_flag.load() && !shutdown_requested()) {
+      const auto r = data.receive(slots, 50);
+      if (r.status == lidar::RecvStatus::kError) {
+        std::lock_guard lock(mutex);
+        last_error = std::string("receive: ") + std::strerror(r.error);
+      }
+      for (std::size_t i = 0; i < r.count; ++i) {
+        const auto& s = slots[i];
+        const Nanos stamp = packet_stamp(s.bytes(), s.rx_ns);
+        if (auto scan = decoder.push(lidar::view(s, static_cast<std::uint16_t>(cfg.port)), stamp)) publish(*scan);
+      }
+      handle_position();
+      std::lock_guard lock(mutex);
+      decoder_stats = decoder.stats();
+      udp_stats = data.stats();
+      sync = mapper.status();
+    }
+  }
+};
+
+LidarDriver::LidarDriver(const LidarConfig& cfg, const dds::Participant& participant, StampsWriter& stamps)
+    : impl_(std::make_unique<Impl>(cfg, participant, stamps)) {}
+
+LidarDriver::~LidarDriver() { stop(); }
+
+void LidarDriver::start() {
+  impl_->thread = std::thread([this] { impl_->run(); });
+  log::info("lidar", impl_->cfg.name + ": " + impl_->cfg.model + " on udp " + impl_->cfg.host + ":" +
+                         std::to_string(impl_->data.port()) + " -> " + impl_->topic_name);
+}
+
+void LidarDriver::stop() {
+  impl_->stop_flag.store(true);
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+std::string LidarDriver::topic() const { return impl_->topic_name; }
+
+DriverStatus LidarDriver::status() const {
+  const auto& c = impl_->cfg;
+  std::lock_guard lock(impl_->mutex);
+  DriverStatus s;
+  s.name = "lidar/" + c.name;
+  s.hardware_id = c.model + "@" + c.host + ":" + std::to_string(c.port);
+  const Nanos age = impl_->last_scan_host_ns == 0 ? -1 : vehicle_now_ns() - impl_->last_scan_host_ns;
+  if (impl_->scans == 0) {
+    s.level = Level::kWarn;
+    s.message = "waiting for packets";
+  } else if (age > 1'000'000'000) {
+    s.level = Level::kError;
+    s.message = "no scan for " + std::to_string(age / 1'000'000) + " ms (device dead?)";
+  } else if (!impl_->last_error.empty()) {
+    s.level = Level::kWarn;
+    s.message = impl_->last_error;
+  } else {
+    s.message = "running";
+  }
+  const auto& d = impl_->decoder_stats;
+  const auto& u = impl_->udp_stats;
+  s.add("topic", impl_->topic_name);
+  s.add_number("scans", impl_->scans);
+  s.add("scan_rate_hz", std::to_string(impl_->scan_rate_hz));
+  s.add_number("points_last_scan", impl_->last_points);
+  s.add_number("packets", d.packets);
+  s.add_number("packets_dropped", d.dropped());
+  for (std::size_t i = 1; i < d.by_status.size(); ++i)
+    if (d.by_status[i] != 0)
+      s.add_number(std::string("dropped_") + lidar::to_string(static_cast<lidar::PacketStatus>(i)), d.by_status[i]);
+  s.add_number("kernel_drops", u.kernel_drops);
+  s.add_number("truncated", u.truncated);
+  s.add_number("write_errors", impl_->write_errors);
+  s.add("time_source", c.time_source);
+  s.add("pps", vel::to_string(impl_->pps));
+  s.add("gprmc", impl_->gprmc_valid ? "valid" : "absent");
+  if (c.time_source == "sensor") {
+    const bool gps = impl_->pps == vel::PpsStatus::kLocked && impl_->gprmc_valid;
+    s.add("sync", gps ? "gps" : timesync::to_string(impl_->sync.state));
+    s.add_number("sync_offset_ns", impl_->sync.offset_ns);
+    s.add("sync_drift_ppm", std::to_string(impl_->sync.drift_ppm));
+    s.add_number("sync_jumps", impl_->sync.jumps);
+  }
+  return s;
+}
+
+}  // namespace sensor_rig::runtime

@@ -1,0 +1,29 @@
+#pragma once
+// `rig monitor`: discovers the rig's topics, subscribes, and reports per topic and per second the
+// rate, size, received, lost and the latency of each stage (SPEC §6):
+//   sensor   = first kernel receive - acquisition   (device + wire)
+//   assemble = last kernel receive - first           (scan/frame duration on the wire)
+//   process  = publish - last kernel receive         (decode, assemble, serialize, write)
+//   dds      = subscriber receive - publish          (Cyclone transport)
+//   total    = subscriber receive - acquisition
+// Stages other than dds need the driver's per-sample stamps (rt/rig/stamps); topics published by
+// others show dds only. A sample announced by its stamps that does not arrive within 2 s is lost.
+#include <string>
+#include <vector>
+
+#include "sensor_rig/dds/participant.hpp"
+
+namespace sensor_rig::runtime {
+
+struct MonitorOptions {
+  std::vector<std::string> topics;  // ROS names; empty = every topic with a known type
+  double duration_s = 0;            // 0 = until Ctrl-C
+  bool json = false;                // one JSON line per topic per second instead of the table
+  int period_ms = 1000;
+  dds::DomainConfig dds;
+};
+
+// Returns the exit code (0 ok).
+int run_monitor(const MonitorOptions& options);
+
+}  // namespace sensor_rig::runtime

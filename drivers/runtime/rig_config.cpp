@@ -1,0 +1,117 @@
+#include "rig_config.hpp"
+
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include "sensor_rig/config/node.hpp"
+
+namespace sensor_rig::runtime {
+namespace {
+
+constexpr std::initializer_list<std::string_view> kLidarModels = {"VLP-16", "VLP-32C", "HDL-32E"};
+
+LidarMockConfig parse_mock(const config::Node& n) {
+  n.allow_keys({"kind", "pcap", "rate", "loop", "rpm", "drop_rate", "corrupt_rate"});
+  LidarMockConfig m;
+  const auto kind = n.get_choice("kind", {"none", "synthetic", "replay"}, "none");
+  m.kind = kind == "synthetic" ? LidarMockConfig::Kind::kSynthetic
+           : kind == "replay"  ? LidarMockConfig::Kind::kReplay
+                               : LidarMockConfig::Kind::kNone;
+  m.pcap = n.get_path("pcap", "");
+  if (m.kind == LidarMockConfig::Kind::kReplay && m.pcap.empty()) n.fail("pcap", "replay mock needs a pcap file");
+  if (!m.pcap.empty() && !std::filesystem::exists(m.pcap)) n.fail("pcap", "file not found: " + m.pcap);
+  m.rate = n.get_double("rate", 0.01, 100.0, 1.0);
+  m.loop = n.get_bool("loop", true);
+  m.rpm = static_cast<int>(n.get_int("rpm", 300, 1200, 600));
+  m.drop_rate = n.get_double("drop_rate", 0.0, 1.0, 0.0);
+  m.corrupt_rate = n.get_double("corrupt_rate", 0.0, 1.0, 0.0);
+  return m;
+}
+
+LidarConfig parse_lidar(const config::Node& n) {
+  LidarConfig l;
+  if (!n.expect_map()) return l;
+  n.allow_keys({"name", "model", "host", "port", "position_port", "receive_buffer_bytes", "calibration",
+                "returns", "min_range", "max_range", "cut_angle", "time_source", "frame_id", "qos", "mock"});
+  l.name = n.get_string("name");
+  for (char c : l.name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
+      n.fail("name", "'" + l.name + "' must be letters, digits and '_' (it becomes a ROS topic name)");
+      break;
+    }
+  l.model = n.get_choice("model", kLidarModels);
+  l.host = n.get_string("host", "127.0.0.1");
+  l.port = static_cast<int>(n.get_int("port", 1, 65535));
+  l.position_port = static_cast<int>(n.get_int("position_port", 0, 65535, 0));
+  l.receive_buffer_bytes = static_cast<int>(n.get_int("receive_buffer_bytes", 0, 1 << 30, 8 << 20));
+  l.calibration = n.get_path("calibration", "");
+  if (!l.calibration.empty() && !std::filesystem::exists(l.calibration))
+    n.fail("calibration", "file not found: " + l.calibration);
+  l.returns = n.get_choice("returns", {"strongest", "last", "dual"}, "strongest");
+  l.min_range_m = n.get_double("min_range", 0.0, 10.0, 0.4);
+  l.max_range_m = n.get_double("max_range", 1.0, 1000.0, 200.0);
+  if (l.min_range_m >= l.max_range_m) n.fail("max_range", "must be greater than min_range");
+  l.cut_angle_deg = n.get_double("cut_angle", 0.0, 359.99, 0.0);
+  l.time_source = n.get_choice("time_source", {"sensor", "host"}, "host");
+  l.frame_id = n.get_string("frame_id", "lidar_" + l.name);
+  if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
+  if (auto m = n.child("mock")) l.mock = parse_mock(*m);
+  return l;
+}
+
+}  // namespace
+
+RigConfig load_rig_config(const std::string& path) {
+  auto problems = std::make_shared<config::Problems>();
+  auto root = config::Node::load_file(path, problems);
+  problems->throw_if_any();  // unreadable or not YAML: nothing more to say
+  RigConfig cfg;
+  cfg.file = path;
+  if (!root.expect_map()) problems->throw_if_any();
+  root.allow_keys({"rig", "lidars", "cameras", "dbw"});
+  if (auto rig = root.child("rig", true)) {
+    rig->allow_keys({"name", "dds", "diagnostics_period_ms"});
+    cfg.name = rig->get_string("name", "rig");
+    cfg.diagnostics_period_ms = static_cast<int>(rig->get_int("diagnostics_period_ms", 100, 60000, 1000));
+    if (auto d = rig->child("dds")) {
+      d->allow_keys({"domain", "profile"});
+      cfg.dds.domain_id = static_cast<dds_domainid_t>(d->get_int("domain", 0, 232, 0));
+      cfg.dds.profile = d->get_path("profile", "");
+      if (!cfg.dds.profile.empty() && !std::filesystem::exists(cfg.dds.profile))
+        d->fail("profile", "file not found: " + cfg.dds.profile);
+    }
+  }
+  std::set<std::string> names;
+  std::set<int> ports;
+  for (const auto& item : root.items("lidars")) {
+    auto l = parse_lidar(item);
+    if (!l.name.empty() && !names.insert(l.name).second) item.fail("name", "duplicate device name '" + l.name + "'");
+    if (!ports.insert(l.port).second) item.fail("port", "port " + std::to_string(l.port) + " used twice");
+    if (l.position_port != 0 && !ports.insert(l.position_port).second)
+      item.fail("position_port", "port " + std::to_string(l.position_port) + " used twice");
+    cfg.lidars.push_back(std::move(l));
+  }
+  if (root.has("cameras")) root.items("cameras");  // type-checked; drivers arrive with the camera issue
+  if (root.has("dbw")) root.child("dbw");
+  problems->throw_if_any();
+  return cfg;
+}
+
+std::string describe(const RigConfig& cfg) {
+  std::ostringstream o;
+  o << "rig '" << cfg.name << "' (" << cfg.file << "), DDS domain " << cfg.dds.domain_id << ", profile "
+    << (cfg.dds.profile.empty() ? std::string("default") : cfg.dds.profile) << "\n";
+  for (const auto& l : cfg.lidars) {
+    o << "  lidar " << l.name << ": " << l.model << " udp " << l.host << ":" << l.port
+      << (l.position_port ? " position " + std::to_string(l.position_port) : std::string()) << ", returns "
+      << l.returns << ", time " << l.time_source << ", qos " << dds::to_string(l.qos) << " -> /sensors/lidar/"
+      << l.name << "/points";
+    if (l.mock.kind == LidarMockConfig::Kind::kSynthetic) o << " [mock: synthetic " << l.mock.rpm << " rpm]";
+    if (l.mock.kind == LidarMockConfig::Kind::kReplay) o << " [mock: replay " << l.mock.pcap << "]";
+    o << "\n";
+  }
+  return o.str();
+}
+
+}  // namespace sensor_rig::runtime

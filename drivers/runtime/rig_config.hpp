@@ -1,0 +1,56 @@
+#pragma once
+// The rig's YAML configuration (config/*.yaml) as plain structs with defaults, validated on load:
+// unknown keys, wrong types and bad values fail before anything starts, naming file:line and key.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/dds/participant.hpp"
+#include "sensor_rig/dds/qos.hpp"
+
+namespace sensor_rig::runtime {
+
+// How the LIDAR's mock (started by `rig up` beside the driver) produces packets.
+struct LidarMockConfig {
+  enum class Kind { kNone, kSynthetic, kReplay } kind = Kind::kNone;
+  std::string pcap;          // replay: capture file (falls back to synthetic when absent and optional)
+  double rate = 1.0;         // replay speed factor
+  bool loop = true;
+  int rpm = 600;             // synthetic: rotation speed
+  double drop_rate = 0.0;    // fault injection, passed to `rig lidar replay`
+  double corrupt_rate = 0.0;
+};
+
+struct LidarConfig {
+  std::string name;                    // topic /sensors/lidar/<name>/points
+  std::string model;                   // VLP-16, VLP-32C, HDL-32E
+  std::string host = "127.0.0.1";      // bind address
+  int port = 2368;                     // data port
+  int position_port = 0;               // 0 = none (position packets ignored)
+  int receive_buffer_bytes = 8 << 20;
+  std::string calibration;             // empty = model defaults
+  std::string returns = "strongest";   // strongest | last | dual
+  double min_range_m = 0.4;
+  double max_range_m = 200.0;
+  double cut_angle_deg = 0.0;
+  std::string time_source = "host";    // sensor | host
+  std::string frame_id;                // default lidar_<name>
+  dds::QosSpec qos;
+  LidarMockConfig mock;
+};
+
+struct RigConfig {
+  std::string file;   // where it was loaded from
+  std::string name = "rig";
+  dds::DomainConfig dds;
+  int diagnostics_period_ms = 1000;
+  std::vector<LidarConfig> lidars;
+};
+
+// Loads and validates; throws ConfigError listing every problem (file:line:col: key: message).
+RigConfig load_rig_config(const std::string& path);
+// Human-readable summary for `rig config check`.
+std::string describe(const RigConfig& cfg);
+
+}  // namespace sensor_rig::runtime

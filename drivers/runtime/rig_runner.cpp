@@ -1,0 +1,77 @@
+#include "rig_runner.hpp"
+
+#include <memory>
+
+#include "diagnostics.hpp"
+#include "lidar_driver.hpp"
+#include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+#include "stamps_writer.hpp"
+
+namespace sensor_rig::runtime {
+
+std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const LidarConfig& l) {
+  std::vector<std::string> argv;
+  if (l.mock.kind == LidarMockConfig::Kind::kNone) return argv;
+  argv = {rig_exe, "lidar", "replay", "--to", l.host + ":" + std::to_string(l.port)};
+  if (l.mock.kind == LidarMockConfig::Kind::kReplay) {
+    argv.insert(argv.end(), {"--pcap", l.mock.pcap, "--rate", std::to_string(l.mock.rate)});
+    if (l.mock.loop) argv.emplace_back("--loop");
+  } else {
+    argv.insert(argv.end(), {"--synthetic", l.model, "--rpm", std::to_string(l.mock.rpm)});
+    if (l.position_port != 0) argv.insert(argv.end(), {"--position-port", std::to_string(l.position_port)});
+  }
+  if (l.mock.drop_rate > 0) argv.insert(argv.end(), {"--drop-rate", std::to_string(l.mock.drop_rate)});
+  if (l.mock.corrupt_rate > 0) argv.insert(argv.end(), {"--corrupt-rate", std::to_string(l.mock.corrupt_rate)});
+  return argv;
+}
+
+int run_rig(const RigConfig& cfg, const RunOptions& opt) {
+  dds::Participant participant(cfg.dds);
+  log::info("rig", "'" + cfg.name + "' on DDS domain " + std::to_string(cfg.dds.domain_id) + ", profile " +
+                       (participant.profile().empty() ? std::string("$CYCLONEDDS_URI") : participant.profile()));
+  StampsWriter stamps(participant);
+  DiagnosticsPublisher diagnostics(participant);
+
+  // Drivers first (sockets bound), then mocks: no packet of a mock is sent to a closed port.
+  std::vector<std::unique_ptr<LidarDriver>> lidars;
+  try {
+    for (const auto& l : cfg.lidars) lidars.push_back(std::make_unique<LidarDriver>(l, participant, stamps));
+  } catch (const std::exception& e) {
+    log::error("rig", std::string("driver start failed: ") + e.what());
+    return 1;
+  }
+  for (auto& d : lidars) d->start();
+
+  std::vector<ChildProcess> mocks;
+  const std::string exe = self_executable();
+  for (const auto& l : cfg.lidars) {
+    auto argv = lidar_mock_command(exe, l);
+    if (argv.empty()) continue;
+    mocks.emplace_back(argv);
+    log::info("rig", "mock for lidar " + l.name + ": pid " + std::to_string(mocks.back().pid()));
+  }
+
+  const Nanos start = monotonic_now_ns();
+  std::vector<bool> reported_dead(mocks.size(), false);
+  while (!shutdown_requested()) {
+    if (wait_for_shutdown(cfg.diagnostics_period_ms)) break;
+    std::vector<DriverStatus> statuses;
+    for (const auto& d : lidars) statuses.push_back(d->status());
+    for (std::size_t i = 0; i < mocks.size(); ++i) {
+      if (!mocks[i].running() && !reported_dead[i]) {
+        reported_dead[i] = true;
+        log::warn("rig", "mock '" + mocks[i].name() + "' exited with status " + std::to_string(mocks[i].exit_status()));
+      }
+    }
+    diagnostics.publish(statuses);
+    if (opt.duration_s > 0 && static_cast<double>(monotonic_now_ns() - start) * 1e-9 >= opt.duration_s) break;
+  }
+  log::info("rig", "stopping");
+  for (auto& m : mocks) m.stop();
+  for (auto& d : lidars) d->stop();
+  return 0;
+}
+
+}  // namespace sensor_rig::runtime
