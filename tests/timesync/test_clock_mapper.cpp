@@ -1,0 +1,334 @@
+#include "sensor_rig/timesync/clock_mapper.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <stdexcept>
+
+#include "sim_clock.hpp"
+
+namespace sensor_rig::timesync {
+namespace {
+
+using test::DelayModel;
+using test::SimDevice;
+using test::SimLink;
+
+constexpr Nanos kUs = 1'000;
+constexpr Nanos kMs = 1'000'000;
+constexpr Nanos kSec = 1'000'000'000;
+
+ClockMapperConfig config_for(const DelayModel& m) {
+  ClockMapperConfig c;
+  c.fixed_delay_ns = m.base_ns;
+  return c;
+}
+
+struct RunResult {
+  Nanos max_err_ns = 0;   // over samples after `settle_ns`
+  std::size_t checked = 0;
+  Nanos lock_time_ns = -1;  // first time the mapper reported locked
+  Nanos last_device_ns = 0;
+};
+
+// Drives `mapper` with samples at `rate_hz` for `duration_ns` starting at dev.t0 + start_ns.
+RunResult run(ClockMapper& mapper, const SimDevice& dev, SimLink& link, double rate_hz,
+              Nanos start_ns, Nanos duration_ns, Nanos settle_ns) {
+  RunResult r;
+  const auto period = static_cast<Nanos>(1e9 / rate_hz);
+  for (Nanos t = dev.t0 + start_ns; t < dev.t0 + start_ns + duration_ns; t += period) {
+    const Nanos d = dev.device_at(t);
+    if (mapper.observe(d, t + link.delay()) == ObserveResult::kAccepted) r.last_device_ns = d;
+    if (r.lock_time_ns < 0 && mapper.state() == SyncState::kLocked) r.lock_time_ns = t - dev.t0;
+    if (t - dev.t0 - start_ns < settle_ns) continue;
+    const auto v = mapper.to_vehicle(d);
+    EXPECT_TRUE(v.has_value());
+    if (!v) continue;
+    r.max_err_ns = std::max(r.max_err_ns, std::abs(*v - dev.vehicle_at(d)));
+    ++r.checked;
+  }
+  return r;
+}
+
+TEST(ClockMapper, StartsUnsyncedAndMapsNothing) {
+  ClockMapper m;
+  EXPECT_EQ(m.state(), SyncState::kUnsynced);
+  EXPECT_FALSE(m.to_vehicle(123).has_value());
+  EXPECT_FALSE(m.map(123).valid);
+  EXPECT_EQ(m.status().samples, 0u);
+}
+
+TEST(ClockMapper, ConvergesWithDriftAndHeavyTailedDelaysAtLidarRate) {
+  for (double ppm : {100.0, -100.0, 37.5}) {
+    DelayModel dm;
+    SimLink link(7, dm);
+    SimDevice dev;
+    dev.drift_ppm = ppm;
+    ClockMapper m(config_for(dm));
+    // VLP-16: ~754 packets/s. Lock within 1.5 s, error < 50 µs from 2 s on.
+    const RunResult r = run(m, dev, link, 754.0, 0, 10 * kSec, 2 * kSec);
+    SCOPED_TRACE(ppm);
+    EXPECT_GE(r.lock_time_ns, 0);
+    EXPECT_LE(r.lock_time_ns, 1500 * kMs);
+    EXPECT_GT(r.checked, 5000u);
+    EXPECT_LT(r.max_err_ns, 50 * kUs);
+    const ClockMapperStatus s = m.status();
+    EXPECT_EQ(s.state, SyncState::kLocked);
+    EXPECT_NEAR(s.drift_ppm, ppm, 3.0);
+    EXPECT_EQ(s.jumps, 0u);
+    EXPECT_GT(s.outliers, 0u);  // the Pareto tail beyond 5 ms
+    EXPECT_GT(s.residual_p99_ns, s.residual_p50_ns);
+    EXPECT_GT(s.residual_p50_ns, 50 * kUs);   // median delay above the envelope ~ 140 µs
+    EXPECT_LT(s.residual_p50_ns, 400 * kUs);
+    EXPECT_EQ(s.samples, s.accepted + s.outliers + s.stale);
+    EXPECT_EQ(s.last_device_ns, r.last_device_ns);
+  }
+}
+
+TEST(ClockMapper, ConvergesAtCameraRate) {
+  DelayModel dm;
+  SimLink link(11, dm);
+  SimDevice dev;
+  dev.drift_ppm = -80;
+  ClockMapper m(config_for(dm));
+  const RunResult r = run(m, dev, link, 10.0, 0, 40 * kSec, 10 * kSec);
+  EXPECT_GE(r.lock_time_ns, 0);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
+  EXPECT_NEAR(m.status().drift_ppm, -80, 10.0);
+}
+
+TEST(ClockMapper, WithoutFixedDelayTheOffsetIncludesTheMinimumDelay) {
+  DelayModel dm;
+  SimLink link(3, dm);
+  SimDevice dev;
+  ClockMapper m;  // fixed_delay_ns = 0: the mapping lands on the delay envelope
+  run(m, dev, link, 754.0, 0, 3 * kSec, 3 * kSec);
+  const Nanos d = dev.device_at(dev.t0 + 3 * kSec);
+  const Nanos err = *m.to_vehicle(d) - dev.vehicle_at(d);
+  EXPECT_GT(err, dm.base_ns - 20 * kUs);
+  EXPECT_LT(err, dm.base_ns + 50 * kUs);
+}
+
+TEST(ClockMapper, RejectsImpossibleEarlySamples) {
+  DelayModel dm;
+  dm.early_prob = 0.002;  // host says the packet arrived 8 ms before it was sent
+  SimLink link(5, dm);
+  SimDevice dev;
+  dev.drift_ppm = 60;
+  ClockMapper m(config_for(dm));
+  const RunResult r = run(m, dev, link, 754.0, 0, 8 * kSec, 2 * kSec);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
+  EXPECT_EQ(m.status().jumps, 0u);
+  EXPECT_GT(m.status().outliers, 10u);
+}
+
+TEST(ClockMapper, DetectsAForwardStepWithinAFewSamplesAndRelocks) {
+  DelayModel dm;
+  SimLink link(9, dm);
+  SimDevice dev;
+  dev.drift_ppm = 50;
+  ClockMapper m(config_for(dm));
+  const double rate = 100.0;
+  run(m, dev, link, rate, 0, 5 * kSec, 5 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+
+  dev.step_ns = 250 * kMs;  // device clock stepped forward
+  int samples_to_detect = -1;
+  for (int i = 0; i < 20; ++i) {
+    const Nanos t = dev.t0 + 5 * kSec + i * 10 * kMs;
+    const ObserveResult res = m.observe(dev.device_at(t), t + link.delay());
+    if (res == ObserveResult::kJumpDetected) {
+      samples_to_detect = i + 1;
+      break;
+    }
+    EXPECT_EQ(res, ObserveResult::kJumpCandidate);
+  }
+  EXPECT_GE(samples_to_detect, 2);
+  EXPECT_LE(samples_to_detect, 4);
+  ClockMapperStatus s = m.status();
+  EXPECT_EQ(s.jumps, 1u);
+  EXPECT_EQ(s.state, SyncState::kJumped);
+  EXPECT_NEAR(static_cast<double>(s.last_jump_ns), -250e6, 1e6);
+  EXPECT_NEAR(s.drift_ppm, 50, 5);  // the crystal did not change
+
+  // Mapping is usable at once (coarse), and fine again after the re-lock.
+  const Nanos t1 = dev.t0 + 5 * kSec + 40 * kMs;
+  EXPECT_LT(std::abs(*m.to_vehicle(dev.device_at(t1)) - t1), 1 * kMs);
+  const RunResult r = run(m, dev, link, rate, 5 * kSec + 50 * kMs, 5 * kSec, 500 * kMs);
+  EXPECT_EQ(m.state(), SyncState::kLocked);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
+  EXPECT_EQ(m.status().jumps, 1u);
+}
+
+TEST(ClockMapper, DetectsADeviceClockResetAtLidarRate) {
+  DelayModel dm;
+  SimLink link(13, dm);
+  SimDevice dev;
+  dev.drift_ppm = -30;
+  ClockMapper m(config_for(dm));
+  run(m, dev, link, 754.0, 0, 3 * kSec, 3 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+  dev.step_ns = -dev.device_at(dev.t0 + 3 * kSec);  // power cycle: counter restarts near 0
+  int n = 0;
+  for (; n < 50; ++n) {
+    const Nanos t = dev.t0 + 3 * kSec + n * (kSec / 754);
+    if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) break;
+  }
+  EXPECT_LE(n + 1, 10);  // 3 samples and >= 10 ms of host time: ~9 packets at 754 Hz
+  EXPECT_EQ(m.status().jumps, 1u);
+  const RunResult r = run(m, dev, link, 754.0, 3 * kSec + 20 * kMs, 3 * kSec, 1 * kSec);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
+}
+
+TEST(ClockMapper, AReceiveStallBacklogIsNotAJump) {
+  DelayModel dm;
+  SimLink link(17, dm);
+  SimDevice dev;
+  ClockMapper m(config_for(dm));
+  run(m, dev, link, 754.0, 0, 3 * kSec, 3 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+  // 60 ms network stall: ~45 packets then arrive back to back at line rate.
+  const Nanos stall_end = dev.t0 + 3 * kSec + 60 * kMs;
+  Nanos t = dev.t0 + 3 * kSec;
+  for (int i = 0; t < stall_end; ++i, t += kSec / 754) {
+    m.observe(dev.device_at(t), stall_end + i * 10 * kUs);
+  }
+  const RunResult r = run(m, dev, link, 754.0, 3 * kSec + 61 * kMs, 2 * kSec, 0);
+  EXPECT_EQ(m.status().jumps, 0u);
+  EXPECT_EQ(m.state(), SyncState::kLocked);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
+}
+
+TEST(ClockMapper, HoldoverDuringGapsThenResumes) {
+  DelayModel dm;
+  SimLink link(19, dm);
+  SimDevice dev;
+  dev.drift_ppm = 90;
+  ClockMapper m(config_for(dm));
+  run(m, dev, link, 754.0, 0, 6 * kSec, 6 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+  const Nanos last_t = dev.t0 + 6 * kSec;
+
+  // 3 s without samples: holdover, still valid and accurate (drift was estimated).
+  const Nanos t_gap = last_t + 3 * kSec;
+  const MapResult mr = m.map(dev.device_at(t_gap));
+  EXPECT_EQ(mr.state, SyncState::kHoldover);
+  ASSERT_TRUE(mr.valid);
+  EXPECT_LT(std::abs(mr.vehicle_ns - t_gap), 50 * kUs);
+  EXPECT_EQ(m.status(t_gap).state, SyncState::kHoldover);
+  EXPECT_EQ(m.status(last_t + 100 * kMs).state, SyncState::kLocked);
+  // Beyond holdover_max the mapping is withdrawn.
+  const Nanos t_far = last_t + m.config().holdover_max_ns + kSec;
+  EXPECT_FALSE(m.map(dev.device_at(t_far)).valid);
+  EXPECT_EQ(m.status(t_far).state, SyncState::kUnsynced);
+
+  // Samples resume after 3 s: locked again, no jump, no restart.
+  const RunResult r = run(m, dev, link, 754.0, 9 * kSec, 2 * kSec, 0);
+  EXPECT_EQ(m.state(), SyncState::kLocked);
+  EXPECT_EQ(m.status().jumps, 0u);
+  EXPECT_EQ(m.status().restarts, 0u);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
+}
+
+TEST(ClockMapper, ResumingAfterHoldoverExpiredRestartsConvergence) {
+  DelayModel dm;
+  SimLink link(23, dm);
+  SimDevice dev;
+  ClockMapper m(config_for(dm));
+  run(m, dev, link, 100.0, 0, 3 * kSec, 3 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+  const Nanos t = dev.t0 + 3 * kSec + m.config().holdover_max_ns + kSec;
+  EXPECT_EQ(m.observe(dev.device_at(t), t + dm.base_ns), ObserveResult::kRestarted);
+  EXPECT_EQ(m.state(), SyncState::kConverging);
+  EXPECT_EQ(m.status().restarts, 1u);
+  EXPECT_EQ(m.status().jumps, 0u);
+}
+
+TEST(ClockMapper, AHighFirstSampleDoesNotBlockConvergence) {
+  DelayModel dm;
+  SimLink link(29, dm);
+  SimDevice dev;
+  ClockMapper m(config_for(dm));
+  // The very first sample sat 8 ms in a queue (between outlier and jump thresholds).
+  m.observe(dev.device_at(dev.t0), dev.t0 + 8 * kMs);
+  const RunResult r = run(m, dev, link, 754.0, kSec / 754, 5 * kSec, 2 * kSec);
+  EXPECT_EQ(m.state(), SyncState::kLocked);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
+}
+
+TEST(ClockMapper, ImplausibleDriftIsRejected) {
+  ClockMapperConfig c;
+  c.max_drift_ppm = 50;
+  ClockMapper m(c);
+  SimDevice dev;
+  dev.drift_ppm = 2000;  // far beyond max_drift_ppm: the fit is refused, never locks
+  for (Nanos t = 0; t < 3 * kSec; t += 10 * kMs) m.observe(dev.device_at(dev.t0 + t), dev.t0 + t);
+  EXPECT_GT(m.status().fit_rejects, 0u);
+  EXPECT_NE(m.state(), SyncState::kLocked);
+  EXPECT_LE(std::abs(m.status().drift_ppm), 50.0);
+}
+
+// Property-style: random offsets, drifts in ±100 ppm, delay parameters and rates, fixed seeds.
+TEST(ClockMapper, RandomizedDevicesConvergeBelow50us) {
+  std::mt19937_64 meta(2024);
+  for (int trial = 0; trial < 24; ++trial) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    DelayModel dm;
+    dm.base_ns = static_cast<Nanos>(50'000 + u(meta) * 500'000);
+    dm.exp_mean_ns = 20'000 + u(meta) * 400'000;
+    dm.tail_prob = u(meta) * 0.03;
+    SimDevice dev;
+    dev.drift_ppm = -100 + 200 * u(meta);
+    dev.device0 = static_cast<Nanos>(u(meta) * 3.6e12);
+    dev.t0 += static_cast<Nanos>(u(meta) * 1e15);
+    const double rate = u(meta) < 0.5 ? 754.0 : 50.0 + u(meta) * 200;
+    SimLink link(static_cast<std::uint64_t>(trial) * 7919u + 1u, dm);
+    ClockMapper m(config_for(dm));
+    const RunResult r = run(m, dev, link, rate, 0, 8 * kSec, 3 * kSec);
+    SCOPED_TRACE(testing::Message() << "trial " << trial << " ppm " << dev.drift_ppm << " rate "
+                                    << rate << " base " << dm.base_ns << " mean " << dm.exp_mean_ns);
+    EXPECT_EQ(m.state(), SyncState::kLocked);
+    EXPECT_LT(r.max_err_ns, 50 * kUs);
+    EXPECT_EQ(m.status().jumps, 0u);
+    EXPECT_NEAR(m.status().drift_ppm, dev.drift_ppm, 8.0);
+  }
+}
+
+TEST(ClockMapper, GarbageInputNeverCrashes) {
+  ClockMapper m;
+  constexpr Nanos kMax = std::numeric_limits<Nanos>::max();
+  constexpr Nanos kMin = std::numeric_limits<Nanos>::min();
+  const Nanos vals[] = {0, 1, -1, kMax, kMin, kMax / 2, kMin / 2, 1'700'000'000'000'000'000};
+  for (Nanos a : vals)
+    for (Nanos b : vals) {
+      m.observe(a, b);
+      (void)m.map(a);
+      (void)m.map(b);
+    }
+  const ClockMapperStatus s = m.status();
+  EXPECT_EQ(s.samples, 64u);
+  EXPECT_EQ(s.samples, s.accepted + s.outliers + s.stale);
+}
+
+TEST(ClockMapper, ConfigValidationNamesTheField) {
+  ClockMapperConfig c;
+  c.bucket_ns = 0;
+  try {
+    ClockMapper m(c);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("bucket_ns"), std::string::npos);
+  }
+  c = {};
+  c.jump_threshold_ns = c.outlier_threshold_ns - 1;
+  EXPECT_THROW(ClockMapper{c}, std::invalid_argument);
+  c = {};
+  c.reacquire_ns = c.jump_confirm_ns - 1;
+  EXPECT_THROW(ClockMapper{c}, std::invalid_argument);
+  EXPECT_NO_THROW(ClockMapper{ClockMapperConfig{}});
+}
+
+}  // namespace
+}  // namespace sensor_rig::timesync

@@ -1,0 +1,148 @@
+#pragma once
+// ClockMapper: device clock -> vehicle time (CLOCK_REALTIME ns) from (device, host receive) pairs.
+// Pure estimator: no clock reads; every time is an argument. Algorithm in timesync/README.md:
+// minimum-delay buckets over a sliding window, a trimmed lower-envelope (convex hull) line fit for
+// offset + drift, outlier rejection, jump detection with quick re-lock, holdover.
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "sensor_rig/common/clock.hpp"
+
+namespace sensor_rig::timesync {
+
+enum class SyncState : std::uint8_t {
+  kUnsynced = 0,  // no usable samples (or holdover expired)
+  kConverging,    // samples arrive; offset known, drift not yet trusted
+  kLocked,        // offset and drift estimated over enough span
+  kHoldover,      // no samples for holdover_after_ns: extrapolating the last fit
+  kJumped,        // a device clock step was detected; re-locking with the previous drift
+};
+const char* to_string(SyncState s) noexcept;
+
+struct ClockMapperConfig {
+  Nanos bucket_ns = 100'000'000;          // device-time span of one minimum-delay bucket
+  std::size_t window_buckets = 256;       // buckets kept for the fit (sliding window)
+  std::size_t lock_buckets = 8;           // buckets needed to lock from cold
+  Nanos lock_span_ns = 1'000'000'000;     // device-time span needed before drift is trusted
+  std::size_t relock_buckets = 3;         // buckets needed to re-lock after a jump (drift kept)
+  Nanos outlier_threshold_ns = 5'000'000; // |residual| beyond this: sample rejected (outlier)
+  Nanos jump_threshold_ns = 10'000'000;   // |residual| beyond this: jump candidate
+  std::size_t jump_confirm_samples = 3;   // consistent candidates needed to declare a jump
+  Nanos jump_confirm_ns = 10'000'000;     // host-time span the candidates must cover
+  Nanos reacquire_ns = 1'000'000'000;     // persistent shift between the two thresholds: re-seed
+  double max_drift_ppm = 500.0;           // fits beyond this are rejected (drift kept)
+  Nanos holdover_after_ns = 1'000'000'000;  // no sample for this long: holdover
+  Nanos holdover_max_ns = 60'000'000'000;   // holdover beyond this: unsynced
+  Nanos fixed_delay_ns = 0;               // known minimum transport delay, subtracted
+  std::size_t residual_history = 256;     // accepted-sample residuals kept for p50/p99/std
+
+  void validate() const;  // throws std::invalid_argument naming the bad field
+};
+
+struct MapResult {
+  Nanos vehicle_ns = 0;
+  SyncState state = SyncState::kUnsynced;
+  bool valid = false;  // false only when there is no mapping (unsynced)
+};
+
+enum class ObserveResult : std::uint8_t {
+  kAccepted = 0,
+  kOutlier,        // rejected: residual beyond outlier_threshold_ns (kept as shift evidence)
+  kJumpCandidate,  // beyond jump_threshold_ns; counts towards a jump
+  kJumpDetected,   // this sample confirmed a jump; the mapping was re-seeded
+  kRestarted,      // converging estimate was restarted (no jump counted)
+  kStale,          // device time older than the window
+};
+
+struct ClockMapperStatus {
+  SyncState state = SyncState::kUnsynced;
+  Nanos offset_ns = 0;          // vehicle - device at the last sample's device time
+  double drift_ppm = 0.0;       // device clock rate error; positive = device runs fast
+  Nanos residual_p50_ns = 0;    // accepted samples: delay above the fitted envelope
+  Nanos residual_p99_ns = 0;
+  Nanos residual_std_ns = 0;
+  Nanos fit_rms_ns = 0;         // rms of the bucket minima around the fitted line
+  std::uint64_t samples = 0;    // observe() calls
+  std::uint64_t accepted = 0;
+  std::uint64_t outliers = 0;
+  std::uint64_t stale = 0;
+  std::uint64_t jumps = 0;
+  std::uint64_t restarts = 0;
+  std::uint64_t fit_rejects = 0;  // fits beyond max_drift_ppm
+  Nanos last_jump_ns = 0;         // size of the last jump (new offset - old offset)
+  Nanos last_device_ns = 0;       // last accepted sample
+  Nanos last_host_ns = 0;         // last update (host time of the last accepted sample)
+  std::size_t buckets = 0;
+};
+
+class ClockMapper {
+ public:
+  explicit ClockMapper(ClockMapperConfig cfg = {});  // throws std::invalid_argument
+
+  ObserveResult observe(Nanos device_ns, Nanos host_ns) noexcept;
+
+  // Vehicle time of a device time. State is kHoldover when device_ns is more than
+  // holdover_after_ns past the last sample; invalid when unsynced or holdover expired.
+  [[nodiscard]] MapResult map(Nanos device_ns) const noexcept;
+  [[nodiscard]] std::optional<Nanos> to_vehicle(Nanos device_ns) const noexcept;
+
+  // Status as of the last sample; the overload also applies holdover by host time now.
+  [[nodiscard]] ClockMapperStatus status() const;
+  [[nodiscard]] ClockMapperStatus status(Nanos host_now_ns) const;
+
+  [[nodiscard]] SyncState state() const noexcept { return state_; }
+  [[nodiscard]] const ClockMapperConfig& config() const noexcept { return cfg_; }
+  void reset() noexcept;  // back to unsynced; counters kept
+
+ private:
+  struct Bucket {
+    std::int64_t index = 0;  // floor((device - origin) / bucket_ns)
+    Nanos device_ns = 0;     // sample with the minimum y = host - device in this bucket
+    Nanos y_ns = 0;
+    std::uint32_t count = 0;
+  };
+  struct Candidate {
+    Nanos device_ns = 0;
+    Nanos host_ns = 0;
+    Nanos y_ns = 0;
+  };
+
+  [[nodiscard]] double predict_y(Nanos device_ns) const noexcept;  // relative to anchor_y_
+  [[nodiscard]] SyncState state_at_gap(Nanos gap_ns) const noexcept;
+  void clear_window() noexcept;
+  void seed(Nanos device_ns, Nanos host_ns, Nanos y_ns) noexcept;
+  enum class BucketAdd : std::uint8_t { kNew, kUpdated, kStale };
+  BucketAdd add_to_bucket(Nanos device_ns, Nanos y_ns) noexcept;
+  void refit() noexcept;
+  void update_lock_state(bool drift_fitted) noexcept;
+  ObserveResult handle_deviation(Nanos device_ns, Nanos host_ns, Nanos y_ns, double resid) noexcept;
+  void push_residual(double r) noexcept;
+
+  ClockMapperConfig cfg_;
+  SyncState state_ = SyncState::kUnsynced;
+  bool have_model_ = false;
+  bool drift_known_ = false;   // drift estimated at least once (kept across jumps)
+  Nanos origin_ns_ = 0;        // device time of bucket index 0
+  Nanos anchor_d_ = 0;         // model: y(d) = anchor_y_ + c_ + s_ * (d - anchor_d_)
+  Nanos anchor_y_ = 0;
+  double c_ = 0.0;
+  double s_ = 0.0;
+  double fit_rms_ = 0.0;
+  std::vector<Bucket> buckets_;  // ring of window_buckets
+  std::size_t head_ = 0;         // index of the oldest bucket
+  std::size_t used_ = 0;
+  std::vector<Candidate> candidates_;
+  std::vector<double> residuals_;  // ring of residual_history
+  std::size_t res_head_ = 0;
+  std::size_t res_used_ = 0;
+  std::size_t buckets_since_seed_ = 0;
+  Nanos first_device_ns_ = 0;  // since the last (re)seed, for lock span
+  ClockMapperStatus counters_;
+  std::vector<double> scratch_x_, scratch_y_, scratch_r_;  // reused by refit, no allocation
+  std::vector<unsigned char> mask_;
+  std::vector<std::size_t> hull_;
+};
+
+}  // namespace sensor_rig::timesync
