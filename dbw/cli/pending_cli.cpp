@@ -1,0 +1,7 @@
+// Temporary: the dbw and mock command groups land with the safety core and the mock ECU.
+#include "dbw_commands.hpp"
+
+namespace sensor_rig::dbw {
+void register_dbw_cli(CLI::App& /*dbw*/, cli::Context& /*ctx*/) {}
+void register_mock_cli(CLI::App& /*mock*/, cli::Context& /*ctx*/) {}
+}  // namespace sensor_rig::dbw
