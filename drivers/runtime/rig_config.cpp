@@ -9,8 +9,6 @@
 namespace sensor_rig::runtime {
 namespace {
 
-constexpr std::initializer_list<std::string_view> kLidarModels = {"VLP-16", "VLP-32C", "HDL-32E"};
-
 LidarMockConfig parse_mock(const config::Node& n) {
   n.allow_keys({"kind", "pcap", "rate", "loop", "rpm", "drop_rate", "corrupt_rate"});
   LidarMockConfig m;
@@ -40,7 +38,7 @@ LidarConfig parse_lidar(const config::Node& n) {
       n.fail("name", "'" + l.name + "' must be letters, digits and '_' (it becomes a ROS topic name)");
       break;
     }
-  l.model = n.get_choice("model", kLidarModels);
+  l.model = n.get_choice("model", {"VLP-16", "VLP-32C", "HDL-32E"});
   l.host = n.get_string("host", "127.0.0.1");
   l.port = static_cast<int>(n.get_int("port", 1, 65535));
   l.position_port = static_cast<int>(n.get_int("position_port", 0, 65535, 0));
@@ -69,7 +67,8 @@ RigConfig load_rig_config(const std::string& path) {
   RigConfig cfg;
   cfg.file = path;
   if (!root.expect_map()) problems->throw_if_any();
-  root.allow_keys({"rig", "lidars", "cameras", "dbw"});
+  // Cameras and drive-by-wire are configured once their drivers exist; until then they are unknown keys.
+  root.allow_keys({"rig", "lidars"});
   if (auto rig = root.child("rig", true)) {
     rig->allow_keys({"name", "dds", "diagnostics_period_ms"});
     cfg.name = rig->get_string("name", "rig");
@@ -92,8 +91,6 @@ RigConfig load_rig_config(const std::string& path) {
       item.fail("position_port", "port " + std::to_string(l.position_port) + " used twice");
     cfg.lidars.push_back(std::move(l));
   }
-  if (root.has("cameras")) root.items("cameras");  // type-checked; drivers arrive with the camera issue
-  if (root.has("dbw")) root.child("dbw");
   problems->throw_if_any();
   return cfg;
 }
