@@ -1,0 +1,321 @@
+// Velodyne decoder: packet validation, scan assembly and the per-point hot loop.
+// Geometry (ROS velodyne / VeloView model): with azimuth a (clockwise from the front, minus the
+// laser's rotation correction), elevation v, distance d, vertical offset vo and horizontal
+// offset ho, the sensor frame (x right, y forward, z up) is
+//   xy = d cos v - vo sin v;  x = xy sin a - ho cos a;  y = xy cos a + ho sin a;  z = d sin v + vo cos v
+// and REP 103 is (y, -x, z).
+#include "sensor_rig/lidar/velodyne/decoder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "angle_table.hpp"
+
+namespace sensor_rig::lidar::velodyne {
+namespace {
+
+constexpr int kAzimuthCount = 36000;
+constexpr std::uint8_t kLegacyProductId = 0x21;  // sent by HDL-32E and by early VLP-16 firmware
+constexpr Nanos kBackwardsTolerance = 1'000'000;
+
+struct ChannelTable {
+  float cos_v, sin_v;
+  float xy_off;  // -vo sin v
+  float z_off;   // vo cos v
+  float cos_r, sin_r;
+  float ho;
+  float dist_corr;
+  std::uint32_t t_ns;        // firing offset within the block
+  std::uint32_t az_frac_q16; // t_ns / block duration, 16-bit fixed point (azimuth interpolation)
+  std::uint16_t ring;
+};
+
+inline std::uint16_t rd16(const std::uint8_t* p) noexcept { return le16(p); }
+
+// Forward azimuth step from a to b in hundredths of a degree, in [0, 36000).
+inline int az_step(int a, int b) noexcept {
+  const int d = b - a;
+  return d < 0 ? d + kAzimuthCount : d;
+}
+
+}  // namespace
+
+PacketStatus check_packet(std::span<const std::byte> bytes, Model m) noexcept {
+  if (bytes.size() != kDataPacketSize) {
+    return bytes.size() == kPositionPacketSize ? PacketStatus::kNotData : PacketStatus::kWrongSize;
+  }
+  const auto* p = reinterpret_cast<const std::uint8_t*>(bytes.data());
+  for (std::size_t b = 0; b < kBlocksPerPacket; ++b) {
+    const std::uint8_t* blk = p + b * sizeof(RawBlock);
+    if (rd16(blk) != kBlockFlagUpper) return PacketStatus::kBadBlockFlag;
+    if (rd16(blk + 2) >= kAzimuthCount) return PacketStatus::kBadAzimuth;
+  }
+  const std::uint8_t mode = p[offsetof(RawDataPacket, return_mode)];
+  const std::uint8_t pid = p[offsetof(RawDataPacket, product_id)];
+  const bool mode_ok = mode == 0 || mode == static_cast<std::uint8_t>(ReturnMode::kStrongest) ||
+                       mode == static_cast<std::uint8_t>(ReturnMode::kLast) ||
+                       mode == static_cast<std::uint8_t>(ReturnMode::kDual);
+  const bool pid_ok =
+      pid == 0 || pid == kLegacyProductId || pid == static_cast<std::uint8_t>(model_info(m).product_id);
+  return mode_ok && pid_ok ? PacketStatus::kOk : PacketStatus::kWrongModel;
+}
+
+struct Decoder::Impl {
+  DecoderConfig cfg;
+  const ModelInfo* info = nullptr;
+  std::array<ChannelTable, kChannelsPerBlock> ch{};
+  std::array<std::uint16_t, kChannelsPerBlock> ring_of_laser{};
+  float resolution = 0.002F;
+  float min_range = 0.0F;
+  float max_range = 0.0F;
+  int cut = 0;  // hundredths of a degree
+  std::uint32_t block_ns = 0;
+
+  DecoderStats stats;
+  PacketStatus last = PacketStatus::kOk;
+  Scan cur;
+  bool cur_started = false;      // has a stamp (first block decoded)
+  bool cur_counted = false;      // current packet already counted in cur.packets
+  bool cur_from_cut = false;     // began at a cut (complete once the next cut ends it)
+  bool have_prev = false;
+  int prev_az = 0;
+  Nanos prev_stamp = 0;
+  std::size_t last_scan_points = 0;
+  std::uint64_t next_seq = 0;
+
+  explicit Impl(DecoderConfig config) : cfg(std::move(config)), info(&model_info(cfg.model)) {
+    if (!(cfg.min_range_m >= 0.0) || !(cfg.max_range_m > cfg.min_range_m)) {
+      throw std::invalid_argument("range: need 0 <= min_range (" + std::to_string(cfg.min_range_m) +
+                                  ") < max_range (" + std::to_string(cfg.max_range_m) + ")");
+    }
+    if (!(cfg.cut_angle_deg >= 0.0 && cfg.cut_angle_deg < 360.0)) {
+      throw std::invalid_argument("cut angle " + std::to_string(cfg.cut_angle_deg) + " is not in [0, 360)");
+    }
+    if (cfg.max_packet_gap_ns <= 0) throw std::invalid_argument("max_packet_gap_ns must be positive");
+    const Calibration cal = validate_for_model(
+        cfg.calibration ? *cfg.calibration : default_calibration(cfg.model), cfg.model);
+    cfg.calibration = cal;
+    resolution = static_cast<float>(cal.distance_resolution_m);
+    min_range = static_cast<float>(cfg.min_range_m);
+    max_range = std::isinf(cfg.max_range_m) ? std::numeric_limits<float>::max()
+                                            : static_cast<float>(cfg.max_range_m);
+    cut = static_cast<int>(std::lround(cfg.cut_angle_deg * 100.0)) % kAzimuthCount;
+    block_ns = static_cast<std::uint32_t>(std::lround(info->block_us * 1000.0));
+
+    // Ring = rank by elevation (ties by laser id), 0 = lowest.
+    std::vector<int> order(static_cast<std::size_t>(info->lasers));
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+      return cal.lasers[static_cast<std::size_t>(a)].vert_correction <
+             cal.lasers[static_cast<std::size_t>(b)].vert_correction;
+    });
+    for (std::size_t r = 0; r < order.size(); ++r)
+      ring_of_laser[static_cast<std::size_t>(order[r])] = static_cast<std::uint16_t>(r);
+
+    for (int c = 0; c < static_cast<int>(kChannelsPerBlock); ++c) {
+      const int laser = channel_laser(cfg.model, c);
+      const auto& l = cal.lasers[static_cast<std::size_t>(laser)];
+      auto& t = ch[static_cast<std::size_t>(c)];
+      const double cv = std::cos(l.vert_correction);
+      const double sv = std::sin(l.vert_correction);
+      t.cos_v = static_cast<float>(cv);
+      t.sin_v = static_cast<float>(sv);
+      t.xy_off = static_cast<float>(-l.vert_offset_correction * sv);
+      t.z_off = static_cast<float>(l.vert_offset_correction * cv);
+      t.cos_r = static_cast<float>(std::cos(l.rot_correction));
+      t.sin_r = static_cast<float>(std::sin(l.rot_correction));
+      t.ho = static_cast<float>(l.horiz_offset_correction);
+      t.dist_corr = static_cast<float>(l.dist_correction);
+      t.t_ns = channel_offset_ns(cfg.model, c);
+      t.az_frac_q16 = static_cast<std::uint32_t>((static_cast<std::uint64_t>(t.t_ns) << 16) / block_ns);
+      t.ring = ring_of_laser[static_cast<std::size_t>(laser)];
+    }
+    start_scan(false);
+  }
+
+  void start_scan(bool from_cut) {
+    const std::size_t dual = cfg.returns == ReturnSelection::kDual ? 2 : 1;
+    const std::size_t guess = last_scan_points ? last_scan_points + last_scan_points / 8
+                                               : static_cast<std::size_t>(info->typical_points_per_scan) * dual;
+    cur = Scan{};
+    cur.points.reserve(guess);
+    cur_started = false;
+    cur_counted = false;
+    cur_from_cut = from_cut;
+  }
+
+  // Ends the scan in progress; returns it when it should be emitted.
+  std::optional<Scan> end_scan(bool complete, bool next_from_cut) {
+    std::optional<Scan> out;
+    const std::uint32_t carried_drops = cur.dropped;
+    if (cur.packets > 0 && (complete || cfg.emit_partial_scans)) {
+      last_scan_points = cur.points.size();
+      cur.seq = next_seq++;
+      ++stats.scans;
+      out = std::move(cur);
+      start_scan(next_from_cut);
+    } else {
+      if (cur.packets > 0) ++stats.partial_scans_discarded;
+      start_scan(next_from_cut);
+      cur.dropped = carried_drops;  // drops stay visible in the next emitted scan
+    }
+    return out;
+  }
+
+  void begin_block(Nanos block_stamp, Nanos rx) {
+    if (!cur_started) {
+      cur.stamp = block_stamp;
+      cur.first_rx_ns = rx;
+      cur_started = true;
+    }
+    if (!cur_counted) {
+      ++cur.packets;
+      cur_counted = true;
+    }
+    cur.last_rx_ns = rx;
+  }
+
+  inline void emit(const ChannelTable& t, std::uint16_t raw, std::uint8_t intensity, int az, std::uint32_t gap,
+                   std::uint32_t t_base, std::uint8_t rtype) {
+    const float d = static_cast<float>(raw) * resolution + t.dist_corr;
+    if (raw == 0 || d < min_range || d > max_range) return;
+    int a = az + static_cast<int>((gap * t.az_frac_q16 + 0x8000U) >> 16);
+    if (a >= kAzimuthCount) a -= kAzimuthCount;
+    const float sa = kAngles.sin[static_cast<std::size_t>(a)];
+    const float ca = kAngles.cos[static_cast<std::size_t>(a)];
+    const float sr = sa * t.cos_r - ca * t.sin_r;
+    const float cr = ca * t.cos_r + sa * t.sin_r;
+    const float xy = d * t.cos_v + t.xy_off;
+    const float xv = xy * sr - t.ho * cr;
+    const float yv = xy * cr + t.ho * sr;
+    cur.points.push_back(PointXYZIRT{yv, -xv, d * t.sin_v + t.z_off, static_cast<float>(intensity),
+                                     t_base + t.t_ns, t.ring, rtype, 0});
+  }
+
+  std::optional<Scan> push(const PacketView& packet, Nanos stamp) noexcept;
+};
+
+std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) noexcept {
+  ++stats.packets;
+  last = check_packet(packet.data, cfg.model);
+  if (last != PacketStatus::kOk) {
+    ++stats.by_status[static_cast<std::size_t>(last)];
+    ++cur.dropped;
+    return std::nullopt;
+  }
+  ++stats.packets_used;
+  ++stats.by_status[0];
+  const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
+  const std::uint8_t mode = p[offsetof(RawDataPacket, return_mode)];
+  const bool dual = mode == static_cast<std::uint8_t>(ReturnMode::kDual);
+  const std::uint8_t single_type = mode == static_cast<std::uint8_t>(ReturnMode::kLast)        ? kReturnLast
+                                   : mode == static_cast<std::uint8_t>(ReturnMode::kStrongest) ? kReturnStrongest
+                                                                                              : kReturnUnknown;
+  std::optional<Scan> out;
+  if (have_prev && (stamp < prev_stamp - kBackwardsTolerance || stamp > prev_stamp + cfg.max_packet_gap_ns)) {
+    ++stats.time_jumps;
+    out = end_scan(false, false);
+    have_prev = false;
+  }
+  prev_stamp = stamp;
+  cur_counted = false;
+
+  const int step = dual ? 2 : 1;
+  int az[kBlocksPerPacket];
+  for (std::size_t b = 0; b < kBlocksPerPacket; ++b) az[b] = rd16(p + b * sizeof(RawBlock) + 2);
+
+  for (int b = 0; b < static_cast<int>(kBlocksPerPacket); b += step) {
+    const int a = az[b];
+    if (have_prev && !out) {
+      const int s = az_step(prev_az, a);
+      if (s < kAzimuthCount / 2 && s > 0 && az_step(prev_az, cut) > 0 && az_step(prev_az, cut) <= s) {
+        out = end_scan(cur_from_cut, true);
+      }
+    }
+    have_prev = true;
+    prev_az = a;
+    const Nanos block_stamp = stamp + static_cast<Nanos>(b / step) * block_ns;
+    begin_block(block_stamp, packet.rx_ns);
+    const auto t_base = static_cast<std::uint32_t>(block_stamp - cur.stamp);
+    // Azimuth advance over this block: to the next block, or from the previous one for the last.
+    std::uint32_t gap = static_cast<std::uint32_t>(b + step < static_cast<int>(kBlocksPerPacket)
+                                                       ? az_step(a, az[b + step])
+                                                       : az_step(az[b - step], a));
+    if (gap > 1000) gap = 0;  // not a plausible rotation step: do not interpolate
+
+    const std::uint8_t* e = p + static_cast<std::size_t>(b) * sizeof(RawBlock) + 4;
+    if (!dual) {
+      for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
+        emit(ch[c], rd16(e + 3 * c), e[3 * c + 2], a, gap, t_base, single_type);
+      }
+      continue;
+    }
+    const std::uint8_t* o = e + sizeof(RawBlock);
+    for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
+      const std::uint16_t de = rd16(e + 3 * c);
+      const std::uint16_t dO = rd16(o + 3 * c);
+      const std::uint8_t ie = e[3 * c + 2];
+      const std::uint8_t io = o[3 * c + 2];
+      // Even block: last echo. Odd block: strongest, or the second strongest when the last echo
+      // is also the strongest; the same distance in both means one echo reported twice.
+      const bool same = de == dO;
+      const bool odd_strongest = !same && io > ie;
+      const std::uint8_t te = odd_strongest ? kReturnLast : kReturnStrongestAndLast;
+      const std::uint8_t to = odd_strongest ? kReturnStrongest : kReturnSecondStrongest;
+      switch (cfg.returns) {
+        case ReturnSelection::kLast:
+          emit(ch[c], de, ie, a, gap, t_base, te);
+          break;
+        case ReturnSelection::kStrongest:
+          if (odd_strongest) {
+            emit(ch[c], dO, io, a, gap, t_base, to);
+          } else {
+            emit(ch[c], de, ie, a, gap, t_base, te);
+          }
+          break;
+        case ReturnSelection::kDual:
+          emit(ch[c], de, ie, a, gap, t_base, te);
+          if (!same) emit(ch[c], dO, io, a, gap, t_base, to);
+          break;
+      }
+    }
+  }
+  return out;
+}
+
+Decoder::Decoder(DecoderConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {}
+Decoder::~Decoder() = default;
+Decoder::Decoder(Decoder&&) noexcept = default;
+Decoder& Decoder::operator=(Decoder&&) noexcept = default;
+
+std::optional<Scan> Decoder::push(PacketView packet, Nanos packet_stamp) noexcept {
+  return impl_->push(packet, packet_stamp);
+}
+
+std::optional<Scan> Decoder::flush() noexcept {
+  auto& d = *impl_;
+  std::optional<Scan> out;
+  if (d.cur.packets > 0) {
+    d.last_scan_points = d.cur.points.size();
+    d.cur.seq = d.next_seq++;
+    ++d.stats.scans;
+    out = std::move(d.cur);
+  }
+  d.start_scan(false);
+  d.have_prev = false;
+  return out;
+}
+
+PacketStatus Decoder::last_status() const noexcept { return impl_->last; }
+const DecoderStats& Decoder::stats() const noexcept { return impl_->stats; }
+const DecoderConfig& Decoder::config() const noexcept { return impl_->cfg; }
+std::uint16_t Decoder::ring_of_laser(int laser_id) const noexcept {
+  if (laser_id < 0 || laser_id >= impl_->info->lasers) return 0;
+  return impl_->ring_of_laser[static_cast<std::size_t>(laser_id)];
+}
+
+}  // namespace sensor_rig::lidar::velodyne
