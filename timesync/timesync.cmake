@@ -4,4 +4,7 @@ rig_library(rig_timesync
   SOURCES
     src/clock_mapper.cpp
     src/envelope_fit.cpp
+    src/top_of_hour.cpp
+    src/stamper.cpp
+    src/ptp_status.cpp
   DEPS rig_common)
