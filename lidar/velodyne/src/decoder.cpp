@@ -131,7 +131,11 @@ struct Decoder::Impl {
       t.ho = static_cast<float>(l.horiz_offset_correction);
       t.dist_corr = static_cast<float>(l.dist_correction);
       t.t_ns = channel_offset_ns(cfg.model, c);
-      t.az_frac_q16 = static_cast<std::uint32_t>((static_cast<std::uint64_t>(t.t_ns) << 16) / block_ns);
+      // Firing-sequence start of this channel (VLP-16: two sequences per block), or its own firing.
+      const std::uint32_t interp_ns = cfg.interpolation == AzimuthInterpolation::kPerLaser
+                                          ? t.t_ns
+                                          : channel_offset_ns(cfg.model, c - c % info->lasers);
+      t.az_frac_q16 = static_cast<std::uint32_t>((static_cast<std::uint64_t>(interp_ns) << 16) / block_ns);
       t.ring = ring_of_laser[static_cast<std::size_t>(laser)];
     }
     start_scan(false);

@@ -26,10 +26,18 @@ namespace sensor_rig::lidar::velodyne {
 // single-return packets carry one echo, which is kept whatever is selected here.
 enum class ReturnSelection : std::uint8_t { kStrongest, kLast, kDual };
 
+// Azimuth of a point inside a block, interpolated from the block azimuths by firing time.
+// kPerSequence is VeloView's (and Velodyne's reference) convention: a VLP-16 block's second
+// firing sequence is half a block later, every other laser uses its block azimuth. kPerLaser also
+// interpolates each laser's firing time (as the ROS driver does for the VLP-16), up to ~0.3°
+// different at 20 Hz. Per-point time `t` is per laser in both cases.
+enum class AzimuthInterpolation : std::uint8_t { kPerSequence, kPerLaser };
+
 struct DecoderConfig {
   Model model = Model::kVLP16;
   std::optional<Calibration> calibration;  // nullopt: the model's built-in manual values
   ReturnSelection returns = ReturnSelection::kStrongest;
+  AzimuthInterpolation interpolation = AzimuthInterpolation::kPerSequence;
   double min_range_m = 0.0;                // points closer are dropped (zero distance always is)
   double max_range_m = std::numeric_limits<double>::infinity();
   double cut_angle_deg = 0.0;              // a scan ends when the azimuth crosses this; 0 = wrap
