@@ -104,6 +104,7 @@ void ClockMapper::seed(Nanos device_ns, Nanos host_ns, Nanos y_ns) noexcept {
   anchor_y_ = y_ns;
   c_ = 0.0;  // slope kept: a device's crystal does not change when its clock is stepped
   have_model_ = true;
+  fit_valid_ = false;  // a single seed sample is no line to warm-start from
   add_to_bucket(device_ns, y_ns);
   counters_.last_device_ns = device_ns;
   counters_.last_host_ns = host_ns;
@@ -157,17 +158,27 @@ void ClockMapper::refit() noexcept {
   const bool free_slope = used_ >= 3 &&
                           sat_sub(newest.device_ns, oldest.device_ns) >= cfg_.lock_span_ns &&
                           sat_sub(newest.device_ns, first_device_ns_) >= cfg_.lock_span_ns;
-  detail::LineFit f = detail::fit_envelope(scratch_x_, scratch_y_, free_slope, s_,
-                                           scratch_r_, mask_, hull_);
+  detail::FitOptions o;
+  o.free_slope = free_slope;
+  o.slope_prior = s_;
+  if (fit_valid_) {  // the previous line in this window's coordinates
+    o.start = true;
+    o.start_s = s_;
+    o.start_c = static_cast<double>(sat_sub(anchor_y_, oldest.y_ns)) + predict_y(oldest.device_ns);
+  }
+  detail::LineFit f = detail::fit_envelope(scratch_x_, scratch_y_, o, scratch_r_, mask_, hull_);
   if (free_slope) {
     const double ppm = -f.s / (1.0 + f.s) * 1e6;
     if (!(std::fabs(ppm) <= cfg_.max_drift_ppm)) {  // implausible rate: keep the previous one
       ++counters_.fit_rejects;
-      f = detail::fit_envelope(scratch_x_, scratch_y_, false, s_, scratch_r_, mask_, hull_);
+      o.free_slope = false;
+      o.start = false;
+      f = detail::fit_envelope(scratch_x_, scratch_y_, o, scratch_r_, mask_, hull_);
     } else {
       drift_known_ = true;
     }
   }
+  fit_valid_ = true;
   anchor_d_ = oldest.device_ns;
   anchor_y_ = oldest.y_ns;
   c_ = f.c;

@@ -6,7 +6,8 @@
 namespace sensor_rig::timesync::detail {
 
 namespace {
-constexpr int kIterations = 4;
+constexpr int kIterations = 3;        // trim passes from cold
+constexpr int kWarmIterations = 2;    // from the previous line: trim, refit, trim
 constexpr double kUpperSigmas = 3.0;
 constexpr double kLowerSigmas = 6.0;
 constexpr double kScaleFloor = 2'000.0;  // ns: never trim tighter than this
@@ -72,16 +73,22 @@ double quantile_inplace(std::span<double> v, double q) {
   return v[k];
 }
 
-LineFit fit_envelope(std::span<const double> x, std::span<const double> y,
-                     bool free_slope, double slope_prior,
+LineFit fit_envelope(std::span<const double> x, std::span<const double> y, const FitOptions& o,
                      std::vector<double>& scratch, std::vector<unsigned char>& mask,
                      std::vector<std::size_t>& hull) {
   const std::size_t n = x.size();
+  const bool free_slope = o.free_slope;
+  const double slope_prior = o.slope_prior;
   mask.assign(n, 1);
   scratch.resize(n);
   LineFit f;
-  for (int it = 0; it < kIterations; ++it) {
-    if (!free_slope || !least_squares(x, y, mask, f.c, f.s)) {
+  const int passes = o.start ? kWarmIterations : kIterations;
+  double sigma = kScaleFloor;
+  for (int it = 0; it < passes; ++it) {
+    if (it == 0 && o.start) {  // warm start: trim against the previous line first
+      f.c = o.start_c;
+      f.s = o.start_s;
+    } else if (!free_slope || !least_squares(x, y, mask, f.c, f.s)) {
       f.s = slope_prior;
       f.c = 0.0;  // the residual median below sets the level
     }
@@ -90,9 +97,10 @@ LineFit fit_envelope(std::span<const double> x, std::span<const double> y,
       if (mask[i]) scratch[m++] = y[i] - (f.c + f.s * x[i]);
     if (m == 0) break;
     const double med = quantile_inplace(std::span(scratch.data(), m), 0.5);
-    for (std::size_t i = 0; i < m; ++i) scratch[i] = std::fabs(scratch[i] - med);
-    const double mad = quantile_inplace(std::span(scratch.data(), m), 0.5);
-    const double sigma = std::max(kMadToSigma * mad, kScaleFloor);
+    if (it == 0) {  // the scale from the first pass serves the later ones (selection is the cost)
+      for (std::size_t i = 0; i < m; ++i) scratch[i] = std::fabs(scratch[i] - med);
+      sigma = std::max(kMadToSigma * quantile_inplace(std::span(scratch.data(), m), 0.5), kScaleFloor);
+    }
     bool changed = false;
     for (std::size_t i = 0; i < n; ++i) {
       const double r = y[i] - (f.c + f.s * x[i]) - med;

@@ -6,7 +6,7 @@
 namespace sensor_rig::timesync {
 
 namespace {
-constexpr Nanos kRefLimit = Nanos{1} << 62;  // keeps the arithmetic below far from overflow
+constexpr Nanos kRefLimit = Nanos{1} << 61;  // a + (b - c) of clamped values cannot overflow
 
 Nanos floor_div(Nanos a, Nanos b) noexcept {
   Nanos q = a / b;

@@ -123,6 +123,7 @@ class ClockMapper {
   ClockMapperConfig cfg_;
   SyncState state_ = SyncState::kUnsynced;
   bool have_model_ = false;
+  bool fit_valid_ = false;     // c_/s_ come from a fit of this window (warm start)
   bool drift_known_ = false;   // drift estimated at least once (kept across jumps)
   Nanos origin_ns_ = 0;        // device time of bucket index 0
   Nanos anchor_d_ = 0;         // model: y(d) = anchor_y_ + c_ + s_ * (d - anchor_d_)
