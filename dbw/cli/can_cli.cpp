@@ -7,7 +7,9 @@
 #include <vector>
 
 #include "dbw_commands.hpp"
+#include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dbw/can/log_decode.hpp"
+#include "sensor_rig/dbw/can/transport.hpp"
 #include "sensor_rig/dbw/dbc/parser.hpp"
 
 namespace sensor_rig::dbw {
@@ -58,6 +60,49 @@ int run_decode(const DecodeOptions& o) {
   return cli::kOk;
 }
 
+struct ReplayOptions {
+  std::string log;
+  std::string transport;
+  double rate = 1.0;
+  bool loop = false;
+};
+
+// Sends every frame of the log to the transport at recorded timing (scaled by --rate).
+int run_replay(const ReplayOptions& o) {
+  std::unique_ptr<can::Transport> out;
+  try {
+    out = can::open_transport(o.transport);
+  } catch (const can::TransportError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return cli::kUsage;
+  }
+  std::uint64_t sent = 0;
+  std::uint64_t refused = 0;
+  do {
+    std::unique_ptr<can::Transport> src;
+    try {
+      src = can::open_transport("candump:" + o.log + "@" + std::to_string(o.rate));
+    } catch (const can::TransportError& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return cli::kUsage;
+    }
+    can::RxFrame rx;
+    while (!shutdown_requested()) {
+      const auto st = src->receive(rx, 100);
+      if (st == can::IoStatus::timeout) continue;
+      if (st != can::IoStatus::ok) break;
+      if (out->send(rx.frame) == can::IoStatus::ok) {
+        ++sent;
+      } else {
+        ++refused;
+      }
+    }
+  } while (o.loop && !shutdown_requested());
+  std::fprintf(stderr, "can replay: %llu frames sent, %llu refused\n", static_cast<unsigned long long>(sent),
+               static_cast<unsigned long long>(refused));
+  return cli::kOk;
+}
+
 }  // namespace
 
 void register_can_cli(CLI::App& can, cli::Context& ctx) {
@@ -68,6 +113,15 @@ void register_can_cli(CLI::App& can, cli::Context& ctx) {
   dec->add_option("--signals", o->signals, "MSG.SIG or MSG (all its signals), comma separated")->delimiter(',');
   dec->add_option("--csv", o->csv, "output CSV")->required();
   dec->callback([o, &ctx] { ctx.exit_code = run_decode(*o); });
+
+  auto r = std::make_shared<ReplayOptions>();
+  auto* rep = can.add_subcommand("replay", "send a candump -L log to a CAN transport at recorded timing");
+  rep->add_option("log", r->log, "candump -L log file")->required();
+  rep->add_option("--transport", r->transport, "socketcan:IFACE | unix:PATH | unix-listen:PATH | fd:N")->required();
+  rep->add_option("--rate", r->rate, "speed factor (1 = recorded timing, 0 = as fast as possible)")
+      ->check(CLI::NonNegativeNumber);
+  rep->add_flag("--loop", r->loop, "start over at the end");
+  rep->callback([r, &ctx] { ctx.exit_code = run_replay(*r); });
 }
 
 }  // namespace sensor_rig::dbw

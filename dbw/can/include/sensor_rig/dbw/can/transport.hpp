@@ -1,0 +1,99 @@
+#pragma once
+// CAN transports behind one interface: SocketCAN (CAN 2.0 + FD, kernel timestamps, error frames,
+// bus-off), AF_UNIX SOCK_SEQPACKET carrying the kernel `struct can_frame`/`canfd_frame` bytes
+// (socketpair, or a listening "bus" socket several processes connect to), and candump log replay.
+// Hot path: send/receive return an IoStatus, never throw. Opening throws TransportError.
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/dbw/can/frame.hpp"
+
+namespace sensor_rig::dbw::can {
+
+struct TransportError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+enum class IoStatus : std::uint8_t {
+  ok,
+  timeout,      // nothing within the wait
+  would_block,  // send buffer full: the frame was NOT queued (never retried later: no stale frames)
+  bus_off,      // controller is bus-off: frame refused
+  closed,       // peer gone / end of log
+  invalid,      // frame malformed (bad length) or not representable on this transport
+  error,        // other OS error (errno kept in stats)
+};
+[[nodiscard]] const char* to_string(IoStatus s) noexcept;
+
+enum class BusState : std::uint8_t { active, warning, passive, bus_off };
+[[nodiscard]] const char* to_string(BusState s) noexcept;
+
+struct RxFrame {
+  Frame frame;
+  Nanos stamp = 0;  // kernel receive time (CLOCK_REALTIME), or the log time for replay
+};
+
+struct TransportStats {
+  std::uint64_t sent = 0;
+  std::uint64_t received = 0;
+  std::uint64_t send_refused = 0;  // would_block / bus_off / invalid
+  std::uint64_t rx_dropped = 0;    // malformed wire records, kernel drops
+  std::uint64_t error_frames = 0;
+  std::uint64_t bus_off_events = 0;
+  int last_errno = 0;
+};
+
+// What an error frame says about the controller (linux/can/error.h classes).
+struct ErrorInfo {
+  bool bus_off = false;
+  bool restarted = false;
+  bool passive = false;
+  bool warning = false;
+  bool back_to_active = false;
+};
+[[nodiscard]] ErrorInfo classify_error_frame(const Frame& f) noexcept;
+// An error frame as a controller would report the event (for mocks and tests).
+[[nodiscard]] Frame make_error_frame(bool bus_off, bool restarted) noexcept;
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  Transport() = default;
+  Transport(const Transport&) = delete;
+  Transport& operator=(const Transport&) = delete;
+
+  virtual IoStatus send(const Frame& f) noexcept = 0;
+  // Waits up to timeout_ms (0 = poll, <0 = forever). Error frames are delivered too (frame.error)
+  // after updating the bus state.
+  virtual IoStatus receive(RxFrame& out, int timeout_ms) noexcept = 0;
+  // A descriptor that becomes readable when receive() has something (-1 if none).
+  [[nodiscard]] virtual int poll_fd() const noexcept = 0;
+  [[nodiscard]] virtual std::string name() const = 0;
+
+  [[nodiscard]] BusState bus_state() const noexcept { return state_; }
+  [[nodiscard]] const TransportStats& stats() const noexcept { return stats_; }
+
+ protected:
+  // Updates bus state from an error frame; returns the info.
+  ErrorInfo note_error_frame(const Frame& f) noexcept;
+  BusState state_ = BusState::active;
+  TransportStats stats_;
+};
+
+// Opens a transport from a spec string:
+//   socketcan:IFACE          SocketCAN raw socket (CAN FD enabled, error frames, kernel timestamps)
+//   unix:PATH                connect to a bus socket (SOCK_SEQPACKET) another process listens on
+//   unix-listen:PATH         be the bus: accept any number of peers; what one peer sends reaches the owner and all others
+//   fd:N                     an inherited SOCK_SEQPACKET descriptor (one end of a socketpair)
+//   candump:FILE[@RATE]      replay a candump -L log at recorded timing (RATE: speed factor, 0 = as fast as possible)
+std::unique_ptr<Transport> open_transport(std::string_view spec);
+
+// Two connected in-process ends (socketpair AF_UNIX SOCK_SEQPACKET).
+std::pair<std::unique_ptr<Transport>, std::unique_ptr<Transport>> make_socketpair();
+
+}  // namespace sensor_rig::dbw::can

@@ -1,0 +1,187 @@
+// AF_UNIX SOCK_SEQPACKET transports: one connected end (socketpair, unix:PATH, fd:N) and the bus
+// owner (unix-listen:PATH) which relays every frame between all connected peers.
+#include "seqpacket_transport.hpp"
+
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "socket_io.hpp"
+
+namespace sensor_rig::dbw::can {
+namespace {
+
+sockaddr_un unix_address(const std::string& path) {
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  if (path.empty() || path.size() >= sizeof a.sun_path) throw TransportError("unix socket path empty or too long: " + path);
+  std::memcpy(a.sun_path, path.data(), path.size());
+  return a;
+}
+
+std::string errno_text(const std::string& what) { return what + ": " + std::strerror(errno); }
+
+Nanos deadline_after(int timeout_ms) {
+  return timeout_ms < 0 ? -1 : monotonic_now_ns() + static_cast<Nanos>(timeout_ms) * 1'000'000LL;
+}
+int remaining_ms(Nanos deadline) {
+  if (deadline < 0) return -1;
+  const Nanos left = deadline - monotonic_now_ns();
+  return left <= 0 ? 0 : static_cast<int>((left + 999'999) / 1'000'000);
+}
+
+}  // namespace
+
+SeqpacketTransport::SeqpacketTransport(UniqueFd fd, std::string name) : fd_(std::move(fd)), name_(std::move(name)) {
+  if (!fd_) throw TransportError("invalid descriptor for " + name_);
+  detail::enable_timestamps(fd_.get());
+}
+
+IoStatus SeqpacketTransport::send(const Frame& f) noexcept {
+  if (state_ == BusState::bus_off) {
+    ++stats_.send_refused;
+    return IoStatus::bus_off;
+  }
+  return detail::send_frame(fd_.get(), f, stats_);
+}
+
+IoStatus SeqpacketTransport::receive(RxFrame& out, int timeout_ms) noexcept {
+  const Nanos deadline = deadline_after(timeout_ms);
+  while (true) {
+    const IoStatus w = detail::wait_readable(fd_.get(), remaining_ms(deadline));
+    if (w != IoStatus::ok) return w;
+    const IoStatus r = detail::recv_frame(fd_.get(), out, stats_);
+    if (r == IoStatus::timeout || r == IoStatus::invalid) {
+      if (remaining_ms(deadline) == 0) return IoStatus::timeout;
+      continue;
+    }
+    if (r == IoStatus::ok && out.frame.error) note_error_frame(out.frame);
+    return r;
+  }
+}
+
+std::unique_ptr<Transport> SeqpacketTransport::connect(const std::string& path) {
+  UniqueFd fd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0));
+  if (!fd) throw TransportError(errno_text("socket(AF_UNIX, SOCK_SEQPACKET)"));
+  const sockaddr_un a = unix_address(path);
+  if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
+    throw TransportError(errno_text("connect " + path));
+  }
+  return std::make_unique<SeqpacketTransport>(std::move(fd), "unix:" + path);
+}
+
+// ---- bus owner -------------------------------------------------------------------------------
+
+BusListener::BusListener(const std::string& path) : path_(path) {
+  listen_ = UniqueFd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
+  if (!listen_) throw TransportError(errno_text("socket(AF_UNIX, SOCK_SEQPACKET)"));
+  const sockaddr_un a = unix_address(path);
+  ::unlink(path.c_str());  // a stale socket file from an earlier run
+  if (::bind(listen_.get(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
+    throw TransportError(errno_text("bind " + path));
+  }
+  if (::listen(listen_.get(), 8) != 0) throw TransportError(errno_text("listen " + path));
+  epoll_ = UniqueFd(::epoll_create1(EPOLL_CLOEXEC));
+  if (!epoll_) throw TransportError(errno_text("epoll_create1"));
+  epoll_event ev{};
+  ev.events = EPOLLIN;
+  ev.data.fd = listen_.get();
+  if (::epoll_ctl(epoll_.get(), EPOLL_CTL_ADD, listen_.get(), &ev) != 0) throw TransportError(errno_text("epoll_ctl"));
+}
+
+BusListener::~BusListener() { ::unlink(path_.c_str()); }
+
+void BusListener::accept_peers() noexcept {
+  while (true) {
+    UniqueFd c(::accept4(listen_.get(), nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK));
+    if (!c) return;
+    detail::enable_timestamps(c.get());
+    epoll_event ev{};
+    ev.events = EPOLLIN;
+    ev.data.fd = c.get();
+    if (::epoll_ctl(epoll_.get(), EPOLL_CTL_ADD, c.get(), &ev) == 0) peers_.push_back(std::move(c));
+  }
+}
+
+void BusListener::drop_peer(int fd) noexcept {
+  for (auto it = peers_.begin(); it != peers_.end(); ++it) {
+    if (it->get() == fd) {
+      ::epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, fd, nullptr);
+      peers_.erase(it);
+      return;
+    }
+  }
+}
+
+void BusListener::relay(const Frame& f, int except_fd) noexcept {
+  TransportStats scratch;
+  for (std::size_t i = 0; i < peers_.size();) {
+    const int fd = peers_[i].get();
+    if (fd == except_fd) {
+      ++i;
+      continue;
+    }
+    if (detail::send_frame(fd, f, scratch) == IoStatus::closed) {
+      drop_peer(fd);
+      continue;
+    }
+    ++i;
+  }
+}
+
+IoStatus BusListener::send(const Frame& f) noexcept {
+  if (state_ == BusState::bus_off) {
+    ++stats_.send_refused;
+    return IoStatus::bus_off;
+  }
+  std::array<std::uint8_t, kFdWireSize> buf{};
+  if (to_wire(f, buf) == 0) {
+    ++stats_.send_refused;
+    return IoStatus::invalid;
+  }
+  accept_peers();
+  relay(f, -1);
+  ++stats_.sent;
+  return IoStatus::ok;
+}
+
+IoStatus BusListener::receive(RxFrame& out, int timeout_ms) noexcept {
+  const Nanos deadline = deadline_after(timeout_ms);
+  while (true) {
+    epoll_event ev{};
+    const int n = ::epoll_wait(epoll_.get(), &ev, 1, remaining_ms(deadline));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      stats_.last_errno = errno;
+      return IoStatus::error;
+    }
+    if (n == 0) return IoStatus::timeout;
+    if (ev.data.fd == listen_.get()) {
+      accept_peers();
+      continue;
+    }
+    const IoStatus r = detail::recv_frame(ev.data.fd, out, stats_);
+    if (r == IoStatus::closed || r == IoStatus::error) {
+      drop_peer(ev.data.fd);
+      continue;
+    }
+    if (r != IoStatus::ok) continue;
+    relay(out.frame, ev.data.fd);  // everyone on the bus sees every frame
+    return IoStatus::ok;
+  }
+}
+
+std::pair<std::unique_ptr<Transport>, std::unique_ptr<Transport>> make_socketpair() {
+  int sv[2] = {-1, -1};
+  if (::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, sv) != 0) throw TransportError(errno_text("socketpair"));
+  UniqueFd a(sv[0]);
+  UniqueFd b(sv[1]);
+  return {std::make_unique<SeqpacketTransport>(std::move(a), "socketpair:0"),
+          std::make_unique<SeqpacketTransport>(std::move(b), "socketpair:1")};
+}
+
+}  // namespace sensor_rig::dbw::can

@@ -1,0 +1,152 @@
+// CAN transports over real sockets: socketpair, the unix-listen bus with several peers, replay timing.
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+
+#include <cerrno>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "sensor_rig/dbw/can/candump.hpp"
+#include "sensor_rig/dbw/can/transport.hpp"
+
+namespace can = sensor_rig::dbw::can;
+namespace fs = std::filesystem;
+
+namespace {
+
+can::Frame frame(std::uint32_t id, std::uint8_t len, bool fd = false) {
+  can::Frame f;
+  f.id = id;
+  f.len = len;
+  f.fd = fd;
+  for (std::size_t i = 0; i < len; ++i) f.data[i] = static_cast<std::uint8_t>(id + i);
+  return f;
+}
+
+std::string temp_path(const char* name) {
+  return (fs::temp_directory_path() / (std::string(name) + "_" + std::to_string(::getpid()))).string();
+}
+
+TEST(Transport, SocketpairCarriesClassicAndFdWithKernelStamps) {
+  auto [a, b] = can::make_socketpair();
+  const auto before = sensor_rig::vehicle_now_ns();
+  ASSERT_EQ(a->send(frame(0x123, 8)), can::IoStatus::ok);
+  ASSERT_EQ(a->send(frame(0x456, 64, true)), can::IoStatus::ok);
+  can::RxFrame rx;
+  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame, frame(0x123, 8));
+  EXPECT_GE(rx.stamp, before);
+  EXPECT_LE(rx.stamp, sensor_rig::vehicle_now_ns());
+  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame, frame(0x456, 64, true));
+  EXPECT_EQ(b->receive(rx, 10), can::IoStatus::timeout);
+  EXPECT_EQ(a->stats().sent, 2U);
+  EXPECT_EQ(b->stats().received, 2U);
+  can::Frame bad = frame(1, 8);
+  bad.len = 9;
+  EXPECT_EQ(a->send(bad), can::IoStatus::invalid);
+  a.reset();
+  EXPECT_EQ(b->receive(rx, 100), can::IoStatus::closed);
+  EXPECT_EQ(b->send(frame(1, 1)), can::IoStatus::closed);
+}
+
+TEST(Transport, BusOffRefusesSendsUntilRestart) {
+  auto [ecu, bridge] = can::make_socketpair();
+  ASSERT_EQ(ecu->send(can::make_error_frame(true, false)), can::IoStatus::ok);
+  can::RxFrame rx;
+  ASSERT_EQ(bridge->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_TRUE(rx.frame.error);
+  EXPECT_EQ(bridge->bus_state(), can::BusState::bus_off);
+  EXPECT_EQ(bridge->send(frame(0x10, 2)), can::IoStatus::bus_off);  // refused, not queued
+  ASSERT_EQ(ecu->send(can::make_error_frame(false, true)), can::IoStatus::ok);
+  ASSERT_EQ(bridge->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(bridge->bus_state(), can::BusState::active);
+  ASSERT_EQ(bridge->send(frame(0x11, 2)), can::IoStatus::ok);
+  ASSERT_EQ(ecu->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame.id, 0x11U);  // the refused frame never went out
+  EXPECT_EQ(ecu->receive(rx, 20), can::IoStatus::timeout);
+  EXPECT_EQ(bridge->stats().bus_off_events, 1U);
+}
+
+TEST(Transport, ListeningBusRelaysBetweenAllPeers) {
+  const std::string path = temp_path("canbus");
+  auto bus = can::open_transport("unix-listen:" + path);
+  auto p1 = can::open_transport("unix:" + path);
+  auto p2 = can::open_transport("unix:" + path);
+  can::RxFrame rx;
+  ASSERT_EQ(p1->send(frame(0x1, 1)), can::IoStatus::ok);
+  ASSERT_EQ(bus->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame.id, 0x1U);
+  ASSERT_EQ(p2->receive(rx, 1000), can::IoStatus::ok);  // a sniffer sees other peers' frames
+  EXPECT_EQ(rx.frame.id, 0x1U);
+  EXPECT_EQ(p1->receive(rx, 20), can::IoStatus::timeout);  // no echo to the sender
+  ASSERT_EQ(bus->send(frame(0x2, 2)), can::IoStatus::ok);
+  ASSERT_EQ(p1->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame.id, 0x2U);
+  ASSERT_EQ(p2->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame.id, 0x2U);
+  p2.reset();  // a peer leaving does not disturb the bus
+  ASSERT_EQ(bus->send(frame(0x3, 3)), can::IoStatus::ok);
+  ASSERT_EQ(p1->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame.id, 0x3U);
+  EXPECT_EQ(bus->receive(rx, 20), can::IoStatus::timeout);
+  bus.reset();
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_THROW(can::open_transport("unix:" + path), can::TransportError);
+}
+
+TEST(Transport, InheritedDescriptorSpec) {
+  int sv[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET, 0, sv), 0);
+  auto a = can::open_transport("fd:" + std::to_string(sv[0]));
+  auto b = can::open_transport("socketpair:" + std::to_string(sv[1]));
+  ASSERT_EQ(a->send(frame(0x7, 7)), can::IoStatus::ok);
+  can::RxFrame rx;
+  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame, frame(0x7, 7));
+}
+
+TEST(Transport, BadSpecsThrowClearErrors) {
+  for (const char* s : {"", "can0", "bogus:x", "fd:abc", "fd:", "candump:/nonexistent/log", "candump:/tmp/x@fast"}) {
+    EXPECT_THROW((void)can::open_transport(s), can::TransportError) << s;
+  }
+}
+
+TEST(Transport, ReplayKeepsRecordedTiming) {
+  const std::string path = temp_path("replay.log");
+  {
+    std::ofstream out(path);
+    out << can::format_candump_line(1'000'000'000'000'000'000LL, "can0", frame(0x10, 1)) << "\n";
+    out << "not a frame\n";
+    out << can::format_candump_line(1'000'000'000'060'000'000LL, "can0", frame(0x11, 1)) << "\n";
+    out << can::format_candump_line(1'000'000'000'120'000'000LL, "can1", frame(0x12, 1)) << "\n";
+  }
+  auto t = can::open_transport("candump:" + path);
+  can::RxFrame rx;
+  const auto t0 = sensor_rig::monotonic_now_ns();
+  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.stamp, 1'000'000'000'000'000'000LL);
+  EXPECT_EQ(t->receive(rx, 5), can::IoStatus::timeout);  // next one is 60 ms later
+  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(rx.frame.id, 0x11U);
+  const auto dt1 = sensor_rig::monotonic_now_ns() - t0;
+  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::ok);
+  const auto dt2 = sensor_rig::monotonic_now_ns() - t0;
+  EXPECT_GE(dt1, 59'000'000);
+  EXPECT_LT(dt1, 90'000'000);
+  EXPECT_GE(dt2, 119'000'000);
+  EXPECT_LT(dt2, 160'000'000);
+  EXPECT_EQ(t->receive(rx, 10), can::IoStatus::closed);
+  EXPECT_EQ(t->stats().rx_dropped, 1U);
+
+  auto fast = can::open_transport("candump:" + path + "@0");
+  const auto f0 = sensor_rig::monotonic_now_ns();
+  int n = 0;
+  while (fast->receive(rx, 1000) == can::IoStatus::ok) ++n;
+  EXPECT_EQ(n, 3);
+  EXPECT_LT(sensor_rig::monotonic_now_ns() - f0, 30'000'000);
+  fs::remove(path);
+}
+
+}  // namespace
