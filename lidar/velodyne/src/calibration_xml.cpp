@@ -41,8 +41,14 @@ class XmlScanner {
         const auto name = tag_name(2);
         skip_past(">");
         if (stack_.empty() || stack_.back() != name) {
-          fail("closing tag </" + std::string(name) + "> does not match " +
-               (stack_.empty() ? std::string("anything") : "<" + std::string(stack_.back()) + ">"));
+          std::string msg = "closing tag </";
+          msg.append(name).append("> does not match ");
+          if (stack_.empty()) {
+            msg.append("anything");
+          } else {
+            msg.append("<").append(stack_.back()).append(">");
+          }
+          fail(msg);
         }
         const std::string_view parent = stack_.size() >= 2 ? stack_[stack_.size() - 2] : std::string_view{};
         if (name == "px") {
@@ -112,7 +118,9 @@ class XmlScanner {
     double v = 0.0;
     const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     if (s.empty() || ec != std::errc{} || end != s.data() + s.size() || !std::isfinite(v)) {
-      fail("<" + std::string(field) + ">: expected a number, got '" + std::string(s) + "'");
+      std::string msg = "<";
+      msg.append(field).append(">: expected a number, got '").append(s).append("'");
+      fail(msg);
     }
     return v;
   }

@@ -86,6 +86,7 @@ struct Decoder::Impl {
   Nanos prev_stamp = 0;
   std::size_t last_scan_points = 0;
   std::uint64_t next_seq = 0;
+  std::vector<std::vector<PointXYZIRT>> spare;  // recycled buffers (at most 2 kept)
 
   explicit Impl(DecoderConfig config) : cfg(std::move(config)), info(&model_info(cfg.model)) {
     if (!(cfg.min_range_m >= 0.0) || !(cfg.max_range_m > cfg.min_range_m)) {
@@ -138,6 +139,7 @@ struct Decoder::Impl {
       t.az_frac_q16 = static_cast<std::uint32_t>((static_cast<std::uint64_t>(interp_ns) << 16) / block_ns);
       t.ring = ring_of_laser[static_cast<std::size_t>(laser)];
     }
+    spare.reserve(2);
     start_scan(false);
   }
 
@@ -146,6 +148,11 @@ struct Decoder::Impl {
     const std::size_t guess = last_scan_points ? last_scan_points + last_scan_points / 8
                                                : static_cast<std::size_t>(info->typical_points_per_scan) * dual;
     cur = Scan{};
+    if (!spare.empty()) {
+      cur.points = std::move(spare.back());
+      spare.pop_back();
+      cur.points.clear();
+    }
     cur.points.reserve(guess);
     cur_started = false;
     cur_counted = false;
@@ -183,14 +190,39 @@ struct Decoder::Impl {
     cur.last_rx_ns = rx;
   }
 
-  inline void emit(const ChannelTable& t, std::uint16_t raw, std::uint8_t intensity, int az, std::uint32_t gap,
+  // Azimuth sin/cos per channel of a block: one lookup per firing sequence (VeloView
+  // interpolation) or one per laser.
+  struct BlockAngles {
+    float sa[kChannelsPerBlock];
+    float ca[kChannelsPerBlock];
+  };
+  void block_angles(int az, std::uint32_t gap, BlockAngles& out) const noexcept {
+    if (cfg.interpolation == AzimuthInterpolation::kPerLaser) {
+      for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
+        int a = az + static_cast<int>((gap * ch[c].az_frac_q16 + 0x8000U) >> 16);
+        if (a >= kAzimuthCount) a -= kAzimuthCount;
+        out.sa[c] = kAngles.sin[static_cast<std::size_t>(a)];
+        out.ca[c] = kAngles.cos[static_cast<std::size_t>(a)];
+      }
+      return;
+    }
+    const std::size_t per_seq = static_cast<std::size_t>(info->lasers);
+    for (std::size_t c0 = 0; c0 < kChannelsPerBlock; c0 += per_seq) {
+      int a = az + static_cast<int>((gap * ch[c0].az_frac_q16 + 0x8000U) >> 16);
+      if (a >= kAzimuthCount) a -= kAzimuthCount;
+      const float sa = kAngles.sin[static_cast<std::size_t>(a)];
+      const float ca = kAngles.cos[static_cast<std::size_t>(a)];
+      for (std::size_t c = c0; c < c0 + per_seq; ++c) {
+        out.sa[c] = sa;
+        out.ca[c] = ca;
+      }
+    }
+  }
+
+  inline void emit(const ChannelTable& t, std::uint16_t raw, std::uint8_t intensity, float sa, float ca,
                    std::uint32_t t_base, std::uint8_t rtype) {
     const float d = static_cast<float>(raw) * resolution + t.dist_corr;
     if (raw == 0 || d < min_range || d > max_range) return;
-    int a = az + static_cast<int>((gap * t.az_frac_q16 + 0x8000U) >> 16);
-    if (a >= kAzimuthCount) a -= kAzimuthCount;
-    const float sa = kAngles.sin[static_cast<std::size_t>(a)];
-    const float ca = kAngles.cos[static_cast<std::size_t>(a)];
     const float sr = sa * t.cos_r - ca * t.sin_r;
     const float cr = ca * t.cos_r + sa * t.sin_r;
     const float xy = d * t.cos_v + t.xy_off;
@@ -251,10 +283,12 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
                                                        : az_step(az[b - step], a));
     if (gap > 1000) gap = 0;  // not a plausible rotation step: do not interpolate
 
+    BlockAngles ang;
+    block_angles(a, gap, ang);
     const std::uint8_t* e = p + static_cast<std::size_t>(b) * sizeof(RawBlock) + 4;
     if (!dual) {
       for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
-        emit(ch[c], rd16(e + 3 * c), e[3 * c + 2], a, gap, t_base, single_type);
+        emit(ch[c], rd16(e + 3 * c), e[3 * c + 2], ang.sa[c], ang.ca[c], t_base, single_type);
       }
       continue;
     }
@@ -272,18 +306,18 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
       const std::uint8_t to = odd_strongest ? kReturnStrongest : kReturnSecondStrongest;
       switch (cfg.returns) {
         case ReturnSelection::kLast:
-          emit(ch[c], de, ie, a, gap, t_base, te);
+          emit(ch[c], de, ie, ang.sa[c], ang.ca[c], t_base, te);
           break;
         case ReturnSelection::kStrongest:
           if (odd_strongest) {
-            emit(ch[c], dO, io, a, gap, t_base, to);
+            emit(ch[c], dO, io, ang.sa[c], ang.ca[c], t_base, to);
           } else {
-            emit(ch[c], de, ie, a, gap, t_base, te);
+            emit(ch[c], de, ie, ang.sa[c], ang.ca[c], t_base, te);
           }
           break;
         case ReturnSelection::kDual:
-          emit(ch[c], de, ie, a, gap, t_base, te);
-          if (!same) emit(ch[c], dO, io, a, gap, t_base, to);
+          emit(ch[c], de, ie, ang.sa[c], ang.ca[c], t_base, te);
+          if (!same) emit(ch[c], dO, io, ang.sa[c], ang.ca[c], t_base, to);
           break;
       }
     }
@@ -312,6 +346,10 @@ std::optional<Scan> Decoder::flush() noexcept {
   d.start_scan(false);
   d.have_prev = false;
   return out;
+}
+
+void Decoder::recycle(std::vector<PointXYZIRT>&& buffer) noexcept {
+  if (impl_->spare.size() < 2 && buffer.capacity() > 0) impl_->spare.push_back(std::move(buffer));
 }
 
 PacketStatus Decoder::last_status() const noexcept { return impl_->last; }
