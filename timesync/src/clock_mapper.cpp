@@ -70,10 +70,13 @@ ClockMapper::ClockMapper(ClockMapperConfig cfg) : cfg_(cfg) {
   cfg_.validate();
   buckets_.resize(cfg_.window_buckets);
   candidates_.reserve(kMaxCandidates);
+  seeds_.reserve(kMaxCandidates);
   residuals_.resize(cfg_.residual_history);
   scratch_x_.reserve(cfg_.window_buckets);
   scratch_y_.reserve(cfg_.window_buckets);
   scratch_r_.reserve(cfg_.window_buckets);
+  mask_.reserve(cfg_.window_buckets);
+  hull_.reserve(cfg_.window_buckets);
 }
 
 void ClockMapper::reset() noexcept {
@@ -224,7 +227,8 @@ ObserveResult ClockMapper::handle_deviation(Nanos device_ns, Nanos host_ns, Nano
   // Confirmed: re-seed the window from the candidates, keeping the drift.
   const double old_pred = static_cast<double>(anchor_y_) + predict_y(device_ns);
   const bool was_converging = state_ == SyncState::kConverging;
-  const std::vector<Candidate> seeds(candidates_.begin(), candidates_.end());
+  std::vector<Candidate>& seeds = seeds_;  // reserved: no allocation here
+  seeds.assign(candidates_.begin(), candidates_.end());
   counters_.outliers -= seeds.size();
   seed(seeds.front().device_ns, seeds.front().host_ns, seeds.front().y_ns);
   state_ = was_converging ? SyncState::kConverging : SyncState::kJumped;

@@ -135,6 +135,7 @@ class ClockMapper {
   std::size_t head_ = 0;         // index of the oldest bucket
   std::size_t used_ = 0;
   std::vector<Candidate> candidates_;
+  std::vector<Candidate> seeds_;
   std::vector<double> residuals_;  // ring of residual_history
   std::size_t res_head_ = 0;
   std::size_t res_used_ = 0;
