@@ -10,7 +10,7 @@
 #include "sensor_rig/lidar/velodyne/decoder.hpp"
 #include "sensor_rig/lidar/velodyne/packet_info.hpp"
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
-#include "sensor_rig/timesync/clock_mapper.hpp"
+#include "sensor_rig/timesync/stamper.hpp"
 #include "stamps_writer.hpp"
 
 namespace sensor_rig::runtime {
@@ -58,7 +58,7 @@ struct LidarDriver::Impl {
   dds::Topic<msg::PointCloud2> topic;
   dds::Writer<msg::PointCloud2> writer;
   StampsWriter& stamps;
-  timesync::ClockMapper mapper;
+  timesync::Stamper stamper;
   std::vector<msg::PointField> fields;
   std::thread thread;
   std::atomic<bool> stop_flag{false};
@@ -69,15 +69,15 @@ struct LidarDriver::Impl {
   std::uint64_t write_errors = 0;
   std::uint64_t position_packets = 0;
   vel::PpsStatus pps = vel::PpsStatus::kAbsent;
-  bool gprmc_valid = false;
-  Nanos gprmc_hour_ns = 0;
+  bool have_position = false;
+  std::optional<Nanos> gprmc_utc_ns;  // latest valid $GPRMC time
   Nanos last_scan_host_ns = 0;
   double scan_rate_hz = 0.0;
   std::size_t last_points = 0;
   std::string last_error;
   vel::DecoderStats decoder_stats;
   lidar::UdpSourceStats udp_stats;
-  timesync::ClockMapperStatus sync;
+  timesync::StamperStatus sync;
 
   Impl(const LidarConfig& c, const dds::Participant& p, StampsWriter& s)
       : cfg(c),
@@ -86,7 +86,8 @@ struct LidarDriver::Impl {
         data(lidar::UdpSourceConfig{{c.host, static_cast<std::uint16_t>(c.port)}, c.receive_buffer_bytes, 64, true}),
         topic(p, topic_name, c.qos),
         writer(p, topic, c.qos),
-        stamps(s) {
+        stamps(s),
+        stamper(stamper_config(c, decoder.config().model)) {
     if (c.position_port != 0)
       position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
           {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 4, true});
@@ -100,20 +101,23 @@ struct LidarDriver::Impl {
     }
   }
 
-  // Vehicle time of the packet's first firing.
+  static timesync::StamperConfig stamper_config(const LidarConfig& c, vel::Model m) {
+    timesync::StamperConfig sc;
+    sc.source = c.time_source == "host" ? timesync::TimeSource::kHost : timesync::TimeSource::kSensor;
+    sc.packet_duration_ns = packet_span_ns(m);
+    return sc;
+  }
+
+  // Vehicle time of the packet's first firing (timesync/ decides how; see its README).
   Nanos packet_stamp(std::span<const std::byte> bytes, Nanos rx_ns) {
-    const Nanos span = packet_span_ns(decoder.config().model);
-    if (cfg.time_source == "host") return rx_ns - span;
     const auto info = vel::read_packet_info(bytes);
-    if (!info) return rx_ns - span;
-    // GPS-disciplined sensor (PPS locked, valid GPRMC): its time is UTC, i.e. vehicle time.
-    if (pps == vel::PpsStatus::kLocked && gprmc_valid)
-      return gprmc_hour_ns + static_cast<Nanos>(info->sensor_time_us) * 1000;
-    // Free-running sensor clock: hour from the host, then offset and drift mapped robustly.
-    const Nanos sensor_ns = vel::sensor_time_to_ns(info->sensor_time_us, rx_ns);
-    mapper.observe(sensor_ns, rx_ns - span);
-    const auto mapped = mapper.map(sensor_ns);
-    return mapped.valid ? mapped.vehicle_ns : rx_ns - span;
+    timesync::PacketTime pt;
+    pt.sensor_us = info ? info->sensor_time_us : 0;
+    pt.rx_ns = rx_ns;
+    pt.gprmc_utc_ns = gprmc_utc_ns;
+    pt.pps = have_position ? static_cast<timesync::PpsState>(pps) : timesync::PpsState::kUnknown;
+    if (!info) return rx_ns - packet_span_ns(decoder.config().model);  // the decoder counts it as a drop
+    return stamper.stamp(pt).vehicle_ns;
   }
 
   void handle_position() {
@@ -124,9 +128,9 @@ struct LidarDriver::Impl {
       if (vel::parse_position_packet(position_arena.slots()[i].bytes(), pp) != lidar::PacketStatus::kOk) continue;
       std::lock_guard lock(mutex);
       ++position_packets;
+      have_position = true;
       pps = pp.pps;
-      gprmc_valid = pp.nmea == vel::NmeaStatus::kOk && pp.fix.valid;
-      if (gprmc_valid) gprmc_hour_ns = pp.fix.hour_start_ns;
+      if (pp.nmea == vel::NmeaStatus::kOk && pp.fix.valid) gprmc_utc_ns = pp.fix.utc_ns;
     }
   }
 
@@ -182,7 +186,7 @@ struct LidarDriver::Impl {
       std::lock_guard lock(mutex);
       decoder_stats = decoder.stats();
       udp_stats = data.stats();
-      sync = mapper.status();
+      sync = stamper.status(vehicle_now_ns());
     }
   }
 };
@@ -239,15 +243,17 @@ DriverStatus LidarDriver::status() const {
   s.add_number("truncated", u.truncated);
   s.add_number("write_errors", impl_->write_errors);
   s.add("time_source", c.time_source);
-  s.add("pps", vel::to_string(impl_->pps));
-  s.add("gprmc", impl_->gprmc_valid ? "valid" : "absent");
-  if (c.time_source == "sensor") {
-    const bool gps = impl_->pps == vel::PpsStatus::kLocked && impl_->gprmc_valid;
-    s.add("sync", gps ? "gps" : timesync::to_string(impl_->sync.state));
-    s.add_number("sync_offset_ns", impl_->sync.offset_ns);
-    s.add("sync_drift_ppm", std::to_string(impl_->sync.drift_ppm));
-    s.add_number("sync_jumps", impl_->sync.jumps);
-  }
+  s.add("pps", impl_->have_position ? vel::to_string(impl_->pps) : "no position packets");
+  s.add("gprmc", impl_->gprmc_utc_ns ? "valid" : "absent");
+  const auto& t = impl_->sync;
+  s.add("stamp_source", timesync::to_string(t.last_source));
+  s.add("sync", timesync::to_string(t.sync));
+  s.add_number("sync_offset_ns", t.mapper.offset_ns);
+  s.add("sync_drift_ppm", std::to_string(t.mapper.drift_ppm));
+  s.add_number("sync_residual_p99_ns", t.mapper.residual_p99_ns);
+  s.add_number("sync_jumps", t.mapper.jumps);
+  s.add_number("bad_timestamps", t.bad_timestamps);
+  s.add_number("host_fallbacks", t.host_fallbacks);
   return s;
 }
 

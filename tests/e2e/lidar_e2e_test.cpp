@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include "sensor_rig/common/child_process.hpp"
@@ -114,6 +116,8 @@ TEST(LidarEndToEnd, SyntheticMockRigPublishesAllThreeModels) {
     topics.push_back(std::make_unique<dds::Topic<msg::PointCloud2>>(p, "/sensors/lidar/l" + std::to_string(i) + "/points", q));
     readers.push_back(std::make_unique<dds::Reader<msg::PointCloud2>>(p, *topics.back(), q));
   }
+  dds::Topic<msg::DiagnosticArray> diag_topic(p, "/diagnostics");
+  dds::Reader<msg::DiagnosticArray> diag(p, diag_topic);
   for (auto& r : readers) ASSERT_TRUE(r->wait_for_writers(1, 15000));
   for (int i = 0; i < 3; ++i) {
     const auto got = receive_scans(*readers[static_cast<std::size_t>(i)], 2000, 2500);
@@ -125,6 +129,48 @@ TEST(LidarEndToEnd, SyntheticMockRigPublishesAllThreeModels) {
       EXPECT_GT(dt, 80'000'000) << models[i];
       EXPECT_LT(dt, 120'000'000) << models[i];
     }
+  }
+
+  // Diagnostics: one status per driver, with its counters, as diagnostic_msgs/DiagnosticArray.
+  std::set<std::string> seen;
+  for (int tries = 0; tries < 30 && seen.size() < 3; ++tries) {
+    diag.wait(200);
+    diag.take([&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
+      for (std::uint32_t k = 0; k < a.status._length; ++k) {
+        const auto& st = a.status._buffer[k];
+        std::map<std::string, std::string> kv;
+        for (std::uint32_t v = 0; v < st.values._length; ++v) kv[st.values._buffer[v].key] = st.values._buffer[v].value;
+        if (kv.contains("scans") && std::stoull(kv["scans"]) > 0 && st.level == 0) seen.insert(st.name);
+        EXPECT_EQ(kv["packets_dropped"], "0") << st.name;
+      }
+    });
+  }
+  EXPECT_EQ(seen, (std::set<std::string>{"lidar/l0", "lidar/l1", "lidar/l2"}));
+
+  // The monitor, as a separate process: one JSON line per topic per second with every stage.
+  const auto [rc, out] = test::run(rig_bin() + " monitor --json --duration 3.5 --domain 18 --dds-profile " +
+                                   test::source_dir() + "/config/cyclonedds/loopback.xml");
+  EXPECT_EQ(rc, 0);
+  std::map<std::string, nlohmann::json> last;
+  std::istringstream lines(out);
+  for (std::string line; std::getline(lines, line);) {
+    auto j = nlohmann::json::parse(line);
+    last[j["topic"]] = j;
+  }
+  ASSERT_EQ(last.size(), 3u) << out;
+  for (const auto& [topic, j] : last) {
+    EXPECT_NEAR(j["rate_hz"].get<double>(), 10.0, 1.5) << topic;
+    EXPECT_GT(j["received"].get<int>(), 15) << topic;
+    EXPECT_EQ(j["lost"].get<int>(), 0) << topic;
+    EXPECT_GT(j["size_bytes"].get<int>(), 24000) << topic;
+    for (const char* stage : {"sensor", "process", "dds", "total"}) {
+      ASSERT_TRUE(j["latency_ms"].contains(stage)) << topic << " " << stage;
+      EXPECT_GE(j["latency_ms"][stage]["p50"].get<double>(), 0.0) << topic << " " << stage;
+      EXPECT_LE(j["latency_ms"][stage]["p50"].get<double>(), j["latency_ms"][stage]["max"].get<double>());
+    }
+    // A scan's first firing is ~100 ms (one revolution at 600 rpm) before its last packet.
+    EXPECT_GT(j["latency_ms"]["total"]["p50"].get<double>(), 90.0) << topic;
+    EXPECT_LT(j["latency_ms"]["total"]["p50"].get<double>(), 150.0) << topic;
   }
   EXPECT_EQ(rig.stop(), 0);
 }
