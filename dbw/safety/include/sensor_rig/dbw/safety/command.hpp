@@ -1,0 +1,23 @@
+#pragma once
+// The actuator command as the safety core sees it (from rt/vehicle/dbw/cmd, after decoding).
+#include <cstdint>
+
+#include "sensor_rig/common/clock.hpp"
+
+namespace sensor_rig::dbw::safety {
+
+enum class Gear : std::uint8_t { none = 0, park = 1, reverse = 2, neutral = 3, drive = 4 };
+
+struct Command {
+  Nanos stamp = 0;           // the command's own stamp (vehicle time)
+  std::uint64_t seq = 0;     // strictly increasing per source
+  bool enable = false;
+  double steering_angle = 0.0;   // road-wheel angle, rad, + = left (REP 103)
+  double steering_torque = 0.0;  // Nm at the steering column (torque mode)
+  double throttle = 0.0;         // 0..1
+  double brake = 0.0;            // 0..1
+  double accel = 0.0;            // requested longitudinal acceleration, m/s^2
+  Gear gear = Gear::none;        // none = keep
+};
+
+}  // namespace sensor_rig::dbw::safety

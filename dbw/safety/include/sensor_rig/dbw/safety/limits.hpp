@@ -1,0 +1,96 @@
+#pragma once
+// Actuator limits: one constexpr table per vehicle, one generic checker (opendbc style).
+// Each axis has a range and a rate limit (per second: steering rate, throttle/brake slew, jerk for
+// acceleration); a violation is clamped or rejected as configured and always reported.
+#include <array>
+#include <cstdint>
+#include <string_view>
+
+#include "sensor_rig/dbw/safety/command.hpp"
+
+namespace sensor_rig::dbw::safety {
+
+enum class Axis : std::uint8_t { steering_angle, steering_torque, throttle, brake, accel, count };
+inline constexpr std::size_t kAxes = static_cast<std::size_t>(Axis::count);
+[[nodiscard]] std::string_view to_string(Axis a) noexcept;
+
+enum class LimitAction : std::uint8_t { clamp, reject };
+
+struct AxisLimit {
+  double min = 0.0;
+  double max = 0.0;
+  double max_rate = 0.0;  // |d/dt| per second; 0 = unlimited
+  LimitAction action = LimitAction::clamp;
+};
+
+struct VehicleLimits {
+  std::string_view name;
+  std::array<AxisLimit, kAxes> axes{};
+  [[nodiscard]] constexpr const AxisLimit& operator[](Axis a) const noexcept { return axes[static_cast<std::size_t>(a)]; }
+  [[nodiscard]] constexpr AxisLimit& operator[](Axis a) noexcept { return axes[static_cast<std::size_t>(a)]; }
+};
+
+// The reference protocol's vehicle (mock ECU): road-wheel angle ±0.6 rad at 0.8 rad/s, column torque
+// ±8 Nm, pedals 0..1 slewing at 2/s, acceleration -8..3 m/s^2 with jerk 5 m/s^3.
+inline constexpr VehicleLimits kParavanRef{
+    "paravan_ref",
+    {{{-0.6, 0.6, 0.8, LimitAction::clamp},
+      {-8.0, 8.0, 40.0, LimitAction::clamp},
+      {0.0, 1.0, 2.0, LimitAction::clamp},
+      {0.0, 1.0, 4.0, LimitAction::clamp},
+      {-8.0, 3.0, 5.0, LimitAction::clamp}}}};
+
+// The research car (Mercedes E-Class with Paravan SWA): conservative test-track limits; range
+// violations are rejected (disengage) instead of clamped.
+inline constexpr VehicleLimits kEClassTrack{
+    "eclass_track",
+    {{{-0.5, 0.5, 0.5, LimitAction::reject},
+      {-5.0, 5.0, 20.0, LimitAction::reject},
+      {0.0, 0.6, 1.0, LimitAction::clamp},
+      {0.0, 1.0, 3.0, LimitAction::clamp},
+      {-6.0, 2.0, 3.0, LimitAction::clamp}}}};
+
+inline constexpr std::array<const VehicleLimits*, 2> kVehicles{&kParavanRef, &kEClassTrack};
+[[nodiscard]] const VehicleLimits* find_vehicle(std::string_view name) noexcept;
+
+struct Violation {
+  Axis axis = Axis::steering_angle;
+  bool rate = false;       // rate (or jerk) limit, else range
+  bool rejected = false;   // rejected rather than clamped
+  bool not_finite = false; // NaN/inf: always rejected
+  double requested = 0.0;
+  double applied = 0.0;
+};
+
+struct LimitResult {
+  Command applied;
+  std::uint8_t count = 0;
+  std::array<Violation, kAxes * 2> violations{};
+  [[nodiscard]] bool rejected() const noexcept;
+  void add(const Violation& v) noexcept;
+};
+
+// Generic checker: range, then rate against the previously applied command.
+class LimitChecker {
+ public:
+  explicit LimitChecker(const VehicleLimits& limits) : limits_(limits) {}
+  // `dt_s`: time since the previously applied command; <= 0 means no rate check (first command).
+  [[nodiscard]] LimitResult check(const Command& requested, double dt_s) const noexcept;
+  // Remember what was actually sent (the basis of the next rate check).
+  void accept(const Command& applied) noexcept {
+    prev_ = applied;
+    have_prev_ = true;
+  }
+  void reset() noexcept { have_prev_ = false; }
+  [[nodiscard]] const VehicleLimits& limits() const noexcept { return limits_; }
+
+ private:
+  VehicleLimits limits_;
+  Command prev_{};
+  bool have_prev_ = false;
+};
+
+[[nodiscard]] double axis_value(const Command& c, Axis a) noexcept;
+void set_axis_value(Command& c, Axis a, double v) noexcept;
+
+}  // namespace sensor_rig::dbw::safety

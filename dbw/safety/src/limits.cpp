@@ -1,0 +1,93 @@
+#include "sensor_rig/dbw/safety/limits.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sensor_rig::dbw::safety {
+
+std::string_view to_string(Axis a) noexcept {
+  switch (a) {
+    case Axis::steering_angle: return "steering_angle";
+    case Axis::steering_torque: return "steering_torque";
+    case Axis::throttle: return "throttle";
+    case Axis::brake: return "brake";
+    case Axis::accel: return "accel";
+    case Axis::count: break;
+  }
+  return "?";
+}
+
+const VehicleLimits* find_vehicle(std::string_view name) noexcept {
+  for (const auto* v : kVehicles) {
+    if (v->name == name) return v;
+  }
+  return nullptr;
+}
+
+double axis_value(const Command& c, Axis a) noexcept {
+  switch (a) {
+    case Axis::steering_angle: return c.steering_angle;
+    case Axis::steering_torque: return c.steering_torque;
+    case Axis::throttle: return c.throttle;
+    case Axis::brake: return c.brake;
+    case Axis::accel: return c.accel;
+    case Axis::count: break;
+  }
+  return 0.0;
+}
+
+void set_axis_value(Command& c, Axis a, double v) noexcept {
+  switch (a) {
+    case Axis::steering_angle: c.steering_angle = v; break;
+    case Axis::steering_torque: c.steering_torque = v; break;
+    case Axis::throttle: c.throttle = v; break;
+    case Axis::brake: c.brake = v; break;
+    case Axis::accel: c.accel = v; break;
+    case Axis::count: break;
+  }
+}
+
+bool LimitResult::rejected() const noexcept {
+  for (std::size_t i = 0; i < count; ++i) {
+    if (violations[i].rejected) return true;
+  }
+  return false;
+}
+
+void LimitResult::add(const Violation& v) noexcept {
+  if (count < violations.size()) violations[count++] = v;
+}
+
+LimitResult LimitChecker::check(const Command& req, double dt_s) const noexcept {
+  LimitResult r;
+  r.applied = req;
+  for (std::size_t i = 0; i < kAxes; ++i) {
+    const auto axis = static_cast<Axis>(i);
+    const AxisLimit& lim = limits_[axis];
+    const double want = axis_value(req, axis);
+    if (!std::isfinite(want)) {
+      r.add({axis, false, true, true, want, 0.0});
+      set_axis_value(r.applied, axis, 0.0);
+      continue;
+    }
+    double v = want;
+    if (v < lim.min || v > lim.max) {
+      const double c = std::clamp(v, lim.min, lim.max);
+      r.add({axis, false, lim.action == LimitAction::reject, false, want, c});
+      v = c;
+    }
+    if (have_prev_ && dt_s > 0.0 && lim.max_rate > 0.0) {
+      const double prev = axis_value(prev_, axis);
+      const double step = lim.max_rate * dt_s;
+      if (std::fabs(v - prev) > step * (1.0 + 1e-9)) {
+        const double c = std::clamp(v, prev - step, prev + step);
+        r.add({axis, true, lim.action == LimitAction::reject, false, want, c});
+        v = c;
+      }
+    }
+    set_axis_value(r.applied, axis, v);
+  }
+  return r;
+}
+
+}  // namespace sensor_rig::dbw::safety
