@@ -1,0 +1,98 @@
+#pragma once
+// Mock LIDAR sender: plays a packet stream (a capture's UDP payloads or a synthetic sensor) to UDP
+// destinations at the stream's own timing, scaled by a rate factor, optionally looping, through
+// the fault injector. Pacing sleeps on absolute CLOCK_MONOTONIC deadlines (clock_nanosleep) and
+// sends everything already due in one sendmmsg batch when it falls behind.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/lidar/mock/fault_injector.hpp"
+#include "sensor_rig/lidar/mock/synthetic_velodyne.hpp"
+#include "sensor_rig/lidar/udp_sender.hpp"
+
+namespace sensor_rig::lidar {
+class PcapReader;
+}
+
+namespace sensor_rig::lidar::mock {
+
+struct StreamPacket {
+  Nanos time_ns = 0;                 // the stream's own time (capture record time, sensor time)
+  std::span<const std::byte> bytes;  // valid until the next call to next()
+  bool position = false;             // a position packet (UDP port 8308 in captures)
+};
+
+class PacketStream {
+ public:
+  virtual ~PacketStream() = default;
+  virtual std::optional<StreamPacket> next() = 0;  // nullopt at the end
+  virtual bool rewind() = 0;                        // back to the start (for --loop); false if it cannot
+  [[nodiscard]] virtual std::string error() const { return {}; }  // why the stream ended early
+};
+
+// UDP payloads of a pcap file, position = destination port 8308. Throws PcapError on open.
+class PcapStream final : public PacketStream {
+ public:
+  explicit PcapStream(std::string path);
+  ~PcapStream() override;
+  std::optional<StreamPacket> next() override;
+  bool rewind() override;
+  [[nodiscard]] std::string error() const override;
+
+ private:
+  std::string path_;
+  std::unique_ptr<PcapReader> reader_;
+};
+
+// An endless synthetic sensor.
+class SyntheticStream final : public PacketStream {
+ public:
+  explicit SyntheticStream(SyntheticVelodyne sensor) : sensor_(std::move(sensor)) {}
+  std::optional<StreamPacket> next() override;
+  bool rewind() override { return true; }  // endless: nothing to rewind
+  [[nodiscard]] const SyntheticVelodyne& sensor() const noexcept { return sensor_; }
+
+ private:
+  SyntheticVelodyne sensor_;
+};
+
+struct ReplayOptions {
+  double rate = 1.0;              // > 0; 2 = twice as fast as recorded
+  bool loop = false;              // restart the stream at its end
+  Nanos duration_ns = 0;          // stop after this wall time (0 = at the end of the stream)
+  std::uint64_t max_packets = 0;  // stop after reading this many packets (0 = no limit)
+  bool send_position = false;     // position packets to destination 1, else they are skipped
+  FaultConfig faults;
+  std::size_t batch = 64;         // packets per sendmmsg when behind schedule
+  Nanos lead_ns = 2'000'000;      // first packet this long after start()
+};
+
+struct ReplayStats {
+  std::uint64_t read = 0;               // packets taken from the stream
+  std::uint64_t sent = 0;               // datagrams handed to the kernel
+  std::uint64_t sent_data = 0;
+  std::uint64_t sent_position = 0;
+  std::uint64_t skipped_position = 0;   // no position destination configured
+  std::uint64_t send_errors = 0;
+  std::uint64_t batches = 0;            // sendmmsg calls
+  std::uint64_t late = 0;               // sent more than 1 ms after their deadline
+  Nanos max_late_ns = 0;
+  std::uint64_t loops = 0;              // completed passes when looping
+  Nanos elapsed_ns = 0;
+  FaultStats faults;
+  std::string stream_error;             // the stream ended on an error (corrupt capture, ...)
+  bool stopped = false;                 // ended by shutdown request
+};
+
+// Runs until the stream ends (without loop), the duration or packet limit is reached, or a
+// shutdown is requested (sensor_rig::shutdown_requested()). Never throws once started.
+ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOptions& options);
+
+// One line: "replay: sent N datagrams (data D, position P) in T s, R pkt/s; faults: ...".
+std::string summary_line(const ReplayStats& s);
+
+}  // namespace sensor_rig::lidar::mock
