@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
-# Runs every benchmark in an optimized build dir. Usage: scripts/bench.sh BUILD_DIR
+# `make bench`: every micro-benchmark (build/bench_*) and the end-to-end scan latency benchmark.
+# Usage: scripts/bench.sh BUILD_DIR
 set -euo pipefail
 build=${1:-build-release}
+export RIG_TEST_DATA=${RIG_TEST_DATA:-$(cd "$(dirname "$0")/.." && pwd)/../shared/data}
 shopt -s nullglob
 for b in "$build"/bench_*; do
   [ -x "$b" ] || continue
   echo "== $(basename "$b")"
-  "$b"
+  "$b" --benchmark_min_time=0.5
 done
+echo "== scan latency, three LIDARs (30 s)"
+scripts/bench_scan_latency.sh "$build" 30

@@ -1,5 +1,9 @@
 #include "lidar_driver.hpp"
 
+#include <pthread.h>
+#include <sched.h>
+
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -152,8 +156,9 @@ struct LidarDriver::Impl {
     pc.is_dense = true;
     const Nanos publish = vehicle_now_ns();
     const auto rc = writer.write(pc, publish);
-    SampleStamps st{scan.stamp, scan.first_rx_ns, scan.last_rx_ns, ready, publish, scan.packets, scan.dropped,
-                    pc.row_step};
+    const Nanos written = vehicle_now_ns();
+    SampleStamps st{scan.stamp, scan.first_rx_ns, scan.last_rx_ns, ready,        publish,
+                    written,    scan.packets,     scan.dropped,     pc.row_step};
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
     std::lock_guard lock(mutex);
     if (rc != DDS_RETCODE_OK) {
@@ -198,6 +203,14 @@ LidarDriver::~LidarDriver() { stop(); }
 
 void LidarDriver::start() {
   impl_->thread = std::thread([this] { impl_->run(); });
+  if (const int prio = impl_->cfg.realtime_priority; prio > 0) {
+    // A driver thread that wakes late adds its delay to every scan: run it real-time when allowed.
+    sched_param sp{};
+    sp.sched_priority = prio;
+    if (const int rc = pthread_setschedparam(impl_->thread.native_handle(), SCHED_FIFO, &sp); rc != 0)
+      log::warn("lidar", impl_->cfg.name + ": SCHED_FIFO " + std::to_string(prio) + " refused (" + std::strerror(rc) +
+                             "), running with normal priority");
+  }
   log::info("lidar", impl_->cfg.name + ": " + impl_->cfg.model + " on udp " + impl_->cfg.host + ":" +
                          std::to_string(impl_->data.port()) + " -> " + impl_->topic_name);
 }

@@ -4,6 +4,8 @@
 
 #include <cstdio>
 #include <deque>
+#include <limits>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <memory>
@@ -20,7 +22,8 @@ namespace sensor_rig::runtime {
 namespace {
 
 constexpr Nanos kLossTimeoutNs = 2'000'000'000;
-constexpr const char* kStages[] = {"sensor", "assemble", "process", "dds", "total"};
+constexpr const char* kStages[] = {"sensor", "assemble", "process", "write", "dds", "total"};
+enum Stage : std::size_t { kSensor, kAssemble, kProcess, kWrite, kDds, kTotal };
 constexpr std::size_t kStageCount = std::size(kStages);
 
 double ms(Nanos ns) { return static_cast<double>(ns) * 1e-6; }
@@ -37,17 +40,20 @@ struct TopicStats {
   std::uint64_t received = 0, lost = 0, source_drops = 0, bytes_window = 0, received_window = 0;
   std::size_t last_size = 0;
   std::array<LatencyWindow, kStageCount> stages;
+  std::array<LatencyWindow, kStageCount> run_stages;  // whole run, for --summary
   // Matching data samples with their stamps by header stamp (ns). Either may come first.
   std::map<Nanos, Arrival> unmatched_data;
   std::map<Nanos, msg::SourceStamps> unmatched_stamps;  // strings not kept (topic only)
   bool has_stamps = false;
+  // Stamps published before this monitor subscribed to the data topic cannot be matched: ignored.
+  Nanos counting_since = std::numeric_limits<Nanos>::max();
 
   void on_data(Nanos stamp, std::size_t size, const Arrival& a) {
     ++received;
     ++received_window;
     bytes_window += size;
     last_size = size;
-    stages[3].add(ms(a.receive_ns - a.publish_ns));
+    add(kDds, ms(a.receive_ns - a.publish_ns));
     if (auto it = unmatched_stamps.find(stamp); it != unmatched_stamps.end()) {
       add_stages(it->second, a);
       unmatched_stamps.erase(it);
@@ -57,6 +63,7 @@ struct TopicStats {
   }
   void on_stamps(const msg::SourceStamps& s, Nanos now) {
     has_stamps = true;
+    if (s.publish_ns < counting_since) return;
     source_drops += s.dropped;
     const Nanos stamp = msg::from_time(s.header.stamp);
     if (auto it = unmatched_data.find(stamp); it != unmatched_data.end()) {
@@ -71,10 +78,15 @@ struct TopicStats {
     }
   }
   void add_stages(const msg::SourceStamps& s, const Arrival& a) {
-    if (s.first_rx_ns > 0 && s.acquisition_ns > 0) stages[0].add(ms(s.first_rx_ns - s.acquisition_ns));
-    if (s.first_rx_ns > 0 && s.last_rx_ns > 0) stages[1].add(ms(s.last_rx_ns - s.first_rx_ns));
-    if (s.last_rx_ns > 0) stages[2].add(ms(s.publish_ns - s.last_rx_ns));
-    if (s.acquisition_ns > 0) stages[4].add(ms(a.receive_ns - s.acquisition_ns));
+    if (s.first_rx_ns > 0 && s.acquisition_ns > 0) add(kSensor, ms(s.first_rx_ns - s.acquisition_ns));
+    if (s.first_rx_ns > 0 && s.last_rx_ns > 0) add(kAssemble, ms(s.last_rx_ns - s.first_rx_ns));
+    if (s.last_rx_ns > 0) add(kProcess, ms(s.publish_ns - s.last_rx_ns));
+    if (s.written_ns > 0) add(kWrite, ms(s.written_ns - s.publish_ns));
+    if (s.acquisition_ns > 0) add(kTotal, ms(a.receive_ns - s.acquisition_ns));
+  }
+  void add(std::size_t stage, double value) {
+    stages[stage].add(value);
+    run_stages[stage].add(value);
   }
   void expire(Nanos now) {
     for (auto it = unmatched_stamps.begin(); it != unmatched_stamps.end();) {
@@ -198,6 +210,7 @@ class Monitor {
       }
       if (opt_.duration_s > 0 && static_cast<double>(mono - start) * 1e-9 >= opt_.duration_s) break;
     }
+    if (!opt_.summary_file.empty()) write_summary(static_cast<double>(monotonic_now_ns() - start) * 1e-9);
     return 0;
   }
 
@@ -218,8 +231,31 @@ class Monitor {
       auto& st = stats_[ros];
       st.name = ros;
       st.type = ep->type_name;
+      // Matching the new reader takes a moment; samples published before then are not ours to count.
+      st.counting_since = vehicle_now_ns() + 500'000'000;
     }
     if (n > 0) dds_return_loan(publications_.handle(), ptrs, n);
+  }
+
+  void write_summary(double run_s) {
+    nlohmann::json all = nlohmann::json::array();
+    for (auto& [name, st] : stats_) {
+      nlohmann::json j;
+      j["topic"] = name;
+      j["duration_s"] = run_s;
+      j["received"] = st.received;
+      j["lost"] = st.lost;
+      j["source_drops"] = st.source_drops;
+      j["size_bytes"] = st.last_size;
+      nlohmann::json lat = nlohmann::json::object();
+      for (std::size_t i = 0; i < kStageCount; ++i) {
+        const auto p = st.run_stages[i].take();
+        if (p.n > 0) lat[kStages[i]] = {{"p50", p.p50}, {"p99", p.p99}, {"max", p.max}, {"n", p.n}};
+      }
+      j["latency_ms"] = lat;
+      all.push_back(j);
+    }
+    std::ofstream(opt_.summary_file) << all.dump(2) << "\n";
   }
 
   void report(double window_s, bool tty) {
@@ -261,8 +297,8 @@ class Monitor {
         std::snprintf(line, sizeof line, "%-34s %6.1fHz %8.1fk %8llu %6llu %6llu | %-15s %-15s %-15s %-15s\n",
                       name.c_str(), rate, static_cast<double>(st.last_size) / 1024.0,
                       static_cast<unsigned long long>(st.received), static_cast<unsigned long long>(st.lost),
-                      static_cast<unsigned long long>(st.source_drops), cell(0).c_str(), cell(2).c_str(),
-                      cell(3).c_str(), cell(4).c_str());
+                      static_cast<unsigned long long>(st.source_drops), cell(kSensor).c_str(), cell(kProcess).c_str(),
+                      cell(kDds).c_str(), cell(kTotal).c_str());
         table << line;
       }
       st.received_window = 0;

@@ -3,7 +3,8 @@
 // rate, size, received, lost and the latency of each stage (SPEC §6):
 //   sensor   = first kernel receive - acquisition   (device + wire)
 //   assemble = last kernel receive - first           (scan/frame duration on the wire)
-//   process  = publish - last kernel receive         (decode, assemble, serialize, write)
+//   process  = publish - last kernel receive         (wake-up, decode, assemble)
+//   write    = DDS write returned - publish          (serialize and send: on the wire)
 //   dds      = subscriber receive - publish          (Cyclone transport)
 //   total    = subscriber receive - acquisition
 // Stages other than dds need the driver's per-sample stamps (rt/rig/stamps); topics published by
@@ -20,6 +21,7 @@ struct MonitorOptions {
   double duration_s = 0;            // 0 = until Ctrl-C
   bool json = false;                // one JSON line per topic per second instead of the table
   int period_ms = 1000;
+  std::string summary_file;         // when set: whole-run percentiles per topic and stage, as JSON
   dds::DomainConfig dds;
 };
 

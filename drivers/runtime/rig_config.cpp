@@ -31,7 +31,8 @@ LidarConfig parse_lidar(const config::Node& n) {
   LidarConfig l;
   if (!n.expect_map()) return l;
   n.allow_keys({"name", "model", "host", "port", "position_port", "receive_buffer_bytes", "calibration",
-                "returns", "min_range", "max_range", "cut_angle", "time_source", "frame_id", "qos", "mock"});
+                "returns", "min_range", "max_range", "cut_angle", "time_source", "frame_id", "realtime_priority", "qos",
+                "mock"});
   l.name = n.get_string("name");
   for (char c : l.name)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
@@ -53,6 +54,7 @@ LidarConfig parse_lidar(const config::Node& n) {
   l.cut_angle_deg = n.get_double("cut_angle", 0.0, 359.99, 0.0);
   l.time_source = n.get_choice("time_source", {"sensor", "host"}, "host");
   l.frame_id = n.get_string("frame_id", "lidar_" + l.name);
+  l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
   if (auto m = n.child("mock")) l.mock = parse_mock(*m);
   return l;

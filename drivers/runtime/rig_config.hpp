@@ -36,6 +36,7 @@ struct LidarConfig {
   double cut_angle_deg = 0.0;
   std::string time_source = "host";    // sensor | host
   std::string frame_id;                // default lidar_<name>
+  int realtime_priority = 0;           // SCHED_FIFO priority of the driver thread; 0 = normal scheduling
   dds::QosSpec qos;
   LidarMockConfig mock;
 };

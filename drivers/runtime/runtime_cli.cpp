@@ -79,6 +79,7 @@ void add_monitor(CLI::App& app, cli::Context& ctx) {
   cmd->add_flag("--json", opt->json, "One JSON line per topic per second");
   cmd->add_option("--domain", *domain, "DDS domain id")->check(CLI::Range(0, 232));
   cmd->add_option("--dds-profile", *profile, "Cyclone XML profile (default: loopback)");
+  cmd->add_option("--summary", opt->summary_file, "At the end, write whole-run percentiles per topic/stage (JSON)");
   cmd->callback([&ctx, opt, profile, domain] {
     opt->dds.domain_id = static_cast<dds_domainid_t>(*domain);
     opt->dds.profile = *profile;

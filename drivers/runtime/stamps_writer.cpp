@@ -23,6 +23,7 @@ void StampsWriter::write(const std::string& topic, const msg::Time& stamp, const
   m.last_rx_ns = s.last_rx_ns;
   m.ready_ns = s.ready_ns;
   m.publish_ns = s.publish_ns;
+  m.written_ns = s.written_ns;
   m.packets = s.packets;
   m.dropped = s.dropped;
   m.size_bytes = s.size_bytes;

@@ -15,6 +15,7 @@ struct SampleStamps {
   Nanos last_rx_ns = 0;
   Nanos ready_ns = 0;
   Nanos publish_ns = 0;
+  Nanos written_ns = 0;
   std::uint32_t packets = 0;
   std::uint32_t dropped = 0;
   std::uint32_t size_bytes = 0;
