@@ -194,6 +194,25 @@ TEST(VelodyneScans, CutAngleMidPacket) {
   EXPECT_EQ(s.packets, 76U);  // the packets on both sides of the cut count for both scans
 }
 
+TEST(VelodyneScans, Azimuth36000EndsTheRevolution) {
+  // Real sensors report 360.00° at the wrap: it is 0° for geometry, and the scan cut comes after it.
+  PacketBuilder b;
+  b.azimuths(35840, 40);  // ..., 35960, 36000 (block 4), 40, ...
+  b.azimuth(4, 36000).all(1000, 3);
+  for (std::size_t k = 5; k < 12; ++k) b.azimuth(k, static_cast<int>(k - 4) * 40);
+  auto cfg = vlp16_no_offsets();
+  cfg.emit_partial_scans = true;
+  Decoder dec(cfg);
+  const auto bytes = b.bytes();
+  const auto first = dec.push(PacketView{bytes, 0, 2368}, 1'000'000'000);
+  EXPECT_EQ(dec.last_status(), PacketStatus::kOk);
+  ASSERT_TRUE(first);
+  ASSERT_EQ(first->points.size(), 5U * 32U);
+  const auto& p = first->points[4 * 32];  // block 4, laser 0
+  EXPECT_NEAR(p.y, 0.0, 1e-4);
+  EXPECT_GT(p.x, 0.0F);
+}
+
 TEST(VelodyneScans, BadCutAngleOrRangeThrows) {
   auto cfg = vlp16_no_offsets();
   cfg.cut_angle_deg = 360.0;
@@ -276,7 +295,7 @@ TEST(VelodyneDrops, BadPacketsAreCountedNotDecoded) {
   cases.push_back({std::vector<std::byte>(512), PacketStatus::kNotData});
   cases.push_back({std::vector<std::byte>(1206, std::byte{0xAB}), PacketStatus::kBadBlockFlag});
   PacketBuilder bad_az = good;
-  bad_az.azimuth(7, 36000);
+  bad_az.azimuth(7, 36001);
   const auto ba = bad_az.bytes();
   cases.push_back({std::vector<std::byte>(ba.begin(), ba.end()), PacketStatus::kBadAzimuth});
   PacketBuilder other(ProductId::kVLP32C);

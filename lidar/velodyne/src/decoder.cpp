@@ -52,7 +52,8 @@ PacketStatus check_packet(std::span<const std::byte> bytes, Model m) noexcept {
   for (std::size_t b = 0; b < kBlocksPerPacket; ++b) {
     const std::uint8_t* blk = p + b * sizeof(RawBlock);
     if (rd16(blk) != kBlockFlagUpper) return PacketStatus::kBadBlockFlag;
-    if (rd16(blk + 2) >= kAzimuthCount) return PacketStatus::kBadAzimuth;
+    // 36000 (360.00°) is sent by real sensors at the wrap; it means 0° but ends the revolution.
+    if (rd16(blk + 2) > kAzimuthCount) return PacketStatus::kBadAzimuth;
   }
   const std::uint8_t mode = p[offsetof(RawDataPacket, return_mode)];
   const std::uint8_t pid = p[offsetof(RawDataPacket, product_id)];
@@ -266,14 +267,16 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
 
   for (int b = 0; b < static_cast<int>(kBlocksPerPacket); b += step) {
     const int a = az[b];
+    // For the cut, 360.00° is the last position of the revolution (VeloView splits after it).
+    const int a_cut = a == kAzimuthCount ? kAzimuthCount - 1 : a;
     if (have_prev && !out) {
-      const int s = az_step(prev_az, a);
+      const int s = az_step(prev_az, a_cut);
       if (s < kAzimuthCount / 2 && s > 0 && az_step(prev_az, cut) > 0 && az_step(prev_az, cut) <= s) {
         out = end_scan(cur_from_cut, true);
       }
     }
     have_prev = true;
-    prev_az = a;
+    prev_az = a_cut;
     const Nanos block_stamp = stamp + static_cast<Nanos>(b / step) * block_ns;
     begin_block(block_stamp, packet.rx_ns);
     const auto t_base = static_cast<std::uint32_t>(block_stamp - cur.stamp);

@@ -1,0 +1,168 @@
+// `rig lidar decode` end to end (SPEC §7): JSON lines on stdout, one PCD per complete scan, exit
+// codes for bad usage (2) and unreadable captures (1), and a truncated capture.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "sensor_rig/lidar/pcd.hpp"
+#include "test_support.hpp"
+
+namespace sensor_rig::lidar::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Run {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string rig_bin() {
+  const char* b = std::getenv("RIG_BIN");
+  return b ? b : "";
+}
+
+Run run(const std::string& args) {
+  const fs::path err = fs::temp_directory_path() / ("rig_decode_err_" + std::to_string(::getpid()));
+  const std::string cmd = rig_bin() + " " + args + " 2>" + err.string();
+  Run r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (p == nullptr) return r;
+  char buf[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int st = ::pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  r.err = read_text(err.string());
+  fs::remove(err);
+  return r;
+}
+
+class DecodeCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (rig_bin().empty() || !fs::exists(rig_bin())) GTEST_SKIP() << "RIG_BIN not set or missing";
+    dir_ = fs::temp_directory_path() / ("rig_decode_cli_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!dir_.empty()) fs::remove_all(dir_);
+  }
+  fs::path dir_;
+};
+
+TEST_F(DecodeCli, Vlp16CaptureMatchesVeloView) {
+  const std::string pcap = velodyne_file("vlp16_veloview_vlp-16-test-90deg-1-50-frames.pcap");
+  const std::string cal = velodyne_file("VeloView_VLP-16.xml");
+  if (!exists(pcap) || !exists(cal)) GTEST_SKIP() << "capture not found under " << data_dir();
+  const auto out = dir_ / "vlp16";
+  const Run r = run("lidar decode --pcap " + pcap + " --model VLP-16 --calibration " + cal + " --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::istringstream lines(r.out);
+  std::string line;
+  std::vector<nlohmann::json> scans;
+  while (std::getline(lines, line)) scans.push_back(nlohmann::json::parse(line));
+  // VeloView: 52 frames = partial first + 50 complete + partial last. The complete ones are written.
+  ASSERT_EQ(scans.size(), 50U);
+  std::int64_t prev = 0;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const auto& j = scans[i];
+    ASSERT_EQ(j.size(), 5U) << line;
+    EXPECT_EQ(j.at("scan").get<std::size_t>(), i);
+    EXPECT_GT(j.at("stamp_ns").get<std::int64_t>(), prev);
+    prev = j.at("stamp_ns").get<std::int64_t>();
+    EXPECT_GE(j.at("packets").get<int>(), 38);
+    EXPECT_LE(j.at("packets").get<int>(), 40);
+    char name[32];
+    std::snprintf(name, sizeof name, "scan_%06zu.pcd", i);
+    const auto pts = read_pcd((out / name).string());
+    EXPECT_EQ(pts.size(), j.at("points").get<std::size_t>()) << name;
+  }
+  // Scan 15 is VeloView's frame 16: 13,860 points, point 0 at (0.0801272, 6.04037, -1.61865) in
+  // VeloView's x-right/y-forward frame.
+  EXPECT_EQ(scans[15].at("points").get<int>(), 13860);
+  const auto pts = read_pcd((out / "scan_000015.pcd").string());
+  ASSERT_EQ(pts.size(), 13860U);
+  EXPECT_NEAR(pts[0].x, 6.04037, 1e-3);
+  EXPECT_NEAR(pts[0].y, -0.0801272, 1e-3);
+  EXPECT_NEAR(pts[0].z, -1.61865, 1e-3);
+  EXPECT_EQ(pts[0].intensity, 4.0F);
+  // The stamp comes from the sensor clock with the pcap's hour.
+  constexpr std::int64_t kHour = 3'600'000'000'000;
+  EXPECT_EQ(scans[0].at("stamp_ns").get<std::int64_t>() / kHour, 1415069209LL * 1'000'000'000 / kHour);
+  EXPECT_NE(r.err.find("dropped"), std::string::npos);
+  EXPECT_EQ(fs::exists(out / "scan_000050.pcd"), false);
+}
+
+TEST_F(DecodeCli, CutAngleAndReturnOptions) {
+  const std::string pcap = velodyne_file("hdl32e_veloview_monterey-first-100-packets.pcap");
+  if (!exists(pcap)) GTEST_SKIP() << "capture not found under " << data_dir();
+  const auto out = dir_ / "hdl";
+  const Run r = run("lidar decode --pcap " + pcap + " --model HDL-32E --return dual --min-range 1 --max-range 50 "
+                    "--cut-angle 180 --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto pts = read_pcd((out / "scan_000002.pcd").string());
+  ASSERT_GT(pts.size(), 30000U);
+  // First block at/after 180°: pointing backwards (x < 0, y ~ 0).
+  const double az = std::atan2(-static_cast<double>(pts[0].y), -static_cast<double>(pts[0].x)) * 180.0 / M_PI;
+  EXPECT_NEAR(az, 0.0, 0.5);
+  for (const auto& p : pts) {
+    const double d = std::hypot(p.x, p.y, p.z);
+    ASSERT_GE(d, 0.99);
+    ASSERT_LE(d, 50.01);
+  }
+}
+
+TEST_F(DecodeCli, BadUsageExitsTwo) {
+  const std::string pcap = velodyne_file("vlp16_veloview_vlp-16-test-90deg-1-50-frames.pcap");
+  Run r = run("lidar decode --pcap " + pcap + " --model Pandar40P --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("not supported yet"), std::string::npos) << r.err;
+  r = run("lidar decode --pcap " + pcap + " --model VLP-99 --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("unknown model"), std::string::npos) << r.err;
+  r = run("lidar decode --pcap " + pcap + " --model VLP-16 --return both --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  r = run("lidar decode --pcap " + pcap + " --model VLP-16 --cut-angle 400 --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  r = run("lidar decode --pcap /nonexistent.pcap --model VLP-16 --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  const auto bad_cal = dir_ / "bad.yaml";
+  std::ofstream(bad_cal) << "lasers:\n- {laser_id: 0, vert_correction: x}\n";
+  r = run("lidar decode --pcap " + pcap + " --model VLP-16 --calibration " + bad_cal.string() + " --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("bad.yaml:2:"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty());
+}
+
+TEST_F(DecodeCli, CorruptAndTruncatedCaptures) {
+  const auto junk = dir_ / "junk.pcap";
+  std::ofstream(junk) << std::string(100, 'x');
+  Run r = run("lidar decode --pcap " + junk.string() + " --model VLP-16 --out " + (dir_ / "o1").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("cannot read pcap"), std::string::npos) << r.err;
+
+  const std::string pcap = velodyne_file("vlp16_veloview_vlp-16-test-90deg-1-50-frames.pcap");
+  if (!exists(pcap)) GTEST_SKIP() << "capture not found under " << data_dir();
+  std::string bytes = read_text(pcap);
+  bytes.resize(bytes.size() / 3 + 77);  // ends inside a record
+  const auto cut = dir_ / "cut.pcap";
+  std::ofstream(cut, std::ios::binary) << bytes;
+  r = run("lidar decode --pcap " + cut.string() + " --model VLP-16 --out " + (dir_ / "o2").string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("truncated"), std::string::npos) << r.err;
+  const auto n = static_cast<std::size_t>(std::count(r.out.begin(), r.out.end(), '\n'));
+  EXPECT_GE(n, 14U);
+  EXPECT_LE(n, 17U);
+}
+
+}  // namespace
+}  // namespace sensor_rig::lidar::test
