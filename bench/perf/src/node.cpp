@@ -1,0 +1,233 @@
+// Load-generator node: publisher (absolute-deadline timer at F Hz from the common start time) or
+// subscriber (one waitset over all its readers, stamps on receipt, per-message CSV).
+#include "sensor_rig/bench/perf/node.hpp"
+
+#include <dds/ddsc/dds_loan_api.h>
+#include <sched.h>
+#include <time.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include "node_io.hpp"
+#include "node_types.hpp"
+#include "sensor_rig/bench/perf/records.hpp"
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+
+namespace sensor_rig::bench::perf {
+namespace {
+
+struct FileCloser {
+  void operator()(std::FILE* f) const noexcept { std::fclose(f); }
+};
+using File = std::unique_ptr<std::FILE, FileCloser>;
+
+File open_csv(const std::string& path) {
+  File f(std::fopen(path.c_str(), "w"));
+  if (!f) throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
+  return f;
+}
+
+dds::QosSpec perf_qos(int depth) {
+  dds::QosSpec q;  // reliable, volatile (ROS 2 default QoS)
+  q.depth = depth;
+  q.max_blocking_ms = 100;
+  return q;
+}
+
+void sleep_until_realtime(Nanos t) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(t / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(t % 1'000'000'000);
+  while (::clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    if (shutdown_requested()) return;
+  }
+}
+
+// A sample to copy from (no loans): payload filled once; the payload seq field stays default.
+template <class T>
+struct OwnedSample {
+  std::unique_ptr<T> sample = std::make_unique<T>();
+  std::vector<std::uint8_t> bytes;
+  explicit OwnedSample(std::uint32_t size) {
+    std::memset(static_cast<void*>(sample.get()), 0, sizeof(T));
+    if constexpr (std::is_same_v<T, PerfSeq>) {
+      bytes.assign(size, 0x5a);
+      sample->header.frame_id = const_cast<char*>("perf");
+      sample->data._buffer = bytes.data();
+      sample->data._length = sample->data._maximum = size;
+      sample->data._release = false;
+    }
+  }
+};
+
+template <class T>
+int run_publisher(const NodeArgs& a, const dds::Participant& p) {
+  const int topic_index = a.topics.front();
+  dds::Topic<T> topic(p, topic_name(a.run_id, topic_index), perf_qos(a.depth));
+  dds::Writer<T> writer(p, topic, perf_qos(a.depth));
+  const bool loan = a.loan && dds_is_loan_available(writer.handle());
+  if (!writer.wait_for_readers(static_cast<std::uint32_t>(a.expected_matches), a.discovery_timeout_ms)) {
+    log::error("perf", "publisher " + std::to_string(a.index) + ": only " + std::to_string(writer.matched()) + " of " +
+                           std::to_string(a.expected_matches) + " readers matched");
+    return 1;
+  }
+  log::info("perf", "publisher " + std::to_string(a.index) + ": shared memory " +
+                        (dds_is_shared_memory_available(writer.handle()) ? "yes" : "no") + ", loans " + (loan ? "yes" : "no"));
+  OwnedSample<T> owned(a.size);
+  std::vector<PubRecord> records(a.count);
+  announce_ready();
+  const auto t0 = wait_for_start();
+  if (!t0) return 1;
+
+  const double period_d = 1e9 / a.rate_hz;
+  const auto period = static_cast<Nanos>(period_d);
+  const Nanos end = *t0 + static_cast<Nanos>(std::llround(period_d * a.count));
+  const auto pub_id = static_cast<std::uint32_t>(topic_index);
+  std::uint64_t write_errors = 0;
+  for (std::uint32_t i = 0; i < a.count; ++i) {
+    PubRecord& r = records[i];
+    r.seq = i;
+    r.deadline_ns = *t0 + static_cast<Nanos>(std::llround(period_d * i));
+    if (vehicle_now_ns() < r.deadline_ns) sleep_until_realtime(r.deadline_ns);
+    if (shutdown_requested() || vehicle_now_ns() >= end) break;  // the rest stay "not sent"
+    T* sample = owned.sample.get();
+    void* loaned = nullptr;
+    if (loan) {
+      if (dds_loan_sample(writer.handle(), &loaned) != DDS_RETCODE_OK || loaned == nullptr) {
+        ++write_errors;
+        continue;  // no chunk: not sent
+      }
+      sample = static_cast<T*>(loaned);
+    }
+    write_ids(*sample, pub_id, i);
+    const Nanos stamp = vehicle_now_ns();  // immediately before publishing
+    write_stamp(*sample, stamp);
+    const dds_return_t rc = writer.write(*sample, stamp);
+    const Nanos after = vehicle_now_ns();
+    if (rc != DDS_RETCODE_OK) {
+      ++write_errors;
+      continue;
+    }
+    r.stamp_ns = stamp;
+    r.write_ns = after - stamp;
+    r.status = classify_send(stamp, r.deadline_ns, period);
+  }
+  for (std::uint32_t i = 0; i < a.count; ++i) {
+    records[i].seq = i;
+    if (records[i].deadline_ns == 0) records[i].deadline_ns = *t0 + static_cast<Nanos>(std::llround(period_d * i));
+  }
+  // Let reliable delivery finish before the writer goes (bounded).
+  dds_wait_for_acks(writer.handle(), DDS_SECS(5));
+  File f = open_csv(a.csv);
+  write_pub_csv(f.get(), records);
+  if (write_errors > 0) log::warn("perf", "publisher " + std::to_string(a.index) + ": " + std::to_string(write_errors) + " writes failed");
+  return 0;
+}
+
+template <class T>
+int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
+  std::vector<std::unique_ptr<dds::Topic<T>>> topics;
+  std::vector<std::unique_ptr<dds::Reader<T>>> readers;
+  for (int t : a.topics) {
+    topics.push_back(std::make_unique<dds::Topic<T>>(p, topic_name(a.run_id, t), perf_qos(a.depth)));
+    readers.push_back(std::make_unique<dds::Reader<T>>(p, *topics.back(), perf_qos(a.depth)));
+  }
+  // One waitset over every reader plus a guard condition the stop watcher triggers.
+  dds::Entity waitset(dds::check(dds_create_waitset(p.handle()), "dds_create_waitset"));
+  std::vector<dds::Entity> conds;
+  for (std::size_t i = 0; i < readers.size(); ++i) {
+    conds.emplace_back(dds::check(dds_create_readcondition(readers[i]->handle(), DDS_ANY_STATE), "dds_create_readcondition"));
+    dds::check(dds_waitset_attach(waitset.handle(), conds.back().handle(), static_cast<dds_attach_t>(i)), "dds_waitset_attach");
+  }
+  dds::Entity guard(dds::check(dds_create_guardcondition(p.handle()), "dds_create_guardcondition"));
+  dds::check(dds_waitset_attach(waitset.handle(), guard.handle(), static_cast<dds_attach_t>(-1)), "dds_waitset_attach");
+
+  const auto deadline = monotonic_now_ns() + static_cast<Nanos>(a.discovery_timeout_ms) * 1'000'000;
+  for (const auto& r : readers) {
+    const auto left = static_cast<int>((deadline - monotonic_now_ns()) / 1'000'000);
+    if (!r->wait_for_writers(1, left > 0 ? left : 0)) {
+      log::error("perf", "subscriber " + std::to_string(a.index) + ": a writer did not match");
+      return 1;
+    }
+  }
+  File f = open_csv(a.csv);
+  std::setvbuf(f.get(), nullptr, _IOFBF, 1 << 16);
+  write_sub_header(f.get());
+  std::fflush(f.get());
+  announce_ready();
+  const dds_entity_t guard_h = guard.handle();
+  StopWatcher stop([guard_h] { dds_set_guardcondition(guard_h, true); });
+
+  auto take_all = [&](std::size_t ri) {
+    const auto topic = static_cast<std::uint32_t>(a.topics[ri]);
+    return readers[ri]->take([&](const T& s, const dds_sample_info_t&) {
+      const Nanos recv = vehicle_now_ns();  // stamp on receipt
+      const PerfStamp st = read_stamp(s);
+      write_sub_row(f.get(), SubRecord{topic, st.seq, st.stamp_ns, recv});
+    });
+  };
+  std::vector<dds_attach_t> triggered(readers.size() + 1);
+  Nanos last_flush = monotonic_now_ns();
+  while (!stop.stopped() && !shutdown_requested()) {
+    const dds_return_t n = dds_waitset_wait(waitset.handle(), triggered.data(), triggered.size(), DDS_SECS(1));
+    for (dds_return_t k = 0; k < n; ++k) {
+      if (triggered[static_cast<std::size_t>(k)] >= 0) take_all(static_cast<std::size_t>(triggered[static_cast<std::size_t>(k)]));
+    }
+    if (monotonic_now_ns() - last_flush > 1'000'000'000) {  // a killed node keeps what it had
+      std::fflush(f.get());
+      last_flush = monotonic_now_ns();
+    }
+  }
+  // Drain: whatever is still queued, until 200 ms pass with nothing new.
+  const Nanos drain_end = monotonic_now_ns() + 2'000'000'000;
+  Nanos idle_since = monotonic_now_ns();
+  while (monotonic_now_ns() < drain_end && monotonic_now_ns() - idle_since < 200'000'000) {
+    int got = 0;
+    for (std::size_t i = 0; i < readers.size(); ++i) got += take_all(i);
+    if (got > 0) idle_since = monotonic_now_ns();
+    else dds_sleepfor(DDS_MSECS(10));
+  }
+  std::fflush(f.get());
+  return 0;
+}
+
+template <class T>
+int run_typed(const NodeArgs& a) {
+  if (a.rt_priority > 0) {  // before the participant: Cyclone's threads inherit the policy
+    sched_param sp{};
+    sp.sched_priority = a.rt_priority;
+    if (::sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+      log::warn("perf", std::string("SCHED_FIFO not available: ") + std::strerror(errno));
+    }
+  }
+  dds::Participant p(dds::DomainConfig{static_cast<dds_domainid_t>(a.domain), a.profile});
+  return a.role == Role::kPublisher ? run_publisher<T>(a, p) : run_subscriber<T>(a, p);
+}
+
+}  // namespace
+
+std::string topic_name(const std::string& run_id, int topic) {
+  return "/perf/r" + run_id + "/t" + std::to_string(topic);
+}
+
+int run_node(const NodeArgs& a) {
+  if (a.topics.empty()) throw std::invalid_argument("node without topics");
+  if (a.role == Role::kPublisher && a.topics.size() != 1) throw std::invalid_argument("a publisher has one topic");
+  if (a.message == Message::kSeq) return run_typed<PerfSeq>(a);
+  switch (a.size) {
+    case 0: return run_typed<PerfFixed0>(a);
+    case 16: return run_typed<PerfFixed16>(a);
+    case 65536: return run_typed<PerfFixed64k>(a);
+    case 524288: return run_typed<PerfFixed512k>(a);
+    case 1048576: return run_typed<PerfFixed1m>(a);
+    case 2097152: return run_typed<PerfFixed2m>(a);
+    default: throw std::invalid_argument("no fixed-size perf type for " + std::to_string(a.size) + " bytes");
+  }
+}
+
+}  // namespace sensor_rig::bench::perf

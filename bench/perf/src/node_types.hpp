@@ -1,0 +1,60 @@
+#pragma once
+// The perf message types registered with the DDS wrapper, and uniform header access.
+#include <type_traits>
+
+#include "sensor_rig/dds/types.hpp"
+#include "sensor_rig_perf.h"
+
+namespace sensor_rig::bench::perf {
+using PerfSeq = sensor_rig_msgs_msg_dds__PerfSeq_;
+using PerfFixed0 = sensor_rig_msgs_msg_dds__PerfFixed0_;
+using PerfFixed16 = sensor_rig_msgs_msg_dds__PerfFixed16_;
+using PerfFixed64k = sensor_rig_msgs_msg_dds__PerfFixed64k_;
+using PerfFixed512k = sensor_rig_msgs_msg_dds__PerfFixed512k_;
+using PerfFixed1m = sensor_rig_msgs_msg_dds__PerfFixed1m_;
+using PerfFixed2m = sensor_rig_msgs_msg_dds__PerfFixed2m_;
+
+static_assert(sizeof(PerfFixed16::data) == 16);
+static_assert(sizeof(PerfFixed64k::data) == 65536);
+static_assert(sizeof(PerfFixed512k::data) == 524288);
+static_assert(sizeof(PerfFixed1m::data) == 1048576);
+static_assert(sizeof(PerfFixed2m::data) == 2097152);
+
+struct PerfStamp {
+  std::uint32_t publisher = 0;
+  std::uint32_t seq = 0;
+  Nanos stamp_ns = 0;
+};
+
+template <class T>
+inline PerfStamp read_stamp(const T& s) {
+  if constexpr (std::is_same_v<T, PerfSeq>) {
+    return {s.publisher, s.seq, msg::from_time(s.header.stamp)};
+  } else {
+    return {s.header.publisher, s.header.seq, msg::from_time(s.header.stamp)};
+  }
+}
+template <class T>
+inline void write_ids(T& s, std::uint32_t publisher, std::uint32_t seq) {
+  if constexpr (std::is_same_v<T, PerfSeq>) {
+    s.publisher = publisher;
+    s.seq = seq;
+  } else {
+    s.header.publisher = publisher;
+    s.header.seq = seq;
+  }
+}
+template <class T>
+inline void write_stamp(T& s, Nanos ns) {
+  s.header.stamp = msg::to_time(ns);
+}
+
+}  // namespace sensor_rig::bench::perf
+
+RIG_DDS_TYPE(sensor_rig::bench::perf::PerfSeq, sensor_rig_msgs_msg_dds__PerfSeq__desc);
+RIG_DDS_TYPE(sensor_rig::bench::perf::PerfFixed0, sensor_rig_msgs_msg_dds__PerfFixed0__desc);
+RIG_DDS_TYPE(sensor_rig::bench::perf::PerfFixed16, sensor_rig_msgs_msg_dds__PerfFixed16__desc);
+RIG_DDS_TYPE(sensor_rig::bench::perf::PerfFixed64k, sensor_rig_msgs_msg_dds__PerfFixed64k__desc);
+RIG_DDS_TYPE(sensor_rig::bench::perf::PerfFixed512k, sensor_rig_msgs_msg_dds__PerfFixed512k__desc);
+RIG_DDS_TYPE(sensor_rig::bench::perf::PerfFixed1m, sensor_rig_msgs_msg_dds__PerfFixed1m__desc);
+RIG_DDS_TYPE(sensor_rig::bench::perf::PerfFixed2m, sensor_rig_msgs_msg_dds__PerfFixed2m__desc);
