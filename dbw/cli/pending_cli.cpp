@@ -3,5 +3,4 @@
 
 namespace sensor_rig::dbw {
 void register_dbw_cli(CLI::App& /*dbw*/, cli::Context& /*ctx*/) {}
-void register_mock_cli(CLI::App& /*mock*/, cli::Context& /*ctx*/) {}
 }  // namespace sensor_rig::dbw

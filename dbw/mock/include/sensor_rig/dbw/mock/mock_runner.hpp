@@ -1,0 +1,28 @@
+#pragma once
+// Runs a MockEcu on a transport: receives until the next 1 ms model tick, sends what the ECU emits,
+// and logs every frame seen on the bus (both directions) as candump -L.
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "sensor_rig/dbw/can/transport.hpp"
+#include "sensor_rig/dbw/mock/mock_ecu.hpp"
+
+namespace sensor_rig::dbw::mock {
+
+struct RunOptions {
+  double duration_s = 0.0;  // 0 = until shutdown
+  std::string log_path;     // empty = no log
+  std::string iface = "can0";
+  int tick_ms = 1;
+  bool print_state = false;  // one JSON line per second on stdout
+};
+
+struct RunResult {
+  std::uint64_t logged = 0;
+  std::uint64_t send_failures = 0;
+};
+
+RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o);
+
+}  // namespace sensor_rig::dbw::mock

@@ -1,0 +1,63 @@
+#include "sensor_rig/dbw/mock/mock_runner.hpp"
+
+#include <fstream>
+
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dbw/can/candump.hpp"
+
+namespace sensor_rig::dbw::mock {
+
+RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
+  RunResult r;
+  std::ofstream log;
+  if (!o.log_path.empty()) {
+    log.open(o.log_path, std::ios::out | std::ios::trunc);
+    if (!log) throw can::TransportError("cannot write bus log " + o.log_path);
+  }
+  auto write_log = [&](Nanos stamp, const can::Frame& f) {
+    if (!log.is_open()) return;
+    log << can::format_candump_line(stamp, o.iface, f) << '\n';
+    ++r.logged;
+  };
+  const Nanos tick = static_cast<Nanos>(o.tick_ms) * 1'000'000;
+  const Nanos start = monotonic_now_ns();
+  const Nanos end = o.duration_s > 0 ? start + static_cast<Nanos>(o.duration_s * 1e9) : -1;
+  Nanos next_tick = start;
+  Nanos next_print = start + 1'000'000'000;
+  can::RxFrame rx;
+  while (!shutdown_requested()) {
+    const Nanos now = monotonic_now_ns();
+    if (end > 0 && now >= end) break;
+    if (now >= next_tick) {
+      for (const auto& f : ecu.step(now)) {
+        if (bus.send(f) != can::IoStatus::ok) ++r.send_failures;
+        write_log(vehicle_now_ns(), f);
+      }
+      next_tick += tick;
+      if (next_tick < now) next_tick = now + tick;
+      if (o.print_state && now >= next_print) {
+        next_print += 1'000'000'000;
+        const auto& s = ecu.model().state();
+        std::printf("{\"engaged\":%s,\"speed_mps\":%.3f,\"steer_rad\":%.4f,\"x\":%.2f,\"y\":%.2f,\"yaw\":%.4f,"
+                    "\"rx\":%llu,\"e2e_errors\":%llu}\n",
+                    ecu.engaged() ? "true" : "false", s.speed, s.steer, s.x, s.y, s.yaw,
+                    static_cast<unsigned long long>(ecu.counters().rx_frames),
+                    static_cast<unsigned long long>(ecu.counters().rx_e2e_errors));
+        std::fflush(stdout);
+      }
+      continue;
+    }
+    const int wait_ms = static_cast<int>((next_tick - now + 999'999) / 1'000'000);
+    const auto st = bus.receive(rx, wait_ms);
+    if (st == can::IoStatus::ok) {
+      write_log(rx.stamp, rx.frame);
+      ecu.on_frame(rx.frame, monotonic_now_ns());
+    } else if (st == can::IoStatus::closed) {
+      break;
+    }
+  }
+  log.flush();
+  return r;
+}
+
+}  // namespace sensor_rig::dbw::mock

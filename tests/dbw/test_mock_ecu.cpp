@@ -1,0 +1,144 @@
+// The mock ECU in-process: engages on valid PU frames, drives the bicycle model, checks E2E and
+// timeouts like a real ECU, and injects each fault.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "dbw_test_data.hpp"
+#include "sensor_rig/dbw/can/transport.hpp"
+#include "sensor_rig/dbw/mock/mock_ecu.hpp"
+
+namespace dbw = sensor_rig::dbw;
+namespace mock = sensor_rig::dbw::mock;
+namespace s = sensor_rig::dbw::safety;
+using sensor_rig::Nanos;
+
+namespace {
+
+constexpr Nanos kMs = 1'000'000;
+
+class MockEcuTest : public ::testing::Test {
+ protected:
+  dbw::Protocol p = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());
+  s::E2eSender steer{p.tx("steering")->e2e};
+  s::E2eSender lon{p.tx("longitudinal")->e2e};
+  s::E2eSender hb{p.tx("heartbeat")->e2e};
+  Nanos now = 1'000'000'000;
+
+  // One 10 ms PU cycle then 10 model steps of 1 ms; returns the ECU's frames.
+  std::vector<dbw::can::Frame> cycle(mock::MockEcu& ecu, bool enable, double steer_rad, double throttle,
+                                     bool corrupt = false) {
+    dbw::can::Frame f;
+    EXPECT_TRUE(p.encode(*p.tx("steering"), {{"enable", enable ? 1 : 0}, {"angle", steer_rad}}, &steer, f));
+    if (corrupt) f.data[0] ^= 0xFF;
+    ecu.on_frame(f, now);
+    EXPECT_TRUE(p.encode(*p.tx("longitudinal"), {{"enable", enable ? 1 : 0}, {"throttle", throttle}, {"gear", 4}}, &lon, f));
+    ecu.on_frame(f, now);
+    EXPECT_TRUE(p.encode(*p.tx("heartbeat"), {{"state", enable ? 1 : 0}}, &hb, f));
+    ecu.on_frame(f, now);
+    std::vector<dbw::can::Frame> out;
+    for (int i = 0; i < 10; ++i) {
+      now += kMs;
+      auto v = ecu.step(now);
+      out.insert(out.end(), v.begin(), v.end());
+    }
+    return out;
+  }
+};
+
+TEST_F(MockEcuTest, EngagesAndDrivesTheModel) {
+  mock::MockEcu ecu(p, {});
+  cycle(ecu, false, 0, 0);
+  for (int i = 0; i < 200; ++i) cycle(ecu, true, 0.2, 0.5);  // 2 s
+  EXPECT_TRUE(ecu.engaged());
+  const auto& st = ecu.model().state();
+  EXPECT_GT(st.speed, 1.5);
+  EXPECT_NEAR(st.steer, 0.2, 0.01);
+  EXPECT_GT(st.yaw, 0.0);  // turning left
+  EXPECT_NEAR(st.yaw_rate, st.speed * std::tan(st.steer) / 2.94, 1e-9);
+  // Status/feedback frames decode and pass the PU's E2E check.
+  s::E2eChecker chk(p.rx("feedback")->e2e);
+  int feedback = 0;
+  for (const auto& f : cycle(ecu, true, 0.2, 0.5)) {
+    if (!p.rx("feedback")->matches(f)) continue;
+    ++feedback;
+    EXPECT_TRUE(s::is_ok(chk.check(f.payload())));
+    EXPECT_NEAR(*dbw::Protocol::value(*p.rx("feedback"), "speed", f), ecu.model().state().speed, 0.1);
+  }
+  EXPECT_EQ(feedback, 1);
+}
+
+TEST_F(MockEcuTest, DisengagesOnPuSilenceAndBadE2e) {
+  mock::MockEcu ecu(p, {});
+  cycle(ecu, false, 0, 0);
+  cycle(ecu, true, 0, 0.2);
+  ASSERT_TRUE(ecu.engaged());
+  for (int i = 0; i < 101; ++i) {
+    now += kMs;
+    ecu.step(now);
+  }
+  EXPECT_FALSE(ecu.engaged());
+  EXPECT_EQ(ecu.last_disengage(), "pu timeout");
+  cycle(ecu, false, 0, 0);
+  cycle(ecu, true, 0, 0.2);
+  ASSERT_TRUE(ecu.engaged());
+  for (int i = 0; i < 5; ++i) cycle(ecu, true, 0, 0.2, true);
+  EXPECT_FALSE(ecu.engaged());
+  EXPECT_GE(ecu.counters().rx_e2e_errors, 4U);
+}
+
+TEST_F(MockEcuTest, InjectedFaultsShowOnTheBus) {
+  mock::MockEcu ecu(p, {mock::parse_fault("bad-crc@0.1+0.05"), mock::parse_fault("stuck-counter@0.2+0.05"),
+                        mock::parse_fault("override@0.3+0.05"), mock::parse_fault("ecu-fault@0.4+0.05"),
+                        mock::parse_fault("bus-off@0.5+0.05")});
+  s::E2eChecker chk(p.rx("status")->e2e);
+  std::map<std::string, int> seen;
+  for (int c = 0; c < 60; ++c) {
+    const double t = c * 0.01;
+    for (const auto& f : cycle(ecu, true, 0, 0)) {
+      if (f.error) {
+        const auto e = dbw::can::classify_error_frame(f);
+        if (e.bus_off) ++seen["bus_off"];
+        if (e.restarted) ++seen["restarted"];
+        continue;
+      }
+      if (!p.rx("status")->matches(f)) continue;
+      const auto st = chk.check(f.payload());
+      if (st == s::E2eStatus::bad_crc) ++seen["bad_crc@" + std::to_string(static_cast<int>(t * 10))];
+      if (st == s::E2eStatus::repeated) ++seen["repeated"];
+      if (*dbw::Protocol::value(*p.rx("status"), "override", f) > 0.5) ++seen["override"];
+      if (*dbw::Protocol::value(*p.rx("status"), "fault", f) > 0.5) ++seen["fault"];
+      if (t > 0.5 && t < 0.55) ++seen["during_bus_off"];
+    }
+  }
+  EXPECT_GE(seen["bad_crc@1"], 3);
+  EXPECT_GE(seen["repeated"], 3);
+  EXPECT_GE(seen["override"], 3);
+  EXPECT_GE(seen["fault"], 3);
+  EXPECT_EQ(seen["bus_off"], 1);
+  EXPECT_EQ(seen["restarted"], 1);
+  EXPECT_EQ(seen["during_bus_off"], 0);
+}
+
+TEST_F(MockEcuTest, FrameLossDropsAboutTheConfiguredShare) {
+  mock::MockEcu ecu(p, {mock::parse_fault("loss=0.5")}, 7);
+  for (int c = 0; c < 200; ++c) cycle(ecu, false, 0, 0);
+  const double total = static_cast<double>(ecu.counters().tx_frames + ecu.counters().tx_dropped);
+  EXPECT_NEAR(static_cast<double>(ecu.counters().tx_dropped) / total, 0.5, 0.08);
+}
+
+TEST(MockFaults, ParseSpecs) {
+  const auto f = mock::parse_fault("bus-off@5+0.3");
+  EXPECT_EQ(f.kind, mock::FaultKind::bus_off);
+  EXPECT_DOUBLE_EQ(f.start_s, 5.0);
+  EXPECT_DOUBLE_EQ(f.duration_s, 0.3);
+  EXPECT_TRUE(f.active(5.1));
+  EXPECT_FALSE(f.active(5.3));
+  EXPECT_DOUBLE_EQ(mock::parse_fault("loss=0.25").value, 0.25);
+  EXPECT_THROW(mock::parse_fault("melt"), std::invalid_argument);
+  EXPECT_THROW(mock::parse_fault("loss=2"), std::invalid_argument);
+  EXPECT_THROW(mock::parse_fault("override@x"), std::invalid_argument);
+}
+
+}  // namespace
