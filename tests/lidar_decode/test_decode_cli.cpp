@@ -18,7 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
+struct CliRun {
   int code = -1;
   std::string out;
   std::string err;
@@ -29,10 +29,10 @@ std::string rig_bin() {
   return b ? b : "";
 }
 
-Run run(const std::string& args) {
+CliRun run(const std::string& args) {
   const fs::path err = fs::temp_directory_path() / ("rig_decode_err_" + std::to_string(::getpid()));
   const std::string cmd = rig_bin() + " " + args + " 2>" + err.string();
-  Run r;
+  CliRun r;
   FILE* p = ::popen(cmd.c_str(), "r");
   if (p == nullptr) return r;
   char buf[4096];
@@ -63,7 +63,7 @@ TEST_F(DecodeCli, Vlp16CaptureMatchesVeloView) {
   const std::string cal = velodyne_file("VeloView_VLP-16.xml");
   if (!exists(pcap) || !exists(cal)) GTEST_SKIP() << "capture not found under " << data_dir();
   const auto out = dir_ / "vlp16";
-  const Run r = run("lidar decode --pcap " + pcap + " --model VLP-16 --calibration " + cal + " --out " + out.string());
+  const CliRun r = run("lidar decode --pcap " + pcap + " --model VLP-16 --calibration " + cal + " --out " + out.string());
   ASSERT_EQ(r.code, 0) << r.err;
   std::istringstream lines(r.out);
   std::string line;
@@ -105,7 +105,7 @@ TEST_F(DecodeCli, CutAngleAndReturnOptions) {
   const std::string pcap = velodyne_file("hdl32e_veloview_monterey-first-100-packets.pcap");
   if (!exists(pcap)) GTEST_SKIP() << "capture not found under " << data_dir();
   const auto out = dir_ / "hdl";
-  const Run r = run("lidar decode --pcap " + pcap + " --model HDL-32E --return dual --min-range 1 --max-range 50 "
+  const CliRun r = run("lidar decode --pcap " + pcap + " --model HDL-32E --return dual --min-range 1 --max-range 50 "
                     "--cut-angle 180 --out " + out.string());
   ASSERT_EQ(r.code, 0) << r.err;
   const auto pts = read_pcd((out / "scan_000002.pcd").string());
@@ -122,7 +122,7 @@ TEST_F(DecodeCli, CutAngleAndReturnOptions) {
 
 TEST_F(DecodeCli, BadUsageExitsTwo) {
   const std::string pcap = velodyne_file("vlp16_veloview_vlp-16-test-90deg-1-50-frames.pcap");
-  Run r = run("lidar decode --pcap " + pcap + " --model Pandar40P --out " + dir_.string());
+  CliRun r = run("lidar decode --pcap " + pcap + " --model Pandar40P --out " + dir_.string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("not supported yet"), std::string::npos) << r.err;
   r = run("lidar decode --pcap " + pcap + " --model VLP-99 --out " + dir_.string());
@@ -145,7 +145,7 @@ TEST_F(DecodeCli, BadUsageExitsTwo) {
 TEST_F(DecodeCli, CorruptAndTruncatedCaptures) {
   const auto junk = dir_ / "junk.pcap";
   std::ofstream(junk) << std::string(100, 'x');
-  Run r = run("lidar decode --pcap " + junk.string() + " --model VLP-16 --out " + (dir_ / "o1").string());
+  CliRun r = run("lidar decode --pcap " + junk.string() + " --model VLP-16 --out " + (dir_ / "o1").string());
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("cannot read pcap"), std::string::npos) << r.err;
 
