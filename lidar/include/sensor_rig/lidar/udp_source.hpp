@@ -42,6 +42,10 @@ struct PacketSlot {
 class SlotArena {
  public:
   explicit SlotArena(std::size_t count, std::size_t slot_bytes = 2048);
+  SlotArena(const SlotArena&) = delete;  // the slots point into this arena's storage
+  SlotArena& operator=(const SlotArena&) = delete;
+  SlotArena(SlotArena&&) noexcept = default;
+  SlotArena& operator=(SlotArena&&) noexcept = default;
   [[nodiscard]] std::span<PacketSlot> slots() noexcept { return slots_; }
 
  private:
