@@ -3,7 +3,11 @@
 // --rate, optionally looping, with injected network faults. Position packets (port 8308 in a
 // capture; GPRMC + PPS from the synthetic sensor) go to --position-port on the same host when
 // given, else they are skipped. Ends with one summary line on stderr (and --json on stdout).
+#include <sched.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -34,7 +38,20 @@ struct ReplayCliOptions {
   std::uint64_t seed = 1;
   int send_buffer = 4 << 20;
   bool json = false;
+  int rt_priority = 10;
 };
+
+// A mock sensor should keep hardware-like timing on a loaded machine: SCHED_FIFO at a low
+// priority when permitted (root / CAP_SYS_NICE). The loop sleeps between packets (~10 % of a core
+// for an HDL-32E), and the kernel's RT throttling bounds it anyway. Best effort.
+void apply_rt_priority(int priority) {
+  if (priority <= 0) return;
+  sched_param sp{};
+  sp.sched_priority = priority;
+  if (::sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
+    log::debug("replay", std::string("SCHED_FIFO not available (") + std::strerror(errno) + "), normal scheduling");
+  }
+}
 
 std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o) {
   if (!o.pcap.empty()) {
@@ -123,6 +140,7 @@ int run_replay_command(const ReplayCliOptions& o) {
   log::info("replay", std::string(o.pcap.empty() ? "synthetic " + o.synthetic : o.pcap) + " -> " + o.to +
                           (o.position_port ? " (position packets -> port " + std::to_string(o.position_port) + ")"
                                            : std::string(" (position packets skipped)")));
+  apply_rt_priority(o.rt_priority);
   const mock::ReplayStats st = mock::run_replay(*stream, sender, ro);
   std::fprintf(stderr, "%s\n", mock::summary_line(st).c_str());
   if (o.json) std::printf("%s\n", json_line(st).c_str());
@@ -167,6 +185,9 @@ void register_replay_command(CLI::App& lidar, cli::Context& ctx) {
   cmd->add_option("--stall-every", opts->stall_every_s, "... every S seconds of stream time")->group(faults);
   cmd->add_option("--seed", opts->seed, "random seed of the faults")->group(faults)->capture_default_str();
   cmd->add_option("--send-buffer", opts->send_buffer, "socket send buffer in bytes")->capture_default_str();
+  cmd->add_option("--rt-priority", opts->rt_priority, "SCHED_FIFO priority for steady timing, 0 = normal scheduling")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 99));
   cmd->add_flag("--json", opts->json, "print the summary as one JSON line on stdout");
   cmd->callback([opts, &ctx] { ctx.exit_code = run_replay_command(*opts); });
 }
