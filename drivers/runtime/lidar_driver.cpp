@@ -185,7 +185,11 @@ struct LidarDriver::Impl {
       for (std::size_t i = 0; i < r.count; ++i) {
         const auto& s = slots[i];
         const Nanos stamp = packet_stamp(s.bytes(), s.rx_ns);
-        if (auto scan = decoder.push(lidar::view(s, static_cast<std::uint16_t>(cfg.port)), stamp)) publish(*scan);
+        if (auto scan = decoder.push(lidar::view(s, static_cast<std::uint16_t>(cfg.port)), stamp)) {
+          publish(*scan);
+          // Cyclone has serialized the sample: the buffer can take the next scan (no page faults).
+          decoder.recycle(std::move(scan->points));
+        }
       }
       handle_position();
       std::lock_guard lock(mutex);

@@ -59,6 +59,7 @@ struct DecoderStats {
   std::uint64_t scans = 0;             // emitted
   std::uint64_t partial_scans_discarded = 0;
   std::uint64_t time_jumps = 0;        // scans ended early because the packet time jumped
+  std::uint64_t early_cut_misses = 0;  // scans ended at a packet's end whose next block did not cross
   [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
 };
 
