@@ -63,6 +63,7 @@ void register_dbw_cli(CLI::App& dbw, cli::Context& ctx) {
 
   auto bo = std::make_shared<BridgeOptions>();
   auto* br = dbw.add_subcommand("bridge", "the DBW bridge: /vehicle/dbw/cmd -> safety -> CAN; status and vehicle state out");
+  br->add_option("config", bo->config, "protocol mapping YAML (positional form of --config)");
   br->add_option("--config", bo->config, "protocol mapping YAML (default: config/dbw/paravan_ref.yaml)");
   br->add_option("--transport", bo->transport, "CAN transport: unix:PATH (default /tmp/rig_paravan.sock), socketcan:IFACE, fd:N");
   br->add_option("--duration", bo->duration, "seconds to run (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);

@@ -58,6 +58,23 @@ TEST(Protocol, HashChangesWithTheMapping) {
   fs::remove_all(dir);
 }
 
+TEST(Protocol, LimitOverridesFromTheMapping) {
+  const fs::path dir = fs::temp_directory_path() / ("protolim_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  fs::copy_file(ref_yaml().parent_path() / "paravan_ref.dbc", dir / "paravan_ref.dbc");
+  std::ofstream(dir / "l.yaml") << sensor_rig::dbw::test::read_text(ref_yaml())
+                                << "limits:\n  steering_angle: {max: 0.3, rate: 0.2, action: reject}\n";
+  const auto p = Protocol::load((dir / "l.yaml").string());
+  const auto& a = p.limits()[sensor_rig::dbw::safety::Axis::steering_angle];
+  EXPECT_DOUBLE_EQ(a.max, 0.3);
+  EXPECT_DOUBLE_EQ(a.min, -0.6);  // untouched keys keep the table's value
+  EXPECT_DOUBLE_EQ(a.max_rate, 0.2);
+  EXPECT_EQ(a.action, sensor_rig::dbw::safety::LimitAction::reject);
+  std::ofstream(dir / "bad.yaml") << sensor_rig::dbw::test::read_text(ref_yaml()) << "limits:\n  throttle: {min: 1, max: 0.5}\n";
+  EXPECT_THROW((void)Protocol::load((dir / "bad.yaml").string()), sensor_rig::ConfigError);
+  fs::remove_all(dir);
+}
+
 TEST(Protocol, BadMappingsNameFileAndLine) {
   const fs::path dir = fs::temp_directory_path() / ("protobad_" + std::to_string(::getpid()));
   fs::create_directories(dir);

@@ -92,7 +92,7 @@ Protocol Protocol::load(const std::string& yaml_path) {
   problems->throw_if_any();
   Protocol p;
   p.mapping_path_ = yaml_path;
-  root.allow_keys({"dbc", "vehicle", "timing", "e2e", "tx", "rx"});
+  root.allow_keys({"dbc", "vehicle", "limits", "timing", "e2e", "tx", "rx"});
   const std::string dbc_path = root.get_path("dbc");
   std::string dbc_text;
   try {
@@ -104,10 +104,29 @@ Protocol Protocol::load(const std::string& yaml_path) {
     problems->throw_if_any();
   }
   const std::string vehicle = root.get_string("vehicle", std::string("paravan_ref"));
-  p.limits_ = safety::find_vehicle(vehicle);
-  if (p.limits_ == nullptr) {
+  if (const auto* table = safety::find_vehicle(vehicle)) {
+    p.limits_ = *table;
+  } else {
     root.fail("vehicle", "unknown vehicle limit table '" + vehicle + "' (paravan_ref, eclass_track)");
-    p.limits_ = &safety::kParavanRef;
+  }
+  // Optional per-axis overrides: limits: {steering_angle: {min: .., max: .., rate: .., action: clamp|reject}}
+  if (const auto lim = root.child("limits")) {
+    lim->allow_keys({"steering_angle", "steering_torque", "throttle", "brake", "accel"});
+    for (std::size_t i = 0; i < safety::kAxes; ++i) {
+      const auto axis = static_cast<safety::Axis>(i);
+      const auto a = lim->child(safety::to_string(axis));
+      if (!a) continue;
+      a->allow_keys({"min", "max", "rate", "action"});
+      safety::AxisLimit& l = p.limits_[axis];
+      l.min = a->get_double("min", -1e6, 1e6, l.min);
+      l.max = a->get_double("max", -1e6, 1e6, l.max);
+      l.max_rate = a->get_double("rate", 0.0, 1e6, l.max_rate);
+      l.action = a->get_choice("action", {"clamp", "reject"}, std::string(l.action == safety::LimitAction::clamp ? "clamp" : "reject")) ==
+                         "reject"
+                     ? safety::LimitAction::reject
+                     : safety::LimitAction::clamp;
+      if (!(l.min < l.max)) a->fail("max", "must be greater than min");
+    }
   }
   if (const auto t = root.child("timing")) {
     t->allow_keys({"command_timeout_ms", "ecu_timeout_ms", "tx_period_ms"});

@@ -39,7 +39,8 @@ class Protocol {
   static Protocol load(const std::string& yaml_path);
 
   [[nodiscard]] const dbc::Database& db() const noexcept { return *db_; }
-  [[nodiscard]] const safety::VehicleLimits& limits() const noexcept { return *limits_; }
+  // The vehicle's constexpr table with the mapping's `limits:` overrides applied.
+  [[nodiscard]] const safety::VehicleLimits& limits() const noexcept { return limits_; }
   [[nodiscard]] const ProtocolTiming& timing() const noexcept { return timing_; }
   [[nodiscard]] int e2e_tolerance() const noexcept { return e2e_tolerance_; }
   // FNV-1a 64 over the DBC bytes and the mapping bytes, hex: identifies what ran.
@@ -60,7 +61,7 @@ class Protocol {
 
  private:
   std::shared_ptr<const dbc::Database> db_;
-  const safety::VehicleLimits* limits_ = &safety::kParavanRef;
+  safety::VehicleLimits limits_ = safety::kParavanRef;
   ProtocolTiming timing_;
   int e2e_tolerance_ = 3;
   std::string hash_;
