@@ -1,4 +1,4 @@
-// bench_dbw_latency [SECONDS] [RATE_HZ]: the DDS bridge and the mock ECU on a socketpair in one
+// bench_dbw_latency [--seconds=S] [--rate=HZ] (other --options, e.g. --benchmark_*, are ignored): the DDS bridge and the mock ECU on a socketpair in one
 // process, a DDS command source at RATE_HZ (default 100) for SECONDS (default 10), then silence.
 // Prints JSON: DDS command (source timestamp) -> CAN frame written p50/p99/max, take -> written,
 // command silence -> first disengage frame on the bus (kernel receive time at the ECU), CPU share.
@@ -22,8 +22,17 @@ namespace dds = sensor_rig::dds;
 using sensor_rig::Nanos;
 
 int main(int argc, char** argv) {
-  const double seconds = argc > 1 ? std::atof(argv[1]) : 10.0;
-  const double rate = argc > 2 ? std::atof(argv[2]) : 100.0;
+  double seconds = 10.0;
+  double rate = 100.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.rfind("--seconds=", 0) == 0) seconds = std::atof(a.c_str() + 10);
+    if (a.rfind("--rate=", 0) == 0) rate = std::atof(a.c_str() + 7);
+  }
+  if (!(seconds > 0.0) || !(rate > 0.0)) {
+    std::fprintf(stderr, "usage: bench_dbw_latency [--seconds=S] [--rate=HZ]\n");
+    return 2;
+  }
   if (std::getenv("ROS_DOMAIN_ID") == nullptr) ::setenv("ROS_DOMAIN_ID", "161", 1);
   const auto protocol = dbw::Protocol::load(std::string(RIG_DBW_SOURCE_DIR) + "/config/dbw/paravan_ref.yaml");
   auto [bridge_end, ecu_end] = dbw::can::make_socketpair();

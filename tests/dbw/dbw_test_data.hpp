@@ -9,8 +9,11 @@
 namespace sensor_rig::dbw::test {
 
 inline std::filesystem::path data_dir() {
-  const char* d = std::getenv("RIG_TEST_DATA");
-  return d != nullptr ? std::filesystem::path(d) : std::filesystem::path("../shared/data");
+  if (const char* d = std::getenv("RIG_TEST_DATA"); d != nullptr && *d != '\0') return d;
+  if (const char* s = std::getenv("RIG_SOURCE_DIR"); s != nullptr && *s != '\0') {
+    return std::filesystem::path(s) / "../shared/data";
+  }
+  return std::filesystem::path("../shared/data");
 }
 
 inline std::filesystem::path source_dir() {
