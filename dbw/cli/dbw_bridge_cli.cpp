@@ -39,6 +39,10 @@ int run_bridge(const BridgeOptions& o) {
               s.silence_to_neutral_ms, static_cast<unsigned long long>(s.status_published),
               static_cast<unsigned long long>(s.state_published), protocol.config_hash().c_str());
   std::fflush(stdout);
+  if (s.transport_closed) {
+    std::fprintf(stderr, "error: CAN transport %s closed\n", bus->name().c_str());
+    return cli::kRuntime;
+  }
   return cli::kOk;
 }
 

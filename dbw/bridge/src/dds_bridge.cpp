@@ -68,6 +68,7 @@ class Runner {
     s.silence_to_neutral_ms = silence_to_neutral_ms_;
     s.status_published = status_published_;
     s.state_published = state_published_;
+    s.transport_closed = transport_closed_;
     return s;
   }
 
@@ -201,6 +202,7 @@ class Runner {
         log::error("dbw", "CAN transport closed: " + bus_.name());
         core_.safety().on_bus_state(true, now);  // nothing reaches the ECU any more
         flush_events(now);
+        transport_closed_ = true;
         break;
       }
       if (bus_.bus_state() != bus_state) {
@@ -242,6 +244,7 @@ class Runner {
   std::vector<double> take_to_send_;
   std::uint64_t status_published_ = 0;
   std::uint64_t state_published_ = 0;
+  bool transport_closed_ = false;
 };
 
 }  // namespace

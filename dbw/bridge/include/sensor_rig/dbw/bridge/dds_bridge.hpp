@@ -26,6 +26,7 @@ struct DdsBridgeStats {
   double silence_to_neutral_ms = -1.0;
   std::uint64_t status_published = 0;
   std::uint64_t state_published = 0;
+  bool transport_closed = false;  // the CAN transport went away before the end (a runtime failure)
 };
 
 DdsBridgeStats run_dds_bridge(const Protocol& protocol, can::Transport& bus, const DdsBridgeOptions& o);
