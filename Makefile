@@ -2,6 +2,7 @@
 JOBS      ?= $(shell nproc)
 BUILD     ?= build
 DURATION  ?= 0
+CONFIG    ?= config/mock_rig.yaml
 CMAKE_ARGS ?=
 
 .PHONY: all setup build demo test test-asan bench fuzz clean
@@ -18,8 +19,9 @@ build: setup $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j$(JOBS)
 
 # The whole rig on mock devices with a live status table; Ctrl-C or DURATION=s to stop.
+# CONFIG=config/replay_rig.yaml replays the shared captures instead of synthetic sensors.
 demo: build
-	$(BUILD)/rig demo --duration $(DURATION)
+	$(BUILD)/rig demo --config $(CONFIG) --duration $(DURATION)
 
 # Installs, builds from scratch into build/, runs the whole suite; then the unit tests under ASan/UBSan.
 test: setup

@@ -109,6 +109,10 @@ struct LidarDriver::Impl {
     timesync::StamperConfig sc;
     sc.source = c.time_source == "host" ? timesync::TimeSource::kHost : timesync::TimeSource::kSensor;
     sc.packet_duration_ns = packet_span_ns(m);
+    sc.hour.hour_source = c.hour_source == "host" ? timesync::HourSource::kHost : timesync::HourSource::kGprmc;
+    sc.correction = c.clock_correction == "always"  ? timesync::Correction::kAlways
+                    : c.clock_correction == "never" ? timesync::Correction::kNever
+                                                    : timesync::Correction::kAuto;
     return sc;
   }
 
@@ -264,6 +268,7 @@ DriverStatus LidarDriver::status() const {
   s.add("gprmc", impl_->gprmc_utc_ns ? "valid" : "absent");
   const auto& t = impl_->sync;
   s.add("stamp_source", timesync::to_string(t.last_source));
+  s.add("hour_source", timesync::to_string(t.hour_source));
   s.add("sync", timesync::to_string(t.sync));
   s.add_number("sync_offset_ns", t.mapper.offset_ns);
   s.add("sync_drift_ppm", std::to_string(t.mapper.drift_ppm));

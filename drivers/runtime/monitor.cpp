@@ -39,6 +39,7 @@ struct TopicStats {
   std::string type;
   std::uint64_t received = 0, lost = 0, source_drops = 0, bytes_window = 0, received_window = 0;
   std::size_t last_size = 0;
+  std::string info;  // what the last sample says, in a few words (points, speed, state...)
   std::array<LatencyWindow, kStageCount> stages;
   std::array<LatencyWindow, kStageCount> run_stages;  // whole run, for --summary
   // Matching data samples with their stamps by header stamp (ns). Either may come first.
@@ -116,23 +117,66 @@ template <>
 struct Inspect<msg::PointCloud2> {
   static Nanos stamp(const msg::PointCloud2& m) { return msg::from_time(m.header.stamp); }
   static std::size_t size(const msg::PointCloud2& m) { return m.data._length; }
+  static std::string info(const msg::PointCloud2& m) { return std::to_string(m.width * m.height) + " points"; }
 };
 template <>
 struct Inspect<msg::Image> {
   static Nanos stamp(const msg::Image& m) { return msg::from_time(m.header.stamp); }
   static std::size_t size(const msg::Image& m) { return m.data._length; }
+  static std::string info(const msg::Image& m) {
+    return std::to_string(m.width) + "x" + std::to_string(m.height) + " " + (m.encoding ? m.encoding : "");
+  }
+};
+
+// Control and state messages: fixed-size payload; report the C struct size as an estimate.
+template <class T>
+struct InspectHeader {
+  static Nanos stamp(const T& m) { return msg::from_time(m.header.stamp); }
+  static std::size_t size(const T&) { return sizeof(T); }
+};
+template <class... A>
+std::string fmt(const char* f, A... a) {
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wformat-nonliteral"  // only called with literals below
+  char buf[96];
+  std::snprintf(buf, sizeof buf, f, a...);
+#pragma GCC diagnostic pop
+  return buf;
+}
+template <>
+struct Inspect<msg::DbwCommand> : InspectHeader<msg::DbwCommand> {
+  static std::string info(const msg::DbwCommand& m) {
+    return std::string(m.enable ? "enable " : "") + fmt("throttle %.2f steer %.3f rad", m.throttle, m.steering_angle);
+  }
+};
+template <>
+struct Inspect<msg::DbwStatus> : InspectHeader<msg::DbwStatus> {
+  static std::string info(const msg::DbwStatus& m) {
+    return std::string(m.state == 1 ? "ENGAGED" : "disengaged") + " (" + (m.reason ? m.reason : "") + ")";
+  }
+};
+template <>
+struct Inspect<msg::VehicleState> : InspectHeader<msg::VehicleState> {
+  static std::string info(const msg::VehicleState& m) {
+    return fmt("%.2f m/s, steering %.3f rad", m.speed, m.steering_angle) + fmt(", yaw rate %.3f rad/s, gear %d", m.yaw_rate, static_cast<int>(m.gear));
+  }
 };
 
 template <class T>
 class TypedReader final : public TopicReader {
  public:
-  TypedReader(const dds::Participant& p, const std::string& ros_name, const dds::QosSpec& q)
-      : topic_(p, ros_name, q), reader_(p, topic_, q) {}
+  TypedReader(const dds::Participant& p, const std::string& ros_name, const dds::QosSpec& q, dds_entity_t waitset)
+      : topic_(p, ros_name, q), reader_(p, topic_, q) {
+    // Wake the monitor's loop as soon as a sample arrives: polling would add its period to the latency.
+    cond_ = dds::Entity(dds::check(dds_create_readcondition(reader_.handle(), DDS_ANY_STATE), "readcondition"));
+    dds::check(dds_waitset_attach(waitset, cond_.handle(), 0), "waitset attach");
+  }
   void poll(TopicStats& stats) override {
     reader_.take(
         [&](const T& m, const dds_sample_info_t& info) {
           stats.on_data(Inspect<T>::stamp(m), Inspect<T>::size(m),
                         Arrival{vehicle_now_ns(), static_cast<Nanos>(info.source_timestamp)});
+          stats.info = Inspect<T>::info(m);
         },
         256);
   }
@@ -140,20 +184,24 @@ class TypedReader final : public TopicReader {
  private:
   dds::Topic<T> topic_;
   dds::Reader<T> reader_;
+  dds::Entity cond_;
 };
 
 using ReaderFactory = std::function<std::unique_ptr<TopicReader>(const dds::Participant&, const std::string&,
-                                                                  const dds::QosSpec&)>;
+                                                                  const dds::QosSpec&, dds_entity_t)>;
 template <class T>
 ReaderFactory factory() {
-  return [](const dds::Participant& p, const std::string& n, const dds::QosSpec& q) {
-    return std::make_unique<TypedReader<T>>(p, n, q);
+  return [](const dds::Participant& p, const std::string& n, const dds::QosSpec& q, dds_entity_t ws) {
+    return std::make_unique<TypedReader<T>>(p, n, q, ws);
   };
 }
 const std::map<std::string, ReaderFactory>& known_types() {
   static const std::map<std::string, ReaderFactory> types = {
       {"sensor_msgs::msg::dds_::PointCloud2_", factory<msg::PointCloud2>()},
       {"sensor_msgs::msg::dds_::Image_", factory<msg::Image>()},
+      {"sensor_rig_msgs::msg::dds_::DbwCommand_", factory<msg::DbwCommand>()},
+      {"sensor_rig_msgs::msg::dds_::DbwStatus_", factory<msg::DbwStatus>()},
+      {"sensor_rig_msgs::msg::dds_::VehicleState_", factory<msg::VehicleState>()},
   };
   return types;
 }
@@ -176,6 +224,10 @@ class Monitor {
         participant_(o.dds),
         stamps_topic_(participant_, kStampsTopic, stamps_qos()),
         stamps_reader_(participant_, stamps_topic_, stamps_qos()) {
+    waitset_ = dds::Entity(dds::check(dds_create_waitset(participant_.handle()), "waitset"));
+    stamps_cond_ = dds::Entity(
+        dds::check(dds_create_readcondition(stamps_reader_.handle(), DDS_ANY_STATE), "readcondition"));
+    dds::check(dds_waitset_attach(waitset_.handle(), stamps_cond_.handle(), 0), "waitset attach");
     publications_ = dds::Entity(
         dds::check(dds_create_reader(participant_.handle(), DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr),
                    "builtin publication reader"));
@@ -189,7 +241,7 @@ class Monitor {
     const bool tty = !opt_.json && ::isatty(STDOUT_FILENO) != 0;
     while (!shutdown_requested()) {
       discover();
-      stamps_reader_.wait(20);
+      dds_waitset_wait(waitset_.handle(), nullptr, 0, DDS_MSECS(20));
       const Nanos now = vehicle_now_ns();
       stamps_reader_.take(
           [&](const msg::SourceStamps& s, const dds_sample_info_t&) {
@@ -227,7 +279,7 @@ class Monitor {
       if (!wanted_.empty() && !wanted_.contains(ros)) continue;
       const auto it = known_types().find(ep->type_name);
       if (it == known_types().end()) continue;
-      readers_.emplace(ros, it->second(participant_, ros, reader_qos_for(ep->qos)));
+      readers_.emplace(ros, it->second(participant_, ros, reader_qos_for(ep->qos), waitset_.handle()));
       auto& st = stats_[ros];
       st.name = ros;
       st.type = ep->type_name;
@@ -263,9 +315,9 @@ class Monitor {
     if (tty) table << "\x1b[H\x1b[2J";
     if (!opt_.json) {
       char line[512];
-      std::snprintf(line, sizeof line, "%-34s %7s %9s %8s %6s %6s | %-15s %-15s %-15s %-15s\n", "topic", "rate",
-                    "size", "recv", "lost", "drops", "sensor p50/p99", "process p50/p99", "dds p50/p99",
-                    "total p50/p99");
+      std::snprintf(line, sizeof line, "%-30s %7s %8s %7s %5s %5s | %-13s %-13s %-13s %-15s | %s\n", "topic", "rate",
+                    "size", "recv", "lost", "drops", "sensor ms", "process ms", "dds ms", "total ms",
+                    "last sample (latencies: p50/p99)");
       table << line;
     }
     for (auto& [name, st] : stats_) {
@@ -281,6 +333,7 @@ class Monitor {
         j["received"] = st.received;
         j["lost"] = st.lost;
         j["source_drops"] = st.source_drops;
+        j["info"] = st.info;
         nlohmann::json lat = nlohmann::json::object();
         for (std::size_t i = 0; i < kStageCount; ++i)
           if (p[i].n > 0) lat[kStages[i]] = {{"p50", p[i].p50}, {"p99", p[i].p99}, {"max", p[i].max}};
@@ -294,11 +347,11 @@ class Monitor {
           return std::string(c);
         };
         char line[512];
-        std::snprintf(line, sizeof line, "%-34s %6.1fHz %8.1fk %8llu %6llu %6llu | %-15s %-15s %-15s %-15s\n",
+        std::snprintf(line, sizeof line, "%-30s %5.1fHz %7.1fk %7llu %5llu %5llu | %-13s %-13s %-13s %-15s | %s\n",
                       name.c_str(), rate, static_cast<double>(st.last_size) / 1024.0,
                       static_cast<unsigned long long>(st.received), static_cast<unsigned long long>(st.lost),
                       static_cast<unsigned long long>(st.source_drops), cell(kSensor).c_str(), cell(kProcess).c_str(),
-                      cell(kDds).c_str(), cell(kTotal).c_str());
+                      cell(kDds).c_str(), cell(kTotal).c_str(), st.info.c_str());
         table << line;
       }
       st.received_window = 0;
@@ -316,6 +369,8 @@ class Monitor {
   dds::Participant participant_;
   dds::Topic<msg::SourceStamps> stamps_topic_;
   dds::Reader<msg::SourceStamps> stamps_reader_;
+  dds::Entity waitset_;
+  dds::Entity stamps_cond_;
   dds::Entity publications_;
   std::set<std::string> wanted_;
   std::map<std::string, std::unique_ptr<TopicReader>> readers_;

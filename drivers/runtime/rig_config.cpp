@@ -31,8 +31,8 @@ LidarConfig parse_lidar(const config::Node& n) {
   LidarConfig l;
   if (!n.expect_map()) return l;
   n.allow_keys({"name", "model", "host", "port", "position_port", "receive_buffer_bytes", "calibration",
-                "returns", "min_range", "max_range", "cut_angle", "time_source", "frame_id", "realtime_priority", "qos",
-                "mock"});
+                "returns", "min_range", "max_range", "cut_angle", "time_source", "hour_source", "clock_correction",
+                "frame_id", "realtime_priority", "qos", "mock"});
   l.name = n.get_string("name");
   for (char c : l.name)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
@@ -53,11 +53,42 @@ LidarConfig parse_lidar(const config::Node& n) {
   if (l.min_range_m >= l.max_range_m) n.fail("max_range", "must be greater than min_range");
   l.cut_angle_deg = n.get_double("cut_angle", 0.0, 359.99, 0.0);
   l.time_source = n.get_choice("time_source", {"sensor", "host"}, "host");
+  l.hour_source = n.get_choice("hour_source", {"gprmc", "host"}, "gprmc");
+  l.clock_correction = n.get_choice("clock_correction", {"auto", "always", "never"}, "auto");
   l.frame_id = n.get_string("frame_id", "lidar_" + l.name);
   l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
   if (auto m = n.child("mock")) l.mock = parse_mock(*m);
   return l;
+}
+
+DbwConfig parse_dbw(const config::Node& n) {
+  DbwConfig d;
+  d.enabled = true;
+  n.allow_keys({"protocol", "bus", "transport", "mock_ecu", "mock_faults", "command_source"});
+  d.protocol = n.get_path("protocol", "");
+  if (!d.protocol.empty() && !std::filesystem::exists(d.protocol)) n.fail("protocol", "file not found: " + d.protocol);
+  d.bus = n.get_string("bus", d.bus);
+  d.transport = n.get_string("transport", "");
+  d.mock_ecu = n.get_bool("mock_ecu", false);
+  for (const auto& f : n.items("mock_faults")) {
+    if (!f.yaml().IsScalar()) {
+      f.fail("", "expected a fault string like 'loss=0.01' or 'override@5+1'");
+      continue;
+    }
+    d.mock_faults.push_back(f.yaml().Scalar());
+  }
+  if (auto c = n.child("command_source")) {
+    c->allow_keys({"enabled", "rate_hz", "steer_rad", "throttle", "brake", "gear"});
+    auto& cs = d.command_source;
+    cs.enabled = c->get_bool("enabled", true);
+    cs.rate_hz = c->get_double("rate_hz", 1, 1000, 50);
+    cs.steer_rad = c->get_double("steer_rad", -1.0, 1.0, 0.05);
+    cs.throttle = c->get_double("throttle", 0, 1, 0.2);
+    cs.brake = c->get_double("brake", 0, 1, 0.0);
+    cs.gear = static_cast<int>(c->get_int("gear", 0, 4, 4));
+  }
+  return d;
 }
 
 }  // namespace
@@ -69,8 +100,8 @@ RigConfig load_rig_config(const std::string& path) {
   RigConfig cfg;
   cfg.file = path;
   if (!root.expect_map()) problems->throw_if_any();
-  // Cameras and drive-by-wire are configured once their drivers exist; until then they are unknown keys.
-  root.allow_keys({"rig", "lidars"});
+  // Cameras are configured once their drivers exist; until then `cameras` is an unknown key.
+  root.allow_keys({"rig", "lidars", "dbw"});
   if (auto rig = root.child("rig", true)) {
     rig->allow_keys({"name", "dds", "diagnostics_period_ms"});
     cfg.name = rig->get_string("name", "rig");
@@ -93,6 +124,7 @@ RigConfig load_rig_config(const std::string& path) {
       item.fail("position_port", "port " + std::to_string(l.position_port) + " used twice");
     cfg.lidars.push_back(std::move(l));
   }
+  if (auto d = root.child("dbw")) cfg.dbw = parse_dbw(*d);
   problems->throw_if_any();
   return cfg;
 }
@@ -108,6 +140,14 @@ std::string describe(const RigConfig& cfg) {
       << l.name << "/points";
     if (l.mock.kind == LidarMockConfig::Kind::kSynthetic) o << " [mock: synthetic " << l.mock.rpm << " rpm]";
     if (l.mock.kind == LidarMockConfig::Kind::kReplay) o << " [mock: replay " << l.mock.pcap << "]";
+    o << "\n";
+  }
+  if (cfg.dbw.enabled) {
+    o << "  dbw: bridge on " << (cfg.dbw.transport.empty() ? "unix:" + cfg.dbw.bus : cfg.dbw.transport)
+      << ", protocol " << (cfg.dbw.protocol.empty() ? std::string("config/dbw/paravan_ref.yaml") : cfg.dbw.protocol)
+      << " -> /vehicle/dbw/status, /vehicle/state";
+    if (cfg.dbw.mock_ecu) o << " [mock ECU on " << cfg.dbw.bus << "]";
+    if (cfg.dbw.command_source.enabled) o << " [command source " << cfg.dbw.command_source.rate_hz << " Hz]";
     o << "\n";
   }
   return o.str();

@@ -35,10 +35,31 @@ struct LidarConfig {
   double max_range_m = 200.0;
   double cut_angle_deg = 0.0;
   std::string time_source = "host";    // sensor | host
+  std::string hour_source = "gprmc";   // sensor time: hour from gprmc (host as fallback) | host
+  std::string clock_correction = "auto";  // sensor time through the clock mapper: auto | always | never
   std::string frame_id;                // default lidar_<name>
   int realtime_priority = 0;           // SCHED_FIFO priority of the driver thread; 0 = normal scheduling
   dds::QosSpec qos;
   LidarMockConfig mock;
+};
+
+// Drive-by-wire: the bridge (`rig dbw bridge`) and, on the mock rig, the mock Paravan ECU and a
+// simple command source, each its own process.
+struct DbwConfig {
+  bool enabled = false;
+  std::string protocol;                 // mapping YAML (default: config/dbw/paravan_ref.yaml)
+  std::string bus = "/tmp/rig_paravan.sock";  // unix seqpacket bus path (mock) ...
+  std::string transport;                // ... or an explicit bridge transport (socketcan:can0); empty = unix:<bus>
+  bool mock_ecu = false;
+  std::vector<std::string> mock_faults;  // `rig mock paravan --fault` values
+  struct CommandSource {
+    bool enabled = false;
+    double rate_hz = 50;
+    double steer_rad = 0.05;
+    double throttle = 0.2;
+    double brake = 0.0;
+    int gear = 4;
+  } command_source;
 };
 
 struct RigConfig {
@@ -47,6 +68,7 @@ struct RigConfig {
   dds::DomainConfig dds;
   int diagnostics_period_ms = 1000;
   std::vector<LidarConfig> lidars;
+  DbwConfig dbw;
 };
 
 // Loads and validates; throws ConfigError listing every problem (file:line:col: key: message).

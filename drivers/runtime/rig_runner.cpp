@@ -1,5 +1,8 @@
 #include "rig_runner.hpp"
 
+#include <unistd.h>
+
+#include <cstdlib>
 #include <memory>
 
 #include "diagnostics.hpp"
@@ -27,7 +30,31 @@ std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const Li
   return argv;
 }
 
+std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, const DbwConfig& d) {
+  std::vector<std::vector<std::string>> out;
+  if (!d.enabled) return out;
+  if (d.mock_ecu) {
+    std::vector<std::string> ecu{rig_exe, "mock", "paravan", "--transport", "unix-listen:" + d.bus};
+    if (!d.protocol.empty()) ecu.insert(ecu.end(), {"--config", d.protocol});
+    for (const auto& f : d.mock_faults) ecu.insert(ecu.end(), {"--fault", f});
+    out.push_back(ecu);
+  }
+  std::vector<std::string> bridge{rig_exe, "dbw", "bridge", "--transport",
+                                  d.transport.empty() ? "unix:" + d.bus : d.transport};
+  if (!d.protocol.empty()) bridge.insert(bridge.end(), {"--config", d.protocol});
+  out.push_back(bridge);
+  if (d.command_source.enabled) {
+    const auto& c = d.command_source;
+    out.push_back({rig_exe, "dbw", "send", "--enable", "--steer", std::to_string(c.steer_rad), "--throttle",
+                   std::to_string(c.throttle), "--brake", std::to_string(c.brake), "--gear", std::to_string(c.gear),
+                   "--rate", std::to_string(c.rate_hz), "--duration", "86400"});
+  }
+  return out;
+}
+
 int run_rig(const RigConfig& cfg, const RunOptions& opt) {
+  // Child tools (dbw bridge, command source) take the DDS domain from ROS_DOMAIN_ID.
+  ::setenv("ROS_DOMAIN_ID", std::to_string(cfg.dds.domain_id).c_str(), 1);
   dds::Participant participant(cfg.dds);
   log::info("rig", "'" + cfg.name + "' on DDS domain " + std::to_string(cfg.dds.domain_id) + ", profile " +
                        (participant.profile().empty() ? std::string("$CYCLONEDDS_URI") : participant.profile()));
@@ -46,6 +73,12 @@ int run_rig(const RigConfig& cfg, const RunOptions& opt) {
 
   std::vector<ChildProcess> mocks;
   const std::string exe = self_executable();
+  for (const auto& argv : dbw_commands(exe, cfg.dbw)) {
+    mocks.emplace_back(argv);
+    log::info("rig", "dbw: " + argv[1] + " " + argv[2] + ": pid " + std::to_string(mocks.back().pid()));
+    // The ECU must listen before the bridge connects, the bridge subscribe before commands flow.
+    ::usleep(300'000);
+  }
   for (const auto& l : cfg.lidars) {
     auto argv = lidar_mock_command(exe, l);
     if (argv.empty()) continue;
@@ -69,7 +102,8 @@ int run_rig(const RigConfig& cfg, const RunOptions& opt) {
     if (opt.duration_s > 0 && static_cast<double>(monotonic_now_ns() - start) * 1e-9 >= opt.duration_s) break;
   }
   log::info("rig", "stopping");
-  for (auto& m : mocks) m.stop();
+  // Stop in reverse: the command source first, so the bridge sees silence and disengages.
+  for (auto it = mocks.rbegin(); it != mocks.rend(); ++it) it->stop();
   for (auto& d : lidars) d->stop();
   return 0;
 }

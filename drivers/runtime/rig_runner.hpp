@@ -14,5 +14,7 @@ int run_rig(const RigConfig& cfg, const RunOptions& opt);
 
 // argv of the mock process for a LIDAR (`rig lidar replay ...`), empty when it has none.
 std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const LidarConfig& l);
+// argv of the drive-by-wire processes, in start order: mock ECU, bridge, command source.
+std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, const DbwConfig& d);
 
 }  // namespace sensor_rig::runtime

@@ -22,9 +22,18 @@ std::string read_file(const std::string& path) {
   s << in.rdbuf();
   return s.str();
 }
-// Cyclone allows one explicit configuration per domain id and process.
+}  // namespace
+
+// Cyclone allows one explicit configuration per domain id and process; the domain lives while a
+// participant uses it (deleting it would delete every participant in it).
+struct DomainHandle {
+  std::string profile;
+  Entity domain;
+};
+
+namespace {
 std::mutex g_domains_mutex;
-std::map<dds_domainid_t, std::string> g_domains;
+std::map<dds_domainid_t, std::weak_ptr<DomainHandle>> g_domains;
 }  // namespace
 
 std::string resolve_profile(const DomainConfig& cfg) {
@@ -38,14 +47,16 @@ std::string resolve_profile(const DomainConfig& cfg) {
 Participant::Participant(const DomainConfig& cfg) : profile_(resolve_profile(cfg)) {
   if (!profile_.empty()) {
     std::lock_guard lock(g_domains_mutex);
-    auto it = g_domains.find(cfg.domain_id);
-    if (it == g_domains.end()) {
+    domain_ = g_domains[cfg.domain_id].lock();
+    if (!domain_) {
       const std::string xml = read_file(profile_);
-      domain_ = Entity(check(dds_create_domain(cfg.domain_id, xml.c_str()), "dds_create_domain"));
-      g_domains.emplace(cfg.domain_id, profile_);
-    } else if (it->second != profile_) {
+      domain_ = std::make_shared<DomainHandle>();
+      domain_->profile = profile_;
+      domain_->domain = Entity(check(dds_create_domain(cfg.domain_id, xml.c_str()), "dds_create_domain"));
+      g_domains[cfg.domain_id] = domain_;
+    } else if (domain_->profile != profile_) {
       throw std::runtime_error("domain " + std::to_string(cfg.domain_id) + " already configured with '" +
-                               it->second + "', cannot also use '" + profile_ + "'");
+                               domain_->profile + "', cannot also use '" + profile_ + "'");
     }
   }
   participant_ = Entity(check(dds_create_participant(cfg.domain_id, nullptr, nullptr), "dds_create_participant"));

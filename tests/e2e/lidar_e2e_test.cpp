@@ -175,5 +175,52 @@ TEST(LidarEndToEnd, SyntheticMockRigPublishesAllThreeModels) {
   EXPECT_EQ(rig.stop(), 0);
 }
 
+// A sensor that stops sending: the driver keeps running and its diagnostics turn to ERROR with a
+// message naming the silence; it recovers when packets come back.
+TEST(LidarEndToEnd, DeadDeviceIsReportedInDiagnostics) {
+  test::TempDir dir;
+  const int port = test::free_udp_port();
+  const auto cfg = dir.write("rig.yaml", rig_config(port, "dead", "VLP-16"));
+  ChildProcess rig({rig_bin(), "up", cfg, "--duration", "60"});
+  dds::Participant p({17, test::source_dir() + "/config/cyclonedds/loopback.xml"});
+  dds::Topic<msg::DiagnosticArray> topic(p, "/diagnostics");
+  dds::Reader<msg::DiagnosticArray> diag(p, topic);
+  ASSERT_TRUE(diag.wait_for_writers(1, 15000));
+
+  // Level and message of lidar/dead in the next diagnostics sample.
+  auto next_status = [&]() -> std::pair<int, std::string> {
+    std::pair<int, std::string> r{-1, ""};
+    for (int tries = 0; tries < 30 && r.first < 0; ++tries) {
+      diag.wait(200);
+      diag.take([&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
+        for (std::uint32_t k = 0; k < a.status._length; ++k)
+          if (std::string(a.status._buffer[k].name) == "lidar/dead")
+            r = {a.status._buffer[k].level, a.status._buffer[k].message};
+      });
+    }
+    return r;
+  };
+  EXPECT_EQ(next_status().first, 1) << "WARN while no packet ever arrived";
+
+  auto send = [&](const char* seconds) {
+    return test::run(rig_bin() + " lidar replay --synthetic VLP-16 --to 127.0.0.1:" + std::to_string(port) +
+                     " --duration " + seconds + " 2>/dev/null");
+  };
+  EXPECT_EQ(send("1.5").first, 0);
+  // Right after the sensor went quiet the last status may still be OK; within ~2 s it is ERROR.
+  std::pair<int, std::string> st;
+  for (int i = 0; i < 6 && st.first != 2; ++i) st = next_status();
+  EXPECT_EQ(st.first, 2);
+  EXPECT_NE(st.second.find("no scan for"), std::string::npos) << st.second;
+
+  // Packets again: back to OK while it sends.
+  ChildProcess sender({rig_bin(), "lidar", "replay", "--synthetic", "VLP-16", "--to",
+                       "127.0.0.1:" + std::to_string(port), "--duration", "4"});
+  for (int i = 0; i < 8 && st.first != 0; ++i) st = next_status();
+  EXPECT_EQ(st.first, 0) << st.second;
+  sender.stop();
+  EXPECT_EQ(rig.stop(), 0);
+}
+
 }  // namespace
 }  // namespace sensor_rig

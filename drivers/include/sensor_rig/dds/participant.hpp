@@ -1,5 +1,6 @@
 #pragma once
 // A DDS domain participant configured from a Cyclone XML profile (file path) or CYCLONEDDS_URI.
+#include <memory>
 #include <string>
 
 #include "sensor_rig/dds/entity.hpp"
@@ -16,6 +17,8 @@ struct DomainConfig {
 // Resolves the profile the way Participant does (for logs and diagnostics).
 std::string resolve_profile(const DomainConfig& cfg);
 
+struct DomainHandle;  // a configured Cyclone domain, shared by the participants that use it
+
 class Participant {
  public:
   explicit Participant(const DomainConfig& cfg = {});
@@ -24,7 +27,7 @@ class Participant {
 
  private:
   std::string profile_;
-  Entity domain_;
+  std::shared_ptr<DomainHandle> domain_;  // outlives participant_ (declared first, destroyed last)
   Entity participant_;
 };
 

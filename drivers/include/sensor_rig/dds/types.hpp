@@ -3,6 +3,7 @@
 #include "builtin_interfaces.h"
 #include "diagnostic_msgs.h"
 #include "sensor_msgs.h"
+#include "sensor_rig_dbw.h"
 #include "sensor_rig_msgs.h"
 #include "std_msgs.h"
 #include "sensor_rig/dds/topic.hpp"
@@ -19,6 +20,9 @@ using DiagnosticStatus = diagnostic_msgs_msg_dds__DiagnosticStatus_;
 using KeyValue = diagnostic_msgs_msg_dds__KeyValue_;
 using SourceStamps = sensor_rig_msgs_msg_dds__SourceStamps_;
 using Time = builtin_interfaces_msg_dds__Time_;
+using DbwCommand = sensor_rig_msgs_msg_dds__DbwCommand_;
+using DbwStatus = sensor_rig_msgs_msg_dds__DbwStatus_;
+using VehicleState = sensor_rig_msgs_msg_dds__VehicleState_;
 }  // namespace sensor_rig::msg
 
 RIG_DDS_TYPE(sensor_rig::msg::PointCloud2, sensor_msgs_msg_dds__PointCloud2__desc);
@@ -28,6 +32,9 @@ RIG_DDS_TYPE(sensor_rig::msg::Imu, sensor_msgs_msg_dds__Imu__desc);
 RIG_DDS_TYPE(sensor_rig::msg::NavSatFix, sensor_msgs_msg_dds__NavSatFix__desc);
 RIG_DDS_TYPE(sensor_rig::msg::DiagnosticArray, diagnostic_msgs_msg_dds__DiagnosticArray__desc);
 RIG_DDS_TYPE(sensor_rig::msg::SourceStamps, sensor_rig_msgs_msg_dds__SourceStamps__desc);
+RIG_DDS_TYPE(sensor_rig::msg::DbwCommand, sensor_rig_msgs_msg_dds__DbwCommand__desc);
+RIG_DDS_TYPE(sensor_rig::msg::DbwStatus, sensor_rig_msgs_msg_dds__DbwStatus__desc);
+RIG_DDS_TYPE(sensor_rig::msg::VehicleState, sensor_rig_msgs_msg_dds__VehicleState__desc);
 
 namespace sensor_rig::msg {
 inline Time to_time(Nanos ns) {
