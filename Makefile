@@ -47,7 +47,7 @@ bench: setup
 fuzz: setup
 	CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_FUZZ=ON -DRIG_TESTS=OFF -DRIG_BENCH=OFF
 	cmake --build build-fuzz -j$(JOBS)
-	scripts/fuzz.sh build-fuzz $(FUZZ_SECONDS)
+	scripts/fuzz.sh build-fuzz $(or $(FUZZ_SECONDS),30)
 
 clean:
 	rm -rf build build-asan build-release build-fuzz

@@ -73,7 +73,6 @@ class MockEcu {
   Nanos next_status_ = 0, next_wheels_ = 0;
   bool steer_enable_ = false, long_enable_ = false, engaged_ = false;
   bool prev_requested_ = false;
-  bool override_seen_ = false;
   bool bus_off_ = false;
   ActuatorRequest req_{};
   EcuCounters counters_{};
