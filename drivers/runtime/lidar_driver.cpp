@@ -10,9 +10,7 @@
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/lidar/udp_source.hpp"
-#include "sensor_rig/lidar/velodyne/calibration.hpp"
-#include "sensor_rig/lidar/velodyne/decoder.hpp"
-#include "sensor_rig/lidar/velodyne/packet_info.hpp"
+#include "sensor_rig/lidar/scan_decoder.hpp"
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
 #include "sensor_rig/timesync/stamper.hpp"
 #include "stamps_writer.hpp"
@@ -22,31 +20,34 @@ namespace vel = lidar::velodyne;
 
 namespace {
 
-vel::DecoderConfig decoder_config(const LidarConfig& c) {
-  vel::DecoderConfig d;
-  const auto model = vel::model_from_name(c.model);
-  if (!model) throw std::invalid_argument("lidar " + c.name + ": unknown model " + c.model);
-  d.model = *model;
+std::string read_file(const std::string& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + what + " " + path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::unique_ptr<lidar::ScanDecoder> make_driver_decoder(const LidarConfig& c) {
+  lidar::DecoderOptions d;
+  d.model = c.model;
   if (!c.calibration.empty()) {
-    std::ifstream in(c.calibration);
-    if (!in) throw std::runtime_error("lidar " + c.name + ": cannot read calibration " + c.calibration);
-    std::stringstream text;
-    text << in.rdbuf();
-    d.calibration = vel::validate_for_model(vel::parse_calibration(text.str(), c.calibration), d.model);
+    d.calibration_text = read_file(c.calibration, "calibration");
+    d.calibration_name = c.calibration;
   }
-  d.returns = c.returns == "dual"   ? vel::ReturnSelection::kDual
-              : c.returns == "last" ? vel::ReturnSelection::kLast
-                                    : vel::ReturnSelection::kStrongest;
+  if (!c.metadata.empty()) {
+    d.metadata_text = read_file(c.metadata, "metadata");
+    d.metadata_name = c.metadata;
+  }
+  d.returns = c.returns;
   d.min_range_m = c.min_range_m;
   d.max_range_m = c.max_range_m;
   d.cut_angle_deg = c.cut_angle_deg;
-  return d;
-}
-
-// Duration of one data packet's firings: its first firing happened this long before the last.
-Nanos packet_span_ns(vel::Model m) {
-  const auto& info = vel::model_info(m);
-  return static_cast<Nanos>(info.block_us * 1000.0 * static_cast<double>(vel::kBlocksPerPacket));
+  try {
+    return lidar::make_decoder(d);
+  } catch (const lidar::DecoderConfigError& e) {
+    throw std::runtime_error("lidar " + c.name + ": " + e.what());
+  }
 }
 
 }  // namespace
@@ -54,7 +55,9 @@ Nanos packet_span_ns(vel::Model m) {
 struct LidarDriver::Impl {
   LidarConfig cfg;
   std::string topic_name;
-  vel::Decoder decoder;
+  std::unique_ptr<lidar::ScanDecoder> decoder;
+  bool velodyne = false;               // position packets and top-of-hour time are Velodyne's
+  timesync::ClockMapper absolute_mapper;  // sensors with absolute time (Ouster, Hesai) when not synced
   lidar::UdpSource data;
   std::unique_ptr<lidar::UdpSource> position;
   lidar::SlotArena arena{64, 2048};
@@ -79,19 +82,20 @@ struct LidarDriver::Impl {
   double scan_rate_hz = 0.0;
   std::size_t last_points = 0;
   std::string last_error;
-  vel::DecoderStats decoder_stats;
+  lidar::DecoderCounters decoder_stats;
   lidar::UdpSourceStats udp_stats;
   timesync::StamperStatus sync;
 
   Impl(const LidarConfig& c, const dds::Participant& p, StampsWriter& s)
       : cfg(c),
         topic_name("/sensors/lidar/" + c.name + "/points"),
-        decoder(decoder_config(c)),
+        decoder(make_driver_decoder(c)),
+        velodyne(lidar::find_model(c.model) != nullptr && lidar::find_model(c.model)->vendor == "velodyne"),
         data(lidar::UdpSourceConfig{{c.host, static_cast<std::uint16_t>(c.port)}, c.receive_buffer_bytes, 64, true}),
         topic(p, topic_name, c.qos),
         writer(p, topic, c.qos),
         stamps(s),
-        stamper(stamper_config(c, decoder.config().model)) {
+        stamper(stamper_config(c, decoder->packet_span_ns())) {
     if (c.position_port != 0)
       position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
           {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 4, true});
@@ -105,10 +109,10 @@ struct LidarDriver::Impl {
     }
   }
 
-  static timesync::StamperConfig stamper_config(const LidarConfig& c, vel::Model m) {
+  static timesync::StamperConfig stamper_config(const LidarConfig& c, Nanos packet_span) {
     timesync::StamperConfig sc;
     sc.source = c.time_source == "host" ? timesync::TimeSource::kHost : timesync::TimeSource::kSensor;
-    sc.packet_duration_ns = packet_span_ns(m);
+    sc.packet_duration_ns = packet_span;
     sc.hour.hour_source = c.hour_source == "host" ? timesync::HourSource::kHost : timesync::HourSource::kGprmc;
     sc.correction = c.clock_correction == "always"  ? timesync::Correction::kAlways
                     : c.clock_correction == "never" ? timesync::Correction::kNever
@@ -118,18 +122,37 @@ struct LidarDriver::Impl {
 
   // Vehicle time of the packet's first firing (timesync/ decides how; see its README).
   Nanos packet_stamp(std::span<const std::byte> bytes, Nanos rx_ns) {
-    const auto info = vel::read_packet_info(bytes);
-    timesync::PacketTime pt;
-    pt.sensor_us = info ? info->sensor_time_us : 0;
-    pt.rx_ns = rx_ns;
-    pt.gprmc_utc_ns = gprmc_utc_ns;
-    pt.pps = have_position ? static_cast<timesync::PpsState>(pps) : timesync::PpsState::kUnknown;
-    if (!info) return rx_ns - packet_span_ns(decoder.config().model);  // the decoder counts it as a drop
-    return stamper.stamp(pt).vehicle_ns;
+    const Nanos host_stamp = rx_ns - decoder->packet_span_ns();
+    if (cfg.time_source == "host") return host_stamp;
+    const auto t = decoder->packet_time(bytes);
+    switch (t.kind) {
+      case lidar::SensorTime::Kind::kMicrosSinceHour: {
+        timesync::PacketTime pt;
+        pt.sensor_us = static_cast<std::uint32_t>(t.value);
+        pt.rx_ns = rx_ns;
+        pt.gprmc_utc_ns = gprmc_utc_ns;
+        pt.pps = have_position ? static_cast<timesync::PpsState>(pps) : timesync::PpsState::kUnknown;
+        return stamper.stamp(pt).vehicle_ns;
+      }
+      case lidar::SensorTime::Kind::kAbsoluteNs: {
+        // A PTP- or GPS-synced sensor's time is vehicle time; a free-running one is mapped.
+        absolute_mapper.observe(t.value, host_stamp);
+        if (cfg.clock_correction == "never") return t.value;
+        const auto mapped = absolute_mapper.map(t.value);
+        if (!mapped.valid) return host_stamp;
+        constexpr Nanos kSyncedWithin = 1'000'000;  // |sensor - vehicle| below this: synchronised
+        const Nanos offset = mapped.vehicle_ns - t.value;
+        if (cfg.clock_correction == "auto" && offset > -kSyncedWithin && offset < kSyncedWithin) return t.value;
+        return mapped.vehicle_ns;
+      }
+      case lidar::SensorTime::Kind::kNone:
+        break;
+    }
+    return host_stamp;  // no usable sensor time: the decoder counts the packet if it is bad
   }
 
   void handle_position() {
-    if (!position) return;
+    if (!position || !velodyne) return;
     const auto r = position->receive(position_arena.slots(), 0);
     for (std::size_t i = 0; i < r.count; ++i) {
       vel::PositionPacket pp;
@@ -188,16 +211,17 @@ struct LidarDriver::Impl {
       }
       for (std::size_t i = 0; i < r.count; ++i) {
         const auto& s = slots[i];
-        const Nanos stamp = packet_stamp(s.bytes(), s.rx_ns);
-        if (auto scan = decoder.push(lidar::view(s, static_cast<std::uint16_t>(cfg.port)), stamp)) {
+        const auto packet = lidar::view(s, static_cast<std::uint16_t>(cfg.port));
+        if (!decoder->is_data_packet(packet)) continue;
+        if (auto scan = decoder->push(packet, packet_stamp(s.bytes(), s.rx_ns))) {
           publish(*scan);
           // Cyclone has serialized the sample: the buffer can take the next scan (no page faults).
-          decoder.recycle(std::move(scan->points));
+          decoder->recycle(std::move(scan->points));
         }
       }
       handle_position();
       std::lock_guard lock(mutex);
-      decoder_stats = decoder.stats();
+      decoder_stats = decoder->counters();
       udp_stats = data.stats();
       sync = stamper.status(vehicle_now_ns());
     }

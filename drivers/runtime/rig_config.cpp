@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "sensor_rig/config/node.hpp"
+#include "sensor_rig/lidar/scan_decoder.hpp"
 
 namespace sensor_rig::runtime {
 namespace {
@@ -31,7 +32,7 @@ LidarConfig parse_lidar(const config::Node& n) {
   LidarConfig l;
   if (!n.expect_map()) return l;
   n.allow_keys({"name", "model", "host", "port", "position_port", "receive_buffer_bytes", "calibration",
-                "returns", "min_range", "max_range", "cut_angle", "time_source", "hour_source", "clock_correction",
+                "metadata", "returns", "min_range", "max_range", "cut_angle", "time_source", "hour_source", "clock_correction",
                 "frame_id", "realtime_priority", "qos", "mock"});
   l.name = n.get_string("name");
   for (char c : l.name)
@@ -39,7 +40,9 @@ LidarConfig parse_lidar(const config::Node& n) {
       n.fail("name", "'" + l.name + "' must be letters, digits and '_' (it becomes a ROS topic name)");
       break;
     }
-  l.model = n.get_choice("model", {"VLP-16", "VLP-32C", "HDL-32E"});
+  l.model = n.get_string("model");
+  if (const auto* m = lidar::find_model(l.model); m == nullptr || m->make == nullptr)
+    n.fail("model", "'" + l.model + "' is not a supported model (supported: " + lidar::implemented_model_names() + ")");
   l.host = n.get_string("host", "127.0.0.1");
   l.port = static_cast<int>(n.get_int("port", 1, 65535));
   l.position_port = static_cast<int>(n.get_int("position_port", 0, 65535, 0));
@@ -47,6 +50,10 @@ LidarConfig parse_lidar(const config::Node& n) {
   l.calibration = n.get_path("calibration", "");
   if (!l.calibration.empty() && !std::filesystem::exists(l.calibration))
     n.fail("calibration", "file not found: " + l.calibration);
+  l.metadata = n.get_path("metadata", "");
+  if (!l.metadata.empty() && !std::filesystem::exists(l.metadata)) n.fail("metadata", "file not found: " + l.metadata);
+  if (const auto* m = lidar::find_model(l.model); m != nullptr && m->needs_metadata && l.metadata.empty())
+    n.fail("metadata", "model " + l.model + " needs its sensor metadata JSON");
   l.returns = n.get_choice("returns", {"strongest", "last", "dual"}, "strongest");
   l.min_range_m = n.get_double("min_range", 0.0, 10.0, 0.4);
   l.max_range_m = n.get_double("max_range", 1.0, 1000.0, 200.0);

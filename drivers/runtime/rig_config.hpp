@@ -24,12 +24,13 @@ struct LidarMockConfig {
 
 struct LidarConfig {
   std::string name;                    // topic /sensors/lidar/<name>/points
-  std::string model;                   // VLP-16, VLP-32C, HDL-32E
+  std::string model;                   // a model of the decoder registry (lidar/scan_decoder.hpp)
   std::string host = "127.0.0.1";      // bind address
   int port = 2368;                     // data port
   int position_port = 0;               // 0 = none (position packets ignored)
   int receive_buffer_bytes = 8 << 20;
   std::string calibration;             // empty = model defaults
+  std::string metadata;                // sensor metadata JSON (Ouster)
   std::string returns = "strongest";   // strongest | last | dual
   double min_range_m = 0.4;
   double max_range_m = 200.0;

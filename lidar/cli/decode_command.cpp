@@ -1,8 +1,9 @@
 // `rig lidar decode`: a capture -> one PCD per complete scan + one JSON line per scan (SPEC §7).
 //
-// Scan time: the packet's sensor timestamp (µs since the top of the hour) with the hour taken
-// from the pcap record time (the hour closest to the record time), i.e. vehicle time as the
-// driver would compute it from a synced sensor. The first scan starts mid-rotation and is not
+// Any model of the registry (scan_decoder.hpp). Scan time: the packet's own sensor time — Velodyne:
+// µs since the top of the hour with the hour taken from the pcap record time (the hour closest to
+// it); sensors with absolute time (Ouster, Hesai): that time — i.e. vehicle time as the driver
+// computes it for a synced sensor; packets without a usable time: the record time. The first scan starts mid-rotation and is not
 // written (VeloView numbers it frame 0, so VeloView frame k is scan k-1 here when the capture
 // starts mid-rotation); the trailing partial scan is not written either. Both are reported on
 // stderr with the drop counts.
@@ -16,7 +17,7 @@
 #include "lidar_commands.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
 #include "sensor_rig/lidar/pcd.hpp"
-#include "sensor_rig/lidar/velodyne/decoder.hpp"
+#include "sensor_rig/lidar/scan_decoder.hpp"
 #include "sensor_rig/lidar/velodyne/packet_info.hpp"
 
 namespace sensor_rig::lidar {
@@ -26,6 +27,7 @@ struct DecodeOptions {
   std::string pcap;
   std::string model;
   std::string calibration;
+  std::string metadata;
   std::string returns = "strongest";
   double min_range = 0.0;
   double max_range = 0.0;  // 0 = no limit
@@ -33,57 +35,52 @@ struct DecodeOptions {
   std::string out;
 };
 
-// Models SPEC §7 names that later issues implement.
-constexpr std::string_view kLaterModels[] = {"OS-LEGACY", "OS", "Pandar40P", "PandarXT32"};
-
-std::string supported_models() {
-  std::string s;
-  for (const auto& m : velodyne::all_models()) s += (s.empty() ? "" : ", ") + std::string(m.name);
-  return s;
-}
-
-std::string read_text(const std::string& path) {
+std::string read_text(const std::string& path, const char* what) {
   std::ifstream f(path, std::ios::binary);
-  if (!f) throw cli::UsageError("cannot read calibration file " + path);
+  if (!f) throw cli::UsageError(std::string("cannot read ") + what + " file " + path);
   std::ostringstream s;
   s << f.rdbuf();
   return s.str();
 }
 
-velodyne::DecoderConfig make_config(const DecodeOptions& o) {
-  velodyne::DecoderConfig cfg;
-  const auto model = velodyne::model_from_name(o.model);
-  if (!model) {
-    for (auto later : kLaterModels) {
-      if (later == o.model) throw cli::UsageError("model " + o.model + " is not supported yet (supported: " + supported_models() + ")");
-    }
-    throw cli::UsageError("unknown model '" + o.model + "' (supported: " + supported_models() + ")");
-  }
-  cfg.model = *model;
+std::unique_ptr<ScanDecoder> make_cli_decoder(const DecodeOptions& o) {
+  DecoderOptions d;
+  d.model = o.model;
   if (!o.calibration.empty()) {
-    try {
-      cfg.calibration = velodyne::parse_calibration(read_text(o.calibration), o.calibration);
-    } catch (const velodyne::CalibrationError& e) {
-      throw cli::UsageError(e.what());
-    }
+    d.calibration_text = read_text(o.calibration, "calibration");
+    d.calibration_name = o.calibration;
   }
-  cfg.returns = o.returns == "last"   ? velodyne::ReturnSelection::kLast
-                : o.returns == "dual" ? velodyne::ReturnSelection::kDual
-                                      : velodyne::ReturnSelection::kStrongest;
-  cfg.min_range_m = o.min_range;
-  if (o.max_range > 0.0) cfg.max_range_m = o.max_range;
-  cfg.cut_angle_deg = o.cut_angle;
-  return cfg;
+  if (!o.metadata.empty()) {
+    d.metadata_text = read_text(o.metadata, "metadata");
+    d.metadata_name = o.metadata;
+  }
+  d.returns = o.returns;
+  d.min_range_m = o.min_range;
+  if (o.max_range > 0.0) d.max_range_m = o.max_range;
+  d.cut_angle_deg = o.cut_angle;
+  try {
+    return make_decoder(d);
+  } catch (const DecoderConfigError& e) {  // unknown model, calibration, options
+    throw cli::UsageError(e.what());
+  }
+}
+
+// Vehicle time of the packet's first firing, from the sensor's own time where the packet has one.
+Nanos packet_stamp(const ScanDecoder& dec, const PacketView& pkt) {
+  const auto t = dec.packet_time(pkt.data);
+  switch (t.kind) {
+    case SensorTime::Kind::kMicrosSinceHour:
+      return velodyne::sensor_time_to_ns(static_cast<std::uint32_t>(t.value), pkt.rx_ns);
+    case SensorTime::Kind::kAbsoluteNs:
+      return t.value;
+    case SensorTime::Kind::kNone:
+      break;
+  }
+  return pkt.rx_ns - dec.packet_span_ns();
 }
 
 int run_decode(const DecodeOptions& o) {
-  velodyne::DecoderConfig cfg = make_config(o);
-  std::unique_ptr<velodyne::Decoder> decoder;
-  try {
-    decoder = std::make_unique<velodyne::Decoder>(std::move(cfg));
-  } catch (const std::exception& e) {  // calibration or option out of range
-    throw cli::UsageError(e.what());
-  }
+  const auto decoder = make_cli_decoder(o);
   if (!std::filesystem::is_regular_file(o.pcap)) throw cli::UsageError("no such capture file: " + o.pcap);
   std::error_code ec;
   std::filesystem::create_directories(o.out, ec);
@@ -97,13 +94,11 @@ int run_decode(const DecodeOptions& o) {
   std::uint64_t written = 0;
   while (auto rec = reader.next()) {
     const auto& pkt = rec->packet;
-    if (pkt.dst_port == velodyne::kPositionPort || pkt.data.size() == velodyne::kPositionPacketSize) {
+    if (!decoder->is_data_packet(pkt)) {
       ++position_packets;
       continue;
     }
-    const auto info = velodyne::read_packet_info(pkt.data);
-    const Nanos stamp = info ? velodyne::sensor_time_to_ns(info->sensor_time_us, pkt.rx_ns) : pkt.rx_ns;
-    auto scan = decoder->push(pkt, stamp);
+    auto scan = decoder->push(pkt, packet_stamp(*decoder, pkt));
     if (!scan) continue;
     char name[32];
     std::snprintf(name, sizeof name, "scan_%06llu.pcd", static_cast<unsigned long long>(scan->seq));
@@ -115,7 +110,7 @@ int run_decode(const DecodeOptions& o) {
   }
   std::fflush(stdout);
   const auto tail = decoder->flush();
-  const auto& st = decoder->stats();
+  const auto st = decoder->counters();
   const auto& ps = reader.stats();
   std::string drops;
   for (std::size_t i = 1; i < st.by_status.size(); ++i) {
@@ -124,8 +119,8 @@ int run_decode(const DecodeOptions& o) {
              std::to_string(st.by_status[i]);
   }
   std::fprintf(stderr,
-               "decoded %llu scans from %llu data packets (%llu dropped%s%s); %llu position packets; "
-               "partial scans not written: first %llu, last %zu points; pcap: %llu records, %llu non-UDP, "
+               "decoded %llu scans from %llu data packets (%llu dropped%s%s); %llu other (position/IMU) packets; "
+               "partial scans not written: %llu, last %zu points; pcap: %llu records, %llu non-UDP, "
                "%llu fragments, %llu truncated, %llu bad\n",
                static_cast<unsigned long long>(written), static_cast<unsigned long long>(st.packets),
                static_cast<unsigned long long>(st.dropped()), drops.empty() ? "" : ": ", drops.c_str(),
@@ -148,8 +143,10 @@ void register_decode_command(CLI::App& lidar, cli::Context& ctx) {
   auto opts = std::make_shared<DecodeOptions>();
   auto* cmd = lidar.add_subcommand("decode", "Decode a capture into PCD files, one per complete scan");
   cmd->add_option("--pcap", opts->pcap, "capture file (pcap/pcapng)")->required();
-  cmd->add_option("--model", opts->model, "VLP-16, VLP-32C or HDL-32E")->required();
-  cmd->add_option("--calibration", opts->calibration, "ROS velodyne YAML or VeloView XML (default: manual values)");
+  cmd->add_option("--model", opts->model, "sensor model: " + implemented_model_names())->required();
+  cmd->add_option("--calibration", opts->calibration,
+                  "calibration file (Velodyne: ROS YAML or VeloView XML; default: the manual's values)");
+  cmd->add_option("--metadata", opts->metadata, "sensor metadata JSON (Ouster models)");
   cmd->add_option("--return", opts->returns, "strongest, last or dual")
       ->check(CLI::IsMember({"strongest", "last", "dual"}))
       ->capture_default_str();
