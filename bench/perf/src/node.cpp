@@ -8,6 +8,7 @@
 #include <sched.h>
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -122,6 +123,15 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
   for (std::uint32_t i = 0; i < a.count; ++i) {
     records[i].seq = i;
     if (records[i].deadline_ns == 0) records[i].deadline_ns = *t0 + static_cast<Nanos>(std::llround(period_d * i));
+  }
+  // Nothing heavy (CSV, teardown) before the run's end: with every publisher on the same deadlines,
+  // one that finished first must not take the CPU from the others' last messages.
+  // The writer also lingers 200 ms: Cyclone drops shared-memory samples that arrive after their
+  // writer was deleted, so an early exit would lose the last message.
+  sleep_until_realtime(std::max(end, vehicle_now_ns()) + 200'000'000);
+  if (a.rt_priority > 0) {
+    sched_param sp{};
+    ::sched_setscheduler(0, SCHED_OTHER, &sp);  // this thread: wrap-up at normal priority
   }
   // Let reliable delivery finish before the writer goes (bounded).
   dds_wait_for_acks(writer.handle(), DDS_SECS(5));

@@ -22,8 +22,8 @@ class Child {
  public:
   // Starts argv[0] (a path) with the given arguments; stderr appended to `stderr_path` (or /dev/null).
   Child(const std::vector<std::string>& argv, const std::string& stderr_path, bool pipe_stdio, pid_t pgid = 0);
-  Child(Child&&) noexcept = default;
-  Child& operator=(Child&&) noexcept = default;
+  Child(const Child&) = delete;  // owns a live PID: neither copied nor moved (hold it by unique_ptr)
+  Child& operator=(const Child&) = delete;
   ~Child();  // a child still running is SIGKILLed and reaped: never left behind
 
   [[nodiscard]] pid_t pid() const noexcept { return pid_; }

@@ -115,7 +115,10 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
                             {"startup_s", r->startup_s()}};
   }
 
-  const std::string exe = self_exe();
+  // Exec through /proc/self/exe (resolved in the child, a copy of us): the very binary that runs
+  // this runner, even if it was replaced on disk by a rebuild since.
+  const std::string exe = "/proc/self/exe";
+  input.extra["rig"] = self_exe();
   std::vector<std::unique_ptr<Child>> kids;
   pid_t pgid = 0;
   for (const auto& n : plan) {
