@@ -1,6 +1,7 @@
 // The model registry: one row per model SPEC §7 names. A vendor's decoder plugs in by its factory.
 #include <string>
 
+#include "sensor_rig/lidar/hesai/scan_decoder.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 #include "velodyne_scan_decoder.hpp"
 
@@ -14,8 +15,8 @@ constexpr ModelEntry kModels[] = {
     {"HDL-32E", "velodyne", 2368, false, &make_velodyne_decoder},
     {"OS-LEGACY", "ouster", 7502, true, nullptr},
     {"OS", "ouster", 7502, true, nullptr},
-    {"Pandar40P", "hesai", 2368, false, nullptr},
-    {"PandarXT32", "hesai", 2368, false, nullptr},
+    {"Pandar40P", "hesai", 2368, false, &make_hesai_decoder},
+    {"PandarXT32", "hesai", 2368, false, &make_hesai_decoder},
 };
 
 }  // namespace

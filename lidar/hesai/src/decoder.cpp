@@ -1,0 +1,403 @@
+// Hesai decoder: scan assembly with nebula's per-point scan cut, echo selection, the hot loop.
+#include "sensor_rig/lidar/hesai/decoder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "sensor_rig/lidar/hesai/packet.hpp"
+
+namespace sensor_rig::lidar::hesai {
+namespace {
+
+constexpr Nanos kBackwardsTolerance = 1'000'000;
+constexpr std::int64_t kMicroDeg = 360'000'000;      // a turn in µ°
+constexpr std::int64_t kNextScanSpan = 20'000'000;   // nebula: points up to 20° past the cut go to the next scan
+
+// sin/cos of every block azimuth (0.01°), built once, read-only.
+struct AngleTable {
+  std::array<float, kAzimuthCount> sin{};
+  std::array<float, kAzimuthCount> cos{};
+  AngleTable() noexcept {
+    for (std::size_t i = 0; i < sin.size(); ++i) {
+      const double a = static_cast<double>(i) * (std::numbers::pi / 18000.0);
+      sin[i] = static_cast<float>(std::sin(a));
+      cos[i] = static_cast<float>(std::cos(a));
+    }
+  }
+};
+const AngleTable& angles() noexcept {
+  static const AngleTable t;
+  return t;
+}
+
+struct ChannelTable {
+  float cos_el, sin_el;
+  float cos_off, sin_off;      // azimuth offset
+  std::int64_t off_udeg;       // azimuth offset in µ° (exact scan-cut test)
+  std::uint32_t fire_rel_ns;   // firing time after the group's first firing
+  std::uint16_t ring;
+};
+
+// Forward step from a to b in 0.01°, in [0, 36000).
+inline int az_step(int a, int b) noexcept {
+  const int d = b - a;
+  return d < 0 ? d + kAzimuthCount : d;
+}
+// `target` in (prev, prev + step] on a forward step shorter than half a turn.
+inline bool crosses(int prev, int step, int target) noexcept {
+  if (step <= 0 || step >= kAzimuthCount / 2) return false;
+  const int to = az_step(prev, target);
+  return to > 0 && to <= step;
+}
+inline bool in_sector(int start, int end, int a) noexcept {  // inclusive, may wrap
+  return start <= end ? (a >= start && a <= end) : (a >= start || a <= end);
+}
+inline int norm_az(long v) noexcept {
+  v %= kAzimuthCount;
+  return static_cast<int>(v < 0 ? v + kAzimuthCount : v);
+}
+inline long round_away(double v) noexcept { return static_cast<long>(v < 0 ? std::floor(v) : std::ceil(v)); }
+
+struct Echo {
+  std::uint16_t raw;
+  std::uint8_t refl;
+};
+
+}  // namespace
+
+struct Decoder::Impl {
+  DecoderConfig cfg;
+  const ModelInfo* mi;
+  std::vector<ChannelTable> ch;
+  std::vector<std::uint16_t> ring_of_channel;
+  Nanos min_fire_ns = 0;
+  float min_range = 0.0F;
+  float max_range = 0.0F;
+  std::int64_t cut_udeg = 0;
+  int reset_raw = 0;  // raw azimuth window [reset_raw, emit_raw] where channels straddle the cut
+  int emit_raw = 0;
+
+  DecoderStats stats;
+  PacketStatus last = PacketStatus::kOk;
+  int last_returns = 1;
+  Scan cur, nxt;  // the scan being assembled; the next one (points already past the cut)
+  bool cur_started = false, cur_counted = false, cur_from_cut = false;
+  bool nxt_started = false, nxt_counted = false, nxt_from_cut = false;
+  bool have_prev = false;
+  int prev_az = 0;
+  Nanos prev_stamp = 0;
+  std::size_t last_scan_points = 0;
+  std::uint64_t next_seq = 0;
+  std::vector<std::vector<PointXYZIRT>> spare;
+
+  explicit Impl(DecoderConfig config) : cfg(std::move(config)), mi(&model_info(cfg.model)) {
+    if (!(cfg.min_range_m >= 0.0) || !(cfg.max_range_m > cfg.min_range_m)) {
+      throw DecoderConfigError("range: need 0 <= min_range (" + std::to_string(cfg.min_range_m) +
+                               ") < max_range (" + std::to_string(cfg.max_range_m) + ")");
+    }
+    if (!(cfg.cut_angle_deg >= 0.0 && cfg.cut_angle_deg < 360.0))
+      throw DecoderConfigError("cut angle " + std::to_string(cfg.cut_angle_deg) + " is not in [0, 360)");
+    if (cfg.max_packet_gap_ns <= 0) throw DecoderConfigError("max_packet_gap_ns must be positive");
+    if (!(cfg.dual_distance_threshold_m >= 0.0)) throw DecoderConfigError("dual_distance_threshold_m must be >= 0");
+    if (!cfg.calibration) cfg.calibration = default_calibration(cfg.model);
+    if (!cfg.firing_times) cfg.firing_times = default_firing_times(cfg.model);
+    const auto n = static_cast<std::size_t>(mi->channels);
+    if (cfg.calibration->channels.size() != n || cfg.firing_times->us.size() != n) {
+      throw DecoderConfigError(cfg.calibration->source + ": " + std::to_string(cfg.calibration->channels.size()) +
+                               " channels, " + std::string(mi->name) + " has " + std::to_string(n));
+    }
+    min_range = static_cast<float>(cfg.min_range_m);
+    max_range = std::isinf(cfg.max_range_m) ? std::numeric_limits<float>::max() : static_cast<float>(cfg.max_range_m);
+    cut_udeg = std::llround(cfg.cut_angle_deg * 1e6) % kMicroDeg;
+
+    const auto& cal = cfg.calibration->channels;
+    const auto& fire = cfg.firing_times->us;
+    min_fire_ns = std::llround(*std::min_element(fire.begin(), fire.end()) * 1000.0);
+    std::vector<std::size_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return cal[a].elevation_deg < cal[b].elevation_deg; });
+    ring_of_channel.resize(n);
+    for (std::size_t r = 0; r < n; ++r) ring_of_channel[order[r]] = static_cast<std::uint16_t>(r);
+    long off_min = 0, off_max = 0;
+    ch.resize(n);
+    for (std::size_t c = 0; c < n; ++c) {
+      const double el = cal[c].elevation_deg * std::numbers::pi / 180.0;
+      const double off = cal[c].azimuth_deg * std::numbers::pi / 180.0;
+      auto& t = ch[c];
+      t.cos_el = static_cast<float>(std::cos(el));
+      t.sin_el = static_cast<float>(std::sin(el));
+      t.cos_off = static_cast<float>(std::cos(off));
+      t.sin_off = static_cast<float>(std::sin(off));
+      t.off_udeg = std::llround(cal[c].azimuth_deg * 1e6);
+      t.fire_rel_ns = static_cast<std::uint32_t>(std::llround(fire[c] * 1000.0) - min_fire_ns);
+      t.ring = ring_of_channel[c];
+      const long o = round_away(cal[c].azimuth_deg * 100.0);
+      off_min = c == 0 ? o : std::min(off_min, o);
+      off_max = c == 0 ? o : std::max(off_max, o);
+    }
+    // nebula's window: from the first raw azimuth where some channel reaches the cut to the one
+    // where every channel has passed it.
+    reset_raw = norm_az(static_cast<long>(std::floor(cfg.cut_angle_deg * 100.0)) - off_max);
+    emit_raw = norm_az(static_cast<long>(std::ceil(cfg.cut_angle_deg * 100.0)) - off_min);
+    last_returns = cfg.returns == ReturnSelection::kDual ? 2 : 1;
+    spare.reserve(3);
+    cur = fresh();
+    nxt = fresh();
+  }
+
+  Scan fresh() {
+    const std::size_t dual = cfg.returns == ReturnSelection::kDual ? 2 : 1;
+    const std::size_t guess = last_scan_points ? last_scan_points + last_scan_points / 8
+                                               : static_cast<std::size_t>(mi->typical_points_per_scan) * dual;
+    Scan s;
+    if (!spare.empty()) {
+      s.points = std::move(spare.back());
+      spare.pop_back();
+      s.points.clear();
+    }
+    s.points.reserve(guess);
+    return s;
+  }
+  void give_back(std::vector<PointXYZIRT>&& v) {
+    if (spare.size() < 3 && v.capacity() > 0) spare.push_back(std::move(v));
+  }
+
+  static void touch(Scan& s, bool& started, bool& counted, Nanos stamp, Nanos rx) {
+    if (!started) {
+      s.stamp = stamp;
+      s.first_rx_ns = rx;
+      started = true;
+    }
+    if (!counted) {
+      ++s.packets;
+      counted = true;
+    }
+    s.last_rx_ns = rx;
+  }
+
+  // The current scan ends: returns it when it should be emitted; the next scan becomes current.
+  std::optional<Scan> end_scan(bool complete) {
+    std::optional<Scan> out;
+    const std::uint32_t carried_drops = cur.dropped;
+    bool emitted = false;
+    if (cur.packets > 0 && (complete || cfg.emit_partial_scans)) {
+      last_scan_points = cur.points.size();
+      cur.seq = next_seq++;
+      ++stats.scans;
+      out = std::move(cur);
+      emitted = true;
+    } else {
+      if (cur.packets > 0) ++stats.partial_scans_discarded;
+      give_back(std::move(cur.points));
+    }
+    cur = std::move(nxt);
+    if (!emitted) cur.dropped += carried_drops;  // drops stay visible in the next emitted scan
+    cur_started = nxt_started;
+    cur_counted = nxt_counted;
+    cur_from_cut = nxt_from_cut;
+    nxt = fresh();
+    nxt_started = nxt_counted = nxt_from_cut = false;
+    return out;
+  }
+
+  void drop_next() {
+    if (nxt.packets > 0) ++stats.partial_scans_discarded;
+    give_back(std::move(nxt.points));
+    nxt = fresh();
+    nxt_started = nxt_counted = nxt_from_cut = false;
+  }
+
+  void merge(std::optional<Scan>& out, std::optional<Scan>&& s) {
+    if (!s) return;
+    if (out) {  // two scans ended in one packet (time jump, then a cut): keep the complete one
+      --stats.scans;
+      ++stats.partial_scans_discarded;
+      give_back(std::move(out->points));
+    }
+    out = std::move(s);
+  }
+
+  inline void point(Scan& s, const ChannelTable& t, Echo e, float unit, float sa, float ca, Nanos group_stamp,
+                    std::uint8_t rtype) {
+    const float d = static_cast<float>(e.raw) * unit;
+    if (e.raw == 0 || d < min_range || d > max_range) return;
+    const float sA = sa * t.cos_off + ca * t.sin_off;
+    const float cA = ca * t.cos_off - sa * t.sin_off;
+    const float xy = d * t.cos_el;
+    Nanos rel = group_stamp - s.stamp + t.fire_rel_ns;
+    rel = std::clamp<Nanos>(rel, 0, std::numeric_limits<std::uint32_t>::max());
+    s.points.push_back(PointXYZIRT{xy * cA, -xy * sA, d * t.sin_el, static_cast<float>(e.refl),
+                                   static_cast<std::uint32_t>(rel), t.ring, rtype, 0});
+  }
+
+  std::optional<Scan> push(const PacketView& packet, Nanos stamp) noexcept;
+};
+
+std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) noexcept {
+  ++stats.packets;
+  last = check_packet(packet.data, cfg.model);
+  if (last != PacketStatus::kOk) {
+    ++stats.by_status[static_cast<std::size_t>(last)];
+    ++cur.dropped;
+    return std::nullopt;
+  }
+  ++stats.packets_used;
+  ++stats.by_status[0];
+  const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
+  const std::uint8_t mode = p[mi->tail_return_mode];
+  const int n = return_count(mode);
+  last_returns = n;
+  const float unit = cfg.model == Model::kPandarXT32 ? static_cast<float>(p[offsetof(HeaderXT, dis_unit)]) * 0.001F
+                                                     : static_cast<float>(mi->distance_unit_m);
+  std::optional<Scan> out;
+  if (have_prev && (stamp < prev_stamp - kBackwardsTolerance || stamp > prev_stamp + cfg.max_packet_gap_ns)) {
+    ++stats.time_jumps;
+    merge(out, end_scan(false));
+    drop_next();
+    have_prev = false;
+  }
+  prev_stamp = stamp;
+  cur_counted = nxt_counted = false;
+
+  const auto& tab = angles();
+  const auto rm = static_cast<ReturnMode>(mode);
+  const bool xt = cfg.model == Model::kPandarXT32;
+  const float thresh = static_cast<float>(cfg.dual_distance_threshold_m);
+  const int groups = mi->blocks / n;
+  for (int g = 0; g < groups; ++g) {
+    const std::uint8_t* blk = p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size;
+    const int a = le16(blk + mi->block_azimuth);
+    const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
+    bool overlap = in_sector(reset_raw, emit_raw, a);
+    bool cut_here = false;
+    if (have_prev) {
+      const int step = az_step(prev_az, a);
+      if (crosses(prev_az, step, reset_raw) && !nxt_started) nxt_from_cut = true;
+      cut_here = crosses(prev_az, step, emit_raw);
+      overlap = overlap || in_sector(reset_raw, emit_raw, prev_az) || cut_here;
+    }
+    if (overlap) touch(nxt, nxt_started, nxt_counted, group_stamp, packet.rx_ns);
+    touch(cur, cur_started, cur_counted, group_stamp, packet.rx_ns);
+
+    const float sa = tab.sin[static_cast<std::size_t>(a)];
+    const float ca = tab.cos[static_cast<std::size_t>(a)];
+    const std::int64_t a_udeg = static_cast<std::int64_t>(a) * 10'000 - cut_udeg;
+    const std::uint8_t* units = blk + mi->block_units;
+    for (std::size_t c = 0; c < ch.size(); ++c) {
+      const ChannelTable& t = ch[c];
+      Scan* s = &cur;
+      if (overlap) {
+        std::int64_t rel = (a_udeg + t.off_udeg) % kMicroDeg;
+        if (rel < 0) rel += kMicroDeg;
+        if (rel <= kNextScanSpan) s = &nxt;
+      }
+      const std::uint8_t* u0 = units + c * mi->unit_size;
+      const Echo e0{le16(u0), u0[2]};
+      if (n == 1) {
+        const std::uint8_t type = rm == ReturnMode::kStrongest ? kReturnStrongest
+                                  : rm == ReturnMode::kLast    ? kReturnLast
+                                  : rm == ReturnMode::kFirst   ? kReturnFirst
+                                                               : kReturnUnknown;
+        point(*s, t, e0, unit, sa, ca, group_stamp, type);
+        continue;
+      }
+      const std::uint8_t* u1 = u0 + mi->block_size;
+      const Echo e1{le16(u1), u1[2]};
+      const bool second_stronger = e1.refl > e0.refl;
+      std::uint8_t t0 = kReturnUnknown, t1 = kReturnUnknown;
+      int last_idx = e1.raw > e0.raw ? 1 : 0;  // modes without a last echo: the farther one
+      switch (rm) {
+        case ReturnMode::kLastStrongest:
+          t0 = second_stronger ? kReturnLast : kReturnStrongestAndLast;
+          t1 = second_stronger ? kReturnStrongest : kReturnSecondStrongest;
+          last_idx = 0;
+          break;
+        case ReturnMode::kFirstLast:  // the XT32 sends the last echo first
+          t0 = xt ? kReturnLast : kReturnFirst;
+          t1 = xt ? kReturnFirst : kReturnLast;
+          last_idx = xt ? 0 : 1;
+          break;
+        case ReturnMode::kFirstStrongest:
+          t0 = kReturnFirst;
+          t1 = second_stronger ? kReturnStrongest : kReturnSecondStrongest;
+          break;
+        default:  // first + second
+          t0 = kReturnFirst;
+          break;
+      }
+      switch (cfg.returns) {
+        case ReturnSelection::kStrongest:
+          if (second_stronger) {
+            point(*s, t, e1, unit, sa, ca, group_stamp, t1);
+          } else {
+            point(*s, t, e0, unit, sa, ca, group_stamp, t0);
+          }
+          break;
+        case ReturnSelection::kLast:
+          point(*s, t, last_idx == 0 ? e0 : e1, unit, sa, ca, group_stamp, last_idx == 0 ? t0 : t1);
+          break;
+        case ReturnSelection::kDual: {
+          const bool same = e0.raw == e1.raw && e0.refl == e1.refl;
+          const float gap = std::abs(static_cast<float>(e0.raw) - static_cast<float>(e1.raw)) * unit;
+          if (!same && !(gap < thresh)) point(*s, t, e0, unit, sa, ca, group_stamp, t0);
+          point(*s, t, e1, unit, sa, ca, group_stamp, same && rm == ReturnMode::kLastStrongest ? t0 : t1);
+          break;
+        }
+      }
+    }
+    if (cut_here) merge(out, end_scan(cur_from_cut));
+    have_prev = true;
+    prev_az = a;
+  }
+  return out;
+}
+
+Decoder::Decoder(DecoderConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {}
+Decoder::~Decoder() = default;
+Decoder::Decoder(Decoder&&) noexcept = default;
+Decoder& Decoder::operator=(Decoder&&) noexcept = default;
+
+std::optional<Scan> Decoder::push(PacketView packet, Nanos packet_stamp) noexcept {
+  return impl_->push(packet, packet_stamp);
+}
+
+std::optional<Scan> Decoder::flush() noexcept {
+  auto& d = *impl_;
+  std::optional<Scan> out;
+  if (d.cur.packets > 0) {
+    d.last_scan_points = d.cur.points.size();
+    d.cur.seq = d.next_seq++;
+    ++d.stats.scans;
+    out = std::move(d.cur);
+  } else {
+    d.give_back(std::move(d.cur.points));
+  }
+  d.cur = d.fresh();
+  d.cur_started = d.cur_counted = d.cur_from_cut = false;
+  d.give_back(std::move(d.nxt.points));
+  d.nxt = d.fresh();
+  d.nxt_started = d.nxt_counted = d.nxt_from_cut = false;
+  d.have_prev = false;
+  return out;
+}
+
+void Decoder::recycle(std::vector<PointXYZIRT>&& buffer) noexcept { impl_->give_back(std::move(buffer)); }
+
+Nanos Decoder::first_firing_offset_ns(int returns) const noexcept {
+  const int groups = impl_->mi->blocks / std::max(returns, 1);
+  return static_cast<Nanos>(impl_->mi->tail_to_last_group_ns) -
+         static_cast<Nanos>(impl_->mi->group_period_ns) * (groups - 1) + impl_->min_fire_ns;
+}
+int Decoder::last_returns() const noexcept { return impl_->last_returns; }
+PacketStatus Decoder::last_status() const noexcept { return impl_->last; }
+const DecoderStats& Decoder::stats() const noexcept { return impl_->stats; }
+const DecoderConfig& Decoder::config() const noexcept { return impl_->cfg; }
+std::uint16_t Decoder::ring_of_channel(int channel) const noexcept {
+  if (channel < 1 || channel > impl_->mi->channels) return 0;
+  return impl_->ring_of_channel[static_cast<std::size_t>(channel - 1)];
+}
+
+}  // namespace sensor_rig::lidar::hesai
