@@ -2,6 +2,7 @@
 #include <string>
 
 #include "sensor_rig/lidar/hesai/scan_decoder.hpp"
+#include "sensor_rig/lidar/ouster/scan_decoder.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 #include "velodyne_scan_decoder.hpp"
 
@@ -13,8 +14,8 @@ constexpr ModelEntry kModels[] = {
     {"VLP-16", "velodyne", 2368, false, &make_velodyne_decoder},
     {"VLP-32C", "velodyne", 2368, false, &make_velodyne_decoder},
     {"HDL-32E", "velodyne", 2368, false, &make_velodyne_decoder},
-    {"OS-LEGACY", "ouster", 7502, true, nullptr},
-    {"OS", "ouster", 7502, true, nullptr},
+    {"OS-LEGACY", "ouster", 7502, true, &make_ouster_decoder},
+    {"OS", "ouster", 7502, true, &make_ouster_decoder},
     {"Pandar40P", "hesai", 2368, false, &make_hesai_decoder},
     {"PandarXT32", "hesai", 2368, false, &make_hesai_decoder},
 };

@@ -1,0 +1,316 @@
+// Ouster decoder: packet validation, scan assembly by frame id, and the per-pixel hot loop.
+#include "sensor_rig/lidar/ouster/decoder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "sensor_rig/lidar/ouster/packet.hpp"
+#include "xyz_lut.hpp"
+
+namespace sensor_rig::lidar::ouster {
+namespace {
+
+constexpr Nanos kBackwardsTolerance = 1'000'000;
+
+const SensorMetadata& validated(const DecoderConfig& c) {
+  const auto& m = c.metadata;
+  if (!(c.min_range_m >= 0.0) || !(c.max_range_m > c.min_range_m))
+    throw std::invalid_argument("range: need 0 <= min_range (" + std::to_string(c.min_range_m) + ") < max_range (" +
+                                std::to_string(c.max_range_m) + ")");
+  if (c.max_packet_gap_ns <= 0) throw std::invalid_argument("max_packet_gap_ns must be positive");
+  if (m.pixels_per_column <= 0 || m.columns_per_frame <= 0 || m.columns_per_packet <= 0 ||
+      m.columns_per_packet > m.columns_per_frame || !(m.frames_per_second > 0.0))
+    throw std::invalid_argument("metadata: data format is not set (use parse_metadata)");
+  const auto n = static_cast<std::size_t>(m.pixels_per_column);
+  if (m.beam_altitude_deg.size() != n || m.beam_azimuth_deg.size() != n)
+    throw std::invalid_argument("metadata: need one beam altitude and azimuth angle per pixel");
+  if (m.column_window_first < 0 || m.column_window_first >= m.columns_per_frame || m.column_window_last < 0 ||
+      m.column_window_last >= m.columns_per_frame)
+    throw std::invalid_argument("metadata: column window outside the frame");
+  return m;
+}
+
+std::uint32_t to_mm(double m, bool round_up) {
+  const double mm = m * 1000.0;
+  if (!(mm < 4e9)) return std::numeric_limits<std::uint32_t>::max();
+  return static_cast<std::uint32_t>(round_up ? std::ceil(mm) : std::floor(mm));
+}
+
+std::uint32_t clamp_u32(Nanos v) noexcept {
+  if (v <= 0) return 0;
+  return v >= static_cast<Nanos>(std::numeric_limits<std::uint32_t>::max()) ? std::numeric_limits<std::uint32_t>::max()
+                                                                            : static_cast<std::uint32_t>(v);
+}
+
+}  // namespace
+
+struct Decoder::Impl {
+  DecoderConfig cfg;
+  PacketLayout layout;
+  XyzLut lut;
+  std::vector<std::uint16_t> ring;  // per beam
+  FieldReader range, range2, inten, inten2;
+  bool dual = false;
+  std::uint32_t min_mm = 0;
+  std::uint32_t max_mm = 0;
+  std::uint32_t window_first = 0;  // first column of a frame that carries data
+  std::uint32_t window_last = 0;   // last one
+  Nanos span_ns = 0;
+  std::vector<ColumnHeader> cols;  // this packet's column headers
+  std::vector<std::uint8_t> col_ok;
+
+  DecoderStats stats;
+  PacketStatus last = PacketStatus::kOk;
+  Scan cur;
+  bool cur_started = false;    // has a stamp (a valid column decoded)
+  bool cur_from_start = false; // began at the frame's first packet (complete once ended)
+  bool have_stamp = false;
+  Nanos prev_stamp = 0;
+  bool have_fid = false;
+  std::uint32_t prev_fid = 0;
+  std::size_t last_scan_points = 0;
+  std::uint64_t next_seq = 0;
+  std::vector<std::vector<PointXYZIRT>> spare;
+
+  explicit Impl(DecoderConfig config)
+      : cfg(std::move(config)), layout(validated(cfg).layout()), lut(cfg.metadata) {
+    const auto& m = cfg.metadata;
+    const auto& spec = profile_spec(m.profile);
+    dual = spec.returns == 2;
+    range = FieldReader::from(spec.field(Field::kRange));
+    range2 = FieldReader::from(spec.field(Field::kRange2));
+    const bool use_signal = cfg.intensity == IntensitySource::kSignal && spec.has(Field::kSignal);
+    inten = FieldReader::from(spec.field(use_signal ? Field::kSignal : Field::kReflectivity));
+    inten2 = FieldReader::from(spec.field(use_signal ? Field::kSignal2 : Field::kReflectivity2));
+    min_mm = to_mm(cfg.min_range_m, true);
+    max_mm = std::isinf(cfg.max_range_m) ? std::numeric_limits<std::uint32_t>::max() : to_mm(cfg.max_range_m, false);
+    const bool wraps = m.column_window_first > m.column_window_last;
+    window_first = wraps ? 0U : static_cast<std::uint32_t>(m.column_window_first);
+    window_last = static_cast<std::uint32_t>(wraps ? m.columns_per_frame - 1 : m.column_window_last);
+    span_ns = static_cast<Nanos>(std::llround(m.column_period_ns() * static_cast<double>(m.columns_per_packet)));
+    cols.resize(layout.columns_per_packet);
+    col_ok.resize(layout.columns_per_packet);
+
+    // Ring = rank of the beam's altitude, 0 = lowest (ties by beam index).
+    std::vector<std::size_t> order(m.beam_altitude_deg.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return m.beam_altitude_deg[a] < m.beam_altitude_deg[b]; });
+    ring.resize(order.size());
+    for (std::size_t r = 0; r < order.size(); ++r) ring[order[r]] = static_cast<std::uint16_t>(r);
+    spare.reserve(2);
+    start_scan();
+  }
+
+  void start_scan() {
+    const std::size_t full = static_cast<std::size_t>(cfg.metadata.columns_per_frame) *
+                             static_cast<std::size_t>(cfg.metadata.pixels_per_column) *
+                             (dual && cfg.returns == ReturnSelection::kDual ? 2 : 1);
+    cur = Scan{};
+    if (!spare.empty()) {
+      cur.points = std::move(spare.back());
+      spare.pop_back();
+      cur.points.clear();
+    }
+    cur.points.reserve(last_scan_points ? std::min(full, last_scan_points + last_scan_points / 8) : full);
+    cur_started = false;
+    cur_from_start = false;
+  }
+
+  std::optional<Scan> end_scan(bool complete) {
+    std::optional<Scan> out;
+    const std::uint32_t carried_drops = cur.dropped;
+    if (cur.packets > 0 && cur_started && (complete || cfg.emit_partial_scans)) {
+      last_scan_points = cur.points.size();
+      cur.seq = next_seq++;
+      ++stats.scans;
+      out = std::move(cur);
+      start_scan();
+    } else {
+      if (cur.packets > 0) ++stats.partial_scans_discarded;
+      start_scan();
+      cur.dropped = carried_drops;  // drops stay visible in the next emitted scan
+    }
+    return out;
+  }
+
+  inline void emit(const LutEntry& l, std::uint64_t r, std::uint64_t i, std::uint32_t t, std::uint16_t rg,
+                   std::uint8_t type) {
+    if (r == 0 || r < min_mm || r > max_mm) return;
+    const float f = static_cast<float>(r);
+    cur.points.push_back(PointXYZIRT{l.dx * f + l.ox, l.dy * f + l.oy, l.dz * f + l.oz, static_cast<float>(i), t, rg,
+                                     type, 0});
+  }
+
+  void decode_dual(const std::uint8_t* px, const LutEntry& l, std::uint32_t t, std::uint16_t rg) {
+    const std::uint64_t r1 = range.read(px);
+    const std::uint64_t r2 = range2.read(px);
+    if (r1 == 0 && r2 == 0) return;
+    const std::uint64_t i1 = inten.read(px);
+    const std::uint64_t i2 = inten2.read(px);
+    // Which of the (up to) two echoes is the strongest and which the farthest.
+    int strongest = r1 != 0 ? 1 : 2;
+    if (r1 != 0 && r2 != 0 && cfg.metadata.return_order != ReturnOrder::kStrongestFirst) strongest = i2 > i1 ? 2 : 1;
+    const int farthest = r2 > r1 ? 2 : 1;
+    const auto type = [&](int k) -> std::uint8_t {
+      if (k == strongest) return k == farthest ? kReturnStrongestAndLast : kReturnStrongest;
+      return k == farthest ? kReturnLast : kReturnSecondStrongest;
+    };
+    switch (cfg.returns) {
+      case ReturnSelection::kStrongest:
+        if (strongest == 1) emit(l, r1, i1, t, rg, type(1)); else emit(l, r2, i2, t, rg, type(2));
+        break;
+      case ReturnSelection::kLast:
+        if (farthest == 1) emit(l, r1, i1, t, rg, type(1)); else emit(l, r2, i2, t, rg, type(2));
+        break;
+      case ReturnSelection::kDual:
+        emit(l, r1, i1, t, rg, type(1));
+        emit(l, r2, i2, t, rg, type(2));
+        break;
+    }
+  }
+
+  void decode_column(const std::uint8_t* col, std::uint16_t mid, std::uint32_t t) {
+    const LutEntry* l = lut.column(mid);
+    const std::uint8_t* px = col + layout.col_header_size;
+    const std::size_t h = layout.pixels_per_column;
+    if (!dual) {
+      for (std::size_t r = 0; r < h; ++r, px += layout.pixel_size)
+        emit(l[r], range.read(px), inten.read(px), t, ring[r], kReturnStrongest);
+      return;
+    }
+    for (std::size_t r = 0; r < h; ++r, px += layout.pixel_size) decode_dual(px, l[r], t, ring[r]);
+  }
+
+  std::optional<Scan> push(const PacketView& packet, Nanos stamp) noexcept;
+};
+
+std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) noexcept {
+  ++stats.packets;
+  last = check_packet(packet.data, layout);
+  if (last != PacketStatus::kOk) {
+    ++stats.by_status[static_cast<std::size_t>(last)];
+    ++cur.dropped;
+    return std::nullopt;
+  }
+  ++stats.packets_used;
+  ++stats.by_status[0];
+  const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
+  const auto& m = cfg.metadata;
+  if (m.init_id != 0 && layout.header != HeaderType::kLegacy) {
+    const auto id = FieldReader::from(header_spec(layout.header).init_id).read(p);
+    if (id != m.init_id) ++stats.init_id_mismatches;
+  }
+
+  // Column headers first: the packet's first valid column gives its time and frame position.
+  std::size_t n_valid = 0;
+  std::uint64_t first_ts = 0;
+  long base = 0;  // measurement id of the packet's first column
+  for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
+    cols[c] = column_header_at(p + layout.column_offset(c), layout);
+    col_ok[c] = 0;
+    if (!cols[c].valid()) {
+      ++stats.invalid_columns;
+    } else if (cols[c].measurement_id >= m.columns_per_frame) {
+      ++stats.bad_measurement_ids;
+    } else {
+      col_ok[c] = 1;
+      if (n_valid++ == 0) {
+        first_ts = cols[c].timestamp_ns;
+        base = static_cast<long>(cols[c].measurement_id) - static_cast<long>(c);
+      }
+    }
+  }
+
+  std::optional<Scan> out;
+  if (n_valid > 0) {
+    if (have_stamp && (stamp < prev_stamp - kBackwardsTolerance || stamp > prev_stamp + cfg.max_packet_gap_ns)) {
+      ++stats.time_jumps;
+      out = end_scan(false);
+      have_fid = false;
+    }
+    prev_stamp = stamp;
+    have_stamp = true;
+  }
+  const std::uint32_t fid = frame_id_at(p, layout);
+  const bool new_frame = have_fid && fid != prev_fid;
+  if (new_frame && cur.packets > 0) out = end_scan(cur_from_start);
+  if (cur.packets == 0) {
+    cur_from_start = new_frame || (n_valid > 0 && base <= static_cast<long>(window_first));
+    cur.first_rx_ns = packet.rx_ns;
+  }
+  ++cur.packets;
+  cur.last_rx_ns = packet.rx_ns;
+  have_fid = true;
+  prev_fid = fid;
+  if (n_valid == 0) return out;
+
+  if (!cur_started) {
+    cur.stamp = stamp;
+    cur_started = true;
+  }
+  const Nanos t_packet = stamp - cur.stamp;
+  for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
+    if (col_ok[c] == 0) continue;
+    const auto dt = static_cast<Nanos>(cols[c].timestamp_ns - first_ts);  // wraps for a column before the first
+    decode_column(p + layout.column_offset(c), cols[c].measurement_id, clamp_u32(t_packet + dt));
+  }
+  // The frame's last packet ends the scan now instead of with the next frame's first packet.
+  const long last_col = base + static_cast<long>(layout.columns_per_packet) - 1;
+  if (!out && last_col >= static_cast<long>(window_last)) out = end_scan(cur_from_start);
+  return out;
+}
+
+Decoder::Decoder(DecoderConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {}
+Decoder::~Decoder() = default;
+Decoder::Decoder(Decoder&&) noexcept = default;
+Decoder& Decoder::operator=(Decoder&&) noexcept = default;
+
+std::optional<Scan> Decoder::push(PacketView packet, Nanos packet_stamp) noexcept {
+  return impl_->push(packet, packet_stamp);
+}
+
+std::optional<Scan> Decoder::flush() noexcept {
+  auto& d = *impl_;
+  std::optional<Scan> out;
+  if (d.cur.packets > 0 && d.cur_started) {
+    d.last_scan_points = d.cur.points.size();
+    d.cur.seq = d.next_seq++;
+    ++d.stats.scans;
+    out = std::move(d.cur);
+  }
+  d.start_scan();
+  d.have_fid = false;
+  d.have_stamp = false;
+  return out;
+}
+
+void Decoder::recycle(std::vector<PointXYZIRT>&& buffer) noexcept {
+  if (impl_->spare.size() < 2 && buffer.capacity() > 0) impl_->spare.push_back(std::move(buffer));
+}
+
+PacketStatus Decoder::last_status() const noexcept { return impl_->last; }
+const DecoderStats& Decoder::stats() const noexcept { return impl_->stats; }
+const DecoderConfig& Decoder::config() const noexcept { return impl_->cfg; }
+const PacketLayout& Decoder::layout() const noexcept { return impl_->layout; }
+Nanos Decoder::packet_span_ns() const noexcept { return impl_->span_ns; }
+
+std::uint16_t Decoder::ring_of_beam(std::size_t beam) const noexcept {
+  return beam < impl_->ring.size() ? impl_->ring[beam] : 0;
+}
+
+std::optional<std::uint64_t> Decoder::first_column_time(std::span<const std::byte> bytes) const noexcept {
+  const auto& d = *impl_;
+  if (check_packet(bytes, d.layout) != PacketStatus::kOk) return std::nullopt;
+  const auto* p = reinterpret_cast<const std::uint8_t*>(bytes.data());
+  for (std::size_t c = 0; c < d.layout.columns_per_packet; ++c) {
+    const auto h = column_header_at(p + d.layout.column_offset(c), d.layout);
+    if (h.valid() && h.measurement_id < d.cfg.metadata.columns_per_frame) return h.timestamp_ns;
+  }
+  return std::nullopt;
+}
+
+}  // namespace sensor_rig::lidar::ouster

@@ -1,0 +1,130 @@
+// The field tables of every supported Ouster lidar UDP profile (bit positions from the sensor
+// firmware manual; the same layout ouster-sdk's parsing.cpp encodes).
+#include "sensor_rig/lidar/ouster/profile.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace sensor_rig::lidar::ouster {
+namespace {
+
+constexpr FieldSpec F(std::uint16_t bit, std::uint8_t width, std::uint8_t up = 0) { return {bit, width, up}; }
+constexpr FieldSpec kNone{};
+
+// Order of every table: range, flags, reflectivity, signal, near_ir, range2, flags2,
+// reflectivity2, signal2, window (the Field enum).
+constexpr ProfileSpec kProfiles[] = {
+    {Profile::kLegacy, "LEGACY", 12, 1,
+     {F(0, 20), F(28, 4), F(32, 8), F(48, 16), F(64, 16), kNone, kNone, kNone, kNone, kNone}},
+    {Profile::kRng19Rfl8Sig16Nir16, "RNG19_RFL8_SIG16_NIR16", 12, 1,
+     {F(0, 19), F(19, 5), F(32, 8), F(48, 16), F(64, 16), kNone, kNone, kNone, kNone, F(88, 8)}},
+    {Profile::kRng19Rfl8Sig16Nir16Dual, "RNG19_RFL8_SIG16_NIR16_DUAL", 16, 2,
+     {F(0, 19), F(19, 5), F(24, 8), F(64, 16), F(96, 16), F(32, 19), F(51, 5), F(56, 8), F(80, 16), F(120, 8)}},
+    {Profile::kRng15Rfl8Nir8, "RNG15_RFL8_NIR8", 4, 1,
+     {F(0, 15, 3), F(15, 1), F(16, 8), kNone, F(24, 8, 4), kNone, kNone, kNone, kNone, kNone}},
+    {Profile::kRng15Rfl8Win8, "RNG15_RFL8_WIN8", 4, 1,
+     {F(0, 15, 3), F(15, 1), F(16, 8), kNone, kNone, kNone, kNone, kNone, kNone, F(24, 8)}},
+    {Profile::kFiveWordPixel, "FIVE_WORD_PIXEL", 20, 2,
+     {F(0, 19), F(19, 5), F(24, 8), F(64, 16), F(96, 16), F(32, 19), F(51, 5), F(56, 8), F(80, 16), kNone}},
+    {Profile::kFusaRng15Rfl8Nir8Dual, "FUSA_RNG15_RFL8_NIR8_DUAL", 8, 2,
+     {F(0, 15, 3), F(15, 1), F(16, 8), kNone, F(24, 8, 4), F(32, 15, 3), F(47, 1), F(48, 8), kNone, F(56, 8)}},
+    {Profile::kRng15Rfl8Nir8Dual, "RNG15_RFL8_NIR8_DUAL", 8, 2,
+     {F(0, 15, 3), F(15, 1), F(16, 8), kNone, F(24, 8, 4), F(32, 15, 3), F(47, 1), F(48, 8), kNone, F(56, 8)}},
+};
+static_assert(std::size(kProfiles) == kProfileCount);
+
+// packet_type, frame_id, init_id, prod_sn, alert_flags, countdown_thermal_shutdown,
+// countdown_shot_limiting, thermal_shutdown, shot_limiting
+constexpr HeaderSpec kLegacyHeader{};  // LEGACY: frame id is in each column header
+constexpr HeaderSpec kStandardHeader{F(0, 16),   F(16, 16),  F(32, 24),  F(56, 40), F(96, 8),
+                                     F(128, 8),  F(136, 8),  F(144, 4),  F(156, 4)};
+constexpr HeaderSpec kFusaHeader{F(0, 8),   F(32, 32), F(8, 24),  F(88, 40), F(64, 8),
+                                 F(128, 8), F(136, 8), F(144, 4), F(156, 4)};
+
+// Every table entry must fit its pixel: checked once at compile time.
+constexpr bool tables_fit() {
+  for (const auto& p : kProfiles) {
+    for (const auto& f : p.fields) {
+      if (f.width > 32 || f.bit_offset + f.width > p.pixel_bytes * 8) return false;
+    }
+  }
+  return true;
+}
+static_assert(tables_fit());
+
+}  // namespace
+
+const ProfileSpec& profile_spec(Profile p) noexcept {
+  const auto i = static_cast<std::size_t>(p);
+  return kProfiles[i < kProfileCount ? i : 0];
+}
+
+std::span<const ProfileSpec> all_profiles() noexcept { return kProfiles; }
+
+std::optional<Profile> profile_from_name(std::string_view name) noexcept {
+  for (const auto& p : kProfiles)
+    if (p.name == name) return p.profile;
+  return std::nullopt;
+}
+
+std::string profile_names() {
+  std::string s;
+  for (const auto& p : kProfiles) s += (s.empty() ? "" : ", ") + std::string(p.name);
+  return s;
+}
+
+const HeaderSpec& header_spec(HeaderType h) noexcept {
+  switch (h) {
+    case HeaderType::kStandard:
+      return kStandardHeader;
+    case HeaderType::kFusa:
+      return kFusaHeader;
+    case HeaderType::kLegacy:
+      break;
+  }
+  return kLegacyHeader;
+}
+
+HeaderType default_header_type(Profile p) noexcept {
+  if (p == Profile::kLegacy) return HeaderType::kLegacy;
+  return p == Profile::kFusaRng15Rfl8Nir8Dual ? HeaderType::kFusa : HeaderType::kStandard;
+}
+
+PacketLayout make_layout(Profile p, HeaderType h, std::size_t pixels_per_column, std::size_t columns_per_packet) {
+  if (pixels_per_column == 0 || columns_per_packet == 0)
+    throw std::invalid_argument("pixels_per_column and columns_per_packet must be positive");
+  const bool legacy = p == Profile::kLegacy;
+  if (legacy != (h == HeaderType::kLegacy))
+    throw std::invalid_argument("the LEGACY profile and only it has no packet header");
+  PacketLayout l;
+  l.profile = p;
+  l.header = h;
+  l.pixels_per_column = pixels_per_column;
+  l.columns_per_packet = columns_per_packet;
+  l.packet_header_size = legacy ? 0 : 32;
+  l.col_header_size = legacy ? 16 : 12;
+  l.pixel_size = profile_spec(p).pixel_bytes;
+  l.col_footer_size = legacy ? 4 : 0;
+  l.packet_footer_size = legacy ? 0 : 32;
+  // Bounded before multiplying: pixels_per_column and columns_per_packet come from metadata.
+  if (pixels_per_column > kMaxPacketSize || columns_per_packet > kMaxPacketSize)
+    throw std::invalid_argument("lidar packet would exceed 65535 bytes");
+  l.col_size = l.col_header_size + pixels_per_column * l.pixel_size + l.col_footer_size;
+  l.packet_size = l.packet_header_size + columns_per_packet * l.col_size + l.packet_footer_size;
+  if (l.packet_size > kMaxPacketSize)
+    throw std::invalid_argument("lidar packet of " + std::to_string(l.packet_size) + " bytes exceeds 65535 bytes");
+  return l;
+}
+
+FieldReader FieldReader::from(const FieldSpec& f) noexcept {
+  FieldReader r;
+  if (f.width == 0) return r;
+  r.byte_offset = static_cast<std::uint16_t>(f.bit_offset / 8);
+  r.shift = static_cast<std::uint8_t>(f.bit_offset % 8);
+  r.nbytes = static_cast<std::uint8_t>((r.shift + f.width + 7) / 8);
+  r.upshift = f.upshift;
+  r.mask = f.width >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << f.width) - 1;
+  return r;
+}
+
+}  // namespace sensor_rig::lidar::ouster

@@ -1,0 +1,81 @@
+// The Ouster decoder behind the vendor-neutral interface. The cut angle does not apply: Ouster
+// scans are cut by frame id (the sensor starts a frame at encoder 0).
+#include "sensor_rig/lidar/ouster/scan_decoder.hpp"
+
+#include "sensor_rig/lidar/ouster/decoder.hpp"
+#include "sensor_rig/lidar/ouster/metadata.hpp"
+
+namespace sensor_rig::lidar {
+namespace {
+
+class OusterScanDecoder final : public ScanDecoder {
+ public:
+  explicit OusterScanDecoder(ouster::DecoderConfig cfg) : decoder_(std::move(cfg)) {
+    const auto& m = decoder_.config().metadata;
+    lidar_port_ = m.udp_port_lidar;
+    imu_port_ = m.udp_port_imu;
+  }
+
+  std::optional<Scan> push(PacketView packet, Nanos packet_stamp) noexcept override {
+    return decoder_.push(packet, packet_stamp);
+  }
+  std::optional<Scan> flush() noexcept override { return decoder_.flush(); }
+  void recycle(std::vector<PointXYZIRT>&& buffer) noexcept override { decoder_.recycle(std::move(buffer)); }
+  // IMU packets come on their own port (7503) and, in the LEGACY IMU profile, are 48 bytes.
+  [[nodiscard]] bool is_data_packet(const PacketView& p) const noexcept override {
+    if (p.data.size() == ouster::kLegacyImuPacketSize && p.data.size() != decoder_.layout().packet_size) return false;
+    return !(imu_port_ != 0 && imu_port_ != lidar_port_ && p.dst_port == imu_port_);
+  }
+  [[nodiscard]] SensorTime packet_time(std::span<const std::byte> bytes) const noexcept override {
+    const auto t = decoder_.first_column_time(bytes);
+    if (!t || *t > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) return {};
+    return {SensorTime::Kind::kAbsoluteNs, static_cast<std::int64_t>(*t)};
+  }
+  [[nodiscard]] Nanos packet_span_ns() const noexcept override { return decoder_.packet_span_ns(); }
+  [[nodiscard]] DecoderCounters counters() const noexcept override {
+    const auto& s = decoder_.stats();
+    DecoderCounters c;
+    c.packets = s.packets;
+    c.packets_used = s.packets_used;
+    c.scans = s.scans;
+    c.partial_scans_discarded = s.partial_scans_discarded;
+    for (std::size_t i = 0; i < c.by_status.size() && i < s.by_status.size(); ++i) c.by_status[i] = s.by_status[i];
+    return c;
+  }
+  [[nodiscard]] PacketStatus last_status() const noexcept override { return decoder_.last_status(); }
+
+ private:
+  ouster::Decoder decoder_;
+  std::uint16_t lidar_port_ = 0;
+  std::uint16_t imu_port_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<ScanDecoder> make_ouster_decoder(const DecoderOptions& o) {
+  if (o.model != "OS-LEGACY" && o.model != "OS") throw DecoderConfigError("not an Ouster model: " + o.model);
+  if (o.metadata_text.empty())
+    throw DecoderConfigError("model " + o.model + " needs the sensor metadata JSON (--metadata)");
+  const std::string name = o.metadata_name.empty() ? "metadata" : o.metadata_name;
+  ouster::DecoderConfig cfg;
+  cfg.metadata = ouster::parse_metadata(o.metadata_text, name);  // MetadataError is a DecoderConfigError
+  const bool legacy = cfg.metadata.profile == ouster::Profile::kLegacy;
+  if (legacy != (o.model == "OS-LEGACY")) {
+    throw DecoderConfigError(name + ": key 'udp_profile_lidar': " +
+                             std::string(ouster::profile_spec(cfg.metadata.profile).name) + " is " +
+                             (legacy ? "the legacy profile: use model OS-LEGACY" : "not LEGACY: use model OS"));
+  }
+  cfg.returns = o.returns == "last"   ? ouster::ReturnSelection::kLast
+                : o.returns == "dual" ? ouster::ReturnSelection::kDual
+                                      : ouster::ReturnSelection::kStrongest;
+  cfg.min_range_m = o.min_range_m;
+  cfg.max_range_m = o.max_range_m;
+  cfg.emit_partial_scans = o.emit_partial_scans;
+  try {
+    return std::make_unique<OusterScanDecoder>(std::move(cfg));
+  } catch (const std::invalid_argument& e) {  // options out of range
+    throw DecoderConfigError(e.what());
+  }
+}
+
+}  // namespace sensor_rig::lidar
