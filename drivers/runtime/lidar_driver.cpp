@@ -91,14 +91,15 @@ struct LidarDriver::Impl {
         topic_name("/sensors/lidar/" + c.name + "/points"),
         decoder(make_driver_decoder(c)),
         velodyne(lidar::find_model(c.model) != nullptr && lidar::find_model(c.model)->vendor == "velodyne"),
-        data(lidar::UdpSourceConfig{{c.host, static_cast<std::uint16_t>(c.port)}, c.receive_buffer_bytes, 64, true}),
+        // No SO_REUSEADDR: a second driver on the same port must fail, not silently share packets.
+        data(lidar::UdpSourceConfig{{c.host, static_cast<std::uint16_t>(c.port)}, c.receive_buffer_bytes, 64, false}),
         topic(p, topic_name, c.qos),
         writer(p, topic, c.qos),
         stamps(s),
         stamper(stamper_config(c, decoder->packet_span_ns())) {
     if (c.position_port != 0)
       position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
-          {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 4, true});
+          {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 4, false});
     for (const auto& f : lidar::kPointFields) {
       msg::PointField pf{};
       pf.name = const_cast<char*>(f.name);

@@ -261,6 +261,7 @@ class Monitor {
         next_report += static_cast<Nanos>(opt_.period_ms) * 1'000'000;
       }
       if (opt_.duration_s > 0 && static_cast<double>(mono - start) * 1e-9 >= opt_.duration_s) break;
+      if (opt_.keep_going && !opt_.keep_going()) break;
     }
     if (!opt_.summary_file.empty()) write_summary(static_cast<double>(monotonic_now_ns() - start) * 1e-9);
     return 0;

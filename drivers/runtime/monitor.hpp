@@ -9,6 +9,7 @@
 //   total    = subscriber receive - acquisition
 // Stages other than dds need the driver's per-sample stamps (rt/rig/stamps); topics published by
 // others show dds only. A sample announced by its stamps that does not arrive within 2 s is lost.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@ struct MonitorOptions {
   int period_ms = 1000;
   std::string summary_file;         // when set: whole-run percentiles per topic and stage, as JSON
   dds::DomainConfig dds;
+  std::function<bool()> keep_going;  // optional: checked every loop; false ends the monitor
 };
 
 // Returns the exit code (0 ok).

@@ -51,7 +51,14 @@ void add_demo(CLI::App& app, cli::Context& ctx) {
     mo.duration_s = *duration;
     mo.json = *json;
     mo.dds = cfg.dds;
+    mo.keep_going = [&rig] { return rig.running(); };
     ctx.exit_code = run_monitor(mo);
+    if (!rig.running() && !shutdown_requested()) {
+      std::fprintf(stderr, "rig demo: `rig up %s` exited with status %d (see its messages above)\n", config->c_str(),
+                   rig.exit_status());
+      ctx.exit_code = cli::kRuntime;
+      return;
+    }
     rig.stop(5000);
   });
 }
