@@ -111,6 +111,31 @@ TEST(HesaiScans, XT32DualRotation) {
   EXPECT_EQ(scans[1].stamp - scans[0].stamp, 2000LL * 50'000);
 }
 
+TEST(HesaiScans, BlocksOnTheCutAngle) {
+  // XT32 without azimuth offsets: the window around the cut is the cut itself, and blocks land on
+  // it exactly (0.18° steps). Starting on the cut: the first scan is complete from the next turn.
+  DecoderConfig cfg;
+  cfg.model = Model::kPandarXT32;
+  Decoder d(cfg);
+  std::vector<Scan> scans;
+  for (int k = 0; k < 1000; ++k) {
+    PacketSpec s;
+    s.kind = Kind::kXT32;
+    s.step = 18;
+    s.azimuth0 = (k * 8 * 18) % kAzimuthCount;
+    s.unit = [](int, int) -> RawUnit { return {1000, 1}; };
+    const auto pkt = build_packet(s);
+    const Nanos t = kT0 + k * 400'000LL;
+    if (auto scan = d.push(PacketView{pkt, t, kDataPort}, t)) scans.push_back(std::move(*scan));
+  }
+  ASSERT_EQ(scans.size(), 2U);
+  for (const auto& s : scans) {
+    EXPECT_EQ(s.points.size(), 2000U * 32U);
+    for (const auto& p : s.points) ASSERT_LT(azimuth_deg(p), 359.82 + 1e-3);
+  }
+  EXPECT_EQ(d.stats().partial_scans_discarded, 1U);
+}
+
 TEST(HesaiDrops, TruncatedAndGarbagePacketsAreCounted) {
   Decoder d40(DecoderConfig{});
   PacketSpec s;

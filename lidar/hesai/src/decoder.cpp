@@ -86,6 +86,7 @@ struct Decoder::Impl {
   bool cur_started = false, cur_counted = false, cur_from_cut = false;
   bool nxt_started = false, nxt_counted = false, nxt_from_cut = false;
   bool have_prev = false;
+  bool window_open = false;  // between the window's start and the cut: points past the cut go to nxt
   int prev_az = 0;
   Nanos prev_stamp = 0;
   std::size_t last_scan_points = 0;
@@ -271,14 +272,19 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
     const std::uint8_t* blk = p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size;
     const int a = le16(blk + mi->block_azimuth);
     const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
-    bool overlap = in_sector(reset_raw, emit_raw, a);
     bool cut_here = false;
     if (have_prev) {
       const int step = az_step(prev_az, a);
-      if (crosses(prev_az, step, reset_raw) && !nxt_started) nxt_from_cut = true;
+      if (crosses(prev_az, step, reset_raw)) {
+        window_open = true;
+        if (!nxt_started) nxt_from_cut = true;
+      }
       cut_here = crosses(prev_az, step, emit_raw);
-      overlap = overlap || in_sector(reset_raw, emit_raw, prev_az) || cut_here;
+    } else {
+      // First block (or after a time jump) inside the window: the window's start was not seen.
+      window_open = in_sector(reset_raw, emit_raw, a) && a != emit_raw;
     }
+    const bool overlap = window_open || cut_here;
     if (overlap) touch(nxt, nxt_started, nxt_counted, group_stamp, packet.rx_ns);
     touch(cur, cur_started, cur_counted, group_stamp, packet.rx_ns);
 
@@ -348,7 +354,10 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
         }
       }
     }
-    if (cut_here) merge(out, end_scan(cur_from_cut));
+    if (cut_here) {
+      merge(out, end_scan(cur_from_cut));
+      window_open = false;
+    }
     have_prev = true;
     prev_az = a;
   }
@@ -381,6 +390,7 @@ std::optional<Scan> Decoder::flush() noexcept {
   d.nxt = d.fresh();
   d.nxt_started = d.nxt_counted = d.nxt_from_cut = false;
   d.have_prev = false;
+  d.window_open = false;
   return out;
 }
 

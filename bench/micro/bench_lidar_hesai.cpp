@@ -1,0 +1,135 @@
+// Hesai decode throughput on one core: every data packet of the Pandar40P capture (dual return,
+// nebula's calibration) pushed through the decoder, scans handed off as a publisher would; the
+// PandarXT32 on synthetic packets (no capture in the shared data). Counters: ns_per_packet,
+// points_per_s. Capture from $RIG_TEST_DATA/lidar/hesai (default ../shared/data).
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hesai_packet_builder.hpp"
+#include "sensor_rig/lidar/hesai/decoder.hpp"
+#include "sensor_rig/lidar/pcap_reader.hpp"
+
+namespace {
+
+using namespace sensor_rig;
+using namespace sensor_rig::lidar;
+
+struct Packet {
+  std::vector<std::byte> bytes;
+  Nanos stamp;
+};
+
+std::string data_dir() {
+  const char* d = std::getenv("RIG_TEST_DATA");
+  return d ? d : RIG_TEST_DATA_DEFAULT;
+}
+
+std::vector<Packet> load_capture(const std::string& path, hesai::Model m) {
+  std::vector<Packet> out;
+  if (!std::filesystem::exists(path)) return out;
+  PcapReader r(path);
+  while (auto rec = r.next()) {
+    const auto info = hesai::read_packet_info(rec->packet.data, m);
+    if (!info || !info->tail_time_ns) continue;
+    out.push_back({std::vector<std::byte>(rec->packet.data.begin(), rec->packet.data.end()),
+                   *info->tail_time_ns + hesai::first_firing_offset_ns(m, info->returns)});
+  }
+  return out;
+}
+
+// Two turns of single-return XT32 packets at 10 Hz (so passes continue seamlessly): random ranges, ~5 % no return.
+std::vector<Packet> synthetic_xt32() {
+  std::mt19937 rng(42);
+  std::vector<Packet> out;
+  Nanos t = 1'000'000'000'000;
+  for (int k = 0; k < 500; ++k) {
+    hesai::test::PacketSpec s;
+    s.kind = hesai::test::Kind::kXT32;
+    s.azimuth0 = (k * 8 * 18) % hesai::kAzimuthCount;
+    s.step = 18;
+    s.unit = [&rng](int, int) -> hesai::test::RawUnit {
+      const auto d = static_cast<std::uint16_t>(rng() % 20000);
+      return {static_cast<std::uint16_t>(d < 1000 ? 0 : d), static_cast<std::uint8_t>(d)};
+    };
+    out.push_back({hesai::test::build_packet(s), t});
+    t += 8 * 50'000;
+  }
+  return out;
+}
+
+void run(benchmark::State& state, const hesai::DecoderConfig& cfg, const std::vector<Packet>& packets) {
+  if (packets.size() < 2) {
+    state.SkipWithError("no packets");
+    return;
+  }
+  hesai::Decoder dec(cfg);
+  std::uint64_t points = 0, pushed = 0;
+  const Nanos pass_ns = packets.back().stamp - packets.front().stamp + (packets[1].stamp - packets[0].stamp);
+  Nanos offset = 0;
+  for (auto _ : state) {
+    for (const auto& p : packets) {
+      auto scan = dec.push(PacketView{p.bytes, p.stamp + offset, hesai::kDataPort}, p.stamp + offset);
+      if (scan) {
+        points += scan->points.size();
+        benchmark::DoNotOptimize(scan->points.data());
+        dec.recycle(std::move(scan->points));
+      }
+    }
+    pushed += packets.size();
+    offset += pass_ns;
+  }
+  if (dec.stats().dropped() != 0) state.SkipWithError("packets dropped");
+  state.counters["ns_per_packet"] =
+      benchmark::Counter(static_cast<double>(pushed) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
+  state.SetItemsProcessed(static_cast<std::int64_t>(pushed));
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::ostringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+void register_all() {
+  const std::string dir = data_dir() + "/lidar/hesai/";
+  auto capture = std::make_shared<std::vector<Packet>>(
+      load_capture(dir + "pandar40p_nebula_1673400149412331409.pcap", hesai::Model::kPandar40P));
+  for (const auto r : {hesai::ReturnSelection::kDual, hesai::ReturnSelection::kStrongest}) {
+    hesai::DecoderConfig cfg;
+    cfg.model = hesai::Model::kPandar40P;
+    cfg.returns = r;
+    if (std::filesystem::exists(dir + "nebula_Pandar40P.csv")) {
+      cfg.calibration =
+          hesai::parse_angle_csv(read_text(dir + "nebula_Pandar40P.csv"), "nebula_Pandar40P.csv", cfg.model);
+    }
+    const std::string name = std::string("decode/Pandar40P/capture/") + (r == hesai::ReturnSelection::kDual ? "dual" : "strongest");
+    benchmark::RegisterBenchmark(name.c_str(), [cfg, capture](benchmark::State& st) { run(st, cfg, *capture); })
+        ->Unit(benchmark::kMillisecond);
+  }
+  auto xt = std::make_shared<std::vector<Packet>>(synthetic_xt32());
+  hesai::DecoderConfig xcfg;
+  xcfg.model = hesai::Model::kPandarXT32;
+  benchmark::RegisterBenchmark("decode/PandarXT32/synthetic/single",
+                               [xcfg, xt](benchmark::State& st) { run(st, xcfg, *xt); })
+      ->Unit(benchmark::kMillisecond);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  register_all();
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
