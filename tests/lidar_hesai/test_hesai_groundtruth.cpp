@@ -103,7 +103,8 @@ TEST_F(HesaiGroundTruth, LastCompleteScanMatchesNebulaPointByPoint) {
   std::size_t bad = 0;
   for (std::size_t i = 0; i < truth.size(); ++i) {
     const auto& p = s.points[i];
-    const double e = std::max({std::abs(p.x - truth[i].y), std::abs(p.y + truth[i].x), std::abs(p.z - truth[i].z)});
+    const double e = static_cast<double>(
+        std::max({std::abs(p.x - truth[i].y), std::abs(p.y + truth[i].x), std::abs(p.z - truth[i].z)}));
     worst = std::max(worst, e);
     if (e > 1e-4 && bad++ < 5) ADD_FAILURE() << "point " << i << " differs by " << e << " m";
   }

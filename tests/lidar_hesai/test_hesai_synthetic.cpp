@@ -86,7 +86,7 @@ TEST(HesaiGeometry, RangeLimits) {
   const auto pts = decode_one(cfg, build_packet(s));
   EXPECT_EQ(pts.size(), 10U * 11U) << "channels 10..20 (1.0 .. 2.0 m) in 10 groups";
   for (const auto& p : pts) {
-    const double r = std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+    const double r = static_cast<double>(std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z));
     EXPECT_GE(r, 1.0 - 1e-5);
     EXPECT_LE(r, 2.0 + 1e-5);
   }
@@ -151,7 +151,7 @@ std::vector<PointXYZIRT> dual_40p(ReturnSelection r) {
   return decode_one(config(Model::kPandar40P, r), build_packet(s));
 }
 
-double range(const PointXYZIRT& p) { return std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z); }
+double range(const PointXYZIRT& p) { return static_cast<double>(std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z)); }
 
 TEST(HesaiReturns, Pandar40PDualLastStrongest) {
   const auto dual = dual_40p(ReturnSelection::kDual);
