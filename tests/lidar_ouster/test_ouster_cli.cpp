@@ -83,7 +83,7 @@ TEST_F(OusterCli, LegacyCaptureGivesOneFrame) {
   for (const auto& p : pts) {
     ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
     ASSERT_LT(p.ring, 32);
-    ASSERT_LT(std::hypot(p.x, p.y, p.z), 200.0F);
+    ASSERT_LT(std::hypot(p.x, p.y, p.z), 1049.0F) << "LEGACY range is 20 bits of mm";
   }
   // --max-range keeps only the near points; --return last is accepted (one echo per pixel here).
   const CliRun near = run("lidar decode --pcap " + pcap_ + " --model OS-LEGACY --metadata " + meta_ +

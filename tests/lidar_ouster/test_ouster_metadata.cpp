@@ -127,6 +127,7 @@ TEST(OusterMetadata, ErrorsNameTheKey) {
   j["beam_intrinsics"].erase("lidar_origin_to_beam_origin_mm");
   EXPECT_NE(error_of(j.dump()).find("beam_intrinsics"), std::string::npos);
   EXPECT_NE(error_of("{not json"), "");
+  EXPECT_NE(error_of(R"({"lidar_mode": 1e99999})").find("not valid JSON"), std::string::npos) << "number overflow";
   EXPECT_NE(error_of("[1,2]").find("JSON object"), std::string::npos);
   EXPECT_NE(error_of("{}").find("'lidar_mode' is missing"), std::string::npos);
 }

@@ -259,7 +259,7 @@ SensorMetadata parse_metadata(std::string_view json_text, const std::string& sou
   json doc;
   try {
     doc = json::parse(json_text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers too large
     throw MetadataError(source + ": not valid JSON: " + e.what());
   }
   if (!doc.is_object()) throw MetadataError(source + ": expected a JSON object at the top level");
@@ -267,10 +267,14 @@ SensorMetadata parse_metadata(std::string_view json_text, const std::string& sou
   m.source = source;
   const Node root(doc, "", source);
   m.nested_format = doc.contains("lidar_data_format") || doc.contains("beam_intrinsics");
-  if (m.nested_format) {
-    parse_nested(root, m);
-  } else {
-    parse_flat(root, m);
+  try {
+    if (m.nested_format) {
+      parse_nested(root, m);
+    } else {
+      parse_flat(root, m);
+    }
+  } catch (const json::exception& e) {  // not expected: every read checks the type first
+    throw MetadataError(source + ": " + e.what());
   }
   return m;
 }
