@@ -6,7 +6,7 @@ PACKAGES=(
   build-essential cmake pkg-config git
   cyclonedds-dev cyclonedds-tools libcycloneddsidl0
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-binding-c-dev
-  libpcap-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
+  libpcap-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libssl-dev
   libaravis-dev aravis-tools
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   clang libclang-rt-14-dev

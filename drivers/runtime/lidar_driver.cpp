@@ -58,9 +58,11 @@ struct LidarDriver::Impl {
   std::unique_ptr<lidar::ScanDecoder> decoder;
   bool velodyne = false;               // position packets and top-of-hour time are Velodyne's
   timesync::ClockMapper absolute_mapper;  // sensors with absolute time (Ouster, Hesai) when not synced
+  const char* absolute_source = "none";   // how the last absolute-time packet was stamped (diagnostics)
   lidar::UdpSource data;
   std::unique_ptr<lidar::UdpSource> position;
-  lidar::SlotArena arena{64, 2048};
+  // 64 kB slots: the largest UDP payload (an OS-128 packet is ~25 kB; Velodyne 1206 B).
+  lidar::SlotArena arena{64, 65536};
   lidar::SlotArena position_arena{4, 1024};
   dds::Topic<msg::PointCloud2> topic;
   dds::Writer<msg::PointCloud2> writer;
@@ -85,6 +87,7 @@ struct LidarDriver::Impl {
   lidar::DecoderCounters decoder_stats;
   lidar::UdpSourceStats udp_stats;
   timesync::StamperStatus sync;
+  timesync::ClockMapperStatus absolute_sync;
 
   Impl(const LidarConfig& c, const dds::Participant& p, StampsWriter& s)
       : cfg(c),
@@ -138,12 +141,22 @@ struct LidarDriver::Impl {
       case lidar::SensorTime::Kind::kAbsoluteNs: {
         // A PTP- or GPS-synced sensor's time is vehicle time; a free-running one is mapped.
         absolute_mapper.observe(t.value, host_stamp);
-        if (cfg.clock_correction == "never") return t.value;
+        if (cfg.clock_correction == "never") {
+          absolute_source = "sensor_raw";
+          return t.value;
+        }
         const auto mapped = absolute_mapper.map(t.value);
-        if (!mapped.valid) return host_stamp;
+        if (!mapped.valid) {
+          absolute_source = "host_fallback";
+          return host_stamp;
+        }
         constexpr Nanos kSyncedWithin = 1'000'000;  // |sensor - vehicle| below this: synchronised
         const Nanos offset = mapped.vehicle_ns - t.value;
-        if (cfg.clock_correction == "auto" && offset > -kSyncedWithin && offset < kSyncedWithin) return t.value;
+        if (cfg.clock_correction == "auto" && offset > -kSyncedWithin && offset < kSyncedWithin) {
+          absolute_source = "sensor_synced";
+          return t.value;
+        }
+        absolute_source = "sensor_mapped";
         return mapped.vehicle_ns;
       }
       case lidar::SensorTime::Kind::kNone:
@@ -225,6 +238,7 @@ struct LidarDriver::Impl {
       decoder_stats = decoder->counters();
       udp_stats = data.stats();
       sync = stamper.status(vehicle_now_ns());
+      absolute_sync = absolute_mapper.status(vehicle_now_ns());
     }
   }
 };
@@ -250,7 +264,16 @@ void LidarDriver::start() {
 
 void LidarDriver::stop() {
   impl_->stop_flag.store(true);
-  if (impl_->thread.joinable()) impl_->thread.join();
+  if (!impl_->thread.joinable()) return;
+  impl_->thread.join();
+  // One summary line per driver: what arrived, what was published, what was dropped and why.
+  const auto st = status();
+  std::string line = impl_->cfg.name + ":";
+  for (const auto& [k, v] : st.values)
+    if (k == "scans" || k == "packets" || k.rfind("dropped", 0) == 0 || k == "packets_dropped" || k == "kernel_drops" ||
+        k == "stamp_source" || k == "sync")
+      line += " " + k + "=" + v;
+  log::info("lidar", line);
 }
 
 std::string LidarDriver::topic() const { return impl_->topic_name; }
@@ -292,15 +315,27 @@ DriverStatus LidarDriver::status() const {
   s.add("pps", impl_->have_position ? vel::to_string(impl_->pps) : "no position packets");
   s.add("gprmc", impl_->gprmc_utc_ns ? "valid" : "absent");
   const auto& t = impl_->sync;
-  s.add("stamp_source", timesync::to_string(t.last_source));
-  s.add("hour_source", timesync::to_string(t.hour_source));
-  s.add("sync", timesync::to_string(t.sync));
-  s.add_number("sync_offset_ns", t.mapper.offset_ns);
-  s.add("sync_drift_ppm", std::to_string(t.mapper.drift_ppm));
-  s.add_number("sync_residual_p99_ns", t.mapper.residual_p99_ns);
-  s.add_number("sync_jumps", t.mapper.jumps);
-  s.add_number("bad_timestamps", t.bad_timestamps);
-  s.add_number("host_fallbacks", t.host_fallbacks);
+  if (c.time_source == "host") {
+    s.add("stamp_source", "host");
+  } else if (impl_->velodyne) {
+    s.add("stamp_source", timesync::to_string(t.last_source));
+    s.add("hour_source", timesync::to_string(t.hour_source));
+    s.add("sync", timesync::to_string(t.sync));
+    s.add_number("sync_offset_ns", t.mapper.offset_ns);
+    s.add("sync_drift_ppm", std::to_string(t.mapper.drift_ppm));
+    s.add_number("sync_residual_p99_ns", t.mapper.residual_p99_ns);
+    s.add_number("sync_jumps", t.mapper.jumps);
+    s.add_number("bad_timestamps", t.bad_timestamps);
+    s.add_number("host_fallbacks", t.host_fallbacks);
+  } else {
+    const auto& m = impl_->absolute_sync;
+    s.add("stamp_source", impl_->absolute_source);
+    s.add("sync", timesync::to_string(m.state));
+    s.add_number("sync_offset_ns", m.offset_ns);
+    s.add("sync_drift_ppm", std::to_string(m.drift_ppm));
+    s.add_number("sync_residual_p99_ns", m.residual_p99_ns);
+    s.add_number("sync_jumps", m.jumps);
+  }
   return s;
 }
 

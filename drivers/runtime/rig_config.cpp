@@ -72,7 +72,8 @@ LidarConfig parse_lidar(const config::Node& n) {
 DbwConfig parse_dbw(const config::Node& n) {
   DbwConfig d;
   d.enabled = true;
-  n.allow_keys({"protocol", "bus", "transport", "mock_ecu", "mock_faults", "command_source"});
+  n.allow_keys({"protocol", "bus", "transport", "mock_ecu", "mock_faults", "command_source", "realtime_priority"});
+  d.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 30));
   d.protocol = n.get_path("protocol", "");
   if (!d.protocol.empty() && !std::filesystem::exists(d.protocol)) n.fail("protocol", "file not found: " + d.protocol);
   d.bus = n.get_string("bus", d.bus);

@@ -52,6 +52,7 @@ struct DbwConfig {
   std::string bus = "/tmp/rig_paravan.sock";  // unix seqpacket bus path (mock) ...
   std::string transport;                // ... or an explicit bridge transport (socketcan:can0); empty = unix:<bus>
   bool mock_ecu = false;
+  int realtime_priority = 30;           // SCHED_FIFO for bridge, mock ECU and command source; 0 = normal
   std::vector<std::string> mock_faults;  // `rig mock paravan --fault` values
   struct CommandSource {
     bool enabled = false;

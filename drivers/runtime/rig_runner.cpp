@@ -74,7 +74,8 @@ int run_rig(const RigConfig& cfg, const RunOptions& opt) {
   std::vector<ChildProcess> mocks;
   const std::string exe = self_executable();
   for (const auto& argv : dbw_commands(exe, cfg.dbw)) {
-    mocks.emplace_back(argv);
+    // The bridge is the only path to the actuators: its timeouts must not be scheduling delays.
+    mocks.emplace_back(argv, cfg.dbw.realtime_priority);
     log::info("rig", "dbw: " + argv[1] + " " + argv[2] + ": pid " + std::to_string(mocks.back().pid()));
     // The ECU must listen before the bridge connects, the bridge subscribe before commands flow.
     ::usleep(300'000);

@@ -1,5 +1,6 @@
 #include "sensor_rig/common/child_process.hpp"
 
+#include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,7 +13,7 @@
 
 namespace sensor_rig {
 
-ChildProcess::ChildProcess(std::vector<std::string> argv) {
+ChildProcess::ChildProcess(std::vector<std::string> argv, int rt_priority) {
   if (argv.empty()) throw std::invalid_argument("ChildProcess: empty argv");
   name_ = argv[0];
   for (std::size_t i = 1; i < argv.size() && i < 3; ++i) name_ += " " + argv[i];
@@ -25,6 +26,11 @@ ChildProcess::ChildProcess(std::vector<std::string> argv) {
     // Default signal dispositions in the child; its own shutdown handlers are installed by it.
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);
+    if (rt_priority > 0) {
+      sched_param sp{};
+      sp.sched_priority = rt_priority;
+      ::sched_setscheduler(0, SCHED_FIFO, &sp);  // kept across exec; refused without privilege: fine
+    }
     ::execv(args[0], args.data());
     ::_exit(127);
   }

@@ -55,9 +55,10 @@ Received receive_scans(dds::Reader<msg::PointCloud2>& reader, int quiet_ms, int 
 }
 
 struct Capture {
-  const char* file;     // below $RIG_TEST_DATA/lidar
+  const char* file;      // below $RIG_TEST_DATA/lidar
   const char* model;
   std::size_t min_scans;
+  const char* metadata;  // below $RIG_TEST_DATA/lidar, or empty
 };
 
 class CaptureReplay : public ::testing::TestWithParam<Capture> {};
@@ -69,7 +70,9 @@ TEST_P(CaptureReplay, ArrivesScanByScanOverDds) {
   test::TempDir dir;
 
   // What the offline decoder finds in the capture: the reference point counts.
+  const std::string metadata = *c.metadata ? (test::test_data() / "lidar" / c.metadata).string() : "";
   const auto [rc, out] = test::run(rig_bin() + " lidar decode --pcap " + pcap.string() + " --model " + c.model +
+                                   (metadata.empty() ? "" : " --metadata " + metadata) +
                                    " --min-range 0 --max-range 1000 --out " + (dir.path / "pcd").string());
   ASSERT_EQ(rc, 0) << out;
   std::vector<std::size_t> expected;
@@ -79,7 +82,8 @@ TEST_P(CaptureReplay, ArrivesScanByScanOverDds) {
   ASSERT_GE(expected.size(), c.min_scans);
 
   const int port = test::free_udp_port();
-  const auto cfg = dir.write("rig.yaml", rig_config(port, "e2e", c.model));
+  const auto cfg =
+      dir.write("rig.yaml", rig_config(port, "e2e", c.model, metadata.empty() ? "" : "    metadata: " + metadata + "\n"));
   ChildProcess rig({rig_bin(), "up", cfg, "--duration", "60"});
 
   dds::Participant p({17, test::source_dir() + "/config/cyclonedds/loopback.xml"});
@@ -108,11 +112,13 @@ TEST_P(CaptureReplay, ArrivesScanByScanOverDds) {
 
 INSTANTIATE_TEST_SUITE_P(
     Captures, CaptureReplay,
-    ::testing::Values(Capture{"velodyne/vlp16_veloview_vlp-16-test-90deg-1-50-frames.pcap", "VLP-16", 40},
-                      Capture{"hesai/pandar40p_nebula_1673400149412331409.pcap", "Pandar40P", 2}),
+    ::testing::Values(Capture{"velodyne/vlp16_veloview_vlp-16-test-90deg-1-50-frames.pcap", "VLP-16", 40, ""},
+                      Capture{"hesai/pandar40p_nebula_1673400149412331409.pcap", "Pandar40P", 2, ""},
+                      Capture{"ouster/OS-1-32-G_v2.1.1_1024x10.pcap", "OS-LEGACY", 1,
+                              "ouster/OS-1-32-G_v2.1.1_1024x10.json"}),
     [](const auto& param_info) {
       std::string n = param_info.param.model;
-      n.erase(std::remove(n.begin(), n.end(), '-'), n.end());
+      n.erase(std::remove(n.begin(), n.end(), '-'), n.end());  // gtest names: alphanumerics only
       return n;
     });
 

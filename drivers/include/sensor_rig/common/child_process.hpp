@@ -12,7 +12,8 @@ class ChildProcess {
  public:
   ChildProcess() = default;
   // argv[0] is the program path; throws std::system_error when fork fails or exec is impossible.
-  explicit ChildProcess(std::vector<std::string> argv);
+  // rt_priority > 0: the child runs SCHED_FIFO at that priority when permitted (else normal).
+  explicit ChildProcess(std::vector<std::string> argv, int rt_priority = 0);
   ChildProcess(const ChildProcess&) = delete;
   ChildProcess& operator=(const ChildProcess&) = delete;
   ChildProcess(ChildProcess&& o) noexcept;
