@@ -1,6 +1,7 @@
 #include "sensor_rig/common/child_process.hpp"
 
 #include <sched.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,12 +21,17 @@ ChildProcess::ChildProcess(std::vector<std::string> argv, int rt_priority) {
   std::vector<char*> args;
   for (auto& a : argv) args.push_back(a.data());
   args.push_back(nullptr);
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) throw std::system_error(errno, std::generic_category(), "fork");
   if (pid == 0) {
     // Default signal dispositions in the child; its own shutdown handlers are installed by it.
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);
+    // If this process dies without stopping its children (SIGKILL, crash), they get SIGTERM:
+    // no orphaned mock device keeps a port or a bus socket.
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() != parent) ::_exit(126);  // the parent died between fork and prctl
     if (rt_priority > 0) {
       sched_param sp{};
       sp.sched_priority = rt_priority;
