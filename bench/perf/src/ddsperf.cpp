@@ -102,7 +102,7 @@ int run_ddsperf(const DdsperfOptions& o) {
     fs::remove(pong_log);
     fs::remove(ping_log);
     Child pong({kDdsperf, "-D", std::to_string(std::stoi(dur) + 5), "-i", std::to_string(domain), "pong"}, pong_log, false);
-    Child ping({kDdsperf, "-D", dur, "-i", std::to_string(domain), "-Qminmatch:1", "-W", "10", "ping", rate, "size",
+    Child ping({kDdsperf, "-D", dur, "-i", std::to_string(domain), "ping", rate, "size",
                 std::to_string(s)},
                ping_log, false);
     std::fprintf(stderr, "[perf] ddsperf %s %s %s for %s s\n", to_string(o.transport).c_str(), size_label(size).c_str(), rate, dur.c_str());
