@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
 #include "sensor_rig/bench/perf/analysis.hpp"
 #include "sensor_rig/bench/perf/ddsperf.hpp"
 #include "sensor_rig/bench/perf/grid.hpp"
@@ -93,7 +95,7 @@ TEST(PerfRecords, SendCategoriesByPeriod) {
 }
 
 TEST(PerfRecords, CutLastLineIsNotARecord) {
-  const auto p = fs::temp_directory_path() / "perf_cut.csv";
+  const auto p = fs::temp_directory_path() / ("perf_cut_" + std::to_string(::getpid()) + ".csv");
   std::ofstream(p) << "topic,seq,stamp_ns,recv_ns\n0,1,100,200\n0,2,300,4";
   CsvStats st;
   const auto v = read_sub_csv(p.string(), &st);
@@ -105,7 +107,7 @@ TEST(PerfRecords, CutLastLineIsNotARecord) {
 
 // A synthetic run: topology 2, 3 nodes, 10 messages; node 1 got all, node 2 missed two and has a duplicate.
 TEST(PerfAnalysis, CountsPerSubscriber) {
-  const auto dir = fs::temp_directory_path() / "perf_analysis";
+  const auto dir = fs::temp_directory_path() / ("perf_analysis_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   RunInput in;
   in.spec.topology = 2;

@@ -3,6 +3,8 @@
 
 #include <filesystem>
 #include <fstream>
+
+#include <unistd.h>
 #include <sstream>
 
 #include "sensor_rig/bench/perf/report.hpp"
@@ -12,7 +14,7 @@ namespace {
 namespace fs = std::filesystem;
 
 TEST(PerfReport, RendersRunsFoundBelowDir) {
-  const auto dir = fs::temp_directory_path() / "perf_report_test";
+  const auto dir = fs::temp_directory_path() / ("perf_report_test_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir / "T2_N32_1MB");
   nlohmann::json s = {{"label", "T2 N=32 1MB 10Hz shm"}, {"topology", 2}, {"nodes", 32}, {"size", 1048576},
