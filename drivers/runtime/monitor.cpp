@@ -22,8 +22,8 @@ namespace sensor_rig::runtime {
 namespace {
 
 constexpr Nanos kLossTimeoutNs = 2'000'000'000;
-constexpr const char* kStages[] = {"sensor", "assemble", "process", "write", "dds", "total"};
-enum Stage : std::size_t { kSensor, kAssemble, kProcess, kWrite, kDds, kTotal };
+constexpr const char* kStages[] = {"sensor", "assemble", "process", "write", "dds", "total", "to_wire"};
+enum Stage : std::size_t { kSensor, kAssemble, kProcess, kWrite, kDds, kTotal, kToWire };
 constexpr std::size_t kStageCount = std::size(kStages);
 
 double ms(Nanos ns) { return static_cast<double>(ns) * 1e-6; }
@@ -83,6 +83,7 @@ struct TopicStats {
     if (s.first_rx_ns > 0 && s.last_rx_ns > 0) add(kAssemble, ms(s.last_rx_ns - s.first_rx_ns));
     if (s.last_rx_ns > 0) add(kProcess, ms(s.publish_ns - s.last_rx_ns));
     if (s.written_ns > 0) add(kWrite, ms(s.written_ns - s.publish_ns));
+    if (s.written_ns > 0 && s.last_rx_ns > 0) add(kToWire, ms(s.written_ns - s.last_rx_ns));
     if (s.acquisition_ns > 0) add(kTotal, ms(a.receive_ns - s.acquisition_ns));
   }
   void add(std::size_t stage, double value) {

@@ -7,6 +7,7 @@
 //   write    = DDS write returned - publish          (serialize and send: on the wire)
 //   dds      = subscriber receive - publish          (Cyclone transport)
 //   total    = subscriber receive - acquisition
+//   to_wire  = DDS write returned - last kernel receive (process + write: the driver's own latency)
 // Stages other than dds need the driver's per-sample stamps (rt/rig/stamps); topics published by
 // others show dds only. A sample announced by its stamps that does not arrive within 2 s is lost.
 #include <functional>
