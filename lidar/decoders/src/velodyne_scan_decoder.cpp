@@ -29,16 +29,7 @@ class VelodyneScanDecoder final : public ScanDecoder {
     return {SensorTime::Kind::kMicrosSinceHour, info->sensor_time_us};
   }
   [[nodiscard]] Nanos packet_span_ns() const noexcept override { return span_ns_; }
-  [[nodiscard]] DecoderCounters counters() const noexcept override {
-    const auto& s = decoder_.stats();
-    DecoderCounters c;
-    c.packets = s.packets;
-    c.packets_used = s.packets_used;
-    c.scans = s.scans;
-    c.partial_scans_discarded = s.partial_scans_discarded;
-    for (std::size_t i = 0; i < c.by_status.size() && i < s.by_status.size(); ++i) c.by_status[i] = s.by_status[i];
-    return c;
-  }
+  [[nodiscard]] DecoderCounters counters() const noexcept override { return counters_from(decoder_.stats()); }
   [[nodiscard]] PacketStatus last_status() const noexcept override { return decoder_.last_status(); }
 
  private:

@@ -57,6 +57,18 @@ struct DecoderCounters {
   [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
 };
 
+// The common counters out of a vendor decoder's own stats (which may count more).
+template <class VendorStats>
+DecoderCounters counters_from(const VendorStats& s) noexcept {
+  DecoderCounters c;
+  c.packets = s.packets;
+  c.packets_used = s.packets_used;
+  c.scans = s.scans;
+  c.partial_scans_discarded = s.partial_scans_discarded;
+  for (std::size_t i = 0; i < c.by_status.size() && i < s.by_status.size(); ++i) c.by_status[i] = s.by_status[i];
+  return c;
+}
+
 class ScanDecoder {
  public:
   virtual ~ScanDecoder() = default;
