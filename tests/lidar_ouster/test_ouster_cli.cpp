@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "ouster_test_support.hpp"
+#include "rig_cli.hpp"
 #include "sensor_rig/lidar/pcd.hpp"
 
 namespace sensor_rig::lidar::ouster::test {
@@ -18,32 +19,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
+using sensor_rig::test::CliRun;
 
-std::string rig_bin() {
-  const char* b = std::getenv("RIG_BIN");
-  return b ? b : "";
-}
-
-CliRun run(const std::string& args) {
-  const fs::path err = fs::temp_directory_path() / ("rig_ouster_err_" + std::to_string(::getpid()));
-  const std::string cmd = rig_bin() + " " + args + " 2>" + err.string();
-  CliRun r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (p == nullptr) return r;
-  char buf[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int st = ::pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  r.err = read_text(err.string());
-  fs::remove(err);
-  return r;
-}
+std::string rig_bin() { return sensor_rig::test::rig_bin_or_empty(); }
+CliRun run(const std::string& args) { return sensor_rig::test::run_rig(args); }
 
 class OusterCli : public ::testing::Test {
  protected:
