@@ -22,6 +22,12 @@ struct LidarMockConfig {
   double corrupt_rate = 0.0;
 };
 
+inline dds::QosSpec lidar_qos() {
+  dds::QosSpec q;
+  q.depth = 2;
+  return q;
+}
+
 struct LidarConfig {
   std::string name;                    // topic /sensors/lidar/<name>/points
   std::string model;                   // a model of the decoder registry (lidar/scan_decoder.hpp)
@@ -40,7 +46,9 @@ struct LidarConfig {
   std::string clock_correction = "auto";  // sensor time through the clock mapper: auto | always | never
   std::string frame_id;                // default lidar_<name>
   int realtime_priority = 0;           // SCHED_FIFO priority of the driver thread; 0 = normal scheduling
-  dds::QosSpec qos;
+  // Keep-last 2: a scan whose repair (lost fragment, slow ack) outlasts one scan period is still
+  // in the writer's history when the next scan is written; depth 1 drops it.
+  dds::QosSpec qos = lidar_qos();
   LidarMockConfig mock;
 };
 
