@@ -36,9 +36,10 @@ test-asan: setup
 	cmake --build build-asan -j$(JOBS)
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -L unit -j$(JOBS)
-	# The runtime end to end under the sanitizers too: every `rig` process it starts is instrumented.
+	# The runtime end to end under the sanitizers too: every `rig` process it starts is instrumented;
+	# one at a time, as each already runs several instrumented processes on the two cores.
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --output-on-failure -R '^(lidar_e2e_test|dbw_rig_test)$$' -j$(JOBS)
+	  ctest --output-on-failure -R '^(lidar_e2e_test|dbw_rig_test)$$' -j1
 
 # Benchmarks: optimized build, figures go to BENCHMARKS.md (by hand, with machine and command).
 bench: setup
