@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "sensor_rig/config/node.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 
 namespace sensor_rig::runtime {
@@ -52,8 +53,6 @@ LidarConfig parse_lidar(const config::Node& n) {
     n.fail("calibration", "file not found: " + l.calibration);
   l.metadata = n.get_path("metadata", "");
   if (!l.metadata.empty() && !std::filesystem::exists(l.metadata)) n.fail("metadata", "file not found: " + l.metadata);
-  if (const auto* m = lidar::find_model(l.model); m != nullptr && m->needs_metadata && l.metadata.empty())
-    n.fail("metadata", "model " + l.model + " needs its sensor metadata JSON");
   l.returns = n.get_choice("returns", {"strongest", "last", "dual"}, "strongest");
   l.min_range_m = n.get_double("min_range", 0.0, 10.0, 0.4);
   l.max_range_m = n.get_double("max_range", 1.0, 1000.0, 200.0);
@@ -66,6 +65,22 @@ LidarConfig parse_lidar(const config::Node& n) {
   l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
   if (auto m = n.child("mock")) l.mock = parse_mock(*m);
+  const bool synthetic = l.mock.kind == LidarMockConfig::Kind::kSynthetic;
+  // A synthetic Ouster without metadata: `rig up` writes the mock's own metadata for the driver.
+  if (const auto* m = lidar::find_model(l.model); m != nullptr && m->needs_metadata && l.metadata.empty() && !synthetic)
+    n.fail("metadata", "model " + l.model + " needs its sensor metadata JSON (or mock: {kind: synthetic})");
+  // (A synthetic Ouster with metadata renders the sensor the file describes: nothing to check here.)
+  if (synthetic && lidar::find_model(l.model) != nullptr && !(lidar::mock::is_ouster_model(l.model) && !l.metadata.empty())) {
+    if (!lidar::mock::is_synthetic_model(l.model)) {
+      n.fail("mock", "no synthetic sensor for model " + l.model + " (synthetic: " + lidar::mock::synthetic_model_names() + ")");
+    } else {
+      lidar::mock::SyntheticOptions o;  // the options `rig up` starts the mock with
+      o.model = l.model;
+      o.rpm = l.mock.rpm;
+      o.ouster_udp_port = static_cast<std::uint16_t>(l.port);
+      if (const auto e = lidar::mock::synthetic_options_error(o); !e.empty()) n.fail("mock", e);
+    }
+  }
   return l;
 }
 

@@ -3,13 +3,18 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
+#include <optional>
 
 #include "diagnostics.hpp"
 #include "lidar_driver.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
+#include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
 #include "stamps_writer.hpp"
 
 namespace sensor_rig::runtime {
@@ -24,6 +29,9 @@ std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const Li
   } else {
     argv.insert(argv.end(), {"--synthetic", l.model, "--rpm", std::to_string(l.mock.rpm)});
     if (l.position_port != 0) argv.insert(argv.end(), {"--position-port", std::to_string(l.position_port)});
+    // The mock renders the sensor the driver decodes: same calibration, same Ouster metadata.
+    if (!l.calibration.empty()) argv.insert(argv.end(), {"--calibration", l.calibration});
+    if (!l.metadata.empty() && lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--metadata", l.metadata});
   }
   if (l.mock.drop_rate > 0) argv.insert(argv.end(), {"--drop-rate", std::to_string(l.mock.drop_rate)});
   if (l.mock.corrupt_rate > 0) argv.insert(argv.end(), {"--corrupt-rate", std::to_string(l.mock.corrupt_rate)});
@@ -52,7 +60,58 @@ std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, c
   return out;
 }
 
-int run_rig(const RigConfig& cfg, const RunOptions& opt) {
+SyntheticMetadataDir::SyntheticMetadataDir() {
+  if (const char* d = std::getenv("RIG_LOG_DIR"); d != nullptr && *d != '\0') {
+    path_ = d;
+    std::filesystem::create_directories(path_);
+    return;
+  }
+  std::string tmpl = (std::filesystem::temp_directory_path() / "rig-up-XXXXXX").string();
+  if (::mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("cannot create a directory for synthetic metadata");
+  path_ = tmpl;
+  owned_ = true;
+}
+
+SyntheticMetadataDir::~SyntheticMetadataDir() {
+  if (!owned_) return;
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+std::string SyntheticMetadataDir::write(const LidarConfig& l) const {
+  lidar::mock::SyntheticOptions o;
+  o.model = l.model;
+  o.rpm = l.mock.rpm;
+  o.ouster_udp_port = static_cast<std::uint16_t>(l.port);
+  const std::string json = lidar::mock::metadata_json(lidar::mock::synthetic_ouster_metadata(o));  // validated on load
+  const auto file = path_ / (l.name + "_synthetic_metadata.json");
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out << json;
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+  return file.string();
+}
+
+bool needs_synthetic_metadata(const LidarConfig& l) {
+  return l.mock.kind == LidarMockConfig::Kind::kSynthetic && l.metadata.empty() && lidar::mock::is_ouster_model(l.model);
+}
+
+int run_rig(const RigConfig& config, const RunOptions& opt) {
+  // A synthetic Ouster without configured metadata: its mock's metadata, for both driver and mock.
+  RigConfig cfg = config;
+  std::optional<SyntheticMetadataDir> metadata_dir;
+  try {
+    for (auto& l : cfg.lidars) {
+      if (!needs_synthetic_metadata(l)) continue;
+      if (!metadata_dir) metadata_dir.emplace();
+      l.metadata = metadata_dir->write(l);
+      log::info("rig", "lidar " + l.name + ": synthetic " + l.model + " metadata " + l.metadata);
+    }
+  } catch (const std::exception& e) {
+    log::error("rig", e.what());
+    return 1;
+  }
+
   // Child tools (dbw bridge, command source) take the DDS domain from ROS_DOMAIN_ID.
   ::setenv("ROS_DOMAIN_ID", std::to_string(cfg.dds.domain_id).c_str(), 1);
   dds::Participant participant(cfg.dds);

@@ -1,5 +1,5 @@
 // `rig lidar replay`: a mock LIDAR (SPEC §7). Sends a capture's UDP payloads (--pcap) or a
-// synthetic sensor's packets (--synthetic MODEL) to HOST:PORT at their own timing, scaled by
+// synthetic sensor's packets (--synthetic MODEL, any of the seven models) to HOST:PORT at their own timing, scaled by
 // --rate, optionally looping, with injected network faults. Position packets (port 8308 in a
 // capture; GPRMC + PPS from the synthetic sensor) go to --position-port on the same host when
 // given, else they are skipped. Ends with one summary line on stderr (and --json on stdout).
@@ -9,13 +9,17 @@
 #include <cmath>
 #include <cstring>
 #include <cstdio>
+#include <fstream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "lidar_commands.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/lidar/mock/replay.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
+#include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
 #include "sensor_rig/lidar/udp_sender.hpp"
 
@@ -30,6 +34,12 @@ struct ReplayCliOptions {
   bool loop = false;
   double rpm = 600.0;
   std::string returns = "strongest";
+  std::string calibration;     // synthetic Velodyne / Hesai
+  std::string metadata;        // synthetic Ouster: render this sensor
+  std::string write_metadata;  // synthetic Ouster: write the metadata used
+  int beams = 32;              // nominal synthetic Ouster
+  std::string lidar_mode;
+  std::string profile;
   int position_port = 0;
   double duration_s = 0.0;
   std::uint64_t count = 0;
@@ -53,7 +63,52 @@ void apply_rt_priority(int priority) {
   }
 }
 
-std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o) {
+std::string read_text(const std::string& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw cli::UsageError(std::string("cannot read ") + what + " " + path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+mock::SyntheticOptions synthetic_options(const ReplayCliOptions& o, std::uint16_t port, Nanos start_ns) {
+  mock::SyntheticOptions s;
+  s.model = o.synthetic;
+  s.rpm = o.rpm;
+  s.returns = o.returns;
+  s.start_ns = start_ns;
+  if (!o.calibration.empty()) {
+    s.calibration_text = read_text(o.calibration, "calibration");
+    s.calibration_name = o.calibration;
+  }
+  if (!o.metadata.empty()) {
+    s.metadata_text = read_text(o.metadata, "metadata");
+    s.metadata_name = o.metadata;
+  }
+  s.ouster_beams = o.beams;
+  s.ouster_mode = o.lidar_mode;
+  s.ouster_profile = o.profile;
+  if (port != 0) s.ouster_udp_port = port;
+  return s;
+}
+
+// --write-metadata: the Ouster metadata the synthetic sensor renders with, for the driver.
+void write_metadata(const ReplayCliOptions& o, std::uint16_t port) {
+  if (!mock::is_ouster_model(o.synthetic))
+    throw cli::UsageError("--write-metadata applies to the synthetic Ouster models (OS-LEGACY, OS)");
+  std::string json;
+  try {
+    json = mock::metadata_json(mock::synthetic_ouster_metadata(synthetic_options(o, port, 0)));
+  } catch (const std::invalid_argument& e) {
+    throw cli::UsageError(e.what());
+  }
+  std::ofstream out(o.write_metadata, std::ios::binary | std::ios::trunc);
+  out << json;
+  out.close();
+  if (!out) throw std::runtime_error("cannot write metadata " + o.write_metadata);
+}
+
+std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::uint16_t port, Nanos lead_ns) {
   if (!o.pcap.empty()) {
     try {
       return std::make_unique<mock::PcapStream>(o.pcap);
@@ -61,24 +116,16 @@ std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o) {
       throw std::runtime_error(std::string("cannot replay: ") + e.what());
     }
   }
-  const auto model = velodyne::model_from_name(o.synthetic);
-  if (!model) {
-    std::string names;
-    for (const auto& m : velodyne::all_models()) names += (names.empty() ? "" : ", ") + std::string(m.name);
-    throw cli::UsageError("unknown synthetic model '" + o.synthetic + "' (supported: " + names + ")");
-  }
-  mock::SyntheticConfig c;
-  c.model = *model;
-  c.rpm = o.rpm;
-  c.return_mode = o.returns == "dual"   ? velodyne::ReturnMode::kDual
-                  : o.returns == "last" ? velodyne::ReturnMode::kLast
-                                        : velodyne::ReturnMode::kStrongest;
-  c.start_ns = vehicle_now_ns();
+  std::unique_ptr<mock::SyntheticSensor> sensor;
   try {
-    return std::make_unique<mock::SyntheticStream>(mock::SyntheticVelodyne(c, mock::Scene::standard()));
+    sensor = mock::make_synthetic_sensor(synthetic_options(o, port, 0), mock::Scene::standard());
   } catch (const std::invalid_argument& e) {
     throw cli::UsageError(e.what());
   }
+  // The sensor's clock is the host's (a PTP-synced sensor): its first packet is complete when the
+  // sender sends it, lead_ns from now; the rest follow on the sensor's own timeline.
+  sensor->set_start_ns(vehicle_now_ns() + lead_ns - sensor->first_packet_offset_ns());
+  return std::make_unique<mock::SyntheticStream>(std::move(sensor));
 }
 
 std::string json_line(const mock::ReplayStats& s) {
@@ -104,6 +151,13 @@ int run_replay_command(const ReplayCliOptions& o) {
   if (o.pcap.empty() == o.synthetic.empty()) throw cli::UsageError("give exactly one of --pcap FILE or --synthetic MODEL");
   if (!(o.rate > 0.0 && std::isfinite(o.rate))) throw cli::UsageError("--rate must be > 0");
   if (o.loop && !o.synthetic.empty()) throw cli::UsageError("--loop applies to --pcap (a synthetic sensor never ends)");
+  if (!o.pcap.empty() && !(o.calibration.empty() && o.metadata.empty() && o.write_metadata.empty()))
+    throw cli::UsageError("--calibration, --metadata and --write-metadata apply to --synthetic");
+  if (o.to.empty()) {
+    if (o.write_metadata.empty()) throw cli::UsageError("--to HOST:PORT is required");
+    write_metadata(o, 0);  // only the metadata: nothing to send
+    return cli::kOk;
+  }
   Endpoint data;
   try {
     data = parse_endpoint(o.to);
@@ -134,7 +188,8 @@ int run_replay_command(const ReplayCliOptions& o) {
 
   std::vector<Endpoint> dests{data};
   if (o.position_port != 0) dests.push_back(Endpoint{data.host, static_cast<std::uint16_t>(o.position_port)});
-  std::unique_ptr<mock::PacketStream> stream = make_stream(o);
+  if (!o.write_metadata.empty()) write_metadata(o, data.port);
+  std::unique_ptr<mock::PacketStream> stream = make_stream(o, data.port, ro.lead_ns);
   UdpSender sender(dests, o.send_buffer);
 
   log::info("replay", std::string(o.pcap.empty() ? "synthetic " + o.synthetic : o.pcap) + " -> " + o.to +
@@ -161,15 +216,34 @@ void register_replay_command(CLI::App& lidar, cli::Context& ctx) {
   auto opts = std::make_shared<ReplayCliOptions>();
   auto* cmd = lidar.add_subcommand("replay", "mock LIDAR: send a capture or a synthetic sensor over UDP at real timing");
   auto* pcap = cmd->add_option("--pcap", opts->pcap, "capture to replay (pcap/pcapng)")->check(CLI::ExistingFile);
-  auto* synth = cmd->add_option("--synthetic", opts->synthetic, "render a synthetic sensor instead: VLP-16, VLP-32C, HDL-32E");
+  auto* synth = cmd->add_option("--synthetic", opts->synthetic,
+                                "render a synthetic sensor instead: " + mock::synthetic_model_names());
   pcap->excludes(synth);
-  cmd->add_option("--to", opts->to, "destination HOST:PORT of the data packets")->required();
+  cmd->add_option("--to", opts->to, "destination HOST:PORT of the data packets (required unless only --write-metadata)");
   cmd->add_option("--rate", opts->rate, "speed factor (2 = twice as fast as recorded)")->capture_default_str();
   cmd->add_flag("--loop", opts->loop, "restart the capture at its end");
   cmd->add_option("--rpm", opts->rpm, "synthetic: rotation speed")->capture_default_str()->check(CLI::Range(60.0, 1200.0));
   cmd->add_option("--return", opts->returns, "synthetic: strongest, last or dual")
       ->capture_default_str()
       ->check(CLI::IsMember({"strongest", "last", "dual"}));
+  cmd->add_option("--calibration", opts->calibration,
+                  "synthetic Velodyne/Hesai: render with this calibration (ROS YAML, VeloView XML, Hesai CSV)")
+      ->check(CLI::ExistingFile);
+  auto* synthetic_ouster = "synthetic Ouster (OS-LEGACY, OS)";
+  cmd->add_option("--metadata", opts->metadata, "render the sensor this metadata JSON describes (default: a nominal OS-1)")
+      ->check(CLI::ExistingFile)
+      ->group(synthetic_ouster);
+  cmd->add_option("--write-metadata", opts->write_metadata,
+                  "write the metadata JSON the sensor renders with (the driver needs it); alone: write and exit")
+      ->group(synthetic_ouster);
+  cmd->add_option("--beams", opts->beams, "nominal OS-1: beams (16, 32, 64, 128)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({16, 32, 64, 128}))
+      ->group(synthetic_ouster);
+  cmd->add_option("--lidar-mode", opts->lidar_mode, "nominal OS-1: 512x10, 1024x10, 2048x10, 512x20, 1024x20, 4096x5 "
+                  "(default 1024x10, or 1024x20 at --rpm 1200)")->group(synthetic_ouster);
+  cmd->add_option("--profile", opts->profile, "nominal OS: UDP profile (default RNG19_RFL8_SIG16_NIR16)")
+      ->group(synthetic_ouster);
   cmd->add_option("--position-port", opts->position_port, "send position packets to this port on the same host")
       ->check(CLI::Range(0, 65535));
   cmd->add_option("--duration", opts->duration_s, "stop after S seconds (default: end of capture / Ctrl-C)")

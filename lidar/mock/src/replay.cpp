@@ -54,7 +54,7 @@ bool PcapStream::rewind() {
 std::string PcapStream::error() const { return reader_->error(); }
 
 std::optional<StreamPacket> SyntheticStream::next() {
-  const SyntheticPacket p = sensor_.next();
+  const SyntheticPacket p = sensor_->next();
   return StreamPacket{p.time_ns, p.bytes, p.position};
 }
 

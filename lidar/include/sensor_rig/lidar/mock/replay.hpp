@@ -48,16 +48,18 @@ class PcapStream final : public PacketStream {
   std::unique_ptr<PcapReader> reader_;
 };
 
-// An endless synthetic sensor.
+// An endless synthetic sensor (any vendor).
 class SyntheticStream final : public PacketStream {
  public:
-  explicit SyntheticStream(SyntheticVelodyne sensor) : sensor_(std::move(sensor)) {}
+  explicit SyntheticStream(std::unique_ptr<SyntheticSensor> sensor) : sensor_(std::move(sensor)) {}
+  explicit SyntheticStream(SyntheticVelodyne sensor)
+      : sensor_(std::make_unique<SyntheticVelodyne>(std::move(sensor))) {}
   std::optional<StreamPacket> next() override;
   bool rewind() override { return true; }  // endless: nothing to rewind
-  [[nodiscard]] const SyntheticVelodyne& sensor() const noexcept { return sensor_; }
+  [[nodiscard]] const SyntheticSensor& sensor() const noexcept { return *sensor_; }
 
  private:
-  SyntheticVelodyne sensor_;
+  std::unique_ptr<SyntheticSensor> sensor_;
 };
 
 struct ReplayOptions {

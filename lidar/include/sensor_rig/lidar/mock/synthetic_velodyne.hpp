@@ -15,6 +15,7 @@
 
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/lidar/mock/scene.hpp"
+#include "sensor_rig/lidar/mock/synthetic_sensor.hpp"
 #include "sensor_rig/lidar/velodyne/calibration.hpp"
 #include "sensor_rig/lidar/velodyne/model.hpp"
 #include "sensor_rig/lidar/velodyne/packet.hpp"
@@ -34,14 +35,8 @@ struct SyntheticConfig {
   bool gps_fix_valid = true;
 };
 
-// One packet of the merged data + position stream, in time order.
-struct SyntheticPacket {
-  Nanos time_ns = 0;                 // vehicle time of the packet's first firing (or the GPS report)
-  std::span<const std::byte> bytes;  // valid until the next call to next()
-  bool position = false;             // true: send to the position port (8308)
-};
-
-class SyntheticVelodyne {
+// SyntheticPacket::time_ns: vehicle time of a data packet's first firing (or of the GPS report).
+class SyntheticVelodyne final : public SyntheticSensor {
  public:
   // Throws std::invalid_argument (rpm out of range) or velodyne::CalibrationError.
   SyntheticVelodyne(SyntheticConfig config, Scene scene);
@@ -50,7 +45,7 @@ class SyntheticVelodyne {
   [[nodiscard]] const Scene& scene() const noexcept { return scene_; }
   // Data packet period: 12 blocks; dual return carries each firing twice, so half the duration.
   [[nodiscard]] double packet_period_ns() const noexcept { return packet_period_ns_; }
-  [[nodiscard]] double packets_per_second() const noexcept { return 1e9 / packet_period_ns_; }
+  [[nodiscard]] double packets_per_second() const noexcept override { return 1e9 / packet_period_ns_; }
   [[nodiscard]] Nanos data_packet_time(std::uint64_t index) const noexcept;
   [[nodiscard]] double azimuth_deg_at(Nanos t) const noexcept;  // 0..360, the sensor's convention
 
@@ -60,7 +55,9 @@ class SyntheticVelodyne {
   void render_position_packet(Nanos t, std::span<std::byte, velodyne::kPositionPacketSize> out) const;
 
   // The merged stream: data packets and, every position_period_ns, a position packet.
-  SyntheticPacket next();
+  SyntheticPacket next() override;
+  [[nodiscard]] Nanos first_packet_offset_ns() const noexcept override { return 0; }  // first firing or GPS report
+  void set_start_ns(Nanos start_ns) noexcept override { config_.start_ns = start_ns; }
   [[nodiscard]] std::uint64_t data_packets_emitted() const noexcept { return next_data_; }
   [[nodiscard]] std::uint64_t position_packets_emitted() const noexcept { return next_position_; }
 
