@@ -5,7 +5,7 @@ DURATION  ?= 0
 CONFIG    ?= config/mock_rig.yaml
 CMAKE_ARGS ?=
 
-.PHONY: all setup build demo test test-asan bench fuzz clean
+.PHONY: all setup build demo test test-asan bench fuzz tidy clean
 
 all: build
 
@@ -52,6 +52,11 @@ fuzz: setup
 	CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_FUZZ=ON -DRIG_TESTS=OFF -DRIG_BENCH=OFF
 	cmake --build build-fuzz -j$(JOBS)
 	scripts/fuzz.sh build-fuzz $(or $(FUZZ_SECONDS),30)
+
+# clang-tidy (.clang-tidy) over BUILD's compile_commands.json: each finding once, then a count.
+# Not part of `make test`. TIDY_ONLY=lidar/ narrows it to paths matching that regex.
+tidy: build
+	scripts/tidy.sh $(BUILD) $(TIDY_ONLY)
 
 clean:
 	rm -rf build build-asan build-release build-fuzz

@@ -9,7 +9,7 @@ PACKAGES=(
   libpcap-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libssl-dev
   libaravis-dev aravis-tools
   libgtest-dev libgmock-dev googletest libbenchmark-dev
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev clang-tidy
   python3
 )
 

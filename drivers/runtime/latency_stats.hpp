@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <vector>
 
+#include "sensor_rig/common/percentile.hpp"
+
 namespace sensor_rig::runtime {
 
 struct Percentiles {
@@ -20,12 +22,8 @@ class LatencyWindow {
     p.n = samples_.size();
     if (samples_.empty()) return p;
     std::sort(samples_.begin(), samples_.end());
-    auto rank = [&](double q) {
-      const auto i = static_cast<std::size_t>(q * static_cast<double>(samples_.size() - 1) + 0.5);
-      return samples_[std::min(i, samples_.size() - 1)];
-    };
-    p.p50 = rank(0.50);
-    p.p99 = rank(0.99);
+    p.p50 = nearest_rank_percentile(samples_, 0.50);
+    p.p99 = nearest_rank_percentile(samples_, 0.99);
     p.max = samples_.back();
     samples_.clear();
     return p;

@@ -3,16 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-namespace sensor_rig::bench::perf {
+#include "sensor_rig/common/percentile.hpp"
 
-double percentile_sorted(const std::vector<double>& sorted, double q) {
-  if (sorted.empty()) return 0.0;
-  const double pos = q * static_cast<double>(sorted.size() - 1);
-  const auto lo = static_cast<std::size_t>(std::floor(pos));
-  const auto hi = std::min(lo + 1, sorted.size() - 1);
-  const double frac = pos - static_cast<double>(lo);
-  return sorted[lo] + (sorted[hi] - sorted[lo]) * frac;
-}
+namespace sensor_rig::bench::perf {
 
 LatencyStats compute_stats(std::vector<double>& ms) {
   LatencyStats s;
@@ -27,12 +20,12 @@ LatencyStats compute_stats(std::vector<double>& ms) {
   s.std = std::sqrt(sq / static_cast<double>(ms.size()));
   s.min = ms.front();
   s.max = ms.back();
-  s.p1 = percentile_sorted(ms, 0.01);
-  s.p25 = percentile_sorted(ms, 0.25);
-  s.p50 = percentile_sorted(ms, 0.50);
-  s.p75 = percentile_sorted(ms, 0.75);
-  s.p90 = percentile_sorted(ms, 0.90);
-  s.p99 = percentile_sorted(ms, 0.99);
+  s.p1 = interpolated_percentile(ms, 0.01);
+  s.p25 = interpolated_percentile(ms, 0.25);
+  s.p50 = interpolated_percentile(ms, 0.50);
+  s.p75 = interpolated_percentile(ms, 0.75);
+  s.p90 = interpolated_percentile(ms, 0.90);
+  s.p99 = interpolated_percentile(ms, 0.99);
   return s;
 }
 

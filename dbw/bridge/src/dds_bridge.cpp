@@ -7,9 +7,12 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/percentile.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
 #include "sensor_rig/dbw/bridge/dds_types.hpp"
@@ -18,11 +21,10 @@
 namespace sensor_rig::dbw {
 namespace {
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
+// Nearest-rank p50 and p99 of `v` (a sorted copy).
+std::pair<double, double> p50_p99(std::vector<double> v) {
   std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(std::min<double>(static_cast<double>(v.size() - 1), q * static_cast<double>(v.size() - 1) + 0.5));
-  return v[i];
+  return {nearest_rank_percentile(v, 0.5), nearest_rank_percentile(v, 0.99)};
 }
 
 safety::Command to_command(const msg::DbwCommand& m) {
@@ -60,11 +62,9 @@ class Runner {
     DdsBridgeStats s;
     s.commands = core_.safety().counters().commands;
     s.frames_sent = core_.counters().frames_sent;
-    s.latency_p50_us = percentile(latencies_, 0.5);
-    s.latency_p99_us = percentile(latencies_, 0.99);
+    std::tie(s.latency_p50_us, s.latency_p99_us) = p50_p99(latencies_);
     s.latency_max_us = latencies_.empty() ? 0.0 : *std::max_element(latencies_.begin(), latencies_.end());
-    s.take_to_send_p50_us = percentile(take_to_send_, 0.5);
-    s.take_to_send_p99_us = percentile(take_to_send_, 0.99);
+    std::tie(s.take_to_send_p50_us, s.take_to_send_p99_us) = p50_p99(take_to_send_);
     s.silence_to_neutral_ms = silence_to_neutral_ms_;
     s.status_published = status_published_;
     s.state_published = state_published_;

@@ -6,12 +6,12 @@
 #include <numbers>
 #include <string>
 
+#include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 #include "sensor_rig/lidar/hesai/packet.hpp"
 
 namespace sensor_rig::lidar::hesai {
 namespace {
 
-constexpr Nanos kBackwardsTolerance = 1'000'000;
 constexpr std::int64_t kMicroDeg = 360'000'000;      // a turn in µ°
 constexpr std::int64_t kNextScanSpan = 20'000'000;   // nebula: points up to 20° past the cut go to the next scan
 
@@ -65,9 +65,19 @@ struct Echo {
   std::uint8_t refl;
 };
 
+// A lookahead scan holds the points already past the cut; three spare buffers cover the two scans
+// being assembled plus the one the caller is publishing.
+ScanAssemblerOptions scan_options(const DecoderConfig& cfg) {
+  const std::size_t dual = cfg.returns == ReturnSelection::kDual ? 2 : 1;
+  return {.first_reserve = static_cast<std::size_t>(model_info(cfg.model).typical_points_per_scan) * dual,
+          .spare_buffers = 3,
+          .emit_partial_scans = cfg.emit_partial_scans,
+          .lookahead = true};
+}
+
 }  // namespace
 
-struct Decoder::Impl {
+struct DecoderImpl {
   DecoderConfig cfg;
   const ModelInfo* mi;
   std::vector<ChannelTable> ch;
@@ -82,18 +92,14 @@ struct Decoder::Impl {
   DecoderStats stats;
   PacketStatus last = PacketStatus::kOk;
   int last_returns = 1;
-  Scan cur, nxt;  // the scan being assembled; the next one (points already past the cut)
-  bool cur_started = false, cur_counted = false, cur_from_cut = false;
-  bool nxt_started = false, nxt_counted = false, nxt_from_cut = false;
+  ScanAssembler scans;  // current(): the scan being assembled; next(): points already past the cut
   bool have_prev = false;
-  bool window_open = false;  // between the window's start and the cut: points past the cut go to nxt
+  bool window_open = false;  // between the window's start and the cut: points past the cut go to next()
   int prev_az = 0;
   Nanos prev_stamp = 0;
-  std::size_t last_scan_points = 0;
-  std::uint64_t next_seq = 0;
-  std::vector<std::vector<PointXYZIRT>> spare;
 
-  explicit Impl(DecoderConfig config) : cfg(std::move(config)), mi(&model_info(cfg.model)) {
+  explicit DecoderImpl(DecoderConfig config)
+      : cfg(std::move(config)), mi(&model_info(cfg.model)), scans(scan_options(cfg), stats) {
     if (!(cfg.min_range_m >= 0.0) || !(cfg.max_range_m > cfg.min_range_m)) {
       throw DecoderConfigError("range: need 0 <= min_range (" + std::to_string(cfg.min_range_m) +
                                ") < max_range (" + std::to_string(cfg.max_range_m) + ")");
@@ -144,81 +150,6 @@ struct Decoder::Impl {
     reset_raw = norm_az(static_cast<long>(std::floor(cfg.cut_angle_deg * 100.0)) - off_max);
     emit_raw = norm_az(static_cast<long>(std::ceil(cfg.cut_angle_deg * 100.0)) - off_min);
     last_returns = cfg.returns == ReturnSelection::kDual ? 2 : 1;
-    spare.reserve(3);
-    cur = fresh();
-    nxt = fresh();
-  }
-
-  Scan fresh() {
-    const std::size_t dual = cfg.returns == ReturnSelection::kDual ? 2 : 1;
-    const std::size_t guess = last_scan_points ? last_scan_points + last_scan_points / 8
-                                               : static_cast<std::size_t>(mi->typical_points_per_scan) * dual;
-    Scan s;
-    if (!spare.empty()) {
-      s.points = std::move(spare.back());
-      spare.pop_back();
-      s.points.clear();
-    }
-    s.points.reserve(guess);
-    return s;
-  }
-  void give_back(std::vector<PointXYZIRT>&& v) {
-    if (spare.size() < 3 && v.capacity() > 0) spare.push_back(std::move(v));
-  }
-
-  static void touch(Scan& s, bool& started, bool& counted, Nanos stamp, Nanos rx) {
-    if (!started) {
-      s.stamp = stamp;
-      s.first_rx_ns = rx;
-      started = true;
-    }
-    if (!counted) {
-      ++s.packets;
-      counted = true;
-    }
-    s.last_rx_ns = rx;
-  }
-
-  // The current scan ends: returns it when it should be emitted; the next scan becomes current.
-  std::optional<Scan> end_scan(bool complete) {
-    std::optional<Scan> out;
-    const std::uint32_t carried_drops = cur.dropped;
-    bool emitted = false;
-    if (cur.packets > 0 && (complete || cfg.emit_partial_scans)) {
-      last_scan_points = cur.points.size();
-      cur.seq = next_seq++;
-      ++stats.scans;
-      out = std::move(cur);
-      emitted = true;
-    } else {
-      if (cur.packets > 0) ++stats.partial_scans_discarded;
-      give_back(std::move(cur.points));
-    }
-    cur = std::move(nxt);
-    if (!emitted) cur.dropped += carried_drops;  // drops stay visible in the next emitted scan
-    cur_started = nxt_started;
-    cur_counted = nxt_counted;
-    cur_from_cut = nxt_from_cut;
-    nxt = fresh();
-    nxt_started = nxt_counted = nxt_from_cut = false;
-    return out;
-  }
-
-  void drop_next() {
-    if (nxt.packets > 0) ++stats.partial_scans_discarded;
-    give_back(std::move(nxt.points));
-    nxt = fresh();
-    nxt_started = nxt_counted = nxt_from_cut = false;
-  }
-
-  void merge(std::optional<Scan>& out, std::optional<Scan>&& s) {
-    if (!s) return;
-    if (out) {  // two scans ended in one packet (time jump, then a cut): keep the complete one
-      --stats.scans;
-      ++stats.partial_scans_discarded;
-      give_back(std::move(out->points));
-    }
-    out = std::move(s);
   }
 
   inline void point(Scan& s, const ChannelTable& t, Echo e, float unit, float sa, float ca, Nanos group_stamp,
@@ -234,19 +165,15 @@ struct Decoder::Impl {
                                    static_cast<std::uint32_t>(rel), t.ring, rtype, 0});
   }
 
-  std::optional<Scan> push(const PacketView& packet, Nanos stamp) noexcept;
+  PacketStatus check(std::span<const std::byte> bytes) const noexcept { return check_packet(bytes, cfg.model); }
+  std::optional<Scan> decode(const PacketView& packet, Nanos stamp) noexcept;
+  void restart() noexcept {
+    have_prev = false;
+    window_open = false;
+  }
 };
 
-std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) noexcept {
-  ++stats.packets;
-  last = check_packet(packet.data, cfg.model);
-  if (last != PacketStatus::kOk) {
-    ++stats.by_status[static_cast<std::size_t>(last)];
-    ++cur.dropped;
-    return std::nullopt;
-  }
-  ++stats.packets_used;
-  ++stats.by_status[0];
+std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) noexcept {
   const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
   const std::uint8_t mode = p[mi->tail_return_mode];
   const int n = return_count(mode);
@@ -254,14 +181,14 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
   const float unit = cfg.model == Model::kPandarXT32 ? static_cast<float>(p[offsetof(HeaderXT, dis_unit)]) * 0.001F
                                                      : static_cast<float>(mi->distance_unit_m);
   std::optional<Scan> out;
-  if (have_prev && (stamp < prev_stamp - kBackwardsTolerance || stamp > prev_stamp + cfg.max_packet_gap_ns)) {
+  if (have_prev && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {
     ++stats.time_jumps;
-    merge(out, end_scan(false));
-    drop_next();
+    scans.merge(out, scans.end_scan(false));
+    scans.drop_next();
     have_prev = false;
   }
   prev_stamp = stamp;
-  cur_counted = nxt_counted = false;
+  scans.begin_packet();
 
   const auto& tab = angles();
   const auto rm = static_cast<ReturnMode>(mode);
@@ -277,7 +204,7 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
       const int step = az_step(prev_az, a);
       if (crosses(prev_az, step, reset_raw)) {
         window_open = true;
-        if (!nxt_started) nxt_from_cut = true;
+        if (!scans.next().started) scans.next().from_cut = true;
       }
       cut_here = crosses(prev_az, step, emit_raw);
     } else {
@@ -285,8 +212,8 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
       window_open = in_sector(reset_raw, emit_raw, a) && a != emit_raw;
     }
     const bool overlap = window_open || cut_here;
-    if (overlap) touch(nxt, nxt_started, nxt_counted, group_stamp, packet.rx_ns);
-    touch(cur, cur_started, cur_counted, group_stamp, packet.rx_ns);
+    if (overlap) scans.next().touch(group_stamp, packet.rx_ns);
+    scans.current().touch(group_stamp, packet.rx_ns);
 
     const float sa = tab.sin[static_cast<std::size_t>(a)];
     const float ca = tab.cos[static_cast<std::size_t>(a)];
@@ -294,11 +221,11 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
     const std::uint8_t* units = blk + mi->block_units;
     for (std::size_t c = 0; c < ch.size(); ++c) {
       const ChannelTable& t = ch[c];
-      Scan* s = &cur;
+      Scan* s = &scans.scan();
       if (overlap) {
         std::int64_t rel = (a_udeg + t.off_udeg) % kMicroDeg;
         if (rel < 0) rel += kMicroDeg;
-        if (rel <= kNextScanSpan) s = &nxt;
+        if (rel <= kNextScanSpan) s = &scans.next().scan;
       }
       const std::uint8_t* u0 = units + c * mi->unit_size;
       const Echo e0{le16(u0), u0[2]};
@@ -355,7 +282,7 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
       }
     }
     if (cut_here) {
-      merge(out, end_scan(cur_from_cut));
+      scans.merge(out, scans.end_scan(scans.current().from_cut));
       window_open = false;
     }
     have_prev = true;
@@ -364,50 +291,21 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
   return out;
 }
 
-Decoder::Decoder(DecoderConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {}
-Decoder::~Decoder() = default;
-Decoder::Decoder(Decoder&&) noexcept = default;
-Decoder& Decoder::operator=(Decoder&&) noexcept = default;
-
-std::optional<Scan> Decoder::push(PacketView packet, Nanos packet_stamp) noexcept {
-  return impl_->push(packet, packet_stamp);
-}
-
-std::optional<Scan> Decoder::flush() noexcept {
-  auto& d = *impl_;
-  std::optional<Scan> out;
-  if (d.cur.packets > 0) {
-    d.last_scan_points = d.cur.points.size();
-    d.cur.seq = d.next_seq++;
-    ++d.stats.scans;
-    out = std::move(d.cur);
-  } else {
-    d.give_back(std::move(d.cur.points));
-  }
-  d.cur = d.fresh();
-  d.cur_started = d.cur_counted = d.cur_from_cut = false;
-  d.give_back(std::move(d.nxt.points));
-  d.nxt = d.fresh();
-  d.nxt_started = d.nxt_counted = d.nxt_from_cut = false;
-  d.have_prev = false;
-  d.window_open = false;
-  return out;
-}
-
-void Decoder::recycle(std::vector<PointXYZIRT>&& buffer) noexcept { impl_->give_back(std::move(buffer)); }
+Decoder::Decoder(DecoderConfig config) : DecoderPimpl(std::move(config)) {}
 
 Nanos Decoder::first_firing_offset_ns(int returns) const noexcept {
-  const int groups = impl_->mi->blocks / std::max(returns, 1);
-  return static_cast<Nanos>(impl_->mi->tail_to_last_group_ns) -
-         static_cast<Nanos>(impl_->mi->group_period_ns) * (groups - 1) + impl_->min_fire_ns;
+  const int groups = impl().mi->blocks / std::max(returns, 1);
+  return static_cast<Nanos>(impl().mi->tail_to_last_group_ns) -
+         static_cast<Nanos>(impl().mi->group_period_ns) * (groups - 1) + impl().min_fire_ns;
 }
-int Decoder::last_returns() const noexcept { return impl_->last_returns; }
-PacketStatus Decoder::last_status() const noexcept { return impl_->last; }
-const DecoderStats& Decoder::stats() const noexcept { return impl_->stats; }
-const DecoderConfig& Decoder::config() const noexcept { return impl_->cfg; }
+int Decoder::last_returns() const noexcept { return impl().last_returns; }
 std::uint16_t Decoder::ring_of_channel(int channel) const noexcept {
-  if (channel < 1 || channel > impl_->mi->channels) return 0;
-  return impl_->ring_of_channel[static_cast<std::size_t>(channel - 1)];
+  if (channel < 1 || channel > impl().mi->channels) return 0;
+  return impl().ring_of_channel[static_cast<std::size_t>(channel - 1)];
 }
 
 }  // namespace sensor_rig::lidar::hesai
+
+namespace sensor_rig::lidar {
+template class DecoderPimpl<hesai::DecoderImpl, hesai::DecoderConfig, hesai::DecoderStats>;
+}  // namespace sensor_rig::lidar

@@ -7,15 +7,10 @@
 namespace sensor_rig::lidar {
 namespace {
 
-class HesaiScanDecoder final : public ScanDecoder {
+class HesaiScanDecoder final : public VendorScanDecoder<hesai::Decoder> {
  public:
-  explicit HesaiScanDecoder(hesai::DecoderConfig cfg) : decoder_(std::move(cfg)) {}
+  explicit HesaiScanDecoder(hesai::DecoderConfig cfg) : VendorScanDecoder(hesai::Decoder(std::move(cfg))) {}
 
-  std::optional<Scan> push(PacketView packet, Nanos packet_stamp) noexcept override {
-    return decoder_.push(packet, packet_stamp);
-  }
-  std::optional<Scan> flush() noexcept override { return decoder_.flush(); }
-  void recycle(std::vector<PointXYZIRT>&& buffer) noexcept override { decoder_.recycle(std::move(buffer)); }
   [[nodiscard]] bool is_data_packet(const PacketView& p) const noexcept override {
     return p.dst_port != hesai::kGpsPort && p.data.size() != hesai::kGpsPacketSize;
   }
@@ -29,11 +24,6 @@ class HesaiScanDecoder final : public ScanDecoder {
   [[nodiscard]] Nanos packet_span_ns() const noexcept override {
     return -decoder_.first_firing_offset_ns(decoder_.last_returns());
   }
-  [[nodiscard]] DecoderCounters counters() const noexcept override { return counters_from(decoder_.stats()); }
-  [[nodiscard]] PacketStatus last_status() const noexcept override { return decoder_.last_status(); }
-
- private:
-  hesai::Decoder decoder_;
 };
 
 }  // namespace
@@ -51,19 +41,7 @@ std::unique_ptr<ScanDecoder> make_hesai_decoder(const DecoderOptions& o) {
       cfg.calibration = hesai::parse_angle_csv(o.calibration_text, name, *model);
     }
   }
-  if (o.returns == "dual") {
-    cfg.returns = hesai::ReturnSelection::kDual;
-  } else if (o.returns == "last") {
-    cfg.returns = hesai::ReturnSelection::kLast;
-  } else if (o.returns == "strongest") {
-    cfg.returns = hesai::ReturnSelection::kStrongest;
-  } else {
-    throw DecoderConfigError("return mode must be strongest, last or dual, not '" + o.returns + "'");
-  }
-  cfg.min_range_m = o.min_range_m;
-  cfg.max_range_m = o.max_range_m;
-  cfg.cut_angle_deg = o.cut_angle_deg;
-  cfg.emit_partial_scans = o.emit_partial_scans;
+  apply_common_options(o, cfg);
   return std::make_unique<HesaiScanDecoder>(std::move(cfg));
 }
 

@@ -8,12 +8,11 @@
 #include <string>
 
 #include "sensor_rig/lidar/ouster/packet.hpp"
+#include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 #include "xyz_lut.hpp"
 
 namespace sensor_rig::lidar::ouster {
 namespace {
-
-constexpr Nanos kBackwardsTolerance = 1'000'000;
 
 const SensorMetadata& validated(const DecoderConfig& c) {
   const auto& m = c.metadata;
@@ -45,9 +44,18 @@ std::uint32_t clamp_u32(Nanos v) noexcept {
                                                                             : static_cast<std::uint32_t>(v);
 }
 
+// A full frame is the most a scan can hold (Ouster scans are cut by frame id).
+ScanAssemblerOptions scan_options(const DecoderConfig& c) {
+  const bool dual = profile_spec(c.metadata.profile).returns == 2;
+  const std::size_t full = static_cast<std::size_t>(c.metadata.columns_per_frame) *
+                           static_cast<std::size_t>(c.metadata.pixels_per_column) *
+                           (dual && c.returns == ReturnSelection::kDual ? 2 : 1);
+  return {.first_reserve = full, .max_reserve = full, .emit_partial_scans = c.emit_partial_scans};
+}
+
 }  // namespace
 
-struct Decoder::Impl {
+struct DecoderImpl {
   DecoderConfig cfg;
   PacketLayout layout;
   XyzLut lut;
@@ -64,19 +72,14 @@ struct Decoder::Impl {
 
   DecoderStats stats;
   PacketStatus last = PacketStatus::kOk;
-  Scan cur;
-  bool cur_started = false;    // has a stamp (a valid column decoded)
-  bool cur_from_start = false; // began at the frame's first packet (complete once ended)
+  ScanAssembler scans;  // current().from_cut: the scan began at the frame's first packet
   bool have_stamp = false;
   Nanos prev_stamp = 0;
   bool have_fid = false;
   std::uint32_t prev_fid = 0;
-  std::size_t last_scan_points = 0;
-  std::uint64_t next_seq = 0;
-  std::vector<std::vector<PointXYZIRT>> spare;
 
-  explicit Impl(DecoderConfig config)
-      : cfg(std::move(config)), layout(validated(cfg).layout()), lut(cfg.metadata) {
+  explicit DecoderImpl(DecoderConfig config)
+      : cfg(std::move(config)), layout(validated(cfg).layout()), lut(cfg.metadata), scans(scan_options(cfg), stats) {
     const auto& m = cfg.metadata;
     const auto& spec = profile_spec(m.profile);
     dual = spec.returns == 2;
@@ -101,48 +104,14 @@ struct Decoder::Impl {
                      [&](std::size_t a, std::size_t b) { return m.beam_altitude_deg[a] < m.beam_altitude_deg[b]; });
     ring.resize(order.size());
     for (std::size_t r = 0; r < order.size(); ++r) ring[order[r]] = static_cast<std::uint16_t>(r);
-    spare.reserve(2);
-    start_scan();
-  }
-
-  void start_scan() {
-    const std::size_t full = static_cast<std::size_t>(cfg.metadata.columns_per_frame) *
-                             static_cast<std::size_t>(cfg.metadata.pixels_per_column) *
-                             (dual && cfg.returns == ReturnSelection::kDual ? 2 : 1);
-    cur = Scan{};
-    if (!spare.empty()) {
-      cur.points = std::move(spare.back());
-      spare.pop_back();
-      cur.points.clear();
-    }
-    cur.points.reserve(last_scan_points ? std::min(full, last_scan_points + last_scan_points / 8) : full);
-    cur_started = false;
-    cur_from_start = false;
-  }
-
-  std::optional<Scan> end_scan(bool complete) {
-    std::optional<Scan> out;
-    const std::uint32_t carried_drops = cur.dropped;
-    if (cur.packets > 0 && cur_started && (complete || cfg.emit_partial_scans)) {
-      last_scan_points = cur.points.size();
-      cur.seq = next_seq++;
-      ++stats.scans;
-      out = std::move(cur);
-      start_scan();
-    } else {
-      if (cur.packets > 0) ++stats.partial_scans_discarded;
-      start_scan();
-      cur.dropped = carried_drops;  // drops stay visible in the next emitted scan
-    }
-    return out;
   }
 
   inline void emit(const LutEntry& l, std::uint64_t r, std::uint64_t i, std::uint32_t t, std::uint16_t rg,
                    std::uint8_t type) {
     if (r == 0 || r < min_mm || r > max_mm) return;
     const float f = static_cast<float>(r);
-    cur.points.push_back(PointXYZIRT{l.dx * f + l.ox, l.dy * f + l.oy, l.dz * f + l.oz, static_cast<float>(i), t, rg,
-                                     type, 0});
+    scans.scan().points.push_back(
+        PointXYZIRT{l.dx * f + l.ox, l.dy * f + l.oy, l.dz * f + l.oz, static_cast<float>(i), t, rg, type, 0});
   }
 
   void decode_dual(const std::uint8_t* px, const LutEntry& l, std::uint32_t t, std::uint16_t rg) {
@@ -185,19 +154,15 @@ struct Decoder::Impl {
     for (std::size_t r = 0; r < h; ++r, px += layout.pixel_size) decode_dual(px, l[r], t, ring[r]);
   }
 
-  std::optional<Scan> push(const PacketView& packet, Nanos stamp) noexcept;
+  PacketStatus check(std::span<const std::byte> bytes) const noexcept { return check_packet(bytes, layout); }
+  std::optional<Scan> decode(const PacketView& packet, Nanos stamp) noexcept;
+  void restart() noexcept {
+    have_fid = false;
+    have_stamp = false;
+  }
 };
 
-std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) noexcept {
-  ++stats.packets;
-  last = check_packet(packet.data, layout);
-  if (last != PacketStatus::kOk) {
-    ++stats.by_status[static_cast<std::size_t>(last)];
-    ++cur.dropped;
-    return std::nullopt;
-  }
-  ++stats.packets_used;
-  ++stats.by_status[0];
+std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) noexcept {
   const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
   const auto& m = cfg.metadata;
   if (m.init_id != 0 && layout.header != HeaderType::kLegacy) {
@@ -227,9 +192,9 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
 
   std::optional<Scan> out;
   if (n_valid > 0) {
-    if (have_stamp && (stamp < prev_stamp - kBackwardsTolerance || stamp > prev_stamp + cfg.max_packet_gap_ns)) {
+    if (have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {
       ++stats.time_jumps;
-      out = end_scan(false);
+      out = scans.end_scan(false);
       have_fid = false;
     }
     prev_stamp = stamp;
@@ -237,22 +202,23 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
   }
   const std::uint32_t fid = frame_id_at(p, layout);
   const bool new_frame = have_fid && fid != prev_fid;
-  if (new_frame && cur.packets > 0) out = end_scan(cur_from_start);
-  if (cur.packets == 0) {
-    cur_from_start = new_frame || (n_valid > 0 && base <= static_cast<long>(window_first));
-    cur.first_rx_ns = packet.rx_ns;
+  PendingScan& cur = scans.current();
+  if (new_frame && cur.scan.packets > 0) out = scans.end_scan(cur.from_cut);
+  if (cur.scan.packets == 0) {
+    cur.from_cut = new_frame || (n_valid > 0 && base <= static_cast<long>(window_first));
+    cur.scan.first_rx_ns = packet.rx_ns;
   }
-  ++cur.packets;
-  cur.last_rx_ns = packet.rx_ns;
+  ++cur.scan.packets;
+  cur.scan.last_rx_ns = packet.rx_ns;
   have_fid = true;
   prev_fid = fid;
   if (n_valid == 0) return out;
 
-  if (!cur_started) {
-    cur.stamp = stamp;
-    cur_started = true;
+  if (!cur.started) {
+    cur.scan.stamp = stamp;
+    cur.started = true;
   }
-  const Nanos t_packet = stamp - cur.stamp;
+  const Nanos t_packet = stamp - cur.scan.stamp;
   for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
     if (col_ok[c] == 0) continue;
     const auto dt = static_cast<Nanos>(cols[c].timestamp_ns - first_ts);  // wraps for a column before the first
@@ -260,50 +226,21 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
   }
   // The frame's last packet ends the scan now instead of with the next frame's first packet.
   const long last_col = base + static_cast<long>(layout.columns_per_packet) - 1;
-  if (!out && last_col >= static_cast<long>(window_last)) out = end_scan(cur_from_start);
+  if (!out && last_col >= static_cast<long>(window_last)) out = scans.end_scan(cur.from_cut);
   return out;
 }
 
-Decoder::Decoder(DecoderConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {}
-Decoder::~Decoder() = default;
-Decoder::Decoder(Decoder&&) noexcept = default;
-Decoder& Decoder::operator=(Decoder&&) noexcept = default;
+Decoder::Decoder(DecoderConfig config) : DecoderPimpl(std::move(config)) {}
 
-std::optional<Scan> Decoder::push(PacketView packet, Nanos packet_stamp) noexcept {
-  return impl_->push(packet, packet_stamp);
-}
-
-std::optional<Scan> Decoder::flush() noexcept {
-  auto& d = *impl_;
-  std::optional<Scan> out;
-  if (d.cur.packets > 0 && d.cur_started) {
-    d.last_scan_points = d.cur.points.size();
-    d.cur.seq = d.next_seq++;
-    ++d.stats.scans;
-    out = std::move(d.cur);
-  }
-  d.start_scan();
-  d.have_fid = false;
-  d.have_stamp = false;
-  return out;
-}
-
-void Decoder::recycle(std::vector<PointXYZIRT>&& buffer) noexcept {
-  if (impl_->spare.size() < 2 && buffer.capacity() > 0) impl_->spare.push_back(std::move(buffer));
-}
-
-PacketStatus Decoder::last_status() const noexcept { return impl_->last; }
-const DecoderStats& Decoder::stats() const noexcept { return impl_->stats; }
-const DecoderConfig& Decoder::config() const noexcept { return impl_->cfg; }
-const PacketLayout& Decoder::layout() const noexcept { return impl_->layout; }
-Nanos Decoder::packet_span_ns() const noexcept { return impl_->span_ns; }
+const PacketLayout& Decoder::layout() const noexcept { return impl().layout; }
+Nanos Decoder::packet_span_ns() const noexcept { return impl().span_ns; }
 
 std::uint16_t Decoder::ring_of_beam(std::size_t beam) const noexcept {
-  return beam < impl_->ring.size() ? impl_->ring[beam] : 0;
+  return beam < impl().ring.size() ? impl().ring[beam] : 0;
 }
 
 std::optional<std::uint64_t> Decoder::first_column_time(std::span<const std::byte> bytes) const noexcept {
-  const auto& d = *impl_;
+  const auto& d = impl();
   if (check_packet(bytes, d.layout) != PacketStatus::kOk) return std::nullopt;
   const auto* p = reinterpret_cast<const std::uint8_t*>(bytes.data());
   for (std::size_t c = 0; c < d.layout.columns_per_packet; ++c) {
@@ -314,3 +251,7 @@ std::optional<std::uint64_t> Decoder::first_column_time(std::span<const std::byt
 }
 
 }  // namespace sensor_rig::lidar::ouster
+
+namespace sensor_rig::lidar {
+template class DecoderPimpl<ouster::DecoderImpl, ouster::DecoderConfig, ouster::DecoderStats>;
+}  // namespace sensor_rig::lidar

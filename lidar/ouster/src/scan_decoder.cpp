@@ -8,19 +8,14 @@
 namespace sensor_rig::lidar {
 namespace {
 
-class OusterScanDecoder final : public ScanDecoder {
+class OusterScanDecoder final : public VendorScanDecoder<ouster::Decoder> {
  public:
-  explicit OusterScanDecoder(ouster::DecoderConfig cfg) : decoder_(std::move(cfg)) {
+  explicit OusterScanDecoder(ouster::DecoderConfig cfg) : VendorScanDecoder(ouster::Decoder(std::move(cfg))) {
     const auto& m = decoder_.config().metadata;
     lidar_port_ = m.udp_port_lidar;
     imu_port_ = m.udp_port_imu;
   }
 
-  std::optional<Scan> push(PacketView packet, Nanos packet_stamp) noexcept override {
-    return decoder_.push(packet, packet_stamp);
-  }
-  std::optional<Scan> flush() noexcept override { return decoder_.flush(); }
-  void recycle(std::vector<PointXYZIRT>&& buffer) noexcept override { decoder_.recycle(std::move(buffer)); }
   // IMU packets come on their own port (7503) and, in the LEGACY IMU profile, are 48 bytes.
   [[nodiscard]] bool is_data_packet(const PacketView& p) const noexcept override {
     if (p.data.size() == ouster::kLegacyImuPacketSize && p.data.size() != decoder_.layout().packet_size) return false;
@@ -32,11 +27,8 @@ class OusterScanDecoder final : public ScanDecoder {
     return {SensorTime::Kind::kAbsoluteNs, static_cast<std::int64_t>(*t)};
   }
   [[nodiscard]] Nanos packet_span_ns() const noexcept override { return decoder_.packet_span_ns(); }
-  [[nodiscard]] DecoderCounters counters() const noexcept override { return counters_from(decoder_.stats()); }
-  [[nodiscard]] PacketStatus last_status() const noexcept override { return decoder_.last_status(); }
 
  private:
-  ouster::Decoder decoder_;
   std::uint16_t lidar_port_ = 0;
   std::uint16_t imu_port_ = 0;
 };
@@ -56,12 +48,7 @@ std::unique_ptr<ScanDecoder> make_ouster_decoder(const DecoderOptions& o) {
                              std::string(ouster::profile_spec(cfg.metadata.profile).name) + " is " +
                              (legacy ? "the legacy profile: use model OS-LEGACY" : "not LEGACY: use model OS"));
   }
-  cfg.returns = o.returns == "last"   ? ouster::ReturnSelection::kLast
-                : o.returns == "dual" ? ouster::ReturnSelection::kDual
-                                      : ouster::ReturnSelection::kStrongest;
-  cfg.min_range_m = o.min_range_m;
-  cfg.max_range_m = o.max_range_m;
-  cfg.emit_partial_scans = o.emit_partial_scans;
+  apply_common_options(o, cfg);  // no cut angle: Ouster scans are cut by frame id
   try {
     return std::make_unique<OusterScanDecoder>(std::move(cfg));
   } catch (const std::invalid_argument& e) {  // options out of range

@@ -14,13 +14,13 @@
 #include <vector>
 
 #include "angle_table.hpp"
+#include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 
 namespace sensor_rig::lidar::velodyne {
 namespace {
 
 constexpr int kAzimuthCount = 36000;
 constexpr std::uint8_t kLegacyProductId = 0x21;  // sent by HDL-32E and by early VLP-16 firmware
-constexpr Nanos kBackwardsTolerance = 1'000'000;
 
 struct ChannelTable {
   float cos_v, sin_v;
@@ -40,6 +40,12 @@ inline std::uint16_t rd16(const std::uint8_t* p) noexcept { return le16(p); }
 inline int az_step(int a, int b) noexcept {
   const int d = b - a;
   return d < 0 ? d + kAzimuthCount : d;
+}
+
+ScanAssemblerOptions scan_options(const DecoderConfig& cfg) {
+  const std::size_t dual = cfg.returns == ReturnSelection::kDual ? 2 : 1;
+  return {.first_reserve = static_cast<std::size_t>(model_info(cfg.model).typical_points_per_scan) * dual,
+          .emit_partial_scans = cfg.emit_partial_scans};
 }
 
 }  // namespace
@@ -65,7 +71,7 @@ PacketStatus check_packet(std::span<const std::byte> bytes, Model m) noexcept {
   return mode_ok && pid_ok ? PacketStatus::kOk : PacketStatus::kWrongModel;
 }
 
-struct Decoder::Impl {
+struct DecoderImpl {
   DecoderConfig cfg;
   const ModelInfo* info = nullptr;
   std::array<ChannelTable, kChannelsPerBlock> ch{};
@@ -78,10 +84,7 @@ struct Decoder::Impl {
 
   DecoderStats stats;
   PacketStatus last = PacketStatus::kOk;
-  Scan cur;
-  bool cur_started = false;      // has a stamp (first block decoded)
-  bool cur_counted = false;      // current packet already counted in cur.packets
-  bool cur_from_cut = false;     // began at a cut (complete once the next cut ends it)
+  ScanAssembler scans;
   bool have_prev = false;
   // The scan was already ended after the previous packet (its next block was predicted to cross
   // the cut): the crossing seen at the next packet's first block is not a second cut.
@@ -89,11 +92,9 @@ struct Decoder::Impl {
   int prev_az = 0;
   int last_gap = 0;  // azimuth advance of the last decoded block (hundredths of a degree)
   Nanos prev_stamp = 0;
-  std::size_t last_scan_points = 0;
-  std::uint64_t next_seq = 0;
-  std::vector<std::vector<PointXYZIRT>> spare;  // recycled buffers (at most 2 kept)
 
-  explicit Impl(DecoderConfig config) : cfg(std::move(config)), info(&model_info(cfg.model)) {
+  explicit DecoderImpl(DecoderConfig config)
+      : cfg(std::move(config)), info(&model_info(cfg.model)), scans(scan_options(cfg), stats) {
     if (!(cfg.min_range_m >= 0.0) || !(cfg.max_range_m > cfg.min_range_m)) {
       throw std::invalid_argument("range: need 0 <= min_range (" + std::to_string(cfg.min_range_m) +
                                   ") < max_range (" + std::to_string(cfg.max_range_m) + ")");
@@ -144,55 +145,6 @@ struct Decoder::Impl {
       t.az_frac_q16 = static_cast<std::uint32_t>((static_cast<std::uint64_t>(interp_ns) << 16) / block_ns);
       t.ring = ring_of_laser[static_cast<std::size_t>(laser)];
     }
-    spare.reserve(2);
-    start_scan(false);
-  }
-
-  void start_scan(bool from_cut) {
-    const std::size_t dual = cfg.returns == ReturnSelection::kDual ? 2 : 1;
-    const std::size_t guess = last_scan_points ? last_scan_points + last_scan_points / 8
-                                               : static_cast<std::size_t>(info->typical_points_per_scan) * dual;
-    cur = Scan{};
-    if (!spare.empty()) {
-      cur.points = std::move(spare.back());
-      spare.pop_back();
-      cur.points.clear();
-    }
-    cur.points.reserve(guess);
-    cur_started = false;
-    cur_counted = false;
-    cur_from_cut = from_cut;
-  }
-
-  // Ends the scan in progress; returns it when it should be emitted.
-  std::optional<Scan> end_scan(bool complete, bool next_from_cut) {
-    std::optional<Scan> out;
-    const std::uint32_t carried_drops = cur.dropped;
-    if (cur.packets > 0 && (complete || cfg.emit_partial_scans)) {
-      last_scan_points = cur.points.size();
-      cur.seq = next_seq++;
-      ++stats.scans;
-      out = std::move(cur);
-      start_scan(next_from_cut);
-    } else {
-      if (cur.packets > 0) ++stats.partial_scans_discarded;
-      start_scan(next_from_cut);
-      cur.dropped = carried_drops;  // drops stay visible in the next emitted scan
-    }
-    return out;
-  }
-
-  void begin_block(Nanos block_stamp, Nanos rx) {
-    if (!cur_started) {
-      cur.stamp = block_stamp;
-      cur.first_rx_ns = rx;
-      cur_started = true;
-    }
-    if (!cur_counted) {
-      ++cur.packets;
-      cur_counted = true;
-    }
-    cur.last_rx_ns = rx;
   }
 
   // Azimuth sin/cos per channel of a block: one lookup per firing sequence (VeloView
@@ -233,23 +185,19 @@ struct Decoder::Impl {
     const float xy = d * t.cos_v + t.xy_off;
     const float xv = xy * sr - t.ho * cr;
     const float yv = xy * cr + t.ho * sr;
-    cur.points.push_back(PointXYZIRT{yv, -xv, d * t.sin_v + t.z_off, static_cast<float>(intensity),
-                                     t_base + t.t_ns, t.ring, rtype, 0});
+    scans.scan().points.push_back(PointXYZIRT{yv, -xv, d * t.sin_v + t.z_off, static_cast<float>(intensity),
+                                              t_base + t.t_ns, t.ring, rtype, 0});
   }
 
-  std::optional<Scan> push(const PacketView& packet, Nanos stamp) noexcept;
+  PacketStatus check(std::span<const std::byte> bytes) const noexcept { return check_packet(bytes, cfg.model); }
+  std::optional<Scan> decode(const PacketView& packet, Nanos stamp) noexcept;
+  void restart() noexcept {
+    have_prev = false;
+    early_cut = false;
+  }
 };
 
-std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) noexcept {
-  ++stats.packets;
-  last = check_packet(packet.data, cfg.model);
-  if (last != PacketStatus::kOk) {
-    ++stats.by_status[static_cast<std::size_t>(last)];
-    ++cur.dropped;
-    return std::nullopt;
-  }
-  ++stats.packets_used;
-  ++stats.by_status[0];
+std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) noexcept {
   const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
   const std::uint8_t mode = p[offsetof(RawDataPacket, return_mode)];
   const bool dual = mode == static_cast<std::uint8_t>(ReturnMode::kDual);
@@ -257,13 +205,13 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
                                    : mode == static_cast<std::uint8_t>(ReturnMode::kStrongest) ? kReturnStrongest
                                                                                               : kReturnUnknown;
   std::optional<Scan> out;
-  if (have_prev && (stamp < prev_stamp - kBackwardsTolerance || stamp > prev_stamp + cfg.max_packet_gap_ns)) {
+  if (have_prev && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {
     ++stats.time_jumps;
-    out = end_scan(false, false);
+    out = scans.end_scan(false);
     have_prev = false;
   }
   prev_stamp = stamp;
-  cur_counted = false;
+  scans.begin_packet();
 
   const int step = dual ? 2 : 1;
   int az[kBlocksPerPacket];
@@ -279,15 +227,15 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
       if (early_cut) {
         if (!crosses) ++stats.early_cut_misses;  // prediction wrong: this block joined the new scan early
       } else if (crosses) {
-        out = end_scan(cur_from_cut, true);
+        out = scans.end_scan(scans.current().from_cut, true);
       }
     }
     early_cut = false;
     have_prev = true;
     prev_az = a_cut;
     const Nanos block_stamp = stamp + static_cast<Nanos>(b / step) * block_ns;
-    begin_block(block_stamp, packet.rx_ns);
-    const auto t_base = static_cast<std::uint32_t>(block_stamp - cur.stamp);
+    scans.current().touch(block_stamp, packet.rx_ns);
+    const auto t_base = static_cast<std::uint32_t>(block_stamp - scans.scan().stamp);
     // Azimuth advance over this block: to the next block, or from the previous one for the last.
     std::uint32_t gap = static_cast<std::uint32_t>(b + step < static_cast<int>(kBlocksPerPacket)
                                                        ? az_step(a, az[b + step])
@@ -341,47 +289,22 @@ std::optional<Scan> Decoder::Impl::push(const PacketView& packet, Nanos stamp) n
   if (!out && have_prev && last_gap > 0) {
     const int to_cut = az_step(prev_az, cut);
     if (to_cut > 0 && to_cut + kEarlyCutMargin <= last_gap) {
-      out = end_scan(cur_from_cut, true);
+      out = scans.end_scan(scans.current().from_cut, true);
       early_cut = true;
     }
   }
   return out;
 }
 
-Decoder::Decoder(DecoderConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {}
-Decoder::~Decoder() = default;
-Decoder::Decoder(Decoder&&) noexcept = default;
-Decoder& Decoder::operator=(Decoder&&) noexcept = default;
+Decoder::Decoder(DecoderConfig config) : DecoderPimpl(std::move(config)) {}
 
-std::optional<Scan> Decoder::push(PacketView packet, Nanos packet_stamp) noexcept {
-  return impl_->push(packet, packet_stamp);
-}
-
-std::optional<Scan> Decoder::flush() noexcept {
-  auto& d = *impl_;
-  std::optional<Scan> out;
-  if (d.cur.packets > 0) {
-    d.last_scan_points = d.cur.points.size();
-    d.cur.seq = d.next_seq++;
-    ++d.stats.scans;
-    out = std::move(d.cur);
-  }
-  d.start_scan(false);
-  d.have_prev = false;
-  d.early_cut = false;
-  return out;
-}
-
-void Decoder::recycle(std::vector<PointXYZIRT>&& buffer) noexcept {
-  if (impl_->spare.size() < 2 && buffer.capacity() > 0) impl_->spare.push_back(std::move(buffer));
-}
-
-PacketStatus Decoder::last_status() const noexcept { return impl_->last; }
-const DecoderStats& Decoder::stats() const noexcept { return impl_->stats; }
-const DecoderConfig& Decoder::config() const noexcept { return impl_->cfg; }
 std::uint16_t Decoder::ring_of_laser(int laser_id) const noexcept {
-  if (laser_id < 0 || laser_id >= impl_->info->lasers) return 0;
-  return impl_->ring_of_laser[static_cast<std::size_t>(laser_id)];
+  if (laser_id < 0 || laser_id >= impl().info->lasers) return 0;
+  return impl().ring_of_laser[static_cast<std::size_t>(laser_id)];
 }
 
 }  // namespace sensor_rig::lidar::velodyne
+
+namespace sensor_rig::lidar {
+template class DecoderPimpl<velodyne::DecoderImpl, velodyne::DecoderConfig, velodyne::DecoderStats>;
+}  // namespace sensor_rig::lidar

@@ -24,6 +24,7 @@ enum class PacketStatus : std::uint8_t {
   kNotData,        // e.g. a position packet on the data port
   kTimeBackwards,  // sensor time jumped back beyond tolerance
 };
+inline constexpr std::size_t kPacketStatusCount = 7;  // PacketStatus values
 
 const char* to_string(PacketStatus s) noexcept;
 

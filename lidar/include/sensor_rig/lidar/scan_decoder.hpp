@@ -11,10 +11,12 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "sensor_rig/lidar/packet.hpp"
 #include "sensor_rig/lidar/point_cloud.hpp"
+#include "sensor_rig/lidar/scan_assembler.hpp"
 
 namespace sensor_rig::lidar {
 
@@ -36,6 +38,27 @@ struct DecoderOptions {
   bool emit_partial_scans = false;   // also emit the scan started mid-rotation / ended by a time jump
 };
 
+// The vendor's ReturnSelection for DecoderOptions::returns (every vendor names its values
+// kStrongest, kLast, kDual). Throws DecoderConfigError for any other word.
+template <class Selection>
+Selection return_selection(const std::string& returns) {
+  if (returns == "strongest") return Selection::kStrongest;
+  if (returns == "last") return Selection::kLast;
+  if (returns == "dual") return Selection::kDual;
+  throw DecoderConfigError("return mode must be strongest, last or dual, not '" + returns + "'");
+}
+
+// Copies the options every vendor's DecoderConfig shares: returns, range gate, partial scans and
+// the cut angle (for the vendors that cut by azimuth). Throws DecoderConfigError (returns).
+template <class VendorConfig>
+void apply_common_options(const DecoderOptions& o, VendorConfig& cfg) {
+  cfg.returns = return_selection<decltype(cfg.returns)>(o.returns);
+  cfg.min_range_m = o.min_range_m;
+  cfg.max_range_m = o.max_range_m;
+  if constexpr (requires { cfg.cut_angle_deg; }) cfg.cut_angle_deg = o.cut_angle_deg;
+  cfg.emit_partial_scans = o.emit_partial_scans;
+}
+
 // What a data packet says about its own time (the sensor's clock, before any mapping).
 struct SensorTime {
   enum class Kind : std::uint8_t {
@@ -46,28 +69,8 @@ struct SensorTime {
   std::int64_t value = 0;
 };
 
-inline constexpr std::size_t kPacketStatusCount = 7;
-
-struct DecoderCounters {
-  std::uint64_t packets = 0;       // pushed
-  std::uint64_t packets_used = 0;  // decoded into points
-  std::uint64_t scans = 0;         // emitted
-  std::uint64_t partial_scans_discarded = 0;
-  std::array<std::uint64_t, kPacketStatusCount> by_status{};  // indexed by PacketStatus
-  [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
-};
-
-// The common counters out of a vendor decoder's own stats (which may count more).
-template <class VendorStats>
-DecoderCounters counters_from(const VendorStats& s) noexcept {
-  DecoderCounters c;
-  c.packets = s.packets;
-  c.packets_used = s.packets_used;
-  c.scans = s.scans;
-  c.partial_scans_discarded = s.partial_scans_discarded;
-  for (std::size_t i = 0; i < c.by_status.size() && i < s.by_status.size(); ++i) c.by_status[i] = s.by_status[i];
-  return c;
-}
+// The common counters of every vendor decoder (a vendor's own stats may count more).
+using DecoderCounters = ScanStats;
 
 class ScanDecoder {
  public:
@@ -86,6 +89,25 @@ class ScanDecoder {
   [[nodiscard]] virtual Nanos packet_span_ns() const noexcept = 0;
   [[nodiscard]] virtual DecoderCounters counters() const noexcept = 0;
   [[nodiscard]] virtual PacketStatus last_status() const noexcept = 0;
+};
+
+// ScanDecoder over a vendor's Decoder (a DecoderPimpl): push, flush, recycle, counters and
+// last_status forward to it; the vendor adds is_data_packet, packet_time and packet_span_ns.
+template <class VendorDecoder>
+class VendorScanDecoder : public ScanDecoder {
+ public:
+  explicit VendorScanDecoder(VendorDecoder&& decoder) noexcept : decoder_(std::move(decoder)) {}
+
+  std::optional<Scan> push(PacketView packet, Nanos packet_stamp) noexcept override {
+    return decoder_.push(packet, packet_stamp);
+  }
+  std::optional<Scan> flush() noexcept override { return decoder_.flush(); }
+  void recycle(std::vector<PointXYZIRT>&& buffer) noexcept override { decoder_.recycle(std::move(buffer)); }
+  [[nodiscard]] DecoderCounters counters() const noexcept override { return decoder_.stats(); }
+  [[nodiscard]] PacketStatus last_status() const noexcept override { return decoder_.last_status(); }
+
+ protected:
+  VendorDecoder decoder_;
 };
 
 struct ModelEntry {

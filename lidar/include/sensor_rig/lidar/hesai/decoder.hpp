@@ -18,14 +18,15 @@
 #include <array>
 #include <cstdint>
 #include <limits>
-#include <memory>
 #include <optional>
 #include <vector>
 
+#include "sensor_rig/lidar/decoder_pimpl.hpp"
 #include "sensor_rig/lidar/hesai/calibration.hpp"
 #include "sensor_rig/lidar/hesai/model.hpp"
 #include "sensor_rig/lidar/packet.hpp"
 #include "sensor_rig/lidar/point_cloud.hpp"
+#include "sensor_rig/lidar/scan_assembler.hpp"
 
 namespace sensor_rig::lidar::hesai {
 
@@ -51,49 +52,28 @@ struct DecoderConfig {
   Nanos max_packet_gap_ns = 1'000'000'000;
 };
 
-inline constexpr std::size_t kStatusCount = 7;  // PacketStatus values
+inline constexpr std::size_t kStatusCount = kPacketStatusCount;
 
-struct DecoderStats {
-  std::uint64_t packets = 0;       // pushed
-  std::uint64_t packets_used = 0;  // decoded into points
-  std::array<std::uint64_t, kStatusCount> by_status{};  // indexed by PacketStatus
-  std::uint64_t scans = 0;         // emitted
-  std::uint64_t partial_scans_discarded = 0;
-  std::uint64_t time_jumps = 0;    // scans ended early because the packet time jumped
-  [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
-};
+struct DecoderStats : ScanStats {};
 
-class Decoder {
+struct DecoderImpl;
+
+// push / flush / recycle / stats as DecoderPimpl says; flush() also discards the points already
+// held for the next scan.
+class Decoder : public DecoderPimpl<DecoderImpl, DecoderConfig, DecoderStats> {
  public:
-  explicit Decoder(DecoderConfig config);
-  ~Decoder();
-  Decoder(Decoder&&) noexcept;
-  Decoder& operator=(Decoder&&) noexcept;
-  Decoder(const Decoder&) = delete;
-  Decoder& operator=(const Decoder&) = delete;
-
-  // Decodes one data packet; returns the scan it completed, if any. Never throws: a rejected
-  // packet is counted (stats(), the scan's `dropped`) and last_status() says why.
-  std::optional<Scan> push(PacketView packet, Nanos packet_stamp) noexcept;
-  // The scan in progress (partial), if it has packets; resets (points held for the next scan are
-  // discarded).
-  std::optional<Scan> flush() noexcept;
-  // A published scan's point buffer back for reuse.
-  void recycle(std::vector<PointXYZIRT>&& buffer) noexcept;
+  explicit Decoder(DecoderConfig config);  // throws DecoderConfigError
 
   // Offset of a packet's first firing from its tail time with this decoder's firing times (< 0).
   [[nodiscard]] Nanos first_firing_offset_ns(int returns) const noexcept;
   // Echoes per azimuth of the last valid packet (before any: 2 if dual was selected, else 1).
   [[nodiscard]] int last_returns() const noexcept;
-  [[nodiscard]] PacketStatus last_status() const noexcept;
-  [[nodiscard]] const DecoderStats& stats() const noexcept;
-  [[nodiscard]] const DecoderConfig& config() const noexcept;
   // Ring (0 = lowest elevation) of a channel (1-based, as in the calibration file).
   [[nodiscard]] std::uint16_t ring_of_channel(int channel) const noexcept;
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace sensor_rig::lidar::hesai
+
+namespace sensor_rig::lidar {
+extern template class DecoderPimpl<hesai::DecoderImpl, hesai::DecoderConfig, hesai::DecoderStats>;
+}  // namespace sensor_rig::lidar

@@ -13,13 +13,14 @@
 #include <array>
 #include <cstdint>
 #include <limits>
-#include <memory>
 #include <optional>
 #include <vector>
 
+#include "sensor_rig/lidar/decoder_pimpl.hpp"
 #include "sensor_rig/lidar/ouster/metadata.hpp"
 #include "sensor_rig/lidar/packet.hpp"
 #include "sensor_rig/lidar/point_cloud.hpp"
+#include "sensor_rig/lidar/scan_assembler.hpp"
 
 namespace sensor_rig::lidar::ouster {
 
@@ -42,38 +43,21 @@ struct DecoderConfig {
   Nanos max_packet_gap_ns = 1'000'000'000;
 };
 
-inline constexpr std::size_t kStatusCount = 7;  // PacketStatus values
+inline constexpr std::size_t kStatusCount = kPacketStatusCount;
 
-struct DecoderStats {
-  std::uint64_t packets = 0;
-  std::uint64_t packets_used = 0;
-  std::array<std::uint64_t, kStatusCount> by_status{};  // indexed by PacketStatus
-  std::uint64_t scans = 0;
-  std::uint64_t partial_scans_discarded = 0;
-  std::uint64_t time_jumps = 0;
+struct DecoderStats : ScanStats {
   std::uint64_t invalid_columns = 0;         // status bit 0 clear: skipped
   std::uint64_t bad_measurement_ids = 0;     // measurement id >= columns_per_frame: skipped
   std::uint64_t init_id_mismatches = 0;      // packets whose init_id differs from the metadata's (decoded)
-  [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
 };
 
-class Decoder {
+struct DecoderImpl;
+
+// push / flush / recycle / stats as DecoderPimpl says; a rejected packet is counted.
+class Decoder : public DecoderPimpl<DecoderImpl, DecoderConfig, DecoderStats> {
  public:
-  explicit Decoder(DecoderConfig config);
-  ~Decoder();
-  Decoder(Decoder&&) noexcept;
-  Decoder& operator=(Decoder&&) noexcept;
-  Decoder(const Decoder&) = delete;
-  Decoder& operator=(const Decoder&) = delete;
+  explicit Decoder(DecoderConfig config);  // throws MetadataError / std::invalid_argument
 
-  // Never throws; a rejected packet is counted (stats(), the scan's `dropped`).
-  std::optional<Scan> push(PacketView packet, Nanos packet_stamp) noexcept;
-  std::optional<Scan> flush() noexcept;
-  void recycle(std::vector<PointXYZIRT>&& buffer) noexcept;
-
-  [[nodiscard]] PacketStatus last_status() const noexcept;
-  [[nodiscard]] const DecoderStats& stats() const noexcept;
-  [[nodiscard]] const DecoderConfig& config() const noexcept;
   [[nodiscard]] const PacketLayout& layout() const noexcept;
   // Ring (0 = lowest elevation) of beam (pixel row) `beam`.
   [[nodiscard]] std::uint16_t ring_of_beam(std::size_t beam) const noexcept;
@@ -81,10 +65,10 @@ class Decoder {
   [[nodiscard]] std::optional<std::uint64_t> first_column_time(std::span<const std::byte> bytes) const noexcept;
   // First column to the last column of one packet's time: columns_per_packet x column period.
   [[nodiscard]] Nanos packet_span_ns() const noexcept;
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace sensor_rig::lidar::ouster
+
+namespace sensor_rig::lidar {
+extern template class DecoderPimpl<ouster::DecoderImpl, ouster::DecoderConfig, ouster::DecoderStats>;
+}  // namespace sensor_rig::lidar

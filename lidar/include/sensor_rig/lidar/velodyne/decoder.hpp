@@ -12,11 +12,12 @@
 #include <array>
 #include <cstdint>
 #include <limits>
-#include <memory>
 #include <optional>
 #include <vector>
 
+#include "sensor_rig/lidar/decoder_pimpl.hpp"
 #include "sensor_rig/lidar/packet.hpp"
+#include "sensor_rig/lidar/scan_assembler.hpp"
 #include "sensor_rig/lidar/point_cloud.hpp"
 #include "sensor_rig/lidar/velodyne/calibration.hpp"
 #include "sensor_rig/lidar/velodyne/model.hpp"
@@ -50,46 +51,20 @@ struct DecoderConfig {
   Nanos max_packet_gap_ns = 1'000'000'000;
 };
 
-inline constexpr std::size_t kStatusCount = 7;  // PacketStatus values
+inline constexpr std::size_t kStatusCount = kPacketStatusCount;
 
-struct DecoderStats {
-  std::uint64_t packets = 0;           // pushed
-  std::uint64_t packets_used = 0;      // decoded into points
-  std::array<std::uint64_t, kStatusCount> by_status{};  // indexed by PacketStatus
-  std::uint64_t scans = 0;             // emitted
-  std::uint64_t partial_scans_discarded = 0;
-  std::uint64_t time_jumps = 0;        // scans ended early because the packet time jumped
+struct DecoderStats : ScanStats {
   std::uint64_t early_cut_misses = 0;  // scans ended at a packet's end whose next block did not cross
-  [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
 };
 
-class Decoder {
+struct DecoderImpl;
+
+class Decoder : public DecoderPimpl<DecoderImpl, DecoderConfig, DecoderStats> {
  public:
-  explicit Decoder(DecoderConfig config);
-  ~Decoder();
-  Decoder(Decoder&&) noexcept;
-  Decoder& operator=(Decoder&&) noexcept;
-  Decoder(const Decoder&) = delete;
-  Decoder& operator=(const Decoder&) = delete;
+  explicit Decoder(DecoderConfig config);  // throws CalibrationError / std::invalid_argument
 
-  // Decodes one data packet. Returns the scan the packet completed, if any. Never throws;
-  // a rejected packet is counted (stats(), the scan's `dropped`) and last_status() says why.
-  std::optional<Scan> push(PacketView packet, Nanos packet_stamp) noexcept;
-  // Returns the scan in progress (partial) and resets; nullopt if it has no packets.
-  std::optional<Scan> flush() noexcept;
-  // Hands a published scan's point buffer back for reuse (optional): the next scan writes into it
-  // instead of a fresh allocation, which saves the page faults of a new multi-MB buffer per scan.
-  void recycle(std::vector<PointXYZIRT>&& buffer) noexcept;
-
-  [[nodiscard]] PacketStatus last_status() const noexcept;
-  [[nodiscard]] const DecoderStats& stats() const noexcept;
-  [[nodiscard]] const DecoderConfig& config() const noexcept;
   // Ring (0 = lowest elevation) of each laser id, from the calibration.
   [[nodiscard]] std::uint16_t ring_of_laser(int laser_id) const noexcept;
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 // Checks size, block flags, azimuths and the factory bytes against `m` without decoding.
@@ -97,3 +72,7 @@ class Decoder {
 PacketStatus check_packet(std::span<const std::byte> bytes, Model m) noexcept;
 
 }  // namespace sensor_rig::lidar::velodyne
+
+namespace sensor_rig::lidar {
+extern template class DecoderPimpl<velodyne::DecoderImpl, velodyne::DecoderConfig, velodyne::DecoderStats>;
+}  // namespace sensor_rig::lidar

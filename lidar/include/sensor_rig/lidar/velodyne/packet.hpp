@@ -10,6 +10,8 @@
 #include <optional>
 #include <span>
 
+#include "sensor_rig/lidar/byte_order.hpp"
+
 namespace sensor_rig::lidar::velodyne {
 
 inline constexpr std::size_t kDataPacketSize = 1206;      // UDP payload
@@ -52,20 +54,10 @@ enum class ProductId : std::uint8_t {
   kVLS128 = 0xA1,
 };
 
-inline std::uint16_t le16(const std::uint8_t* p) noexcept {
-  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
-}
-inline std::uint32_t le32(const std::uint8_t* p) noexcept {
-  return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
-         (static_cast<std::uint32_t>(p[2]) << 16) | (static_cast<std::uint32_t>(p[3]) << 24);
-}
-inline void put_le16(std::uint8_t* p, std::uint16_t v) noexcept {
-  p[0] = static_cast<std::uint8_t>(v & 0xFF);
-  p[1] = static_cast<std::uint8_t>(v >> 8);
-}
-inline void put_le32(std::uint8_t* p, std::uint32_t v) noexcept {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>((v >> (8 * i)) & 0xFF);
-}
+using lidar::le16;  // sensor_rig/lidar/byte_order.hpp
+using lidar::le32;
+using lidar::put_le16;
+using lidar::put_le32;
 
 // Bounds-checked view: only a buffer of exactly kDataPacketSize bytes yields a packet.
 inline std::optional<RawDataPacket> read_data_packet(std::span<const std::byte> bytes) noexcept {
