@@ -7,15 +7,26 @@
 set -euo pipefail
 build=${1:-build}
 only=${2:-}
-src=$(sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$build/CMakeCache.txt")
 [ -f "$build/compile_commands.json" ] || { echo "tidy: no $build/compile_commands.json (configure and build it first)" >&2; exit 2; }
-files="^${src}/${only:-(bench|camera|dbw|drivers|lidar|msgs|tests|timesync)/}"
-out=$(mktemp)
-trap 'rm -f "$out"' EXIT
-run-clang-tidy -p "$build" -j "${JOBS:-$(nproc)}" -quiet "$files" >"$out" 2>/dev/null || true
-# One line per finding (headers are seen from many translation units).
-grep -E '^/.*:[0-9]+:[0-9]+: (warning|error):' "$out" | sort -u | tee "$out.findings" || true
-n=$(wc -l <"$out.findings")
-echo "tidy: $n findings in $(cut -d: -f1 "$out.findings" | sort -u | wc -l) files"
-grep -oE '\[[a-z0-9.,-]+\]$' "$out.findings" | sort | uniq -c | sort -rn || true
-rm -f "$out.findings"
+src=$(sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$build/CMakeCache.txt")
+regex="^${src}/${only:-(bench|camera|dbw|drivers|lidar|msgs|tests|timesync)/}"
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+python3 - "$build/compile_commands.json" "$regex" >"$out/files" <<'PY'
+import json, re, sys
+seen = set()
+for e in json.load(open(sys.argv[1])):
+    f = e["file"]
+    if re.search(sys.argv[2], f) and f not in seen:
+        seen.add(f)
+        print(f)
+PY
+echo "tidy: $(wc -l <"$out/files") sources under $src" >&2
+# One clang-tidy per source, JOBS at a time; each writes its own file (no interleaving).
+xargs -a "$out/files" -P "${JOBS:-$(nproc)}" -I{} sh -c \
+  'clang-tidy -p "$1" --quiet "$2" >"$3/$(echo "$2" | tr / _).log" 2>/dev/null || true' _ "$build" {} "$out"
+# One line per finding (a header is seen from many translation units).
+cat "$out"/*.log | grep -E '^/.*:[0-9]+:[0-9]+: (warning|error):' | sort -u >"$out/findings" || true
+cat "$out/findings"
+echo "tidy: $(wc -l <"$out/findings") findings in $(cut -d: -f1 "$out/findings" | sort -u | wc -l) files"
+grep -oE '\[[a-z0-9.,-]+\]$' "$out/findings" | sort | uniq -c | sort -rn || true

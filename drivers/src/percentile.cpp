@@ -17,7 +17,8 @@ double position(std::size_t n, double q) noexcept {
 
 double nearest_rank_percentile(std::span<const double> sorted, double q) noexcept {
   if (sorted.empty()) return 0.0;
-  const auto i = static_cast<std::size_t>(position(sorted.size(), q) + 0.5);
+  // Halves round up, as the monitor and the bridge always did (std::lround agrees but for 0.5 - ulp).
+  const auto i = static_cast<std::size_t>(position(sorted.size(), q) + 0.5);  // NOLINT(bugprone-incorrect-roundings)
   return sorted[i < sorted.size() ? i : sorted.size() - 1];
 }
 

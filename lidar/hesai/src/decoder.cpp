@@ -28,8 +28,8 @@ struct AngleTable {
   }
 };
 const AngleTable& angles() noexcept {
-  static const AngleTable t;
-  return t;
+  static const AngleTable kTable;
+  return kTable;
 }
 
 struct ChannelTable {
@@ -156,12 +156,12 @@ struct DecoderImpl {
                     std::uint8_t rtype) {
     const float d = static_cast<float>(e.raw) * unit;
     if (e.raw == 0 || d < min_range || d > max_range) return;
-    const float sA = sa * t.cos_off + ca * t.sin_off;
-    const float cA = ca * t.cos_off - sa * t.sin_off;
+    const float sin_a = sa * t.cos_off + ca * t.sin_off;
+    const float cos_a = ca * t.cos_off - sa * t.sin_off;
     const float xy = d * t.cos_el;
     Nanos rel = group_stamp - s.stamp + t.fire_rel_ns;
     rel = std::clamp<Nanos>(rel, 0, std::numeric_limits<std::uint32_t>::max());
-    s.points.push_back(PointXYZIRT{xy * cA, -xy * sA, d * t.sin_el, static_cast<float>(e.refl),
+    s.points.push_back(PointXYZIRT{xy * cos_a, -xy * sin_a, d * t.sin_el, static_cast<float>(e.refl),
                                    static_cast<std::uint32_t>(rel), t.ring, rtype, 0});
   }
 

@@ -10,19 +10,19 @@
 namespace sensor_rig::lidar::ouster {
 namespace {
 
-using json = nlohmann::json;
+using Json = nlohmann::json;
 
 // A JSON value with its key path, for messages.
 class Node {
  public:
-  Node(const json& j, std::string path, const std::string& source) : j_(&j), path_(std::move(path)), src_(&source) {}
+  Node(const Json& j, std::string path, const std::string& source) : j_(&j), path_(std::move(path)), src_(&source) {}
 
   [[noreturn]] void fail(const std::string& what) const {
     if (path_.empty()) throw MetadataError(*src_ + ": " + what);
     throw MetadataError(*src_ + ": key '" + path_ + "': " + what);
   }
   [[nodiscard]] const std::string& path() const noexcept { return path_; }
-  [[nodiscard]] const json& raw() const noexcept { return *j_; }
+  [[nodiscard]] const Json& raw() const noexcept { return *j_; }
 
   [[nodiscard]] std::optional<Node> get(const std::string& key) const {
     if (!j_->is_object()) return std::nullopt;
@@ -77,7 +77,7 @@ class Node {
   }
 
  private:
-  const json* j_;
+  const Json* j_;
   std::string path_;
   const std::string* src_;
 };
@@ -256,10 +256,10 @@ void parse_flat(const Node& root, SensorMetadata& m) {
 }  // namespace
 
 SensorMetadata parse_metadata(std::string_view json_text, const std::string& source) {
-  json doc;
+  Json doc;
   try {
-    doc = json::parse(json_text);
-  } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers too large
+    doc = Json::parse(json_text);
+  } catch (const Json::exception& e) {  // parse_error, and out_of_range for numbers too large
     throw MetadataError(source + ": not valid JSON: " + e.what());
   }
   if (!doc.is_object()) throw MetadataError(source + ": expected a JSON object at the top level");
@@ -273,7 +273,7 @@ SensorMetadata parse_metadata(std::string_view json_text, const std::string& sou
     } else {
       parse_flat(root, m);
     }
-  } catch (const json::exception& e) {  // not expected: every read checks the type first
+  } catch (const Json::exception& e) {  // not expected: every read checks the type first
     throw MetadataError(source + ": " + e.what());
   }
   return m;

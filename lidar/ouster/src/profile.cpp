@@ -8,38 +8,38 @@
 namespace sensor_rig::lidar::ouster {
 namespace {
 
-constexpr FieldSpec F(std::uint16_t bit, std::uint8_t width, std::uint8_t up = 0) { return {bit, width, up}; }
+constexpr FieldSpec bits(std::uint16_t bit, std::uint8_t width, std::uint8_t up = 0) { return {bit, width, up}; }
 constexpr FieldSpec kNone{};
 
 // Order of every table: range, flags, reflectivity, signal, near_ir, range2, flags2,
 // reflectivity2, signal2, window (the Field enum).
 constexpr ProfileSpec kProfiles[] = {
     {Profile::kLegacy, "LEGACY", 12, 1,
-     {F(0, 20), F(28, 4), F(32, 8), F(48, 16), F(64, 16), kNone, kNone, kNone, kNone, kNone}},
+     {bits(0, 20), bits(28, 4), bits(32, 8), bits(48, 16), bits(64, 16), kNone, kNone, kNone, kNone, kNone}},
     {Profile::kRng19Rfl8Sig16Nir16, "RNG19_RFL8_SIG16_NIR16", 12, 1,
-     {F(0, 19), F(19, 5), F(32, 8), F(48, 16), F(64, 16), kNone, kNone, kNone, kNone, F(88, 8)}},
+     {bits(0, 19), bits(19, 5), bits(32, 8), bits(48, 16), bits(64, 16), kNone, kNone, kNone, kNone, bits(88, 8)}},
     {Profile::kRng19Rfl8Sig16Nir16Dual, "RNG19_RFL8_SIG16_NIR16_DUAL", 16, 2,
-     {F(0, 19), F(19, 5), F(24, 8), F(64, 16), F(96, 16), F(32, 19), F(51, 5), F(56, 8), F(80, 16), F(120, 8)}},
+     {bits(0, 19), bits(19, 5), bits(24, 8), bits(64, 16), bits(96, 16), bits(32, 19), bits(51, 5), bits(56, 8), bits(80, 16), bits(120, 8)}},
     {Profile::kRng15Rfl8Nir8, "RNG15_RFL8_NIR8", 4, 1,
-     {F(0, 15, 3), F(15, 1), F(16, 8), kNone, F(24, 8, 4), kNone, kNone, kNone, kNone, kNone}},
+     {bits(0, 15, 3), bits(15, 1), bits(16, 8), kNone, bits(24, 8, 4), kNone, kNone, kNone, kNone, kNone}},
     {Profile::kRng15Rfl8Win8, "RNG15_RFL8_WIN8", 4, 1,
-     {F(0, 15, 3), F(15, 1), F(16, 8), kNone, kNone, kNone, kNone, kNone, kNone, F(24, 8)}},
+     {bits(0, 15, 3), bits(15, 1), bits(16, 8), kNone, kNone, kNone, kNone, kNone, kNone, bits(24, 8)}},
     {Profile::kFiveWordPixel, "FIVE_WORD_PIXEL", 20, 2,
-     {F(0, 19), F(19, 5), F(24, 8), F(64, 16), F(96, 16), F(32, 19), F(51, 5), F(56, 8), F(80, 16), kNone}},
+     {bits(0, 19), bits(19, 5), bits(24, 8), bits(64, 16), bits(96, 16), bits(32, 19), bits(51, 5), bits(56, 8), bits(80, 16), kNone}},
     {Profile::kFusaRng15Rfl8Nir8Dual, "FUSA_RNG15_RFL8_NIR8_DUAL", 8, 2,
-     {F(0, 15, 3), F(15, 1), F(16, 8), kNone, F(24, 8, 4), F(32, 15, 3), F(47, 1), F(48, 8), kNone, F(56, 8)}},
+     {bits(0, 15, 3), bits(15, 1), bits(16, 8), kNone, bits(24, 8, 4), bits(32, 15, 3), bits(47, 1), bits(48, 8), kNone, bits(56, 8)}},
     {Profile::kRng15Rfl8Nir8Dual, "RNG15_RFL8_NIR8_DUAL", 8, 2,
-     {F(0, 15, 3), F(15, 1), F(16, 8), kNone, F(24, 8, 4), F(32, 15, 3), F(47, 1), F(48, 8), kNone, F(56, 8)}},
+     {bits(0, 15, 3), bits(15, 1), bits(16, 8), kNone, bits(24, 8, 4), bits(32, 15, 3), bits(47, 1), bits(48, 8), kNone, bits(56, 8)}},
 };
 static_assert(std::size(kProfiles) == kProfileCount);
 
 // packet_type, frame_id, init_id, prod_sn, alert_flags, countdown_thermal_shutdown,
 // countdown_shot_limiting, thermal_shutdown, shot_limiting
 constexpr HeaderSpec kLegacyHeader{};  // LEGACY: frame id is in each column header
-constexpr HeaderSpec kStandardHeader{F(0, 16),   F(16, 16),  F(32, 24),  F(56, 40), F(96, 8),
-                                     F(128, 8),  F(136, 8),  F(144, 4),  F(156, 4)};
-constexpr HeaderSpec kFusaHeader{F(0, 8),   F(32, 32), F(8, 24),  F(88, 40), F(64, 8),
-                                 F(128, 8), F(136, 8), F(144, 4), F(156, 4)};
+constexpr HeaderSpec kStandardHeader{bits(0, 16),   bits(16, 16),  bits(32, 24),  bits(56, 40), bits(96, 8),
+                                     bits(128, 8),  bits(136, 8),  bits(144, 4),  bits(156, 4)};
+constexpr HeaderSpec kFusaHeader{bits(0, 8),   bits(32, 32), bits(8, 24),  bits(88, 40), bits(64, 8),
+                                 bits(128, 8), bits(136, 8), bits(144, 4), bits(156, 4)};
 
 // Every table entry must fit its pixel: checked once at compile time.
 constexpr bool tables_fit() {

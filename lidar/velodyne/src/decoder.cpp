@@ -254,30 +254,30 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     }
     const std::uint8_t* o = e + sizeof(RawBlock);
     for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
-      const std::uint16_t de = rd16(e + 3 * c);
-      const std::uint16_t dO = rd16(o + 3 * c);
-      const std::uint8_t ie = e[3 * c + 2];
-      const std::uint8_t io = o[3 * c + 2];
+      const std::uint16_t d_even = rd16(e + 3 * c);
+      const std::uint16_t d_odd = rd16(o + 3 * c);
+      const std::uint8_t i_even = e[3 * c + 2];
+      const std::uint8_t i_odd = o[3 * c + 2];
       // Even block: last echo. Odd block: strongest, or the second strongest when the last echo
       // is also the strongest; the same distance in both means one echo reported twice.
-      const bool same = de == dO;
-      const bool odd_strongest = !same && io > ie;
+      const bool same = d_even == d_odd;
+      const bool odd_strongest = !same && i_odd > i_even;
       const std::uint8_t te = odd_strongest ? kReturnLast : kReturnStrongestAndLast;
       const std::uint8_t to = odd_strongest ? kReturnStrongest : kReturnSecondStrongest;
       switch (cfg.returns) {
         case ReturnSelection::kLast:
-          emit(ch[c], de, ie, ang.sa[c], ang.ca[c], t_base, te);
+          emit(ch[c], d_even, i_even, ang.sa[c], ang.ca[c], t_base, te);
           break;
         case ReturnSelection::kStrongest:
           if (odd_strongest) {
-            emit(ch[c], dO, io, ang.sa[c], ang.ca[c], t_base, to);
+            emit(ch[c], d_odd, i_odd, ang.sa[c], ang.ca[c], t_base, to);
           } else {
-            emit(ch[c], de, ie, ang.sa[c], ang.ca[c], t_base, te);
+            emit(ch[c], d_even, i_even, ang.sa[c], ang.ca[c], t_base, te);
           }
           break;
         case ReturnSelection::kDual:
-          emit(ch[c], de, ie, ang.sa[c], ang.ca[c], t_base, te);
-          if (!same) emit(ch[c], dO, io, ang.sa[c], ang.ca[c], t_base, to);
+          emit(ch[c], d_even, i_even, ang.sa[c], ang.ca[c], t_base, te);
+          if (!same) emit(ch[c], d_odd, i_odd, ang.sa[c], ang.ca[c], t_base, to);
           break;
       }
     }

@@ -38,12 +38,16 @@ int channel_laser(Model m, int channel) noexcept {
 std::uint32_t channel_offset_ns(Model m, int channel) noexcept {
   double us = 0.0;
   switch (m) {
-    case Model::kVLP16:
-      us = (channel / 16) * 55.296 + (channel % 16) * 2.304;
+    case Model::kVLP16: {
+      const int sequence = channel / 16;  // two firing sequences of 16 lasers per block
+      us = sequence * 55.296 + (channel % 16) * 2.304;
       break;
-    case Model::kVLP32C:
-      us = (channel / 2) * 2.304;
+    }
+    case Model::kVLP32C: {
+      const int pair = channel / 2;  // the lasers fire in pairs
+      us = pair * 2.304;
       break;
+    }
     case Model::kHDL32E:
       us = channel * 1.152;
       break;
