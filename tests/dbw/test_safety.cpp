@@ -102,6 +102,7 @@ TYPED_TEST(SafetySuite, RefusesWithoutEcuStatusOrWhenNotReady) {
   this->step(10 * kMs);
   this->core.on_ecu_status({false, false, false, false, 0}, this->now);
   this->core.on_command(this->cmd(false), this->now);
+  this->step(1 * kMs);
   this->core.on_command(this->cmd(true), this->now);
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   ev = this->core.take_events();
@@ -112,11 +113,14 @@ TYPED_TEST(SafetySuite, RefusesWithoutEcuStatusOrWhenNotReady) {
 TYPED_TEST(SafetySuite, RefusesDuringOverrideOrFault) {
   this->cycle(false);
   this->core.on_ecu_status({true, false, true, false, 0}, this->now);
+  this->step(1 * kMs);
   this->core.on_command(this->cmd(true), this->now);
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   EXPECT_EQ(this->core.take_events().back().reason, s::Reason::driver_override);
+  this->step(1 * kMs);
   this->core.on_command(this->cmd(false), this->now);
   this->core.on_ecu_status({true, false, false, true, 7}, this->now);
+  this->step(1 * kMs);
   this->core.on_command(this->cmd(true), this->now);
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   EXPECT_EQ(this->core.take_events().back().reason, s::Reason::ecu_fault);
@@ -296,6 +300,101 @@ TYPED_TEST(SafetySuite, RateLimitsHoldOverManySteps) {
   }
 }
 
+TYPED_TEST(SafetySuite, LaterSeqWithEqualOrEarlierStampCannotDodgeRateLimits) {
+  const auto& lim = TypeParam::limits;
+  for (std::size_t a = 0; a < s::kAxes; ++a) {
+    const auto axis = static_cast<s::Axis>(a);
+    if (lim[axis].max_rate <= 0) continue;
+    SCOPED_TRACE(std::string(s::to_string(axis)));
+    this->engage();
+    const double before = s::axis_value(this->core.tick(this->now).command, axis);
+    const Nanos last_stamp = this->now;
+    const auto ignored = this->core.counters().ignored_stamp;
+    for (const Nanos back : {Nanos{0}, 5 * kMs}) {
+      this->step(1 * kMs);
+      this->ecu_ok();
+      auto c = this->cmd(true);
+      c.stamp = last_stamp - back;  // higher seq, stamp not advancing
+      s::set_axis_value(c, axis, before + lim[axis].max_rate * 0.010);
+      this->core.on_command(c, this->now);
+    }
+    EXPECT_EQ(this->core.counters().ignored_stamp, ignored + 2);
+    EXPECT_EQ(this->core.state(), s::State::engaged);
+    const auto d = this->core.tick(this->now);
+    ASSERT_TRUE(d.active);
+    EXPECT_DOUBLE_EQ(s::axis_value(d.command, axis), before) << "the command with a stale stamp was applied";
+    // The ignored commands did not refresh the command either: it times out from its own stamp.
+    this->step(last_stamp + 100 * kMs - this->now);
+    this->ecu_ok();
+    EXPECT_TRUE(this->core.tick(this->now).active);
+    this->step(1 * kMs);
+    this->ecu_ok();
+    EXPECT_FALSE(this->core.tick(this->now).active);
+    EXPECT_EQ(this->core.reason(), s::Reason::command_timeout);
+    this->cycle(false);
+  }
+}
+
+TYPED_TEST(SafetySuite, StampsRacingAheadOfArrivalCannotWidenAStep) {
+  const auto& lim = TypeParam::limits;
+  const double window_s = 0.001 + static_cast<double>(this->core.config().rate_rx_slack_ns) * 1e-9;
+  for (std::size_t a = 0; a < s::kAxes; ++a) {
+    const auto axis = static_cast<s::Axis>(a);
+    if (lim[axis].max_rate <= 0) continue;
+    SCOPED_TRACE(std::string(s::to_string(axis)));
+    this->engage();
+    const double before = s::axis_value(this->core.tick(this->now).command, axis);
+    // Arrives 1 ms after the last one but claims 20 ms (the most a stamp may lead): a 10 ms step
+    // fits the stamps, not the arrival times.
+    this->step(1 * kMs);
+    this->ecu_ok();
+    auto c = this->cmd(true);
+    c.stamp = this->now + this->core.config().max_future_ns - 1 * kMs;
+    s::set_axis_value(c, axis, before + lim[axis].max_rate * 0.010);
+    this->core.on_command(c, this->now);
+    if (lim[axis].action == s::LimitAction::reject) {
+      EXPECT_EQ(this->core.state(), s::State::disengaged);
+      EXPECT_EQ(this->core.reason(), s::Reason::invalid_command);
+    } else {
+      const auto d = this->core.tick(this->now);
+      ASSERT_TRUE(d.active);
+      const double v = s::axis_value(d.command, axis);
+      EXPECT_GT(v, before);
+      EXPECT_LE(v - before, lim[axis].max_rate * window_s * (1 + 1e-9));
+    }
+    this->step(20 * kMs);
+    this->cycle(false);
+  }
+}
+
+TYPED_TEST(SafetySuite, SteadyRampWithDeliveryJitterIsNotLimited) {
+  const auto& lim = TypeParam::limits;
+  this->engage();
+  const auto start = this->core.tick(this->now).command;
+  const Nanos jitter = this->core.config().rate_rx_slack_ns * 3 / 4;
+  Nanos stamp = this->now;
+  for (int i = 1; i <= 20; ++i) {
+    stamp += 10 * kMs;
+    this->now = stamp + (i % 2 == 0 ? jitter : 0);  // every other command delivered late
+    this->ecu_ok();
+    auto c = this->cmd(true);
+    c.stamp = stamp;
+    for (std::size_t a = 0; a < s::kAxes; ++a) {
+      const auto axis = static_cast<s::Axis>(a);
+      s::set_axis_value(c, axis, s::axis_value(start, axis) + 0.9 * lim[axis].max_rate * 0.010 * i);
+    }
+    this->core.on_command(c, this->now);
+    const auto d = this->core.tick(this->now);
+    ASSERT_TRUE(d.active) << i;
+    for (std::size_t a = 0; a < s::kAxes; ++a) {
+      const auto axis = static_cast<s::Axis>(a);
+      EXPECT_DOUBLE_EQ(s::axis_value(d.command, axis), s::axis_value(c, axis)) << s::to_string(axis) << " at " << i;
+    }
+  }
+  EXPECT_EQ(this->core.counters().clamped, 0U);
+  EXPECT_EQ(this->core.counters().rejected, 0U);
+}
+
 TEST(LimitChecker, TablesAreSane) {
   for (const auto* v : s::kVehicles) {
     SCOPED_TRACE(std::string(v->name));
@@ -309,6 +408,21 @@ TEST(LimitChecker, TablesAreSane) {
     EXPECT_LE((*v)[s::Axis::accel].min, 0.0);
   }
   EXPECT_EQ(s::find_vehicle("nope"), nullptr);
+}
+
+TEST(LimitChecker, ZeroOrNegativeIntervalAllowsNoChange) {
+  s::LimitChecker chk(s::kParavanRef);
+  s::Command c;
+  chk.accept(c);
+  c.steering_angle = 0.1;
+  for (const double dt : {0.0, -0.01}) {
+    const auto r = chk.check(c, dt);
+    ASSERT_EQ(r.count, 1) << dt;
+    EXPECT_TRUE(r.violations[0].rate);
+    EXPECT_DOUBLE_EQ(r.applied.steering_angle, 0.0);
+  }
+  chk.reset();  // no previous command: only the range applies
+  EXPECT_EQ(chk.check(c, 0.0).count, 0);
 }
 
 TEST(LimitChecker, JerkIsTheAccelerationRate) {

@@ -76,9 +76,9 @@ LimitResult LimitChecker::check(const Command& req, double dt_s) const noexcept 
       r.add({axis, false, lim.action == LimitAction::reject, false, want, c});
       v = c;
     }
-    if (have_prev_ && dt_s > 0.0 && lim.max_rate > 0.0) {
+    if (have_prev_ && lim.max_rate > 0.0) {
       const double prev = axis_value(prev_, axis);
-      const double step = lim.max_rate * dt_s;
+      const double step = lim.max_rate * std::max(dt_s, 0.0);
       if (std::fabs(v - prev) > step * (1.0 + 1e-9)) {
         const double c = std::clamp(v, prev - step, prev + step);
         r.add({axis, true, lim.action == LimitAction::reject, false, want, c});

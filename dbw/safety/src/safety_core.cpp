@@ -1,5 +1,6 @@
 #include "sensor_rig/dbw/safety/safety_core.hpp"
 
+#include <algorithm>
 #include <utility>
 
 namespace sensor_rig::dbw::safety {
@@ -99,10 +100,19 @@ void SafetyCore::on_command(const Command& cmd, Nanos now) {
     emit(now, EventKind::command_ignored, Reason::command_timeout);
     return;
   }
-  const double dt = have_cmd_ && cmd_valid_ ? static_cast<double>(cmd.stamp - last_cmd_stamp_) * 1e-9 : 0.0;
-  const LimitResult lr = checker_.check(cmd, state_ == State::engaged ? dt : 0.0);
+  if (have_cmd_ && cmd.stamp <= last_stamp_seen_) {
+    // A later seq with an equal or earlier stamp: no time has passed for it, so it can carry no
+    // change (and must not reset the freshness of the command it follows).
+    ++counters_.ignored_stamp;
+    emit(now, EventKind::command_ignored, Reason::invalid_command);
+    return;
+  }
+  // Rates are checked only while engaged (the checker holds no previous command otherwise).
+  const Nanos rate_dt = have_cmd_ && cmd_valid_ ? std::min(cmd.stamp - last_cmd_stamp_, now - last_cmd_rx_ + cfg_.rate_rx_slack_ns) : 0;
+  const LimitResult lr = checker_.check(cmd, static_cast<double>(rate_dt) * 1e-9);
   have_cmd_ = true;
   last_seq_ = cmd.seq;
+  last_stamp_seen_ = cmd.stamp;
   if (lr.rejected()) {
     ++counters_.rejected;
     cmd_valid_ = false;
@@ -121,6 +131,7 @@ void SafetyCore::on_command(const Command& cmd, Nanos now) {
   cmd_valid_ = true;
   latest_ = lr.applied;
   last_cmd_stamp_ = cmd.stamp;
+  last_cmd_rx_ = now;
   if (state_ == State::engaged) checker_.accept(lr.applied);
   if (!cmd.enable) {
     disengage(Reason::enable_released, now);

@@ -74,7 +74,9 @@ struct LimitResult {
 class LimitChecker {
  public:
   explicit LimitChecker(const VehicleLimits& limits) : limits_(limits) {}
-  // `dt_s`: time since the previously applied command; <= 0 means no rate check (first command).
+  // `dt_s`: time since the previously applied command. Rates are checked whenever there is a
+  // previous command (accept() since the last reset()); dt_s <= 0 then allows no change at all
+  // (fail-safe: a zero or negative interval must not switch the rate limits off).
   [[nodiscard]] LimitResult check(const Command& requested, double dt_s) const noexcept;
   // Remember what was actually sent (the basis of the next rate check).
   void accept(const Command& applied) noexcept {

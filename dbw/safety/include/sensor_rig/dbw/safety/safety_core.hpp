@@ -8,7 +8,8 @@
 // operator must release and re-enable. Disengage on: enable released, command older than its timeout,
 // ECU status timeout, E2E (counter/CRC) errors beyond tolerance, driver override, ECU fault or not
 // ready, a rejected (out-of-range with action reject, NaN/inf) command, bus-off. Every transition and
-// refusal is an Event with its reason. tick() says what to put on the bus: the latest fresh command,
+// refusal is an Event with its reason. Commands whose seq or stamp does not advance are ignored;
+// rate limits are checked against min(stamp interval, receive interval + slack). tick() says what to put on the bus: the latest fresh command,
 // or the protocol's neutral/disengage frame — never a stale command.
 #include <cstdint>
 #include <string_view>
@@ -44,6 +45,9 @@ struct SafetyConfig {
   Nanos ecu_timeout_ns = 100'000'000;
   Nanos max_future_ns = 20'000'000;  // a command stamped further ahead than this is invalid
   int e2e_tolerance = 3;             // bad frames (net of good ones) tolerated before disengaging
+  // Rate limits use the shorter of the stamp interval and the receive interval plus this slack
+  // (delivery jitter): neither a sender's stamps nor a burst of deliveries can widen a step.
+  Nanos rate_rx_slack_ns = 2'000'000;
   VehicleLimits limits = kParavanRef;
 };
 
@@ -76,6 +80,7 @@ struct SafetyCounters {
   std::uint64_t commands = 0;
   std::uint64_t ignored_stale = 0;     // too old on arrival, or from the future
   std::uint64_t ignored_sequence = 0;  // seq not increasing
+  std::uint64_t ignored_stamp = 0;     // stamp not after the previous command's (would dodge rate limits)
   std::uint64_t rejected = 0;
   std::uint64_t clamped = 0;
   std::uint64_t e2e_errors = 0;
@@ -117,7 +122,9 @@ class SafetyCore {
   Command latest_{};
   bool have_cmd_ = false;
   bool cmd_valid_ = false;
-  Nanos last_cmd_stamp_ = 0;
+  Nanos last_cmd_stamp_ = 0;   // of the latest valid command
+  Nanos last_cmd_rx_ = 0;      // `now` when it arrived
+  Nanos last_stamp_seen_ = 0;  // of the latest command not ignored (valid or rejected)
   std::uint64_t last_seq_ = 0;
   bool prev_enable_ = false;
   EcuStatus ecu_{};
