@@ -1,6 +1,7 @@
 #include "rig_config.hpp"
 
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <sstream>
 
@@ -27,6 +28,43 @@ LidarMockConfig parse_mock(const config::Node& n) {
   m.drop_rate = n.get_double("drop_rate", 0.0, 1.0, 0.0);
   m.corrupt_rate = n.get_double("corrupt_rate", 0.0, 1.0, 0.0);
   return m;
+}
+
+std::string file_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Builds the decoder the driver will build: a calibration or metadata file made for another model
+// (or malformed) is an error at its key now, not a driver failing after `rig up` started the mocks.
+void check_decoder_files(const config::Node& n, const LidarConfig& l) {
+  const auto* model = lidar::find_model(l.model);
+  if (model == nullptr || model->make == nullptr || (l.calibration.empty() && l.metadata.empty())) return;
+  if (model->needs_metadata && l.metadata.empty()) return;  // synthetic: `rig up` writes it
+  const char* key = l.calibration.empty() ? "metadata" : "calibration";
+  const std::string& file = l.calibration.empty() ? l.metadata : l.calibration;
+  if (!std::filesystem::is_regular_file(file)) return;  // reported as not found
+  lidar::DecoderOptions d;
+  d.model = l.model;
+  if (!l.calibration.empty()) {
+    d.calibration_text = file_text(l.calibration);
+    d.calibration_name = l.calibration;
+  }
+  if (!l.metadata.empty() && std::filesystem::is_regular_file(l.metadata)) {
+    d.metadata_text = file_text(l.metadata);
+    d.metadata_name = l.metadata;
+  }
+  d.returns = l.returns;
+  d.min_range_m = l.min_range_m;
+  d.max_range_m = l.max_range_m;
+  d.cut_angle_deg = l.cut_angle_deg;
+  try {
+    (void)lidar::make_decoder(d);
+  } catch (const lidar::DecoderConfigError& e) {
+    n.fail(key, e.what());
+  }
 }
 
 LidarConfig parse_lidar(const config::Node& n) {
@@ -65,6 +103,7 @@ LidarConfig parse_lidar(const config::Node& n) {
   l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
   if (auto m = n.child("mock")) l.mock = parse_mock(*m);
+  check_decoder_files(n, l);
   const bool synthetic = l.mock.kind == LidarMockConfig::Kind::kSynthetic;
   // A synthetic Ouster without metadata: `rig up` writes the mock's own metadata for the driver.
   if (const auto* m = lidar::find_model(l.model); m != nullptr && m->needs_metadata && l.metadata.empty() && !synthetic)

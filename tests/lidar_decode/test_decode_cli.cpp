@@ -122,6 +122,33 @@ TEST_F(DecodeCli, BadUsageExitsTwo) {
   EXPECT_TRUE(r.out.empty());
 }
 
+// A calibration made for another model: exit 2 naming the file and the mismatch, nothing decoded.
+TEST_F(DecodeCli, CalibrationOfAnotherModelExitsTwo) {
+  const std::string vlp16 = velodyne_file("vlp16_veloview_vlp-16-test-90deg-1-50-frames.pcap");
+  const std::string hdl32 = velodyne_file("hdl32e_veloview_monterey-first-100-packets.pcap");
+  const std::string vlp32c_cal = velodyne_file("ros_velodyne_VeloView-VLP-32C.yaml");
+  if (!exists(vlp16) || !exists(hdl32) || !exists(vlp32c_cal)) GTEST_SKIP() << "captures not found under " << data_dir();
+  CliRun r = run("lidar decode --pcap " + vlp16 + " --model VLP-16 --calibration " + vlp32c_cal + " --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(vlp32c_cal + ": num_lasers 32 does not match VLP-16"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  r = run("lidar decode --pcap " + hdl32 + " --model HDL-32E --calibration " + vlp32c_cal + " --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(vlp32c_cal + ": distance_resolution 0.004 m does not match HDL-32E"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  // A small generated file: 32 lasers for the VLP-16.
+  const auto gen = dir_ / "thirty_two.yaml";
+  {
+    std::ofstream f(gen);
+    f << "lasers:\n";
+    for (int i = 0; i < 32; ++i) f << "- {laser_id: " << i << ", vert_correction: 0." << i << "}\n";
+  }
+  r = run("lidar decode --pcap " + vlp16 + " --model VLP-16 --calibration " + gen.string() + " --out " + dir_.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("thirty_two.yaml: num_lasers 32 does not match VLP-16"), std::string::npos) << r.err;
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator{}), 1);  // no PCD written
+}
+
 TEST_F(DecodeCli, CorruptAndTruncatedCaptures) {
   const auto junk = dir_ / "junk.pcap";
   std::ofstream(junk) << std::string(100, 'x');

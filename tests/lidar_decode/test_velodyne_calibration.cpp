@@ -83,8 +83,14 @@ TEST(VelodyneCalibration, RosYamlFields) {
   EXPECT_EQ(c.lasers[0].vert_offset_correction, 0.003);
   EXPECT_EQ(c.lasers[0].horiz_offset_correction, 0.004);
   EXPECT_EQ(c.lasers[1].rot_correction, 0.0);
-  // Two lasers do not make a VLP-16.
-  EXPECT_NE(error_of([&] { velodyne::validate_for_model(c, Model::kVLP16); }).find("needs 16"), std::string::npos);
+  // Two lasers do not make a VLP-16: the stated count says so first ...
+  EXPECT_NE(error_of([&] { velodyne::validate_for_model(c, Model::kVLP16); }).find("num_lasers 2 does not match VLP-16"),
+            std::string::npos);
+  // ... and without num_lasers the list is too short.
+  auto unstated = c;
+  unstated.num_lasers = 0;
+  unstated.distance_resolution_m = 0.0;
+  EXPECT_NE(error_of([&] { velodyne::validate_for_model(unstated, Model::kVLP16); }).find("needs 16"), std::string::npos);
 }
 
 TEST(VelodyneCalibration, MalformedYamlNamesLineAndKey) {
@@ -154,9 +160,13 @@ TEST(VelodyneCalibration, ValidationRejectsBadTables) {
   steep.lasers[0].vert_correction = 2.0;
   EXPECT_NE(error_of([&] { velodyne::validate_for_model(steep, Model::kVLP16); }).find("beyond"), std::string::npos);
   auto res = c;
-  res.distance_resolution_m = 0;
-  EXPECT_NE(error_of([&] { velodyne::validate_for_model(res, Model::kVLP16); }).find("distance_resolution"),
-            std::string::npos);
+  res.distance_resolution_m = 0;  // not stated: the model's
+  EXPECT_EQ(velodyne::validate_for_model(res, Model::kVLP16).distance_resolution_m, 0.002);
+  for (double wrong : {0.004, 0.0021, -0.002, std::nan("")}) {
+    res.distance_resolution_m = wrong;
+    EXPECT_NE(error_of([&] { velodyne::validate_for_model(res, Model::kVLP16); }).find("distance_resolution"),
+              std::string::npos) << wrong;
+  }
   // A 64-entry VeloView table is fine for a 16-laser model: ids beyond 15 are unused.
   auto big = c;
   for (int i = 16; i < 64; ++i) big.lasers.push_back(velodyne::LaserCorrection{.laser_id = i});
@@ -165,6 +175,85 @@ TEST(VelodyneCalibration, ValidationRejectsBadTables) {
   velodyne::DecoderConfig cfg;
   cfg.calibration = dup;
   EXPECT_THROW(velodyne::Decoder{cfg}, CalibrationError);
+}
+
+// A calibration of another model is an error naming the file and the mismatch, never a silent
+// decode (a VLP-32C file on an HDL-32E doubles every range).
+TEST(VelodyneCalibration, SharedFilesOfAnotherModelAreRejected) {
+  struct F {
+    const char* file;
+    Model model;
+    const char* error;
+  };
+  int checked = 0;
+  for (const F f : {F{"ros_velodyne_VeloView-VLP-32C.yaml", Model::kVLP16, "num_lasers 32 does not match VLP-16"},
+                    F{"ros_velodyne_VeloView-VLP-32C.yaml", Model::kHDL32E,
+                      "distance_resolution 0.004 m does not match HDL-32E (0.002 m per count"},
+                    F{"nebula_VLP32.yaml", Model::kHDL32E, "distance_resolution 0.004 m does not match HDL-32E"},
+                    F{"ros_velodyne_32db.yaml", Model::kVLP32C, "distance_resolution 0.002 m does not match VLP-32C"},
+                    F{"ros_velodyne_32db.yaml", Model::kVLP16, "num_lasers 32 does not match VLP-16"},
+                    F{"ros_velodyne_VLP16db.yaml", Model::kHDL32E, "num_lasers 16 does not match HDL-32E"},
+                    F{"ros_velodyne_VLP16db.yaml", Model::kVLP32C, "num_lasers 16 does not match VLP-32C"},
+                    F{"VeloView_HDL-32.xml", Model::kVLP16, "laser_id 16 has corrections, but VLP-16 has only 16"},
+                    F{"VeloView_HDL-32.xml", Model::kVLP32C, "distance_resolution 0.002 m does not match VLP-32C"},
+                    F{"VeloView_VLP-16.xml", Model::kHDL32E, "16-laser (VLP-16) calibration, not for HDL-32E"},
+                    F{"VeloView_VLP-16.xml", Model::kVLP32C, "distance_resolution 0.002 m does not match VLP-32C"}}) {
+    const std::string path = velodyne_file(f.file);
+    if (!exists(path)) continue;
+    ++checked;
+    const std::string e =
+        error_of([&] { velodyne::validate_for_model(velodyne::parse_calibration(read_text(path), path), f.model); });
+    EXPECT_EQ(e.rfind(path + ": ", 0), 0U) << e;  // names the file first
+    EXPECT_NE(e.find(f.error), std::string::npos) << f.file << " as " << velodyne::model_info(f.model).name << ": " << e;
+  }
+  if (checked == 0) GTEST_SKIP() << "no calibration files under " << data_dir();
+}
+
+std::string yaml_lasers(int n, const char* extra) {
+  std::string s = "lasers:\n";
+  for (int i = 0; i < n; ++i)
+    s += "- {laser_id: " + std::to_string(i) + ", vert_correction: " + std::to_string(0.01 * (i - n / 2)) + "}\n";
+  return s + extra;
+}
+
+TEST(VelodyneCalibration, GeneratedFilesOfAnotherModelAreRejected) {
+  // 32 lasers without num_lasers: the list's length is the count.
+  std::string e = error_of([] {
+    velodyne::validate_for_model(velodyne::parse_ros_yaml(yaml_lasers(32, ""), "g32.yaml"), Model::kVLP16);
+  });
+  EXPECT_NE(e.find("g32.yaml: num_lasers 32 does not match VLP-16, which has 16 lasers"), std::string::npos) << e;
+  // num_lasers 16 but the model has 32: the count check names it, not a missing id.
+  e = error_of([] {
+    velodyne::validate_for_model(velodyne::parse_ros_yaml(yaml_lasers(16, "num_lasers: 16\n"), "g16.yaml"),
+                                 Model::kVLP32C);
+  });
+  EXPECT_NE(e.find("g16.yaml: num_lasers 16 does not match VLP-32C"), std::string::npos) << e;
+  // Resolution: absent = the model's; any other value than the model's is an error.
+  const auto vlp32 = velodyne::validate_for_model(velodyne::parse_ros_yaml(yaml_lasers(32, ""), "a.yaml"), Model::kVLP32C);
+  EXPECT_EQ(vlp32.distance_resolution_m, 0.004);
+  const auto hdl = velodyne::validate_for_model(velodyne::parse_ros_yaml(yaml_lasers(32, ""), "a.yaml"), Model::kHDL32E);
+  EXPECT_EQ(hdl.distance_resolution_m, 0.002);
+  EXPECT_NO_THROW(velodyne::validate_for_model(
+      velodyne::parse_ros_yaml(yaml_lasers(32, "distance_resolution: 0.004\n"), "b.yaml"), Model::kVLP32C));
+  e = error_of([] {
+    velodyne::validate_for_model(
+        velodyne::parse_ros_yaml(yaml_lasers(32, "distance_resolution: 0.003\n"), "c.yaml"), Model::kVLP32C);
+  });
+  EXPECT_NE(e.find("c.yaml: distance_resolution 0.003 m does not match VLP-32C (0.004 m per count"),
+            std::string::npos) << e;
+  // VeloView XML: an entry with data beyond the model's lasers (all-zero padding is fine, above).
+  std::string items;
+  for (int i = 0; i < 16; ++i) items += xml_px(i, std::to_string(i - 8).c_str());
+  items += xml_px(20, "3.5");  // a 17th laser with data
+  std::string xml = xml_doc(items);
+  xml.replace(xml.find("0.4</distLSB_>"), 3, "0.2");
+  e = error_of([&] { velodyne::validate_for_model(velodyne::parse_calibration(xml, "p.xml"), Model::kVLP16); });
+  EXPECT_NE(e.find("p.xml: laser_id 20 has corrections, but VLP-16 has only 16 lasers"), std::string::npos) << e;
+  // The same table without distLSB_: the model's resolution.
+  std::string no_lsb = xml_doc(items.substr(0, items.rfind("\t\t<item>")));
+  no_lsb.erase(no_lsb.find("\t<distLSB_>"), std::string("\t<distLSB_>0.4</distLSB_>\n").size());
+  EXPECT_EQ(velodyne::validate_for_model(velodyne::parse_calibration(no_lsb, "q.xml"), Model::kVLP16).distance_resolution_m,
+            0.002);
 }
 
 TEST(VelodyneModels, Registry) {

@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 #include <string>
 
 #include "sensor_rig/lidar/velodyne/calibration.hpp"
@@ -33,6 +34,66 @@ constexpr std::array<double, 32> kVlp32AzimuthOffset{
 
 [[noreturn]] void fail(const Calibration& c, const std::string& what) {
   throw CalibrationError(c.source + ": " + what);
+}
+
+std::string metres(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str() + " m";
+}
+
+bool same_corrections(const LaserCorrection& a, const LaserCorrection& b) {
+  return a.rot_correction == b.rot_correction && a.vert_correction == b.vert_correction &&
+         a.dist_correction == b.dist_correction && a.dist_correction_x == b.dist_correction_x &&
+         a.dist_correction_y == b.dist_correction_y && a.vert_offset_correction == b.vert_offset_correction &&
+         a.horiz_offset_correction == b.horiz_offset_correction;
+}
+
+bool all_zero(const LaserCorrection& l) { return same_corrections(l, LaserCorrection{.laser_id = l.laser_id}); }
+
+const LaserCorrection* find_laser(const Calibration& c, int id) {
+  for (const auto& l : c.lasers)
+    if (l.laser_id == id) return &l;
+  return nullptr;
+}
+
+// A calibration made for another model must not decode silently: a VLP-32C file (4 mm counts) on
+// an HDL-32E doubles every range, a 32-laser file on a VLP-16 takes the wrong elevations.
+// Fills in the model's resolution when the file states none.
+void check_model_fit(Calibration& c, const ModelInfo& info) {
+  const std::string model(info.name);
+  const std::string model_res = metres(info.distance_resolution_m);
+  if (c.num_lasers != 0 && c.num_lasers != info.lasers) {
+    fail(c, "num_lasers " + std::to_string(c.num_lasers) + " does not match " + model + ", which has " +
+                std::to_string(info.lasers) + " lasers (a calibration for another model?)");
+  }
+  if (c.distance_resolution_m == 0.0) c.distance_resolution_m = info.distance_resolution_m;
+  // The manuals' count units: VLP-16 and HDL-32E 2 mm, VLP-32C 4 mm (ROS/VeloView files agree).
+  if (!(std::abs(c.distance_resolution_m - info.distance_resolution_m) < 1e-9)) {
+    fail(c, "distance_resolution " + metres(c.distance_resolution_m) + " does not match " + model + " (" +
+                model_res + " per count; a calibration for another model?)");
+  }
+  // VeloView XML lists 64 entries whatever the model: the ones beyond the model's lasers must be
+  // unused — all zero, or (VLP-16 files) a repeat of laser id % lasers.
+  for (const auto& l : c.lasers) {
+    if (l.laser_id < info.lasers || all_zero(l)) continue;
+    const LaserCorrection* same = find_laser(c, l.laser_id % info.lasers);
+    if (same != nullptr && same_corrections(*same, l)) continue;
+    fail(c, "laser_id " + std::to_string(l.laser_id) + " has corrections, but " + model + " has only " +
+                std::to_string(info.lasers) + " lasers (a calibration for another model?)");
+  }
+  // The reverse: a VLP-16 VeloView file (lasers 16..31 repeat 0..15) on a 32-laser model.
+  if (info.lasers > 16) {
+    bool repeats = true;
+    bool any_set = false;  // an all-zero table repeats itself too, but is no VLP-16 file
+    for (int id = 16; id < 32 && repeats; ++id) {
+      const LaserCorrection* hi = find_laser(c, id);
+      const LaserCorrection* lo = find_laser(c, id - 16);
+      repeats = hi != nullptr && lo != nullptr && same_corrections(*hi, *lo);
+      any_set = any_set || (lo != nullptr && !all_zero(*lo));
+    }
+    if (repeats && any_set) fail(c, "lasers 16-31 repeat lasers 0-15: a 16-laser (VLP-16) calibration, not for " + model);
+  }
 }
 
 }  // namespace
@@ -66,20 +127,16 @@ Calibration default_calibration(Model m) {
 
 Calibration validate_for_model(Calibration c, Model m) {
   const ModelInfo& info = model_info(m);
-  if (!(c.distance_resolution_m > 0.0 && c.distance_resolution_m < 0.1)) {
-    fail(c, "distance_resolution " + std::to_string(c.distance_resolution_m) +
-                " m is out of range (0, 0.1)");
-  }
+  const std::string model(info.name);
+  check_model_fit(c, info);
   if (c.lasers.size() < static_cast<std::size_t>(info.lasers)) {
-    fail(c, "has " + std::to_string(c.lasers.size()) + " lasers, " + std::string(info.name) + " needs " +
-                std::to_string(info.lasers));
+    fail(c, "has " + std::to_string(c.lasers.size()) + " lasers, " + model + " needs " + std::to_string(info.lasers));
   }
   std::vector<LaserCorrection> by_id(static_cast<std::size_t>(info.lasers));
   std::vector<bool> seen(by_id.size(), false);
   for (const auto& l : c.lasers) {
     if (l.laser_id < 0) fail(c, "negative laser_id " + std::to_string(l.laser_id));
-    // VeloView files list 64 entries whatever the model; ids beyond the model are unused.
-    if (l.laser_id >= info.lasers) continue;
+    if (l.laser_id >= info.lasers) continue;  // unused VeloView padding (check_model_fit)
     const auto id = static_cast<std::size_t>(l.laser_id);
     if (seen[id]) fail(c, "laser_id " + std::to_string(l.laser_id) + " appears twice");
     for (double v : {l.rot_correction, l.vert_correction, l.dist_correction, l.dist_correction_x,

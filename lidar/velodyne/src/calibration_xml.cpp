@@ -82,7 +82,7 @@ class XmlScanner {
     }
     if (!stack_.empty()) fail("file ends inside <" + std::string(stack_.back()) + ">");
     if (c.lasers.empty()) fail("no <px> laser entries (not a VeloView calibration?)");
-    if (!have_lsb) c.distance_resolution_m = 0.002;
+    if (!have_lsb) c.distance_resolution_m = 0.0;  // validation takes the model's
     return c;
   }
 

@@ -13,12 +13,13 @@ Calibration parse_ros_yaml(const std::string& text, const std::string& source) {
   c.source = source;
   if (root.valid() && root.expect_map()) {
     root.allow_keys({"lasers", "num_lasers", "distance_resolution"});
-    c.distance_resolution_m = root.get_double("distance_resolution", 1e-6, 0.1, 0.002);
+    c.distance_resolution_m = root.get_double("distance_resolution", 1e-6, 0.1, 0.0);  // 0: the model's
     const auto lasers = root.items("lasers", true);
     const auto num = root.get_int("num_lasers", 1, 128, static_cast<std::int64_t>(lasers.size()));
     if (problems->empty() && num != static_cast<std::int64_t>(lasers.size())) {
       root.fail("num_lasers", "says " + std::to_string(num) + " but lasers lists " + std::to_string(lasers.size()));
     }
+    c.num_lasers = static_cast<int>(num);
     constexpr double kBig = 1e3;
     for (const auto& l : lasers) {
       if (!l.expect_map()) continue;

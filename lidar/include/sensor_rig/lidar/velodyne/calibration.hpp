@@ -30,7 +30,10 @@ struct LaserCorrection {
 
 struct Calibration {
   std::vector<LaserCorrection> lasers;  // indexed by laser_id after validation
-  double distance_resolution_m = 0.002;
+  // Metres per distance count; 0 = the file does not say (validation takes the model's value).
+  double distance_resolution_m = 0.0;
+  // Lasers the file says it describes (ROS `num_lasers`); 0 = not stated (VeloView XML, built in).
+  int num_lasers = 0;
   std::string source;                   // file name or "built-in <model>", for messages
 };
 
@@ -42,8 +45,11 @@ Calibration parse_ros_yaml(const std::string& text, const std::string& source);
 Calibration parse_veloview_xml(std::string_view text, const std::string& source);
 // Chooses the parser from the content (an XML prolog or <boost_serialization> means VeloView).
 Calibration parse_calibration(const std::string& text, const std::string& source);
-// Checks the calibration fits the model (laser count and ids, finite values, supported fields)
-// and returns it trimmed to the model's lasers, ordered by laser_id. Throws CalibrationError.
+// Checks the calibration fits the model and returns it trimmed to the model's lasers, ordered by
+// laser_id. Throws CalibrationError for a calibration of another model: a stated laser count other
+// than the model's, a used laser id beyond the model's lasers, a distance resolution other than the
+// model's (VLP-16, HDL-32E 2 mm; VLP-32C 4 mm) — and for missing/duplicate ids, non-finite or
+// implausible values, unsupported fields.
 Calibration validate_for_model(Calibration c, Model m);
 
 }  // namespace sensor_rig::lidar::velodyne
