@@ -312,6 +312,7 @@ DriverStatus LidarDriver::status() const {
   s.add_number("truncated", u.truncated);
   s.add_number("write_errors", impl_->write_errors);
   s.add("time_source", c.time_source);
+  s.add_number("position_packets", impl_->position_packets);
   s.add("pps", impl_->have_position ? vel::to_string(impl_->pps) : "no position packets");
   s.add("gprmc", impl_->gprmc_utc_ns ? "valid" : "absent");
   const auto& t = impl_->sync;

@@ -28,13 +28,14 @@ std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const Li
     if (l.mock.loop) argv.emplace_back("--loop");
   } else {
     argv.insert(argv.end(), {"--synthetic", l.model, "--rpm", std::to_string(l.mock.rpm)});
-    if (l.position_port != 0) argv.insert(argv.end(), {"--position-port", std::to_string(l.position_port)});
     // The mock renders the sensor the driver decodes: same calibration, same Ouster metadata.
     if (!l.calibration.empty()) argv.insert(argv.end(), {"--calibration", l.calibration});
     if (!l.metadata.empty() && lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--metadata", l.metadata});
     // Same return mode as the driver expects (an Ouster's echoes come from its UDP profile instead).
     if (!lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--return", l.returns});
   }
+  // Position packets (GPRMC, PPS): the synthetic Velodyne's, or a capture's (port 8308 records).
+  if (l.position_port != 0) argv.insert(argv.end(), {"--position-port", std::to_string(l.position_port)});
   if (l.mock.drop_rate > 0) argv.insert(argv.end(), {"--drop-rate", std::to_string(l.mock.drop_rate)});
   if (l.mock.corrupt_rate > 0) argv.insert(argv.end(), {"--corrupt-rate", std::to_string(l.mock.corrupt_rate)});
   return argv;

@@ -68,8 +68,20 @@ TEST(LidarMockCommand, ReplayAndNone) {
   EXPECT_EQ(value_of(argv, "--pcap"), "/data/x.pcap");
   EXPECT_TRUE(has(argv, "--loop"));
   EXPECT_FALSE(has(argv, "--synthetic"));
+  EXPECT_FALSE(has(argv, "--position-port"));  // none configured: the capture's are skipped
   l.mock.kind = LidarMockConfig::Kind::kNone;
   EXPECT_TRUE(lidar_mock_command("rig", l).empty());
+}
+
+// A capture's position packets (GPRMC, PPS) reach the driver's position port, as the synthetic
+// sensor's do.
+TEST(LidarMockCommand, PositionPortForReplayAndSynthetic) {
+  LidarConfig l = synthetic("VLP-16", "strongest");
+  l.position_port = 8318;
+  EXPECT_EQ(value_of(lidar_mock_command("rig", l), "--position-port"), "8318");
+  l.mock.kind = LidarMockConfig::Kind::kReplay;
+  l.mock.pcap = "/data/x.pcap";
+  EXPECT_EQ(value_of(lidar_mock_command("rig", l), "--position-port"), "8318");
 }
 
 }  // namespace

@@ -1,12 +1,16 @@
 // End to end with real processes: a mixed-vendor rig (VLP-32C, OS-LEGACY, Pandar40P), every LIDAR
 // fed by its synthetic mock, `rig up` -> Cyclone DDS (domain 21) -> this process reading all three
 // topics at once. Behaviour, not timing: each arrives scan by scan with sensor-clock stamps one
-// revolution apart, the Ouster and Hesai stamps come from the sensor clock through the mapper, and
-// the synthetic Ouster's metadata is written where the driver read it.
+// revolution apart, the Ouster and Hesai stamps come from the sensor clock through the mapper, the
+// VLP-32C's from its GPRMC/PPS position packets (GPS-synced), and the synthetic Ouster's metadata is
+// written where the driver read it. With the shared captures, a replay-mock HDL-32E shows that a
+// capture's position packets reach the driver too.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -25,7 +29,13 @@ constexpr int kDomain = 21;
 constexpr const char* kNames[] = {"velodyne", "ouster", "hesai"};
 constexpr const char* kModels[] = {"VLP-32C", "OS-LEGACY", "Pandar40P"};
 
-std::string mixed_rig(const std::string& profile) {
+// The HDL-32E capture: its position packets (port 8308 records) carry a valid GPRMC, PPS absent.
+std::string hdl32e_capture() {
+  return (test::test_data() / "lidar/velodyne/hdl32e_veloview_monterey-first-100-packets.pcap").string();
+}
+
+// `capture`: also a replay-mock HDL-32E with a position port (its capture's position packets).
+std::string mixed_rig(const std::string& profile, const std::string& capture = "") {
   std::ostringstream y;
   y << "rig:\n  name: synthetic-mixed\n  dds: {domain: " << kDomain << ", profile: " << profile << "}\nlidars:\n";
   for (int i = 0; i < 3; ++i) {
@@ -33,6 +43,10 @@ std::string mixed_rig(const std::string& profile) {
     if (i == 0) y << ", position_port: " << test::free_udp_port();
     y << ", time_source: sensor, qos: {reliability: reliable, depth: 20}, mock: {kind: synthetic, rpm: 600}}\n";
   }
+  if (!capture.empty())
+    y << "  - {name: replayed, model: HDL-32E, port: " << test::free_udp_port()
+      << ", position_port: " << test::free_udp_port() << ", time_source: sensor, mock: {kind: replay, pcap: " << capture
+      << ", loop: true}}\n";
   return y.str();
 }
 
@@ -78,7 +92,9 @@ TEST(SyntheticRig, WriteMetadataAloneWritesWhatTheParserReads) {
 TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
   test::TempDir dir;
   const std::string profile = test::source_dir() + "/config/cyclonedds/loopback.xml";
-  const auto cfg = dir.write("rig.yaml", mixed_rig(profile));
+  const bool with_capture = std::filesystem::exists(hdl32e_capture());
+  if (!with_capture) std::cout << "no " << hdl32e_capture() << ": replay mock position packets not checked\n";
+  const auto cfg = dir.write("rig.yaml", mixed_rig(profile, with_capture ? hdl32e_capture() : ""));
   ::setenv("RIG_LOG_DIR", dir.path.c_str(), 1);  // the synthetic Ouster's metadata lands here
   ChildProcess rig({rig_bin(), "up", cfg, "--duration", "30"});
   ::unsetenv("RIG_LOG_DIR");
@@ -128,12 +144,33 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
     EXPECT_NEAR(mean_dt, 100e6, 10e6);
     const auto& kv = status["lidar/" + std::string(kNames[i])];
     EXPECT_EQ(kv.at("packets_dropped"), "0");
-    if (i > 0) {  // absolute sensor time (Ouster, Hesai): the host clock of the mock, through the mapper
+    if (i == 0) {
+      // The synthetic VLP-32C is a GPS-synced sensor: its position packets say PPS locked with a
+      // valid GPRMC, so its µs-since-hour take the hour from GPRMC and are vehicle time as they are.
+      EXPECT_GT(std::stoull(kv.at("position_packets")), 0u);
+      EXPECT_EQ(kv.at("pps"), "locked");
+      EXPECT_EQ(kv.at("gprmc"), "valid");
+      EXPECT_EQ(kv.at("hour_source"), "gprmc");
+      EXPECT_EQ(kv.at("stamp_source"), "gps");
+      EXPECT_EQ(kv.at("sync"), "locked");
+      EXPECT_EQ(kv.at("host_fallbacks"), "0");
+    } else {  // absolute sensor time (Ouster, Hesai): the host clock of the mock, through the mapper
       EXPECT_TRUE(kv.at("stamp_source") == "sensor_synced" || kv.at("stamp_source") == "sensor_mapped")
           << kv.at("stamp_source");
       std::cout << kNames[i] << ": stamp_source " << kv.at("stamp_source") << ", sync " << kv.at("sync")
                 << ", offset " << kv.at("sync_offset_ns") << " ns\n";
     }
+  }
+  if (with_capture) {
+    // The replay mock forwards the capture's position packets: GPRMC valid (2012), PPS absent, so
+    // the hour comes from GPRMC and the free-running sensor clock is mapped.
+    const auto& kv = status["lidar/replayed"];
+    ASSERT_TRUE(kv.contains("position_packets")) << "no diagnostics for the replayed HDL-32E";
+    EXPECT_GT(std::stoull(kv.at("position_packets")), 0u);
+    EXPECT_EQ(kv.at("pps"), "absent");
+    EXPECT_EQ(kv.at("gprmc"), "valid");
+    EXPECT_EQ(kv.at("hour_source"), "gprmc");
+    EXPECT_EQ(kv.at("stamp_source"), "sensor_mapped");
   }
   const auto meta = dir.path / "ouster_synthetic_metadata.json";
   ASSERT_TRUE(std::filesystem::exists(meta));
