@@ -41,6 +41,7 @@ void add_node(CLI::App& perf_app, cli::Context& ctx) {
   sub->add_option("--depth", a->depth);
   sub->add_option("--rt-priority", a->rt_priority);
   sub->add_option("--csv", a->csv)->required();
+  sub->add_option("--stats", a->stats);
   sub->add_flag("!--no-loan", a->loan, "copy instead of loaning samples");
   sub->callback([a, role, msg, topics, &ctx] {
     a->role = *role == "pub" ? perf::Role::kPublisher : perf::Role::kSubscriber;
@@ -60,7 +61,9 @@ void add_run(CLI::App& perf_app, cli::Context& ctx) {
   sub->add_option("--rate", r->spec.rate_hz, "publish rate, Hz")->required();
   sub->add_option("--duration", r->spec.duration_s, "seconds of publishing")->required();
   sub->add_option("--transport", r->transport, "udp | udp-tuned | shm")->capture_default_str();
-  sub->add_option("--message", r->message, "fixed (fixed-size struct per size, loanable) | seq (header + sequence<octet>)")
+  sub->add_option("--message", r->message,
+                  "fixed (fixed-size struct per size, loanable) | seq (header + sequence<octet>) | "
+                  "pointcloud2 (sensor_msgs/PointCloud2 as the LIDAR driver publishes it)")
       ->capture_default_str();
   sub->add_option("--depth", r->spec.depth, "keep-last depth")->capture_default_str();
   sub->add_option("--domain", r->spec.domain, "DDS domain id (default: from the runner's pid)");
@@ -88,7 +91,9 @@ void add_table(CLI::App& perf_app, cli::Context& ctx, int which) {
   auto g = std::make_shared<perf::GridOptions>();
   g->table = which;
   auto transport = std::make_shared<std::string>("shm");
+  auto message = std::make_shared<std::string>("fixed");
   sub->add_option("--duration", g->duration_s, "seconds per run (paper: 60)")->capture_default_str();
+  sub->add_option("--message", *message, "fixed | seq | pointcloud2")->capture_default_str();
   sub->add_option("--transport", *transport, "udp | udp-tuned | shm")->capture_default_str();
   sub->add_option("--out", g->out, "output directory (one subdirectory per run)")->required();
   sub->add_option("--topology", g->topologies, "only these topologies (default 1 2 3)")->delimiter(',');
@@ -98,8 +103,9 @@ void add_table(CLI::App& perf_app, cli::Context& ctx, int which) {
   sub->add_option("--domain", g->domain, "DDS domain id");
   sub->add_option("--rt-priority", g->rt_priority, "nodes run SCHED_FIFO at this priority (0: normal scheduling)");
   sub->add_flag("--no-report", g->no_report, "skip writing report.html");
-  sub->callback([g, transport, &ctx] {
+  sub->callback([g, transport, message, &ctx] {
     g->transport = perf::parse_transport(*transport);
+    g->message = perf::parse_message(*message);
     ctx.exit_code = perf::run_grid(*g);
   });
 }

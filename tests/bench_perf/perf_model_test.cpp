@@ -105,7 +105,9 @@ TEST(PerfRecords, CutLastLineIsNotARecord) {
   fs::remove(p);
 }
 
-// A synthetic run: topology 2, 3 nodes, 10 messages; node 1 got all, node 2 missed two and has a duplicate.
+// A synthetic run: topology 2, 3 nodes, 10 messages; node 1 got all, node 2 missed two, has a duplicate,
+// a copy of message 9 which the publisher never sent, and message 6 with a stamp that is not the
+// publisher's.
 TEST(PerfAnalysis, CountsPerSubscriber) {
   const auto dir = fs::temp_directory_path() / ("perf_analysis_" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -136,9 +138,11 @@ TEST(PerfAnalysis, CountsPerSubscriber) {
     for (std::uint32_t i = 0; i < 9; ++i) {
       if (node == 2 && (i == 3 || i == 4)) continue;
       const Nanos lat = (node == 1 ? 1'000'000 : 2'000'000) + (i == 8 ? 200'000'000 : 0);
-      write_sub_row(f, {0, i, pub[i].stamp_ns, pub[i].stamp_ns + lat});
+      const Nanos stamp = node == 2 && i == 6 ? pub[i].stamp_ns - 7 : pub[i].stamp_ns;
+      write_sub_row(f, {0, i, stamp, pub[i].stamp_ns + lat});
       if (node == 2 && i == 5) write_sub_row(f, {0, i, pub[i].stamp_ns, pub[i].stamp_ns + lat});
     }
+    if (node == 2) write_sub_row(f, {0, 9, pub[8].stamp_ns + 100'000'000, pub[8].stamp_ns + 101'000'000});
     std::fclose(f);
   }
   for (const auto& n : plan_nodes(in.spec)) {
@@ -160,7 +164,17 @@ TEST(PerfAnalysis, CountsPerSubscriber) {
   EXPECT_EQ(s["lost"], 2);
   EXPECT_EQ(s["expected"], 18);
   EXPECT_EQ(s["duplicates"], 1);
+  EXPECT_EQ(s["never_sent"], 1);     // message 9: not counted as received, not in the latencies
+  EXPECT_EQ(s["per_subscriber"][1]["never_sent"], 1);
+  EXPECT_EQ(s["stamp_mismatch"], 1);
+  EXPECT_EQ(s["latency_ms"]["n"], 16);
   EXPECT_EQ(s["received_late"], 2);  // message 8 took 200 ms > one period at both
+  const std::string warnings = s["warnings"].dump();
+  EXPECT_NE(warnings.find("1 duplicate"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("never_sent"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("stamp_mismatch"), std::string::npos) << warnings;
+  EXPECT_DOUBLE_EQ(s["per_subscriber"][1]["delivery_ratio"].get<double>(), 7.0 / 9.0);
+  EXPECT_NEAR(s["fairness"]["jain_delivery_ratio"].get<double>(), (16.0 / 9) * (16.0 / 9) / (2 * (1 + 49.0 / 81)), 1e-12);
   EXPECT_EQ(s["per_subscriber"][0]["lost"], 0);
   EXPECT_EQ(s["per_subscriber"][1]["lost"], 2);
   // Node 1 is always first to receive: mean rank 0; node 2 always last: 1.
@@ -168,6 +182,62 @@ TEST(PerfAnalysis, CountsPerSubscriber) {
   EXPECT_DOUBLE_EQ(s["per_subscriber"][1]["mean_rank"].get<double>(), 1.0);
   EXPECT_NEAR(s["latency_ms"]["max"].get<double>(), 202.0, 1e-6);
   EXPECT_TRUE(s["failed_nodes"].empty());
+  fs::remove_all(dir);
+}
+
+// Topology 3, 3 nodes, 10 messages each: publisher 1 was killed before writing its records, yet its
+// subscriber got 4 of its messages. Its 10 messages count as not sent (categories still add up), the
+// 4 copies as never_sent, and the summary says the publisher failed.
+TEST(PerfAnalysis, FailedPublisherCountsAsNotSent) {
+  const auto dir = fs::temp_directory_path() / ("perf_failed_pub_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  RunInput in;
+  in.spec.topology = 3;
+  in.spec.nodes = 3;
+  in.spec.rate_hz = 10;
+  in.spec.duration_s = 1;
+  in.spec.out = dir.string();
+  const Nanos t0 = 1'000'000'000'000;
+  std::vector<PubRecord> pub;
+  for (std::uint32_t i = 0; i < 10; ++i) pub.push_back({i, t0 + i * 100'000'000LL, t0 + i * 100'000'000LL + 1000, 500, SendStatus::kOnTime});
+  {
+    std::FILE* f = std::fopen((dir / "pub_0.csv").c_str(), "w");
+    write_pub_csv(f, pub);
+    std::fclose(f);
+    f = std::fopen((dir / "sub_2.csv").c_str(), "w");
+    write_sub_header(f);
+    for (std::uint32_t topic : {0u, 1u}) {
+      for (std::uint32_t i = 0; i < (topic == 0 ? 10u : 4u); ++i) write_sub_row(f, {topic, i, pub[i].stamp_ns, pub[i].stamp_ns + 1'000'000});
+    }
+    std::fclose(f);
+  }
+  for (const auto& n : plan_nodes(in.spec)) {
+    NodeOutcome o;
+    o.plan = n;
+    o.pid = 200 + n.index;
+    o.exited = true;
+    o.exit_code = n.index == 1 ? -1 : 0;
+    o.term_signal = n.index == 1 ? 9 : 0;
+    o.csv = (dir / ((n.role == Role::kPublisher ? "pub_" : "sub_") + std::to_string(n.index) + ".csv")).string();
+    in.nodes.push_back(o);
+  }
+  const auto s = analyse(in);
+  EXPECT_EQ(s["sent"], 10);
+  EXPECT_EQ(s["sent_on_time"], 10);
+  EXPECT_EQ(s["not_sent"], 10);
+  EXPECT_EQ(s["sent_on_time"].get<int>() + s["sent_late"].get<int>() + s["not_sent"].get<int>(), 20);
+  EXPECT_EQ(s["received"], 10);
+  EXPECT_EQ(s["expected"], 10);
+  EXPECT_EQ(s["lost"], 0);
+  EXPECT_EQ(s["never_sent"], 4);
+  ASSERT_EQ(s["per_publisher"].size(), 2u);
+  EXPECT_FALSE(s["per_publisher"][0]["failed"].get<bool>());
+  EXPECT_TRUE(s["per_publisher"][1]["failed"].get<bool>());
+  EXPECT_EQ(s["per_publisher"][1]["not_sent"], 10);
+  EXPECT_FALSE(s["per_publisher"][1]["records"].get<bool>());
+  ASSERT_EQ(s["failed_nodes"].size(), 1u);
+  EXPECT_EQ(s["failed_nodes"][0]["node"], 1);
+  EXPECT_NE(s["warnings"].dump().find("publisher node 1 failed (killed by signal 9)"), std::string::npos) << s["warnings"].dump();
   fs::remove_all(dir);
 }
 
@@ -184,6 +254,17 @@ TEST(PerfDdsperf, ParsesPingLines) {
   const auto j = aggregate_ddsperf({d, d});
   EXPECT_EQ(j["roundtrips"], 20);
   EXPECT_NEAR(j["one_way_ms_est"]["mean"].get<double>(), 0.182662 / 2, 1e-9);
+}
+
+TEST(PerfDdsperf, UnmeasuredSizesAreNamed) {
+  DdsperfInterval d;
+  ASSERT_TRUE(parse_ddsperf_line("size 16 mean 100us min 90us 50% 100us 90% 110us 99% 120us max 130us cnt 4", d));
+  auto measured = aggregate_ddsperf({d});
+  measured["size_label"] = "16B";
+  auto none = aggregate_ddsperf({});
+  none["size_label"] = "1MB";
+  EXPECT_TRUE(unmeasured_sizes({{"sizes", {measured}}}).empty());
+  EXPECT_EQ(unmeasured_sizes({{"sizes", {measured, none}}}), std::vector<std::string>{"1MB"});
 }
 
 TEST(PerfGrid, TablesHaveThePapersCells) {

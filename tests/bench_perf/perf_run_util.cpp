@@ -7,6 +7,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
 
 namespace sensor_rig::bench::perf::test {
 namespace fs = std::filesystem;
@@ -67,7 +70,27 @@ void check_invariants(const nlohmann::json& s, bool expect_complete) {
   EXPECT_EQ(rec, s["received"].get<std::uint64_t>());
   EXPECT_EQ(lost, s["lost"].get<std::uint64_t>());
   EXPECT_EQ(rec + lost, s["expected"].get<std::uint64_t>());
-  EXPECT_TRUE(s["fairness"].contains("jain_delivery_ratio"));
+  // Fairness (paper Fig. 14): ranks are normalised positions, Jain's index follows from the ratios.
+  double sum = 0, sum_sq = 0;
+  for (const auto& sub : s["per_subscriber"]) {
+    const auto e = sub["expected"].get<double>();
+    const double ratio = e > 0 ? sub["received"].get<double>() / e : 1.0;
+    EXPECT_DOUBLE_EQ(sub["delivery_ratio"].get<double>(), ratio);
+    sum += ratio;
+    sum_sq += ratio * ratio;
+    if (sub.contains("mean_rank")) {
+      EXPECT_GE(sub["mean_rank"].get<double>(), 0.0);
+      EXPECT_LE(sub["mean_rank"].get<double>(), 1.0);
+    }
+  }
+  const auto n_subs = static_cast<double>(s["per_subscriber"].size());
+  ASSERT_TRUE(s["fairness"].contains("jain_delivery_ratio"));
+  if (n_subs > 0) {
+    EXPECT_NEAR(s["fairness"]["jain_delivery_ratio"].get<double>(), sum * sum / (n_subs * sum_sq), 1e-12);
+  }
+  if (lost == 0) {
+    EXPECT_DOUBLE_EQ(s["fairness"]["jain_delivery_ratio"].get<double>(), 1.0);
+  }
   // Latencies are positive and shorter than the run.
   const double run_ms = s["duration_s"].get<double>() * 1000.0;
   if (s["received"].get<std::uint64_t>() > 0) {
@@ -87,7 +110,108 @@ void check_invariants(const nlohmann::json& s, bool expect_complete) {
     // A short run on loopback: everything sent and delivered (reliable QoS).
     EXPECT_EQ(s["sent"].get<std::uint64_t>(), count * pubs);
     EXPECT_EQ(s["lost"].get<std::uint64_t>(), 0u) << s["per_subscriber"].dump();
+    for (const char* k : {"duplicates", "never_sent", "unexpected", "stamp_mismatch"}) {
+      EXPECT_EQ(s[k].get<std::uint64_t>(), 0u) << k;
+    }
+    // Every subscription got every message its publisher sent: topology 2 fans one publisher out to
+    // N-1 subscribers; in topologies 1 and 3 each topic has one reader.
+    const auto per_topic = s["topology"].get<int>() == 2 ? s["nodes"].get<std::uint64_t>() - 1 : 1u;
+    EXPECT_EQ(s["received"].get<std::uint64_t>(), s["sent"].get<std::uint64_t>() * per_topic);
+    for (const auto& sub : s["per_subscriber"]) EXPECT_EQ(sub["received"], sub["expected"]);
+    // Every copy of a message reaches all of its k subscribers: ranks 0, 1/(k-1), ..., 1 each time,
+    // so the subscribers' mean ranks average exactly 1/2.
+    if (per_topic >= 2) {
+      double rank_sum = 0;
+      for (const auto& sub : s["per_subscriber"]) {
+        ASSERT_TRUE(sub.contains("mean_rank")) << sub.dump();
+        rank_sum += sub["mean_rank"].get<double>();
+      }
+      EXPECT_NEAR(rank_sum / n_subs, 0.5, 1e-9);
+    }
   }
+}
+
+namespace {
+// Rows of a CSV after its header, split at commas; a last line without newline is not a row.
+std::vector<std::vector<long long>> csv_rows(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  std::vector<std::vector<long long>> rows;
+  std::size_t pos = text.find('\n');
+  while (pos != std::string::npos && pos + 1 < text.size()) {
+    const std::size_t end = text.find('\n', pos + 1);
+    if (end == std::string::npos) break;  // cut last line
+    std::vector<long long> row;
+    std::istringstream line(text.substr(pos + 1, end - pos - 1));
+    for (std::string cell; std::getline(line, cell, ',');) row.push_back(std::stoll(cell));
+    rows.push_back(row);
+    pos = end;
+  }
+  return rows;
+}
+int node_of(const fs::path& p, const char* prefix) {
+  return std::stoi(p.stem().string().substr(std::string(prefix).size()));
+}
+}  // namespace
+
+void check_raw_csvs(const RigRun& r, bool expect_complete) {
+  const auto& s = r.summary;
+  ASSERT_TRUE(s.is_object());
+  // Publishers: node i publishes topic i (the runner starts publishers first). status 2 = not sent.
+  std::map<long long, std::map<long long, long long>> sent;  // topic -> seq -> stamp
+  std::uint64_t sent_rows = 0;
+  std::map<int, std::vector<std::vector<long long>>> sub_rows;
+  for (const auto& e : fs::directory_iterator(r.out)) {
+    const auto name = e.path().filename().string();
+    if (e.path().extension() != ".csv") continue;
+    if (name.rfind("pub_", 0) == 0) {
+      const int topic = node_of(e.path(), "pub_");
+      for (const auto& row : csv_rows(e.path())) {
+        ASSERT_EQ(row.size(), 5u) << name;
+        if (row[4] == 2) continue;
+        EXPECT_TRUE(sent[topic].emplace(row[0], row[2]).second) << name << ": seq " << row[0] << " twice";
+        ++sent_rows;
+      }
+    } else if (name.rfind("sub_", 0) == 0) {
+      sub_rows[node_of(e.path(), "sub_")] = csv_rows(e.path());
+    }
+  }
+  EXPECT_EQ(sent_rows, s["sent"].get<std::uint64_t>());
+  std::uint64_t distinct_total = 0;
+  for (const auto& sub : s["per_subscriber"]) {
+    const int node = sub["node"].get<int>();
+    ASSERT_TRUE(sub_rows.count(node)) << "no sub_" << node << ".csv";
+    std::set<std::pair<long long, long long>> distinct;
+    std::set<long long> topics;
+    std::uint64_t dups = 0, never = 0;
+    for (const auto& row : sub_rows[node]) {
+      ASSERT_EQ(row.size(), 4u);
+      topics.insert(row[0]);
+      const auto t = sent.find(row[0]);
+      if (t == sent.end() || t->second.count(row[1]) == 0) {
+        ++never;
+        continue;
+      }
+      EXPECT_EQ(row[2], t->second.at(row[1])) << "sub_" << node << ": stamp of " << row[0] << "/" << row[1] << " differs from the publisher's";
+      if (!distinct.emplace(row[0], row[1]).second) ++dups;
+    }
+    EXPECT_EQ(distinct.size(), sub["received"].get<std::uint64_t>()) << "sub_" << node;
+    EXPECT_EQ(dups, sub["duplicates"].get<std::uint64_t>()) << "sub_" << node;
+    EXPECT_EQ(never, sub["never_sent"].get<std::uint64_t>() + sub["unexpected"].get<std::uint64_t>()) << "sub_" << node;
+    distinct_total += distinct.size();
+    if (expect_complete) {
+      // Exactly the ids its publishers sent: count by count per topic it heard from.
+      std::uint64_t want = 0;
+      for (long long t : topics) want += sent[t].size();
+      EXPECT_EQ(distinct.size(), want) << "sub_" << node;
+      EXPECT_EQ(static_cast<std::uint64_t>(topics.size()), sub["topics"].get<std::uint64_t>()) << "sub_" << node;
+      EXPECT_EQ(dups, 0u);
+      EXPECT_EQ(never, 0u);
+    }
+  }
+  EXPECT_EQ(distinct_total, s["received"].get<std::uint64_t>());
 }
 
 }  // namespace sensor_rig::bench::perf::test

@@ -76,6 +76,14 @@ nlohmann::json aggregate_ddsperf(const std::vector<DdsperfInterval>& v) {
           {"one_way_ms_est", {{"mean", ms(mean / n / 2)}, {"p50", ms(p50 / n / 2)}, {"p99", ms(p99 / n / 2)}, {"max", ms(mx / 2)}}}};
 }
 
+std::vector<std::string> unmeasured_sizes(const nlohmann::json& result) {
+  std::vector<std::string> v;
+  for (const auto& s : result.value("sizes", nlohmann::json::array())) {
+    if (s.value("roundtrips", std::uint64_t{0}) == 0) v.push_back(s.value("size_label", std::string("?")));
+  }
+  return v;
+}
+
 int run_ddsperf(const DdsperfOptions& o) {
   if (o.out.empty()) throw cli::UsageError("--out DIR is required");
   if (::access(kDdsperf, X_OK) != 0) throw std::runtime_error("ddsperf not found (Debian package cyclonedds-tools)");
@@ -130,7 +138,18 @@ int run_ddsperf(const DdsperfOptions& o) {
       std::printf("ddsperf %s %s: no round trips (see %s)\n", to_string(o.transport).c_str(), size_label(size).c_str(), ping_log.c_str());
     }
   }
+  // Sizes without a single round trip: the floor is unknown there, and the command says so.
+  const auto unmeasured = unmeasured_sizes(result);
+  result["unmeasured"] = unmeasured;
   std::ofstream(fs::path(o.out) / "ddsperf.json") << result.dump(2) << "\n";
+  if (shutdown_requested()) return 1;
+  if (!unmeasured.empty()) {
+    std::string list;
+    for (const auto& u : unmeasured) list += (list.empty() ? "" : ", ") + u;
+    std::fprintf(stderr, "rig perf ddsperf: no round trip measured for %s; see ping_<size>.log / pong_<size>.log in %s\n",
+                 list.c_str(), o.out.c_str());
+    return 1;
+  }
   return 0;
 }
 

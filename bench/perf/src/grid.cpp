@@ -51,11 +51,13 @@ std::vector<RunSpec> grid_specs(const GridOptions& g) {
           s.rate_hz = rate;
           s.duration_s = g.duration_s;
           s.transport = g.transport;
+          s.message = g.message;
           s.domain = g.domain;
           s.rt_priority = g.rt_priority;
-          char dir[96];
-          std::snprintf(dir, sizeof dir, "T%d_N%d_%s_%gHz_%s", t, n, size_label(size).c_str(), rate,
-                        to_string(g.transport).c_str());
+          char dir[128];
+          std::snprintf(dir, sizeof dir, "T%d_N%d_%s_%gHz_%s%s", t, n, size_label(size).c_str(), rate,
+                        to_string(g.transport).c_str(),
+                        g.message == Message::kFixed ? "" : ("_" + to_string(g.message)).c_str());
           s.out = (fs::path(g.out) / dir).string();
           specs.push_back(s);
         }

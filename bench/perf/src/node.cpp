@@ -15,11 +15,15 @@
 #include <memory>
 #include <vector>
 
+#include <fstream>
+#include <nlohmann/json.hpp>
+
 #include "node_io.hpp"
 #include "node_types.hpp"
 #include "sensor_rig/bench/perf/records.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/lidar/point_cloud.hpp"
 
 namespace sensor_rig::bench::perf {
 namespace {
@@ -52,10 +56,14 @@ void sleep_until_realtime(Nanos t) {
 }
 
 // A sample to copy from (no loans): payload filled once; the payload seq field stays default.
+// PointCloud2 as the LIDAR driver fills it (lidar_driver.cpp): the rig's 24-byte point layout, one
+// row; S is rarely a multiple of 24, so the row holds S / 24 points and row_step = S (trailing pad).
 template <class T>
 struct OwnedSample {
   std::unique_ptr<T> sample = std::make_unique<T>();
   std::vector<std::uint8_t> bytes;
+  std::vector<char> frame_id;                // heap: stays put if this struct moves
+  std::vector<msg::PointField> fields;
   explicit OwnedSample(std::uint32_t size) {
     std::memset(static_cast<void*>(sample.get()), 0, sizeof(T));
     if constexpr (std::is_same_v<T, PerfSeq>) {
@@ -64,23 +72,74 @@ struct OwnedSample {
       sample->data._buffer = bytes.data();
       sample->data._length = sample->data._maximum = size;
       sample->data._release = false;
+    } else if constexpr (std::is_same_v<T, PointCloud2>) {
+      bytes.assign(size, 0x5a);
+      frame_id.assign(kCloudFrameIdSize, '\0');
+      for (const auto& f : lidar::kPointFields) {
+        msg::PointField pf{};
+        pf.name = const_cast<char*>(f.name);
+        pf.offset = f.offset;
+        pf.datatype = f.datatype;
+        pf.count = 1;
+        fields.push_back(pf);
+      }
+      T& pc = *sample;
+      pc.header.frame_id = frame_id.data();
+      pc.height = 1;
+      pc.point_step = sizeof(lidar::PointXYZIRT);
+      pc.width = size / pc.point_step;
+      pc.row_step = size;
+      pc.fields._buffer = fields.data();
+      pc.fields._length = pc.fields._maximum = static_cast<std::uint32_t>(fields.size());
+      pc.fields._release = false;
+      pc.is_bigendian = false;
+      pc.is_dense = true;
+      pc.data._buffer = bytes.data();
+      pc.data._length = pc.data._maximum = size;
+      pc.data._release = false;
     }
   }
 };
+
+// How the samples travelled (summary.json "loans"): loaned iceoryx chunks or copies.
+struct DataPath {
+  bool shared_memory = false;  // Cyclone uses iceoryx for this endpoint
+  bool loan_available = false; // writer: dds_is_loan_available (fixed-size types over shm)
+  std::uint64_t loaned_writes = 0, copied_writes = 0, failed_writes = 0;
+  std::uint64_t zero_copy_takes = 0, copied_takes = 0;
+};
+
+void write_stats(const std::string& path, Role role, const DataPath& d) {
+  if (path.empty()) return;
+  nlohmann::json j = {{"role", role == Role::kPublisher ? "pub" : "sub"}, {"shared_memory", d.shared_memory}};
+  if (role == Role::kPublisher) {
+    j["loan_available"] = d.loan_available;
+    j["loaned_writes"] = d.loaned_writes;
+    j["copied_writes"] = d.copied_writes;
+    j["failed_writes"] = d.failed_writes;
+  } else {
+    j["zero_copy_takes"] = d.zero_copy_takes;
+    j["copied_takes"] = d.copied_takes;
+  }
+  std::ofstream(path) << j.dump() << "\n";
+}
 
 template <class T>
 int run_publisher(const NodeArgs& a, const dds::Participant& p) {
   const int topic_index = a.topics.front();
   dds::Topic<T> topic(p, topic_name(a.run_id, topic_index), perf_qos(a.depth));
   dds::Writer<T> writer(p, topic, perf_qos(a.depth));
-  const bool loan = a.loan && dds_is_loan_available(writer.handle());
+  DataPath path;
+  path.loan_available = dds_is_loan_available(writer.handle());
+  path.shared_memory = dds_is_shared_memory_available(writer.handle());
+  const bool loan = a.loan && path.loan_available;
   if (!writer.wait_for_readers(static_cast<std::uint32_t>(a.expected_matches), a.discovery_timeout_ms)) {
     log::error("perf", "publisher " + std::to_string(a.index) + ": only " + std::to_string(writer.matched()) + " of " +
                            std::to_string(a.expected_matches) + " readers matched");
     return 1;
   }
-  log::info("perf", "publisher " + std::to_string(a.index) + ": shared memory " +
-                        (dds_is_shared_memory_available(writer.handle()) ? "yes" : "no") + ", loans " + (loan ? "yes" : "no"));
+  log::info("perf", "publisher " + std::to_string(a.index) + ": shared memory " + (path.shared_memory ? "yes" : "no") +
+                        ", loans " + (loan ? "yes" : "no"));
   OwnedSample<T> owned(a.size);
   std::vector<PubRecord> records(a.count);
   announce_ready();
@@ -91,7 +150,6 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
   const auto period = static_cast<Nanos>(period_d);
   const Nanos end = *t0 + static_cast<Nanos>(std::llround(period_d * a.count));
   const auto pub_id = static_cast<std::uint32_t>(topic_index);
-  std::uint64_t write_errors = 0;
   for (std::uint32_t i = 0; i < a.count; ++i) {
     PubRecord& r = records[i];
     r.seq = i;
@@ -102,7 +160,7 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
     void* loaned = nullptr;
     if (loan) {
       if (dds_loan_sample(writer.handle(), &loaned) != DDS_RETCODE_OK || loaned == nullptr) {
-        ++write_errors;
+        ++path.failed_writes;
         continue;  // no chunk: not sent
       }
       sample = static_cast<T*>(loaned);
@@ -113,9 +171,10 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
     const dds_return_t rc = writer.write(*sample, stamp);
     const Nanos after = vehicle_now_ns();
     if (rc != DDS_RETCODE_OK) {
-      ++write_errors;
+      ++path.failed_writes;
       continue;
     }
+    ++(loan ? path.loaned_writes : path.copied_writes);
     r.stamp_ns = stamp;
     r.write_ns = after - stamp;
     r.status = classify_send(stamp, r.deadline_ns, period);
@@ -137,7 +196,10 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
   dds_wait_for_acks(writer.handle(), DDS_SECS(5));
   File f = open_csv(a.csv);
   write_pub_csv(f.get(), records);
-  if (write_errors > 0) log::warn("perf", "publisher " + std::to_string(a.index) + ": " + std::to_string(write_errors) + " writes failed");
+  write_stats(a.stats, Role::kPublisher, path);
+  if (path.failed_writes > 0) {
+    log::warn("perf", "publisher " + std::to_string(a.index) + ": " + std::to_string(path.failed_writes) + " writes failed");
+  }
   return 0;
 }
 
@@ -146,7 +208,7 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
 // iceoryx chunk itself, as rmw_cyclonedds does for loaned messages. Data that came another way
 // (network, serialized in the chunk) is deserialized into `scratch`.
 template <class T, class F>
-int take_zero_copy(dds_entity_t reader, T& scratch, F&& fn) {
+int take_zero_copy(dds_entity_t reader, T& scratch, DataPath& path, F&& fn) {
   int n = 0;
   for (;;) {
     ddsi_serdata* sd = nullptr;
@@ -155,8 +217,10 @@ int take_zero_copy(dds_entity_t reader, T& scratch, F&& fn) {
     if (si.valid_data) {
       if (sd->iox_chunk != nullptr && shm_get_data_state(sd->iox_chunk) == IOX_CHUNK_CONTAINS_RAW_DATA) {
         fn(*static_cast<const T*>(sd->iox_chunk));
+        ++path.zero_copy_takes;
       } else if (ddsi_serdata_to_sample(sd, &scratch, nullptr, nullptr)) {
         fn(scratch);
+        ++path.copied_takes;
       }
       ++n;
     }
@@ -199,11 +263,12 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
   const dds_entity_t guard_h = guard.handle();
   StopWatcher stop([guard_h] { dds_set_guardcondition(guard_h, true); });
 
-  constexpr bool kFixed = !std::is_same_v<T, PerfSeq>;
-  const bool zero_copy = kFixed && a.loan && dds_is_shared_memory_available(readers.front()->handle());
-  log::info("perf", "subscriber " + std::to_string(a.index) + ": shared memory " +
-                        (dds_is_shared_memory_available(readers.front()->handle()) ? "yes" : "no") + ", zero-copy take " +
-                        (zero_copy ? "yes" : "no"));
+  constexpr bool kFixed = !std::is_same_v<T, PerfSeq> && !std::is_same_v<T, PointCloud2>;
+  DataPath path;
+  path.shared_memory = dds_is_shared_memory_available(readers.front()->handle());
+  const bool zero_copy = kFixed && a.loan && path.shared_memory;
+  log::info("perf", "subscriber " + std::to_string(a.index) + ": shared memory " + (path.shared_memory ? "yes" : "no") +
+                        ", zero-copy take " + (zero_copy ? "yes" : "no"));
   OwnedSample<T> scratch(0);
   // Large samples one at a time: a loaned take allocates sizeof(T) x the batch size per reader.
   const int batch = sizeof(T) > 4096 ? 1 : 32;
@@ -214,13 +279,14 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
       const PerfStamp st = read_stamp(s);
       write_sub_row(f.get(), SubRecord{topic, st.seq, st.stamp_ns, recv});
     };
-    if (zero_copy) return take_zero_copy(readers[ri]->handle(), *scratch.sample, record);
+    if (zero_copy) return take_zero_copy(readers[ri]->handle(), *scratch.sample, path, record);
     int total = 0;
     for (int got = 1; got > 0;) {
       got = readers[ri]->take([&](const T& s, const dds_sample_info_t&) { record(s); }, batch);
       total += got;
       if (batch > 1) break;
     }
+    path.copied_takes += static_cast<std::uint64_t>(total);
     return total;
   };
   std::vector<dds_attach_t> triggered(readers.size() + 1);
@@ -245,6 +311,7 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
     else dds_sleepfor(DDS_MSECS(10));
   }
   std::fflush(f.get());
+  write_stats(a.stats, Role::kSubscriber, path);
   return 0;
 }
 
@@ -271,6 +338,7 @@ int run_node(const NodeArgs& a) {
   if (a.topics.empty()) throw std::invalid_argument("node without topics");
   if (a.role == Role::kPublisher && a.topics.size() != 1) throw std::invalid_argument("a publisher has one topic");
   if (a.message == Message::kSeq) return run_typed<PerfSeq>(a);
+  if (a.message == Message::kPointCloud2) return run_typed<PointCloud2>(a);
   switch (a.size) {
     case 0: return run_typed<PerfFixed0>(a);
     case 16: return run_typed<PerfFixed16>(a);

@@ -1,5 +1,8 @@
 #pragma once
 // The perf message types registered with the DDS wrapper, and uniform header access.
+// PointCloud2 is the LIDAR driver's message: its id travels in header.frame_id ("perf/<pub>/<seq>").
+#include <cinttypes>
+#include <cstdio>
 #include <type_traits>
 
 #include "sensor_rig/dds/types.hpp"
@@ -20,6 +23,12 @@ static_assert(sizeof(PerfFixed512k::data) == 524288);
 static_assert(sizeof(PerfFixed1m::data) == 1048576);
 static_assert(sizeof(PerfFixed2m::data) == 2097152);
 
+using PointCloud2 = msg::PointCloud2;
+
+// header.frame_id of a perf PointCloud2: "perf/<publisher>/<seq>" (room for two 10-digit numbers).
+inline constexpr std::size_t kCloudFrameIdSize = 32;
+inline constexpr std::uint32_t kBadId = 0xffffffffu;  // an id that could not be read: never a sent seq
+
 struct PerfStamp {
   std::uint32_t publisher = 0;
   std::uint32_t seq = 0;
@@ -28,15 +37,26 @@ struct PerfStamp {
 
 template <class T>
 inline PerfStamp read_stamp(const T& s) {
-  if constexpr (std::is_same_v<T, PerfSeq>) {
+  if constexpr (std::is_same_v<T, PointCloud2>) {
+    PerfStamp st{kBadId, kBadId, msg::from_time(s.header.stamp)};
+    char tail = 0;
+    if (s.header.frame_id == nullptr ||
+        std::sscanf(s.header.frame_id, "perf/%" SCNu32 "/%" SCNu32 "%c", &st.publisher, &st.seq, &tail) != 2) {
+      st.publisher = st.seq = kBadId;
+    }
+    return st;
+  } else if constexpr (std::is_same_v<T, PerfSeq>) {
     return {s.publisher, s.seq, msg::from_time(s.header.stamp)};
   } else {
     return {s.header.publisher, s.header.seq, msg::from_time(s.header.stamp)};
   }
 }
+// PointCloud2: header.frame_id must point at kCloudFrameIdSize writable bytes.
 template <class T>
 inline void write_ids(T& s, std::uint32_t publisher, std::uint32_t seq) {
-  if constexpr (std::is_same_v<T, PerfSeq>) {
+  if constexpr (std::is_same_v<T, PointCloud2>) {
+    std::snprintf(s.header.frame_id, kCloudFrameIdSize, "perf/%" PRIu32 "/%" PRIu32, publisher, seq);
+  } else if constexpr (std::is_same_v<T, PerfSeq>) {
     s.publisher = publisher;
     s.seq = seq;
   } else {

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 
@@ -133,6 +134,31 @@ bool Child::wait_exit(int timeout_ms) {
 
 void Child::signal(int sig) {
   if (running() && !poll_exit()) ::kill(pid_, sig);
+}
+
+ProcessUsage process_usage(pid_t pid) {
+  ProcessUsage u;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return u;
+  // Fields after the parenthesised comm (which may hold spaces): state is field 3, utime 14, stime 15.
+  const auto close = line.rfind(')');
+  if (close == std::string::npos) return u;
+  std::istringstream in(line.substr(close + 2));
+  std::string field;
+  unsigned long long utime = 0, stime = 0;
+  for (int i = 3; i <= 15 && in >> field; ++i) {
+    if (i == 14) utime = std::stoull(field);
+    if (i == 15) stime = std::stoull(field);
+  }
+  const long hz = ::sysconf(_SC_CLK_TCK);
+  u.cpu_s = static_cast<double>(utime + stime) / static_cast<double>(hz > 0 ? hz : 100);
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) u.max_rss_kb = std::strtol(line.c_str() + 6, nullptr, 10);
+  }
+  u.known = true;
+  return u;
 }
 
 std::string self_exe() {

@@ -48,6 +48,15 @@ class Child {
   ExitInfo info_;
 };
 
+// CPU seconds (user + system) and peak RSS (VmHWM) of a live process, from /proc; known = false when
+// it cannot be read (gone, other user).
+struct ProcessUsage {
+  bool known = false;
+  double cpu_s = 0.0;
+  long max_rss_kb = 0;
+};
+ProcessUsage process_usage(pid_t pid);
+
 // /proc/self/exe resolved (the `rig` binary itself).
 std::string self_exe();
 // PIDs of processes whose comm is `name` (e.g. "iox-roudi").

@@ -7,7 +7,13 @@
 #include <fstream>
 #include <sstream>
 
+#include <functional>
+#include <map>
+#include <tuple>
+
 #include "sensor_rig/bench/perf/records.hpp"
+#include "sensor_rig/bench/perf/spec.hpp"
+#include "sensor_rig/bench/perf/stats.hpp"
 #include "svg.hpp"
 
 namespace sensor_rig::bench::perf {
@@ -20,15 +26,30 @@ const char* kColors[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", 
 struct Run {
   fs::path dir;
   json s;
+  std::vector<double> latency_ms;  // every row of its subscriber CSVs (pooled by Figs. 9-10)
   [[nodiscard]] std::string label() const { return s.value("label", dir.filename().string()); }
 };
+
+std::vector<SubRecord> read_sub_rows(const fs::path& dir) {
+  std::vector<SubRecord> all;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const auto n = e.path().filename().string();
+    if (n.rfind("sub_", 0) == 0 && e.path().extension() == ".csv") {
+      auto v = read_sub_csv(e.path().string());
+      all.insert(all.end(), v.begin(), v.end());
+    }
+  }
+  return all;
+}
 
 std::vector<Run> find_runs(const fs::path& dir) {
   std::vector<Run> runs;
   auto load = [&](const fs::path& p) {
     std::ifstream in(p);
     try {
-      runs.push_back({p.parent_path(), json::parse(in)});
+      Run r{p.parent_path(), json::parse(in), {}};
+      for (const auto& row : read_sub_rows(r.dir)) r.latency_ms.push_back(static_cast<double>(row.recv_ns - row.stamp_ns) / 1e6);
+      runs.push_back(std::move(r));
     } catch (const std::exception&) {
       // unreadable summary: not a run
     }
@@ -60,14 +81,7 @@ std::string fmt(int prec, double v) {
 // Fig. 8: latency over time of every subscription, subsampled to at most ~4000 points.
 std::string latency_over_time(const Run& r) {
   const Nanos t0 = r.s.value("t0_ns", Nanos{0});
-  std::vector<SubRecord> all;
-  for (const auto& e : fs::directory_iterator(r.dir)) {
-    const auto n = e.path().filename().string();
-    if (n.rfind("sub_", 0) == 0 && e.path().extension() == ".csv") {
-      auto v = read_sub_csv(e.path().string());
-      all.insert(all.end(), v.begin(), v.end());
-    }
-  }
+  const std::vector<SubRecord> all = read_sub_rows(r.dir);
   svg::Series s{"latency", kColors[0], {}, {}};
   const std::size_t step = std::max<std::size_t>(1, all.size() / 4000);
   double ymax = 0.001, ymin = 1e9;
@@ -85,22 +99,89 @@ std::string latency_over_time(const Run& r) {
                       {s});
 }
 
+// Figs. 9-10: the latencies of every run in a group pooled into one box (the paper's boxes are per
+// message size and per subscriber count, not per run). One chart per `chart` key, one box per `box`
+// key; runs without subscriber CSVs cannot be pooled and are left out (said under the chart).
+template <class ChartKey, class BoxKey>
+std::string pooled_boxes(const std::vector<Run>& runs, const std::string& fig,
+                         const std::function<ChartKey(const json&)>& chart_of,
+                         const std::function<std::string(const ChartKey&)>& chart_title,
+                         const std::function<BoxKey(const json&)>& box_of,
+                         const std::function<std::string(const BoxKey&)>& box_label) {
+  struct Pool {
+    std::vector<double> ms;
+    int runs = 0;
+  };
+  std::map<ChartKey, std::map<BoxKey, Pool>> charts;
+  int without_samples = 0;
+  for (const auto& r : runs) {
+    if (r.latency_ms.empty()) {
+      ++without_samples;
+      continue;
+    }
+    Pool& p = charts[chart_of(r.s)][box_of(r.s)];
+    p.ms.insert(p.ms.end(), r.latency_ms.begin(), r.latency_ms.end());
+    ++p.runs;
+  }
+  std::ostringstream h;
+  for (auto& [ck, boxes] : charts) {
+    std::vector<svg::Box> b;
+    double lo = 1e9, hi = 0.001;
+    for (auto& [bk, pool] : boxes) {
+      const auto st = compute_stats(pool.ms);
+      b.push_back({box_label(bk) + " (" + std::to_string(pool.runs) + (pool.runs == 1 ? " run, " : " runs, ") +
+                       std::to_string(st.n) + " msgs)",
+                   st.p1, st.p25, st.p50, st.p75, st.p99, st.max, st.mean});
+      lo = std::min(lo, std::max(1e-3, st.p1));
+      hi = std::max(hi, st.max);
+    }
+    const svg::Axis y{std::pow(10.0, std::floor(std::log10(lo))), hi * 1.2, true, "latency (ms, log)"};
+    h << svg::boxes(fig + ": " + chart_title(ck), y, b);
+  }
+  if (without_samples > 0) h << "<p>" << without_samples << " run(s) without subscriber CSVs left out.</p>";
+  if (charts.empty()) h << "<p>no samples</p>";
+  return h.str();
+}
+
+using SeriesKey = std::tuple<std::string, std::string, double>;  // transport, message, rate
+SeriesKey series_of(const json& s) {
+  return {s.value("transport", std::string("?")), s.value("message", std::string("fixed")), s.value("rate_hz", 0.0)};
+}
+std::string series_title(const SeriesKey& k) {
+  char b[128];
+  std::snprintf(b, sizeof b, "%s, %s, %g Hz", std::get<0>(k).c_str(), std::get<1>(k).c_str(), std::get<2>(k));
+  return b;
+}
+int subscriptions_of(const json& s) {
+  if (s.contains("subscriptions")) return s["subscriptions"].get<int>();
+  int n = 0;  // summaries written before the key existed
+  for (const auto& sub : s.value("per_subscriber", json::array())) n += sub.value("topics", 1);
+  return n;
+}
+
 }  // namespace
 
+// Only what SPEC §1 states about the paper (Kouril et al.); "—" where it gives no figure.
 std::string paper_reference(const json& s) {
   const auto size = s.value("size", 0u);
   const int nodes = s.value("nodes", 0);
   const int topo = s.value("topology", 0);
-  std::string ref;
-  if (size == 1048576 && nodes == 32 && topo == 2) ref = "PointCloud1m to 31 subs: Cyclone 15-20 ms mean, Fast DDS 8 ms";
-  else ref = "most latencies < 2 ms";
-  if (size >= 524288 && nodes >= 8) ref += "; not all 600 sent on time (from 512 kB)";
-  ref += "; loss up to 0.88 %";
-  return ref;
+  const double rate = s.value("rate_hz", 0.0);
+  std::vector<std::string> refs;
+  if (size == 1048576 && nodes == 32 && topo == 2 && rate == 10.0) refs.emplace_back("Cyclone 15–20 ms mean, Fast DDS 8 ms");
+  if (size >= 524288 && rate == 10.0) refs.emplace_back("not all 600 messages of a 60 s run sent on time");
+  if (refs.empty()) return "—";
+  std::string out = refs.front();
+  for (std::size_t i = 1; i < refs.size(); ++i) out += "; " + refs[i];
+  return out;
 }
 
 std::string markdown_table(const std::vector<json>& summaries) {
   std::ostringstream o;
+  o << "Paper headline (Kouril et al., as SPEC §1 states it): most latencies < 2 ms; PointCloud1m (1 MB) to 31 "
+       "subscribers 15–20 ms mean with Cyclone DDS, 8 ms with Fast DDS; loss up to 0.88 %; from 512 kB up publishers "
+       "could not send all 600 messages of a 60 s run on time. The paper column gives a figure only for runs it "
+       "states one for (—: none stated).\n\n";
   o << "| run | sent | on time | late | not sent | received | lost (%) | mean ms | p50 | p90 | p99 | max | paper (Kouril et al.) |\n"
     << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
   for (const auto& s : summaries) {
@@ -134,7 +215,8 @@ ReportResult write_report(const std::string& dir_s) {
 
   // Summary table.
   h << "<h2>Runs</h2><table><tr><th>run</th><th>sent</th><th>on time</th><th>late</th><th>not sent</th><th>received</th>"
-       "<th>lost</th><th>mean</th><th>p50</th><th>p90</th><th>p99</th><th>max</th><th>std</th><th>CPU s</th><th>max RSS MB</th><th>status</th></tr>";
+       "<th>lost</th><th>mean</th><th>p50</th><th>p90</th><th>p99</th><th>max</th><th>std</th><th>CPU s</th><th>max RSS MB</th>"
+       "<th>RouDi CPU s / RSS MB</th><th>status</th></tr>";
   for (const auto& r : runs) {
     const auto& s = r.s;
     double cpu = 0, rss = 0;
@@ -146,7 +228,13 @@ ReportResult write_report(const std::string& dir_s) {
       << s["sent_late"] << "</td><td>" << s["not_sent"] << "</td><td>" << s["received"] << "</td><td>" << s["lost"] << " ("
       << fmt(3, s.value("loss_pct", 0.0)) << " %)</td>";
     for (const char* k : {"mean", "p50", "p90", "p99", "max", "std"}) h << "<td>" << fmt(3, ms(s, k)) << "</td>";
-    h << "<td>" << fmt(1, cpu) << "</td><td>" << fmt(0, rss) << "</td><td>"
+    h << "<td>" << fmt(1, cpu) << "</td><td>" << fmt(0, rss) << "</td><td>";
+    if (s.contains("roudi") && s["roudi"].contains("cpu_s")) {
+      h << fmt(1, s["roudi"].value("cpu_s", 0.0)) << " / " << fmt(0, s["roudi"].value("max_rss_kb", 0.0) / 1024.0);
+    } else {
+      h << "—";
+    }
+    h << "</td><td>"
       << (s["failed_nodes"].empty() ? "ok" : svg::escape(s["failed_nodes"].dump())) << "</td></tr>";
   }
   h << "</table>";
@@ -161,28 +249,20 @@ ReportResult write_report(const std::string& dir_s) {
   h << "<h2>Latency over time (paper Fig. 8)</h2>";
   for (const Run* r : heavy) h << latency_over_time(*r);
 
-  // Figs. 9-10: box plots per size and per subscriber count.
-  if (!runs.empty()) {
-    std::vector<svg::Box> b;
-    double lo = 1e9, hi = 0;
-    for (const auto& r : runs) {
-      const auto& l = r.s["latency_ms"];
-      if (l.value("n", 0) == 0) continue;
-      b.push_back({r.label(), l.value("p1", 0.0), l.value("p25", 0.0), l.value("p50", 0.0), l.value("p75", 0.0),
-                   l.value("p99", 0.0), l.value("max", 0.0), l.value("mean", 0.0)});
-      lo = std::min(lo, std::max(1e-3, l.value("p1", 1.0)));
-      hi = std::max(hi, l.value("max", 0.0));
-    }
-    if (!b.empty()) {
-      h << "<h2>Latency distribution per size and subscriber count (paper Figs. 9-10)</h2>"
-           "<p>Box p25-p75, red line median, whiskers p1-p99, circle max.</p>";
-      const svg::Axis y{std::pow(10.0, std::floor(std::log10(lo))), hi * 1.2, true, "latency (ms, log)"};
-      for (std::size_t i = 0; i < b.size(); i += 24) {
-        std::vector<svg::Box> part(b.begin() + static_cast<long>(i), b.begin() + static_cast<long>(std::min(b.size(), i + 24)));
-        h << svg::boxes("Latency per run", y, part);
-      }
-    }
-  }
+  // Figs. 9-10: every message's latency pooled per message size and per subscriber count.
+  h << "<h2>Latency per message size (paper Fig. 9)</h2><p>One chart per transport, message type and rate; one box "
+       "per size pooling every received message of every run with that size (all topologies and node counts). "
+       "Box p25-p75, red line median, whiskers p1-p99, circle max.</p>";
+  h << pooled_boxes<SeriesKey, std::uint32_t>(
+      runs, "Fig. 9", series_of, series_title, [](const json& s) { return s.value("size", 0u); },
+      [](const std::uint32_t& size) { return size_label(size); });
+  h << "<h2>Latency per subscriber count (paper Fig. 10)</h2><p>One chart per transport, message type, rate and "
+       "size; one box per number of subscriptions (readers) in the run, pooling all topologies with that count.</p>";
+  using SizedKey = std::tuple<SeriesKey, std::uint32_t>;
+  h << pooled_boxes<SizedKey, int>(
+      runs, "Fig. 10", [](const json& s) { return SizedKey{series_of(s), s.value("size", 0u)}; },
+      [](const SizedKey& k) { return series_title(std::get<0>(k)) + ", " + size_label(std::get<1>(k)); }, subscriptions_of,
+      [](const int& n) { return std::to_string(n) + (n == 1 ? " sub" : " subs"); });
 
   // Fig. 11: categories.
   std::vector<svg::Stack> pub_rows, sub_rows;

@@ -83,13 +83,17 @@ RouDi::RouDi(const std::string& config_file, const std::string& log_file, bool a
 
 int RouDi::pid() const noexcept { return child_ ? child_->pid() : external_pid_; }
 
-RouDi::~RouDi() {
+RouDi::~RouDi() { stop(); }
+
+void RouDi::stop() {
   if (!child_) return;
   child_->signal(SIGTERM);
   if (!child_->wait_exit(15000)) {
     child_->signal(SIGKILL);
     child_->wait_exit(5000);
   }
+  stopped_cpu_s_ = child_->info().cpu_s;
+  stopped_max_rss_kb_ = child_->info().max_rss_kb;
   child_.reset();
   if (find_processes("iox-roudi").empty()) {
     std::error_code ec;

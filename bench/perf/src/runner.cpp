@@ -39,7 +39,7 @@ namespace {
 
 std::vector<std::string> node_argv(const std::string& exe, const RunSpec& spec, const NodePlan& n,
                                    const std::string& run_id, int domain, const std::string& profile,
-                                   const std::string& csv) {
+                                   const std::string& csv, const std::string& stats) {
   std::string topics;
   for (int t : n.topics) topics += (topics.empty() ? "" : ",") + std::to_string(t);
   char rate[32];
@@ -48,7 +48,8 @@ std::vector<std::string> node_argv(const std::string& exe, const RunSpec& spec, 
           "--topics", topics, "--matches", std::to_string(n.expected_matches), "--run-id", run_id,
           "--domain", std::to_string(domain), "--profile", profile, "--size", std::to_string(spec.size),
           "--message", to_string(spec.message), "--rate", rate, "--count", std::to_string(spec.count()),
-          "--depth", std::to_string(spec.depth), "--rt-priority", std::to_string(spec.rt_priority), "--csv", csv};
+          "--depth", std::to_string(spec.depth), "--rt-priority", std::to_string(spec.rt_priority), "--csv", csv,
+          "--stats", stats};
 }
 
 // Stops children politely (STOP / SIGTERM), then by force; only the ones given, only while running.
@@ -83,7 +84,8 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
   const fs::path out = fs::absolute(spec.out);
   for (const auto& e : fs::directory_iterator(out)) {  // a rerun into the same directory starts clean
     const auto name = e.path().filename().string();
-    if (name.rfind("pub_", 0) == 0 || name.rfind("sub_", 0) == 0 || name == "summary.json") fs::remove(e.path());
+    const bool node_stats = name.rfind("node_", 0) == 0 && e.path().extension() == ".json";
+    if (name.rfind("pub_", 0) == 0 || name.rfind("sub_", 0) == 0 || name == "summary.json" || node_stats) fs::remove(e.path());
   }
   fs::copy_file(profile, out / "profile.xml", fs::copy_options::overwrite_existing);
   static int run_counter = 0;
@@ -102,6 +104,8 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
 
   // Shared memory: a RouDi for this run unless the caller (a table) holds one.
   std::unique_ptr<RouDi> own_roudi;
+  pid_t roudi_pid = 0;
+  ProcessUsage roudi_before;  // to charge the run with what RouDi used during it (tables share one)
   if (spec.transport == Transport::kShm) {
     if (opt.roudi == nullptr) {
       const auto cfg = out / "roudi.toml";
@@ -113,6 +117,8 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
     const RouDi* r = opt.roudi != nullptr ? opt.roudi : own_roudi.get();
     input.extra["roudi"] = {{"pid", r->pid()}, {"external", r->external()}, {"owned_by_run", own_roudi != nullptr && !r->external()},
                             {"startup_s", r->startup_s()}};
+    roudi_pid = r->pid();
+    roudi_before = process_usage(roudi_pid);
   }
 
   // Exec through /proc/self/exe (resolved in the child, a copy of us): the very binary that runs
@@ -124,13 +130,15 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
   for (const auto& n : plan) {
     const std::string csv = (out / ((n.role == Role::kPublisher ? "pub_" : "sub_") + std::to_string(n.index) + ".csv")).string();
     const std::string err = (out / ("node_" + std::to_string(n.index) + ".log")).string();
+    const std::string stats = (out / ("node_" + std::to_string(n.index) + ".json")).string();
     fs::remove(err);
-    kids.push_back(std::make_unique<Child>(node_argv(exe, spec, n, run_id, domain, profile, csv), err, true, pgid));
+    kids.push_back(std::make_unique<Child>(node_argv(exe, spec, n, run_id, domain, profile, csv, stats), err, true, pgid));
     if (pgid == 0) pgid = kids.front()->pid();
     NodeOutcome o;
     o.plan = n;
     o.pid = kids.back()->pid();
     o.csv = csv;
+    o.stats = stats;
     input.nodes.push_back(o);
   }
   const int n_nodes = static_cast<int>(kids.size());
@@ -236,6 +244,23 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
     o.max_rss_kb = e.max_rss_kb;
   }
   kids.clear();
+  if (roudi_pid > 0) {
+    // RouDi's CPU and RSS: during the run from /proc (works for a table's shared RouDi too), and for
+    // a RouDi this run started, its whole life from wait4 (startup touches every mempool chunk).
+    auto& j = input.extra["roudi"];
+    const ProcessUsage after = process_usage(roudi_pid);
+    if (after.known && roudi_before.known) {
+      j["cpu_s"] = after.cpu_s - roudi_before.cpu_s;
+      j["max_rss_kb"] = after.max_rss_kb;
+    } else {
+      input.warnings.push_back("RouDi (pid " + std::to_string(roudi_pid) + "): CPU and RSS not readable from /proc");
+    }
+    if (own_roudi && !own_roudi->external()) {
+      own_roudi->stop();
+      j["lifetime_cpu_s"] = own_roudi->stopped_cpu_s();
+      j["lifetime_max_rss_kb"] = own_roudi->stopped_max_rss_kb();
+    }
+  }
   own_roudi.reset();
   if (failed_start) input.warnings.push_back("run did not start: no message was published");
   if (aborted && !failed_start) input.warnings.push_back("run interrupted");

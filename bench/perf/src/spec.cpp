@@ -62,10 +62,18 @@ std::string to_string(Transport t) {
 Message parse_message(const std::string& text) {
   if (text == "fixed") return Message::kFixed;
   if (text == "seq") return Message::kSeq;
-  throw cli::UsageError("unknown message kind '" + text + "' (fixed, seq)");
+  if (text == "pointcloud2") return Message::kPointCloud2;
+  throw cli::UsageError("unknown message kind '" + text + "' (fixed, seq, pointcloud2)");
 }
 
-std::string to_string(Message m) { return m == Message::kFixed ? "fixed" : "seq"; }
+std::string to_string(Message m) {
+  switch (m) {
+    case Message::kFixed: return "fixed";
+    case Message::kSeq: return "seq";
+    case Message::kPointCloud2: return "pointcloud2";
+  }
+  return "?";
+}
 
 std::uint32_t RunSpec::count() const {
   return static_cast<std::uint32_t>(std::llround(rate_hz * duration_s));
@@ -75,7 +83,7 @@ std::string RunSpec::label() const {
   char buf[128];
   std::snprintf(buf, sizeof buf, "T%d N=%d %s %gHz %s", topology, nodes, size_label(size).c_str(), rate_hz,
                 to_string(transport).c_str());
-  return buf;
+  return message == Message::kFixed ? std::string(buf) : std::string(buf) + " " + to_string(message);
 }
 
 void RunSpec::validate() const {

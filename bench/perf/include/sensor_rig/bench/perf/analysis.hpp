@@ -14,6 +14,7 @@ struct NodeOutcome {
   NodePlan plan;
   int pid = 0;
   std::string csv;           // path of the node's CSV
+  std::string stats;         // path of the node's exit stats (JSON: loans, zero-copy takes), may be absent
   bool exited = false;       // reaped
   int exit_code = -1;        // when it exited normally
   int term_signal = 0;       // when a signal ended it

@@ -29,6 +29,10 @@ bool parse_ddsperf_line(const std::string& line, DdsperfInterval& out);
 // Aggregates intervals (count-weighted means of the per-interval percentiles; min/max exact).
 nlohmann::json aggregate_ddsperf(const std::vector<DdsperfInterval>& v);
 
+// The size labels of a ddsperf.json result that got no round trip (pure).
+std::vector<std::string> unmeasured_sizes(const nlohmann::json& result);
+
+// Writes DIR/ddsperf.json. Returns 1 (and says which) when a size got no round trip at all.
 int run_ddsperf(const DdsperfOptions& o);
 
 }  // namespace sensor_rig::bench::perf

@@ -11,6 +11,7 @@ struct GridOptions {
   int table = 1;
   double duration_s = 60.0;
   Transport transport = Transport::kShm;
+  Message message = Message::kFixed;
   std::string out;
   std::vector<int> topologies;          // filters; empty = all
   std::vector<int> nodes;

@@ -28,6 +28,7 @@ struct NodeArgs {
   int depth = 10;
   bool loan = true;          // publishers: loan samples when Cyclone offers it (shm + fixed type)
   std::string csv;
+  std::string stats;         // JSON written at exit: shared memory, loaned/copied writes, zero-copy takes
   int discovery_timeout_ms = 60000;
   int rt_priority = 0;       // > 0: SCHED_FIFO at this priority (inherited by Cyclone's threads)
 };

@@ -28,11 +28,18 @@ class RouDi {
   [[nodiscard]] bool external() const noexcept { return external_pid_ > 0; }
   [[nodiscard]] int pid() const noexcept;
   [[nodiscard]] double startup_s() const noexcept { return startup_s_; }
+  // Stops the RouDi it started (as the destructor does); afterwards its CPU seconds and peak RSS
+  // (from wait4) are in stopped_cpu_s() / stopped_max_rss_kb(). No effect on an external RouDi.
+  void stop();
+  [[nodiscard]] double stopped_cpu_s() const noexcept { return stopped_cpu_s_; }
+  [[nodiscard]] long stopped_max_rss_kb() const noexcept { return stopped_max_rss_kb_; }
 
  private:
   std::unique_ptr<Child> child_;
   int external_pid_ = 0;
   double startup_s_ = 0.0;
+  double stopped_cpu_s_ = 0.0;
+  long stopped_max_rss_kb_ = 0;
 };
 
 }  // namespace sensor_rig::bench::perf

@@ -9,7 +9,9 @@
 namespace sensor_rig::bench::perf {
 
 enum class Transport { kUdp, kUdpTuned, kShm };
-enum class Message { kFixed, kSeq };  // fixed-size struct per size class (loanable) or sequence<octet>
+// fixed: fixed-size struct per size class (loanable); seq: header + sequence<octet>; pointcloud2: the
+// sensor_msgs/PointCloud2 the LIDAR driver publishes (24-byte points, S bytes of data).
+enum class Message { kFixed, kSeq, kPointCloud2 };
 enum class Role { kPublisher, kSubscriber };
 
 // The size classes of the paper (binary multiples): 0B 16B 64kB 512kB 1MB 2MB.
@@ -35,7 +37,7 @@ struct RunSpec {
   std::string out;            // output directory
 
   [[nodiscard]] std::uint32_t count() const;  // messages per publisher: rate x duration, rounded
-  [[nodiscard]] std::string label() const;    // "T2 N=32 1MB 10Hz shm"
+  [[nodiscard]] std::string label() const;    // "T2 N=32 1MB 10Hz shm" (+ " pointcloud2"/" seq")
   void validate() const;                      // throws cli::UsageError
 };
 
