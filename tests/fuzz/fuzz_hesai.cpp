@@ -5,7 +5,7 @@
 // time like the CLI does. Invariants: no crash, finite points, rings in range, counters add up.
 //
 // Built with -DRIG_FUZZ_CORPUS_MAIN instead, this file is the corpus generator:
-//   g++ -std=c++20 -DRIG_FUZZ_CORPUS_MAIN -Ilidar/include -Idrivers/include -Itests/lidar_hesai \
+//   g++ -std=c++20 -DRIG_FUZZ_CORPUS_MAIN -Ilidar/include -Idrivers/include -Itests/lidar_hesai
 //       tests/fuzz/fuzz_hesai.cpp && ./a.out tests/fuzz/corpus/hesai
 #include <cmath>
 #include <cstddef>
