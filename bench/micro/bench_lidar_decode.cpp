@@ -37,9 +37,11 @@ std::vector<Packet> load_capture(const std::string& path) {
   PcapReader r(path);
   while (auto rec = r.next()) {
     if (rec->packet.data.size() != velodyne::kDataPacketSize) continue;
+    // A packet without readable time (damaged capture) is still decoded (and counted as a drop):
+    // stamped with its record time, as the decode CLI does.
     const auto info = velodyne::read_packet_info(rec->packet.data);
-    out.push_back({std::vector<std::byte>(rec->packet.data.begin(), rec->packet.data.end()),
-                   velodyne::sensor_time_to_ns(info->sensor_time_us, rec->packet.rx_ns)});
+    const Nanos stamp = info ? velodyne::sensor_time_to_ns(info->sensor_time_us, rec->packet.rx_ns) : rec->packet.rx_ns;
+    out.push_back({std::vector<std::byte>(rec->packet.data.begin(), rec->packet.data.end()), stamp});
   }
   return out;
 }
