@@ -71,7 +71,7 @@ void register_mock_cli(CLI::App& mock, cli::Context& ctx) {
                 "bus: unix-listen:PATH (default, the bridge connects with unix:PATH), socketcan:IFACE, fd:N");
   p->add_option("--config", o->config, "protocol mapping YAML (default: config/dbw/paravan_ref.yaml)");
   p->add_option("--log", o->log, "write every frame on the bus (both directions) as candump -L; default $RIG_LOG_DIR/dbw_bus.log");
-  p->add_option("--fault", o->faults, "loss=P | bad-crc | stuck-counter | override | ecu-fault | bus-off, each [@START_S][+DURATION_S]");
+  p->add_option("--fault", o->faults, "loss=P | bad-crc | stuck-counter | override | ecu-fault | bus-off | no-status, each [@START_S][+DURATION_S]");
   p->add_option("--duration", o->duration, "seconds to run (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
   p->add_option("--seed", o->seed, "random seed for frame loss");
   p->add_flag("--print-state", o->print_state, "one JSON line per second with the vehicle state");

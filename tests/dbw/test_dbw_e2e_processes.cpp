@@ -2,9 +2,6 @@
 // bus -> `rig mock paravan` (ECU + vehicle model) -> feedback -> rt/vehicle/state, and the status
 // topic with reasons and config hash; the mock's candump log holds both directions.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -13,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "dbw_processes.hpp"
 #include "dbw_test_data.hpp"
 #include "sensor_rig/dbw/bridge/dds_domain.hpp"
 #include "sensor_rig/dbw/bridge/dds_types.hpp"
@@ -25,33 +23,8 @@ namespace dds = sensor_rig::dds;
 
 namespace {
 
-pid_t spawn(const std::vector<std::string>& args, const std::string& out) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int fd = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd >= 0) {
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-    }
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-
-int wait_exit(pid_t pid, int timeout_ms) {
-  for (int i = 0; i < timeout_ms / 10; ++i) {
-    int st = 0;
-    if (::waitpid(pid, &st, WNOHANG) == pid) return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-    ::usleep(10'000);
-  }
-  ::kill(pid, SIGKILL);
-  ::waitpid(pid, nullptr, 0);
-  return -1;
-}
+using sensor_rig::dbw::test::spawn;
+using sensor_rig::dbw::test::wait_exit;
 
 TEST(DbwProcesses, CommandsThroughBridgeAndMockEcuComeBackAsVehicleState) {
   const char* bin = std::getenv("RIG_BIN");

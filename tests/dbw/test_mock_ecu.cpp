@@ -28,15 +28,17 @@ class MockEcuTest : public ::testing::Test {
 
   // One 10 ms PU cycle then 10 model steps of 1 ms; returns the ECU's frames.
   std::vector<dbw::can::Frame> cycle(mock::MockEcu& ecu, bool enable, double steer_rad, double throttle,
-                                     bool corrupt = false) {
+                                     bool corrupt = false, bool heartbeat = true) {
     dbw::can::Frame f;
     EXPECT_TRUE(p.encode(*p.tx("steering"), {{"enable", enable ? 1 : 0}, {"angle", steer_rad}}, &steer, f));
     if (corrupt) f.data[0] ^= 0xFF;
     ecu.on_frame(f, now);
     EXPECT_TRUE(p.encode(*p.tx("longitudinal"), {{"enable", enable ? 1 : 0}, {"throttle", throttle}, {"gear", 4}}, &lon, f));
     ecu.on_frame(f, now);
-    EXPECT_TRUE(p.encode(*p.tx("heartbeat"), {{"state", enable ? 1 : 0}}, &hb, f));
-    ecu.on_frame(f, now);
+    if (heartbeat) {
+      EXPECT_TRUE(p.encode(*p.tx("heartbeat"), {{"state", enable ? 1 : 0}}, &hb, f));
+      ecu.on_frame(f, now);
+    }
     std::vector<dbw::can::Frame> out;
     for (int i = 0; i < 10; ++i) {
       now += kMs;
@@ -88,6 +90,56 @@ TEST_F(MockEcuTest, DisengagesOnPuSilenceAndBadE2e) {
   EXPECT_GE(ecu.counters().rx_e2e_errors, 4U);
 }
 
+TEST_F(MockEcuTest, OnlyThePuHeartbeatStoppingDisengagesAndIsReported) {
+  mock::MockEcu ecu(p, {});
+  cycle(ecu, false, 0, 0);
+  cycle(ecu, true, 0.1, 0.2);
+  ASSERT_TRUE(ecu.engaged());
+  auto reported_engaged = [&](const std::vector<dbw::can::Frame>& frames) {
+    double v = -1;
+    for (const auto& f : frames) {
+      if (p.rx("status")->matches(f)) v = *dbw::Protocol::value(*p.rx("status"), "engaged", f);
+    }
+    return v;
+  };
+  // Commands go on (valid, fresh, enabled); only the heartbeat is missing.
+  EXPECT_DOUBLE_EQ(reported_engaged(cycle(ecu, true, 0.1, 0.2)), 1.0);
+  int cycles = 0;
+  while (ecu.engaged() && cycles < 30) {
+    cycle(ecu, true, 0.1, 0.2, false, false);
+    ++cycles;
+  }
+  EXPECT_FALSE(ecu.engaged());
+  EXPECT_GE(cycles, 10) << "disengaged before the heartbeat timeout";
+  EXPECT_LE(cycles, 12) << "the heartbeat timeout is 100 ms";
+  EXPECT_EQ(ecu.last_disengage(), "pu timeout");
+  EXPECT_EQ(ecu.counters().pu_timeouts, 1U);
+  EXPECT_DOUBLE_EQ(reported_engaged(cycle(ecu, true, 0.1, 0.2, false, false)), 0.0) << "status must report it";
+  // Heartbeat back with enable held: no re-engagement without a new enable edge.
+  for (int i = 0; i < 5; ++i) cycle(ecu, true, 0.1, 0.2);
+  EXPECT_FALSE(ecu.engaged());
+  cycle(ecu, false, 0, 0);
+  cycle(ecu, true, 0.1, 0.2);
+  EXPECT_TRUE(ecu.engaged());
+}
+
+TEST_F(MockEcuTest, NoStatusFaultSilencesOnlyTheStatusMessage) {
+  mock::MockEcu ecu(p, {mock::parse_fault("no-status@0.1+0.1")});
+  std::map<std::string, int> during, outside;
+  for (int c = 0; c < 30; ++c) {
+    const double t = (c + 1) * 0.01;  // end of this cycle, ECU time
+    for (const auto& f : cycle(ecu, false, 0, 0)) {
+      auto& m = t > 0.11 && t <= 0.2 ? during : outside;
+      for (const auto& rm : p.rx_messages()) {
+        if (rm.matches(f)) ++m[rm.role];
+      }
+    }
+  }
+  EXPECT_EQ(during["status"], 0);
+  EXPECT_GE(during["feedback"], 8);
+  EXPECT_GE(outside["status"], 18);
+}
+
 TEST_F(MockEcuTest, InjectedFaultsShowOnTheBus) {
   mock::MockEcu ecu(p, {mock::parse_fault("bad-crc@0.1+0.05"), mock::parse_fault("stuck-counter@0.2+0.05"),
                         mock::parse_fault("override@0.3+0.05"), mock::parse_fault("ecu-fault@0.4+0.05"),
@@ -136,6 +188,7 @@ TEST(MockFaults, ParseSpecs) {
   EXPECT_TRUE(f.active(5.1));
   EXPECT_FALSE(f.active(5.3));
   EXPECT_DOUBLE_EQ(mock::parse_fault("loss=0.25").value, 0.25);
+  EXPECT_EQ(mock::parse_fault("no-status@1+0.2").kind, mock::FaultKind::no_status);
   EXPECT_THROW(mock::parse_fault("melt"), std::invalid_argument);
   EXPECT_THROW(mock::parse_fault("loss=2"), std::invalid_argument);
   EXPECT_THROW(mock::parse_fault("override@x"), std::invalid_argument);

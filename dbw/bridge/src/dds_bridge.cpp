@@ -1,5 +1,7 @@
 #include "sensor_rig/dbw/bridge/dds_bridge.hpp"
 
+#include <time.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -55,8 +57,13 @@ class Runner {
   DdsBridgeStats run() {
     const Nanos start = monotonic_now_ns();
     end_ = o_.duration_s > 0 ? start + static_cast<Nanos>(o_.duration_s * 1e9) : -1;
-    std::thread dds_thread([this] { dds_loop(); });
+    double dds_cpu_s = 0.0;
+    std::thread dds_thread([this, &dds_cpu_s] {
+      dds_loop();
+      dds_cpu_s = thread_cpu_s();
+    });
     can_loop();
+    const double can_cpu_s = thread_cpu_s();
     stop_ = true;
     dds_thread.join();
     DdsBridgeStats s;
@@ -69,10 +76,17 @@ class Runner {
     s.status_published = status_published_;
     s.state_published = state_published_;
     s.transport_closed = transport_closed_;
+    s.bridge_threads_cpu_s = dds_cpu_s + can_cpu_s;
     return s;
   }
 
  private:
+  static double thread_cpu_s() {
+    timespec ts{};
+    ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+  }
+
   static dds::QosSpec status_qos() {
     dds::QosSpec q;
     q.depth = 16;  // bursts of events must not overwrite each other
@@ -96,7 +110,7 @@ class Runner {
   }
 
   // Publishes pending safety events (and notes the silence->neutral time); caller holds mu_.
-  void flush_events(Nanos now) {
+  void flush_events() {
     for (const auto& e : core_.safety().take_events()) {
       if (e.kind == safety::EventKind::transition && e.reason == safety::Reason::command_timeout && last_cmd_rx_ > 0) {
         silence_to_neutral_ms_ = static_cast<double>(vehicle_now_ns() - last_cmd_rx_) * 1e-6;
@@ -106,7 +120,7 @@ class Runner {
         log::info("dbw", std::string(safety::to_string(e.kind)) + ": " + std::string(safety::to_string(e.reason)) +
                              " -> " + std::string(safety::to_string(e.state)));
       }
-      publish_status(now, &e);
+      publish_status(e.t, &e);  // stamped with the event's time: frames after it reflect it
     }
   }
 
@@ -145,7 +159,7 @@ class Runner {
     m.bus_state = const_cast<char*>(bus_state.c_str());
     const auto& c = core_.safety().counters();
     m.commands = c.commands;
-    m.commands_ignored = c.ignored_stale + c.ignored_sequence;
+    m.commands_ignored = c.ignored_stale + c.ignored_sequence + c.ignored_stamp;
     m.commands_rejected = c.rejected;
     m.commands_clamped = c.clamped;
     m.e2e_errors = c.e2e_errors;
@@ -174,15 +188,17 @@ class Runner {
     while (!done()) {
       if (!reader_.wait(20)) continue;
       reader_.take([this](const msg::DbwCommand& m, const dds_sample_info_t& info) {
-        const Nanos taken = vehicle_now_ns();
         std::lock_guard<std::mutex> lock(mu_);
+        // Read under the lock: no frame of the CAN thread can go out between this time (the time of
+        // any event the command causes) and the frames it produces.
+        const Nanos taken = vehicle_now_ns();
         core_.on_command(to_command(m), taken);
         last_cmd_rx_ = taken;
         send_frames(taken);
         const Nanos sent = vehicle_now_ns();
         latencies_.push_back(static_cast<double>(sent - info.source_timestamp) * 1e-3);
         take_to_send_.push_back(static_cast<double>(sent - taken) * 1e-3);
-        flush_events(sent);
+        flush_events();
       });
     }
   }
@@ -201,7 +217,7 @@ class Runner {
       } else if (st == can::IoStatus::closed) {
         log::error("dbw", "CAN transport closed: " + bus_.name());
         core_.safety().on_bus_state(true, now);  // nothing reaches the ECU any more
-        flush_events(now);
+        flush_events();
         transport_closed_ = true;
         break;
       }
@@ -214,7 +230,7 @@ class Runner {
       const bool dropped = was_engaged && core_.safety().state() != safety::State::engaged;
       const Nanos mono = monotonic_now_ns();
       if (dropped || mono - last_tx_ >= period) send_frames(now);  // disengage goes out at once
-      flush_events(now);
+      flush_events();
       if (mono >= next_status) {
         next_status = mono + 100'000'000;
         publish_status(now, nullptr);

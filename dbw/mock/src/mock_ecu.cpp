@@ -28,7 +28,8 @@ Fault parse_fault(const std::string& spec) {
   else if (name == "override") f.kind = FaultKind::driver_override;
   else if (name == "ecu-fault") f.kind = FaultKind::ecu_fault;
   else if (name == "bus-off") f.kind = FaultKind::bus_off;
-  else throw std::invalid_argument("unknown fault '" + name + "' (loss=P, bad-crc, stuck-counter, override, ecu-fault, bus-off; [@start][+duration])");
+  else if (name == "no-status") f.kind = FaultKind::no_status;
+  else throw std::invalid_argument("unknown fault '" + name + "' (loss=P, bad-crc, stuck-counter, override, ecu-fault, bus-off, no-status; [@start][+duration])");
   if (f.kind == FaultKind::frame_loss && (f.value < 0.0 || f.value > 1.0)) throw std::invalid_argument("loss probability must be 0..1");
   return f;
 }
@@ -137,7 +138,8 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
   const bool has_hb = p_.tx("heartbeat") != nullptr;
   const bool fresh = last_steer_ >= 0 && last_long_ >= 0 && now - last_steer_ <= timeout && now - last_long_ <= timeout &&
                      (!has_hb || (last_heartbeat_ >= 0 && now - last_heartbeat_ <= timeout));
-  const bool requested = fresh && steer_enable_ && long_enable_;
+  const bool enable_bits = steer_enable_ && long_enable_;
+  const bool requested = fresh && enable_bits;
   if (engaged_ && !fresh) {
     ++counters_.pu_timeouts;
     disengage("pu timeout");
@@ -147,8 +149,10 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
   int worst = 0;
   for (int l : e2e_level_) worst = std::max(worst, l);
   const bool ready = !fault_now && !bus_off_ && worst <= p_.e2e_tolerance();
-  if (requested && !prev_requested_ && ready && !override_now) engaged_ = true;
-  prev_requested_ = requested;
+  // Engage on a rising edge of the enable bits themselves: the PU's frames (or heartbeat) coming back
+  // after a timeout with enable still set is not a new request.
+  if (requested && !prev_enable_bits_ && ready && !override_now) engaged_ = true;
+  prev_enable_bits_ = enable_bits;
 
   ActuatorRequest act;
   act.steer = model_.state().steer;  // disengaged: the driver holds the wheel
@@ -162,6 +166,7 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
     const auto& s = model_.state();
     for (std::size_t i = 0; i < rxm.size(); ++i) {
       if (rxm[i].role == "status") {
+        if (fault_active(FaultKind::no_status, t_s)) continue;
         emit(rxm[i], {{"ready", ready ? 1 : 0}, {"engaged", engaged_ ? 1 : 0}, {"override", override_now ? 1 : 0},
                       {"fault", fault_now ? 1 : 0}, {"fault_code", fault_now ? 1 : 0}},
              senders_[i], t_s, out);

@@ -27,6 +27,8 @@ struct DdsBridgeStats {
   std::uint64_t status_published = 0;
   std::uint64_t state_published = 0;
   bool transport_closed = false;  // the CAN transport went away before the end (a runtime failure)
+  // CPU time of the bridge's own two threads (DDS reader + CAN loop), not Cyclone's threads.
+  double bridge_threads_cpu_s = 0.0;
 };
 
 DdsBridgeStats run_dds_bridge(const Protocol& protocol, can::Transport& bus, const DdsBridgeOptions& o);

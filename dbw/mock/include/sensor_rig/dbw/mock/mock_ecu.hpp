@@ -15,10 +15,11 @@
 
 namespace sensor_rig::dbw::mock {
 
-enum class FaultKind : std::uint8_t { frame_loss, bad_crc, stuck_counter, driver_override, ecu_fault, bus_off };
+enum class FaultKind : std::uint8_t { frame_loss, bad_crc, stuck_counter, driver_override, ecu_fault, bus_off, no_status };
 
 // "name[=value][@start_s][+duration_s]": loss=0.2, bad-crc@2, stuck-counter@2+1, override@3+0.5,
-// ecu-fault@4, bus-off@5+0.3. Without a start: from the beginning; without duration: until the end.
+// ecu-fault@4, bus-off@5+0.3, no-status@6+0.3 (the status message, the ECU's heartbeat, stops; the
+// rest goes on). Without a start: from the beginning; without duration: until the end.
 struct Fault {
   FaultKind kind = FaultKind::frame_loss;
   double value = 1.0;  // loss probability
@@ -72,7 +73,7 @@ class MockEcu {
   Nanos last_steer_ = -1, last_long_ = -1, last_heartbeat_ = -1;
   Nanos next_status_ = 0, next_wheels_ = 0;
   bool steer_enable_ = false, long_enable_ = false, engaged_ = false;
-  bool prev_requested_ = false;
+  bool prev_enable_bits_ = false;
   bool bus_off_ = false;
   ActuatorRequest req_{};
   EcuCounters counters_{};
