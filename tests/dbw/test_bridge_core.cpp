@@ -37,18 +37,25 @@ struct Loop {
     }
     last_tx.clear();
     bridge.frames(now, last_tx);
+    if (bus_off) {
+      refused += last_tx.size();  // as the transport does: refused, not queued
+      last_tx.clear();
+    }
     for (const auto& f : last_tx) ecu.on_frame(f, now);
     for (int i = 0; i < 10; ++i) {
       now += kMs;
       for (const auto& f : ecu.step(now)) {
         dbw::can::RxFrame rx{f, now};
         bridge.on_frame(rx, now);
-        if (f.error) bridge.on_bus_state(dbw::can::classify_error_frame(f).bus_off ? dbw::can::BusState::bus_off
-                                                                                 : dbw::can::BusState::active,
-                                         now);
+        if (f.error) {
+          bus_off = dbw::can::classify_error_frame(f).bus_off;
+          bridge.on_bus_state(bus_off ? dbw::can::BusState::bus_off : dbw::can::BusState::active, now);
+        }
       }
     }
   }
+  bool bus_off = false;
+  std::size_t refused = 0;
   double tx_enable() {
     for (const auto& f : last_tx) {
       if (p.tx("steering")->matches(f)) return *dbw::Protocol::value(*p.tx("steering"), "enable", f);
@@ -90,6 +97,23 @@ TEST(BridgeLoop, CommandSilenceSendsNeutralWithinOnePeriodOfTheTimeout) {
   EXPECT_FALSE(l.ecu.engaged());
 }
 
+// Every command message of the last cycle decodes to the protocol's neutral request (enable 0,
+// zero steering angle/torque, zero pedals and acceleration, gear "keep"), and the heartbeat reports
+// disengaged. Returns how many command frames were checked.
+int expect_all_neutral(const Loop& l) {
+  int checked = 0;
+  for (const auto& f : l.last_tx) {
+    for (const auto& rm : l.p.tx_messages()) {
+      if (!rm.matches(f)) continue;
+      for (const auto& [role, sig] : rm.signals) {
+        EXPECT_DOUBLE_EQ(*dbw::Protocol::value(rm, role, f), 0.0) << rm.role << "." << role;
+      }
+      if (rm.role != "heartbeat") ++checked;
+    }
+  }
+  return checked;
+}
+
 struct FaultCase {
   const char* fault;
   s::Reason reason;
@@ -105,8 +129,54 @@ TEST_P(BridgeFaults, EachInjectedFaultDisengagesWithItsReason) {
   for (int i = 0; i < 100 && l.bridge.safety().state() == s::State::engaged; ++i) l.cycle(true, true);
   EXPECT_EQ(l.bridge.safety().state(), s::State::disengaged);
   EXPECT_EQ(l.bridge.safety().reason(), GetParam().reason);
-  for (int i = 0; i < 3; ++i) l.cycle(true, true);
-  EXPECT_DOUBLE_EQ(l.tx_enable(), l.bridge.safety().state() == s::State::engaged ? 1.0 : 0.0);
+  // Enable held, fresh commands: the disengage latches and only neutral frames go out.
+  for (int i = 0; i < 3; ++i) {
+    l.cycle(true, true);
+    EXPECT_EQ(l.bridge.safety().state(), s::State::disengaged) << i;
+    if (!l.bus_off) {
+      EXPECT_EQ(expect_all_neutral(l), 2) << i;
+      EXPECT_DOUBLE_EQ(l.tx_enable(), 0.0);
+    }
+  }
+  EXPECT_FALSE(l.ecu.engaged());
+}
+
+TEST(BridgeLoop, AfterBusOffRecoveryOnlyNeutralFramesUntilANewEnableEdge) {
+  Loop l({dbw::mock::parse_fault("bus-off@0.2+0.3")});
+  l.cycle(true, false);
+  for (int i = 0; i < 10; ++i) l.cycle(true, true, 0.3, 0.1);
+  ASSERT_EQ(l.bridge.safety().state(), s::State::engaged);
+  ASSERT_DOUBLE_EQ(l.tx_enable(), 1.0);
+  int cycles = 0;
+  while (!l.bus_off && cycles++ < 50) l.cycle(true, true, 0.5, 0.2);  // the command changes as the bus drops
+  ASSERT_TRUE(l.bus_off);
+  EXPECT_EQ(l.bridge.safety().reason(), s::Reason::bus_off);
+  // Bus-off: fresh enabled commands keep coming; every frame is refused.
+  cycles = 0;
+  while (l.bus_off && cycles++ < 50) l.cycle(true, true, 0.5, 0.2);
+  ASSERT_FALSE(l.bus_off) << "the bus did not recover";
+  EXPECT_GE(l.refused, 3U * 20U) << "the bridge kept transmitting (refused) while bus-off";
+  // Recovered: the first frames out are neutral, not the command of the bus-off period.
+  for (int i = 0; i < 5; ++i) {
+    l.cycle(true, true, 0.5, 0.2);
+    EXPECT_EQ(l.bridge.safety().state(), s::State::disengaged) << i;
+    EXPECT_EQ(expect_all_neutral(l), 2) << i;
+  }
+  EXPECT_FALSE(l.ecu.engaged());
+  // A new enable edge engages again, with the current command.
+  l.cycle(true, false, 0.5, 0.2);
+  EXPECT_EQ(expect_all_neutral(l), 2);
+  l.cycle(true, true, 0.5, 0.2);
+  EXPECT_EQ(l.bridge.safety().state(), s::State::engaged);
+  EXPECT_DOUBLE_EQ(l.tx_enable(), 1.0);
+  const auto* lon = l.p.tx("longitudinal");
+  for (const auto& f : l.last_tx) {
+    if (lon->matches(f)) {
+      EXPECT_NEAR(*dbw::Protocol::value(*lon, "throttle", f), 0.5, 0.01);
+    }
+  }
+  for (int i = 0; i < 3; ++i) l.cycle(true, true, 0.5, 0.2);
+  EXPECT_TRUE(l.ecu.engaged());
 }
 
 INSTANTIATE_TEST_SUITE_P(All, BridgeFaults,
@@ -115,6 +185,7 @@ INSTANTIATE_TEST_SUITE_P(All, BridgeFaults,
                                            FaultCase{"bad-crc@0.2", s::Reason::e2e_errors},
                                            FaultCase{"stuck-counter@0.2", s::Reason::e2e_errors},
                                            FaultCase{"bus-off@0.2+0.3", s::Reason::bus_off},
-                                           FaultCase{"loss=1@0.2", s::Reason::ecu_timeout}));
+                                           FaultCase{"loss=1@0.2", s::Reason::ecu_timeout},
+                                           FaultCase{"no-status@0.2", s::Reason::ecu_timeout}));
 
 }  // namespace
