@@ -1,15 +1,24 @@
 // The dbw commands as processes: exit codes on bad input (SPEC §7: 2 = usage/config), the mock's
-// bus log in $RIG_LOG_DIR, and `rig can decode` on a small log with multiplexing.
+// bus log in $RIG_LOG_DIR, `rig can decode` on a small log with multiplexing, and `rig can replay`
+// onto a unix seqpacket bus the test owns.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "dbw_test_data.hpp"
+#include "rig_cli.hpp"
+#include "sensor_rig/dbw/can/candump.hpp"
+#include "sensor_rig/dbw/can/transport.hpp"
 
 namespace fs = std::filesystem;
 
@@ -82,6 +91,51 @@ TEST_F(DbwCli, MockLogsToRigLogDir) {
   const std::string log = sensor_rig::dbw::test::read_text(dir / "dbw_bus.log");
   EXPECT_GT(std::count(log.begin(), log.end(), '\n'), 40);
   EXPECT_NE(log.find(" can0 180#"), std::string::npos);
+}
+
+// A generated log with classic, extended, remote and FD frames, a 10 ms cadence and a 200 ms gap,
+// replayed at twice the recorded speed: every frame arrives unchanged, in order, at its scaled time.
+TEST_F(DbwCli, ReplaySendsTheLogAtItsScaledTiming) {
+  namespace can = sensor_rig::dbw::can;
+  std::ostringstream text;
+  std::vector<can::LogRecord> expected;
+  const char* frames[] = {"123#0102030405060708", "1ABCDEF0#CAFE", "7FF#R", "456##1000102030405060708090A0B", "010#"};
+  double t = 1700000000.0;
+  for (int i = 0; i < 30; ++i) {
+    t += i == 20 ? 0.2 : 0.01;
+    char line[160];
+    std::snprintf(line, sizeof line, "(%.6f) can%d %s", t, i % 2, frames[i % 5]);
+    text << line << "\n";
+    can::LogRecord r;
+    ASSERT_EQ(can::parse_candump_line(line, r), can::LineStatus::ok) << line;
+    expected.push_back(r);
+  }
+  std::ofstream(dir / "gen.log") << text.str();
+  const std::string sock = (dir / "replay.sock").string();
+  auto bus = can::open_transport("unix-listen:" + sock);
+  sensor_rig::test::CliRun replay;
+  std::thread runner([&] { replay = sensor_rig::test::run_rig("can replay " + (dir / "gen.log").string() +
+                                                              " --transport unix:" + sock + " --rate 2"); });
+  std::vector<can::RxFrame> got;
+  can::RxFrame rx;
+  while (got.size() < expected.size() && bus->receive(rx, 3000) == can::IoStatus::ok) got.push_back(rx);
+  runner.join();
+  EXPECT_EQ(replay.code, 0) << replay.err;
+  EXPECT_NE(replay.err.find(std::to_string(expected.size()) + " frames sent, 0 refused"), std::string::npos) << replay.err;
+  ASSERT_EQ(got.size(), expected.size());
+  double worst_ms = 0.0;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_TRUE(got[i].frame == expected[i].frame) << i << ": " << can::format_frame(got[i].frame) << " vs "
+                                                   << can::format_frame(expected[i].frame);
+    const double want_ms = static_cast<double>(expected[i].stamp - expected[0].stamp) * 1e-6 / 2.0;
+    const double got_ms = static_cast<double>(got[i].stamp - got[0].stamp) * 1e-6;
+    worst_ms = std::max(worst_ms, std::abs(got_ms - want_ms));
+    EXPECT_GE(got_ms, want_ms - 2.0) << "frame " << i << " early";
+  }
+  EXPECT_LT(worst_ms, 50.0) << "loose bound: the machine is shared";
+  const double span_ms = static_cast<double>(got.back().stamp - got.front().stamp) * 1e-6;
+  EXPECT_GT(span_ms, 230.0) << "rate 2 of a 0.48 s log";
+  EXPECT_LT(span_ms, 400.0) << "rate 2 of a 0.48 s log";
 }
 
 }  // namespace
