@@ -58,6 +58,29 @@ TEST(Protocol, HashChangesWithTheMapping) {
   fs::remove_all(dir);
 }
 
+TEST(Protocol, HashChangesWithTheDbcAlone) {
+  const fs::path dir = fs::temp_directory_path() / ("protodbc_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string dbc = sensor_rig::dbw::test::read_text(ref_yaml().parent_path() / "paravan_ref.dbc");
+  const std::string yaml = sensor_rig::dbw::test::read_text(ref_yaml());
+  std::ofstream(dir / "paravan_ref.dbc") << dbc;
+  std::ofstream(dir / "m.yaml") << yaml;
+  const std::string base = Protocol::load((dir / "m.yaml").string()).config_hash();
+  EXPECT_EQ(base, Protocol::load(ref_yaml().string()).config_hash()) << "same bytes, other directory: same hash";
+  // The mapping file stays byte for byte the same; only the DBC it names changes (a cycle time).
+  std::string changed = dbc;
+  const std::string from = "BA_ \"GenMsgCycleTime\" BO_ 384 10;";
+  const auto pos = changed.find(from);
+  ASSERT_NE(pos, std::string::npos);
+  changed.replace(pos, from.size(), "BA_ \"GenMsgCycleTime\" BO_ 384 20;");
+  std::ofstream(dir / "paravan_ref.dbc", std::ios::trunc) << changed;
+  const auto p = Protocol::load((dir / "m.yaml").string());
+  EXPECT_EQ(p.db().cycle_time_ms(*p.rx("status")->message), 20) << "the changed DBC was loaded";
+  EXPECT_NE(p.config_hash(), base);
+  EXPECT_EQ(p.config_hash().size(), 16U);
+  fs::remove_all(dir);
+}
+
 TEST(Protocol, LimitOverridesFromTheMapping) {
   const fs::path dir = fs::temp_directory_path() / ("protolim_" + std::to_string(::getpid()));
   fs::create_directories(dir);
