@@ -16,6 +16,7 @@ BridgeCore::BridgeCore(const Protocol& p) : p_(p), safety_(safety_config(p)) {
   for (const auto& m : p_.rx_messages()) checkers_.emplace_back(m.e2e);
 }
 
+// Applies every role the message maps; a message may carry status and feedback roles at once.
 RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
   ++counters_.frames_received;
   if (rx.frame.error) return RxKind::error_frame;
@@ -33,54 +34,54 @@ RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
       safety_.on_e2e(ok, now);
       if (!ok) return RxKind::e2e_error;
     }
-    auto get = [&](std::string_view role) { return Protocol::value(rm, role, rx.frame).value_or(0.0); };
-    if (rm.role == "status") {
-      ecu_.ready = get("ready") > 0.5;
-      ecu_.engaged = get("engaged") > 0.5;
-      ecu_.override = get("override") > 0.5;
-      ecu_.fault = get("fault") > 0.5;
-      ecu_.fault_code = static_cast<std::uint8_t>(get("fault_code"));
-      safety_.on_ecu_status(ecu_, now);
-      return RxKind::status;
+    auto has = [&](std::string_view role) { return rm.signal(role) != nullptr; };
+    auto get = [&](std::string_view role, double fallback) { return Protocol::value(rm, role, rx.frame).value_or(fallback); };
+    RxKind kind = RxKind::other;
+    if (has("fl")) {
+      fb_.wheels[0] = get("fl", fb_.wheels[0]);
+      fb_.wheels[1] = get("fr", fb_.wheels[1]);
+      fb_.wheels[2] = get("rl", fb_.wheels[2]);
+      fb_.wheels[3] = get("rr", fb_.wheels[3]);
+      kind = RxKind::wheels;
     }
-    if (rm.role == "feedback") {
+    if (has("speed") || has("steering_angle") || has("yaw_rate")) {
       fb_.stamp = rx.stamp;
-      fb_.speed = get("speed");
-      fb_.steering_angle = get("steering_angle");
-      fb_.yaw_rate = get("yaw_rate");
-      fb_.gear = static_cast<int>(get("gear"));
-      return RxKind::feedback;
+      fb_.speed = get("speed", fb_.speed);
+      fb_.steering_angle = get("steering_angle", fb_.steering_angle);
+      fb_.yaw_rate = get("yaw_rate", fb_.yaw_rate);
+      if (has("gear")) fb_.gear = static_cast<int>(get("gear", 0.0));
+      kind = RxKind::feedback;
     }
-    if (rm.role == "wheels") {
-      fb_.wheels[0] = get("fl");
-      fb_.wheels[1] = get("fr");
-      fb_.wheels[2] = get("rl");
-      fb_.wheels[3] = get("rr");
-      return RxKind::wheels;
+    if (has("ready") || has("override") || has("fault")) {
+      // The message carrying the ECU's readiness is its heartbeat: every one refreshes the status.
+      auto flag = [&](std::string_view role, bool current) { return has(role) ? get(role, 0.0) > 0.5 : current; };
+      ecu_.ready = flag("ready", ecu_.ready);
+      ecu_.engaged = flag("engaged", ecu_.engaged);
+      ecu_.override = flag("override", ecu_.override);
+      ecu_.fault = flag("fault", ecu_.fault);
+      if (has("fault_code")) ecu_.fault_code = static_cast<std::uint8_t>(get("fault_code", 0.0));
+      safety_.on_ecu_status(ecu_, now);
+      if (kind == RxKind::other) kind = RxKind::status;
     }
+    return kind;
   }
   return RxKind::other;
 }
 
+// Every tx message gets every command value it maps (and the enable of the decision): a protocol may
+// spread steering, throttle, brake, gear and enable over as many messages as it likes.
 void BridgeCore::frames(Nanos now, std::vector<can::Frame>& out) {
   const safety::Decision d = safety_.tick(now);
+  const double en = d.active ? 1.0 : 0.0;
+  const safety::Command& c = d.command;  // zeros when not active: the neutral/disengage request
   const auto& txm = p_.tx_messages();
   for (std::size_t i = 0; i < txm.size(); ++i) {
-    const RoleMessage& rm = txm[i];
     can::Frame f;
-    bool ok = false;
-    const double en = d.active ? 1.0 : 0.0;
-    const safety::Command& c = d.command;  // zeros when not active: the neutral/disengage request
-    if (rm.role == "steering") {
-      ok = p_.encode(rm, {{"enable", en}, {"mode", 0}, {"angle", c.steering_angle}, {"torque", c.steering_torque}},
-                     &senders_[i], f);
-    } else if (rm.role == "longitudinal") {
-      ok = p_.encode(rm, {{"enable", en}, {"gear", static_cast<double>(c.gear)}, {"throttle", c.throttle},
-                          {"brake", c.brake}, {"accel", c.accel}},
-                     &senders_[i], f);
-    } else if (rm.role == "heartbeat") {
-      ok = p_.encode(rm, {{"state", en}}, &senders_[i], f);
-    }
+    const bool ok = p_.encode(txm[i],
+                              {{"enable", en}, {"state", en}, {"mode", 0}, {"angle", c.steering_angle},
+                               {"torque", c.steering_torque}, {"gear", static_cast<double>(c.gear)}, {"throttle", c.throttle},
+                               {"brake", c.brake}, {"accel", c.accel}},
+                              &senders_[i], f);
     if (ok) {
       out.push_back(f);
     } else {

@@ -1,5 +1,6 @@
 #include "sensor_rig/dbw/bridge/protocol.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -19,23 +20,24 @@ std::string read_all(const std::string& path) {
   return ss.str();
 }
 
-struct RoleSpec {
-  std::string_view role;
-  std::vector<std::string_view> required;
-  std::vector<std::string_view> optional;
-  bool message_required;
+// The roles a message of each direction may map. Any number of messages, each named freely; a role
+// may appear in several messages (e.g. one enable bit per actuator message).
+struct GroupSpec {
+  std::vector<std::string_view> roles;
+  std::vector<std::string_view> required;      // mapped by at least one message of the group
+  std::vector<std::string_view> needs_enable;  // a message mapping one of these must map "enable" too
 };
+const GroupSpec kTxSpec = {{"enable", "mode", "angle", "torque", "gear", "throttle", "brake", "accel", "state"},
+                           {"enable", "angle", "throttle", "brake"},
+                           {"mode", "angle", "torque", "gear", "throttle", "brake", "accel"}};
+const GroupSpec kRxSpec = {{"ready", "engaged", "override", "fault", "fault_code", "speed", "steering_angle", "yaw_rate",
+                            "gear", "fl", "fr", "rl", "rr"},
+                           {"ready", "override", "fault", "speed", "steering_angle"},
+                           {}};
 
-const std::vector<RoleSpec> kTxSpecs = {
-    {"steering", {"enable", "angle"}, {"torque", "mode"}, true},
-    {"longitudinal", {"enable", "throttle", "brake"}, {"gear", "accel"}, true},
-    {"heartbeat", {}, {"state"}, false},
-};
-const std::vector<RoleSpec> kRxSpecs = {
-    {"status", {"ready", "override", "fault"}, {"engaged", "fault_code"}, true},
-    {"feedback", {"speed", "steering_angle"}, {"yaw_rate", "gear"}, true},
-    {"wheels", {"fl", "fr", "rl", "rr"}, {}, false},
-};
+bool contains(const std::vector<std::string_view>& v, std::string_view x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
 
 // A 4-bit counter must be one nibble; a CRC one whole byte (either byte order).
 bool nibble_of(const dbc::Signal& s, std::size_t& byte, bool& high) {
@@ -57,6 +59,113 @@ bool byte_of(const dbc::Signal& s, std::size_t& byte) {
   byte = s.start_bit / 8U;
   return (s.order == dbc::ByteOrder::intel && s.start_bit % 8 == 0) ||
          (s.order == dbc::ByteOrder::motorola && s.start_bit % 8 == 7);
+}
+
+// signals: {role: SIGNAL} or {role: {signal: SIGNAL, scale: X}} (bus value = role value * scale).
+void bind_signals(const config::Node& n, const GroupSpec& spec, RoleMessage& rm) {
+  const auto sigs = n.child("signals", true);
+  if (!sigs) return;
+  for (const auto& kv : sigs->yaml()) {
+    const std::string role = kv.first.Scalar();
+    if (!contains(spec.roles, role)) {
+      sigs->fail(role, "unknown role '" + role + "'");
+      continue;
+    }
+    std::string name;
+    double scale = 1.0;
+    if (kv.second.IsMap()) {
+      const auto b = sigs->child(role);
+      b->allow_keys({"signal", "scale"});
+      name = b->get_string("signal");
+      scale = b->get_double("scale", -1e9, 1e9, 1.0);
+      if (scale == 0.0) b->fail("scale", "must not be 0");
+    } else {
+      name = sigs->get_string(role);
+    }
+    const dbc::Signal* s = rm.message->find(name);
+    if (s == nullptr) {
+      sigs->fail(role, "no signal '" + name + "' in message " + rm.message->name);
+      continue;
+    }
+    rm.signals.emplace(role, s);
+    if (scale != 1.0) rm.scales.emplace(role, scale);
+  }
+  const bool actuates = std::any_of(spec.needs_enable.begin(), spec.needs_enable.end(),
+                                    [&rm](std::string_view r) { return rm.signal(r) != nullptr; });
+  if (actuates && rm.signal("enable") == nullptr) sigs->fail("enable", "required role 'enable' is not mapped");
+}
+
+// const: {SIGNAL: value} written into every frame of the message (e.g. a request-type multiplexor).
+void bind_constants(const config::Node& n, RoleMessage& rm) {
+  const auto c = n.child("const");
+  if (!c) return;
+  for (const auto& kv : c->yaml()) {
+    const std::string name = kv.first.Scalar();
+    const dbc::Signal* s = rm.message->find(name);
+    if (s == nullptr) {
+      c->fail(name, "no signal '" + name + "' in message " + rm.message->name);
+      continue;
+    }
+    rm.constants.emplace_back(s, c->get_double(name, -1e12, 1e12));
+  }
+}
+
+// Counter/CRC signals and the message's own E2E settings (`e2e:` overrides the file's defaults;
+// `data_id_list:` gives P02's 16 Data IDs, default data_id + counter).
+void bind_e2e(const config::Node& n, const safety::E2eConfig& base, RoleMessage& rm) {
+  const std::string& msg = rm.message->name;
+  rm.e2e = base;
+  if (const auto e = n.child("e2e")) {
+    e->allow_keys({"profile", "data_id_mode", "max_delta"});
+    const std::string prof = e->get_choice("profile", {"none", "counter", "j1850", "p01", "p02"}, std::string(safety::to_string(base.profile)));
+    (void)safety::parse_profile(prof, rm.e2e.profile);
+    if (e->has("data_id_mode")) {
+      (void)safety::parse_id_mode(e->get_choice("data_id_mode", {"both", "alt", "low", "nibble"}), rm.e2e.id_mode);
+    }
+    rm.e2e.max_delta = static_cast<std::uint8_t>(e->get_int("max_delta", 1, 14, base.max_delta));
+  }
+  const bool has_counter = n.has("counter");
+  const bool has_crc = n.has("crc");
+  if ((!has_counter && !has_crc) || rm.e2e.profile == safety::E2eProfile::none) {
+    rm.e2e.profile = safety::E2eProfile::none;
+    return;
+  }
+  if (has_counter) {
+    const std::string cname = n.get_string("counter");
+    const dbc::Signal* c = rm.message->find(cname);
+    if (c == nullptr || !nibble_of(*c, rm.e2e.counter_byte, rm.e2e.counter_high_nibble)) {
+      n.fail("counter", "'" + cname + "' must be a 4-bit, nibble-aligned signal of " + msg);
+    }
+  } else {
+    n.fail("counter", "E2E needs a counter signal when a CRC is mapped");
+  }
+  if (has_crc) {
+    const std::string cname = n.get_string("crc");
+    const dbc::Signal* c = rm.message->find(cname);
+    if (c == nullptr || !byte_of(*c, rm.e2e.crc_byte)) {
+      n.fail("crc", "'" + cname + "' must be an 8-bit, byte-aligned signal of " + msg);
+    }
+  } else if (safety::has_crc(rm.e2e.profile)) {
+    rm.e2e.profile = safety::E2eProfile::counter;
+  }
+  rm.e2e.data_id = static_cast<std::uint16_t>(n.get_int("data_id", 0, 0xFFFF, 0));
+  for (std::size_t i = 0; i < 16; ++i) rm.e2e.data_id_list[i] = static_cast<std::uint8_t>((rm.e2e.data_id + i) & 0xFF);
+  if (n.has("data_id_list")) {
+    const YAML::Node list = n.yaml()["data_id_list"];
+    if (!list.IsSequence() || list.size() != 16) {
+      n.fail("data_id_list", "must be a list of 16 bytes (P02: one Data ID per counter value)");
+      return;
+    }
+    for (std::size_t i = 0; i < 16; ++i) {
+      try {
+        const int v = list[i].as<int>();
+        if (v < 0 || v > 255) throw YAML::Exception(YAML::Mark::null_mark(), "range");
+        rm.e2e.data_id_list[i] = static_cast<std::uint8_t>(v);
+      } catch (const YAML::Exception&) {
+        n.fail("data_id_list", "entry " + std::to_string(i) + " is not a byte 0..255");
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -147,87 +256,34 @@ Protocol Protocol::load(const std::string& yaml_path) {
     e2e_base.max_delta = static_cast<std::uint8_t>(e->get_int("max_delta", 1, 14, 1));
     p.e2e_tolerance_ = static_cast<int>(e->get_int("tolerance", 0, 100, 3));
   }
-  auto load_group = [&](std::string_view group, const std::vector<RoleSpec>& specs, std::vector<RoleMessage>& out) {
+  auto load_group = [&](std::string_view group, const GroupSpec& spec, std::vector<RoleMessage>& out) {
     const auto g = root.child(group, true);
     if (!g) return;
-    std::vector<std::string_view> names;
-    for (const auto& s : specs) names.push_back(s.role);
     for (const auto& kv : g->yaml()) {
-      bool known = false;
-      for (auto n : names) known = known || n == kv.first.Scalar();
-      if (!known) g->fail(kv.first.Scalar(), "unknown role (allowed: " + std::string(specs[0].role) + ", ...)");
-    }
-    for (const auto& spec : specs) {
-      const auto n = g->child(spec.role, spec.message_required);
+      const std::string label = kv.first.Scalar();
+      const auto n = g->child(label, true);
       if (!n) continue;
-      n->allow_keys({"message", "data_id", "counter", "crc", "signals"});
+      n->allow_keys({"message", "data_id", "data_id_list", "e2e", "counter", "crc", "signals", "const"});
       RoleMessage rm;
-      rm.role = std::string(spec.role);
+      rm.role = label;
       const std::string msg = n->get_string("message");
       rm.message = p.db_->find(msg);
       if (rm.message == nullptr) {
         n->fail("message", "no message '" + msg + "' in " + dbc_path);
         continue;
       }
-      const auto sigs = n->child("signals", !spec.required.empty());
-      auto bind = [&](std::string_view role, bool required) {
-        if (!sigs) return;
-        if (!sigs->has(role)) {
-          if (required) sigs->fail(role, "required role '" + std::string(role) + "' is not mapped");
-          return;
-        }
-        const std::string name = sigs->get_string(role);
-        const dbc::Signal* s = rm.message->find(name);
-        if (s == nullptr) {
-          sigs->fail(role, "no signal '" + name + "' in message " + msg);
-          return;
-        }
-        rm.signals.emplace(std::string(role), s);
-      };
-      for (auto r : spec.required) bind(r, true);
-      for (auto r : spec.optional) bind(r, false);
-      if (sigs) {
-        for (const auto& kv : sigs->yaml()) {
-          bool known = false;
-          for (auto r : spec.required) known = known || r == kv.first.Scalar();
-          for (auto r : spec.optional) known = known || r == kv.first.Scalar();
-          if (!known) sigs->fail(kv.first.Scalar(), "unknown role for " + std::string(spec.role));
-        }
-      }
-      rm.e2e = e2e_base;
-      const bool has_counter = n->has("counter");
-      const bool has_crc = n->has("crc");
-      if (!has_counter && !has_crc) {
-        rm.e2e.profile = safety::E2eProfile::none;
-      } else {
-        if (has_counter) {
-          const std::string cname = n->get_string("counter");
-          const dbc::Signal* c = rm.message->find(cname);
-          if (c == nullptr || !nibble_of(*c, rm.e2e.counter_byte, rm.e2e.counter_high_nibble)) {
-            n->fail("counter", "'" + cname + "' must be a 4-bit, nibble-aligned signal of " + msg);
-          }
-        } else {
-          n->fail("counter", "E2E needs a counter signal when a CRC is mapped");
-        }
-        if (has_crc) {
-          const std::string cname = n->get_string("crc");
-          const dbc::Signal* c = rm.message->find(cname);
-          if (c == nullptr || !byte_of(*c, rm.e2e.crc_byte)) {
-            n->fail("crc", "'" + cname + "' must be an 8-bit, byte-aligned signal of " + msg);
-          }
-        } else if (safety::has_crc(rm.e2e.profile)) {
-          rm.e2e.profile = safety::E2eProfile::counter;
-        }
-        rm.e2e.data_id = static_cast<std::uint16_t>(n->get_int("data_id", 0, 0xFFFF, 0));
-        for (std::size_t i = 0; i < 16; ++i) {
-          rm.e2e.data_id_list[i] = static_cast<std::uint8_t>((rm.e2e.data_id + i) & 0xFF);
-        }
-      }
+      bind_signals(*n, spec, rm);
+      bind_constants(*n, rm);
+      bind_e2e(*n, e2e_base, rm);
       out.push_back(std::move(rm));
     }
+    for (auto r : spec.required) {
+      const bool mapped = std::any_of(out.begin(), out.end(), [r](const RoleMessage& m) { return m.signal(r) != nullptr; });
+      if (!mapped) g->fail(r, "required role '" + std::string(r) + "' is not mapped in any " + std::string(group) + " message");
+    }
   };
-  load_group("tx", kTxSpecs, p.tx_);
-  load_group("rx", kRxSpecs, p.rx_);
+  load_group("tx", kTxSpec, p.tx_);
+  load_group("rx", kRxSpec, p.rx_);
   problems->throw_if_any();
   p.hash_ = fnv1a64_hex(dbc_text, read_all(yaml_path));
   return p;
@@ -254,10 +310,13 @@ bool Protocol::encode(const RoleMessage& rm, std::initializer_list<std::pair<std
   out.extended = rm.message->extended;
   out.len = rm.message->size;
   out.fd = rm.message->size > can::kClassicMaxLen;
+  for (const auto& [sig, v] : rm.constants) {
+    if (dbc::encode(*sig, v, out.payload()) == dbc::EncodeStatus::out_of_frame) return false;
+  }
   for (const auto& [role, v] : values) {
     const dbc::Signal* s = rm.signal(role);
     if (s == nullptr) continue;
-    const auto st = dbc::encode(*s, v, out.payload());
+    const auto st = dbc::encode(*s, v * rm.scale(role), out.payload());
     if (st == dbc::EncodeStatus::not_finite || st == dbc::EncodeStatus::out_of_frame) return false;
     if (st == dbc::EncodeStatus::clamped && clamped != nullptr) ++*clamped;
   }
@@ -268,7 +327,9 @@ bool Protocol::encode(const RoleMessage& rm, std::initializer_list<std::pair<std
 std::optional<double> Protocol::value(const RoleMessage& rm, std::string_view role, const can::Frame& f) noexcept {
   const dbc::Signal* s = rm.signal(role);
   if (s == nullptr) return std::nullopt;
-  return dbc::decode(*s, f.payload());
+  const auto v = dbc::decode(*s, f.payload());
+  if (!v) return std::nullopt;
+  return *v / rm.scale(role);
 }
 
 }  // namespace sensor_rig::dbw

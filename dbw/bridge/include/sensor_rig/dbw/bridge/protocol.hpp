@@ -18,12 +18,20 @@
 
 namespace sensor_rig::dbw {
 
+// One mapped message: its label in the mapping (e.g. "steering"), the roles it carries (a role may
+// live in several messages, e.g. one enable bit per actuator), constants and its own E2E settings.
 struct RoleMessage {
-  std::string role;  // e.g. "steering"
+  std::string role;  // the mapping's label of the message, e.g. "steering"
   const dbc::Message* message = nullptr;
   std::map<std::string, const dbc::Signal*, std::less<>> signals;  // role -> signal
+  std::map<std::string, double, std::less<>> scales;               // role -> bus units per role unit (default 1)
+  std::vector<std::pair<const dbc::Signal*, double>> constants;    // written into every frame
   safety::E2eConfig e2e;  // profile none when the message has no counter/CRC
   [[nodiscard]] const dbc::Signal* signal(std::string_view name) const noexcept;
+  [[nodiscard]] double scale(std::string_view name) const noexcept {
+    const auto it = scales.find(name);
+    return it == scales.end() ? 1.0 : it->second;
+  }
   [[nodiscard]] bool matches(const can::Frame& f) const noexcept;
 };
 
