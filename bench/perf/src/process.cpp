@@ -63,6 +63,7 @@ Child::Child(const std::vector<std::string>& argv, const std::string& stderr_pat
   posix_spawnattr_setflags(&attr.attr, POSIX_SPAWN_SETPGROUP);
   posix_spawnattr_setpgroup(&attr.attr, pgid);
   std::vector<char*> args;
+  args.reserve(argv.size() + 1);
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   const int rc = ::posix_spawn(&pid_, argv.at(0).c_str(), &fa.fa, &attr.attr, args.data(), environ);

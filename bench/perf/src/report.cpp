@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 namespace {
 
-const char* kColors[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"};
+constexpr const char* kColors[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"};
 
 struct Run {
   fs::path dir;
@@ -201,6 +201,7 @@ ReportResult write_report(const std::string& dir_s) {
   ReportResult res;
   res.runs = static_cast<int>(runs.size());
   std::vector<json> sums;
+  sums.reserve(runs.size());
   for (const auto& r : runs) sums.push_back(r.s);
 
   std::ostringstream h;
@@ -241,6 +242,7 @@ ReportResult write_report(const std::string& dir_s) {
 
   // Fig. 8: latency over time, for the heaviest runs (at most 6).
   std::vector<const Run*> heavy;
+  heavy.reserve(runs.size());
   for (const auto& r : runs) heavy.push_back(&r);
   std::sort(heavy.begin(), heavy.end(), [](const Run* a, const Run* b) {
     return a->s.value("size", 0u) * a->s.value("received", 0ull) > b->s.value("size", 0u) * b->s.value("received", 0ull);

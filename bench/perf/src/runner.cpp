@@ -53,7 +53,7 @@ std::vector<std::string> node_argv(const std::string& exe, const RunSpec& spec, 
 }
 
 // Stops children politely (STOP / SIGTERM), then by force; only the ones given, only while running.
-void stop_children(std::vector<Child*> kids, int grace_ms) {
+void stop_children(const std::vector<Child*>& kids, int grace_ms) {
   for (Child* c : kids) {
     c->send_line("STOP");
     c->close_stdin();
@@ -152,6 +152,7 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
   Nanos next_tick = disc_start + 1'000'000'000;
   while (n_ready < n_nodes && !failed_start && !shutdown_requested()) {
     std::vector<pollfd> fds;
+    fds.reserve(kids.size());
     for (const auto& k : kids) fds.push_back({k->stdout_fd(), POLLIN, 0});
     ::poll(fds.data(), fds.size(), 100);
     for (std::size_t i = 0; i < kids.size(); ++i) {
@@ -220,6 +221,7 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
 
   // Stop: subscribers drain on STOP; anything still running after the grace period is terminated.
   std::vector<Child*> all;
+  all.reserve(kids.size());
   for (auto& k : kids) all.push_back(k.get());
   stop_children(all, 5000);
   for (std::size_t i = 0; i < kids.size(); ++i) {
