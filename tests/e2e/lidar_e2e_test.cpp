@@ -30,6 +30,10 @@ std::string rig_config(int port, const std::string& name, const std::string& mod
   return y.str();
 }
 
+// A lidar name of this process only: a test run in another build dir on the same machine (same
+// DDS domain, same loopback) publishes the same captures on its own topics, not on ours.
+std::string unique(const std::string& name) { return name + "_" + std::to_string(::getpid()); }
+
 struct Received {
   std::vector<std::size_t> points;
   std::vector<Nanos> stamps;
@@ -86,13 +90,13 @@ TEST_P(CaptureReplay, ArrivesScanByScanOverDds) {
 
   const int port = test::free_udp_port();
   const auto cfg =
-      dir.write("rig.yaml", rig_config(port, "e2e", c.model, metadata.empty() ? "" : "    metadata: " + metadata + "\n"));
+      dir.write("rig.yaml", rig_config(port, unique("e2e"), c.model, metadata.empty() ? "" : "    metadata: " + metadata + "\n"));
   ChildProcess rig({rig_bin(), "up", cfg, "--duration", "60"});
 
   dds::Participant p({17, test::source_dir() + "/config/cyclonedds/loopback.xml"});
   dds::QosSpec q;
   q.depth = 100;
-  dds::Topic<msg::PointCloud2> topic(p, "/sensors/lidar/e2e/points", q);
+  dds::Topic<msg::PointCloud2> topic(p, "/sensors/lidar/" + unique("e2e") + "/points", q);
   dds::Reader<msg::PointCloud2> reader(p, topic, q);
   ASSERT_TRUE(reader.wait_for_writers(1, 15000)) << "driver did not come up";
 
@@ -271,14 +275,14 @@ struct LidarStatus {
 TEST(LidarEndToEnd, DeadDeviceAndBadPacketsAreReportedInDiagnostics) {
   test::TempDir dir;
   const int port = test::free_udp_port();
-  const auto cfg = dir.write("rig.yaml", rig_config(port, "dead", "VLP-16"));
+  const auto cfg = dir.write("rig.yaml", rig_config(port, unique("dead"), "VLP-16"));
   ChildProcess rig({rig_bin(), "up", cfg, "--duration", "60"});
   dds::Participant p({17, test::source_dir() + "/config/cyclonedds/loopback.xml"});
   dds::Topic<msg::DiagnosticArray> topic(p, "/diagnostics");
   dds::Reader<msg::DiagnosticArray> diag(p, topic);
   ASSERT_TRUE(diag.wait_for_writers(1, 15000));
 
-  // lidar/dead in the next diagnostics sample.
+  // lidar/dead_<pid> in the next diagnostics sample.
   auto next_status = [&]() {
     LidarStatus r;
     for (int tries = 0; tries < 30 && r.level < 0; ++tries) {
@@ -286,7 +290,7 @@ TEST(LidarEndToEnd, DeadDeviceAndBadPacketsAreReportedInDiagnostics) {
       diag.take([&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
         for (std::uint32_t k = 0; k < a.status._length; ++k) {
           const auto& st = a.status._buffer[k];
-          if (std::string(st.name) != "lidar/dead") continue;
+          if (std::string(st.name) != "lidar/" + unique("dead")) continue;
           r.level = st.level;
           r.message = st.message;
           for (std::uint32_t v = 0; v < st.values._length; ++v) r.values[st.values._buffer[v].key] = st.values._buffer[v].value;
