@@ -1,5 +1,10 @@
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
 
+#include <string_view>
+#include <utility>
+
+#include "sensor_rig/dbw/dbc/codec.hpp"
+
 namespace sensor_rig::dbw {
 
 safety::SafetyConfig safety_config(const Protocol& p) {
@@ -12,7 +17,19 @@ safety::SafetyConfig safety_config(const Protocol& p) {
 }
 
 BridgeCore::BridgeCore(const Protocol& p) : p_(p), safety_(safety_config(p)) {
-  for (const auto& m : p_.tx_messages()) senders_.emplace_back(m.e2e);
+  static constexpr std::array<std::pair<std::string_view, TxField>, static_cast<std::size_t>(TxField::count)> kFields{{
+      {"enable", TxField::enable}, {"state", TxField::state}, {"mode", TxField::mode}, {"angle", TxField::angle},
+      {"torque", TxField::torque}, {"gear", TxField::gear}, {"throttle", TxField::throttle}, {"brake", TxField::brake},
+      {"accel", TxField::accel}}};
+  for (const auto& m : p_.tx_messages()) {
+    senders_.emplace_back(m.e2e);
+    auto& bindings = tx_bindings_.emplace_back();
+    for (const auto& [role, sig] : m.signals) {
+      for (const auto& [name, field] : kFields) {
+        if (name == role) bindings.push_back({sig, field, m.scale(role)});
+      }
+    }
+  }
   for (const auto& m : p_.rx_messages()) checkers_.emplace_back(m.e2e);
 }
 
@@ -74,14 +91,24 @@ void BridgeCore::frames(Nanos now, std::vector<can::Frame>& out) {
   const safety::Decision d = safety_.tick(now);
   const double en = d.active ? 1.0 : 0.0;
   const safety::Command& c = d.command;  // zeros when not active: the neutral/disengage request
+  std::array<double, static_cast<std::size_t>(TxField::count)> v{};
+  v[static_cast<std::size_t>(TxField::enable)] = en;
+  v[static_cast<std::size_t>(TxField::state)] = en;
+  v[static_cast<std::size_t>(TxField::angle)] = c.steering_angle;
+  v[static_cast<std::size_t>(TxField::torque)] = c.steering_torque;
+  v[static_cast<std::size_t>(TxField::gear)] = static_cast<double>(c.gear);
+  v[static_cast<std::size_t>(TxField::throttle)] = c.throttle;
+  v[static_cast<std::size_t>(TxField::brake)] = c.brake;
+  v[static_cast<std::size_t>(TxField::accel)] = c.accel;
   const auto& txm = p_.tx_messages();
   for (std::size_t i = 0; i < txm.size(); ++i) {
     can::Frame f;
-    const bool ok = p_.encode(txm[i],
-                              {{"enable", en}, {"state", en}, {"mode", 0}, {"angle", c.steering_angle},
-                               {"torque", c.steering_torque}, {"gear", static_cast<double>(c.gear)}, {"throttle", c.throttle},
-                               {"brake", c.brake}, {"accel", c.accel}},
-                              &senders_[i], f);
+    bool ok = Protocol::start_frame(txm[i], f);
+    for (const auto& b : tx_bindings_[i]) {
+      const auto st = dbc::encode(*b.signal, v[static_cast<std::size_t>(b.field)] * b.scale, f.payload());
+      ok = ok && st != dbc::EncodeStatus::not_finite && st != dbc::EncodeStatus::out_of_frame;
+    }
+    if (ok && txm[i].e2e.profile != safety::E2eProfile::none) ok = senders_[i].protect(f.payload());
     if (ok) {
       out.push_back(f);
     } else {

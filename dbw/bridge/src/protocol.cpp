@@ -303,8 +303,7 @@ const RoleMessage* Protocol::rx(std::string_view role) const noexcept {
   return nullptr;
 }
 
-bool Protocol::encode(const RoleMessage& rm, std::initializer_list<std::pair<std::string_view, double>> values,
-                      safety::E2eSender* e2e, can::Frame& out, int* clamped) const noexcept {
+bool Protocol::start_frame(const RoleMessage& rm, can::Frame& out) noexcept {
   out = can::Frame{};
   out.id = rm.message->id;
   out.extended = rm.message->extended;
@@ -313,6 +312,12 @@ bool Protocol::encode(const RoleMessage& rm, std::initializer_list<std::pair<std
   for (const auto& [sig, v] : rm.constants) {
     if (dbc::encode(*sig, v, out.payload()) == dbc::EncodeStatus::out_of_frame) return false;
   }
+  return true;
+}
+
+bool Protocol::encode(const RoleMessage& rm, std::initializer_list<std::pair<std::string_view, double>> values,
+                      safety::E2eSender* e2e, can::Frame& out, int* clamped) const noexcept {
+  if (!start_frame(rm, out)) return false;
   for (const auto& [role, v] : values) {
     const dbc::Signal* s = rm.signal(role);
     if (s == nullptr) continue;

@@ -1,6 +1,7 @@
 #pragma once
 // The bridge without DDS: commands -> safety -> encoder (DBC signals, counter, CRC) -> frames, and
 // ECU frames -> E2E check -> status/feedback -> safety. No I/O; time is passed in (vehicle time).
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -47,8 +48,17 @@ class BridgeCore {
   [[nodiscard]] const Protocol& protocol() const noexcept { return p_; }
 
  private:
+  // What a tx message carries, resolved once: the hot path does no role-name lookups.
+  enum class TxField : std::uint8_t { enable, state, mode, angle, torque, gear, throttle, brake, accel, count };
+  struct TxBinding {
+    const dbc::Signal* signal;
+    TxField field;
+    double scale;
+  };
+
   const Protocol& p_;
   safety::SafetyCore safety_;
+  std::vector<std::vector<TxBinding>> tx_bindings_;  // per tx message
   std::vector<safety::E2eSender> senders_;   // per tx message
   std::vector<safety::E2eChecker> checkers_; // per rx message
   safety::EcuStatus ecu_{};

@@ -64,6 +64,8 @@ class Protocol {
   // applied. Returns false on a non-finite value; clamped values are counted in *clamped.
   bool encode(const RoleMessage& rm, std::initializer_list<std::pair<std::string_view, double>> values,
               safety::E2eSender* e2e, can::Frame& out, int* clamped = nullptr) const noexcept;
+  // An empty frame of `rm` (id, length) holding its constants; false if one does not fit.
+  static bool start_frame(const RoleMessage& rm, can::Frame& out) noexcept;
   [[nodiscard]] static std::optional<double> value(const RoleMessage& rm, std::string_view role,
                                                    const can::Frame& f) noexcept;
 
