@@ -3,6 +3,7 @@
 // bus-off), AF_UNIX SOCK_SEQPACKET carrying the kernel `struct can_frame`/`canfd_frame` bytes
 // (socketpair, or a listening "bus" socket several processes connect to), and candump log replay.
 // Hot path: send/receive return an IoStatus, never throw. Opening throws TransportError.
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -81,7 +82,8 @@ class Transport {
  protected:
   // Updates bus state from an error frame; returns the info.
   ErrorInfo note_error_frame(const Frame& f) noexcept;
-  BusState state_ = BusState::active;
+  // Written by the receiving thread, read by senders on other threads (the bridge's DDS thread).
+  std::atomic<BusState> state_{BusState::active};
   TransportStats stats_;
 };
 
