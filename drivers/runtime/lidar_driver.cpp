@@ -4,8 +4,6 @@
 #include <sched.h>
 
 #include <cstring>
-#include <fstream>
-#include <sstream>
 
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
@@ -20,31 +18,9 @@ namespace vel = lidar::velodyne;
 
 namespace {
 
-std::string read_file(const std::string& path, const std::string& what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + what + " " + path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 std::unique_ptr<lidar::ScanDecoder> make_driver_decoder(const LidarConfig& c) {
-  lidar::DecoderOptions d;
-  d.model = c.model;
-  if (!c.calibration.empty()) {
-    d.calibration_text = read_file(c.calibration, "calibration");
-    d.calibration_name = c.calibration;
-  }
-  if (!c.metadata.empty()) {
-    d.metadata_text = read_file(c.metadata, "metadata");
-    d.metadata_name = c.metadata;
-  }
-  d.returns = c.returns;
-  d.min_range_m = c.min_range_m;
-  d.max_range_m = c.max_range_m;
-  d.cut_angle_deg = c.cut_angle_deg;
   try {
-    return lidar::make_decoder(d);
+    return lidar::make_decoder(decoder_options(c));
   } catch (const lidar::DecoderConfigError& e) {
     throw std::runtime_error("lidar " + c.name + ": " + e.what());
   }
@@ -103,14 +79,7 @@ struct LidarDriver::Impl {
     if (c.position_port != 0)
       position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
           {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 4, false});
-    for (const auto& f : lidar::kPointFields) {
-      msg::PointField pf{};
-      pf.name = const_cast<char*>(f.name);
-      pf.offset = f.offset;
-      pf.datatype = f.datatype;
-      pf.count = 1;
-      fields.push_back(pf);
-    }
+    fields = msg::point_fields(lidar::kPointFields);
   }
 
   static timesync::StamperConfig stamper_config(const LidarConfig& c, Nanos packet_span) {

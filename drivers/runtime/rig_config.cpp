@@ -30,13 +30,6 @@ LidarMockConfig parse_mock(const config::Node& n) {
   return m;
 }
 
-std::string file_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // Builds the decoder the driver will build: a calibration or metadata file made for another model
 // (or malformed) is an error at its key now, not a driver failing after `rig up` started the mocks.
 void check_decoder_files(const config::Node& n, const LidarConfig& l) {
@@ -46,23 +39,10 @@ void check_decoder_files(const config::Node& n, const LidarConfig& l) {
   const char* key = l.calibration.empty() ? "metadata" : "calibration";
   const std::string& file = l.calibration.empty() ? l.metadata : l.calibration;
   if (!std::filesystem::is_regular_file(file)) return;  // reported as not found
-  lidar::DecoderOptions d;
-  d.model = l.model;
-  if (!l.calibration.empty()) {
-    d.calibration_text = file_text(l.calibration);
-    d.calibration_name = l.calibration;
-  }
-  if (!l.metadata.empty() && std::filesystem::is_regular_file(l.metadata)) {
-    d.metadata_text = file_text(l.metadata);
-    d.metadata_name = l.metadata;
-  }
-  d.returns = l.returns;
-  d.min_range_m = l.min_range_m;
-  d.max_range_m = l.max_range_m;
-  d.cut_angle_deg = l.cut_angle_deg;
+  if (!l.metadata.empty() && !std::filesystem::is_regular_file(l.metadata)) return;  // reported as not found
   try {
-    (void)lidar::make_decoder(d);
-  } catch (const lidar::DecoderConfigError& e) {
+    (void)lidar::make_decoder(decoder_options(l));
+  } catch (const std::exception& e) {  // DecoderConfigError, or a file that cannot be read
     n.fail(key, e.what());
   }
 }
@@ -154,6 +134,31 @@ DbwConfig parse_dbw(const config::Node& n) {
 }
 
 }  // namespace
+
+lidar::DecoderOptions decoder_options(const LidarConfig& c) {
+  const auto read = [](const std::string& path, const char* what) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error(std::string("cannot read ") + what + " " + path);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+  };
+  lidar::DecoderOptions d;
+  d.model = c.model;
+  if (!c.calibration.empty()) {
+    d.calibration_text = read(c.calibration, "calibration");
+    d.calibration_name = c.calibration;
+  }
+  if (!c.metadata.empty()) {
+    d.metadata_text = read(c.metadata, "metadata");
+    d.metadata_name = c.metadata;
+  }
+  d.returns = c.returns;
+  d.min_range_m = c.min_range_m;
+  d.max_range_m = c.max_range_m;
+  d.cut_angle_deg = c.cut_angle_deg;
+  return d;
+}
 
 RigConfig load_rig_config(const std::string& path) {
   auto problems = std::make_shared<config::Problems>();

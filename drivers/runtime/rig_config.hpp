@@ -8,6 +8,7 @@
 
 #include "sensor_rig/dds/participant.hpp"
 #include "sensor_rig/dds/qos.hpp"
+#include "sensor_rig/lidar/scan_decoder.hpp"
 
 namespace sensor_rig::runtime {
 
@@ -83,6 +84,9 @@ struct RigConfig {
 
 // Loads and validates; throws ConfigError listing every problem (file:line:col: key: message).
 RigConfig load_rig_config(const std::string& path);
+// The decoder options a LIDAR's config asks for, its calibration and metadata files read; throws
+// std::runtime_error when one cannot be read. The driver and `rig config check` build from this.
+lidar::DecoderOptions decoder_options(const LidarConfig& c);
 // Human-readable summary for `rig config check`.
 std::string describe(const RigConfig& cfg);
 

@@ -75,14 +75,7 @@ struct OwnedSample {
     } else if constexpr (std::is_same_v<T, PointCloud2>) {
       bytes.assign(size, 0x5a);
       frame_id.assign(kCloudFrameIdSize, '\0');
-      for (const auto& f : lidar::kPointFields) {
-        msg::PointField pf{};
-        pf.name = const_cast<char*>(f.name);
-        pf.offset = f.offset;
-        pf.datatype = f.datatype;
-        pf.count = 1;
-        fields.push_back(pf);
-      }
+      fields = msg::point_fields(lidar::kPointFields);
       T& pc = *sample;
       pc.header.frame_id = frame_id.data();
       pc.height = 1;

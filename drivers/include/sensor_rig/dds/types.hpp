@@ -8,6 +8,8 @@
 #include "std_msgs.h"
 #include "sensor_rig/dds/topic.hpp"
 
+#include <vector>
+
 namespace sensor_rig::msg {
 using PointCloud2 = sensor_msgs_msg_dds__PointCloud2_;
 using PointField = sensor_msgs_msg_dds__PointField_;
@@ -46,5 +48,21 @@ inline Time to_time(Nanos ns) {
 }
 inline Nanos from_time(const Time& t) {
   return static_cast<Nanos>(t.sec) * 1'000'000'000 + static_cast<Nanos>(t.nanosec);
+}
+
+// PointCloud2.fields from a field table of {name, offset, datatype} (e.g. lidar::kPointFields). The
+// names point into the table: it must outlive every sample that uses the result.
+template <class FieldTable>
+std::vector<PointField> point_fields(const FieldTable& table) {
+  std::vector<PointField> fields;
+  for (const auto& f : table) {
+    PointField pf{};
+    pf.name = const_cast<char*>(f.name);  // the C type is not const-correct; never written through
+    pf.offset = f.offset;
+    pf.datatype = f.datatype;
+    pf.count = 1;
+    fields.push_back(pf);
+  }
+  return fields;
 }
 }  // namespace sensor_rig::msg
