@@ -8,6 +8,10 @@ target_compile_options(rig_warnings INTERFACE
 if(RIG_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
+  # GCC 12's object-size analysis at -O2 walks ASan's instrumented paths and reports impossible
+  # sizes (e.g. a 2^64-byte memset in vector::resize). The uninstrumented builds keep these as errors.
+  target_compile_options(rig_warnings INTERFACE -Wno-stringop-overflow -Wno-stringop-overread
+    -Wno-array-bounds -Wno-restrict -Wno-maybe-uninitialized)
 endif()
 
 # rig_library(NAME SOURCES... DEPS ...): a static library with the area's public include dir.
