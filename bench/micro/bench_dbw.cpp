@@ -4,6 +4,7 @@
 #include <array>
 #include <string>
 
+#include "sensor_rig/dbw/bridge/defaults.hpp"
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
 #include "sensor_rig/dbw/can/candump.hpp"
 #include "sensor_rig/dbw/dbc/codec.hpp"
@@ -56,7 +57,7 @@ BENCHMARK(BM_E2eP01ProtectAndCheck);
 
 // One command through validation, safety, encoding and E2E into the three frames of the protocol.
 void BM_BridgeCommandToFrames(benchmark::State& st) {
-  const auto p = dbw::Protocol::load(std::string(RIG_DBW_SOURCE_DIR) + "/config/dbw/paravan_ref.yaml");
+  const auto p = dbw::Protocol::load(dbw::default_protocol_config());
   dbw::BridgeCore core(p);
   sensor_rig::Nanos now = 1'000'000'000'000;
   core.safety().on_ecu_status({true, false, false, false, 0}, now);

@@ -14,9 +14,10 @@
 #include <string>
 #include <thread>
 
-#include "sensor_rig/dbw/bridge/dds_bridge.hpp"
-#include "sensor_rig/dbw/bridge/dds_domain.hpp"
-#include "sensor_rig/dbw/bridge/dds_types.hpp"
+#include "sensor_rig/dbw/bridge/defaults.hpp"
+#include "sensor_rig/drivers/dbw/dds_bridge.hpp"
+#include "sensor_rig/drivers/dbw/dds_domain.hpp"
+#include "sensor_rig/drivers/dbw/dds_types.hpp"
 #include "sensor_rig/dbw/can/candump.hpp"
 #include "sensor_rig/dbw/mock/mock_runner.hpp"
 
@@ -37,7 +38,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (std::getenv("ROS_DOMAIN_ID") == nullptr) ::setenv("ROS_DOMAIN_ID", "161", 1);
-  const auto protocol = dbw::Protocol::load(std::string(RIG_DBW_SOURCE_DIR) + "/config/dbw/paravan_ref.yaml");
+  const auto protocol = dbw::Protocol::load(dbw::default_protocol_config());
   auto [bridge_end, ecu_end] = dbw::can::make_socketpair();
   const std::string log = "/tmp/bench_dbw_bus_" + std::to_string(::getpid()) + ".log";
   dbw::mock::MockEcu ecu(protocol, {});
@@ -45,16 +46,16 @@ int main(int argc, char** argv) {
   mo.duration_s = seconds + 1.5;
   mo.log_path = log;
   std::thread ecu_thread([&] { dbw::mock::run_mock(ecu, *ecu_end, mo); });
-  dbw::DdsBridgeOptions bo;
+  sensor_rig::drivers::DdsBridgeOptions bo;
   bo.duration_s = seconds + 1.2;
-  dbw::DdsBridgeStats stats;
-  std::thread bridge_thread([&] { stats = dbw::run_dds_bridge(protocol, *bridge_end, bo); });
+  sensor_rig::drivers::DdsBridgeStats stats;
+  std::thread bridge_thread([&] { stats = sensor_rig::drivers::run_dds_bridge(protocol, *bridge_end, bo); });
 
   rusage r0{};
   ::getrusage(RUSAGE_SELF, &r0);
   // Command source (same as `rig dbw send`), remembering the last write time.
-  dds::Participant participant(dbw::domain_config());
-  dds::Topic<sensor_rig::msg::DbwCommand> topic(participant, dbw::kCmdTopic);
+  dds::Participant participant(sensor_rig::drivers::domain_config());
+  dds::Topic<sensor_rig::msg::DbwCommand> topic(participant, sensor_rig::drivers::kCmdTopic);
   dds::Writer<sensor_rig::msg::DbwCommand> writer(participant, topic);
   writer.wait_for_readers(1, 3000);
   sensor_rig::msg::DbwCommand c{};

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_data.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
 #include "sensor_rig/lidar/velodyne/decoder.hpp"
 #include "sensor_rig/lidar/velodyne/packet_info.hpp"
@@ -26,10 +27,8 @@ struct Packet {
   Nanos stamp;
 };
 
-std::string data_dir() {
-  const char* d = std::getenv("RIG_TEST_DATA");
-  return d ? d : RIG_TEST_DATA_DEFAULT;
-}
+using bench::data_dir;
+using bench::read_text;
 
 std::vector<Packet> load_capture(const std::string& path) {
   std::vector<Packet> out;

@@ -13,7 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "hesai_packet_builder.hpp"
+#include "bench_data.hpp"
+#include "sensor_rig/lidar/mock/hesai_packet_builder.hpp"
 #include "sensor_rig/lidar/hesai/decoder.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
 
@@ -27,10 +28,8 @@ struct Packet {
   Nanos stamp;
 };
 
-std::string data_dir() {
-  const char* d = std::getenv("RIG_TEST_DATA");
-  return d ? d : RIG_TEST_DATA_DEFAULT;
-}
+using bench::data_dir;
+using bench::read_text;
 
 std::vector<Packet> load_capture(const std::string& path, hesai::Model m) {
   std::vector<Packet> out;
@@ -51,15 +50,15 @@ std::vector<Packet> synthetic_xt32() {
   std::vector<Packet> out;
   Nanos t = 1'000'000'000'000;
   for (int k = 0; k < 500; ++k) {
-    hesai::test::PacketSpec s;
-    s.kind = hesai::test::Kind::kXT32;
+    hesai::builder::PacketSpec s;
+    s.kind = hesai::builder::Kind::kXT32;
     s.azimuth0 = (k * 8 * 18) % hesai::kAzimuthCount;
     s.step = 18;
-    s.unit = [&rng](int, int) -> hesai::test::RawUnit {
+    s.unit = [&rng](int, int) -> hesai::builder::RawUnit {
       const auto d = static_cast<std::uint16_t>(rng() % 20000);
       return {static_cast<std::uint16_t>(d < 1000 ? 0 : d), static_cast<std::uint8_t>(d)};
     };
-    out.push_back({hesai::test::build_packet(s), t});
+    out.push_back({hesai::builder::build_packet(s), t});
     t += 8 * 50'000;
   }
   return out;
@@ -91,13 +90,6 @@ void run(benchmark::State& state, const hesai::DecoderConfig& cfg, const std::ve
       benchmark::Counter(static_cast<double>(pushed) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
   state.SetItemsProcessed(static_cast<std::int64_t>(pushed));
-}
-
-std::string read_text(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
 }
 
 void register_all() {

@@ -15,7 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "ouster_test_support.hpp"
+#include "bench_data.hpp"
+#include "sensor_rig/lidar/mock/ouster_packet_builder.hpp"
 #include "sensor_rig/lidar/ouster/decoder.hpp"
 #include "sensor_rig/lidar/ouster/metadata.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
@@ -26,10 +27,8 @@ using namespace sensor_rig;
 using namespace sensor_rig::lidar;
 namespace os = sensor_rig::lidar::ouster;
 
-std::string data_dir() {
-  const char* d = std::getenv("RIG_TEST_DATA");
-  return d ? d : RIG_TEST_DATA_DEFAULT;
-}
+using bench::data_dir;
+using bench::read_text;
 
 struct Stream {
   os::SensorMetadata meta;
@@ -46,7 +45,7 @@ std::shared_ptr<Stream> load_capture() {
     s->error = "capture not found under " + dir;
     return s;
   }
-  s->meta = os::parse_metadata(os::test::read_text(meta), meta);
+  s->meta = os::parse_metadata(read_text(meta), meta);
   PcapReader r(pcap);
   while (auto rec = r.next())
     if (rec->packet.dst_port == s->meta.udp_port_lidar)
@@ -61,7 +60,7 @@ std::shared_ptr<Stream> synthetic_os2(const std::string& profile) {
     s->error = "metadata not found: " + meta;
     return s;
   }
-  auto j = nlohmann::json::parse(os::test::read_text(meta));
+  auto j = nlohmann::json::parse(read_text(meta));
   j["data_format"]["udp_profile_lidar"] = profile;
   s->meta = os::parse_metadata(j.dump(), meta);
   const auto prof = s->meta.profile;
@@ -69,7 +68,7 @@ std::shared_ptr<Stream> synthetic_os2(const std::string& profile) {
   std::uniform_int_distribution<std::uint32_t> dist(0, 60000);
   const std::size_t h = static_cast<std::size_t>(s->meta.pixels_per_column);
   for (std::size_t k = 0; k < 64; ++k) {
-    std::vector<os::test::Column> cols(16);
+    std::vector<os::builder::Column> cols(16);
     for (std::size_t c = 0; c < 16; ++c) {
       cols[c].measurement_id = static_cast<std::uint16_t>(k * 16 + c);
       cols[c].timestamp_ns = 1'000'000'000'000ULL + (k * 16 + c) * 97'656ULL;
@@ -80,7 +79,7 @@ std::shared_ptr<Stream> synthetic_os2(const std::string& profile) {
         px.second = {d < 30000 ? 0U : d * 8 + 800, static_cast<std::uint8_t>(d >> 2), static_cast<std::uint16_t>(d >> 2)};
       }
     }
-    const auto b = os::test::encode_packet(prof, h, 1, cols, s->meta.init_id);
+    const auto b = os::builder::encode_packet(prof, h, 1, cols, s->meta.init_id);
     const auto* p = reinterpret_cast<const std::byte*>(b.data());
     s->packets.emplace_back(p, p + b.size());
   }

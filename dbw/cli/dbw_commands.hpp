@@ -4,6 +4,5 @@
 
 namespace sensor_rig::dbw {
 void register_can_cli(CLI::App& can, cli::Context& ctx);
-void register_dbw_cli(CLI::App& dbw, cli::Context& ctx);
 void register_mock_cli(CLI::App& mock, cli::Context& ctx);
 }  // namespace sensor_rig::dbw

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "cli_common.hpp"
+#include "sensor_rig/dbw/bridge/defaults.hpp"
 #include "dbw_commands.hpp"
 #include "sensor_rig/dbw/mock/mock_runner.hpp"
 

@@ -6,7 +6,7 @@
 
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/dds/types.hpp"
-#include "test_support.hpp"
+#include "rig_process.hpp"
 
 namespace sensor_rig {
 namespace {
@@ -14,14 +14,14 @@ namespace {
 TEST(DbwRig, CommandSourceDrivesTheMockVehicleThroughTheBridge) {
   test::TempDir dir;
   std::ostringstream y;
-  y << "rig:\n  name: e2e-dbw\n  dds: {domain: 19, profile: " << test::source_dir()
+  y << "rig:\n  name: e2e-dbw\n  dds: {domain: 19, profile: " << test::source_dir().string()
     << "/config/cyclonedds/loopback.xml}\n"
-    << "dbw:\n  protocol: " << test::source_dir() << "/config/dbw/paravan_ref.yaml\n  bus: " << (dir.path / "bus.sock").string()
+    << "dbw:\n  protocol: " << test::source_dir().string() << "/config/dbw/paravan_ref.yaml\n  bus: " << (dir.path / "bus.sock").string()
     << "\n  mock_ecu: true\n  command_source: {rate_hz: 50, steer_rad: 0.05, throttle: 0.3, gear: 4}\n";
   const auto cfg = dir.write("rig.yaml", y.str());
   ChildProcess rig({test::rig_bin(), "up", cfg, "--duration", "60"});
 
-  dds::Participant p({19, test::source_dir() + "/config/cyclonedds/loopback.xml"});
+  dds::Participant p({19, test::source_dir().string() + "/config/cyclonedds/loopback.xml"});
   dds::QosSpec q;
   q.depth = 200;
   dds::Topic<msg::VehicleState> state_topic(p, "/vehicle/state", q);

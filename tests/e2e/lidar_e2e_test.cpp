@@ -14,7 +14,7 @@
 
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/dds/types.hpp"
-#include "test_support.hpp"
+#include "rig_process.hpp"
 
 namespace sensor_rig {
 namespace {
@@ -23,7 +23,7 @@ using test::rig_bin;
 
 std::string rig_config(int port, const std::string& name, const std::string& model, const std::string& extra = "") {
   std::ostringstream y;
-  y << "rig:\n  name: e2e\n  dds: {domain: 17, profile: " << test::source_dir() << "/config/cyclonedds/loopback.xml}\n"
+  y << "rig:\n  name: e2e\n  dds: {domain: 17, profile: " << test::source_dir().string() << "/config/cyclonedds/loopback.xml}\n"
     << "lidars:\n  - name: " << name << "\n    model: " << model << "\n    port: " << port
     << "\n    time_source: sensor\n    min_range: 0.0\n    max_range: 1000\n    qos: {reliability: reliable, depth: 100}\n"
     << extra;
@@ -93,7 +93,7 @@ TEST_P(CaptureReplay, ArrivesScanByScanOverDds) {
       dir.write("rig.yaml", rig_config(port, unique("e2e"), c.model, metadata.empty() ? "" : "    metadata: " + metadata + "\n"));
   ChildProcess rig({rig_bin(), "up", cfg, "--duration", "60"});
 
-  dds::Participant p({17, test::source_dir() + "/config/cyclonedds/loopback.xml"});
+  dds::Participant p({17, test::source_dir().string() + "/config/cyclonedds/loopback.xml"});
   dds::QosSpec q;
   q.depth = 100;
   dds::Topic<msg::PointCloud2> topic(p, "/sensors/lidar/" + unique("e2e") + "/points", q);
@@ -132,7 +132,7 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(LidarEndToEnd, SyntheticMockRigPublishesAllThreeModels) {
   test::TempDir dir;
   std::ostringstream y;
-  y << "rig:\n  name: e2e-mock\n  dds: {domain: 18, profile: " << test::source_dir()
+  y << "rig:\n  name: e2e-mock\n  dds: {domain: 18, profile: " << test::source_dir().string()
     << "/config/cyclonedds/loopback.xml}\nlidars:\n";
   const char* models[] = {"VLP-16", "VLP-32C", "HDL-32E"};
   for (int i = 0; i < 3; ++i)
@@ -141,7 +141,7 @@ TEST(LidarEndToEnd, SyntheticMockRigPublishesAllThreeModels) {
   const auto cfg = dir.write("rig.yaml", y.str());
   ChildProcess rig({rig_bin(), "up", cfg, "--duration", "30"});
 
-  dds::Participant p({18, test::source_dir() + "/config/cyclonedds/loopback.xml"});
+  dds::Participant p({18, test::source_dir().string() + "/config/cyclonedds/loopback.xml"});
   std::vector<std::unique_ptr<dds::Topic<msg::PointCloud2>>> topics;
   std::vector<std::unique_ptr<dds::Reader<msg::PointCloud2>>> readers;
   dds::QosSpec q;
@@ -202,7 +202,7 @@ TEST(LidarEndToEnd, SyntheticMockRigPublishesAllThreeModels) {
 
   // The monitor, as a separate process: one JSON line per topic per second with every stage.
   const auto [rc, out] = test::run(rig_bin() + " monitor --json --duration 3.5 --domain 18 --dds-profile " +
-                                   test::source_dir() + "/config/cyclonedds/loopback.xml");
+                                   test::source_dir().string() + "/config/cyclonedds/loopback.xml");
   EXPECT_EQ(rc, 0);
   std::map<std::string, nlohmann::json> last;
   std::istringstream lines(out);
@@ -289,7 +289,7 @@ TEST(LidarEndToEnd, DeadDeviceAndBadPacketsAreReportedInDiagnostics) {
   const int port = test::free_udp_port();
   const auto cfg = dir.write("rig.yaml", rig_config(port, unique("dead"), "VLP-16"));
   ChildProcess rig({rig_bin(), "up", cfg, "--duration", "60"});
-  dds::Participant p({17, test::source_dir() + "/config/cyclonedds/loopback.xml"});
+  dds::Participant p({17, test::source_dir().string() + "/config/cyclonedds/loopback.xml"});
   dds::Topic<msg::DiagnosticArray> topic(p, "/diagnostics");
   dds::Reader<msg::DiagnosticArray> diag(p, topic);
   ASSERT_TRUE(diag.wait_for_writers(1, 15000));

@@ -5,7 +5,7 @@
 // time like the CLI does. Invariants: no crash, finite points, rings in range, counters add up.
 //
 // Built with -DRIG_FUZZ_CORPUS_MAIN instead, this file is the corpus generator:
-//   g++ -std=c++20 -DRIG_FUZZ_CORPUS_MAIN -Ilidar/include -Idrivers/include -Itests/lidar_hesai
+//   g++ -std=c++20 -DRIG_FUZZ_CORPUS_MAIN -Ilidar/include -Icommon/include
 //       tests/fuzz/fuzz_hesai.cpp && ./a.out tests/fuzz/corpus/hesai
 #include <cmath>
 #include <cstddef>
@@ -84,26 +84,26 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 #include <fstream>
 #include <vector>
 
-#include "hesai_packet_builder.hpp"
+#include "sensor_rig/lidar/mock/hesai_packet_builder.hpp"
 
 namespace {
 
 namespace h = sensor_rig::lidar::hesai;
 
-std::vector<std::byte> packet(h::test::Kind kind, std::uint8_t return_mode, int az0, int step, unsigned seed,
+std::vector<std::byte> packet(h::builder::Kind kind, std::uint8_t return_mode, int az0, int step, unsigned seed,
                               std::uint32_t us) {
-  h::test::PacketSpec s;
+  h::builder::PacketSpec s;
   s.kind = kind;
   s.return_mode = return_mode;
   s.azimuth0 = az0;
   s.step = step;
   s.us = us;
-  s.unit = [&seed](int, int) -> h::test::RawUnit {
+  s.unit = [&seed](int, int) -> h::builder::RawUnit {
     seed = seed * 1103515245U + 12345U;
     const auto d = static_cast<std::uint16_t>((seed >> 8) % 30000U);
     return {static_cast<std::uint16_t>(d < 500 ? 0 : d), static_cast<std::uint8_t>(seed >> 24)};
   };
-  return h::test::build_packet(s);
+  return h::builder::build_packet(s);
 }
 
 void write(const std::filesystem::path& dir, const std::string& name, std::uint8_t mode,
@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
   if (argc != 2) return 2;
   const std::filesystem::path dir(argv[1]);
   std::filesystem::create_directories(dir);
-  using h::test::Kind;
+  using h::builder::Kind;
   // mode: bit 0 model (0 Pandar40P, 1 PandarXT32), bits 1-2 returns, bits 3-4 cut, bit 5 partial.
   write(dir, "p40_strongest_cut", 0x20,
         {packet(Kind::k40P, 0x37, 35800, 20, 1, 100), packet(Kind::k40P, 0x37, 0, 20, 2, 656),

@@ -6,7 +6,7 @@
 // Invariants: no crash, finite points, rings in range, packets = used + dropped.
 //
 // Built with -DRIG_FUZZ_CORPUS_MAIN instead, this file is the corpus generator:
-//   g++ -std=c++20 -DRIG_FUZZ_CORPUS_MAIN -Ilidar/include -Idrivers/include -Itests/lidar_ouster
+//   g++ -std=c++20 -DRIG_FUZZ_CORPUS_MAIN -Ilidar/include -Icommon/include
 //       tests/fuzz/fuzz_ouster.cpp; ./a.out tests/fuzz/corpus/ouster
 #include <cmath>
 #include <cstddef>
@@ -15,9 +15,9 @@
 #include <span>
 #include <string>
 
-#include "ouster_test_support.hpp"
+#include "sensor_rig/lidar/mock/ouster_packet_builder.hpp"
 
-namespace ot = sensor_rig::lidar::ouster::test;
+namespace ot = sensor_rig::lidar::ouster::builder;
 using sensor_rig::lidar::ouster::Profile;
 
 constexpr int kPixels = 4;

@@ -6,7 +6,7 @@
 // (CalibrationError) or one laser per model laser.
 //
 // Built with -DRIG_FUZZ_CORPUS_MAIN instead, this file is the corpus generator:
-//   g++ -std=c++20 -DRIG_FUZZ_CORPUS_MAIN -Ilidar/include -Idrivers/include tests/fuzz/fuzz_velodyne.cpp
+//   g++ -std=c++20 -DRIG_FUZZ_CORPUS_MAIN -Ilidar/include -Icommon/include tests/fuzz/fuzz_velodyne.cpp
 //   ./a.out tests/fuzz/corpus/velodyne
 #include <cmath>
 #include <cstddef>

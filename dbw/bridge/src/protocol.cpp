@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "sensor_rig/config/node.hpp"
+#include "sensor_rig/common/config_node.hpp"
 #include "sensor_rig/dbw/dbc/codec.hpp"
 #include "sensor_rig/dbw/dbc/parser.hpp"
 

@@ -11,7 +11,7 @@ namespace {
 
 // Firing time of each channel (µs) within its azimuth group, indexed by channel - 1: the vendor's
 // Firetime tables (HesaiLidar_SDK_2.0 Pandar40P_Firetime.csv / PandarXT-32_Firetime.csv, the user
-// manuals' values) turned into code; tests/lidar_hesai checks them against the CSV files.
+// manuals' values) turned into code; tests/lidar/hesai checks them against the CSV files.
 // ModelInfo::group_period_ns / tail_to_last_group_ns place the groups relative to the tail time.
 constexpr std::array<double, 40> kFire40P{
     -42.22, -28.47, -16.04, -3.62,  -45.49, -31.74, -47.46, -54.67, -20.62, -33.71,

@@ -1,7 +1,7 @@
 // ROS velodyne_pointcloud calibration YAML: metres and radians.
 #include <memory>
 
-#include "sensor_rig/config/node.hpp"
+#include "sensor_rig/common/config_node.hpp"
 #include "sensor_rig/lidar/velodyne/calibration.hpp"
 
 namespace sensor_rig::lidar::velodyne {

@@ -1,0 +1,38 @@
+#pragma once
+// The shared writer of per-sample source stamps (rt/rig/stamps); thread-safe (Cyclone writers are).
+#include <cstdint>
+#include <string>
+
+#include "sensor_rig/dds/types.hpp"
+
+namespace sensor_rig::dds {
+
+inline constexpr const char* kStampsTopic = "/rig/stamps";
+
+struct SampleStamps {
+  Nanos acquisition_ns = 0;
+  Nanos first_rx_ns = 0;
+  Nanos last_rx_ns = 0;
+  Nanos ready_ns = 0;
+  Nanos publish_ns = 0;
+  Nanos written_ns = 0;
+  std::uint32_t packets = 0;
+  std::uint32_t dropped = 0;
+  std::uint32_t size_bytes = 0;
+};
+
+class StampsWriter {
+ public:
+  explicit StampsWriter(const dds::Participant& p);
+  void write(const std::string& topic, const msg::Time& stamp, const char* frame_id, std::uint64_t seq,
+             const SampleStamps& s);
+
+ private:
+  dds::Topic<msg::SourceStamps> topic_;
+  dds::Writer<msg::SourceStamps> writer_;
+};
+
+// QoS of the stamps topic: reliable, keep-last 64 (many topics feed one monitor).
+dds::QosSpec stamps_qos();
+
+}  // namespace sensor_rig::dds

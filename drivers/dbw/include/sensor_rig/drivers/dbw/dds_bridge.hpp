@@ -1,0 +1,51 @@
+#pragma once
+// The DDS side of the bridge: rt/vehicle/dbw/cmd -> BridgeCore -> CAN transport; ECU frames ->
+// rt/vehicle/state; every state change/fault and 10 Hz -> rt/vehicle/dbw/status.
+// Two threads: the DDS reader sends the frames of a fresh command at once (low latency); the CAN
+// loop receives ECU frames and ticks every millisecond (timeouts, repeat/neutral frames, heartbeat).
+#include <cstdint>
+#include <string>
+
+#include "sensor_rig/dbw/bridge/protocol.hpp"
+#include "sensor_rig/dbw/can/transport.hpp"
+
+namespace sensor_rig::drivers {
+
+struct DdsBridgeOptions {
+  double duration_s = 0.0;  // 0 = until shutdown
+  bool print_stats = true;  // summary on stderr at the end
+};
+
+struct DdsBridgeStats {
+  std::uint64_t commands = 0;
+  std::uint64_t frames_sent = 0;
+  // Command sample source timestamp -> its CAN frames written (ns), and take -> written.
+  double latency_p50_us = 0.0, latency_p99_us = 0.0, latency_max_us = 0.0;
+  double take_to_send_p50_us = 0.0, take_to_send_p99_us = 0.0;
+  // Last command received -> first neutral frame after a command timeout (ms); <0 when none happened.
+  double silence_to_neutral_ms = -1.0;
+  std::uint64_t status_published = 0;
+  std::uint64_t state_published = 0;
+  bool transport_closed = false;  // the CAN transport went away before the end (a runtime failure)
+  // CPU time of the bridge's own two threads (DDS reader + CAN loop), not Cyclone's threads.
+  double bridge_threads_cpu_s = 0.0;
+};
+
+DdsBridgeStats run_dds_bridge(const dbw::Protocol& protocol, dbw::can::Transport& bus, const DdsBridgeOptions& o);
+
+struct CommandSourceOptions {
+  bool enable = false;
+  double steer = 0.0;
+  double throttle = 0.0;
+  double brake = 0.0;
+  double accel = 0.0;
+  int gear = 0;
+  double rate_hz = 50.0;
+  double duration_s = 1.0;
+  double wait_for_reader_s = 2.0;  // wait this long for the bridge to match before sending
+  bool enable_edge = true;         // with --enable: first sample enable=false so the bridge sees an edge
+};
+// Publishes commands on rt/vehicle/dbw/cmd; returns the number sent.
+std::uint64_t run_command_source(const CommandSourceOptions& o);
+
+}  // namespace sensor_rig::drivers

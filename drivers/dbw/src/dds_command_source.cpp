@@ -1,0 +1,43 @@
+// `rig dbw send`: a fixed command at a fixed rate on /vehicle/dbw/cmd; ends by simply stopping.
+#include <time.h>
+
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/drivers/dbw/dds_bridge.hpp"
+#include "sensor_rig/drivers/dbw/dds_types.hpp"
+#include "sensor_rig/drivers/dbw/dds_domain.hpp"
+
+namespace sensor_rig::drivers {
+
+using namespace sensor_rig::dbw;  // NOLINT(google-build-using-namespace): the node of the dbw area
+
+std::uint64_t run_command_source(const CommandSourceOptions& o) {
+  dds::Participant participant(domain_config());
+  dds::Topic<msg::DbwCommand> topic(participant, kCmdTopic);
+  dds::Writer<msg::DbwCommand> writer(participant, topic);
+  writer.wait_for_readers(1, static_cast<int>(o.wait_for_reader_s * 1000));
+  const Nanos period = static_cast<Nanos>(1e9 / o.rate_hz);
+  const Nanos start = monotonic_now_ns();
+  const Nanos end = start + static_cast<Nanos>(o.duration_s * 1e9);
+  msg::DbwCommand c{};
+  char frame_id[] = "base_link";
+  c.header.frame_id = frame_id;
+  std::uint64_t sent = 0;
+  for (Nanos next = start; next < end && !shutdown_requested(); next += period) {
+    timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
+    ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    const Nanos stamp = vehicle_now_ns();
+    c.header.stamp = msg::to_time(stamp);
+    c.seq = ++sent;
+    c.enable = o.enable && !(o.enable_edge && sent == 1);
+    c.steering_angle = o.steer;
+    c.steering_torque = 0.0;
+    c.throttle = o.throttle;
+    c.brake = o.brake;
+    c.accel = o.accel;
+    c.gear = static_cast<std::uint8_t>(o.gear);
+    writer.write(c, stamp);
+  }
+  return sent;
+}
+
+}  // namespace sensor_rig::drivers

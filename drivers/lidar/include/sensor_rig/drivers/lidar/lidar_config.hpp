@@ -1,0 +1,60 @@
+#pragma once
+// A LIDAR node's configuration (the `lidars:` items of a rig config) as a plain struct with
+// defaults, and its parser: unknown keys, wrong types and bad values are reported at file:line.
+#include <cstdint>
+#include <string>
+
+#include "sensor_rig/common/config_node.hpp"
+#include "sensor_rig/dds/qos.hpp"
+#include "sensor_rig/lidar/scan_decoder.hpp"
+
+namespace sensor_rig::drivers {
+
+// How the LIDAR's mock (started by `rig up` beside the driver) produces packets.
+struct LidarMockConfig {
+  enum class Kind { kNone, kSynthetic, kReplay } kind = Kind::kNone;
+  std::string pcap;          // replay: capture file (falls back to synthetic when absent and optional)
+  double rate = 1.0;         // replay speed factor
+  bool loop = true;
+  int rpm = 600;             // synthetic: rotation speed
+  double drop_rate = 0.0;    // fault injection, passed to `rig lidar replay`
+  double corrupt_rate = 0.0;
+};
+
+inline dds::QosSpec lidar_qos() {
+  dds::QosSpec q;
+  q.depth = 2;
+  return q;
+}
+
+struct LidarConfig {
+  std::string name;                    // topic /sensors/lidar/<name>/points
+  std::string model;                   // a model of the decoder registry (lidar/scan_decoder.hpp)
+  std::string host = "127.0.0.1";      // bind address
+  int port = 2368;                     // data port
+  int position_port = 0;               // 0 = none (position packets ignored)
+  int receive_buffer_bytes = 8 << 20;
+  std::string calibration;             // empty = model defaults
+  std::string metadata;                // sensor metadata JSON (Ouster)
+  std::string returns = "strongest";   // strongest | last | dual
+  double min_range_m = 0.4;
+  double max_range_m = 200.0;
+  double cut_angle_deg = 0.0;
+  std::string time_source = "host";    // sensor | host
+  std::string hour_source = "gprmc";   // sensor time: hour from gprmc (host as fallback) | host
+  std::string clock_correction = "auto";  // sensor time through the clock mapper: auto | always | never
+  std::string frame_id;                // default lidar_<name>
+  int realtime_priority = 0;           // SCHED_FIFO priority of the driver thread; 0 = normal scheduling
+  // Keep-last 2: a scan whose repair (lost fragment, slow ack) outlasts one scan period is still
+  // in the writer's history when the next scan is written; depth 1 drops it.
+  dds::QosSpec qos = lidar_qos();
+  LidarMockConfig mock;
+};
+
+// Parses one `lidars:` item; problems go to the node's problem list (reported all at once).
+LidarConfig parse_lidar_config(const config::Node& n);
+// The decoder options a LIDAR's config asks for, its calibration and metadata files read; throws
+// std::runtime_error when one cannot be read. The driver and `rig config check` build from this.
+lidar::DecoderOptions decoder_options(const LidarConfig& c);
+
+}  // namespace sensor_rig::drivers

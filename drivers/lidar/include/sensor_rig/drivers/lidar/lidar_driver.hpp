@@ -1,0 +1,37 @@
+#pragma once
+// One LIDAR: UDP packets (kernel timestamps) -> sensor time -> vehicle time -> decoder -> scan ->
+// PointCloud2 on rt/sensors/lidar/<name>/points + SourceStamps on rt/rig/stamps.
+// Runs in its own thread; stops when shutdown is requested or stop() is called.
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "sensor_rig/dds/driver_status.hpp"
+#include "sensor_rig/drivers/lidar/lidar_config.hpp"
+#include "sensor_rig/dds/stamps_writer.hpp"
+#include "sensor_rig/dds/types.hpp"
+
+namespace sensor_rig::drivers {
+
+
+
+class LidarDriver {
+ public:
+  // Opens sockets and builds the decoder; throws on bad calibration or a port in use.
+  LidarDriver(const LidarConfig& cfg, const dds::Participant& participant, dds::StampsWriter& stamps);
+  ~LidarDriver();
+  LidarDriver(const LidarDriver&) = delete;
+  LidarDriver& operator=(const LidarDriver&) = delete;
+
+  void start();
+  void stop();
+  [[nodiscard]] dds::DriverStatus status() const;
+  [[nodiscard]] std::string topic() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sensor_rig::drivers

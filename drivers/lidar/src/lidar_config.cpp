@@ -1,0 +1,130 @@
+#include "sensor_rig/drivers/lidar/lidar_config.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+LidarMockConfig parse_mock(const config::Node& n) {
+  n.allow_keys({"kind", "pcap", "rate", "loop", "rpm", "drop_rate", "corrupt_rate"});
+  LidarMockConfig m;
+  const auto kind = n.get_choice("kind", {"none", "synthetic", "replay"}, "none");
+  m.kind = kind == "synthetic" ? LidarMockConfig::Kind::kSynthetic
+           : kind == "replay"  ? LidarMockConfig::Kind::kReplay
+                               : LidarMockConfig::Kind::kNone;
+  m.pcap = n.get_path("pcap", "");
+  if (m.kind == LidarMockConfig::Kind::kReplay && m.pcap.empty()) n.fail("pcap", "replay mock needs a pcap file");
+  if (!m.pcap.empty() && !std::filesystem::exists(m.pcap)) n.fail("pcap", "file not found: " + m.pcap);
+  m.rate = n.get_double("rate", 0.01, 100.0, 1.0);
+  m.loop = n.get_bool("loop", true);
+  m.rpm = static_cast<int>(n.get_int("rpm", 300, 1200, 600));
+  m.drop_rate = n.get_double("drop_rate", 0.0, 1.0, 0.0);
+  m.corrupt_rate = n.get_double("corrupt_rate", 0.0, 1.0, 0.0);
+  return m;
+}
+
+// Builds the decoder the driver will build: a calibration or metadata file made for another model
+// (or malformed) is an error at its key now, not a driver failing after `rig up` started the mocks.
+void check_decoder_files(const config::Node& n, const LidarConfig& l) {
+  const auto* model = lidar::find_model(l.model);
+  if (model == nullptr || model->make == nullptr || (l.calibration.empty() && l.metadata.empty())) return;
+  if (model->needs_metadata && l.metadata.empty()) return;  // synthetic: `rig up` writes it
+  const char* key = l.calibration.empty() ? "metadata" : "calibration";
+  const std::string& file = l.calibration.empty() ? l.metadata : l.calibration;
+  if (!std::filesystem::is_regular_file(file)) return;  // reported as not found
+  if (!l.metadata.empty() && !std::filesystem::is_regular_file(l.metadata)) return;  // reported as not found
+  try {
+    (void)lidar::make_decoder(decoder_options(l));
+  } catch (const std::exception& e) {  // DecoderConfigError, or a file that cannot be read
+    n.fail(key, e.what());
+  }
+}
+
+}  // namespace
+
+LidarConfig parse_lidar_config(const config::Node& n) {
+  LidarConfig l;
+  if (!n.expect_map()) return l;
+  n.allow_keys({"name", "model", "host", "port", "position_port", "receive_buffer_bytes", "calibration",
+                "metadata", "returns", "min_range", "max_range", "cut_angle", "time_source", "hour_source", "clock_correction",
+                "frame_id", "realtime_priority", "qos", "mock"});
+  l.name = n.get_string("name");
+  for (char c : l.name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
+      n.fail("name", "'" + l.name + "' must be letters, digits and '_' (it becomes a ROS topic name)");
+      break;
+    }
+  l.model = n.get_string("model");
+  if (const auto* m = lidar::find_model(l.model); m == nullptr || m->make == nullptr)
+    n.fail("model", "'" + l.model + "' is not a supported model (supported: " + lidar::implemented_model_names() + ")");
+  l.host = n.get_string("host", "127.0.0.1");
+  l.port = static_cast<int>(n.get_int("port", 1, 65535));
+  l.position_port = static_cast<int>(n.get_int("position_port", 0, 65535, 0));
+  l.receive_buffer_bytes = static_cast<int>(n.get_int("receive_buffer_bytes", 0, 1 << 30, 8 << 20));
+  l.calibration = n.get_path("calibration", "");
+  if (!l.calibration.empty() && !std::filesystem::exists(l.calibration))
+    n.fail("calibration", "file not found: " + l.calibration);
+  l.metadata = n.get_path("metadata", "");
+  if (!l.metadata.empty() && !std::filesystem::exists(l.metadata)) n.fail("metadata", "file not found: " + l.metadata);
+  l.returns = n.get_choice("returns", {"strongest", "last", "dual"}, "strongest");
+  l.min_range_m = n.get_double("min_range", 0.0, 10.0, 0.4);
+  l.max_range_m = n.get_double("max_range", 1.0, 1000.0, 200.0);
+  if (l.min_range_m >= l.max_range_m) n.fail("max_range", "must be greater than min_range");
+  l.cut_angle_deg = n.get_double("cut_angle", 0.0, 359.99, 0.0);
+  l.time_source = n.get_choice("time_source", {"sensor", "host"}, "host");
+  l.hour_source = n.get_choice("hour_source", {"gprmc", "host"}, "gprmc");
+  l.clock_correction = n.get_choice("clock_correction", {"auto", "always", "never"}, "auto");
+  l.frame_id = n.get_string("frame_id", "lidar_" + l.name);
+  l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
+  if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
+  if (auto m = n.child("mock")) l.mock = parse_mock(*m);
+  check_decoder_files(n, l);
+  const bool synthetic = l.mock.kind == LidarMockConfig::Kind::kSynthetic;
+  // A synthetic Ouster without metadata: `rig up` writes the mock's own metadata for the driver.
+  if (const auto* m = lidar::find_model(l.model); m != nullptr && m->needs_metadata && l.metadata.empty() && !synthetic)
+    n.fail("metadata", "model " + l.model + " needs its sensor metadata JSON (or mock: {kind: synthetic})");
+  // (A synthetic Ouster with metadata renders the sensor the file describes: nothing to check here.)
+  if (synthetic && lidar::find_model(l.model) != nullptr && !(lidar::mock::is_ouster_model(l.model) && !l.metadata.empty())) {
+    if (!lidar::mock::is_synthetic_model(l.model)) {
+      n.fail("mock", "no synthetic sensor for model " + l.model + " (synthetic: " + lidar::mock::synthetic_model_names() + ")");
+    } else {
+      lidar::mock::SyntheticOptions o;  // the options `rig up` starts the mock with
+      o.model = l.model;
+      o.rpm = l.mock.rpm;
+      o.ouster_udp_port = static_cast<std::uint16_t>(l.port);
+      if (const auto e = lidar::mock::synthetic_options_error(o); !e.empty()) n.fail("mock", e);
+    }
+  }
+  return l;
+}
+
+lidar::DecoderOptions decoder_options(const LidarConfig& c) {
+  const auto read = [](const std::string& path, const char* what) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error(std::string("cannot read ") + what + " " + path);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+  };
+  lidar::DecoderOptions d;
+  d.model = c.model;
+  if (!c.calibration.empty()) {
+    d.calibration_text = read(c.calibration, "calibration");
+    d.calibration_name = c.calibration;
+  }
+  if (!c.metadata.empty()) {
+    d.metadata_text = read(c.metadata, "metadata");
+    d.metadata_name = c.metadata;
+  }
+  d.returns = c.returns;
+  d.min_range_m = c.min_range_m;
+  d.max_range_m = c.max_range_m;
+  d.cut_angle_deg = c.cut_angle_deg;
+  return d;
+}
+
+}  // namespace sensor_rig::drivers

@@ -1,0 +1,34 @@
+#pragma once
+// `rig monitor`: discovers the rig's topics, subscribes, and reports per topic and per second the
+// rate, size, received, lost and the latency of each stage (SPEC §6):
+//   sensor   = first kernel receive - acquisition   (device + wire)
+//   assemble = last kernel receive - first           (scan/frame duration on the wire)
+//   process  = publish - last kernel receive         (wake-up, decode, assemble)
+//   write    = DDS write returned - publish          (serialize and send: on the wire)
+//   dds      = subscriber receive - publish          (Cyclone transport)
+//   total    = subscriber receive - acquisition
+//   to_wire  = DDS write returned - last kernel receive (process + write: the driver's own latency)
+// Stages other than dds need the driver's per-sample stamps (rt/rig/stamps); topics published by
+// others show dds only. A sample announced by its stamps that does not arrive within 2 s is lost.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/dds/participant.hpp"
+
+namespace sensor_rig::rig {
+
+struct MonitorOptions {
+  std::vector<std::string> topics;  // ROS names; empty = every topic with a known type
+  double duration_s = 0;            // 0 = until Ctrl-C
+  bool json = false;                // one JSON line per topic per second instead of the table
+  int period_ms = 1000;
+  std::string summary_file;         // when set: whole-run percentiles per topic and stage, as JSON
+  dds::DomainConfig dds;
+  std::function<bool()> keep_going;  // optional: checked every loop; false ends the monitor
+};
+
+// Returns the exit code (0 ok).
+int run_monitor(const MonitorOptions& options);
+
+}  // namespace sensor_rig::rig

@@ -1,0 +1,25 @@
+#pragma once
+// Every area's register function; the list is the whole `rig` command tree.
+#include "sensor_rig/common/cli.hpp"
+
+namespace sensor_rig {
+namespace lidar { void register_cli(CLI::App& app, cli::Context& ctx); }
+namespace dbw { void register_cli(CLI::App& app, cli::Context& ctx); }
+namespace bench { void register_cli(CLI::App& app, cli::Context& ctx); }
+namespace rig { void register_cli(CLI::App& app, cli::Context& ctx); }
+namespace drivers { void register_dbw_cli(CLI::App& app, cli::Context& ctx); }
+
+inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
+  rig::register_cli(app, ctx);  // up, demo, config, monitor
+#ifdef RIG_HAVE_LIDAR
+  lidar::register_cli(app, ctx);    // lidar decode|replay|...
+#endif
+#ifdef RIG_HAVE_DBW
+  dbw::register_cli(app, ctx);      // can ..., mock paravan
+  drivers::register_dbw_cli(app, ctx);  // dbw bridge|send (the DDS node)
+#endif
+#ifdef RIG_HAVE_BENCH
+  bench::register_cli(app, ctx);    // perf ...
+#endif
+}
+}  // namespace sensor_rig

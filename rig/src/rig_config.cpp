@@ -1,0 +1,71 @@
+#include "rig_config.hpp"
+
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include "sensor_rig/common/config_node.hpp"
+
+namespace sensor_rig::rig {
+
+RigConfig load_rig_config(const std::string& path) {
+  auto problems = std::make_shared<config::Problems>();
+  auto root = config::Node::load_file(path, problems);
+  problems->throw_if_any();  // unreadable or not YAML: nothing more to say
+  RigConfig cfg;
+  cfg.file = path;
+  if (!root.expect_map()) problems->throw_if_any();
+  // Cameras are configured once their drivers exist; until then `cameras` is an unknown key.
+  root.allow_keys({"rig", "lidars", "dbw"});
+  if (auto rig = root.child("rig", true)) {
+    rig->allow_keys({"name", "dds", "diagnostics_period_ms"});
+    cfg.name = rig->get_string("name", "rig");
+    cfg.diagnostics_period_ms = static_cast<int>(rig->get_int("diagnostics_period_ms", 100, 60000, 1000));
+    if (auto d = rig->child("dds")) {
+      d->allow_keys({"domain", "profile"});
+      cfg.dds.domain_id = static_cast<dds_domainid_t>(d->get_int("domain", 0, 232, 0));
+      cfg.dds.profile = d->get_path("profile", "");
+      if (!cfg.dds.profile.empty() && !std::filesystem::exists(cfg.dds.profile))
+        d->fail("profile", "file not found: " + cfg.dds.profile);
+    }
+  }
+  std::set<std::string> names;
+  std::set<int> ports;
+  for (const auto& item : root.items("lidars")) {
+    auto l = drivers::parse_lidar_config(item);
+    if (!l.name.empty() && !names.insert(l.name).second) item.fail("name", "duplicate device name '" + l.name + "'");
+    if (!ports.insert(l.port).second) item.fail("port", "port " + std::to_string(l.port) + " used twice");
+    if (l.position_port != 0 && !ports.insert(l.position_port).second)
+      item.fail("position_port", "port " + std::to_string(l.position_port) + " used twice");
+    cfg.lidars.push_back(std::move(l));
+  }
+  if (auto d = root.child("dbw")) cfg.dbw = drivers::parse_dbw_config(*d);
+  problems->throw_if_any();
+  return cfg;
+}
+
+std::string describe(const RigConfig& cfg) {
+  std::ostringstream o;
+  o << "rig '" << cfg.name << "' (" << cfg.file << "), DDS domain " << cfg.dds.domain_id << ", profile "
+    << (cfg.dds.profile.empty() ? std::string("default") : cfg.dds.profile) << "\n";
+  for (const auto& l : cfg.lidars) {
+    o << "  lidar " << l.name << ": " << l.model << " udp " << l.host << ":" << l.port
+      << (l.position_port ? " position " + std::to_string(l.position_port) : std::string()) << ", returns "
+      << l.returns << ", time " << l.time_source << ", qos " << dds::to_string(l.qos) << " -> /sensors/lidar/"
+      << l.name << "/points";
+    if (l.mock.kind == LidarMockConfig::Kind::kSynthetic) o << " [mock: synthetic " << l.mock.rpm << " rpm]";
+    if (l.mock.kind == LidarMockConfig::Kind::kReplay) o << " [mock: replay " << l.mock.pcap << "]";
+    o << "\n";
+  }
+  if (cfg.dbw.enabled) {
+    o << "  dbw: bridge on " << (cfg.dbw.transport.empty() ? "unix:" + cfg.dbw.bus : cfg.dbw.transport)
+      << ", protocol " << (cfg.dbw.protocol.empty() ? std::string("config/dbw/paravan_ref.yaml") : cfg.dbw.protocol)
+      << " -> /vehicle/dbw/status, /vehicle/state";
+    if (cfg.dbw.mock_ecu) o << " [mock ECU on " << cfg.dbw.bus << "]";
+    if (cfg.dbw.command_source.enabled) o << " [command source " << cfg.dbw.command_source.rate_hz << " Hz]";
+    o << "\n";
+  }
+  return o.str();
+}
+
+}  // namespace sensor_rig::rig

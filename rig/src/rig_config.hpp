@@ -1,0 +1,34 @@
+#pragma once
+// The rig's YAML configuration (config/*.yaml) as plain structs with defaults, validated on load:
+// unknown keys, wrong types and bad values fail before anything starts, naming file:line and key.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/dds/participant.hpp"
+#include "sensor_rig/dds/qos.hpp"
+#include "sensor_rig/drivers/dbw/dbw_config.hpp"
+#include "sensor_rig/drivers/lidar/lidar_config.hpp"
+
+namespace sensor_rig::rig {
+
+using drivers::DbwConfig;
+using drivers::LidarConfig;
+using drivers::LidarMockConfig;
+
+struct RigConfig {
+  std::string file;   // where it was loaded from
+  std::string name = "rig";
+  dds::DomainConfig dds;
+  int diagnostics_period_ms = 1000;
+  std::vector<LidarConfig> lidars;
+  DbwConfig dbw;
+};
+
+// Loads and validates; throws ConfigError listing every problem (file:line:col: key: message).
+RigConfig load_rig_config(const std::string& path);
+// Human-readable summary for `rig config check`.
+std::string describe(const RigConfig& cfg);
+
+}  // namespace sensor_rig::rig

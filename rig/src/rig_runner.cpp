@@ -1,0 +1,174 @@
+#include "rig_runner.hpp"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+
+#include "sensor_rig/dds/diagnostics.hpp"
+#include "sensor_rig/drivers/lidar/lidar_driver.hpp"
+#include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
+#include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
+#include "sensor_rig/dds/stamps_writer.hpp"
+
+namespace sensor_rig::rig {
+
+std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const LidarConfig& l) {
+  std::vector<std::string> argv;
+  if (l.mock.kind == LidarMockConfig::Kind::kNone) return argv;
+  argv = {rig_exe, "lidar", "replay", "--to", l.host + ":" + std::to_string(l.port)};
+  if (l.mock.kind == LidarMockConfig::Kind::kReplay) {
+    argv.insert(argv.end(), {"--pcap", l.mock.pcap, "--rate", std::to_string(l.mock.rate)});
+    if (l.mock.loop) argv.emplace_back("--loop");
+  } else {
+    argv.insert(argv.end(), {"--synthetic", l.model, "--rpm", std::to_string(l.mock.rpm)});
+    // The mock renders the sensor the driver decodes: same calibration, same Ouster metadata.
+    if (!l.calibration.empty()) argv.insert(argv.end(), {"--calibration", l.calibration});
+    if (!l.metadata.empty() && lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--metadata", l.metadata});
+    // Same return mode as the driver expects (an Ouster's echoes come from its UDP profile instead).
+    if (!lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--return", l.returns});
+  }
+  // Position packets (GPRMC, PPS): the synthetic Velodyne's, or a capture's (port 8308 records).
+  if (l.position_port != 0) argv.insert(argv.end(), {"--position-port", std::to_string(l.position_port)});
+  if (l.mock.drop_rate > 0) argv.insert(argv.end(), {"--drop-rate", std::to_string(l.mock.drop_rate)});
+  if (l.mock.corrupt_rate > 0) argv.insert(argv.end(), {"--corrupt-rate", std::to_string(l.mock.corrupt_rate)});
+  return argv;
+}
+
+std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, const DbwConfig& d) {
+  std::vector<std::vector<std::string>> out;
+  if (!d.enabled) return out;
+  if (d.mock_ecu) {
+    std::vector<std::string> ecu{rig_exe, "mock", "paravan", "--transport", "unix-listen:" + d.bus};
+    if (!d.protocol.empty()) ecu.insert(ecu.end(), {"--config", d.protocol});
+    for (const auto& f : d.mock_faults) ecu.insert(ecu.end(), {"--fault", f});
+    out.push_back(ecu);
+  }
+  std::vector<std::string> bridge{rig_exe, "dbw", "bridge", "--transport",
+                                  d.transport.empty() ? "unix:" + d.bus : d.transport};
+  if (!d.protocol.empty()) bridge.insert(bridge.end(), {"--config", d.protocol});
+  out.push_back(bridge);
+  if (d.command_source.enabled) {
+    const auto& c = d.command_source;
+    out.push_back({rig_exe, "dbw", "send", "--enable", "--steer", std::to_string(c.steer_rad), "--throttle",
+                   std::to_string(c.throttle), "--brake", std::to_string(c.brake), "--gear", std::to_string(c.gear),
+                   "--rate", std::to_string(c.rate_hz), "--duration", "86400"});
+  }
+  return out;
+}
+
+SyntheticMetadataDir::SyntheticMetadataDir() {
+  if (const char* d = std::getenv("RIG_LOG_DIR"); d != nullptr && *d != '\0') {
+    path_ = d;
+    std::filesystem::create_directories(path_);
+    return;
+  }
+  std::string tmpl = (std::filesystem::temp_directory_path() / "rig-up-XXXXXX").string();
+  if (::mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("cannot create a directory for synthetic metadata");
+  path_ = tmpl;
+  owned_ = true;
+}
+
+SyntheticMetadataDir::~SyntheticMetadataDir() {
+  if (!owned_) return;
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+std::string SyntheticMetadataDir::write(const LidarConfig& l) const {
+  lidar::mock::SyntheticOptions o;
+  o.model = l.model;
+  o.rpm = l.mock.rpm;
+  o.ouster_udp_port = static_cast<std::uint16_t>(l.port);
+  const std::string json = lidar::mock::metadata_json(lidar::mock::synthetic_ouster_metadata(o));  // validated on load
+  const auto file = path_ / (l.name + "_synthetic_metadata.json");
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out << json;
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+  return file.string();
+}
+
+bool needs_synthetic_metadata(const LidarConfig& l) {
+  return l.mock.kind == LidarMockConfig::Kind::kSynthetic && l.metadata.empty() && lidar::mock::is_ouster_model(l.model);
+}
+
+int run_rig(const RigConfig& config, const RunOptions& opt) {
+  // A synthetic Ouster without configured metadata: its mock's metadata, for both driver and mock.
+  RigConfig cfg = config;
+  std::optional<SyntheticMetadataDir> metadata_dir;
+  try {
+    for (auto& l : cfg.lidars) {
+      if (!needs_synthetic_metadata(l)) continue;
+      if (!metadata_dir) metadata_dir.emplace();
+      l.metadata = metadata_dir->write(l);
+      log::info("rig", "lidar " + l.name + ": synthetic " + l.model + " metadata " + l.metadata);
+    }
+  } catch (const std::exception& e) {
+    log::error("rig", e.what());
+    return 1;
+  }
+
+  // Child tools (dbw bridge, command source) take the DDS domain from ROS_DOMAIN_ID.
+  ::setenv("ROS_DOMAIN_ID", std::to_string(cfg.dds.domain_id).c_str(), 1);
+  dds::Participant participant(cfg.dds);
+  log::info("rig", "'" + cfg.name + "' on DDS domain " + std::to_string(cfg.dds.domain_id) + ", profile " +
+                       (participant.profile().empty() ? std::string("$CYCLONEDDS_URI") : participant.profile()));
+  dds::StampsWriter stamps(participant);
+  dds::DiagnosticsPublisher diagnostics(participant);
+
+  // Drivers first (sockets bound), then mocks: no packet of a mock is sent to a closed port.
+  std::vector<std::unique_ptr<drivers::LidarDriver>> lidars;
+  try {
+    for (const auto& l : cfg.lidars) lidars.push_back(std::make_unique<drivers::LidarDriver>(l, participant, stamps));
+  } catch (const std::exception& e) {
+    log::error("rig", std::string("driver start failed: ") + e.what());
+    return 1;
+  }
+  for (auto& d : lidars) d->start();
+
+  std::vector<ChildProcess> mocks;
+  const std::string exe = self_executable();
+  for (const auto& argv : dbw_commands(exe, cfg.dbw)) {
+    // The bridge is the only path to the actuators: its timeouts must not be scheduling delays.
+    mocks.emplace_back(argv, cfg.dbw.realtime_priority);
+    log::info("rig", "dbw: " + argv[1] + " " + argv[2] + ": pid " + std::to_string(mocks.back().pid()));
+    // The ECU must listen before the bridge connects, the bridge subscribe before commands flow.
+    ::usleep(300'000);
+  }
+  for (const auto& l : cfg.lidars) {
+    auto argv = lidar_mock_command(exe, l);
+    if (argv.empty()) continue;
+    mocks.emplace_back(argv);
+    log::info("rig", "mock for lidar " + l.name + ": pid " + std::to_string(mocks.back().pid()));
+  }
+
+  const Nanos start = monotonic_now_ns();
+  std::vector<bool> reported_dead(mocks.size(), false);
+  while (!shutdown_requested()) {
+    if (wait_for_shutdown(cfg.diagnostics_period_ms)) break;
+    std::vector<dds::DriverStatus> statuses;
+    for (const auto& d : lidars) statuses.push_back(d->status());
+    for (std::size_t i = 0; i < mocks.size(); ++i) {
+      if (!mocks[i].running() && !reported_dead[i]) {
+        reported_dead[i] = true;
+        log::warn("rig", "mock '" + mocks[i].name() + "' exited with status " + std::to_string(mocks[i].exit_status()));
+      }
+    }
+    diagnostics.publish(statuses);
+    if (opt.duration_s > 0 && static_cast<double>(monotonic_now_ns() - start) * 1e-9 >= opt.duration_s) break;
+  }
+  log::info("rig", "stopping");
+  // Stop in reverse: the command source first, so the bridge sees silence and disengages.
+  for (auto it = mocks.rbegin(); it != mocks.rend(); ++it) it->stop();
+  for (auto& d : lidars) d->stop();
+  return 0;
+}
+
+}  // namespace sensor_rig::rig

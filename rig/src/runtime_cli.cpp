@@ -1,0 +1,106 @@
+// `rig up`, `rig demo`, `rig config check`, `rig monitor`.
+#include <cstdio>
+#include <filesystem>
+
+#include "monitor.hpp"
+#include "rig_config.hpp"
+#include "rig_runner.hpp"
+#include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+
+#ifndef RIG_DEFAULT_SOURCE_DIR
+#define RIG_DEFAULT_SOURCE_DIR "."
+#endif
+
+namespace sensor_rig::rig {
+namespace {
+
+std::string default_mock_config() {
+  const char* src = std::getenv("RIG_SOURCE_DIR");
+  return (std::filesystem::path(src != nullptr ? src : RIG_DEFAULT_SOURCE_DIR) / "config/mock_rig.yaml").string();
+}
+
+void add_up(CLI::App& app, cli::Context& ctx) {
+  auto* cmd = app.add_subcommand("up", "Run the drivers (and mock devices) a config names");
+  auto config = std::make_shared<std::string>();
+  auto duration = std::make_shared<double>(0);
+  cmd->add_option("CONFIG", *config, "Rig config (YAML)")->required();
+  cmd->add_option("--duration", *duration, "Stop after S seconds (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
+  cmd->callback([&ctx, config, duration] {
+    const auto cfg = load_rig_config(*config);
+    ctx.exit_code = run_rig(cfg, RunOptions{*duration});
+  });
+}
+
+void add_demo(CLI::App& app, cli::Context& ctx) {
+  auto* cmd = app.add_subcommand("demo", "The whole rig on mock devices with a live status table");
+  auto config = std::make_shared<std::string>(default_mock_config());
+  auto duration = std::make_shared<double>(0);
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("--config", *config, "Rig config (default config/mock_rig.yaml)");
+  cmd->add_option("--duration", *duration, "Stop after S seconds (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--json", *json, "Monitor output as JSON lines");
+  cmd->callback([&ctx, config, duration, json] {
+    const auto cfg = load_rig_config(*config);  // validate before starting anything
+    std::fprintf(stderr, "%s", describe(cfg).c_str());
+    // Real processes: mocks and drivers in `rig up`, the monitor here.
+    ChildProcess rig({self_executable(), "up", *config});
+    MonitorOptions mo;
+    mo.duration_s = *duration;
+    mo.json = *json;
+    mo.dds = cfg.dds;
+    mo.keep_going = [&rig] { return rig.running(); };
+    ctx.exit_code = run_monitor(mo);
+    if (!rig.running() && !shutdown_requested()) {
+      std::fprintf(stderr, "rig demo: `rig up %s` exited with status %d (see its messages above)\n", config->c_str(),
+                   rig.exit_status());
+      ctx.exit_code = cli::kRuntime;
+      return;
+    }
+    rig.stop(5000);
+  });
+}
+
+void add_config(CLI::App& app, cli::Context& ctx) {
+  auto* cfg = app.add_subcommand("config", "Configuration tools");
+  cfg->require_subcommand(1);
+  auto* check = cfg->add_subcommand("check", "Validate a rig config; errors name file:line:key (exit 2)");
+  auto path = std::make_shared<std::string>();
+  check->add_option("CONFIG", *path, "Rig config (YAML)")->required();
+  check->callback([&ctx, path] {
+    const auto c = load_rig_config(*path);  // throws ConfigError -> exit 2
+    std::printf("%s: ok\n%s", path->c_str(), describe(c).c_str());
+    ctx.exit_code = 0;
+  });
+}
+
+void add_monitor(CLI::App& app, cli::Context& ctx) {
+  auto* cmd = app.add_subcommand("monitor", "Live per-topic rate, size, latency stages and loss");
+  auto opt = std::make_shared<MonitorOptions>();
+  auto profile = std::make_shared<std::string>();
+  auto domain = std::make_shared<int>(0);
+  cmd->add_option("TOPIC", opt->topics, "ROS topic names (default: all known)");
+  cmd->add_option("--duration", opt->duration_s, "Stop after S seconds")->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--json", opt->json, "One JSON line per topic per second");
+  cmd->add_option("--domain", *domain, "DDS domain id")->check(CLI::Range(0, 232));
+  cmd->add_option("--dds-profile", *profile, "Cyclone XML profile (default: loopback)");
+  cmd->add_option("--summary", opt->summary_file, "At the end, write whole-run percentiles per topic/stage (JSON)");
+  cmd->callback([&ctx, opt, profile, domain] {
+    opt->dds.domain_id = static_cast<dds_domainid_t>(*domain);
+    opt->dds.profile = *profile;
+    ctx.exit_code = run_monitor(*opt);
+  });
+}
+
+}  // namespace
+
+void register_cli(CLI::App& app, cli::Context& ctx) {
+  add_up(app, ctx);
+  add_demo(app, ctx);
+  add_config(app, ctx);
+  add_monitor(app, ctx);
+}
+
+}  // namespace sensor_rig::rig

@@ -1,0 +1,184 @@
+// End to end with real processes: a mixed-vendor rig (VLP-32C, OS-LEGACY, Pandar40P), every LIDAR
+// fed by its synthetic mock, `rig up` -> Cyclone DDS (domain 21) -> this process reading all three
+// topics at once. Behaviour, not timing: each arrives scan by scan with sensor-clock stamps one
+// revolution apart, the Ouster and Hesai stamps come from the sensor clock through the mapper, the
+// VLP-32C's from its GPRMC/PPS position packets (GPS-synced), and the synthetic Ouster's metadata is
+// written where the driver read it. With the shared captures, a replay-mock HDL-32E shows that a
+// capture's position packets reach the driver too.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/dds/types.hpp"
+#include "rig_process.hpp"
+
+namespace sensor_rig {
+namespace {
+
+using test::rig_bin;
+
+constexpr int kDomain = 21;
+constexpr const char* kNames[] = {"velodyne", "ouster", "hesai"};
+constexpr const char* kModels[] = {"VLP-32C", "OS-LEGACY", "Pandar40P"};
+
+// The HDL-32E capture: its position packets (port 8308 records) carry a valid GPRMC, PPS absent.
+std::string hdl32e_capture() {
+  return (test::test_data() / "lidar/velodyne/hdl32e_veloview_monterey-first-100-packets.pcap").string();
+}
+
+// `capture`: also a replay-mock HDL-32E with a position port (its capture's position packets).
+std::string mixed_rig(const std::string& profile, const std::string& capture = "") {
+  std::ostringstream y;
+  y << "rig:\n  name: synthetic-mixed\n  dds: {domain: " << kDomain << ", profile: " << profile << "}\nlidars:\n";
+  for (int i = 0; i < 3; ++i) {
+    y << "  - {name: " << kNames[i] << ", model: " << kModels[i] << ", port: " << test::free_udp_port();
+    if (i == 0) y << ", position_port: " << test::free_udp_port();
+    y << ", time_source: sensor, qos: {reliability: reliable, depth: 20}, mock: {kind: synthetic, rpm: 600}}\n";
+  }
+  if (!capture.empty())
+    y << "  - {name: replayed, model: HDL-32E, port: " << test::free_udp_port()
+      << ", position_port: " << test::free_udp_port() << ", time_source: sensor, mock: {kind: replay, pcap: " << capture
+      << ", loop: true}}\n";
+  return y.str();
+}
+
+TEST(SyntheticRig, ConfigCheckAcceptsSyntheticModelsAndRefusesWhatTheyCannotDo) {
+  test::TempDir dir;
+  const std::string profile = test::source_dir().string() + "/config/cyclonedds/loopback.xml";
+  auto [rc, out] = test::run(rig_bin() + " config check " + dir.write("ok.yaml", mixed_rig(profile)) + " 2>&1");
+  EXPECT_EQ(rc, 0) << out;
+  // An Ouster without metadata needs its synthetic mock (which brings the metadata) ...
+  std::tie(rc, out) = test::run(rig_bin() + " config check " +
+                                dir.write("no_meta.yaml", "lidars:\n  - {name: os, model: OS, port: 7502}\n") + " 2>&1");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find("metadata"), std::string::npos) << out;
+  // ... and each synthetic sensor runs only at the speeds the real one does.
+  std::tie(rc, out) = test::run(
+      rig_bin() + " config check " +
+      dir.write("rpm.yaml", "lidars:\n  - {name: h, model: Pandar40P, port: 2368, mock: {kind: synthetic, rpm: 300}}\n") +
+      " 2>&1");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find("600 or 1200"), std::string::npos) << out;
+  std::tie(rc, out) = test::run(
+      rig_bin() + " config check " +
+      dir.write("os.yaml", "lidars:\n  - {name: o, model: OS, port: 7502, mock: {kind: synthetic, rpm: 900}}\n") + " 2>&1");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find("10 or 20 Hz"), std::string::npos) << out;
+}
+
+TEST(SyntheticRig, WriteMetadataAloneWritesWhatTheParserReads) {
+  test::TempDir dir;
+  const auto file = (dir.path / "os.json").string();
+  const auto [rc, out] =
+      test::run(rig_bin() + " lidar replay --synthetic OS --beams 64 --lidar-mode 2048x10 --write-metadata " + file + " 2>&1");
+  ASSERT_EQ(rc, 0) << out;
+  std::ifstream in(file);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["config_params"]["lidar_mode"], "2048x10");
+  EXPECT_EQ(j["config_params"]["udp_profile_lidar"], "RNG19_RFL8_SIG16_NIR16");
+  EXPECT_EQ(j["beam_intrinsics"]["beam_altitude_angles"].size(), 64u);
+  const auto [rc2, out2] = test::run(rig_bin() + " lidar replay --synthetic VLP-16 --write-metadata " + file + " 2>&1");
+  EXPECT_EQ(rc2, 2) << out2;
+}
+
+TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
+  test::TempDir dir;
+  const std::string profile = test::source_dir().string() + "/config/cyclonedds/loopback.xml";
+  const bool with_capture = std::filesystem::exists(hdl32e_capture());
+  if (!with_capture) std::cout << "no " << hdl32e_capture() << ": replay mock position packets not checked\n";
+  const auto cfg = dir.write("rig.yaml", mixed_rig(profile, with_capture ? hdl32e_capture() : ""));
+  ::setenv("RIG_LOG_DIR", dir.path.c_str(), 1);  // the synthetic Ouster's metadata lands here
+  ChildProcess rig({rig_bin(), "up", cfg, "--duration", "30"});
+  ::unsetenv("RIG_LOG_DIR");
+
+  dds::Participant p({kDomain, profile});
+  dds::QosSpec q;
+  q.depth = 20;
+  std::vector<std::unique_ptr<dds::Topic<msg::PointCloud2>>> topics;
+  std::vector<std::unique_ptr<dds::Reader<msg::PointCloud2>>> readers;
+  for (const char* n : kNames) {
+    topics.push_back(std::make_unique<dds::Topic<msg::PointCloud2>>(p, std::string("/sensors/lidar/") + n + "/points", q));
+    readers.push_back(std::make_unique<dds::Reader<msg::PointCloud2>>(p, *topics.back(), q));
+  }
+  dds::Topic<msg::DiagnosticArray> diag_topic(p, "/diagnostics");
+  dds::Reader<msg::DiagnosticArray> diag(p, diag_topic);
+  for (auto& r : readers) ASSERT_TRUE(r->wait_for_writers(1, 15000)) << "driver did not come up";
+
+  // All three at once, as a fusion node would.
+  std::vector<std::vector<std::uint32_t>> points(3);
+  std::vector<std::vector<Nanos>> stamps(3);
+  std::map<std::string, std::map<std::string, std::string>> status;  // last diagnostics per driver
+  for (const Nanos end = monotonic_now_ns() + 3'000'000'000; monotonic_now_ns() < end;) {
+    for (std::size_t i = 0; i < 3; ++i) {
+      readers[i]->take([&](const msg::PointCloud2& pc, const dds_sample_info_t&) {
+        points[i].push_back(pc.width);
+        stamps[i].push_back(msg::from_time(pc.header.stamp));
+      });
+    }
+    diag.take([&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
+      for (std::uint32_t k = 0; k < a.status._length; ++k) {
+        auto& kv = status[a.status._buffer[k].name];
+        for (std::uint32_t v = 0; v < a.status._buffer[k].values._length; ++v)
+          kv[a.status._buffer[k].values._buffer[v].key] = a.status._buffer[k].values._buffer[v].value;
+      }
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(rig.stop(), 0);
+
+  for (std::size_t i = 0; i < 3; ++i) {
+    SCOPED_TRACE(kModels[i]);
+    ASSERT_GE(points[i].size(), 10u) << "3 s of a 10 Hz sensor";
+    for (const auto n : points[i]) EXPECT_GT(n, 10000u);
+    for (std::size_t k = 1; k < stamps[i].size(); ++k) EXPECT_GT(stamps[i][k], stamps[i][k - 1]);
+    // Stamps are the sensor's: one revolution (100 ms) apart on average.
+    const double mean_dt = static_cast<double>(stamps[i].back() - stamps[i].front()) / double(stamps[i].size() - 1);
+    EXPECT_NEAR(mean_dt, 100e6, 10e6);
+    const auto& kv = status["lidar/" + std::string(kNames[i])];
+    EXPECT_EQ(kv.at("packets_dropped"), "0");
+    if (i == 0) {
+      // The synthetic VLP-32C is a GPS-synced sensor: its position packets say PPS locked with a
+      // valid GPRMC, so its µs-since-hour take the hour from GPRMC and are vehicle time as they are.
+      EXPECT_GT(std::stoull(kv.at("position_packets")), 0u);
+      EXPECT_EQ(kv.at("pps"), "locked");
+      EXPECT_EQ(kv.at("gprmc"), "valid");
+      EXPECT_EQ(kv.at("hour_source"), "gprmc");
+      EXPECT_EQ(kv.at("stamp_source"), "gps");
+      EXPECT_EQ(kv.at("sync"), "locked");
+      EXPECT_EQ(kv.at("host_fallbacks"), "0");
+    } else {  // absolute sensor time (Ouster, Hesai): the host clock of the mock, through the mapper
+      EXPECT_TRUE(kv.at("stamp_source") == "sensor_synced" || kv.at("stamp_source") == "sensor_mapped")
+          << kv.at("stamp_source");
+      std::cout << kNames[i] << ": stamp_source " << kv.at("stamp_source") << ", sync " << kv.at("sync")
+                << ", offset " << kv.at("sync_offset_ns") << " ns\n";
+    }
+  }
+  if (with_capture) {
+    // The replay mock forwards the capture's position packets: GPRMC valid (2012), PPS absent, so
+    // the hour comes from GPRMC and the free-running sensor clock is mapped.
+    const auto& kv = status["lidar/replayed"];
+    ASSERT_TRUE(kv.contains("position_packets")) << "no diagnostics for the replayed HDL-32E";
+    EXPECT_GT(std::stoull(kv.at("position_packets")), 0u);
+    EXPECT_EQ(kv.at("pps"), "absent");
+    EXPECT_EQ(kv.at("gprmc"), "valid");
+    EXPECT_EQ(kv.at("hour_source"), "gprmc");
+    EXPECT_EQ(kv.at("stamp_source"), "sensor_mapped");
+  }
+  const auto meta = dir.path / "ouster_synthetic_metadata.json";
+  ASSERT_TRUE(std::filesystem::exists(meta));
+  std::ifstream in(meta);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["lidar_mode"], "1024x10");
+  EXPECT_EQ(j["beam_altitude_angles"].size(), 32u);
+}
+
+}  // namespace
+}  // namespace sensor_rig
