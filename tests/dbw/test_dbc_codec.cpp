@@ -16,7 +16,7 @@ namespace {
 dbc::Signal sig(int start, int len, dbc::ByteOrder order, bool is_signed = false, double factor = 1.0,
                 double offset = 0.0) {
   dbc::Signal s;
-  s.name = "S";
+  s.name = std::string(1, 'S');  // not = "S": GCC 12 -O3 reports a false -Wrestrict on that assign
   s.start_bit = static_cast<std::uint16_t>(start);
   s.length = static_cast<std::uint16_t>(len);
   s.order = order;
