@@ -7,7 +7,7 @@ PACKAGES=(
   cyclonedds-dev cyclonedds-tools libcycloneddsidl0
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-binding-c-dev
   libpcap-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libssl-dev
-  libaravis-dev aravis-tools
+  libaravis-dev aravis-tools libusb-1.0-0-dev libturbojpeg0-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   clang libclang-rt-14-dev clang-tidy
   python3

@@ -1,0 +1,84 @@
+#pragma once
+// A camera as a frame source: open (throws CameraError with the reason), next(timeout) -> a value
+// (frame, timeout, incomplete, disconnected: never an exception in the capture loop), close.
+// One thread uses a source; a Frame must be dropped before the next call to next() or close().
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sensor_rig/camera/frame.hpp"
+#include "sensor_rig/camera/pixel_format.hpp"
+
+namespace sensor_rig::camera {
+
+struct CameraError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+enum class TriggerMode : std::uint8_t { kFreeRun = 0, kSoftware, kLine };
+const char* to_string(TriggerMode m) noexcept;
+
+// What a backend is asked to configure (the driver's config minus DDS). Applied in this order:
+// pixel format, ROI, frame rate, exposure, gain, then `features` by name, then the trigger.
+struct SourceConfig {
+  std::string backend = "aravis";  // aravis | v4l2
+  std::string device;              // aravis: id, serial, IP or MAC; v4l2: /dev/videoN
+  PixelFormat format = PixelFormat::kBayerRG8;
+  std::uint32_t width = 1920;
+  std::uint32_t height = 1200;
+  double frame_rate = 10.0;
+  double exposure_us = 0.0;        // 0: leave as the device has it
+  double gain_db = -1.0;           // < 0: leave as the device has it
+  std::vector<std::pair<std::string, std::string>> features;  // any GenICam feature: name -> value
+  TriggerMode trigger = TriggerMode::kFreeRun;
+  std::string trigger_line = "Line1";  // hardware trigger source
+  int packet_size = 0;                 // GigE: 0 = negotiate
+  std::int64_t packet_delay_ns = 0;    // GigE inter-packet delay
+  int socket_buffer_bytes = 8 << 20;   // GigE stream socket (fixed; >= 4 MB, SPEC §8)
+  bool packet_socket = false;          // Aravis' packet socket: receives nothing from the fake as root
+  int buffers = 4;                     // pool size
+};
+
+enum class CaptureStatus : std::uint8_t {
+  kFrame = 0,
+  kTimeout,       // nothing within the timeout
+  kIncomplete,    // a frame arrived damaged (missing packets, short buffer): counted, not returned
+  kDisconnected,  // control lost / device gone: close() and open() again
+  kError,         // other failure (reason in Capture::error)
+};
+const char* to_string(CaptureStatus s) noexcept;
+
+struct Capture {
+  CaptureStatus status = CaptureStatus::kTimeout;
+  Frame frame;
+  std::string error;
+};
+
+struct SourceStats {
+  std::uint64_t completed = 0;   // frames returned
+  std::uint64_t incomplete = 0;  // damaged frames dropped (failures, short buffers)
+  std::uint64_t timeouts = 0;
+  std::uint64_t underruns = 0;   // no free buffer when a frame started
+  std::uint64_t missing_packets = 0;
+  std::uint64_t resent_packets = 0;
+  std::uint64_t disconnects = 0;
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual void open() = 0;  // throws CameraError
+  virtual void close() noexcept = 0;
+  [[nodiscard]] virtual bool is_open() const noexcept = 0;
+  virtual Capture next(int timeout_ms) = 0;
+  // The caller's watchdog gave up on the device: close() must not wait for it to answer.
+  virtual void mark_lost() noexcept {}
+  // Software trigger (TriggerMode::kSoftware); false when not open or refused.
+  virtual bool trigger() { return false; }
+  [[nodiscard]] virtual SourceStats stats() const = 0;
+  [[nodiscard]] virtual std::string describe() const = 0;  // "aravis 127.0.0.2 BayerRG8 1920x1200@10"
+};
+
+}  // namespace sensor_rig::camera

@@ -1,0 +1,50 @@
+#pragma once
+// V4L2 capture: format negotiation (S_FMT, checked against what the device offers), frame rate
+// (S_PARM), controls (exposure, gain), mmap streaming with a bounded ring of buffers. A frame's
+// data is the mmap buffer itself; dropping the Frame queues the buffer again (no copy).
+// Timestamps: the driver's CLOCK_MONOTONIC buffer time, with CLOCK_REALTIME and CLOCK_MONOTONIC
+// sampled together at every dequeue, so the driver maps each frame with a fresh offset.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/camera/source.hpp"
+#include "sensor_rig/camera/v4l2_device.hpp"
+
+namespace sensor_rig::camera {
+
+class V4l2Source final : public FrameSource {
+ public:
+  V4l2Source(SourceConfig cfg, std::shared_ptr<V4l2Device> dev);
+  ~V4l2Source() override;
+
+  void open() override;
+  void close() noexcept override;
+  [[nodiscard]] bool is_open() const noexcept override { return fd_ >= 0; }
+  Capture next(int timeout_ms) override;
+  [[nodiscard]] SourceStats stats() const override { return stats_; }
+  [[nodiscard]] std::string describe() const override;
+
+ private:
+  struct Mapped {
+    void* addr = nullptr;
+    std::size_t length = 0;
+  };
+  void negotiate_format();
+  void set_rate_and_controls();
+  void start_streaming();
+  void requeue(std::uint32_t index) noexcept;
+  [[noreturn]] void fail(const std::string& what, int rc);
+
+  SourceConfig cfg_;
+  std::shared_ptr<V4l2Device> dev_;
+  int fd_ = -1;
+  bool streaming_ = false;
+  std::uint32_t step_ = 0;
+  std::uint32_t image_bytes_ = 0;
+  std::vector<Mapped> buffers_;
+  SourceStats stats_;
+};
+
+}  // namespace sensor_rig::camera

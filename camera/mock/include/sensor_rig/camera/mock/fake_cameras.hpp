@@ -1,0 +1,42 @@
+#pragma once
+// Aravis fakes for tests and the mock rig.
+// - In process: "fake:<serial>" devices (arv_fake_device_new) — cheap, many per process, the
+//   real AravisSource and stream code, no network.
+// - GigE: one `arv-fake-gv-camera-0.8 -i <address>` process per loopback address (GVCP port 3956
+//   is per address), the real network path; `ensure_loopback_address` adds 127.0.0.x to `lo`
+//   where permitted.
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/camera/aravis_source.hpp"
+#include "sensor_rig/common/child_process.hpp"
+
+namespace sensor_rig::camera::mock {
+
+inline constexpr const char* kFakePrefix = "fake:";
+
+// Opens "fake:<serial>" in process, anything else through the network.
+AravisDeviceOpener inprocess_fake_opener();
+
+// True when `address` is on an interface (or was added to `lo` now: root / CAP_NET_ADMIN).
+// `why` gets the reason when false.
+bool ensure_loopback_address(const std::string& address, std::string& why);
+// True when some interface holds the IPv4 address.
+bool has_address(const std::string& address);
+
+struct GigeFakeOptions {
+  std::string address = "127.0.0.2";
+  std::string serial;                  // default: derived from the address
+  int lost_packets_per_thousand = 0;   // arv-fake-gv-camera -r: GVSP packet loss
+  std::string program = "arv-fake-gv-camera-0.8";
+};
+
+// argv of the fake process.
+std::vector<std::string> gige_fake_command(const GigeFakeOptions& o);
+// Starts the fake and waits (bounded) until its GVCP port answers; throws std::runtime_error.
+ChildProcess start_gige_fake(const GigeFakeOptions& o, std::chrono::milliseconds timeout = std::chrono::seconds(3));
+// True when something listens on UDP <address>:3956 (from /proc/net/udp).
+bool gvcp_port_bound(const std::string& address);
+
+}  // namespace sensor_rig::camera::mock

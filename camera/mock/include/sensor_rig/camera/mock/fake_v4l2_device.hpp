@@ -1,0 +1,89 @@
+#pragma once
+// A fake V4L2 capture device behind the V4l2Device interface: the real V4l2Source drives it
+// (QUERYCAP, ENUM_FMT, S_FMT with size adjustment as drivers do, S_PARM, controls, REQBUFS, mmap,
+// QBUF/DQBUF, STREAMON/OFF, poll). Frames come at the negotiated rate, stamped with
+// CLOCK_MONOTONIC at exposure start (V4L2_BUF_FLAG_TSTAMP_SRC_SOE). Faults, thread-safe, taking
+// effect at the next frame: stall (no frames), disconnect (ENODEV until reconnect), short buffers.
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/camera/v4l2_device.hpp"
+#include "sensor_rig/common/clock.hpp"
+
+namespace sensor_rig::camera::mock {
+
+struct FakeV4l2Format {
+  std::uint32_t fourcc = 0;
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+};
+
+struct FakeV4l2Options {
+  std::string path = "/dev/video0";
+  std::vector<FakeV4l2Format> formats;  // empty: YUYV, GREY, RGGB, RGB3 at 640x480, 1280x720, 1920x1200
+  double max_rate_hz = 60.0;
+  std::uint32_t max_buffers = 8;
+};
+
+struct FakeV4l2Counters {
+  std::uint64_t frames = 0;         // frames filled
+  std::uint64_t dropped = 0;        // frames due while no buffer was queued
+  std::uint64_t opens = 0;
+  std::uint32_t exposure_100us = 0;  // last V4L2_CID_EXPOSURE_ABSOLUTE
+  std::int32_t gain = -1;
+  double rate_hz = 0.0;              // negotiated
+};
+
+class FakeV4l2Device final : public V4l2Device {
+ public:
+  explicit FakeV4l2Device(FakeV4l2Options o = {});
+  ~FakeV4l2Device() override = default;
+
+  void stall(bool on);
+  void disconnect();
+  void reconnect();
+  void short_buffers(std::uint32_t every_n);  // every n-th frame carries half an image; 0: off
+  [[nodiscard]] FakeV4l2Counters counters() const;
+
+  int open(const std::string& path) override;
+  int close(int fd) override;
+  int ioctl(int fd, unsigned long request, void* arg) override;
+  void* mmap(std::size_t length, int fd, off_t offset) override;
+  int munmap(void* addr, std::size_t length) override;
+  int poll(int fd, int timeout_ms) override;
+
+ private:
+  struct Buffer {
+    std::vector<std::uint8_t> mem;
+    bool queued = false;
+    bool filled = false;
+    std::uint32_t bytesused = 0;
+    std::uint32_t sequence = 0;
+    Nanos stamp_mono = 0;
+  };
+  int ioctl_locked(unsigned long request, void* arg);
+  bool fill_one(Nanos due);  // with mutex_ held
+
+  FakeV4l2Options opt_;
+  mutable std::mutex mutex_;
+  int fd_ = -1;
+  int next_fd_ = 1000;
+  bool disconnected_ = false;
+  bool stalled_ = false;
+  std::uint32_t short_every_ = 0;
+  FakeV4l2Format fmt_;
+  std::uint32_t bytesperline_ = 0;
+  std::uint32_t sizeimage_ = 0;
+  double rate_hz_ = 30.0;
+  bool streaming_ = false;
+  Nanos next_due_ = 0;
+  std::uint32_t sequence_ = 0;
+  std::vector<Buffer> buffers_;
+  std::deque<std::uint32_t> queue_;  // queued buffers in QBUF order (filled FIFO, as drivers do)
+  FakeV4l2Counters counters_;
+};
+
+}  // namespace sensor_rig::camera::mock

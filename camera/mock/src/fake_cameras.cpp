@@ -1,0 +1,136 @@
+#include "sensor_rig/camera/mock/fake_cameras.hpp"
+
+#include <arpa/inet.h>
+#include <arv.h>
+#include <ifaddrs.h>
+#include <netinet/in.h>
+#include <time.h>
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "sensor_rig/common/clock.hpp"
+
+namespace sensor_rig::camera::mock {
+namespace {
+
+void sleep_ms(int ms) {
+  timespec ts{ms / 1000, static_cast<long>(ms % 1000) * 1'000'000};
+  ::nanosleep(&ts, nullptr);
+}
+
+}  // namespace
+
+AravisDeviceOpener inprocess_fake_opener() {
+  return [](const std::string& device) -> void* {
+    const std::string prefix = kFakePrefix;
+    if (device.rfind(prefix, 0) != 0) return open_aravis_network_device(device);
+    GError* err = nullptr;
+    ArvDevice* d = arv_fake_device_new(device.substr(prefix.size()).c_str(), &err);
+    if (d == nullptr) {
+      std::string msg = err != nullptr ? err->message : "unknown error";
+      if (err != nullptr) g_error_free(err);
+      throw CameraError("aravis " + device + ": " + msg);
+    }
+    return d;
+  };
+}
+
+bool has_address(const std::string& address) {
+  in_addr want{};
+  if (::inet_pton(AF_INET, address.c_str(), &want) != 1) return false;
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) != 0) return false;
+  bool found = false;
+  for (ifaddrs* i = list; i != nullptr && !found; i = i->ifa_next) {
+    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
+    sockaddr_in sin{};
+    std::memcpy(&sin, i->ifa_addr, sizeof sin);
+    found = sin.sin_addr.s_addr == want.s_addr;
+  }
+  ::freeifaddrs(list);
+  return found;
+}
+
+bool ensure_loopback_address(const std::string& address, std::string& why) {
+  in_addr a{};
+  if (::inet_pton(AF_INET, address.c_str(), &a) != 1) {
+    why = "'" + address + "' is not an IPv4 address";
+    return false;
+  }
+  if (has_address(address)) return true;
+  if ((ntohl(a.s_addr) >> 24) != 127) {
+    why = address + " is on no interface (only 127.0.0.0/8 addresses are added to lo)";
+    return false;
+  }
+  ChildProcess ip({"/usr/sbin/ip", "addr", "add", address + "/8", "dev", "lo"});
+  const Nanos deadline = monotonic_now_ns() + 2'000'000'000;
+  while (ip.running() && monotonic_now_ns() < deadline) sleep_ms(10);
+  if (ip.running()) ip.stop(100);
+  if (has_address(address)) return true;
+  why = "cannot add " + address + " to lo (needs root or CAP_NET_ADMIN; `ip addr add` exit " +
+        std::to_string(ip.exit_status()) + ")";
+  return false;
+}
+
+namespace {
+// execv takes a path: find a bare program name on $PATH.
+std::string find_program(const std::string& program) {
+  if (program.find('/') != std::string::npos) return program;
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path != nullptr ? path : "/usr/bin:/bin");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    const std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + program;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+  }
+  return program;
+}
+}  // namespace
+
+std::vector<std::string> gige_fake_command(const GigeFakeOptions& o) {
+  std::string serial = o.serial;
+  if (serial.empty()) {
+    serial = "RIG";
+    for (char c : o.address) serial += c == '.' ? '_' : c;
+  }
+  std::vector<std::string> argv{find_program(o.program), "-i", o.address, "-s", serial};
+  if (o.lost_packets_per_thousand > 0) argv.insert(argv.end(), {"-r", std::to_string(o.lost_packets_per_thousand)});
+  return argv;
+}
+
+bool gvcp_port_bound(const std::string& address) {
+  in_addr a{};
+  if (::inet_pton(AF_INET, address.c_str(), &a) != 1) return false;
+  // /proc/net/udp: local address as hex of the in-memory (network order) u32, then :port hex.
+  char want[32];
+  std::snprintf(want, sizeof want, "%08X:%04X", a.s_addr, 3956u);
+  std::ifstream in("/proc/net/udp");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.find(want) != std::string::npos) return true;
+  return false;
+}
+
+ChildProcess start_gige_fake(const GigeFakeOptions& o, std::chrono::milliseconds timeout) {
+  ChildProcess p(gige_fake_command(o));
+  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(timeout.count()) * 1'000'000;
+  while (!gvcp_port_bound(o.address)) {
+    if (!p.running())
+      throw std::runtime_error("arv-fake-gv-camera on " + o.address + " exited with status " + std::to_string(p.exit_status()));
+    if (monotonic_now_ns() > deadline) {
+      p.stop(500);
+      throw std::runtime_error("arv-fake-gv-camera on " + o.address + " did not bind GVCP port 3956");
+    }
+    sleep_ms(10);
+  }
+  return p;
+}
+
+}  // namespace sensor_rig::camera::mock

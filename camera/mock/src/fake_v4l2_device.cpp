@@ -1,0 +1,283 @@
+#include "sensor_rig/camera/mock/fake_v4l2_device.hpp"
+
+#include <linux/videodev2.h>
+#include <time.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+#include "sensor_rig/camera/pixel_format.hpp"
+
+namespace sensor_rig::camera::mock {
+namespace {
+
+constexpr off_t kPage = 4096;
+
+void sleep_ns(Nanos ns) {
+  if (ns <= 0) return;
+  timespec ts{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
+  ::nanosleep(&ts, nullptr);
+}
+
+std::uint32_t bytes_pp(std::uint32_t fourcc_code) {
+  const auto f = from_v4l2(fourcc_code);
+  return f ? std::max<std::uint32_t>(1, bytes_per_pixel(*f)) : 1;
+}
+
+}  // namespace
+
+FakeV4l2Device::FakeV4l2Device(FakeV4l2Options o) : opt_(std::move(o)) {
+  if (opt_.formats.empty())
+    for (const auto code : {fourcc('Y', 'U', 'Y', 'V'), fourcc('G', 'R', 'E', 'Y'), fourcc('R', 'G', 'G', 'B'), fourcc('R', 'G', 'B', '3')})
+      for (const auto& [w, h] : {std::pair{640u, 480u}, std::pair{1280u, 720u}, std::pair{1920u, 1200u}})
+        opt_.formats.push_back({code, w, h});
+  fmt_ = opt_.formats.front();
+  bytesperline_ = fmt_.width * bytes_pp(fmt_.fourcc);
+  sizeimage_ = bytesperline_ * fmt_.height;
+}
+
+void FakeV4l2Device::stall(bool on) {
+  std::lock_guard lock(mutex_);
+  stalled_ = on;
+  if (!on) next_due_ = monotonic_now_ns();
+}
+void FakeV4l2Device::disconnect() {
+  std::lock_guard lock(mutex_);
+  disconnected_ = true;
+}
+void FakeV4l2Device::reconnect() {
+  std::lock_guard lock(mutex_);
+  disconnected_ = false;
+}
+void FakeV4l2Device::short_buffers(std::uint32_t every_n) {
+  std::lock_guard lock(mutex_);
+  short_every_ = every_n;
+}
+FakeV4l2Counters FakeV4l2Device::counters() const {
+  std::lock_guard lock(mutex_);
+  auto c = counters_;
+  c.rate_hz = rate_hz_;
+  return c;
+}
+
+int FakeV4l2Device::open(const std::string& path) {
+  std::lock_guard lock(mutex_);
+  if (path != opt_.path) return -ENOENT;
+  if (disconnected_) return -ENODEV;
+  if (fd_ >= 0) return -EBUSY;
+  fd_ = next_fd_++;
+  ++counters_.opens;
+  return fd_;
+}
+
+int FakeV4l2Device::close(int fd) {
+  std::lock_guard lock(mutex_);
+  if (fd != fd_) return -EBADF;
+  fd_ = -1;
+  streaming_ = false;
+  buffers_.clear();
+  queue_.clear();
+  return 0;
+}
+
+void* FakeV4l2Device::mmap(std::size_t length, int fd, off_t offset) {
+  std::lock_guard lock(mutex_);
+  const auto index = static_cast<std::size_t>(offset / kPage);
+  if (fd != fd_ || disconnected_ || offset % kPage != 0 || index >= buffers_.size() || length > buffers_[index].mem.size())
+    return nullptr;
+  return buffers_[index].mem.data();
+}
+
+int FakeV4l2Device::munmap(void* /*addr*/, std::size_t /*length*/) { return 0; }
+
+int FakeV4l2Device::ioctl(int fd, unsigned long request, void* arg) {
+  std::lock_guard lock(mutex_);
+  if (fd != fd_) return -EBADF;
+  if (disconnected_) return -ENODEV;
+  return ioctl_locked(request, arg);
+}
+
+int FakeV4l2Device::ioctl_locked(unsigned long request, void* arg) {
+  switch (request) {
+    case VIDIOC_QUERYCAP: {
+      auto* c = static_cast<v4l2_capability*>(arg);
+      *c = {};
+      constexpr char kDriver[] = "sensor-rig-fake";
+      constexpr char kCard[] = "fake v4l2 camera";
+      static_assert(sizeof kDriver <= sizeof c->driver && sizeof kCard <= sizeof c->card);
+      std::memcpy(c->driver, kDriver, sizeof kDriver);
+      std::memcpy(c->card, kCard, sizeof kCard);
+      c->capabilities = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING | V4L2_CAP_DEVICE_CAPS;
+      c->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
+      return 0;
+    }
+    case VIDIOC_ENUM_FMT: {
+      auto* d = static_cast<v4l2_fmtdesc*>(arg);
+      std::vector<std::uint32_t> codes;
+      for (const auto& f : opt_.formats)
+        if (std::find(codes.begin(), codes.end(), f.fourcc) == codes.end()) codes.push_back(f.fourcc);
+      if (d->index >= codes.size()) return -EINVAL;
+      d->pixelformat = codes[d->index];
+      return 0;
+    }
+    case VIDIOC_S_FMT:
+    case VIDIOC_G_FMT: {
+      auto* f = static_cast<v4l2_format*>(arg);
+      if (f->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return -EINVAL;
+      if (request == VIDIOC_S_FMT) {
+        if (streaming_) return -EBUSY;
+        // As drivers do: the nearest size of the wanted fourcc (or of the first format).
+        const FakeV4l2Format* best = nullptr;
+        std::int64_t best_d = 0;
+        for (const auto& c : opt_.formats) {
+          if (c.fourcc != f->fmt.pix.pixelformat) continue;
+          const std::int64_t d = std::llabs(static_cast<std::int64_t>(c.width) - f->fmt.pix.width) +
+                                 std::llabs(static_cast<std::int64_t>(c.height) - f->fmt.pix.height);
+          if (best == nullptr || d < best_d) {
+            best = &c;
+            best_d = d;
+          }
+        }
+        fmt_ = best != nullptr ? *best : opt_.formats.front();
+        bytesperline_ = fmt_.width * bytes_pp(fmt_.fourcc);
+        sizeimage_ = bytesperline_ * fmt_.height;
+      }
+      f->fmt.pix.width = fmt_.width;
+      f->fmt.pix.height = fmt_.height;
+      f->fmt.pix.pixelformat = fmt_.fourcc;
+      f->fmt.pix.bytesperline = bytesperline_;
+      f->fmt.pix.sizeimage = sizeimage_;
+      f->fmt.pix.field = V4L2_FIELD_NONE;
+      return 0;
+    }
+    case VIDIOC_S_PARM: {
+      auto* p = static_cast<v4l2_streamparm*>(arg);
+      const auto& t = p->parm.capture.timeperframe;
+      if (t.numerator == 0 || t.denominator == 0) return -EINVAL;
+      rate_hz_ = std::min(opt_.max_rate_hz, static_cast<double>(t.denominator) / t.numerator);
+      p->parm.capture.timeperframe.numerator = 1000;
+      p->parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(std::lround(rate_hz_ * 1000));
+      return 0;
+    }
+    case VIDIOC_S_CTRL: {
+      auto* c = static_cast<v4l2_control*>(arg);
+      if (c->id == V4L2_CID_EXPOSURE_ABSOLUTE) counters_.exposure_100us = static_cast<std::uint32_t>(c->value);
+      else if (c->id == V4L2_CID_GAIN) counters_.gain = c->value;
+      else if (c->id != V4L2_CID_EXPOSURE_AUTO) return -EINVAL;
+      return 0;
+    }
+    case VIDIOC_REQBUFS: {
+      auto* r = static_cast<v4l2_requestbuffers*>(arg);
+      if (r->memory != V4L2_MEMORY_MMAP) return -EINVAL;
+      if (streaming_) return -EBUSY;
+      buffers_.clear();
+      queue_.clear();
+      r->count = std::min(r->count, opt_.max_buffers);
+      buffers_.resize(r->count);
+      for (auto& b : buffers_) b.mem.assign(sizeimage_, 0);
+      return 0;
+    }
+    case VIDIOC_QUERYBUF:
+    case VIDIOC_QBUF: {
+      auto* b = static_cast<v4l2_buffer*>(arg);
+      if (b->index >= buffers_.size() || b->memory != V4L2_MEMORY_MMAP) return -EINVAL;
+      auto& buf = buffers_[b->index];
+      if (request == VIDIOC_QUERYBUF) {
+        b->length = static_cast<std::uint32_t>(buf.mem.size());
+        b->m.offset = static_cast<std::uint32_t>(b->index * kPage);
+        return 0;
+      }
+      if (buf.queued) return -EINVAL;
+      buf.queued = true;
+      buf.filled = false;
+      queue_.push_back(b->index);
+      return 0;
+    }
+    case VIDIOC_DQBUF: {
+      auto* b = static_cast<v4l2_buffer*>(arg);
+      Buffer* oldest = nullptr;
+      std::uint32_t index = 0;
+      for (std::uint32_t i = 0; i < buffers_.size(); ++i)
+        if (buffers_[i].filled && (oldest == nullptr || buffers_[i].sequence < oldest->sequence)) {
+          oldest = &buffers_[i];
+          index = i;
+        }
+      if (oldest == nullptr) return -EAGAIN;
+      oldest->filled = false;
+      oldest->queued = false;
+      b->index = index;
+      b->bytesused = oldest->bytesused;
+      b->sequence = oldest->sequence;
+      b->field = V4L2_FIELD_NONE;
+      b->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
+      b->timestamp.tv_sec = static_cast<time_t>(oldest->stamp_mono / 1'000'000'000);
+      b->timestamp.tv_usec = static_cast<suseconds_t>((oldest->stamp_mono % 1'000'000'000) / 1000);
+      return 0;
+    }
+    case VIDIOC_STREAMON:
+      if (buffers_.empty()) return -EINVAL;
+      streaming_ = true;
+      next_due_ = monotonic_now_ns();
+      return 0;
+    case VIDIOC_STREAMOFF:
+      streaming_ = false;
+      for (auto& b : buffers_) b.queued = b.filled = false;
+      queue_.clear();
+      return 0;
+    default:
+      return -ENOTTY;
+  }
+}
+
+bool FakeV4l2Device::fill_one(Nanos due) {
+  while (!queue_.empty()) {
+    auto& b = buffers_[queue_.front()];
+    queue_.pop_front();
+    if (!b.queued || b.filled) continue;
+    const auto seq = sequence_++;
+    std::memset(b.mem.data(), static_cast<int>(seq & 0xff), sizeimage_);
+    std::memcpy(b.mem.data(), &seq, std::min<std::size_t>(sizeof seq, sizeimage_));
+    b.sequence = seq;
+    b.stamp_mono = due;
+    b.bytesused = short_every_ != 0 && (seq + 1) % short_every_ == 0 ? sizeimage_ / 2 : sizeimage_;
+    b.filled = true;
+    ++counters_.frames;
+    return true;
+  }
+  ++sequence_;
+  ++counters_.dropped;
+  return false;
+}
+
+int FakeV4l2Device::poll(int fd, int timeout_ms) {
+  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(timeout_ms) * 1'000'000;
+  for (;;) {
+    Nanos wake = deadline;
+    {
+      std::lock_guard lock(mutex_);
+      if (fd != fd_) return -EBADF;
+      if (disconnected_) return -ENODEV;
+      for (const auto& b : buffers_)
+        if (b.filled) return 1;
+      const Nanos now = monotonic_now_ns();
+      if (streaming_ && !stalled_) {
+        if (now >= next_due_) {
+          const Nanos due = next_due_;
+          next_due_ += static_cast<Nanos>(1e9 / rate_hz_);
+          if (next_due_ < now) next_due_ = now;  // a late consumer does not get a burst
+          if (fill_one(due)) return 1;
+          continue;
+        }
+        wake = std::min(wake, next_due_);
+      }
+      if (now >= deadline) return 0;
+      // Faults must take effect quickly: never sleep more than 10 ms at once.
+      wake = std::min(wake, now + 10'000'000);
+    }
+    sleep_ns(wake - monotonic_now_ns());
+  }
+}
+
+}  // namespace sensor_rig::camera::mock

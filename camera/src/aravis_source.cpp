@@ -1,0 +1,372 @@
+#include "sensor_rig/camera/aravis_source.hpp"
+
+#include <arv.h>
+
+#include <cmath>
+#include <cstdint>
+#include <thread>
+#include <vector>
+
+namespace sensor_rig::camera {
+namespace {
+
+// GError -> CameraError text; frees the error.
+std::string take_error(GError*& e) {
+  std::string s = e != nullptr && e->message != nullptr ? e->message : "unknown error";
+  if (e != nullptr) g_error_free(e);
+  e = nullptr;
+  return s;
+}
+
+template <class T>
+void unref(T*& p) noexcept {
+  if (p != nullptr) g_object_unref(p);
+  p = nullptr;
+}
+
+void on_control_lost(ArvDevice* /*device*/, gpointer user) {
+  static_cast<std::atomic<bool>*>(user)->store(true);
+}
+
+}  // namespace
+
+struct AravisSource::State {
+  ArvCamera* camera = nullptr;
+  ArvDevice* device = nullptr;  // borrowed from camera
+  ArvStream* stream = nullptr;
+  bool gv = false;
+  std::unique_ptr<BufferPool> pool;
+  std::vector<ArvBuffer*> buffers;  // owned by the stream once pushed
+  std::size_t payload = 0;
+  std::uint64_t seq = 0;
+};
+
+void* open_aravis_network_device(const std::string& device) {
+  GError* err = nullptr;
+  ArvDevice* d = arv_open_device(device.c_str(), &err);
+  if (d != nullptr) return d;
+  const std::string first = take_error(err);
+  // A bare serial number is not one of Aravis' keys: find it in the device list.
+  arv_update_device_list();
+  for (unsigned i = 0; i < arv_get_n_devices(); ++i) {
+    const char* serial = arv_get_device_serial_nbr(i);
+    if (serial == nullptr || device != serial) continue;
+    d = arv_open_device(arv_get_device_id(i), &err);
+    if (d != nullptr) return d;
+    throw CameraError("aravis " + device + ": " + take_error(err));
+  }
+  throw CameraError("aravis " + device + ": " + first);
+}
+
+AravisSource::AravisSource(SourceConfig cfg, AravisDeviceOpener opener)
+    : cfg_(std::move(cfg)), opener_(std::move(opener)), st_(std::make_unique<State>()) {
+  if (!opener_) opener_ = open_aravis_network_device;
+  if (!backend_supports("aravis", cfg_.format))
+    throw CameraError("aravis " + cfg_.device + ": pixel format not supported (supported: " + pixel_format_names("aravis") + ")");
+}
+
+AravisSource::~AravisSource() { close(); }
+
+bool AravisSource::is_open() const noexcept {
+  std::lock_guard lock(mutex_);
+  return st_->stream != nullptr;
+}
+
+std::string AravisSource::describe() const {
+  return "aravis " + cfg_.device + " " + info(cfg_.format).genicam + " " + std::to_string(cfg_.width) + "x" +
+         std::to_string(cfg_.height) + "@" + std::to_string(cfg_.frame_rate) + " trigger " + to_string(cfg_.trigger);
+}
+
+AravisDetails AravisSource::details() const {
+  std::lock_guard lock(mutex_);
+  return details_;
+}
+
+void AravisSource::open() {
+  close();
+  std::lock_guard lock(mutex_);
+  control_lost_.store(false);
+  auto* device = static_cast<ArvDevice*>(opener_(cfg_.device));  // throws CameraError
+  GError* err = nullptr;
+  st_->camera = arv_camera_new_with_device(device, &err);
+  g_object_unref(device);  // the camera holds its own reference
+  if (st_->camera == nullptr) throw CameraError("aravis " + cfg_.device + ": " + take_error(err));
+  st_->device = arv_camera_get_device(st_->camera);
+  st_->gv = arv_camera_is_gv_device(st_->camera) != FALSE;
+  g_signal_connect_data(st_->device, "control-lost", reinterpret_cast<GCallback>(&on_control_lost), &control_lost_,
+                        nullptr, GConnectFlags{});
+  try {
+    configure();
+    start_stream();
+  } catch (...) {
+    if (st_->stream != nullptr) arv_stream_set_emit_signals(st_->stream, FALSE);
+    unref(st_->stream);
+    unref(st_->camera);
+    st_->device = nullptr;
+    throw;
+  }
+}
+
+void AravisSource::configure() {
+  ArvCamera* cam = st_->camera;
+  ArvDevice* dev = st_->device;
+  GError* err = nullptr;
+  const auto check = [&](const std::string& what) {
+    if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": " + what + ": " + take_error(err));
+  };
+  details_ = {};
+  if (const char* v = arv_camera_get_vendor_name(cam, nullptr)) details_.vendor = v;
+  if (const char* v = arv_camera_get_model_name(cam, nullptr)) details_.model = v;
+  if (const char* v = arv_camera_get_device_serial_number(cam, nullptr)) details_.serial = v;
+  // 1. pixel format (the device must offer it), 2. ROI.
+  arv_camera_set_pixel_format_from_string(cam, info(cfg_.format).genicam, &err);
+  check(std::string("PixelFormat ") + info(cfg_.format).genicam);
+  arv_camera_set_region(cam, 0, 0, static_cast<gint>(cfg_.width), static_cast<gint>(cfg_.height), &err);
+  check("region " + std::to_string(cfg_.width) + "x" + std::to_string(cfg_.height));
+  gint x = 0, y = 0, w = 0, h = 0;
+  arv_camera_get_region(cam, &x, &y, &w, &h, &err);
+  check("region");
+  if (static_cast<std::uint32_t>(w) != cfg_.width || static_cast<std::uint32_t>(h) != cfg_.height)
+    throw CameraError("aravis " + cfg_.device + ": device gives " + std::to_string(w) + "x" + std::to_string(h) +
+                      " instead of " + std::to_string(cfg_.width) + "x" + std::to_string(cfg_.height));
+  // 3. frame rate (free run and line trigger: the device's; software trigger: our ticker's).
+  if (arv_camera_is_frame_rate_available(cam, nullptr) != FALSE) {
+    arv_camera_set_frame_rate(cam, cfg_.frame_rate, &err);
+    check("frame rate " + std::to_string(cfg_.frame_rate));
+    details_.frame_rate = arv_camera_get_frame_rate(cam, nullptr);
+  }
+  // 4. exposure: SFNC ExposureTime, older cameras ExposureTimeAbs.
+  if (cfg_.exposure_us > 0) {
+    std::string tried;
+    for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {
+      if (arv_device_is_feature_available(dev, name, nullptr) == FALSE) continue;
+      arv_device_set_float_feature_value(dev, name, cfg_.exposure_us, &err);
+      if (err == nullptr) {
+        details_.exposure_feature = name;
+        break;
+      }
+      tried += std::string(name) + ": " + take_error(err) + "; ";
+    }
+    if (details_.exposure_feature.empty())
+      throw CameraError("aravis " + cfg_.device + ": exposure " + std::to_string(cfg_.exposure_us) + " us: " +
+                        (tried.empty() ? "no ExposureTime/ExposureTimeAbs feature" : tried));
+  }
+  // 5. gain.
+  if (cfg_.gain_db >= 0) {
+    arv_camera_set_gain(cam, cfg_.gain_db, &err);
+    check("gain " + std::to_string(cfg_.gain_db));
+  }
+  // 6. any feature by name, in config order.
+  for (const auto& [name, value] : cfg_.features) {
+    const std::string assignment = name + "=" + value;
+    arv_device_set_features_from_string(dev, assignment.c_str(), &err);
+    check("feature " + assignment);
+  }
+  // 7. trigger.
+  switch (cfg_.trigger) {
+    case TriggerMode::kFreeRun:
+      arv_camera_clear_triggers(cam, &err);
+      check("clear triggers");
+      break;
+    case TriggerMode::kSoftware:
+      arv_camera_set_trigger(cam, "Software", &err);
+      check("software trigger");
+      break;
+    case TriggerMode::kLine:
+      arv_camera_set_trigger(cam, cfg_.trigger_line.c_str(), &err);
+      check("trigger source " + cfg_.trigger_line);
+      break;
+  }
+  // GigE transport: packet size (or negotiated), inter-packet delay, no packet socket.
+  if (st_->gv) {
+    if (cfg_.packet_size > 0) {
+      arv_camera_gv_set_packet_size(cam, cfg_.packet_size, &err);
+      check("packet size");
+    } else {
+      (void)arv_camera_gv_auto_packet_size(cam, &err);
+      if (err != nullptr) take_error(err);  // keep the device's packet size
+    }
+    if (cfg_.packet_delay_ns > 0) {
+      arv_camera_gv_set_packet_delay(cam, cfg_.packet_delay_ns, &err);
+      check("packet delay");
+    }
+    details_.packet_size = static_cast<int>(arv_camera_gv_get_packet_size(cam, nullptr));
+    arv_camera_gv_set_stream_options(
+        cam, cfg_.packet_socket ? ARV_GV_STREAM_OPTION_NONE : ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+  }
+}
+
+void AravisSource::start_stream() {
+  GError* err = nullptr;
+  st_->payload = arv_camera_get_payload(st_->camera, &err);
+  if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": payload: " + take_error(err));
+  const std::size_t image = frame_bytes(cfg_.format, cfg_.width, cfg_.height);
+  if (st_->payload < image) st_->payload = image;
+  if (!st_->pool || st_->pool->bytes() != st_->payload || st_->pool->count() != static_cast<std::size_t>(cfg_.buffers))
+    st_->pool = std::make_unique<BufferPool>(static_cast<std::size_t>(cfg_.buffers), st_->payload);
+  st_->stream = arv_camera_create_stream(st_->camera, nullptr, nullptr, &err);
+  if (st_->stream == nullptr) throw CameraError("aravis " + cfg_.device + ": stream: " + take_error(err));
+  if (st_->gv) {
+    g_object_set(st_->stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
+                 static_cast<gint>(cfg_.socket_buffer_bytes), "packet-timeout", 20'000u, "frame-retention",
+                 static_cast<guint>(std::max(100'000.0, 2e6 / std::max(cfg_.frame_rate, 1.0))), nullptr);
+  }
+  // Every pool buffer becomes one stream buffer, once: Aravis writes the image into pool memory.
+  st_->buffers.clear();
+  for (std::size_t i = 0; i < st_->pool->count(); ++i) {
+    auto buf = st_->pool->buffer(i);
+    ArvBuffer* b = arv_buffer_new_full(st_->payload, buf.data(), reinterpret_cast<gpointer>(static_cast<std::uintptr_t>(i)), nullptr);
+    st_->buffers.push_back(b);
+    arv_stream_push_buffer(st_->stream, b);
+  }
+  arv_camera_start_acquisition(st_->camera, &err);
+  if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": start acquisition: " + take_error(err));
+}
+
+void AravisSource::fold_stats() noexcept {
+  if (st_->stream == nullptr) return;
+  guint64 completed = 0, failures = 0, underruns = 0;
+  arv_stream_get_statistics(st_->stream, &completed, &failures, &underruns);
+  base_.underruns += underruns;
+  if (st_->gv) {
+    guint64 resent = 0, missing = 0;
+    arv_gv_stream_get_statistics(reinterpret_cast<ArvGvStream*>(st_->stream), &resent, &missing);
+    base_.resent_packets += resent;
+    base_.missing_packets += missing;
+  }
+}
+
+void AravisSource::close() noexcept {
+  std::lock_guard lock(mutex_);
+  if (st_->camera == nullptr) return;
+  const bool lost = control_lost_.load();
+  if (!lost) arv_camera_stop_acquisition(st_->camera, nullptr);
+  fold_stats();
+  st_->buffers.clear();
+  if (lost) {
+    // A dead device's stream channel and control channel are released with GVCP retries that
+    // take seconds: not on the capture thread, which reopens as soon as the camera answers. The
+    // old pool goes with them (its stream may write into it until it is stopped).
+    std::thread([camera = st_->camera, stream = st_->stream, pool = std::move(st_->pool)]() mutable {
+      if (stream != nullptr) g_object_unref(stream);
+      g_object_unref(camera);
+      pool.reset();
+    }).detach();
+    st_->stream = nullptr;
+    st_->camera = nullptr;
+  } else {
+    unref(st_->stream);  // frees its buffers (ours stay: the pool owns the memory)
+    unref(st_->camera);
+  }
+  st_->device = nullptr;
+}
+
+std::string AravisSource::feature(const std::string& name) const {
+  std::lock_guard lock(mutex_);
+  if (st_->device == nullptr) return {};
+  ArvGcNode* node = arv_device_get_feature(st_->device, name.c_str());
+  if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) return {};
+  GError* err = nullptr;
+  const char* v = arv_gc_feature_node_get_value_as_string(reinterpret_cast<ArvGcFeatureNode*>(node), &err);
+  if (err != nullptr) {
+    g_error_free(err);
+    return {};
+  }
+  return v != nullptr ? v : "";
+}
+
+bool AravisSource::trigger() {
+  std::lock_guard lock(mutex_);
+  if (st_->camera == nullptr || control_lost_.load()) return false;
+  GError* err = nullptr;
+  arv_camera_software_trigger(st_->camera, &err);
+  if (err == nullptr) return true;
+  g_error_free(err);
+  return false;
+}
+
+Capture AravisSource::next(int timeout_ms) {
+  Capture c;
+  ArvStream* stream = st_->stream;  // only this thread opens and closes
+  if (stream == nullptr || control_lost_.load()) {
+    if (stream != nullptr) ++disconnects_;
+    c.status = CaptureStatus::kDisconnected;
+    c.error = stream == nullptr ? "not open" : "aravis " + cfg_.device + ": control lost";
+    return c;
+  }
+  ArvBuffer* b = arv_stream_timeout_pop_buffer(stream, static_cast<guint64>(timeout_ms) * 1000);
+  if (b == nullptr) {
+    ++timeouts_;
+    c.status = control_lost_.load() ? CaptureStatus::kDisconnected : CaptureStatus::kTimeout;
+    if (c.status == CaptureStatus::kDisconnected) c.error = "aravis " + cfg_.device + ": control lost";
+    return c;
+  }
+  const Nanos real = vehicle_now_ns();
+  const Nanos mono = monotonic_now_ns();
+  const auto status = arv_buffer_get_status(b);
+  const bool image = arv_buffer_get_payload_type(b) == ARV_BUFFER_PAYLOAD_TYPE_IMAGE;
+  if (status != ARV_BUFFER_STATUS_SUCCESS || !image ||
+      static_cast<std::uint32_t>(arv_buffer_get_image_width(b)) != cfg_.width ||
+      static_cast<std::uint32_t>(arv_buffer_get_image_height(b)) != cfg_.height) {
+    ++incomplete_;
+    c.status = CaptureStatus::kIncomplete;
+    c.error = "frame " + std::to_string(arv_buffer_get_frame_id(b)) + " status " + std::to_string(static_cast<int>(status));
+    arv_stream_push_buffer(stream, b);
+    return c;
+  }
+  std::size_t size = 0;
+  const void* data = arv_buffer_get_image_data(b, &size);
+  const auto index = static_cast<std::size_t>(reinterpret_cast<std::uintptr_t>(arv_buffer_get_user_data(b)));
+  auto mem = st_->pool->buffer(index);
+  const std::size_t want = frame_bytes(cfg_.format, cfg_.width, cfg_.height);
+  if (data != mem.data() || size < want) {  // not our memory or short: never publish it
+    ++incomplete_;
+    c.status = CaptureStatus::kIncomplete;
+    c.error = "buffer of " + std::to_string(size) + " bytes, expected " + std::to_string(want);
+    arv_stream_push_buffer(stream, b);
+    return c;
+  }
+  FrameMeta m;
+  m.seq = arv_buffer_get_frame_id(b);
+  m.width = cfg_.width;
+  m.height = cfg_.height;
+  m.step = row_step(cfg_.format, cfg_.width);
+  m.format = cfg_.format;
+  m.device_ns = static_cast<Nanos>(arv_buffer_get_timestamp(b));
+  m.domain = TimeDomain::kDeviceTicks;
+  const auto sys = static_cast<Nanos>(arv_buffer_get_system_timestamp(b));
+  m.first_rx_ns = sys > 0 && sys <= real ? sys : real;
+  m.complete_ns = real;
+  m.complete_mono_ns = mono;
+  if (st_->payload > 0)  // GVSP data packets of this frame at the negotiated packet size
+    m.packets = details_.packet_size > 36 ? static_cast<std::uint32_t>((want + static_cast<std::size_t>(details_.packet_size) - 37) /
+                                                                       static_cast<std::size_t>(details_.packet_size - 36))
+                                          : 0;
+  ++completed_;
+  c.status = CaptureStatus::kFrame;
+  c.frame = Frame(m, mem.first(want), [stream, b] { arv_stream_push_buffer(stream, b); });
+  return c;
+}
+
+SourceStats AravisSource::stats() const {
+  std::lock_guard lock(mutex_);
+  SourceStats s = base_;
+  if (st_->stream != nullptr) {
+    guint64 completed = 0, failures = 0, underruns = 0;
+    arv_stream_get_statistics(st_->stream, &completed, &failures, &underruns);
+    s.underruns += underruns;
+    if (st_->gv) {
+      guint64 resent = 0, missing = 0;
+      arv_gv_stream_get_statistics(reinterpret_cast<ArvGvStream*>(st_->stream), &resent, &missing);
+      s.resent_packets += resent;
+      s.missing_packets += missing;
+    }
+  }
+  s.completed = completed_;
+  s.incomplete = incomplete_;
+  s.timeouts = timeouts_;
+  s.disconnects = disconnects_;
+  return s;
+}
+
+}  // namespace sensor_rig::camera

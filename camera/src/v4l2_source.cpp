@@ -1,0 +1,212 @@
+#include "sensor_rig/camera/v4l2_source.hpp"
+
+#include <linux/videodev2.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+namespace sensor_rig::camera {
+namespace {
+
+Nanos timeval_ns(const timeval& tv) {
+  return static_cast<Nanos>(tv.tv_sec) * 1'000'000'000 + static_cast<Nanos>(tv.tv_usec) * 1000;
+}
+
+}  // namespace
+
+V4l2Source::V4l2Source(SourceConfig cfg, std::shared_ptr<V4l2Device> dev) : cfg_(std::move(cfg)), dev_(std::move(dev)) {
+  if (!dev_) throw CameraError("v4l2: no device layer");
+  if (!backend_supports("v4l2", cfg_.format))
+    throw CameraError("v4l2 " + cfg_.device + ": pixel format not supported (supported: " + pixel_format_names("v4l2") + ")");
+}
+
+V4l2Source::~V4l2Source() { close(); }
+
+std::string V4l2Source::describe() const {
+  return "v4l2 " + cfg_.device + " " + info(cfg_.format).v4l2_name + " " + std::to_string(cfg_.width) + "x" +
+         std::to_string(cfg_.height) + "@" + std::to_string(static_cast<int>(std::lround(cfg_.frame_rate)));
+}
+
+void V4l2Source::fail(const std::string& what, int rc) {
+  const std::string msg = "v4l2 " + cfg_.device + ": " + what + (rc < 0 ? std::string(": ") + std::strerror(-rc) : "");
+  close();
+  throw CameraError(msg);
+}
+
+void V4l2Source::open() {
+  close();
+  const int fd = dev_->open(cfg_.device);
+  if (fd < 0) fail("open", fd);
+  fd_ = fd;
+  v4l2_capability cap{};
+  if (const int rc = dev_->ioctl(fd_, VIDIOC_QUERYCAP, &cap); rc < 0) fail("VIDIOC_QUERYCAP", rc);
+  const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
+  if ((caps & V4L2_CAP_VIDEO_CAPTURE) == 0) fail("not a video capture device", 0);
+  if ((caps & V4L2_CAP_STREAMING) == 0) fail("no streaming I/O", 0);
+  negotiate_format();
+  set_rate_and_controls();
+  start_streaming();
+}
+
+void V4l2Source::negotiate_format() {
+  const auto& fi = info(cfg_.format);
+  // What the device offers, for the error message when the wanted format is not among them.
+  std::string offered;
+  bool found = false;
+  for (std::uint32_t i = 0; i < 64; ++i) {
+    v4l2_fmtdesc d{};
+    d.index = i;
+    d.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    if (dev_->ioctl(fd_, VIDIOC_ENUM_FMT, &d) < 0) break;
+    offered += (offered.empty() ? "" : ", ") + fourcc_string(d.pixelformat);
+    found = found || d.pixelformat == fi.v4l2;
+  }
+  if (!found) fail(std::string("device does not offer ") + fi.v4l2_name + " (offers: " + offered + ")", 0);
+  v4l2_format f{};
+  f.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  f.fmt.pix.width = cfg_.width;
+  f.fmt.pix.height = cfg_.height;
+  f.fmt.pix.pixelformat = fi.v4l2;
+  f.fmt.pix.field = V4L2_FIELD_NONE;
+  if (const int rc = dev_->ioctl(fd_, VIDIOC_S_FMT, &f); rc < 0) fail("VIDIOC_S_FMT", rc);
+  // The driver may adjust: accept only exactly what was asked (the calibration is for that size).
+  if (f.fmt.pix.pixelformat != fi.v4l2 || f.fmt.pix.width != cfg_.width || f.fmt.pix.height != cfg_.height)
+    fail("device gives " + fourcc_string(f.fmt.pix.pixelformat) + " " + std::to_string(f.fmt.pix.width) + "x" +
+             std::to_string(f.fmt.pix.height) + " instead of the configured format",
+         0);
+  const std::uint32_t tight = row_step(cfg_.format, cfg_.width);
+  step_ = f.fmt.pix.bytesperline >= tight ? f.fmt.pix.bytesperline : tight;
+  image_bytes_ = step_ * cfg_.height;
+}
+
+void V4l2Source::set_rate_and_controls() {
+  v4l2_streamparm p{};
+  p.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  p.parm.capture.timeperframe.numerator = 1000;
+  p.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(std::lround(cfg_.frame_rate * 1000.0));
+  if (const int rc = dev_->ioctl(fd_, VIDIOC_S_PARM, &p); rc < 0 && rc != -ENOTTY) fail("VIDIOC_S_PARM", rc);
+  if (cfg_.exposure_us > 0) {
+    v4l2_control manual{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL};
+    (void)dev_->ioctl(fd_, VIDIOC_S_CTRL, &manual);  // not every device has auto exposure
+    // V4L2_CID_EXPOSURE_ABSOLUTE is in units of 100 µs.
+    v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, static_cast<std::int32_t>(std::lround(cfg_.exposure_us / 100.0))};
+    if (const int rc = dev_->ioctl(fd_, VIDIOC_S_CTRL, &c); rc < 0) fail("exposure (V4L2_CID_EXPOSURE_ABSOLUTE)", rc);
+  }
+  if (cfg_.gain_db >= 0) {
+    v4l2_control c{V4L2_CID_GAIN, static_cast<std::int32_t>(std::lround(cfg_.gain_db))};
+    if (const int rc = dev_->ioctl(fd_, VIDIOC_S_CTRL, &c); rc < 0) fail("gain (V4L2_CID_GAIN)", rc);
+  }
+}
+
+void V4l2Source::start_streaming() {
+  v4l2_requestbuffers req{};
+  req.count = static_cast<std::uint32_t>(cfg_.buffers);
+  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  req.memory = V4L2_MEMORY_MMAP;
+  if (const int rc = dev_->ioctl(fd_, VIDIOC_REQBUFS, &req); rc < 0) fail("VIDIOC_REQBUFS", rc);
+  if (req.count < 2) fail("device granted fewer than 2 buffers", 0);
+  buffers_.resize(req.count);
+  for (std::uint32_t i = 0; i < req.count; ++i) {
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    b.index = i;
+    if (const int rc = dev_->ioctl(fd_, VIDIOC_QUERYBUF, &b); rc < 0) fail("VIDIOC_QUERYBUF", rc);
+    if (b.length < image_bytes_) fail("buffer smaller than one image", 0);
+    void* p = dev_->mmap(b.length, fd_, static_cast<off_t>(b.m.offset));
+    if (p == nullptr) fail("mmap", -ENOMEM);
+    buffers_[i] = {p, b.length};
+    if (const int rc = dev_->ioctl(fd_, VIDIOC_QBUF, &b); rc < 0) fail("VIDIOC_QBUF", rc);
+  }
+  int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  if (const int rc = dev_->ioctl(fd_, VIDIOC_STREAMON, &type); rc < 0) fail("VIDIOC_STREAMON", rc);
+  streaming_ = true;
+}
+
+void V4l2Source::requeue(std::uint32_t index) noexcept {
+  if (fd_ < 0 || index >= buffers_.size()) return;
+  v4l2_buffer b{};
+  b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  b.memory = V4L2_MEMORY_MMAP;
+  b.index = index;
+  (void)dev_->ioctl(fd_, VIDIOC_QBUF, &b);  // fails only when the device is gone: next() reports that
+}
+
+void V4l2Source::close() noexcept {
+  if (fd_ < 0) return;
+  if (streaming_) {
+    int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    (void)dev_->ioctl(fd_, VIDIOC_STREAMOFF, &type);
+    streaming_ = false;
+  }
+  for (auto& m : buffers_)
+    if (m.addr != nullptr) (void)dev_->munmap(m.addr, m.length);
+  buffers_.clear();
+  v4l2_requestbuffers req{};
+  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  req.memory = V4L2_MEMORY_MMAP;
+  (void)dev_->ioctl(fd_, VIDIOC_REQBUFS, &req);
+  (void)dev_->close(fd_);
+  fd_ = -1;
+}
+
+Capture V4l2Source::next(int timeout_ms) {
+  Capture c;
+  if (fd_ < 0) {
+    c.status = CaptureStatus::kDisconnected;
+    c.error = "not open";
+    return c;
+  }
+  const int pr = dev_->poll(fd_, timeout_ms);
+  if (pr == 0) {
+    ++stats_.timeouts;
+    c.status = CaptureStatus::kTimeout;
+    return c;
+  }
+  v4l2_buffer b{};
+  b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  b.memory = V4L2_MEMORY_MMAP;
+  const int rc = pr < 0 ? pr : dev_->ioctl(fd_, VIDIOC_DQBUF, &b);
+  if (rc == -EAGAIN) {
+    ++stats_.timeouts;
+    c.status = CaptureStatus::kTimeout;
+    return c;
+  }
+  if (rc < 0) {
+    ++stats_.disconnects;
+    c.status = rc == -ENODEV || rc == -EIO || rc == -ENXIO ? CaptureStatus::kDisconnected : CaptureStatus::kError;
+    c.error = std::string("v4l2 ") + cfg_.device + ": " + std::strerror(-rc);
+    return c;
+  }
+  const Nanos real = vehicle_now_ns();
+  const Nanos mono = monotonic_now_ns();
+  if (b.index >= buffers_.size() || (b.flags & V4L2_BUF_FLAG_ERROR) != 0 || b.bytesused < image_bytes_) {
+    ++stats_.incomplete;
+    c.status = CaptureStatus::kIncomplete;
+    c.error = "short or damaged buffer: " + std::to_string(b.bytesused) + " of " + std::to_string(image_bytes_) + " bytes";
+    requeue(b.index);
+    return c;
+  }
+  FrameMeta m;
+  m.seq = b.sequence;
+  m.width = cfg_.width;
+  m.height = cfg_.height;
+  m.step = step_;
+  m.format = cfg_.format;
+  m.domain = TimeDomain::kMonotonic;
+  m.device_ns = timeval_ns(b.timestamp);
+  // End-of-frame stamps: exposure started about one frame period earlier.
+  if ((b.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_EOF && cfg_.frame_rate > 0)
+    m.device_ns -= static_cast<Nanos>(1e9 / cfg_.frame_rate);
+  m.first_rx_ns = real - (mono - timeval_ns(b.timestamp));
+  m.complete_ns = real;
+  m.complete_mono_ns = mono;
+  ++stats_.completed;
+  const std::uint32_t index = b.index;
+  c.status = CaptureStatus::kFrame;
+  c.frame = Frame(m, {static_cast<std::uint8_t*>(buffers_[index].addr), image_bytes_}, [this, index] { requeue(index); });
+  return c;
+}
+
+}  // namespace sensor_rig::camera
