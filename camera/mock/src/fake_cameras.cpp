@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -31,6 +32,10 @@ AravisDeviceOpener inprocess_fake_opener() {
   return [](const std::string& device) -> void* {
     const std::string prefix = kFakePrefix;
     if (device.rfind(prefix, 0) != 0) return open_aravis_network_device(device);
+    // Aravis loads the fake's GenICam XML lazily into a static without a lock: two cameras
+    // opening at once get "Genicam data not found". One at a time.
+    static std::mutex create_mutex;
+    std::lock_guard lock(create_mutex);
     GError* err = nullptr;
     ArvDevice* d = arv_fake_device_new(device.substr(prefix.size()).c_str(), &err);
     if (d == nullptr) {

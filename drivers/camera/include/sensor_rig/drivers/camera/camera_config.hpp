@@ -1,0 +1,48 @@
+#pragma once
+// A camera node's configuration (the `cameras:` items of a rig config) as a plain struct with
+// defaults, and its parser: unknown keys, formats the backend cannot do, bad values and a
+// calibration of another size are reported at file:line:col, all at once.
+#include <string>
+
+#include "sensor_rig/camera/calibration.hpp"
+#include "sensor_rig/camera/source.hpp"
+#include "sensor_rig/common/config_node.hpp"
+#include "sensor_rig/dds/qos.hpp"
+
+namespace sensor_rig::drivers {
+
+struct CameraMockConfig {
+  // none: a real device | gige: arv-fake-gv-camera-0.8 on `device` (a loopback address) |
+  // aravis-inprocess: an in-process Aravis fake | v4l2-fake: the fake V4L2 device
+  enum class Kind { kNone, kGige, kAravisInProcess, kV4l2Fake } kind = Kind::kNone;
+  int lost_packets_per_thousand = 0;  // gige: the fake's -r (GVSP packet loss)
+};
+const char* to_string(CameraMockConfig::Kind k) noexcept;
+
+// Keep-last 1: an image is 2-7 MB; only the newest matters, and a slow subscriber must not make
+// the capture thread block (max_blocking_ms) for long. Reliable so default ROS subscribers match.
+inline dds::QosSpec camera_qos() {
+  dds::QosSpec q;
+  q.depth = 1;
+  q.max_blocking_ms = 50;
+  return q;
+}
+
+struct CameraConfig {
+  std::string name;                 // /sensors/camera/<name>/image_raw, frame camera_<name>
+  camera::SourceConfig source;      // backend, device, format, size, rate, exposure, gain, trigger
+  std::string calibration;          // ROS camera_calibration YAML; "" = uncalibrated
+  camera::CameraInfo info;          // loaded from `calibration` (or uncalibrated of the size)
+  std::string frame_id;             // default camera_<name>
+  std::string trigger_group;        // software trigger: cameras of a group share one tick
+  int realtime_priority = 0;
+  int watchdog_ms = 0;              // no frame for this long: reported and reopened; 0 = auto
+  dds::QosSpec qos = camera_qos();
+  CameraMockConfig mock;
+
+  [[nodiscard]] int watchdog() const noexcept;  // the effective watchdog (< 1 s)
+};
+
+CameraConfig parse_camera_config(const config::Node& n);
+
+}  // namespace sensor_rig::drivers

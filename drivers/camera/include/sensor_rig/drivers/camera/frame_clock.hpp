@@ -1,0 +1,38 @@
+#pragma once
+// Exposure start of a frame in vehicle time, from what the source measured (camera/ returns
+// device time + host times; this is the "source -> timesync" step):
+// - device ticks (GigE): timesync's robust estimator, fed (device time, leader-packet arrival)
+//   every frame; mapped device time, never the arrival time alone (host fallback until locked);
+// - CLOCK_MONOTONIC (V4L2): plus the realtime-monotonic offset sampled at this frame;
+// - software trigger: the vehicle time of the trigger tick that exposed it (shared by a group).
+#include <cstdint>
+
+#include "sensor_rig/camera/frame.hpp"
+#include "sensor_rig/timesync/clock_mapper.hpp"
+
+namespace sensor_rig::drivers {
+
+enum class StampSource : std::uint8_t { kDeviceMapped, kHostFallback, kMonotonic, kVehicle, kTriggerTick };
+const char* to_string(StampSource s) noexcept;
+
+struct FrameStamp {
+  Nanos vehicle_ns = 0;
+  StampSource source = StampSource::kHostFallback;
+};
+
+class FrameClock {
+ public:
+  // exposure_ns: known delay from exposure start to the first packet beyond transport (the
+  // estimator's envelope is the minimum arrival delay).
+  explicit FrameClock(Nanos exposure_ns = 0);
+  // `tick_ns`: vehicle time of the software trigger tick that exposed the frame (0: none).
+  FrameStamp stamp(const camera::FrameMeta& m, Nanos tick_ns = 0) noexcept;
+  [[nodiscard]] timesync::ClockMapperStatus status(Nanos now) const { return mapper_.status(now); }
+  void reset() noexcept { mapper_.reset(); }
+
+ private:
+  timesync::ClockMapper mapper_;
+  Nanos exposure_ns_;
+};
+
+}  // namespace sensor_rig::drivers

@@ -1,0 +1,43 @@
+#pragma once
+// One software trigger tick for a group of cameras (a stereo pair): a thread that, at the group's
+// rate, triggers every member back to back and records the tick's vehicle time, so the frames it
+// exposed carry the same stamp.
+#include <atomic>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sensor_rig/common/clock.hpp"
+
+namespace sensor_rig::drivers {
+
+class TriggerGroup {
+ public:
+  TriggerGroup(std::string name, double rate_hz);
+  ~TriggerGroup();
+  TriggerGroup(const TriggerGroup&) = delete;
+  TriggerGroup& operator=(const TriggerGroup&) = delete;
+
+  void add(std::function<bool()> trigger);  // before start()
+  void start();
+  void stop();
+  // Vehicle time of the latest tick at or before `t` (0: none yet).
+  [[nodiscard]] Nanos tick_before(Nanos t) const;
+  [[nodiscard]] std::uint64_t ticks() const noexcept { return ticks_.load(); }
+  [[nodiscard]] const std::string& name() const noexcept { return name_; }
+
+ private:
+  void run();
+  std::string name_;
+  double rate_hz_;
+  std::vector<std::function<bool()>> members_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> ticks_{0};
+  mutable std::mutex mutex_;
+  std::vector<Nanos> recent_;  // ring of the last ticks
+};
+
+}  // namespace sensor_rig::drivers

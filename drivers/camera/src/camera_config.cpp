@@ -1,0 +1,142 @@
+#include "sensor_rig/drivers/camera/camera_config.hpp"
+
+#include <arpa/inet.h>
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+
+namespace sensor_rig::drivers {
+
+const char* to_string(CameraMockConfig::Kind k) noexcept {
+  switch (k) {
+    case CameraMockConfig::Kind::kNone: return "none";
+    case CameraMockConfig::Kind::kGige: return "gige";
+    case CameraMockConfig::Kind::kAravisInProcess: return "aravis-inprocess";
+    case CameraMockConfig::Kind::kV4l2Fake: return "v4l2-fake";
+  }
+  return "?";
+}
+
+int CameraConfig::watchdog() const noexcept {
+  if (watchdog_ms > 0) return watchdog_ms;
+  // Three frame periods, at least 300 ms, and reported within 1 s whatever the rate.
+  const double period_ms = source.frame_rate > 0 ? 1000.0 / source.frame_rate : 1000.0;
+  return static_cast<int>(std::clamp(3.0 * period_ms, 300.0, 800.0));
+}
+
+namespace {
+
+CameraMockConfig parse_mock(const config::Node& n) {
+  n.allow_keys({"kind", "lost_packets_per_thousand"});
+  CameraMockConfig m;
+  const auto kind = n.get_choice("kind", {"none", "gige", "aravis-inprocess", "v4l2-fake"}, "none");
+  m.kind = kind == "gige"               ? CameraMockConfig::Kind::kGige
+           : kind == "aravis-inprocess" ? CameraMockConfig::Kind::kAravisInProcess
+           : kind == "v4l2-fake"        ? CameraMockConfig::Kind::kV4l2Fake
+                                        : CameraMockConfig::Kind::kNone;
+  m.lost_packets_per_thousand = static_cast<int>(n.get_int("lost_packets_per_thousand", 0, 1000, 0));
+  return m;
+}
+
+}  // namespace
+
+CameraConfig parse_camera_config(const config::Node& n) {
+  CameraConfig c;
+  if (!n.expect_map()) return c;
+  n.allow_keys({"name", "backend", "device", "pixel_format", "width", "height", "frame_rate", "calibration", "exposure_us",
+                "gain_db", "features", "trigger", "packet_size", "packet_delay_ns", "socket_buffer_bytes", "buffers",
+                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock"});
+  c.name = n.get_string("name");
+  for (char ch : c.name)
+    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) {
+      n.fail("name", "'" + c.name + "' must be letters, digits and '_' (it becomes a ROS topic name)");
+      break;
+    }
+  auto& s = c.source;
+  s.backend = n.get_choice("backend", {"aravis", "v4l2"}, "aravis");
+  s.device = n.get_string("device");
+  const std::string fmt = n.get_string("pixel_format", s.backend == "v4l2" ? "YUYV" : "BayerRG8");
+  if (const auto f = camera::parse_pixel_format(fmt); !f) {
+    n.fail("pixel_format", "unknown pixel format '" + fmt + "' (" + s.backend + ": " + camera::pixel_format_names(s.backend) + ")");
+  } else if (!camera::backend_supports(s.backend, *f)) {
+    n.fail("pixel_format", "the " + s.backend + " backend cannot do '" + fmt + "' (" + camera::pixel_format_names(s.backend) + ")");
+  } else {
+    s.format = *f;
+  }
+  s.width = static_cast<std::uint32_t>(n.get_int("width", 16, 8192, 1920));
+  s.height = static_cast<std::uint32_t>(n.get_int("height", 16, 8192, 1200));
+  if (s.format == camera::PixelFormat::kYuv422Yuyv && s.width % 2 != 0) n.fail("width", "YUYV needs an even width");
+  s.frame_rate = n.get_double("frame_rate", 0.1, 240.0, 10.0);
+  s.exposure_us = n.get_double("exposure_us", 0.0, 1e7, 0.0);
+  if (s.exposure_us * s.frame_rate > 1e6) n.fail("exposure_us", "longer than one frame period at frame_rate");
+  s.gain_db = n.get_double("gain_db", -1.0, 48.0, -1.0);
+  if (auto f = n.child("features")) {
+    if (!f->yaml().IsMap()) {
+      f->fail("", "must be a map of GenICam feature name -> value");
+    } else {
+      for (const auto& kv : f->yaml()) {
+        const auto key = kv.first.as<std::string>();
+        if (!kv.second.IsScalar()) {
+          f->fail(key, "value must be a scalar");
+          continue;
+        }
+        s.features.emplace_back(key, kv.second.as<std::string>());
+      }
+      if (s.backend != "aravis" && !s.features.empty()) f->fail("", "GenICam features need the aravis backend");
+    }
+  }
+  if (auto t = n.child("trigger")) {
+    t->allow_keys({"mode", "line", "group"});
+    const auto mode = t->get_choice("mode", {"free_run", "software", "line"}, "free_run");
+    s.trigger = mode == "software" ? camera::TriggerMode::kSoftware
+                : mode == "line"   ? camera::TriggerMode::kLine
+                                   : camera::TriggerMode::kFreeRun;
+    s.trigger_line = t->get_string("line", "Line1");
+    c.trigger_group = t->get_string("group", "");
+    if (s.trigger != camera::TriggerMode::kFreeRun && s.backend != "aravis")
+      t->fail("mode", "trigger modes need the aravis backend (V4L2 cameras free-run)");
+    if (!c.trigger_group.empty() && s.trigger != camera::TriggerMode::kSoftware)
+      t->fail("group", "a trigger group needs mode: software");
+  }
+  s.packet_size = static_cast<int>(n.get_int("packet_size", 0, 16384, 0));
+  if (s.packet_size != 0 && s.packet_size < 576) n.fail("packet_size", "0 (negotiate) or 576..16384");
+  s.packet_delay_ns = n.get_int("packet_delay_ns", 0, 1'000'000'000, 0);
+  // SPEC §8: below 4 MB most frames fail.
+  s.socket_buffer_bytes = static_cast<int>(n.get_int("socket_buffer_bytes", 4 << 20, 1 << 30, 8 << 20));
+  s.buffers = static_cast<int>(n.get_int("buffers", 2, 64, 4));
+  c.calibration = n.get_path("calibration", "");
+  c.info = camera::uncalibrated(s.width, s.height);
+  if (!c.calibration.empty()) {
+    if (!std::filesystem::is_regular_file(c.calibration)) {
+      n.fail("calibration", "file not found: " + c.calibration);
+    } else {
+      try {
+        c.info = camera::load_calibration(c.calibration);
+        if (const auto e = camera::size_mismatch(c.info, s.width, s.height); !e.empty()) n.fail("calibration", e);
+      } catch (const camera::CalibrationError& e) {
+        n.fail("calibration", e.what());
+      }
+    }
+  }
+  c.frame_id = n.get_string("frame_id", "camera_" + c.name);
+  c.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
+  c.watchdog_ms = static_cast<int>(n.get_int("watchdog_ms", 0, 900, 0));
+  if (auto q = n.child("qos")) c.qos = dds::QosSpec::from_config(*q, c.qos);
+  if (auto m = n.child("mock")) c.mock = parse_mock(*m);
+  using K = CameraMockConfig::Kind;
+  const bool aravis_mock = c.mock.kind == K::kGige || c.mock.kind == K::kAravisInProcess;
+  if (aravis_mock && s.backend != "aravis") n.fail("mock", std::string("mock ") + to_string(c.mock.kind) + " needs backend: aravis");
+  if (c.mock.kind == K::kV4l2Fake && s.backend != "v4l2") n.fail("mock", "mock v4l2-fake needs backend: v4l2");
+  if (c.mock.kind == K::kGige) {
+    in_addr a{};
+    if (::inet_pton(AF_INET, s.device.c_str(), &a) != 1 || (ntohl(a.s_addr) >> 24) != 127)
+      n.fail("device", "a gige mock runs on a loopback address (127.0.0.x), not '" + s.device + "'");
+  }
+  if (c.mock.lost_packets_per_thousand > 0 && c.mock.kind != K::kGige) n.fail("mock", "lost_packets_per_thousand needs kind: gige");
+  if (s.backend == "v4l2" && c.mock.kind == K::kNone && s.device.rfind("/dev/", 0) != 0)
+    n.fail("device", "a V4L2 device is a /dev/videoN path");
+  return c;
+}
+
+}  // namespace sensor_rig::drivers

@@ -1,0 +1,296 @@
+#include "sensor_rig/drivers/camera/camera_driver.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+
+#include <cstring>
+#include <mutex>
+#include <thread>
+
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/drivers/camera/frame_clock.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+constexpr Nanos kReopenEveryNs = 250'000'000;
+
+}  // namespace
+
+struct CameraDriver::Impl {
+  CameraConfig cfg;
+  std::string image_topic_name;
+  std::string info_topic_name;
+  std::unique_ptr<camera::FrameSource> src;
+  dds::Topic<msg::Image> image_topic;
+  dds::Writer<msg::Image> image_writer;
+  dds::Topic<msg::CameraInfo> info_topic;
+  dds::Writer<msg::CameraInfo> info_writer;
+  dds::StampsWriter& stamps;
+  TriggerGroup* trigger;
+  FrameClock clock;
+  std::vector<double> d;  // CameraInfo.d storage
+  std::thread thread;
+  std::atomic<bool> stop_flag{false};
+
+  mutable std::mutex mutex;  // counters shared with status(); written by the driver thread
+  std::uint64_t frames = 0;
+  std::uint64_t write_errors = 0;
+  std::uint64_t reopens = 0;
+  std::uint64_t lost_reports = 0;
+  std::uint64_t incomplete_since_publish = 0;
+  Nanos last_frame_host_ns = 0;
+  double rate_hz = 0.0;
+  bool open = false;
+  std::string state = "opening";
+  std::string last_error;
+  StampSource stamp_source = StampSource::kHostFallback;
+  camera::SourceStats source_stats;
+  timesync::ClockMapperStatus sync;
+
+  Impl(const CameraConfig& c, std::unique_ptr<camera::FrameSource> s, const dds::Participant& p, dds::StampsWriter& st,
+       TriggerGroup* t)
+      : cfg(c),
+        image_topic_name("/sensors/camera/" + c.name + "/image_raw"),
+        info_topic_name("/sensors/camera/" + c.name + "/camera_info"),
+        src(std::move(s)),
+        image_topic(p, image_topic_name, c.qos),
+        image_writer(p, image_topic, c.qos),
+        info_topic(p, info_topic_name, c.qos),
+        info_writer(p, info_topic, c.qos),
+        stamps(st),
+        trigger(t),
+        clock(static_cast<Nanos>(c.source.exposure_us * 1000.0)),
+        d(c.info.d) {}
+
+  msg::CameraInfo camera_info(const msg::Time& stamp) {
+    msg::CameraInfo ci{};
+    ci.header.stamp = stamp;
+    ci.header.frame_id = const_cast<char*>(cfg.frame_id.c_str());
+    ci.height = cfg.source.height;
+    ci.width = cfg.source.width;
+    ci.distortion_model = const_cast<char*>(cfg.info.distortion_model.c_str());
+    ci.d._buffer = d.data();
+    ci.d._length = ci.d._maximum = static_cast<std::uint32_t>(d.size());
+    std::copy(cfg.info.k.begin(), cfg.info.k.end(), ci.k);
+    std::copy(cfg.info.r.begin(), cfg.info.r.end(), ci.r);
+    std::copy(cfg.info.p.begin(), cfg.info.p.end(), ci.p);
+    ci.roi.width = 0;  // full image (ROS: all zero = full resolution)
+    return ci;
+  }
+
+  void publish(camera::Frame& f) {
+    const Nanos ready = vehicle_now_ns();
+    const auto& m = f.meta();
+    const Nanos tick = trigger != nullptr ? trigger->tick_before(m.first_rx_ns) : 0;
+    const auto st = clock.stamp(m, tick);
+    msg::Image img{};
+    img.header.stamp = msg::to_time(st.vehicle_ns);
+    img.header.frame_id = const_cast<char*>(cfg.frame_id.c_str());
+    img.height = m.height;
+    img.width = m.width;
+    img.encoding = const_cast<char*>(camera::info(m.format).ros_encoding);
+    img.is_bigendian = 0;
+    img.step = m.step;
+    // The source's buffer is the published buffer: no copy between capture and the writer.
+    img.data._buffer = f.data().data();
+    img.data._length = img.data._maximum = static_cast<std::uint32_t>(f.data().size());
+    img.data._release = false;
+    const Nanos publish = vehicle_now_ns();
+    const auto rc = image_writer.write(img, publish);
+    const Nanos written = vehicle_now_ns();
+    const auto ci = camera_info(img.header.stamp);
+    (void)info_writer.write(ci, publish);
+    std::uint64_t dropped = 0;
+    {
+      std::lock_guard lock(mutex);
+      dropped = incomplete_since_publish;
+      incomplete_since_publish = 0;
+    }
+    dds::SampleStamps s{st.vehicle_ns, m.first_rx_ns, m.complete_ns, ready, publish, written,
+                        m.packets, static_cast<std::uint32_t>(dropped), img.data._length};
+    stamps.write(image_topic_name, img.header.stamp, img.header.frame_id, m.seq, s);
+    std::lock_guard lock(mutex);
+    if (!rc.ok()) {
+      ++write_errors;
+      last_error = "dds write: " + rc.message();
+    }
+    ++frames;
+    stamp_source = st.source;
+    if (last_frame_host_ns != 0) {
+      const double dt = static_cast<double>(publish - last_frame_host_ns) * 1e-9;
+      if (dt > 0) rate_hz = rate_hz == 0.0 ? 1.0 / dt : 0.8 * rate_hz + 0.2 / dt;
+    }
+    last_frame_host_ns = publish;
+  }
+
+  void set_state(const std::string& s, const std::string& err = {}) {
+    std::lock_guard lock(mutex);
+    state = s;
+    if (!err.empty()) last_error = err;
+  }
+
+  bool try_open() {
+    try {
+      src->open();
+      clock.reset();  // a reopened device may restart its tick counter
+      std::lock_guard lock(mutex);
+      open = true;
+      state = "streaming";
+      last_frame_host_ns = vehicle_now_ns();  // the watchdog starts now
+      return true;
+    } catch (const std::exception& e) {
+      set_state("opening", e.what());
+      return false;
+    }
+  }
+
+  void lose(const std::string& why) {
+    src->mark_lost();
+    src->close();
+    log::warn("camera", cfg.name + ": " + why + "; reopening");
+    std::lock_guard lock(mutex);
+    open = false;
+    ++lost_reports;
+    state = "lost";
+    last_error = why;
+  }
+
+  void run() {
+    Nanos next_open = 0;
+    bool was_open = false;
+    while (!stop_flag.load() && !shutdown_requested()) {
+      if (!src->is_open()) {
+        const Nanos now = monotonic_now_ns();
+        if (now < next_open) {
+          ::usleep(20'000);
+          continue;
+        }
+        next_open = now + kReopenEveryNs;
+        if (!try_open()) continue;
+        if (was_open) {
+          std::lock_guard lock(mutex);
+          ++reopens;
+        }
+        was_open = true;
+        log::info("camera", cfg.name + ": streaming " + src->describe());
+      }
+      auto c = src->next(50);
+      switch (c.status) {
+        case camera::CaptureStatus::kFrame:
+          publish(c.frame);
+          break;
+        case camera::CaptureStatus::kIncomplete: {
+          std::lock_guard lock(mutex);
+          ++incomplete_since_publish;
+          break;
+        }
+        case camera::CaptureStatus::kDisconnected:
+          lose(c.error.empty() ? "disconnected" : c.error);
+          break;
+        case camera::CaptureStatus::kError:
+          set_state("streaming", c.error);
+          break;
+        case camera::CaptureStatus::kTimeout:
+          break;
+      }
+      c.frame.reset();  // the buffer goes back to the source before it is used again
+      Nanos last = 0;
+      {
+        std::lock_guard lock(mutex);
+        last = last_frame_host_ns;
+      }
+      const Nanos silent = vehicle_now_ns() - last;
+      if (src->is_open() && silent > static_cast<Nanos>(cfg.watchdog()) * 1'000'000)
+        lose("no frame for " + std::to_string(silent / 1'000'000) + " ms");
+      std::lock_guard lock(mutex);
+      source_stats = src->stats();
+      sync = clock.status(vehicle_now_ns());
+    }
+    src->close();
+  }
+};
+
+CameraDriver::CameraDriver(const CameraConfig& cfg, const dds::Participant& participant, dds::StampsWriter& stamps,
+                           TriggerGroup* trigger)
+    : CameraDriver(cfg, make_camera_source(cfg), participant, stamps, trigger) {}
+
+CameraDriver::CameraDriver(const CameraConfig& cfg, std::unique_ptr<camera::FrameSource> source,
+                           const dds::Participant& participant, dds::StampsWriter& stamps, TriggerGroup* trigger)
+    : impl_(std::make_unique<Impl>(cfg, std::move(source), participant, stamps, trigger)) {
+  if (trigger != nullptr) trigger->add([src = impl_->src.get()] { return src->trigger(); });
+}
+
+CameraDriver::~CameraDriver() { stop(); }
+
+camera::FrameSource& CameraDriver::source() { return *impl_->src; }
+std::string CameraDriver::topic() const { return impl_->image_topic_name; }
+
+void CameraDriver::start() {
+  impl_->thread = std::thread([this] { impl_->run(); });
+  if (const int prio = impl_->cfg.realtime_priority; prio > 0) {
+    sched_param sp{};
+    sp.sched_priority = prio;
+    if (const int rc = pthread_setschedparam(impl_->thread.native_handle(), SCHED_FIFO, &sp); rc != 0)
+      log::warn("camera", impl_->cfg.name + ": SCHED_FIFO " + std::to_string(prio) + " refused (" + std::strerror(rc) + ")");
+  }
+  log::info("camera", impl_->cfg.name + ": " + impl_->src->describe() + " -> " + impl_->image_topic_name);
+}
+
+void CameraDriver::stop() {
+  impl_->stop_flag.store(true);
+  if (!impl_->thread.joinable()) return;
+  impl_->thread.join();
+  const auto st = status();
+  std::string line = impl_->cfg.name + ":";
+  for (const auto& [k, v] : st.values)
+    if (k == "frames" || k == "incomplete" || k == "reopens" || k == "stamp_source" || k == "sync") line += " " + k + "=" + v;
+  log::info("camera", line);
+}
+
+dds::DriverStatus CameraDriver::status() const {
+  const auto& c = impl_->cfg;
+  std::lock_guard lock(impl_->mutex);
+  dds::DriverStatus s;
+  s.name = "camera/" + c.name;
+  s.hardware_id = std::string(c.source.backend) + ":" + c.source.device;
+  const Nanos age = impl_->last_frame_host_ns == 0 ? -1 : vehicle_now_ns() - impl_->last_frame_host_ns;
+  if (!impl_->open) {
+    s.level = impl_->frames == 0 && impl_->lost_reports == 0 ? dds::Level::kWarn : dds::Level::kError;
+    s.message = impl_->state + (impl_->last_error.empty() ? "" : ": " + impl_->last_error);
+  } else if (impl_->frames == 0 && age > 1'000'000'000) {
+    s.level = dds::Level::kWarn;
+    s.message = "waiting for frames";
+  } else if (age > static_cast<Nanos>(c.watchdog()) * 1'000'000) {
+    s.level = dds::Level::kError;
+    s.message = "no frame for " + std::to_string(age / 1'000'000) + " ms";
+  } else {
+    s.message = "running";
+  }
+  const auto& st = impl_->source_stats;
+  s.add("topic", impl_->image_topic_name);
+  s.add("state", impl_->state);
+  s.add_number("frames", impl_->frames);
+  s.add("frame_rate_hz", std::to_string(impl_->rate_hz));
+  s.add_number("incomplete", st.incomplete);
+  s.add_number("timeouts", st.timeouts);
+  s.add_number("underruns", st.underruns);
+  s.add_number("missing_packets", st.missing_packets);
+  s.add_number("resent_packets", st.resent_packets);
+  s.add_number("lost_reports", impl_->lost_reports);
+  s.add_number("reopens", impl_->reopens);
+  s.add_number("write_errors", impl_->write_errors);
+  s.add("trigger", camera::to_string(c.source.trigger));
+  s.add("stamp_source", to_string(impl_->stamp_source));
+  s.add("sync", timesync::to_string(impl_->sync.state));
+  s.add_number("sync_offset_ns", impl_->sync.offset_ns);
+  s.add("sync_drift_ppm", std::to_string(impl_->sync.drift_ppm));
+  s.add_number("sync_residual_p99_ns", impl_->sync.residual_p99_ns);
+  s.add("ptp", "not used (device ticks mapped)");
+  if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
+  return s;
+}
+
+}  // namespace sensor_rig::drivers

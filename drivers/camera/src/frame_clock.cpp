@@ -1,0 +1,48 @@
+#include "sensor_rig/drivers/camera/frame_clock.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+timesync::ClockMapperConfig mapper_config(Nanos exposure_ns) {
+  timesync::ClockMapperConfig c;
+  c.fixed_delay_ns = exposure_ns;
+  // A frame every 33-100 ms: buckets of 200 ms keep a few samples each for the minimum.
+  c.bucket_ns = 200'000'000;
+  c.lock_buckets = 5;
+  return c;
+}
+
+}  // namespace
+
+const char* to_string(StampSource s) noexcept {
+  switch (s) {
+    case StampSource::kDeviceMapped: return "device_mapped";
+    case StampSource::kHostFallback: return "host_fallback";
+    case StampSource::kMonotonic: return "monotonic";
+    case StampSource::kVehicle: return "device_vehicle";
+    case StampSource::kTriggerTick: return "trigger_tick";
+  }
+  return "?";
+}
+
+FrameClock::FrameClock(Nanos exposure_ns) : mapper_(mapper_config(exposure_ns)), exposure_ns_(exposure_ns) {}
+
+FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
+  switch (m.domain) {
+    case camera::TimeDomain::kMonotonic:
+      // The offset of the two clocks sampled together at this frame's dequeue: a clock step
+      // (NTP/PTP slew or jump) shows in the next frame, not never.
+      return {m.device_ns + (m.complete_ns - m.complete_mono_ns), StampSource::kMonotonic};
+    case camera::TimeDomain::kVehicle:
+      return {m.device_ns, StampSource::kVehicle};
+    case camera::TimeDomain::kDeviceTicks:
+      break;
+  }
+  mapper_.observe(m.device_ns, m.first_rx_ns);
+  if (tick_ns > 0 && tick_ns <= m.first_rx_ns) return {tick_ns, StampSource::kTriggerTick};
+  const auto r = mapper_.map(m.device_ns);
+  if (r.valid) return {r.vehicle_ns, StampSource::kDeviceMapped};
+  return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback};
+}
+
+}  // namespace sensor_rig::drivers

@@ -1,0 +1,90 @@
+// The `cameras:` item parser: contract keys, defaults, and every bad value reported at its line.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "sensor_rig/drivers/camera/camera_config.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+struct Parsed {
+  CameraConfig cfg;
+  std::string problems;
+};
+
+Parsed parse(const std::string& yaml) {
+  auto problems = std::make_shared<config::Problems>();
+  auto node = config::Node::load_string(yaml, "cams.yaml", problems);
+  Parsed p{parse_camera_config(node), ""};
+  p.problems = problems->str();
+  return p;
+}
+
+TEST(CameraConfig, ContractKeysAndDefaults) {
+  const auto p = parse(R"(name: front_narrow
+backend: aravis
+device: 127.0.0.2
+pixel_format: BayerRG8
+width: 1920
+height: 1200
+frame_rate: 10
+calibration: ""
+exposure_us: 5000
+gain_db: 2
+features: {BalanceWhiteAuto: "Off"}
+trigger: {mode: software, group: stereo}
+mock: {kind: gige, lost_packets_per_thousand: 2}
+)");
+  EXPECT_EQ(p.problems, "");
+  const auto& c = p.cfg;
+  EXPECT_EQ(c.name, "front_narrow");
+  EXPECT_EQ(c.frame_id, "camera_front_narrow");
+  EXPECT_EQ(c.source.format, camera::PixelFormat::kBayerRG8);
+  EXPECT_EQ(c.source.width, 1920u);
+  EXPECT_DOUBLE_EQ(c.source.frame_rate, 10.0);
+  EXPECT_EQ(c.source.trigger, camera::TriggerMode::kSoftware);
+  EXPECT_EQ(c.trigger_group, "stereo");
+  ASSERT_EQ(c.source.features.size(), 1u);
+  EXPECT_EQ(c.source.features[0].second, "Off");
+  EXPECT_EQ(c.mock.kind, CameraMockConfig::Kind::kGige);
+  EXPECT_FALSE(c.info.calibrated());
+  EXPECT_EQ(c.info.width, 1920u);
+  EXPECT_GE(c.source.socket_buffer_bytes, 4 << 20);
+  EXPECT_LT(c.watchdog(), 1000);
+}
+
+TEST(CameraConfig, BadValuesAreReportedAllAtOnceWithLines) {
+  const auto p = parse(R"(name: front-narrow
+backend: v4l2
+device: video0
+pixel_format: BayerRG16
+width: 1921
+height: 1200
+frame_rate: 500
+trigger: {mode: software}
+mock: {kind: gige}
+colour: red
+)");
+  for (const char* needle : {"cams.yaml:1:", "must be letters", "cams.yaml:4:", "cannot do 'BayerRG16'", "cams.yaml:7:",
+                             "frame_rate", "trigger modes need the aravis backend", "mock gige needs backend: aravis",
+                             "colour", "loopback address"})
+    EXPECT_NE(p.problems.find(needle), std::string::npos) << needle << "\n" << p.problems;
+}
+
+TEST(CameraConfig, CalibrationOfAnotherSizeIsAnError) {
+  const std::string file = ::testing::TempDir() + "/cam_calib_720p.yaml";
+  std::ofstream(file) << "image_width: 1280\nimage_height: 720\ncamera_matrix: {rows: 3, cols: 3, data: [900, 0, 640, 0, 900, 360, 0, 0, 1]}\n"
+                         "distortion_model: plumb_bob\ndistortion_coefficients: {rows: 1, cols: 5, data: [0, 0, 0, 0, 0]}\n";
+  auto p = parse("name: c\ndevice: 127.0.0.3\nwidth: 1920\nheight: 1200\ncalibration: " + file + "\n");
+  EXPECT_NE(p.problems.find("calibration is for 1280x720, the camera runs 1920x1200"), std::string::npos) << p.problems;
+  p = parse("name: c\ndevice: 127.0.0.3\nwidth: 1280\nheight: 720\ncalibration: " + file + "\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_TRUE(p.cfg.info.calibrated());
+  EXPECT_DOUBLE_EQ(p.cfg.info.k[2], 640.0);
+  p = parse("name: c\ndevice: 127.0.0.3\ncalibration: /nonexistent.yaml\n");
+  EXPECT_NE(p.problems.find("file not found"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace sensor_rig::drivers
