@@ -4,6 +4,7 @@
 #include <set>
 #include <sstream>
 
+#include "rig_cameras.hpp"
 #include "sensor_rig/common/config_node.hpp"
 
 namespace sensor_rig::rig {
@@ -15,8 +16,7 @@ RigConfig load_rig_config(const std::string& path) {
   RigConfig cfg;
   cfg.file = path;
   if (!root.expect_map()) problems->throw_if_any();
-  // Cameras are configured once their drivers exist; until then `cameras` is an unknown key.
-  root.allow_keys({"rig", "lidars", "dbw"});
+  root.allow_keys({"rig", "lidars", "cameras", "dbw"});
   if (auto rig = root.child("rig", true)) {
     rig->allow_keys({"name", "dds", "diagnostics_period_ms"});
     cfg.name = rig->get_string("name", "rig");
@@ -39,6 +39,7 @@ RigConfig load_rig_config(const std::string& path) {
       item.fail("position_port", "port " + std::to_string(l.position_port) + " used twice");
     cfg.lidars.push_back(std::move(l));
   }
+  cfg.cameras = parse_cameras(root);
   if (auto d = root.child("dbw")) cfg.dbw = drivers::parse_dbw_config(*d);
   problems->throw_if_any();
   return cfg;
@@ -57,6 +58,7 @@ std::string describe(const RigConfig& cfg) {
     if (l.mock.kind == LidarMockConfig::Kind::kReplay) o << " [mock: replay " << l.mock.pcap << "]";
     o << "\n";
   }
+  o << describe_cameras(cfg.cameras);
   if (cfg.dbw.enabled) {
     o << "  dbw: bridge on " << (cfg.dbw.transport.empty() ? "unix:" + cfg.dbw.bus : cfg.dbw.transport)
       << ", protocol " << (cfg.dbw.protocol.empty() ? std::string("config/dbw/paravan_ref.yaml") : cfg.dbw.protocol)

@@ -8,6 +8,7 @@
 
 #include "sensor_rig/dds/participant.hpp"
 #include "sensor_rig/dds/qos.hpp"
+#include "sensor_rig/drivers/camera/camera_config.hpp"
 #include "sensor_rig/drivers/dbw/dbw_config.hpp"
 #include "sensor_rig/drivers/lidar/lidar_config.hpp"
 
@@ -23,6 +24,7 @@ struct RigConfig {
   dds::DomainConfig dds;
   int diagnostics_period_ms = 1000;
   std::vector<LidarConfig> lidars;
+  std::vector<drivers::CameraConfig> cameras;
   DbwConfig dbw;
 };
 

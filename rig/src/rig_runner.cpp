@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 
+#include "rig_cameras.hpp"
 #include "sensor_rig/dds/diagnostics.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 #include "sensor_rig/common/child_process.hpp"
@@ -132,6 +133,14 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     return 1;
   }
   for (auto& d : lidars) d->start();
+  std::unique_ptr<CameraRig> cameras;
+  try {
+    cameras = std::make_unique<CameraRig>(cfg.cameras, participant, stamps);
+  } catch (const std::exception& e) {
+    log::error("rig", std::string("camera driver start failed: ") + e.what());
+    return 1;
+  }
+  cameras->start();  // GigE fakes first, then the nodes (which retry until their camera answers)
 
   std::vector<ChildProcess> mocks;
   const std::string exe = self_executable();
@@ -155,6 +164,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     if (wait_for_shutdown(cfg.diagnostics_period_ms)) break;
     std::vector<dds::DriverStatus> statuses;
     for (const auto& d : lidars) statuses.push_back(d->status());
+    cameras->supervise(statuses);
     for (std::size_t i = 0; i < mocks.size(); ++i) {
       if (!mocks[i].running() && !reported_dead[i]) {
         reported_dead[i] = true;
@@ -167,6 +177,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   log::info("rig", "stopping");
   // Stop in reverse: the command source first, so the bridge sees silence and disengages.
   for (auto it = mocks.rbegin(); it != mocks.rend(); ++it) it->stop();
+  cameras->stop();
   for (auto& d : lidars) d->stop();
   return 0;
 }

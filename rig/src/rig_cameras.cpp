@@ -1,0 +1,140 @@
+#include "rig_cameras.hpp"
+
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/log.hpp"
+
+namespace sensor_rig::rig {
+
+std::vector<drivers::CameraConfig> parse_cameras(const config::Node& root) {
+  std::vector<drivers::CameraConfig> out;
+  std::set<std::string> names;
+  std::set<std::string> devices;
+  for (const auto& item : root.items("cameras")) {
+    auto c = drivers::parse_camera_config(item);
+    if (!c.name.empty() && !names.insert(c.name).second) item.fail("name", "duplicate camera name '" + c.name + "'");
+    if (!c.source.device.empty() && !devices.insert(c.source.backend + ":" + c.source.device).second)
+      item.fail("device", "device '" + c.source.device + "' used by two cameras");
+    out.push_back(std::move(c));
+  }
+  // A software trigger group ticks at one rate: its members must agree on it.
+  std::map<std::string, double> group_rate;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const auto& c = out[i];
+    if (c.trigger_group.empty()) continue;
+    auto [it, fresh] = group_rate.emplace(c.trigger_group, c.source.frame_rate);
+    if (!fresh && it->second != c.source.frame_rate)
+      root.items("cameras")[i].fail("frame_rate", "trigger group '" + c.trigger_group + "' members need the same frame_rate");
+  }
+  return out;
+}
+
+std::string describe_cameras(const std::vector<drivers::CameraConfig>& cameras) {
+  std::ostringstream o;
+  for (const auto& c : cameras) {
+    o << "  camera " << c.name << ": " << c.source.backend << " " << c.source.device << " "
+      << (camera::info(c.source.format).genicam != nullptr && c.source.backend == "aravis" ? camera::info(c.source.format).genicam
+                                                                                           : camera::info(c.source.format).v4l2_name)
+      << " " << c.source.width << "x" << c.source.height << " @ " << c.source.frame_rate << " Hz, trigger "
+      << camera::to_string(c.source.trigger) << (c.trigger_group.empty() ? "" : " (group " + c.trigger_group + ")")
+      << (c.info.calibrated() ? ", calibrated" : ", uncalibrated") << " -> /sensors/camera/" << c.name << "/image_raw";
+    if (c.mock.kind != drivers::CameraMockConfig::Kind::kNone) o << " [mock: " << drivers::to_string(c.mock.kind) << "]";
+    o << "\n";
+  }
+  return o.str();
+}
+
+std::vector<drivers::CameraConfig> resolve_camera_mocks(std::vector<drivers::CameraConfig> cameras) {
+  for (auto& c : cameras) {
+    if (c.mock.kind != drivers::CameraMockConfig::Kind::kGige) continue;
+    std::string why;
+    if (camera::mock::ensure_loopback_address(c.source.device, why)) continue;
+    log::warn("rig", "camera " + c.name + ": no GigE fake on " + c.source.device + " (" + why +
+                         "): running an in-process Aravis fake instead");
+    c.mock.kind = drivers::CameraMockConfig::Kind::kAravisInProcess;
+  }
+  return cameras;
+}
+
+struct CameraRig::Impl {
+  struct Fake {
+    camera::mock::GigeFakeOptions options;
+    ChildProcess process;
+    std::string camera;
+    bool reported = false;
+  };
+  std::vector<drivers::CameraConfig> cameras;
+  std::map<std::string, std::unique_ptr<drivers::TriggerGroup>> groups;
+  std::vector<std::unique_ptr<drivers::CameraDriver>> drivers;
+  std::vector<Fake> fakes;
+};
+
+CameraRig::CameraRig(const std::vector<drivers::CameraConfig>& cameras, const dds::Participant& participant,
+                     dds::StampsWriter& stamps)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->cameras = resolve_camera_mocks(cameras);
+  for (const auto& c : impl_->cameras) {
+    drivers::TriggerGroup* group = nullptr;
+    if (c.source.trigger == camera::TriggerMode::kSoftware) {
+      const std::string key = c.trigger_group.empty() ? "camera:" + c.name : c.trigger_group;
+      auto& g = impl_->groups[key];
+      if (!g) g = std::make_unique<drivers::TriggerGroup>(key, c.source.frame_rate);
+      group = g.get();
+    }
+    impl_->drivers.push_back(std::make_unique<drivers::CameraDriver>(c, participant, stamps, group));
+  }
+}
+
+CameraRig::~CameraRig() { stop(); }
+
+void CameraRig::start() {
+  for (const auto& c : impl_->cameras) {
+    if (c.mock.kind != drivers::CameraMockConfig::Kind::kGige) continue;
+    Impl::Fake f;
+    f.options.address = c.source.device;
+    f.options.lost_packets_per_thousand = c.mock.lost_packets_per_thousand;
+    f.camera = c.name;
+    try {
+      f.process = camera::mock::start_gige_fake(f.options);
+      log::info("rig", "mock for camera " + c.name + ": arv-fake-gv-camera on " + c.source.device + ", pid " +
+                           std::to_string(f.process.pid()));
+    } catch (const std::exception& e) {
+      log::error("rig", "camera " + c.name + ": " + e.what());
+    }
+    impl_->fakes.push_back(std::move(f));
+  }
+  for (auto& d : impl_->drivers) d->start();  // they open (and reopen) their cameras themselves
+  for (auto& [name, g] : impl_->groups) g->start();
+}
+
+void CameraRig::supervise(std::vector<dds::DriverStatus>& statuses) {
+  for (auto& f : impl_->fakes) {
+    if (f.process.pid() > 0 && f.process.running()) continue;
+    if (!f.reported) {
+      log::warn("rig", "GigE fake of camera " + f.camera + " exited (status " + std::to_string(f.process.exit_status()) +
+                           "): restarting it");
+      f.reported = true;
+    }
+    try {
+      f.process = camera::mock::start_gige_fake(f.options);
+      f.reported = false;
+      log::info("rig", "mock for camera " + f.camera + " restarted, pid " + std::to_string(f.process.pid()));
+    } catch (const std::exception& e) {
+      log::error("rig", "camera " + f.camera + ": " + e.what());
+    }
+  }
+  for (const auto& d : impl_->drivers) statuses.push_back(d->status());
+}
+
+void CameraRig::stop() {
+  for (auto& [name, g] : impl_->groups) g->stop();
+  for (auto& d : impl_->drivers) d->stop();
+  for (auto& f : impl_->fakes)
+    if (f.process.pid() > 0) f.process.stop(1000);
+  impl_->fakes.clear();
+}
+
+}  // namespace sensor_rig::rig
