@@ -200,6 +200,11 @@ double Node::get_double(std::string_view key, double lo, double hi, std::optiona
 
 std::string Node::get_choice(std::string_view key, std::initializer_list<std::string_view> choices,
                              std::optional<std::string> fallback) const {
+  return get_choice_of(key, std::vector<std::string_view>(choices), std::move(fallback));
+}
+
+std::string Node::get_choice_of(std::string_view key, const std::vector<std::string_view>& choices,
+                                std::optional<std::string> fallback) const {
   const bool present = has(key);
   std::string s = get_string(key, fallback);
   if (!present) return s;
@@ -208,7 +213,7 @@ std::string Node::get_choice(std::string_view key, std::initializer_list<std::st
   std::string list;
   for (auto c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
   fail(key, "'" + s + "' is not one of: " + list);
-  return fallback.value_or(std::string(*choices.begin()));
+  return fallback.value_or(choices.empty() ? std::string() : std::string(choices.front()));
 }
 
 std::string Node::get_path(std::string_view key, std::optional<std::string> fallback) const {

@@ -3,9 +3,8 @@
 
 namespace sensor_rig::lidar {
 void register_cli(CLI::App& app, cli::Context& ctx) {
-  auto* lidar = app.add_subcommand("lidar", "LIDAR tools: decode captures, replay them as a mock sensor");
+  auto* lidar = app.add_subcommand("lidar", "LIDAR tools: decode captures (drivers/lidar), replay them as a mock sensor");
   lidar->require_subcommand(1);
-  register_decode_command(*lidar, ctx);
   register_replay_command(*lidar, ctx);
 }
 }  // namespace sensor_rig::lidar

@@ -2,6 +2,5 @@
 #include "sensor_rig/common/cli.hpp"
 
 namespace sensor_rig::lidar {
-void register_decode_command(CLI::App& lidar, cli::Context& ctx);  // decode_command.cpp
 void register_replay_command(CLI::App& lidar, cli::Context& ctx);  // replay_command.cpp
 }  // namespace sensor_rig::lidar

@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "lidar_commands.hpp"
+#include "sensor_rig/lidar/decoder_files.hpp"
+#include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/lidar/mock/replay.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
@@ -33,7 +35,7 @@ struct ReplayCliOptions {
   double rate = 1.0;
   bool loop = false;
   double rpm = 600.0;
-  std::string returns = "strongest";
+  ReturnSelection returns = ReturnSelection::kStrongest;
   std::string calibration;     // synthetic Velodyne / Hesai
   std::string metadata;        // synthetic Ouster: render this sensor
   std::string write_metadata;  // synthetic Ouster: write the metadata used
@@ -63,27 +65,16 @@ void apply_rt_priority(int priority) {
   }
 }
 
-std::string read_text(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw cli::UsageError(std::string("cannot read ") + what + " " + path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 mock::SyntheticOptions synthetic_options(const ReplayCliOptions& o, std::uint16_t port, Nanos start_ns) {
   mock::SyntheticOptions s;
   s.model = o.synthetic;
   s.rpm = o.rpm;
   s.returns = o.returns;
   s.start_ns = start_ns;
-  if (!o.calibration.empty()) {
-    s.calibration_text = read_text(o.calibration, "calibration");
-    s.calibration_name = o.calibration;
-  }
-  if (!o.metadata.empty()) {
-    s.metadata_text = read_text(o.metadata, "metadata");
-    s.metadata_name = o.metadata;
+  try {
+    apply_decoder_files(read_decoder_files(o.calibration, o.metadata), s);
+  } catch (const DecoderFileError& e) {
+    throw cli::UsageError(e.what());
   }
   s.ouster_beams = o.beams;
   s.ouster_mode = o.lidar_mode;
@@ -223,9 +214,9 @@ void register_replay_command(CLI::App& lidar, cli::Context& ctx) {
   cmd->add_option("--rate", opts->rate, "speed factor (2 = twice as fast as recorded)")->capture_default_str();
   cmd->add_flag("--loop", opts->loop, "restart the capture at its end");
   cmd->add_option("--rpm", opts->rpm, "synthetic: rotation speed")->capture_default_str()->check(CLI::Range(60.0, 1200.0));
-  cmd->add_option("--return", opts->returns, "synthetic: strongest, last or dual")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"strongest", "last", "dual"}));
+  cmd->add_option("--return", "synthetic: strongest, last or dual (default strongest)")
+      ->check(CLI::IsMember({"strongest", "last", "dual"}))
+      ->each([o = opts.get()](const std::string& w) { o->returns = *parse_return_selection(w); });
   cmd->add_option("--calibration", opts->calibration,
                   "synthetic Velodyne/Hesai: render with this calibration (ROS YAML, VeloView XML, Hesai CSV)")
       ->check(CLI::ExistingFile);

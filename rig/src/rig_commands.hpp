@@ -7,12 +7,16 @@ namespace lidar { void register_cli(CLI::App& app, cli::Context& ctx); }
 namespace dbw { void register_cli(CLI::App& app, cli::Context& ctx); }
 namespace bench { void register_cli(CLI::App& app, cli::Context& ctx); }
 namespace rig { void register_cli(CLI::App& app, cli::Context& ctx); }
-namespace drivers { void register_dbw_cli(CLI::App& app, cli::Context& ctx); }
+namespace drivers {
+void register_lidar_cli(CLI::App& app, cli::Context& ctx);
+void register_dbw_cli(CLI::App& app, cli::Context& ctx);
+}  // namespace drivers
 
 inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
   rig::register_cli(app, ctx);  // up, demo, config, monitor
 #ifdef RIG_HAVE_LIDAR
-  lidar::register_cli(app, ctx);    // lidar decode|replay|...
+  lidar::register_cli(app, ctx);    // lidar replay
+  drivers::register_lidar_cli(app, ctx);  // lidar decode (source -> timesync -> decoder -> PCD)
 #endif
 #ifdef RIG_HAVE_DBW
   dbw::register_cli(app, ctx);      // can ..., mock paravan

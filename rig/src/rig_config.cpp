@@ -52,7 +52,7 @@ std::string describe(const RigConfig& cfg) {
   for (const auto& l : cfg.lidars) {
     o << "  lidar " << l.name << ": " << l.model << " udp " << l.host << ":" << l.port
       << (l.position_port ? " position " + std::to_string(l.position_port) : std::string()) << ", returns "
-      << l.returns << ", time " << l.time_source << ", qos " << dds::to_string(l.qos) << " -> /sensors/lidar/"
+      << lidar::to_string(l.returns) << ", time " << timesync::to_string(l.time_source) << ", qos " << dds::to_string(l.qos) << " -> /sensors/lidar/"
       << l.name << "/points";
     if (l.mock.kind == LidarMockConfig::Kind::kSynthetic) o << " [mock: synthetic " << l.mock.rpm << " rpm]";
     if (l.mock.kind == LidarMockConfig::Kind::kReplay) o << " [mock: replay " << l.mock.pcap << "]";

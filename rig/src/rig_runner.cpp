@@ -33,7 +33,7 @@ std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const Li
     if (!l.calibration.empty()) argv.insert(argv.end(), {"--calibration", l.calibration});
     if (!l.metadata.empty() && lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--metadata", l.metadata});
     // Same return mode as the driver expects (an Ouster's echoes come from its UDP profile instead).
-    if (!lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--return", l.returns});
+    if (!lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--return", lidar::to_string(l.returns)});
   }
   // Position packets (GPRMC, PPS): the synthetic Velodyne's, or a capture's (port 8308 records).
   if (l.position_port != 0) argv.insert(argv.end(), {"--position-port", std::to_string(l.position_port)});

@@ -23,7 +23,7 @@ bool has(const std::vector<std::string>& argv, const std::string& flag) {
   return std::find(argv.begin(), argv.end(), flag) != argv.end();
 }
 
-LidarConfig synthetic(const std::string& model, const std::string& returns) {
+LidarConfig synthetic(const std::string& model, lidar::ReturnSelection returns) {
   LidarConfig l;
   l.name = "l";
   l.model = model;
@@ -36,7 +36,7 @@ LidarConfig synthetic(const std::string& model, const std::string& returns) {
 }
 
 TEST(LidarMockCommand, SyntheticVelodyneCarriesModelPortAndReturnMode) {
-  const auto argv = lidar_mock_command("rig", synthetic("VLP-16", "dual"));
+  const auto argv = lidar_mock_command("rig", synthetic("VLP-16", lidar::ReturnSelection::kDual));
   ASSERT_GE(argv.size(), 3u);
   EXPECT_EQ(argv[1], "lidar");
   EXPECT_EQ(argv[2], "replay");
@@ -48,11 +48,11 @@ TEST(LidarMockCommand, SyntheticVelodyneCarriesModelPortAndReturnMode) {
 }
 
 TEST(LidarMockCommand, HesaiLastReturnIsPassedOn) {
-  EXPECT_EQ(value_of(lidar_mock_command("rig", synthetic("Pandar40P", "last")), "--return"), "last");
+  EXPECT_EQ(value_of(lidar_mock_command("rig", synthetic("Pandar40P", lidar::ReturnSelection::kLast)), "--return"), "last");
 }
 
 TEST(LidarMockCommand, OusterTakesItsEchoesFromTheProfileAndGetsTheDriversMetadata) {
-  auto l = synthetic("OS-LEGACY", "strongest");
+  auto l = synthetic("OS-LEGACY", lidar::ReturnSelection::kStrongest);
   l.metadata = "/tmp/os.json";
   const auto argv = lidar_mock_command("rig", l);
   EXPECT_FALSE(has(argv, "--return"));
@@ -60,7 +60,7 @@ TEST(LidarMockCommand, OusterTakesItsEchoesFromTheProfileAndGetsTheDriversMetada
 }
 
 TEST(LidarMockCommand, ReplayAndNone) {
-  LidarConfig l = synthetic("VLP-16", "strongest");
+  LidarConfig l = synthetic("VLP-16", lidar::ReturnSelection::kStrongest);
   l.mock.kind = LidarMockConfig::Kind::kReplay;
   l.mock.pcap = "/data/x.pcap";
   l.mock.loop = true;
@@ -76,7 +76,7 @@ TEST(LidarMockCommand, ReplayAndNone) {
 // A capture's position packets (GPRMC, PPS) reach the driver's position port, as the synthetic
 // sensor's do.
 TEST(LidarMockCommand, PositionPortForReplayAndSynthetic) {
-  LidarConfig l = synthetic("VLP-16", "strongest");
+  LidarConfig l = synthetic("VLP-16", lidar::ReturnSelection::kStrongest);
   l.position_port = 8318;
   EXPECT_EQ(value_of(lidar_mock_command("rig", l), "--position-port"), "8318");
   l.mock.kind = LidarMockConfig::Kind::kReplay;

@@ -22,17 +22,6 @@ const char* to_string(Correction c) noexcept {
   return "unknown";
 }
 
-const char* to_string(PpsState p) noexcept {
-  switch (p) {
-    case PpsState::kAbsent: return "absent";
-    case PpsState::kSynchronizing: return "synchronizing";
-    case PpsState::kLocked: return "locked";
-    case PpsState::kError: return "error";
-    case PpsState::kUnknown: return "unknown";
-  }
-  return "unknown";
-}
-
 const char* to_string(StampSource s) noexcept {
   switch (s) {
     case StampSource::kGps: return "gps";

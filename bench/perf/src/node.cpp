@@ -161,7 +161,7 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
     write_ids(*sample, pub_id, i);
     const Nanos stamp = vehicle_now_ns();  // immediately before publishing
     write_stamp(*sample, stamp);
-    const dds_return_t rc = writer.write(*sample, stamp);
+    const dds_return_t rc = writer.write(*sample, stamp).code();
     const Nanos after = vehicle_now_ns();
     if (rc != DDS_RETCODE_OK) {
       ++path.failed_writes;

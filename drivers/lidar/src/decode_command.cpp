@@ -1,4 +1,5 @@
 // `rig lidar decode`: a capture -> one PCD per complete scan + one JSON line per scan (SPEC §7).
+// The offline LIDAR node: pcap source -> timesync (the node's PacketStamper) -> decoder -> PCD.
 //
 // Any model of the registry (scan_decoder.hpp). Scan time: the packet's own sensor time — Velodyne:
 // µs since the top of the hour with the hour taken from the pcap record time (the hour closest to
@@ -14,45 +15,38 @@
 #include <sstream>
 #include <string>
 
-#include "lidar_commands.hpp"
+#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/drivers/lidar/lidar_stamping.hpp"
+#include "sensor_rig/lidar/decoder_files.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
 #include "sensor_rig/lidar/pcd.hpp"
+#include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
-#include "sensor_rig/lidar/velodyne/packet_info.hpp"
 
-namespace sensor_rig::lidar {
+namespace sensor_rig::drivers {
 namespace {
+
+using namespace sensor_rig::lidar;  // NOLINT(google-build-using-namespace): the command of the lidar area
 
 struct DecodeOptions {
   std::string pcap;
   std::string model;
   std::string calibration;
   std::string metadata;
-  std::string returns = "strongest";
+  ReturnSelection returns = ReturnSelection::kStrongest;
   double min_range = 0.0;
   double max_range = 0.0;  // 0 = no limit
   double cut_angle = 0.0;
   std::string out;
 };
 
-std::string read_text(const std::string& path, const char* what) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw cli::UsageError(std::string("cannot read ") + what + " file " + path);
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
 std::unique_ptr<ScanDecoder> make_cli_decoder(const DecodeOptions& o) {
   DecoderOptions d;
   d.model = o.model;
-  if (!o.calibration.empty()) {
-    d.calibration_text = read_text(o.calibration, "calibration");
-    d.calibration_name = o.calibration;
-  }
-  if (!o.metadata.empty()) {
-    d.metadata_text = read_text(o.metadata, "metadata");
-    d.metadata_name = o.metadata;
+  try {
+    apply_decoder_files(read_decoder_files(o.calibration, o.metadata), d);
+  } catch (const DecoderFileError& e) {
+    throw cli::UsageError(e.what());
   }
   d.returns = o.returns;
   d.min_range_m = o.min_range;
@@ -65,20 +59,6 @@ std::unique_ptr<ScanDecoder> make_cli_decoder(const DecodeOptions& o) {
   }
 }
 
-// Vehicle time of the packet's first firing, from the sensor's own time where the packet has one.
-Nanos packet_stamp(const ScanDecoder& dec, const PacketView& pkt) {
-  const auto t = dec.packet_time(pkt.data);
-  switch (t.kind) {
-    case SensorTime::Kind::kMicrosSinceHour:
-      return velodyne::sensor_time_to_ns(static_cast<std::uint32_t>(t.value), pkt.rx_ns);
-    case SensorTime::Kind::kAbsoluteNs:
-      return t.value;
-    case SensorTime::Kind::kNone:
-      break;
-  }
-  return pkt.rx_ns - dec.packet_span_ns();
-}
-
 int run_decode(const DecodeOptions& o) {
   const auto decoder = make_cli_decoder(o);
   if (!std::filesystem::is_regular_file(o.pcap)) throw cli::UsageError("no such capture file: " + o.pcap);
@@ -89,6 +69,10 @@ int run_decode(const DecodeOptions& o) {
     return cli::kRuntime;
   }
 
+  // The LIDAR node's stamping policy, offline: the sensor's own time as is (no mapping: a
+  // capture has no live vehicle clock to map to), the hour from the record time.
+  timesync::PacketStamper stamper(stamper_config(timesync::TimeSource::kSensor, timesync::HourSource::kHost,
+                                                 timesync::Correction::kNever, decoder->packet_span_ns()));
   PcapReader reader(o.pcap);  // PcapError -> exit 1 with its message
   std::uint64_t position_packets = 0;
   std::uint64_t written = 0;
@@ -98,7 +82,7 @@ int run_decode(const DecodeOptions& o) {
       ++position_packets;
       continue;
     }
-    auto scan = decoder->push(pkt, packet_stamp(*decoder, pkt));
+    auto scan = decoder->push(pkt, stamper.stamp(device_packet(decoder->packet_time(pkt.data), pkt.rx_ns)));
     if (!scan) continue;
     char name[32];
     std::snprintf(name, sizeof name, "scan_%06llu.pcd", static_cast<unsigned long long>(scan->seq));
@@ -139,7 +123,12 @@ int run_decode(const DecodeOptions& o) {
 
 }  // namespace
 
-void register_decode_command(CLI::App& lidar, cli::Context& ctx) {
+// Adds `decode` to the `rig lidar` group the lidar area made (rig calls the area first).
+void register_lidar_cli(CLI::App& app, cli::Context& ctx) {
+  const auto found = app.get_subcommands([](CLI::App* a) { return a->get_name() == "lidar"; });
+  CLI::App* group = found.empty() ? nullptr : found.front();
+  if (group == nullptr) group = app.add_subcommand("lidar", "LIDAR tools")->require_subcommand(1);
+  CLI::App& lidar = *group;
   auto opts = std::make_shared<DecodeOptions>();
   auto* cmd = lidar.add_subcommand("decode", "Decode a capture into PCD files, one per complete scan");
   cmd->add_option("--pcap", opts->pcap, "capture file (pcap/pcapng)")->required();
@@ -147,9 +136,9 @@ void register_decode_command(CLI::App& lidar, cli::Context& ctx) {
   cmd->add_option("--calibration", opts->calibration,
                   "calibration file (Velodyne: ROS YAML or VeloView XML; default: the manual's values)");
   cmd->add_option("--metadata", opts->metadata, "sensor metadata JSON (Ouster models)");
-  cmd->add_option("--return", opts->returns, "strongest, last or dual")
+  cmd->add_option("--return", "strongest, last or dual (default strongest)")
       ->check(CLI::IsMember({"strongest", "last", "dual"}))
-      ->capture_default_str();
+      ->each([o = opts.get()](const std::string& w) { o->returns = *parse_return_selection(w); });
   cmd->add_option("--min-range", opts->min_range, "drop points closer than M metres")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
@@ -162,4 +151,4 @@ void register_decode_command(CLI::App& lidar, cli::Context& ctx) {
   cmd->callback([opts, &ctx] { ctx.exit_code = run_decode(*opts); });
 }
 
-}  // namespace sensor_rig::lidar
+}  // namespace sensor_rig::drivers

@@ -1,9 +1,8 @@
 #include "sensor_rig/drivers/lidar/lidar_config.hpp"
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
+#include "sensor_rig/lidar/decoder_files.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 
 namespace sensor_rig::drivers {
@@ -70,14 +69,24 @@ LidarConfig parse_lidar_config(const config::Node& n) {
     n.fail("calibration", "file not found: " + l.calibration);
   l.metadata = n.get_path("metadata", "");
   if (!l.metadata.empty() && !std::filesystem::exists(l.metadata)) n.fail("metadata", "file not found: " + l.metadata);
-  l.returns = n.get_choice("returns", {"strongest", "last", "dual"}, "strongest");
+  l.returns = n.get_enum<lidar::ReturnSelection>(
+      "returns", {{"strongest", lidar::ReturnSelection::kStrongest}, {"last", lidar::ReturnSelection::kLast},
+                  {"dual", lidar::ReturnSelection::kDual}},
+      lidar::ReturnSelection::kStrongest);
   l.min_range_m = n.get_double("min_range", 0.0, 10.0, 0.4);
   l.max_range_m = n.get_double("max_range", 1.0, 1000.0, 200.0);
   if (l.min_range_m >= l.max_range_m) n.fail("max_range", "must be greater than min_range");
   l.cut_angle_deg = n.get_double("cut_angle", 0.0, 359.99, 0.0);
-  l.time_source = n.get_choice("time_source", {"sensor", "host"}, "host");
-  l.hour_source = n.get_choice("hour_source", {"gprmc", "host"}, "gprmc");
-  l.clock_correction = n.get_choice("clock_correction", {"auto", "always", "never"}, "auto");
+  using timesync::Correction;
+  using timesync::HourSource;
+  using timesync::TimeSource;
+  l.time_source = n.get_enum<TimeSource>("time_source", {{"sensor", TimeSource::kSensor}, {"host", TimeSource::kHost}},
+                                         TimeSource::kHost);
+  l.hour_source = n.get_enum<HourSource>("hour_source", {{"gprmc", HourSource::kGprmc}, {"host", HourSource::kHost}},
+                                         HourSource::kGprmc);
+  l.clock_correction = n.get_enum<Correction>(
+      "clock_correction", {{"auto", Correction::kAuto}, {"always", Correction::kAlways}, {"never", Correction::kNever}},
+      Correction::kAuto);
   l.frame_id = n.get_string("frame_id", "lidar_" + l.name);
   l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
@@ -103,22 +112,12 @@ LidarConfig parse_lidar_config(const config::Node& n) {
 }
 
 lidar::DecoderOptions decoder_options(const LidarConfig& c) {
-  const auto read = [](const std::string& path, const char* what) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error(std::string("cannot read ") + what + " " + path);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-  };
   lidar::DecoderOptions d;
   d.model = c.model;
-  if (!c.calibration.empty()) {
-    d.calibration_text = read(c.calibration, "calibration");
-    d.calibration_name = c.calibration;
-  }
-  if (!c.metadata.empty()) {
-    d.metadata_text = read(c.metadata, "metadata");
-    d.metadata_name = c.metadata;
+  try {
+    lidar::apply_decoder_files(lidar::read_decoder_files(c.calibration, c.metadata), d);
+  } catch (const lidar::DecoderFileError& e) {
+    throw std::runtime_error(e.what());
   }
   d.returns = c.returns;
   d.min_range_m = c.min_range_m;

@@ -10,7 +10,7 @@
 #include "sensor_rig/lidar/udp_source.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
-#include "sensor_rig/timesync/stamper.hpp"
+#include "sensor_rig/drivers/lidar/lidar_stamping.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 
 namespace sensor_rig::drivers {
@@ -26,6 +26,10 @@ std::unique_ptr<lidar::ScanDecoder> make_driver_decoder(const LidarConfig& c) {
   }
 }
 
+timesync::StamperConfig lidar_stamper_config(const LidarConfig& c, Nanos packet_span_ns) {
+  return stamper_config(c.time_source, c.hour_source, c.clock_correction, packet_span_ns);
+}
+
 }  // namespace
 
 struct LidarDriver::Impl {
@@ -33,8 +37,6 @@ struct LidarDriver::Impl {
   std::string topic_name;
   std::unique_ptr<lidar::ScanDecoder> decoder;
   bool velodyne = false;               // position packets and top-of-hour time are Velodyne's
-  timesync::ClockMapper absolute_mapper;  // sensors with absolute time (Ouster, Hesai) when not synced
-  const char* absolute_source = "none";   // how the last absolute-time packet was stamped (diagnostics)
   lidar::UdpSource data;
   std::unique_ptr<lidar::UdpSource> position;
   // 64 kB slots: the largest UDP payload (an OS-128 packet is ~25 kB; Velodyne 1206 B).
@@ -43,7 +45,7 @@ struct LidarDriver::Impl {
   dds::Topic<msg::PointCloud2> topic;
   dds::Writer<msg::PointCloud2> writer;
   dds::StampsWriter& stamps;
-  timesync::Stamper stamper;
+  timesync::PacketStamper stamper;  // one policy with `rig lidar decode` (timesync/packet_stamper.hpp)
   std::vector<msg::PointField> fields;
   std::thread thread;
   std::atomic<bool> stop_flag{false};
@@ -53,7 +55,7 @@ struct LidarDriver::Impl {
   std::uint64_t scans = 0;
   std::uint64_t write_errors = 0;
   std::uint64_t position_packets = 0;
-  vel::PpsStatus pps = vel::PpsStatus::kAbsent;
+  PpsState pps = PpsState::kAbsent;
   bool have_position = false;
   std::optional<Nanos> gprmc_utc_ns;  // latest valid $GPRMC time
   Nanos last_scan_host_ns = 0;
@@ -64,6 +66,7 @@ struct LidarDriver::Impl {
   lidar::UdpSourceStats udp_stats;
   timesync::StamperStatus sync;
   timesync::ClockMapperStatus absolute_sync;
+  timesync::AbsoluteSource absolute_source = timesync::AbsoluteSource::kNone;
 
   Impl(const LidarConfig& c, const dds::Participant& p, dds::StampsWriter& s)
       : cfg(c),
@@ -75,63 +78,19 @@ struct LidarDriver::Impl {
         topic(p, topic_name, c.qos),
         writer(p, topic, c.qos),
         stamps(s),
-        stamper(stamper_config(c, decoder->packet_span_ns())) {
+        stamper(lidar_stamper_config(c, decoder->packet_span_ns())) {
     if (c.position_port != 0)
       position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
           {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 4, false});
     fields = msg::point_fields(lidar::kPointFields);
   }
 
-  static timesync::StamperConfig stamper_config(const LidarConfig& c, Nanos packet_span) {
-    timesync::StamperConfig sc;
-    sc.source = c.time_source == "host" ? timesync::TimeSource::kHost : timesync::TimeSource::kSensor;
-    sc.packet_duration_ns = packet_span;
-    sc.hour.hour_source = c.hour_source == "host" ? timesync::HourSource::kHost : timesync::HourSource::kGprmc;
-    sc.correction = c.clock_correction == "always"  ? timesync::Correction::kAlways
-                    : c.clock_correction == "never" ? timesync::Correction::kNever
-                                                    : timesync::Correction::kAuto;
-    return sc;
-  }
-
   // Vehicle time of the packet's first firing (timesync/ decides how; see its README).
   Nanos packet_stamp(std::span<const std::byte> bytes, Nanos rx_ns) {
-    const Nanos host_stamp = rx_ns - decoder->packet_span_ns();
-    if (cfg.time_source == "host") return host_stamp;
-    const auto t = decoder->packet_time(bytes);
-    switch (t.kind) {
-      case lidar::SensorTime::Kind::kMicrosSinceHour: {
-        timesync::PacketTime pt;
-        pt.sensor_us = static_cast<std::uint32_t>(t.value);
-        pt.rx_ns = rx_ns;
-        pt.gprmc_utc_ns = gprmc_utc_ns;
-        pt.pps = have_position ? static_cast<timesync::PpsState>(pps) : timesync::PpsState::kUnknown;
-        return stamper.stamp(pt).vehicle_ns;
-      }
-      case lidar::SensorTime::Kind::kAbsoluteNs: {
-        // A PTP- or GPS-synced sensor's time is vehicle time; a free-running one is mapped.
-        absolute_mapper.observe(t.value, host_stamp);
-        if (cfg.clock_correction == "never") {
-          absolute_source = "sensor_raw";
-          return t.value;
-        }
-        const auto mapped = absolute_mapper.map(t.value);
-        if (!mapped.valid) {
-          absolute_source = "host_fallback";
-          return host_stamp;
-        }
-        constexpr Nanos kSyncedWithin = 1'000'000;  // |sensor - vehicle| below this: synchronised
-        const Nanos offset = mapped.vehicle_ns - t.value;
-        if (cfg.clock_correction == "auto" && offset > -kSyncedWithin && offset < kSyncedWithin) {
-          absolute_source = "sensor_synced";
-          return t.value;
-        }
-        absolute_source = "sensor_mapped";
-        return mapped.vehicle_ns;
-      }
-      case lidar::SensorTime::Kind::kNone:
-        break;
-    }
-    return host_stamp;  // no usable sensor time: the decoder counts the packet if it is bad
+    timesync::DevicePacket p = device_packet(decoder->packet_time(bytes), rx_ns);
+    p.gprmc_utc_ns = gprmc_utc_ns;
+    p.pps = have_position ? pps : PpsState::kUnknown;
+    return stamper.stamp(p);
   }
 
   void handle_position() {
@@ -171,9 +130,9 @@ struct LidarDriver::Impl {
                     written,    scan.packets,     scan.dropped,     pc.row_step};
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
     std::lock_guard lock(mutex);
-    if (rc != DDS_RETCODE_OK) {
+    if (!rc.ok()) {
       ++write_errors;
-      last_error = std::string("dds write: ") + dds_strretcode(rc);
+      last_error = "dds write: " + rc.message();
     }
     ++scans;
     last_points = scan.points.size();
@@ -206,8 +165,9 @@ struct LidarDriver::Impl {
       std::lock_guard lock(mutex);
       decoder_stats = decoder->counters();
       udp_stats = data.stats();
-      sync = stamper.status(vehicle_now_ns());
-      absolute_sync = absolute_mapper.status(vehicle_now_ns());
+      sync = stamper.hour_status(vehicle_now_ns());
+      absolute_sync = stamper.absolute_status(vehicle_now_ns());
+      absolute_source = stamper.absolute_source();
     }
   }
 };
@@ -280,12 +240,12 @@ dds::DriverStatus LidarDriver::status() const {
   s.add_number("kernel_drops", u.kernel_drops);
   s.add_number("truncated", u.truncated);
   s.add_number("write_errors", impl_->write_errors);
-  s.add("time_source", c.time_source);
+  s.add("time_source", timesync::to_string(c.time_source));
   s.add_number("position_packets", impl_->position_packets);
-  s.add("pps", impl_->have_position ? vel::to_string(impl_->pps) : "no position packets");
+  s.add("pps", impl_->have_position ? to_string(impl_->pps) : "no position packets");
   s.add("gprmc", impl_->gprmc_utc_ns ? "valid" : "absent");
   const auto& t = impl_->sync;
-  if (c.time_source == "host") {
+  if (c.time_source == timesync::TimeSource::kHost) {
     s.add("stamp_source", "host");
   } else if (impl_->velodyne) {
     s.add("stamp_source", timesync::to_string(t.last_source));
@@ -299,7 +259,7 @@ dds::DriverStatus LidarDriver::status() const {
     s.add_number("host_fallbacks", t.host_fallbacks);
   } else {
     const auto& m = impl_->absolute_sync;
-    s.add("stamp_source", impl_->absolute_source);
+    s.add("stamp_source", timesync::to_string(impl_->absolute_source));
     s.add("sync", timesync::to_string(m.state));
     s.add_number("sync_offset_ns", m.offset_ns);
     s.add("sync_drift_ppm", std::to_string(m.drift_ppm));

@@ -45,8 +45,6 @@ std::unique_ptr<ScanDecoder> make_decoder(const DecoderOptions& o) {
     throw DecoderConfigError("model " + o.model + " is not supported yet (supported: " + implemented_model_names() + ")");
   if (m->needs_metadata && o.metadata_text.empty())
     throw DecoderConfigError("model " + o.model + " needs the sensor metadata JSON (--metadata)");
-  if (o.returns != "strongest" && o.returns != "last" && o.returns != "dual")
-    throw DecoderConfigError("return mode must be strongest, last or dual, not '" + o.returns + "'");
   return m->make(o);
 }
 

@@ -81,16 +81,6 @@ bool parse_angle(std::string_view value, std::string_view hemisphere, char negat
 
 }  // namespace
 
-const char* to_string(PpsStatus s) noexcept {
-  switch (s) {
-    case PpsStatus::kAbsent: return "absent";
-    case PpsStatus::kSynchronizing: return "synchronizing";
-    case PpsStatus::kLocked: return "locked";
-    case PpsStatus::kError: return "error";
-  }
-  return "error";
-}
-
 const char* to_string(NmeaStatus s) noexcept {
   switch (s) {
     case NmeaStatus::kOk: return "ok";
@@ -176,7 +166,7 @@ PacketStatus parse_position_packet(std::span<const std::byte> bytes, PositionPac
   std::memcpy(&raw, bytes.data(), sizeof raw);
   PositionPacket p;
   p.sensor_time_us = le32(raw.timestamp);
-  p.pps = raw.pps_status <= 3 ? static_cast<PpsStatus>(raw.pps_status) : PpsStatus::kError;
+  p.pps = raw.pps_status <= 3 ? static_cast<PpsState>(raw.pps_status) : PpsState::kError;
   const auto* end = std::find(std::begin(raw.nmea), std::end(raw.nmea), '\0');
   const std::string_view sentence(raw.nmea, static_cast<std::size_t>(end - std::begin(raw.nmea)));
   p.nmea = parse_rmc(sentence, p.fix);
@@ -213,7 +203,7 @@ std::string format_rmc(const RmcInput& in) {
   return s;
 }
 
-void encode_position_packet(std::uint32_t sensor_time_us, PpsStatus pps, std::string_view sentence,
+void encode_position_packet(std::uint32_t sensor_time_us, PpsState pps, std::string_view sentence,
                             std::span<std::byte, kPositionPacketSize> out) noexcept {
   RawPositionPacket raw{};
   put_le32(raw.timestamp, sensor_time_us);

@@ -21,8 +21,8 @@ std::unique_ptr<SyntheticSensor> make_velodyne(const SyntheticOptions& o, velody
   SyntheticConfig c;
   c.model = m;
   c.rpm = o.rpm;
-  c.return_mode = o.returns == "dual"   ? velodyne::ReturnMode::kDual
-                  : o.returns == "last" ? velodyne::ReturnMode::kLast
+  c.return_mode = o.returns == ReturnSelection::kDual   ? velodyne::ReturnMode::kDual
+                  : o.returns == ReturnSelection::kLast ? velodyne::ReturnMode::kLast
                                         : velodyne::ReturnMode::kStrongest;
   c.start_ns = o.start_ns;
   try {
@@ -39,8 +39,8 @@ std::unique_ptr<SyntheticSensor> make_hesai(const SyntheticOptions& o, hesai::Mo
   SyntheticHesaiConfig c;
   c.model = m;
   c.rpm = o.rpm;
-  c.return_mode = o.returns == "dual"   ? hesai::ReturnMode::kLastStrongest
-                  : o.returns == "last" ? hesai::ReturnMode::kLast
+  c.return_mode = o.returns == ReturnSelection::kDual   ? hesai::ReturnMode::kLastStrongest
+                  : o.returns == ReturnSelection::kLast ? hesai::ReturnMode::kLast
                                         : hesai::ReturnMode::kStrongest;
   c.start_ns = o.start_ns;
   try {
@@ -130,8 +130,6 @@ std::string synthetic_options_error(const SyntheticOptions& o) {
 std::unique_ptr<SyntheticSensor> make_synthetic_sensor(const SyntheticOptions& o, Scene scene) {
   if (!is_synthetic_model(o.model))
     throw std::invalid_argument("unknown synthetic model '" + o.model + "' (supported: " + synthetic_model_names() + ")");
-  if (o.returns != "strongest" && o.returns != "last" && o.returns != "dual")
-    throw std::invalid_argument("return mode must be strongest, last or dual, not '" + o.returns + "'");
   if (const auto v = velodyne::model_from_name(o.model)) return make_velodyne(o, *v, std::move(scene));
   if (const auto h = hesai::model_from_name(o.model)) return make_hesai(o, *h, std::move(scene));
   SyntheticOusterConfig c;

@@ -16,7 +16,7 @@ constexpr std::string_view kHdl32Sentence =
 
 constexpr Nanos kSec = 1'000'000'000LL;
 
-std::array<std::byte, kPositionPacketSize> packet_with(std::uint32_t us, PpsStatus pps, std::string_view s) {
+std::array<std::byte, kPositionPacketSize> packet_with(std::uint32_t us, PpsState pps, std::string_view s) {
   std::array<std::byte, kPositionPacketSize> buf{};
   encode_position_packet(us, pps, s, buf);
   return buf;
@@ -96,7 +96,7 @@ TEST(Rmc, RejectsTruncatedAndMalformed) {
 }
 
 TEST(PositionPacket, LayoutOffsetsMatchManual) {
-  const auto buf = packet_with(0x01020304u, PpsStatus::kLocked, kHdl32Sentence);
+  const auto buf = packet_with(0x01020304u, PpsState::kLocked, kHdl32Sentence);
   EXPECT_EQ(std::to_integer<int>(buf[198]), 0x04);
   EXPECT_EQ(std::to_integer<int>(buf[201]), 0x01);
   EXPECT_EQ(std::to_integer<int>(buf[202]), 2);
@@ -105,11 +105,11 @@ TEST(PositionPacket, LayoutOffsetsMatchManual) {
 }
 
 TEST(PositionPacket, ParsesEncodedPacket) {
-  const auto buf = packet_with(2'192'000'000u, PpsStatus::kLocked, kHdl32Sentence);
+  const auto buf = packet_with(2'192'000'000u, PpsState::kLocked, kHdl32Sentence);
   PositionPacket p;
   ASSERT_EQ(parse_position_packet(buf, p), PacketStatus::kOk);
   EXPECT_EQ(p.sensor_time_us, 2'192'000'000u);
-  EXPECT_EQ(p.pps, PpsStatus::kLocked);
+  EXPECT_EQ(p.pps, PpsState::kLocked);
   ASSERT_EQ(p.nmea, NmeaStatus::kOk);
   EXPECT_EQ(p.fix.minute, 6);
   // Sensor time = GPRMC hour + µs since hour.
@@ -122,22 +122,22 @@ TEST(PositionPacket, BadInputIsAStatusNotACrash) {
   EXPECT_EQ(parse_position_packet(std::span<const std::byte>(big).first(100), p), PacketStatus::kWrongSize);
   EXPECT_EQ(parse_position_packet(big, p), PacketStatus::kWrongSize);
 
-  auto empty = packet_with(5, PpsStatus::kAbsent, "");
+  auto empty = packet_with(5, PpsState::kAbsent, "");
   ASSERT_EQ(parse_position_packet(empty, p), PacketStatus::kOk);
   EXPECT_EQ(p.nmea, NmeaStatus::kMissing);
-  EXPECT_EQ(p.pps, PpsStatus::kAbsent);
+  EXPECT_EQ(p.pps, PpsState::kAbsent);
 
   // A sentence filling the whole field with no terminator and no checksum.
   std::array<std::byte, kPositionPacketSize> full{};
-  encode_position_packet(5, PpsStatus::kSynchronizing, std::string(200, 'A'), full);
+  encode_position_packet(5, PpsState::kSynchronizing, std::string(200, 'A'), full);
   full[206] = std::byte{'$'};
   ASSERT_EQ(parse_position_packet(full, p), PacketStatus::kOk);
   EXPECT_EQ(p.nmea, NmeaStatus::kTruncated);
-  EXPECT_EQ(p.pps, PpsStatus::kSynchronizing);
+  EXPECT_EQ(p.pps, PpsState::kSynchronizing);
 
   full[202] = std::byte{0x7F};  // undefined PPS value
   ASSERT_EQ(parse_position_packet(full, p), PacketStatus::kOk);
-  EXPECT_EQ(p.pps, PpsStatus::kError);
+  EXPECT_EQ(p.pps, PpsState::kError);
 }
 
 TEST(PositionPacket, FormatRoundTrips) {

@@ -118,7 +118,7 @@ TEST_P(Synthetic, StreamInterleavesPositionPacketsWithGprmc) {
     }
     velodyne::PositionPacket pp;
     ASSERT_EQ(velodyne::parse_position_packet(pk.bytes, pp), PacketStatus::kOk);
-    EXPECT_EQ(pp.pps, velodyne::PpsStatus::kLocked);
+    EXPECT_EQ(pp.pps, velodyne::PpsState::kLocked);
     ASSERT_EQ(pp.nmea, velodyne::NmeaStatus::kOk);
     EXPECT_TRUE(pp.fix.valid);
     // GPRMC hour + µs since hour = the packet's time (to the µs).

@@ -71,12 +71,11 @@ TEST(SyntheticFactory, OusterMetadataFollowsTheOptions) {
 }
 
 TEST(SyntheticFactory, RefusesWhatNoSensorCanDo) {
-  const auto err = [](const char* model, double rpm, const char* profile = "", const char* returns = "strongest") {
+  const auto err = [](const char* model, double rpm, const char* profile = "") {
     SyntheticOptions o;
     o.model = model;
     o.rpm = rpm;
     o.ouster_profile = profile;
-    o.returns = returns;
     return synthetic_options_error(o);
   };
   EXPECT_NE(err("VLP-64", 600).find("unknown synthetic model 'VLP-64'"), std::string::npos);
@@ -87,7 +86,6 @@ TEST(SyntheticFactory, RefusesWhatNoSensorCanDo) {
   EXPECT_NE(err("OS", 600, "LEGACY").find("LEGACY"), std::string::npos);
   EXPECT_NE(err("OS-LEGACY", 600, "RNG19_RFL8_SIG16_NIR16").find("OS-LEGACY renders the LEGACY profile"),
             std::string::npos);
-  EXPECT_NE(err("HDL-32E", 600, "", "both").find("strongest, last or dual"), std::string::npos);
   SyntheticOptions o;
   o.model = "Pandar40P";
   o.calibration_text = "Laser id,Elevation,Azimuth\n1,15,0\n";

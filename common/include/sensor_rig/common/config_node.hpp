@@ -69,6 +69,20 @@ class Node {
   // One of `choices`; reports the allowed values otherwise.
   std::string get_choice(std::string_view key, std::initializer_list<std::string_view> choices,
                          std::optional<std::string> fallback = std::nullopt) const;
+  // One of `choices` as its enum value: text becomes an enum at load time, never compared later.
+  template <class E>
+  E get_enum(std::string_view key, std::initializer_list<std::pair<std::string_view, E>> choices, E fallback) const {
+    std::vector<std::string_view> words;
+    std::string fallback_word;
+    for (const auto& [word, value] : choices) {
+      words.push_back(word);
+      if (value == fallback) fallback_word = std::string(word);
+    }
+    const std::string got = get_choice_of(key, words, fallback_word);
+    for (const auto& [word, value] : choices)
+      if (got == word) return value;
+    return fallback;  // reported as a problem by get_choice_of
+  }
   // A path relative to the config file's directory (absolute paths pass through).
   std::string get_path(std::string_view key, std::optional<std::string> fallback = std::nullopt) const;
 
@@ -76,6 +90,8 @@ class Node {
   void fail(std::string_view key, std::string message) const;
 
  private:
+  std::string get_choice_of(std::string_view key, const std::vector<std::string_view>& choices,
+                            std::optional<std::string> fallback) const;
   [[nodiscard]] std::string key_path(std::string_view key) const;
   [[nodiscard]] YAML::Node raw(std::string_view key) const;
 

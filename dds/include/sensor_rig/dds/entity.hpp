@@ -1,5 +1,7 @@
 #pragma once
-// RAII over Cyclone DDS C API handles. Only drivers/ (rig_dds) includes <dds/dds.h>.
+// RAII over Cyclone DDS C API handles. Only dds/ (rig_dds) includes <dds/dds.h>.
+// One error style for Cyclone's return codes: setup (create, attach) goes through check() and
+// throws DdsError; hot paths (write) return a Result that the caller counts and reports.
 #include <dds/dds.h>
 
 #include <stdexcept>
@@ -19,6 +21,18 @@ inline dds_return_t check(dds_return_t rc, const char* what) {
   if (rc < 0) throw DdsError(what, rc);
   return rc;
 }
+
+// The outcome of a hot-path call: ok, or Cyclone's code and its text. Never throws.
+class Result {
+ public:
+  explicit Result(dds_return_t rc) noexcept : rc_(rc) {}
+  [[nodiscard]] bool ok() const noexcept { return rc_ >= 0; }
+  [[nodiscard]] dds_return_t code() const noexcept { return rc_; }
+  [[nodiscard]] std::string message() const { return dds_strretcode(rc_); }
+
+ private:
+  dds_return_t rc_;
+};
 
 // Owns one entity; deleting it deletes its children too (Cyclone semantics).
 class Entity {

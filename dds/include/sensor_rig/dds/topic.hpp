@@ -65,10 +65,10 @@ class Writer {
     writer_ = Entity(check(dds_create_writer(p.handle(), t.handle(), q.get(), nullptr), "dds_create_writer"));
   }
   // Writes with the given source timestamp (vehicle ns), so publish time is exact and known.
-  dds_return_t write(const T& sample, Nanos source_ts) const noexcept {
-    return dds_write_ts(writer_.handle(), &sample, static_cast<dds_time_t>(source_ts));
+  Result write(const T& sample, Nanos source_ts) const noexcept {
+    return Result(dds_write_ts(writer_.handle(), &sample, static_cast<dds_time_t>(source_ts)));
   }
-  dds_return_t write(const T& sample) const noexcept { return dds_write(writer_.handle(), &sample); }
+  Result write(const T& sample) const noexcept { return Result(dds_write(writer_.handle(), &sample)); }
   [[nodiscard]] std::uint32_t matched() const { return publication_matched(writer_.handle()); }
   bool wait_for_readers(std::uint32_t n, int timeout_ms) const {
     return wait_until([&] { return matched() >= n; }, timeout_ms);

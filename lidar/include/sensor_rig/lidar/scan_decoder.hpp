@@ -16,6 +16,7 @@
 
 #include "sensor_rig/lidar/packet.hpp"
 #include "sensor_rig/lidar/point_cloud.hpp"
+#include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/lidar/scan_assembler.hpp"
 
 namespace sensor_rig::lidar {
@@ -31,28 +32,18 @@ struct DecoderOptions {
   std::string calibration_name;      // file name, for messages
   std::string metadata_text;         // Ouster sensor metadata JSON (OS models need it)
   std::string metadata_name;
-  std::string returns = "strongest";  // strongest | last | dual
+  ReturnSelection returns = ReturnSelection::kStrongest;
   double min_range_m = 0.0;
   double max_range_m = std::numeric_limits<double>::infinity();
   double cut_angle_deg = 0.0;        // azimuth where a scan ends (vendors without azimuth cut by frame id)
   bool emit_partial_scans = false;   // also emit the scan started mid-rotation / ended by a time jump
 };
 
-// The vendor's ReturnSelection for DecoderOptions::returns (every vendor names its values
-// kStrongest, kLast, kDual). Throws DecoderConfigError for any other word.
-template <class Selection>
-Selection return_selection(const std::string& returns) {
-  if (returns == "strongest") return Selection::kStrongest;
-  if (returns == "last") return Selection::kLast;
-  if (returns == "dual") return Selection::kDual;
-  throw DecoderConfigError("return mode must be strongest, last or dual, not '" + returns + "'");
-}
-
 // Copies the options every vendor's DecoderConfig shares: returns, range gate, partial scans and
-// the cut angle (for the vendors that cut by azimuth). Throws DecoderConfigError (returns).
+// the cut angle (for the vendors that cut by azimuth).
 template <class VendorConfig>
 void apply_common_options(const DecoderOptions& o, VendorConfig& cfg) {
-  cfg.returns = return_selection<decltype(cfg.returns)>(o.returns);
+  cfg.returns = o.returns;
   cfg.min_range_m = o.min_range_m;
   cfg.max_range_m = o.max_range_m;
   if constexpr (requires { cfg.cut_angle_deg; }) cfg.cut_angle_deg = o.cut_angle_deg;

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/common/pps_state.hpp"
 #include "sensor_rig/timesync/clock_mapper.hpp"
 #include "sensor_rig/timesync/top_of_hour.hpp"
 
@@ -27,9 +28,7 @@ enum class Correction : std::uint8_t {
 };
 const char* to_string(Correction c) noexcept;
 
-// Same values as the Velodyne position packet's PPS byte (cast it); kUnknown when not known.
-enum class PpsState : std::uint8_t { kAbsent = 0, kSynchronizing = 1, kLocked = 2, kError = 3, kUnknown = 4 };
-const char* to_string(PpsState p) noexcept;
+using sensor_rig::PpsState;  // common/pps_state.hpp: one enum for the decoder and timesync
 
 // Where a stamp came from (diagnostics).
 enum class StampSource : std::uint8_t {

@@ -21,6 +21,7 @@
 #include <optional>
 #include <vector>
 
+#include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/lidar/decoder_pimpl.hpp"
 #include "sensor_rig/lidar/hesai/calibration.hpp"
 #include "sensor_rig/lidar/hesai/model.hpp"
@@ -35,7 +36,7 @@ namespace sensor_rig::lidar::hesai {
 // echo (the farther one when the mode has no last echo). kDual: both, except that an echo
 // identical to the other one, or closer than dual_distance_threshold_m to it, is kept once
 // (the second block's), as nebula does.
-enum class ReturnSelection : std::uint8_t { kStrongest, kLast, kDual };
+using ReturnSelection = lidar::ReturnSelection;
 
 struct DecoderConfig {
   Model model = Model::kPandar40P;

@@ -10,13 +10,14 @@
 #include "sensor_rig/lidar/mock/scene.hpp"
 #include "sensor_rig/lidar/mock/synthetic_sensor.hpp"
 #include "sensor_rig/lidar/ouster/metadata.hpp"
+#include "sensor_rig/lidar/return_selection.hpp"
 
 namespace sensor_rig::lidar::mock {
 
 struct SyntheticOptions {
   std::string model;                  // VLP-16, VLP-32C, HDL-32E, OS-LEGACY, OS, Pandar40P, PandarXT32
   double rpm = 600.0;                 // Ouster: 600 (x10 modes) or 1200 (x20 modes) when no metadata is given
-  std::string returns = "strongest";  // strongest | last | dual (Velodyne, Hesai; Ouster renders one echo)
+  ReturnSelection returns = ReturnSelection::kStrongest;  // Velodyne, Hesai; Ouster renders one echo
   Nanos start_ns = 0;                 // vehicle time the sensor's timeline starts at
   std::string calibration_text;       // Velodyne ROS YAML / VeloView XML, Hesai angle or Firetime CSV
   std::string calibration_name;

@@ -31,7 +31,7 @@ struct SyntheticConfig {
   double start_azimuth_deg = 0.0;
   std::optional<velodyne::Calibration> calibration;         // nullopt: default_calibration(model)
   Nanos position_period_ns = 1'000'000'000;                 // 0: no position packets
-  velodyne::PpsStatus pps = velodyne::PpsStatus::kLocked;
+  velodyne::PpsState pps = velodyne::PpsState::kLocked;
   bool gps_fix_valid = true;
 };
 

@@ -16,6 +16,7 @@
 #include <optional>
 #include <vector>
 
+#include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/lidar/decoder_pimpl.hpp"
 #include "sensor_rig/lidar/ouster/metadata.hpp"
 #include "sensor_rig/lidar/packet.hpp"
@@ -26,7 +27,7 @@ namespace sensor_rig::lidar::ouster {
 
 // Dual-return profiles: strongest = the stronger echo, last = the farther of the two echoes the
 // sensor reports, dual = both. Single-return profiles give their one echo whatever is selected.
-enum class ReturnSelection : std::uint8_t { kStrongest, kLast, kDual };
+using ReturnSelection = lidar::ReturnSelection;
 // point.intensity: signal photons (profiles without signal fall back to reflectivity), or the
 // calibrated reflectivity.
 enum class IntensitySource : std::uint8_t { kSignal, kReflectivity };

@@ -15,6 +15,7 @@
 #include <optional>
 #include <vector>
 
+#include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/lidar/decoder_pimpl.hpp"
 #include "sensor_rig/lidar/packet.hpp"
 #include "sensor_rig/lidar/scan_assembler.hpp"
@@ -26,7 +27,7 @@ namespace sensor_rig::lidar::velodyne {
 
 // Which echoes to keep. Dual-return packets carry pairs of blocks (last, strongest-or-second);
 // single-return packets carry one echo, which is kept whatever is selected here.
-enum class ReturnSelection : std::uint8_t { kStrongest, kLast, kDual };
+using ReturnSelection = lidar::ReturnSelection;
 
 // Azimuth of a point inside a block, interpolated from the block azimuths by firing time.
 // kPerSequence is VeloView's (and Velodyne's reference) convention: a VLP-16 block's second

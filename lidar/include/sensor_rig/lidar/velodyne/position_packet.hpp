@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 
+#include "sensor_rig/common/pps_state.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/lidar/packet.hpp"
 #include "sensor_rig/lidar/velodyne/packet.hpp"
@@ -23,7 +24,7 @@ struct RawPositionPacket {
   std::uint8_t imu[24];          // HDL-32E gyro / temperature / accelerometer words
   std::uint8_t reserved1[160];
   std::uint8_t timestamp[4];     // little-endian µs since the top of the hour
-  std::uint8_t pps_status;       // PpsStatus
+  std::uint8_t pps_status;       // PpsState (0..3)
   std::uint8_t reserved2[3];
   char nmea[kNmeaFieldSize];     // "$GPRMC,...*hh\r\n", NUL padded
   std::uint8_t reserved3[178];
@@ -33,8 +34,7 @@ static_assert(offsetof(RawPositionPacket, timestamp) == 198);
 static_assert(offsetof(RawPositionPacket, pps_status) == 202);
 static_assert(offsetof(RawPositionPacket, nmea) == 206);
 
-enum class PpsStatus : std::uint8_t { kAbsent = 0, kSynchronizing = 1, kLocked = 2, kError = 3 };
-const char* to_string(PpsStatus s) noexcept;
+using sensor_rig::PpsState;  // the position packet's PPS byte (0..3); common/pps_state.hpp
 
 enum class NmeaStatus : std::uint8_t {
   kOk = 0,
@@ -63,12 +63,12 @@ NmeaStatus parse_rmc(std::string_view sentence, RmcFix& out) noexcept;
 
 struct PositionPacket {
   std::uint32_t sensor_time_us = 0;  // µs since the top of the hour
-  PpsStatus pps = PpsStatus::kAbsent;
+  PpsState pps = PpsState::kAbsent;
   NmeaStatus nmea = NmeaStatus::kMissing;
   RmcFix fix;                        // meaningful when nmea == kOk
 };
 
-// kOk, or kWrongSize for anything but 512 bytes. A PPS byte above 3 reads as PpsStatus::kError.
+// kOk, or kWrongSize for anything but 512 bytes. A PPS byte above 3 reads as PpsState::kError.
 // A bad or missing sentence still yields kOk with `nmea` saying what was wrong.
 PacketStatus parse_position_packet(std::span<const std::byte> bytes, PositionPacket& out) noexcept;
 
@@ -84,7 +84,7 @@ struct RmcInput {
 std::string format_rmc(const RmcInput& in);
 
 // Fills a 512-byte position packet. The sentence is cut to the field (callers keep it short).
-void encode_position_packet(std::uint32_t sensor_time_us, PpsStatus pps, std::string_view sentence,
+void encode_position_packet(std::uint32_t sensor_time_us, PpsState pps, std::string_view sentence,
                             std::span<std::byte, kPositionPacketSize> out) noexcept;
 
 // XOR of the characters between '$' and '*' (or the end).

@@ -7,6 +7,7 @@
 #include "sensor_rig/common/config_node.hpp"
 #include "sensor_rig/dds/qos.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
+#include "sensor_rig/timesync/stamper.hpp"
 
 namespace sensor_rig::drivers {
 
@@ -36,13 +37,13 @@ struct LidarConfig {
   int receive_buffer_bytes = 8 << 20;
   std::string calibration;             // empty = model defaults
   std::string metadata;                // sensor metadata JSON (Ouster)
-  std::string returns = "strongest";   // strongest | last | dual
+  lidar::ReturnSelection returns = lidar::ReturnSelection::kStrongest;
   double min_range_m = 0.4;
   double max_range_m = 200.0;
   double cut_angle_deg = 0.0;
-  std::string time_source = "host";    // sensor | host
-  std::string hour_source = "gprmc";   // sensor time: hour from gprmc (host as fallback) | host
-  std::string clock_correction = "auto";  // sensor time through the clock mapper: auto | always | never
+  timesync::TimeSource time_source = timesync::TimeSource::kHost;    // sensor | host
+  timesync::HourSource hour_source = timesync::HourSource::kGprmc;   // sensor time: gprmc (host as fallback) | host
+  timesync::Correction clock_correction = timesync::Correction::kAuto;  // through the clock mapper: auto | always | never
   std::string frame_id;                // default lidar_<name>
   int realtime_priority = 0;           // SCHED_FIFO priority of the driver thread; 0 = normal scheduling
   // Keep-last 2: a scan whose repair (lost fragment, slow ack) outlasts one scan period is still
