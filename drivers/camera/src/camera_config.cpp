@@ -20,9 +20,9 @@ const char* to_string(CameraMockConfig::Kind k) noexcept {
 
 int CameraConfig::watchdog() const noexcept {
   if (watchdog_ms > 0) return watchdog_ms;
-  // Three frame periods, at least 300 ms, and reported within 1 s whatever the rate.
+  // Three frame periods, at least 500 ms (a fresh stream's first frame), reported within 1 s.
   const double period_ms = source.frame_rate > 0 ? 1000.0 / source.frame_rate : 1000.0;
-  return static_cast<int>(std::clamp(3.0 * period_ms, 300.0, 800.0));
+  return static_cast<int>(std::clamp(3.0 * period_ms, 500.0, 800.0));
 }
 
 namespace {
