@@ -91,6 +91,19 @@ TEST_F(OusterCli, BadMetadataAndModelMismatchExit2) {
   EXPECT_NE(b.err.find("data_format.columns_per_packet"), std::string::npos) << b.err;
 }
 
+TEST_F(OusterCli, MetadataThatIsADirectoryOrEmptyExits2NamingIt) {
+  const CliRun d = run("lidar decode --pcap " + pcap_ + " --model OS-LEGACY --metadata " + dir_.string() + " --out " +
+                       (dir_ / "d").string());
+  EXPECT_EQ(d.code, 2);
+  EXPECT_NE(d.err.find("is a directory"), std::string::npos) << d.err;
+  const auto empty = dir_ / "empty.json";
+  std::ofstream(empty) << "  \n";
+  const CliRun e = run("lidar decode --pcap " + pcap_ + " --model OS-LEGACY --metadata " + empty.string() + " --out " +
+                       (dir_ / "e").string());
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.err.find("is empty"), std::string::npos) << e.err;
+}
+
 TEST_F(OusterCli, WrongLayoutMetadataCountsEveryPacketAsDropped) {
   // 64-beam metadata for the 32-beam capture: every packet has the wrong size, none is decoded.
   auto j = nlohmann::json::parse(read_text(meta_));
