@@ -73,7 +73,7 @@ void BM_BridgeCommandToFrames(benchmark::State& st) {
     c.enable = true;
     c.steering_angle = 0.1;
     c.throttle = 0.2;
-    core.on_command(c, now);
+    core.on_command(c, now, now);
     out.clear();
     core.frames(now, out);
     (void)core.safety().take_events();

@@ -33,7 +33,7 @@ struct Loop {
       c.throttle = throttle;
       c.steering_angle = steer;
       c.gear = s::Gear::drive;
-      bridge.on_command(c, now);
+      bridge.on_command(c, now, now);
     }
     last_tx.clear();
     bridge.frames(now, last_tx);
@@ -163,18 +163,24 @@ TEST(BridgeLoop, AfterBusOffRecoveryOnlyNeutralFramesUntilANewEnableEdge) {
     EXPECT_EQ(expect_all_neutral(l), 2) << i;
   }
   EXPECT_FALSE(l.ecu.engaged());
-  // A new enable edge engages again, with the current command.
+  // A new enable edge engages again, ramping from the released pedal toward the current command.
   l.cycle(true, false, 0.5, 0.2);
   EXPECT_EQ(expect_all_neutral(l), 2);
   l.cycle(true, true, 0.5, 0.2);
   EXPECT_EQ(l.bridge.safety().state(), s::State::engaged);
   EXPECT_DOUBLE_EQ(l.tx_enable(), 1.0);
   const auto* lon = l.p.tx("longitudinal");
+  const double slew = l.p.limits()[s::Axis::throttle].max_rate * 0.010;
+  int seen = 0;
   for (const auto& f : l.last_tx) {
     if (lon->matches(f)) {
-      EXPECT_NEAR(*dbw::Protocol::value(*lon, "throttle", f), 0.5, 0.01);
+      ++seen;
+      const double t = *dbw::Protocol::value(*lon, "throttle", f);
+      EXPECT_GT(t, 0.0);
+      EXPECT_LE(t, slew + 0.01) << "engaged with a step, not from the measured state";
     }
   }
+  EXPECT_EQ(seen, 1);
   for (int i = 0; i < 3; ++i) l.cycle(true, true, 0.5, 0.2);
   EXPECT_TRUE(l.ecu.engaged());
 }

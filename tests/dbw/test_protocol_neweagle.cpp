@@ -84,15 +84,17 @@ TEST_F(SplitProtocol, RolesInSeparateMessagesEachWithItsOwnE2e) {
   dbw::can::Frame status;
   ASSERT_TRUE(p.encode(*p.rx("ecu"), {{"ready", 1}}, nullptr, status));
   s::Command c;
-  for (int i = 0; i < 2; ++i) {
+  // 1 s of the same command after the enable edge: the rate limits (from the measured state on
+  // engagement) have reached it.
+  for (int i = 0; i < 101; ++i) {
     bridge.on_frame({status, now}, now);
     c.stamp = now;
     c.seq = static_cast<std::uint64_t>(i + 1);
-    c.enable = i == 1;
+    c.enable = i >= 1;
     c.steering_angle = -0.25;
     c.throttle = 0.4;
-    c.brake = 0.2;
-    bridge.on_command(c, now);
+    c.brake = 0.04;  // below the pedal interlock's cutoff: throttle stays
+    bridge.on_command(c, now, now);
     now += 10 * kMs;
   }
   ASSERT_EQ(bridge.safety().state(), s::State::engaged);
@@ -116,7 +118,7 @@ TEST_F(SplitProtocol, RolesInSeparateMessagesEachWithItsOwnE2e) {
   EXPECT_NEAR(sig("gas", "PEDAL"), 40.0, 1e-9);  // 0.4 * 100 %
   EXPECT_EQ(sig("gas", "TYPE"), 2.0);
   EXPECT_EQ(sig("brk", "EN"), 1.0);
-  EXPECT_NEAR(sig("brk", "PEDAL"), 20.0, 1e-9);
+  EXPECT_NEAR(sig("brk", "PEDAL"), 4.0, 1e-9);
   // Each frame passes its own message's check; the P02 CRC uses the mapping's DataIDList.
   for (const auto& rm : p.tx_messages()) {
     s::E2eChecker chk(rm.e2e);
@@ -210,13 +212,16 @@ TEST_F(NewEagle, BridgeEncodesACommandIntoTheProtocolsFrames) {
     c.throttle = 0.3;
     c.brake = 0.0;
     c.gear = s::Gear::drive;
-    bridge.on_command(c, now);
+    bridge.on_command(c, now, now);
   };
+  bridge.safety().on_measured(0.1, 0.0);  // the wheel stands at the command (eclass_track rejects steps)
   ecu_ready(bridge, now);
   command(false);
-  now += 10 * kMs;
-  ecu_ready(bridge, now);
-  command(true);
+  for (int i = 0; i < 100; ++i) {  // 1 s: the rate limits from the measured state reach the command
+    now += 10 * kMs;
+    ecu_ready(bridge, now);
+    command(true);
+  }
   ASSERT_EQ(bridge.safety().state(), s::State::engaged);
   std::vector<dbw::can::Frame> frames;
   bridge.frames(now, frames);

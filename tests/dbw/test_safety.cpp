@@ -2,6 +2,7 @@
 // table through one typed suite (opendbc style), plus the generic limit checker.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -23,32 +24,39 @@ struct EClassTrack {
 
 template <class V>
 class SafetySuite : public ::testing::Test {
- protected:
+ public:
+  // The wheel stands where the commands below ask it to be: engaging needs no step (a table that
+  // rejects rate violations refuses to jump from the measured angle).
+  SafetySuite() { core.on_measured(0.1 * V::limits[s::Axis::steering_angle].max, 0.0); }
   s::SafetyConfig cfg() {
     s::SafetyConfig c;
     c.limits = V::limits;
     return c;
   }
   s::SafetyCore core{cfg()};
-  Nanos now = 1'000'000'000'000;
+  Nanos now = 1'000'000'000'000;  // the bridge's monotonic clock
+  Nanos offset = 7'000'000'000;   // vehicle time - monotonic time (stepped by clock corrections)
   std::uint64_t seq = 0;
 
-  s::Command cmd(bool enable) {
+  Nanos vnow() const { return now + offset; }
+  s::Command cmd(bool enable, s::WriterId writer = 0) {
     s::Command c;
-    c.stamp = now;
+    c.stamp = vnow();
     c.seq = ++seq;
+    c.writer = writer;
     c.enable = enable;
     c.steering_angle = 0.1 * V::limits[s::Axis::steering_angle].max;
     c.throttle = 0.1;
     return c;
   }
+  void send(const s::Command& c) { core.on_command(c, now, vnow()); }
   void ecu_ok() { core.on_ecu_status({true, false, false, false, 0}, now); }
   void step(Nanos dt) { now += dt; }
   // Steady 10 ms cycle: ECU status + command.
   void cycle(bool enable) {
     step(10 * kMs);
     ecu_ok();
-    core.on_command(cmd(enable), now);
+    send(cmd(enable));
   }
   void engage() {
     cycle(false);
@@ -70,13 +78,19 @@ TYPED_TEST_SUITE(SafetySuite, Vehicles);
 
 TYPED_TEST(SafetySuite, EngagesOnlyOnEnableEdgeWithEverythingFresh) {
   this->ecu_ok();
-  // Enable held from the first command counts as an edge (implicit false before).
-  this->core.on_command(this->cmd(true), this->now);
+  // Enable held from the first command is no edge: a bridge (re)started under a publisher that
+  // holds enable stays disengaged.
+  for (int i = 0; i < 5; ++i) this->cycle(true);
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+  this->cycle(false);
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+  this->cycle(true);
   EXPECT_EQ(this->core.state(), s::State::engaged);
   EXPECT_EQ(this->last_transition_reason(), s::Reason::enabled);
   const auto d = this->core.tick(this->now);
   EXPECT_TRUE(d.active);
-  EXPECT_DOUBLE_EQ(d.command.throttle, 0.1);
+  // Ramped from the measured state (pedals released) at the table's slew over one 10 ms period.
+  EXPECT_DOUBLE_EQ(d.command.throttle, std::min(0.1, TypeParam::limits[s::Axis::throttle].max_rate * 0.010));
 }
 
 TYPED_TEST(SafetySuite, EnableHeldAfterDisengageDoesNotReengage) {
@@ -90,7 +104,9 @@ TYPED_TEST(SafetySuite, EnableHeldAfterDisengageDoesNotReengage) {
 }
 
 TYPED_TEST(SafetySuite, RefusesWithoutEcuStatusOrWhenNotReady) {
-  this->core.on_command(this->cmd(true), this->now);
+  this->send(this->cmd(false));
+  this->step(1 * kMs);
+  this->send(this->cmd(true));
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   auto ev = this->core.take_events();
   ASSERT_FALSE(ev.empty());
@@ -101,9 +117,9 @@ TYPED_TEST(SafetySuite, RefusesWithoutEcuStatusOrWhenNotReady) {
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   this->step(10 * kMs);
   this->core.on_ecu_status({false, false, false, false, 0}, this->now);
-  this->core.on_command(this->cmd(false), this->now);
+  this->send(this->cmd(false));
   this->step(1 * kMs);
-  this->core.on_command(this->cmd(true), this->now);
+  this->send(this->cmd(true));
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   ev = this->core.take_events();
   ASSERT_FALSE(ev.empty());
@@ -114,14 +130,14 @@ TYPED_TEST(SafetySuite, RefusesDuringOverrideOrFault) {
   this->cycle(false);
   this->core.on_ecu_status({true, false, true, false, 0}, this->now);
   this->step(1 * kMs);
-  this->core.on_command(this->cmd(true), this->now);
+  this->send(this->cmd(true));
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   EXPECT_EQ(this->core.take_events().back().reason, s::Reason::driver_override);
   this->step(1 * kMs);
-  this->core.on_command(this->cmd(false), this->now);
+  this->send(this->cmd(false));
   this->core.on_ecu_status({true, false, false, true, 7}, this->now);
   this->step(1 * kMs);
-  this->core.on_command(this->cmd(true), this->now);
+  this->send(this->cmd(true));
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   EXPECT_EQ(this->core.take_events().back().reason, s::Reason::ecu_fault);
 }
@@ -149,16 +165,16 @@ TYPED_TEST(SafetySuite, CommandTimeoutSendsNeutralNeverTheStaleCommand) {
 TYPED_TEST(SafetySuite, StaleOrReplayedCommandsAreIgnored) {
   this->engage();
   auto old = this->cmd(true);
-  old.stamp = this->now - 150 * kMs;
-  this->core.on_command(old, this->now);
+  old.stamp = this->vnow() - 150 * kMs;
+  this->send(old);
   EXPECT_EQ(this->core.counters().ignored_stale, 1U);
   auto replay = this->cmd(true);
   replay.seq = 1;
-  this->core.on_command(replay, this->now);
+  this->send(replay);
   EXPECT_EQ(this->core.counters().ignored_sequence, 1U);
   auto future = this->cmd(true);
-  future.stamp = this->now + 50 * kMs;
-  this->core.on_command(future, this->now);
+  future.stamp = this->vnow() + 50 * kMs;
+  this->send(future);
   EXPECT_EQ(this->core.counters().ignored_stale, 2U);
   EXPECT_EQ(this->core.state(), s::State::engaged);
 }
@@ -167,12 +183,12 @@ TYPED_TEST(SafetySuite, EcuStatusTimeout) {
   this->engage();
   for (int i = 0; i < 10; ++i) {
     this->step(10 * kMs);
-    this->core.on_command(this->cmd(true), this->now);
+    this->send(this->cmd(true));
     this->core.tick(this->now);
   }
   EXPECT_EQ(this->core.state(), s::State::engaged);
   this->step(2 * kMs);
-  this->core.on_command(this->cmd(true), this->now);
+  this->send(this->cmd(true));
   EXPECT_FALSE(this->core.tick(this->now).active);
   EXPECT_EQ(this->core.reason(), s::Reason::ecu_timeout);
 }
@@ -239,9 +255,9 @@ TYPED_TEST(SafetySuite, NanCommandDisengagesOnEveryAxis) {
     this->engage();
     auto c = this->cmd(true);
     this->step(10 * kMs);
-    c.stamp = this->now;
+    c.stamp = this->vnow();
     s::set_axis_value(c, static_cast<s::Axis>(a), std::numeric_limits<double>::quiet_NaN());
-    this->core.on_command(c, this->now);
+    this->send(c);
     EXPECT_EQ(this->core.state(), s::State::disengaged);
     EXPECT_EQ(this->core.reason(), s::Reason::invalid_command);
     EXPECT_FALSE(this->core.tick(this->now).active);
@@ -256,10 +272,10 @@ TYPED_TEST(SafetySuite, OutOfRangeClampedOrRejectedPerTableAndReported) {
     this->engage();
     auto c = this->cmd(true);
     this->step(10 * kMs);
-    c.stamp = this->now;
+    c.stamp = this->vnow();
     // Far beyond the range: both range and (for engaged) rate are violated.
     s::set_axis_value(c, axis, lim[axis].max + 10.0);
-    this->core.on_command(c, this->now);
+    this->send(c);
     const auto ev = this->core.take_events();
     bool reported = false;
     for (const auto& e : ev) reported = reported || (e.kind == s::EventKind::limit && e.violation.axis == axis);
@@ -290,7 +306,7 @@ TYPED_TEST(SafetySuite, RateLimitsHoldOverManySteps) {
       this->ecu_ok();
       auto c = this->cmd(true);
       s::set_axis_value(c, axis, lim[axis].max);  // a step to the maximum
-      this->core.on_command(c, this->now);
+      this->send(c);
       const auto d = this->core.tick(this->now);
       ASSERT_TRUE(d.active);
       const double v = s::axis_value(d.command, axis);
@@ -308,7 +324,7 @@ TYPED_TEST(SafetySuite, LaterSeqWithEqualOrEarlierStampCannotDodgeRateLimits) {
     SCOPED_TRACE(std::string(s::to_string(axis)));
     this->engage();
     const double before = s::axis_value(this->core.tick(this->now).command, axis);
-    const Nanos last_stamp = this->now;
+    const Nanos last_stamp = this->vnow();
     const auto ignored = this->core.counters().ignored_stamp;
     for (const Nanos back : {Nanos{0}, 5 * kMs}) {
       this->step(1 * kMs);
@@ -316,7 +332,7 @@ TYPED_TEST(SafetySuite, LaterSeqWithEqualOrEarlierStampCannotDodgeRateLimits) {
       auto c = this->cmd(true);
       c.stamp = last_stamp - back;  // higher seq, stamp not advancing
       s::set_axis_value(c, axis, before + lim[axis].max_rate * 0.010);
-      this->core.on_command(c, this->now);
+      this->send(c);
     }
     EXPECT_EQ(this->core.counters().ignored_stamp, ignored + 2);
     EXPECT_EQ(this->core.state(), s::State::engaged);
@@ -324,7 +340,7 @@ TYPED_TEST(SafetySuite, LaterSeqWithEqualOrEarlierStampCannotDodgeRateLimits) {
     ASSERT_TRUE(d.active);
     EXPECT_DOUBLE_EQ(s::axis_value(d.command, axis), before) << "the command with a stale stamp was applied";
     // The ignored commands did not refresh the command either: it times out from its own stamp.
-    this->step(last_stamp + 100 * kMs - this->now);
+    this->step(last_stamp + 100 * kMs - this->vnow());
     this->ecu_ok();
     EXPECT_TRUE(this->core.tick(this->now).active);
     this->step(1 * kMs);
@@ -349,9 +365,9 @@ TYPED_TEST(SafetySuite, StampsRacingAheadOfArrivalCannotWidenAStep) {
     this->step(1 * kMs);
     this->ecu_ok();
     auto c = this->cmd(true);
-    c.stamp = this->now + this->core.config().max_future_ns - 1 * kMs;
+    c.stamp = this->vnow() + this->core.config().max_future_ns - 1 * kMs;
     s::set_axis_value(c, axis, before + lim[axis].max_rate * 0.010);
-    this->core.on_command(c, this->now);
+    this->send(c);
     if (lim[axis].action == s::LimitAction::reject) {
       EXPECT_EQ(this->core.state(), s::State::disengaged);
       EXPECT_EQ(this->core.reason(), s::Reason::invalid_command);
@@ -369,30 +385,309 @@ TYPED_TEST(SafetySuite, StampsRacingAheadOfArrivalCannotWidenAStep) {
 
 TYPED_TEST(SafetySuite, SteadyRampWithDeliveryJitterIsNotLimited) {
   const auto& lim = TypeParam::limits;
+  // Throttle and brake ramp in separate runs: together the pedal interlock would cut the throttle.
+  for (const auto skip : {s::Axis::brake, s::Axis::throttle}) {
+    SCOPED_TRACE(std::string("without ") + std::string(s::to_string(skip)));
+    this->engage();
+    for (int i = 0; i < 20 && skip == s::Axis::throttle; ++i) {  // release the throttle first
+      this->step(10 * kMs);
+      this->ecu_ok();
+      auto c = this->cmd(true);
+      c.throttle = 0.0;
+      this->send(c);
+    }
+    const auto start = this->core.tick(this->now).command;
+    const Nanos jitter = this->core.config().rate_rx_slack_ns * 3 / 4;
+    const auto clamped = this->core.counters().clamped;  // engaging ramps from the measured state
+    Nanos stamp = this->vnow();
+    for (int i = 1; i <= 20; ++i) {
+      stamp += 10 * kMs;
+      this->now = stamp - this->offset + (i % 2 == 0 ? jitter : 0);  // every other command delivered late
+      this->ecu_ok();
+      auto c = this->cmd(true);
+      c.stamp = stamp;
+      for (std::size_t a = 0; a < s::kAxes; ++a) {
+        const auto axis = static_cast<s::Axis>(a);
+        const double ramp = axis == skip ? 0.0 : 0.9 * lim[axis].max_rate * 0.010 * i;
+        s::set_axis_value(c, axis, s::axis_value(start, axis) + ramp);
+      }
+      this->send(c);
+      const auto d = this->core.tick(this->now);
+      ASSERT_TRUE(d.active) << i;
+      for (std::size_t a = 0; a < s::kAxes; ++a) {
+        const auto axis = static_cast<s::Axis>(a);
+        EXPECT_DOUBLE_EQ(s::axis_value(d.command, axis), s::axis_value(c, axis)) << s::to_string(axis) << " at " << i;
+      }
+    }
+    EXPECT_EQ(this->core.counters().clamped, clamped);
+    EXPECT_EQ(this->core.counters().rejected, 0U);
+    this->cycle(false);
+  }
+}
+
+// ---- time: timeouts on the bridge's monotonic clock, stamps only checked for plausibility -----
+
+// Ticks every millisecond with the ECU fresh until the core stops sending the command; returns how
+// long after `from` (monotonic) that happened. `feed` is called every 10 ms (e.g. ignored commands).
+template <class Suite, class F>
+Nanos ms_until_neutral(Suite* t, Nanos from, F feed) {
+  for (int i = 1; i <= 2000; ++i) {
+    t->step(1 * kMs);
+    if (i % 10 == 0) {
+      t->ecu_ok();
+      feed();
+    }
+    if (!t->core.tick(t->now).active) return t->now - from;
+  }
+  return -1;
+}
+
+TYPED_TEST(SafetySuite, VehicleClockStepBackNeverExtendsTheActiveCommand) {
   this->engage();
-  const auto start = this->core.tick(this->now).command;
-  const Nanos jitter = this->core.config().rate_rx_slack_ns * 3 / 4;
-  Nanos stamp = this->now;
-  for (int i = 1; i <= 20; ++i) {
-    stamp += 10 * kMs;
-    this->now = stamp + (i % 2 == 0 ? jitter : 0);  // every other command delivered late
+  const Nanos last_rx = this->now;
+  this->offset -= 5'000'000'000;  // PTP/NTP steps the vehicle clock 5 s back
+  // The sender keeps going with its (now earlier) stamps: ignored, and they must not keep it alive.
+  const Nanos t = ms_until_neutral(this, last_rx, [this] { this->send(this->cmd(true)); });
+  EXPECT_GT(t, this->core.config().command_timeout_ns);
+  EXPECT_LE(t, this->core.config().command_timeout_ns + 10 * kMs);
+  EXPECT_EQ(this->core.reason(), s::Reason::command_timeout);
+  EXPECT_GT(this->core.counters().ignored_stamp, 0U);
+}
+
+TYPED_TEST(SafetySuite, VehicleClockStepForwardKeepsValidCommandsAndTheTimeout) {
+  this->engage();
+  this->offset += 5'000'000'000;  // sender and bridge share the stepped clock
+  for (int i = 0; i < 20; ++i) this->cycle(true);
+  EXPECT_EQ(this->core.state(), s::State::engaged);
+  const Nanos last_rx = this->now;
+  const Nanos t = ms_until_neutral(this, last_rx, [] {});
+  EXPECT_GT(t, this->core.config().command_timeout_ns);
+  EXPECT_LE(t, this->core.config().command_timeout_ns + 1 * kMs);
+}
+
+TYPED_TEST(SafetySuite, FutureStampsNeverExtendFreshness) {
+  this->engage();
+  this->step(10 * kMs);
+  this->ecu_ok();
+  auto c = this->cmd(true);
+  c.stamp = this->vnow() + this->core.config().max_future_ns;  // the most a stamp may lead: accepted
+  this->send(c);
+  const auto accepted = this->core.counters().ignored_stale;
+  const Nanos t = ms_until_neutral(this, this->now, [] {});
+  EXPECT_EQ(this->core.counters().ignored_stale, accepted);
+  EXPECT_GT(t, this->core.config().command_timeout_ns);
+  EXPECT_LE(t, this->core.config().command_timeout_ns + 1 * kMs) << "timeout ran from the stamp, not from receipt";
+}
+
+TYPED_TEST(SafetySuite, OneSendersShiftedClockMakesItsCommandsImplausibleNotItsDisable) {
+  this->engage();
+  // Writer 2's clock runs 3 s behind: its stamps look stale, its disable still counts.
+  this->step(5 * kMs);
+  auto late = this->cmd(true, 2);
+  late.stamp = this->vnow() - 3'000'000'000;
+  this->send(late);
+  EXPECT_EQ(this->core.state(), s::State::engaged);
+  EXPECT_EQ(this->core.counters().ignored_stale, 1U);
+  auto off = this->cmd(false, 2);
+  off.stamp = this->vnow() - 3'000'000'000;
+  this->send(off);
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+  EXPECT_EQ(this->core.reason(), s::Reason::enable_released);
+  EXPECT_FALSE(this->core.tick(this->now).active);
+}
+
+// ---- writers ------------------------------------------------------------------------------
+
+TYPED_TEST(SafetySuite, DisableFromAnyWriterWhateverItsSequence) {
+  this->seq = 1'000'000;  // writer 0 publishes high sequence numbers
+  this->engage();
+  this->step(3 * kMs);
+  auto off = this->cmd(false, 7);
+  off.seq = 1;  // a second publisher (teleop, safety node) with its own low sequence
+  this->send(off);
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+  EXPECT_EQ(this->core.reason(), s::Reason::enable_released);
+  // And the first writer holding enable does not re-engage: every writer needs a new edge.
+  for (int i = 0; i < 5; ++i) this->cycle(true);
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+}
+
+TYPED_TEST(SafetySuite, OnlyTheEngagingWriterDrivesTheActuators) {
+  this->engage();
+  // Writer 5 releases (any disable counts), the owner engages again, then writer 5 shows its
+  // rising edge with the brake: ignored, never applied, the owner keeps the engagement.
+  this->step(2 * kMs);
+  this->send(this->cmd(false, 5));
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+  this->engage();
+  const auto before = this->core.counters().ignored_writer;
+  for (int i = 0; i < 3; ++i) {
+    this->step(3 * kMs);
+    auto c = this->cmd(true, 5);
+    c.throttle = 0.0;
+    c.brake = 0.5;
+    this->send(c);
+  }
+  EXPECT_EQ(this->core.counters().ignored_writer, before + 3);
+  EXPECT_EQ(this->core.owner(), 0U);
+  const auto d = this->core.tick(this->now);
+  ASSERT_TRUE(d.active);
+  EXPECT_DOUBLE_EQ(d.command.brake, 0.0);
+  EXPECT_GT(d.command.throttle, 0.0);
+}
+
+TYPED_TEST(SafetySuite, RestartedPublisherWithANewHandleIsNotBlockedByTheOldSequence) {
+  this->seq = 5'000;
+  this->engage();
+  // The planner restarts: new writer, seq from 1. Its first enable is no edge.
+  this->seq = 0;
+  this->cycle(false);
+  EXPECT_EQ(this->core.state(), s::State::disengaged);  // its disable counted, seq 1 or not
+  this->seq = 0;
+  for (int i = 0; i < 3; ++i) {
+    this->step(10 * kMs);
+    this->ecu_ok();
+    this->send(this->cmd(i > 0, 9));
+  }
+  EXPECT_EQ(this->core.state(), s::State::engaged);
+  EXPECT_EQ(this->core.owner(), 9U);
+  // Only the old handle's low-seq disable was out of sequence (and it still disengaged).
+  EXPECT_EQ(this->core.counters().ignored_sequence, 1U);
+}
+
+TYPED_TEST(SafetySuite, ForgottenWritersMustShowANewEdge) {
+  this->ecu_ok();
+  this->send(this->cmd(false, 1));  // writer 1 armed ...
+  for (s::WriterId w = 100; w < 100 + s::SafetyCore::kMaxWriters; ++w) {
+    this->step(1 * kMs);
+    this->send(this->cmd(false, w));  // ... then pushed out of the table by newer writers
+  }
+  this->step(1 * kMs);
+  this->send(this->cmd(true, 1));
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+}
+
+// ---- engagement from the measured state, pedal interlock, lateral limit --------------------
+
+TYPED_TEST(SafetySuite, EngagementRampsFromTheMeasuredSteeringAngle) {
+  const auto& lim = TypeParam::limits[s::Axis::steering_angle];
+  for (const double measured : {0.0, 0.5 * lim.max, 0.5 * lim.min}) {
+    SCOPED_TRACE(measured);
+    this->core.on_measured(measured, 0.0);
+    this->cycle(false);
+    this->step(10 * kMs);
     this->ecu_ok();
     auto c = this->cmd(true);
-    c.stamp = stamp;
-    for (std::size_t a = 0; a < s::kAxes; ++a) {
-      const auto axis = static_cast<s::Axis>(a);
-      s::set_axis_value(c, axis, s::axis_value(start, axis) + 0.9 * lim[axis].max_rate * 0.010 * i);
+    c.steering_angle = measured > 0 ? lim.min : lim.max;  // as far away as the range allows
+    c.throttle = 1.0;
+    c.brake = 1.0;
+    this->send(c);
+    if (lim.action == s::LimitAction::reject) {
+      EXPECT_EQ(this->core.state(), s::State::disengaged) << "a step from the measured angle is rejected";
+      const auto ev = this->core.take_events();
+      ASSERT_FALSE(ev.empty());
+      EXPECT_EQ(ev.back().kind, s::EventKind::limit);
+      EXPECT_TRUE(ev.back().violation.rejected);
+      EXPECT_TRUE(ev.back().violation.rate);
+      continue;
     }
-    this->core.on_command(c, this->now);
+    ASSERT_EQ(this->core.state(), s::State::engaged);
     const auto d = this->core.tick(this->now);
-    ASSERT_TRUE(d.active) << i;
-    for (std::size_t a = 0; a < s::kAxes; ++a) {
-      const auto axis = static_cast<s::Axis>(a);
-      EXPECT_DOUBLE_EQ(s::axis_value(d.command, axis), s::axis_value(c, axis)) << s::to_string(axis) << " at " << i;
-    }
+    ASSERT_TRUE(d.active);
+    EXPECT_LE(std::fabs(d.command.steering_angle - measured), lim.max_rate * 0.010 * (1 + 1e-9));
+    EXPECT_DOUBLE_EQ(d.command.throttle, 0.0) << "throttle with the brake requested";
+    EXPECT_LE(d.command.brake, TypeParam::limits[s::Axis::brake].max_rate * 0.010 * (1 + 1e-9));
+    this->cycle(false);
   }
-  EXPECT_EQ(this->core.counters().clamped, 0U);
-  EXPECT_EQ(this->core.counters().rejected, 0U);
+}
+
+TYPED_TEST(SafetySuite, ThrottleIsZeroWhileTheBrakeIsRequested) {
+  this->engage();
+  const double cutoff = TypeParam::limits.brake_throttle_cutoff;
+  for (int i = 0; i < 30; ++i) this->cycle(true);  // throttle ramps to 0.1
+  auto c = this->cmd(true);
+  this->step(10 * kMs);
+  c = this->cmd(true);
+  c.brake = cutoff * 0.5;  // below the cutoff: pedals may overlap (brake blending at rest)
+  this->send(c);
+  EXPECT_GT(this->core.tick(this->now).command.throttle, 0.0);
+  this->step(10 * kMs);
+  c = this->cmd(true);
+  c.brake = cutoff * 1.5;
+  this->send(c);
+  const auto d = this->core.tick(this->now);
+  ASSERT_TRUE(d.active);
+  EXPECT_DOUBLE_EQ(d.command.throttle, 0.0);
+  EXPECT_GT(d.command.brake, 0.0);
+}
+
+TYPED_TEST(SafetySuite, LateralAccelerationLimitsTheSteeringAngleOverSpeed) {
+  const auto& v = TypeParam::limits;
+  const auto& lim = v[s::Axis::steering_angle];
+  this->engage();
+  // Steers toward `target` within the rate limit (a table may reject faster requests); returns the
+  // last applied angle.
+  auto steer_toward = [this, &lim](double target, double speed, int steps) {
+    double applied = this->core.tick(this->now).command.steering_angle;
+    for (int i = 0; i < steps; ++i) {
+      this->step(10 * kMs);
+      this->ecu_ok();
+      auto c = this->cmd(true);
+      const double max_step = 0.9 * lim.max_rate * 0.010;
+      c.steering_angle = applied + std::clamp(target - applied, -max_step, max_step);
+      this->send(c);
+      EXPECT_EQ(this->core.state(), s::State::engaged);
+      applied = this->core.tick(this->now).command.steering_angle;
+      EXPECT_LE(speed * speed * std::tan(std::fabs(applied)) / this->core.config().limits.wheelbase_m,
+                this->core.config().limits.max_lateral_accel * (1 + 1e-9)) << i;
+    }
+    return applied;
+  };
+  for (const double speed : {0.0, 5.0, 10.0, 20.0, 35.0}) {
+    SCOPED_TRACE(speed);
+    steer_toward(0.0, 0.0, 200);  // straight ahead first: the rate limit keeps the wheel from jumping
+    this->core.on_measured(0.0, speed);
+    const double applied = steer_toward(0.99 * lim.max, speed, 300);
+    // The limit is reached, not undershot.
+    const double expect = std::min(0.99 * lim.max, speed > 0 ? std::atan(v.max_lateral_accel * v.wheelbase_m / (speed * speed)) : 1.0);
+    EXPECT_NEAR(applied, expect, 1e-9);
+  }
+}
+
+// ---- E2E, shutdown, bounded buffers -------------------------------------------------------
+
+TYPED_TEST(SafetySuite, E2eErrorLevelSaturates) {
+  this->engage();
+  for (int i = 0; i < 2000; ++i) this->core.on_e2e(false, this->now);
+  const int max = s::e2e_level_max(this->core.config());
+  EXPECT_EQ(this->core.e2e_error_level(), max);
+  EXPECT_GT(max, this->core.config().e2e_tolerance);
+  for (int i = 0; i < max - this->core.config().e2e_tolerance; ++i) this->core.on_e2e(true, this->now);
+  this->cycle(false);
+  this->cycle(true);
+  EXPECT_EQ(this->core.state(), s::State::engaged) << "2000 bad frames must not need 2000 good ones";
+}
+
+TYPED_TEST(SafetySuite, ShutdownDisengagesForGood) {
+  this->engage();
+  this->core.shutdown(this->now);
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+  EXPECT_EQ(this->core.reason(), s::Reason::shutdown);
+  EXPECT_FALSE(this->core.tick(this->now).active);
+  this->cycle(false);
+  this->cycle(true);
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+}
+
+TYPED_TEST(SafetySuite, EventBufferIsBoundedAndCountsWhatItDrops) {
+  this->core.clear_events();
+  auto c = this->cmd(false);
+  this->send(c);
+  for (int i = 0; i < 1000; ++i) this->send(c);  // replays: one ignored event each
+  EXPECT_EQ(this->core.events().size(), s::SafetyCore::kMaxEvents);
+  EXPECT_EQ(this->core.counters().events_dropped, 1000U - s::SafetyCore::kMaxEvents);
+  this->core.clear_events();
+  EXPECT_TRUE(this->core.events().empty());
 }
 
 TEST(LimitChecker, TablesAreSane) {
@@ -406,6 +701,11 @@ TEST(LimitChecker, TablesAreSane) {
     EXPECT_GE((*v)[s::Axis::throttle].min, 0.0);
     EXPECT_LE((*v)[s::Axis::throttle].max, 1.0);
     EXPECT_LE((*v)[s::Axis::accel].min, 0.0);
+    EXPECT_GT(v->wheelbase_m, 1.0);
+    EXPECT_GT(v->max_lateral_accel, 0.0);
+    EXPECT_LE(v->max_lateral_accel, 5.0);  // ISO 11270 order of magnitude
+    EXPECT_GT(v->brake_throttle_cutoff, 0.0);
+    EXPECT_LT(v->brake_throttle_cutoff, 0.2);
   }
   EXPECT_EQ(s::find_vehicle("nope"), nullptr);
 }

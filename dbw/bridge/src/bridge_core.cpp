@@ -1,5 +1,6 @@
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
 
+#include <limits>
 #include <string_view>
 #include <utility>
 
@@ -16,7 +17,7 @@ safety::SafetyConfig safety_config(const Protocol& p) {
   return c;
 }
 
-BridgeCore::BridgeCore(const Protocol& p) : p_(p), safety_(safety_config(p)) {
+BridgeCore::BridgeCore(const Protocol& p) : p_(p), safety_(safety_config(p)), schedule_(p.timing().tx_period_ns) {
   static constexpr std::array<std::pair<std::string_view, TxField>, static_cast<std::size_t>(TxField::count)> kFields{{
       {"enable", TxField::enable}, {"state", TxField::state}, {"mode", TxField::mode}, {"angle", TxField::angle},
       {"torque", TxField::torque}, {"gear", TxField::gear}, {"throttle", TxField::throttle}, {"brake", TxField::brake},
@@ -31,6 +32,22 @@ BridgeCore::BridgeCore(const Protocol& p) : p_(p), safety_(safety_config(p)) {
     }
   }
   for (const auto& m : p_.rx_messages()) checkers_.emplace_back(m.e2e);
+}
+
+bool BridgeCore::on_command(const safety::Command& c, Nanos now, Nanos vehicle_now) {
+  const auto applied = safety_.counters().applied;
+  safety_.on_command(c, now, vehicle_now);
+  return safety_.counters().applied != applied || safety_.transitions() != transitions_sent_;
+}
+
+bool BridgeCore::transmit_due(Nanos now, bool command_changed) {
+  (void)safety_.tick(now);
+  if (safety_.transitions() != transitions_sent_) return true;
+  if (safety_.counters().applied != applied_sent_) {
+    if (schedule_.command_may_go(now)) return true;
+    if (command_changed) ++counters_.commands_deferred;
+  }
+  return schedule_.periodic_due(now);
 }
 
 // Applies every role the message maps; a message may carry status and feedback roles at once.
@@ -67,6 +84,9 @@ RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
       fb_.steering_angle = get("steering_angle", fb_.steering_angle);
       fb_.yaw_rate = get("yaw_rate", fb_.yaw_rate);
       if (has("gear")) fb_.gear = static_cast<int>(get("gear", 0.0));
+      // Only what this message measured (NaN: unchanged).
+      constexpr double kKeep = std::numeric_limits<double>::quiet_NaN();
+      safety_.on_measured(has("steering_angle") ? fb_.steering_angle : kKeep, has("speed") ? fb_.speed : kKeep);
       kind = RxKind::feedback;
     }
     if (has("ready") || has("override") || has("fault")) {
@@ -89,6 +109,9 @@ RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
 // spread steering, throttle, brake, gear and enable over as many messages as it likes.
 void BridgeCore::frames(Nanos now, std::vector<can::Frame>& out) {
   const safety::Decision d = safety_.tick(now);
+  transitions_sent_ = safety_.transitions();
+  schedule_.sent(now, safety_.counters().applied != applied_sent_);
+  applied_sent_ = safety_.counters().applied;
   const double en = d.active ? 1.0 : 0.0;
   const safety::Command& c = d.command;  // zeros when not active: the neutral/disengage request
   std::array<double, static_cast<std::size_t>(TxField::count)> v{};

@@ -7,6 +7,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -143,8 +144,11 @@ IoStatus BusListener::send(const Frame& f) noexcept {
     ++stats_.send_refused;
     return IoStatus::invalid;
   }
-  accept_peers();
-  relay(f, -1);
+  {
+    std::lock_guard<std::mutex> lock(peers_mu_);
+    accept_peers();
+    relay(f, -1);
+  }
   ++stats_.sent;
   return IoStatus::ok;
 }
@@ -160,10 +164,13 @@ IoStatus BusListener::receive(RxFrame& out, int timeout_ms) noexcept {
       return IoStatus::error;
     }
     if (n == 0) return IoStatus::timeout;
+    std::lock_guard<std::mutex> lock(peers_mu_);
     if (ev.data.fd == listen_.get()) {
       accept_peers();
       continue;
     }
+    // The sending thread may have dropped this peer since epoll_wait returned.
+    if (std::none_of(peers_.begin(), peers_.end(), [&](const UniqueFd& p) { return p.get() == ev.data.fd; })) continue;
     const IoStatus r = detail::recv_frame(ev.data.fd, out, stats_);
     if (r == IoStatus::closed || r == IoStatus::error) {
       drop_peer(ev.data.fd);

@@ -1,4 +1,5 @@
 #pragma once
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -32,7 +33,10 @@ class BusListener final : public Transport {
   IoStatus receive(RxFrame& out, int timeout_ms) noexcept override;
   [[nodiscard]] int poll_fd() const noexcept override { return epoll_.get(); }
   [[nodiscard]] std::string name() const override { return "unix-listen:" + path_; }
-  [[nodiscard]] std::size_t peers() const noexcept { return peers_.size(); }
+  [[nodiscard]] std::size_t peers() const {
+    std::lock_guard<std::mutex> lock(peers_mu_);
+    return peers_.size();
+  }
 
  private:
   void accept_peers() noexcept;
@@ -41,6 +45,8 @@ class BusListener final : public Transport {
   std::string path_;
   UniqueFd listen_;
   UniqueFd epoll_;
+  // send() and receive() may run on different threads: both accept, relay to and drop peers.
+  mutable std::mutex peers_mu_;
   std::vector<UniqueFd> peers_;
 };
 

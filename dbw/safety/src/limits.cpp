@@ -5,6 +5,10 @@
 
 namespace sensor_rig::dbw::safety {
 
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}  // namespace
+
 std::string_view to_string(Axis a) noexcept {
   switch (a) {
     case Axis::steering_angle: return "steering_angle";
@@ -58,7 +62,13 @@ void LimitResult::add(const Violation& v) noexcept {
   if (count < violations.size()) violations[count++] = v;
 }
 
-LimitResult LimitChecker::check(const Command& req, double dt_s) const noexcept {
+double lateral_angle_limit(const VehicleLimits& v, double speed_mps) noexcept {
+  const double v2 = speed_mps * speed_mps;
+  if (v2 <= 0.0) return kPi / 2;  // standing still: only the range applies
+  return std::atan(v.max_lateral_accel * v.wheelbase_m / v2);
+}
+
+LimitResult LimitChecker::check(const Command& req, double dt_s, double speed_mps) const noexcept {
   LimitResult r;
   r.applied = req;
   for (std::size_t i = 0; i < kAxes; ++i) {
@@ -76,6 +86,15 @@ LimitResult LimitChecker::check(const Command& req, double dt_s) const noexcept 
       r.add({axis, false, lim.action == LimitAction::reject, false, want, c});
       v = c;
     }
+    if (axis == Axis::steering_angle) {
+      // Clamped, never rejected: dropping the steering at speed is worse than holding the limit.
+      const double lat = lateral_angle_limit(limits_, std::isfinite(speed_mps) ? speed_mps : 0.0);
+      if (std::fabs(v) > lat) {
+        const double c = std::clamp(v, -lat, lat);
+        r.add({axis, false, false, false, want, c, true, false});
+        v = c;
+      }
+    }
     if (have_prev_ && lim.max_rate > 0.0) {
       const double prev = axis_value(prev_, axis);
       const double step = lim.max_rate * std::max(dt_s, 0.0);
@@ -84,6 +103,11 @@ LimitResult LimitChecker::check(const Command& req, double dt_s) const noexcept 
         r.add({axis, true, lim.action == LimitAction::reject, false, want, c});
         v = c;
       }
+    }
+    // After the rate limit: releasing the throttle at once is always allowed.
+    if (axis == Axis::throttle && std::isfinite(req.brake) && req.brake > limits_.brake_throttle_cutoff && v > 0.0) {
+      r.add({axis, false, false, false, want, 0.0, false, true});
+      v = 0.0;
     }
     set_axis_value(r.applied, axis, v);
   }

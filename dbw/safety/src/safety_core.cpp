@@ -1,6 +1,7 @@
 #include "sensor_rig/dbw/safety/safety_core.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 namespace sensor_rig::dbw::safety {
@@ -21,6 +22,8 @@ std::string_view to_string(Reason r) noexcept {
     case Reason::invalid_command: return "invalid_command";
     case Reason::bus_off: return "bus_off";
     case Reason::no_command: return "no_command";
+    case Reason::not_owner: return "not_owner";
+    case Reason::shutdown: return "shutdown";
   }
   return "?";
 }
@@ -36,27 +39,38 @@ std::string_view to_string(EventKind k) noexcept {
   return "?";
 }
 
-SafetyCore::SafetyCore(const SafetyConfig& cfg) : cfg_(cfg), checker_(cfg.limits) { events_.reserve(64); }
+namespace {
+// One bit per (axis, kind of limit).
+std::uint32_t violation_bit(const Violation& v) noexcept {
+  const unsigned kind = v.not_finite ? 0U : v.rate ? 1U : v.lateral ? 2U : v.interlock ? 3U : 4U;
+  return 1U << (static_cast<unsigned>(v.axis) * 5U + kind);
+}
+}  // namespace
+
+SafetyCore::SafetyCore(const SafetyConfig& cfg) : cfg_(cfg), checker_(cfg.limits) {}
 
 void SafetyCore::emit(Nanos now, EventKind k, Reason r, const Violation& v) {
-  events_.push_back(Event{now, k, state_, r, v});
+  if (n_events_ == events_.size()) {
+    ++counters_.events_dropped;
+    return;
+  }
+  events_[n_events_++] = Event{now, k, state_, r, v};
 }
 
 std::vector<Event> SafetyCore::take_events() {
-  std::vector<Event> out;
-  out.swap(events_);
-  events_.reserve(64);
+  std::vector<Event> out(events().begin(), events().end());
+  clear_events();
   return out;
 }
 
 bool SafetyCore::has_fresh_command(Nanos now) const noexcept {
-  return have_cmd_ && cmd_valid_ && now - last_cmd_stamp_ <= cfg_.command_timeout_ns;
+  return state_ == State::engaged && now - last_cmd_rx_ <= cfg_.command_timeout_ns;
 }
 
 bool SafetyCore::ecu_fresh(Nanos now) const noexcept { return have_ecu_ && now - last_ecu_ <= cfg_.ecu_timeout_ns; }
 
 Reason SafetyCore::engage_blocker(Nanos now) const noexcept {
-  if (!has_fresh_command(now)) return Reason::no_command;
+  if (stopping_) return Reason::shutdown;
   if (bus_off_) return Reason::bus_off;
   if (!ecu_fresh(now)) return Reason::ecu_timeout;
   if (ecu_.override) return Reason::driver_override;
@@ -66,7 +80,29 @@ Reason SafetyCore::engage_blocker(Nanos now) const noexcept {
   return Reason::none;
 }
 
-void SafetyCore::engage(Nanos now) {
+WriterState& SafetyCore::writer(WriterId id) noexcept {
+  WriterState* oldest = nullptr;
+  for (auto& w : writers_) {
+    if (w.used && w.id == id) return w;
+  }
+  for (auto& w : writers_) {
+    if (!w.used) {
+      w = WriterState{id};
+      return w;
+    }
+    const bool owns = state_ == State::engaged && w.id == owner_;
+    if (!owns && (oldest == nullptr || w.last_rx < oldest->last_rx)) oldest = &w;
+  }
+  *oldest = WriterState{id};  // forgotten: it must show a new edge to engage
+  return *oldest;
+}
+
+void SafetyCore::disarm_all() noexcept {
+  for (auto& w : writers_) w.armed = false;
+}
+
+void SafetyCore::engage(WriterState& w, const Command& applied, Nanos now) {
+  w.armed = false;  // an edge is used once, engaged or refused
   const Reason block = engage_blocker(now);
   if (block != Reason::none) {
     emit(now, EventKind::engage_refused, block);
@@ -74,6 +110,11 @@ void SafetyCore::engage(Nanos now) {
   }
   state_ = State::engaged;
   reason_ = Reason::enabled;
+  owner_ = w.id;
+  ++counters_.applied;
+  latest_ = applied;
+  last_cmd_rx_ = now;
+  checker_.accept(applied);
   ++counters_.engagements;
   emit(now, EventKind::transition, Reason::enabled);
 }
@@ -82,64 +123,84 @@ void SafetyCore::disengage(Reason r, Nanos now) {
   if (state_ != State::engaged) return;
   state_ = State::disengaged;
   reason_ = r;
+  owner_ = 0;
   ++counters_.disengagements;
   checker_.reset();
+  disarm_all();  // every writer must show false then true again
   emit(now, EventKind::transition, r);
 }
 
-void SafetyCore::on_command(const Command& cmd, Nanos now) {
+void SafetyCore::on_command(const Command& cmd, Nanos now, Nanos vehicle_now) {
   ++counters_.commands;
-  if (have_cmd_ && cmd.seq <= last_seq_) {
+  // A disable from any writer takes effect at once, whatever its seq or stamp: stopping is safe.
+  if (!cmd.enable) disengage(Reason::enable_released, now);
+  WriterState& w = writer(cmd.writer);
+  if (w.used && cmd.seq <= w.last_seq) {
     ++counters_.ignored_sequence;
     emit(now, EventKind::command_ignored, Reason::none);
     return;
   }
-  const Nanos age = now - cmd.stamp;
+  const Nanos age = vehicle_now - cmd.stamp;
   if (age > cfg_.command_timeout_ns || age < -cfg_.max_future_ns) {
     ++counters_.ignored_stale;
     emit(now, EventKind::command_ignored, Reason::command_timeout);
     return;
   }
-  if (have_cmd_ && cmd.stamp <= last_stamp_seen_) {
-    // A later seq with an equal or earlier stamp: no time has passed for it, so it can carry no
-    // change (and must not reset the freshness of the command it follows).
+  if (w.used && cmd.stamp <= w.last_stamp) {
+    // A later seq with an equal or earlier stamp: no time has passed for it, so it can carry no change.
     ++counters_.ignored_stamp;
     emit(now, EventKind::command_ignored, Reason::invalid_command);
     return;
   }
-  // Rates are checked only while engaged (the checker holds no previous command otherwise).
-  const Nanos rate_dt = have_cmd_ && cmd_valid_ ? std::min(cmd.stamp - last_cmd_stamp_, now - last_cmd_rx_ + cfg_.rate_rx_slack_ns) : 0;
-  const LimitResult lr = checker_.check(cmd, static_cast<double>(rate_dt) * 1e-9);
-  have_cmd_ = true;
-  last_seq_ = cmd.seq;
-  last_stamp_seen_ = cmd.stamp;
-  if (lr.rejected()) {
-    ++counters_.rejected;
-    cmd_valid_ = false;
-    emit(now, EventKind::limit, Reason::invalid_command, lr.violations[0]);
-    disengage(Reason::invalid_command, now);
-    prev_enable_ = cmd.enable;  // a rejected command cannot produce an enable edge later
+  const Nanos rate_dt = w.used && w.valid ? std::min(cmd.stamp - w.last_stamp, now - w.last_rx + cfg_.rate_rx_slack_ns) : 0;
+  w.used = true;
+  w.last_seq = cmd.seq;
+  w.last_stamp = cmd.stamp;
+  w.last_rx = now;
+  if (state_ == State::engaged && w.id != owner_) {
+    w.valid = true;
+    ++counters_.ignored_writer;
+    emit(now, EventKind::command_ignored, Reason::not_owner);
     return;
   }
-  if (lr.count > 0) {
-    ++counters_.clamped;
-    if (!limit_reported_) emit(now, EventKind::limit, Reason::none, lr.violations[0]);
-    limit_reported_ = true;
-  } else {
-    limit_reported_ = false;
+  const bool engaging = state_ == State::disengaged && cmd.enable && w.armed;
+  if (engaging) {
+    // Rate limits start from the actuators as measured, not from a step out of nothing.
+    Command measured{};
+    measured.steering_angle = measured_steering_;
+    checker_.accept(measured);
+  } else if (state_ == State::disengaged) {
+    checker_.reset();  // nothing is applied: range checks only
   }
-  cmd_valid_ = true;
-  latest_ = lr.applied;
-  last_cmd_stamp_ = cmd.stamp;
-  last_cmd_rx_ = now;
-  if (state_ == State::engaged) checker_.accept(lr.applied);
+  const LimitResult lr = checker_.check(cmd, static_cast<double>(rate_dt) * 1e-9, measured_speed_);
+  if (lr.rejected()) {
+    ++counters_.rejected;
+    w.valid = false;
+    w.armed = false;  // a rejected command cannot be half of an enable edge
+    emit(now, EventKind::limit, Reason::invalid_command, lr.violations[0]);
+    disengage(Reason::invalid_command, now);
+    return;
+  }
+  // Each kind of violation is reported when it starts (a run of clamped commands: one event).
+  std::uint32_t kinds = 0;
+  for (std::size_t i = 0; i < lr.count; ++i) {
+    const std::uint32_t bit = violation_bit(lr.violations[i]);
+    if ((reported_limits_ & bit) == 0) emit(now, EventKind::limit, Reason::none, lr.violations[i]);
+    kinds |= bit;
+  }
+  reported_limits_ = kinds;
+  if (lr.count > 0) ++counters_.clamped;
+  w.valid = true;
   if (!cmd.enable) {
-    disengage(Reason::enable_released, now);
-  } else if (!prev_enable_ && state_ == State::disengaged) {
-    engage(now);
-    if (state_ == State::engaged) checker_.accept(lr.applied);
+    w.armed = true;
+  } else if (state_ == State::engaged) {
+    ++counters_.applied;
+    latest_ = lr.applied;
+    last_cmd_rx_ = now;
+    checker_.accept(lr.applied);
+  } else if (engaging) {
+    engage(w, lr.applied, now);
   }
-  prev_enable_ = cmd.enable;
 }
 
 void SafetyCore::on_ecu_status(const EcuStatus& st, Nanos now) {
@@ -162,7 +223,7 @@ void SafetyCore::on_e2e(bool ok, Nanos now) {
     return;
   }
   ++counters_.e2e_errors;
-  ++e2e_level_;
+  e2e_level_ = std::min(e2e_level_ + 1, e2e_level_max(cfg_));
   if (e2e_level_ == cfg_.e2e_tolerance + 1) emit(now, EventKind::fault, Reason::e2e_errors);
   if (e2e_level_ > cfg_.e2e_tolerance) disengage(Reason::e2e_errors, now);
 }
@@ -173,9 +234,19 @@ void SafetyCore::on_bus_state(bool bus_off, Nanos now) {
   if (bus_off) disengage(Reason::bus_off, now);
 }
 
+void SafetyCore::on_measured(double steering_angle, double speed_mps) noexcept {
+  if (std::isfinite(steering_angle)) measured_steering_ = steering_angle;
+  if (std::isfinite(speed_mps)) measured_speed_ = speed_mps;
+}
+
+void SafetyCore::shutdown(Nanos now) {
+  stopping_ = true;
+  disengage(Reason::shutdown, now);
+}
+
 Decision SafetyCore::tick(Nanos now) {
   if (state_ == State::engaged) {
-    if (!has_fresh_command(now)) {
+    if (now - last_cmd_rx_ > cfg_.command_timeout_ns) {
       disengage(Reason::command_timeout, now);
     } else if (!ecu_fresh(now)) {
       disengage(Reason::ecu_timeout, now);

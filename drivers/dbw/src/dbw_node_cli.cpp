@@ -17,6 +17,7 @@ struct BridgeOptions {
   std::string transport = std::string("unix:") + kDefaultBusSocket;
   double duration = 0.0;
   bool json = false;
+  int domain = -1;
 };
 
 int run_bridge(const BridgeOptions& o) {
@@ -32,14 +33,17 @@ int run_bridge(const BridgeOptions& o) {
                protocol.config_hash().c_str());
   DdsBridgeOptions bo;
   bo.duration_s = o.duration;
+  bo.domain = o.domain;
   const auto s = run_dds_bridge(protocol, *bus, bo);
   std::printf("{\"commands\":%llu,\"frames_sent\":%llu,\"latency_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
               "\"take_to_send_us\":{\"p50\":%.1f,\"p99\":%.1f},\"silence_to_neutral_ms\":%.3f,"
-              "\"status_published\":%llu,\"state_published\":%llu,\"config_hash\":\"%s\"}\n",
+              "\"status_published\":%llu,\"state_published\":%llu,\"commands_deferred\":%llu,"
+              "\"neutral_sets_on_stop\":%llu,\"config_hash\":\"%s\"}\n",
               static_cast<unsigned long long>(s.commands), static_cast<unsigned long long>(s.frames_sent),
               s.latency_p50_us, s.latency_p99_us, s.latency_max_us, s.take_to_send_p50_us, s.take_to_send_p99_us,
               s.silence_to_neutral_ms, static_cast<unsigned long long>(s.status_published),
-              static_cast<unsigned long long>(s.state_published), protocol.config_hash().c_str());
+              static_cast<unsigned long long>(s.state_published), static_cast<unsigned long long>(s.commands_deferred),
+              static_cast<unsigned long long>(s.neutral_sets_on_stop), protocol.config_hash().c_str());
   std::fflush(stdout);
   if (s.transport_closed) {
     std::fprintf(stderr, "error: CAN transport %s closed\n", bus->name().c_str());
@@ -62,6 +66,9 @@ void register_dbw_cli(CLI::App& app, cli::Context& ctx) {
   send->add_option("--gear", so->gear, "0 keep, 1 park, 2 reverse, 3 neutral, 4 drive")->check(CLI::Range(0, 4));
   send->add_option("--rate", so->rate_hz, "Hz")->required()->check(CLI::PositiveNumber);
   send->add_option("--duration", so->duration_s, "seconds")->required()->check(CLI::NonNegativeNumber);
+  send->add_option("--domain", so->domain, "DDS domain (default: ROS_DOMAIN_ID, else 0)")->check(CLI::Range(0, 232));
+  send->add_option("--clock-offset", so->clock_offset_s,
+                   "seconds added to every stamp, as if this process's clock were off (testing)");
   send->callback([so, &ctx] {
     const auto n = run_command_source(*so);
     std::fprintf(stderr, "dbw send: %llu commands\n", static_cast<unsigned long long>(n));
@@ -74,6 +81,7 @@ void register_dbw_cli(CLI::App& app, cli::Context& ctx) {
   br->add_option("--config", bo->config, "protocol mapping YAML (default: config/dbw/paravan_ref.yaml)");
   br->add_option("--transport", bo->transport, "CAN transport: unix:PATH (default /tmp/rig_paravan.sock), socketcan:IFACE, fd:N");
   br->add_option("--duration", bo->duration, "seconds to run (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
+  br->add_option("--domain", bo->domain, "DDS domain (default: ROS_DOMAIN_ID, else 0)")->check(CLI::Range(0, 232));
   br->callback([bo, &ctx] { ctx.exit_code = run_bridge(*bo); });
 }
 

@@ -11,11 +11,12 @@ namespace sensor_rig::drivers {
 using namespace sensor_rig::dbw;  // NOLINT(google-build-using-namespace): the node of the dbw area
 
 std::uint64_t run_command_source(const CommandSourceOptions& o) {
-  dds::Participant participant(domain_config());
+  dds::Participant participant(domain_config(o.domain));
   dds::Topic<msg::DbwCommand> topic(participant, kCmdTopic);
   dds::Writer<msg::DbwCommand> writer(participant, topic);
   writer.wait_for_readers(1, static_cast<int>(o.wait_for_reader_s * 1000));
   const Nanos period = static_cast<Nanos>(1e9 / o.rate_hz);
+  const auto offset = static_cast<Nanos>(o.clock_offset_s * 1e9);  // this process's clock, as if off
   const Nanos start = monotonic_now_ns();
   const Nanos end = start + static_cast<Nanos>(o.duration_s * 1e9);
   msg::DbwCommand c{};
@@ -25,7 +26,7 @@ std::uint64_t run_command_source(const CommandSourceOptions& o) {
   for (Nanos next = start; next < end && !shutdown_requested(); next += period) {
     timespec ts{static_cast<time_t>(next / 1'000'000'000), static_cast<long>(next % 1'000'000'000)};
     ::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-    const Nanos stamp = vehicle_now_ns();
+    const Nanos stamp = vehicle_now_ns() + offset;
     c.header.stamp = msg::to_time(stamp);
     c.seq = ++sent;
     c.enable = o.enable && !(o.enable_edge && sent == 1);

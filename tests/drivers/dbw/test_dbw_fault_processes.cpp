@@ -38,7 +38,9 @@ using sensor_rig::vehicle_now_ns;
 namespace {
 
 constexpr Nanos kMs = 1'000'000;
-constexpr double kSteer = 0.05;
+// Straight ahead: eclass_track rejects a steering step from the measured angle (the mock's wheel
+// stands at 0), so a source must start where the wheel is; 0 keeps every episode's engage simple.
+constexpr double kSteer = 0.0;
 constexpr double kThrottle = 0.2;
 
 struct StatusEvent {
@@ -274,7 +276,8 @@ TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFol
     } else if (!e.fault.empty()) {
       src.drive(at(e.at_s + e.dur_s + 0.6), true, disengaged);
     } else {
-      src.drive(vehicle_now_ns() + 400 * kMs, true, [] { return false; }, kSteer, 0.9);  // eclass_track: <= 0.6, clamp
+      // eclass_track: <= 0.6, clamped; from the released pedal at 1/s it takes 0.6 s to get there
+      src.drive(vehicle_now_ns() + 800 * kMs, true, [] { return false; }, kSteer, 0.9);
       EXPECT_TRUE(src.engaged) << "a clamped command must not disengage";
       src.drive(vehicle_now_ns() + 30 * kMs, false);
     }

@@ -1,12 +1,14 @@
 #pragma once
 // The bridge without DDS: commands -> safety -> encoder (DBC signals, counter, CRC) -> frames, and
-// ECU frames -> E2E check -> status/feedback -> safety. No I/O; time is passed in (vehicle time).
+// ECU frames -> E2E check -> status/feedback -> safety, and when to transmit (TxSchedule). No I/O;
+// time is passed in: `now` is the bridge's monotonic clock, `vehicle_now` vehicle time.
 #include <array>
 #include <cstdint>
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/bridge/protocol.hpp"
+#include "sensor_rig/dbw/bridge/tx_schedule.hpp"
 #include "sensor_rig/dbw/can/transport.hpp"
 #include "sensor_rig/dbw/safety/e2e.hpp"
 #include "sensor_rig/dbw/safety/safety_core.hpp"
@@ -29,16 +31,24 @@ struct BridgeCounters {
   std::uint64_t frames_refused = 0;
   std::uint64_t frames_received = 0;
   std::uint64_t encode_errors = 0;
+  std::uint64_t commands_deferred = 0;  // changed commands held for the bus schedule
 };
 
 class BridgeCore {
  public:
   explicit BridgeCore(const Protocol& p);
 
-  void on_command(const safety::Command& c, Nanos now) { safety_.on_command(c, now); }
+  // True when the command changed what goes on the bus (applied, or a transition).
+  bool on_command(const safety::Command& c, Nanos now, Nanos vehicle_now);
   RxKind on_frame(const can::RxFrame& rx, Nanos now);
   void on_bus_state(can::BusState s, Nanos now) { safety_.on_bus_state(s == can::BusState::bus_off, now); }
-  // Appends the frames to transmit now: command (or neutral/disengage) messages + heartbeat.
+  // Whether to transmit a frame set now: a transition not yet on the bus (at once, in the same tick
+  // as its cause), a new command within the bus schedule (a held one goes at the first tick that
+  // allows it), or the periodic repeat. Evaluates the timeouts first. `command_changed`: the caller
+  // just handed a command that changed the output (only counted when held back).
+  [[nodiscard]] bool transmit_due(Nanos now, bool command_changed);
+  // Appends the frames to transmit now: command (or neutral/disengage) messages + heartbeat; the
+  // caller puts them on the bus (the schedule counts them as sent).
   void frames(Nanos now, std::vector<can::Frame>& out);
 
   [[nodiscard]] safety::SafetyCore& safety() noexcept { return safety_; }
@@ -64,6 +74,9 @@ class BridgeCore {
   safety::EcuStatus ecu_{};
   VehicleFeedback fb_{};
   BridgeCounters counters_{};
+  TxSchedule schedule_;
+  std::uint64_t transitions_sent_ = 0;  // safety transitions already reflected on the bus
+  std::uint64_t applied_sent_ = 0;      // applied commands already on the bus
 };
 
 safety::SafetyConfig safety_config(const Protocol& p);

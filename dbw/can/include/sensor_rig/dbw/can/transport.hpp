@@ -39,14 +39,37 @@ struct RxFrame {
   Nanos stamp = 0;  // kernel receive time (CLOCK_REALTIME), or the log time for replay
 };
 
+// A statistic one thread updates while others read it (relaxed atomics: counts, no ordering).
+template <class T>
+class StatValue {
+ public:
+  StatValue(T v = T{}) noexcept : v_(v) {}  // NOLINT(google-explicit-constructor): reads as a plain number
+  StatValue(const StatValue& o) noexcept : v_(o.load()) {}
+  StatValue& operator=(const StatValue& o) noexcept { return *this = o.load(); }
+  StatValue& operator=(T v) noexcept {
+    v_.store(v, std::memory_order_relaxed);
+    return *this;
+  }
+  StatValue& operator++() noexcept {
+    v_.fetch_add(1, std::memory_order_relaxed);
+    return *this;
+  }
+  operator T() const noexcept { return load(); }  // NOLINT(google-explicit-constructor)
+  [[nodiscard]] T load() const noexcept { return v_.load(std::memory_order_relaxed); }
+
+ private:
+  std::atomic<T> v_;
+};
+
+// Updated by the sending and the receiving thread (the bridge sends from two threads, receives on one).
 struct TransportStats {
-  std::uint64_t sent = 0;
-  std::uint64_t received = 0;
-  std::uint64_t send_refused = 0;  // would_block / bus_off / invalid
-  std::uint64_t rx_dropped = 0;    // malformed wire records, kernel drops
-  std::uint64_t error_frames = 0;
-  std::uint64_t bus_off_events = 0;
-  int last_errno = 0;
+  StatValue<std::uint64_t> sent = 0;
+  StatValue<std::uint64_t> received = 0;
+  StatValue<std::uint64_t> send_refused = 0;  // would_block / bus_off / invalid
+  StatValue<std::uint64_t> rx_dropped = 0;    // malformed wire records, kernel drops
+  StatValue<std::uint64_t> error_frames = 0;
+  StatValue<std::uint64_t> bus_off_events = 0;
+  StatValue<int> last_errno = 0;
 };
 
 // What an error frame says about the controller (linux/can/error.h classes).

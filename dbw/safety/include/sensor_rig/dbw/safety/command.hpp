@@ -8,9 +8,13 @@ namespace sensor_rig::dbw::safety {
 
 enum class Gear : std::uint8_t { none = 0, park = 1, reverse = 2, neutral = 3, drive = 4 };
 
+// Who sent a command: the DDS publication handle of its writer (0 when there is only one source).
+using WriterId = std::uint64_t;
+
 struct Command {
-  Nanos stamp = 0;           // the command's own stamp (vehicle time)
-  std::uint64_t seq = 0;     // strictly increasing per source
+  Nanos stamp = 0;           // the command's own stamp (vehicle time): a plausibility check only
+  std::uint64_t seq = 0;     // strictly increasing per writer
+  WriterId writer = 0;
   bool enable = false;
   double steering_angle = 0.0;   // road-wheel angle, rad, + = left (REP 103)
   double steering_torque = 0.0;  // Nm at the steering column (torque mode)

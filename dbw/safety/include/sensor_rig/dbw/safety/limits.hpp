@@ -26,6 +26,12 @@ struct AxisLimit {
 struct VehicleLimits {
   std::string_view name;
   std::array<AxisLimit, kAxes> axes{};
+  // Speed-dependent steering limit (ISO 11270 style): the road-wheel angle may not ask for more
+  // than this lateral acceleration at the measured speed (kinematic bicycle: a = v^2 tan(delta) / L).
+  double wheelbase_m = 2.94;
+  double max_lateral_accel = 3.0;  // m/s^2
+  // Throttle is forced to zero while the brake request exceeds this (pedals never fight).
+  double brake_throttle_cutoff = 0.05;
   [[nodiscard]] constexpr const AxisLimit& operator[](Axis a) const noexcept { return axes[static_cast<std::size_t>(a)]; }
   [[nodiscard]] constexpr AxisLimit& operator[](Axis a) noexcept { return axes[static_cast<std::size_t>(a)]; }
 };
@@ -38,7 +44,10 @@ inline constexpr VehicleLimits kParavanRef{
       {-8.0, 8.0, 40.0, LimitAction::clamp},
       {0.0, 1.0, 2.0, LimitAction::clamp},
       {0.0, 1.0, 4.0, LimitAction::clamp},
-      {-8.0, 3.0, 5.0, LimitAction::clamp}}}};
+      {-8.0, 3.0, 5.0, LimitAction::clamp}}},
+    2.94,
+    3.0,
+    0.05};
 
 // The research car (Mercedes E-Class with Paravan SWA): conservative test-track limits; range
 // violations are rejected (disengage) instead of clamped.
@@ -48,7 +57,10 @@ inline constexpr VehicleLimits kEClassTrack{
       {-5.0, 5.0, 20.0, LimitAction::reject},
       {0.0, 0.6, 1.0, LimitAction::clamp},
       {0.0, 1.0, 3.0, LimitAction::clamp},
-      {-6.0, 2.0, 3.0, LimitAction::clamp}}}};
+      {-6.0, 2.0, 3.0, LimitAction::clamp}}},
+    2.94,
+    2.5,
+    0.05};
 
 inline constexpr std::array<const VehicleLimits*, 2> kVehicles{&kParavanRef, &kEClassTrack};
 [[nodiscard]] const VehicleLimits* find_vehicle(std::string_view name) noexcept;
@@ -60,6 +72,8 @@ struct Violation {
   bool not_finite = false; // NaN/inf: always rejected
   double requested = 0.0;
   double applied = 0.0;
+  bool lateral = false;    // steering beyond the lateral-acceleration limit at the measured speed (clamped)
+  bool interlock = false;  // throttle zeroed because the brake is requested
 };
 
 struct LimitResult {
@@ -76,8 +90,9 @@ class LimitChecker {
   explicit LimitChecker(const VehicleLimits& limits) : limits_(limits) {}
   // `dt_s`: time since the previously applied command. Rates are checked whenever there is a
   // previous command (accept() since the last reset()); dt_s <= 0 then allows no change at all
-  // (fail-safe: a zero or negative interval must not switch the rate limits off).
-  [[nodiscard]] LimitResult check(const Command& requested, double dt_s) const noexcept;
+  // (fail-safe: a zero or negative interval must not switch the rate limits off). `speed_mps`: the
+  // measured speed, for the lateral-acceleration steering limit.
+  [[nodiscard]] LimitResult check(const Command& requested, double dt_s, double speed_mps = 0.0) const noexcept;
   // Remember what was actually sent (the basis of the next rate check).
   void accept(const Command& applied) noexcept {
     prev_ = applied;
@@ -91,6 +106,9 @@ class LimitChecker {
   Command prev_{};
   bool have_prev_ = false;
 };
+
+// The largest road-wheel angle (rad) within the table's lateral acceleration at `speed_mps`.
+[[nodiscard]] double lateral_angle_limit(const VehicleLimits& v, double speed_mps) noexcept;
 
 [[nodiscard]] double axis_value(const Command& c, Axis a) noexcept;
 void set_axis_value(Command& c, Axis a, double v) noexcept;

@@ -1,0 +1,88 @@
+#pragma once
+// What the bridge's control threads hand to its publisher thread: safety events (with the status
+// they left behind) and per-command stamps. A fixed ring under its own small lock: the control
+// path neither allocates nor waits on DDS writes; when full, new items are counted and dropped.
+#include <array>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+
+#include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/dbw/bridge/bridge_core.hpp"
+#include "sensor_rig/dbw/safety/safety_core.hpp"
+#include "sensor_rig/dds/stamps_writer.hpp"
+
+namespace sensor_rig::drivers {
+
+// The bridge's state as rt/vehicle/dbw/status reports it (plain values, copied under the lock).
+struct StatusSnapshot {
+  dbw::safety::State state = dbw::safety::State::disengaged;
+  dbw::safety::Reason reason = dbw::safety::Reason::none;
+  dbw::safety::SafetyCounters counters{};
+  dbw::safety::EcuStatus ecu{};
+  const char* bus_state = "active";
+  std::uint64_t frames_sent = 0;
+  std::uint64_t frames_received = 0;
+};
+
+struct OutboxItem {
+  // kPeriodic: the 10 Hz status, queued like the events so that samples keep their order.
+  enum class Kind : std::uint8_t { kEvent, kPeriodic, kStamps, kState } kind = Kind::kEvent;
+  dbw::safety::Event event{};  // event.t in vehicle time (kPeriodic: the snapshot's time)
+  StatusSnapshot status{};
+  Nanos stamp = 0;        // kStamps: the command's header stamp
+  std::uint64_t seq = 0;  // kStamps: the command's seq
+  dds::SampleStamps stamps{};
+  dbw::VehicleFeedback feedback{};  // kState
+};
+
+class Outbox {
+ public:
+  static constexpr std::size_t kCapacity = 256;
+
+  // `wake`: notify the publisher now (events); stamps wait for its next poll.
+  void push(const OutboxItem& item, bool wake) noexcept {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (size_ == items_.size()) {
+        ++dropped_;
+        return;
+      }
+      items_[(head_ + size_) % items_.size()] = item;
+      ++size_;
+    }
+    if (wake) cv_.notify_one();
+  }
+  // Waits up to `ms` for items, then hands each to `f` (outside the lock) and returns how many.
+  template <class F>
+  std::size_t drain(int ms, F&& f) {
+    std::array<OutboxItem, 16> batch;
+    std::size_t n = 0;
+    {
+      std::unique_lock<std::mutex> lock(mu_);
+      cv_.wait_for(lock, std::chrono::milliseconds(ms), [this] { return size_ > 0; });
+      while (n < batch.size() && size_ > 0) {
+        batch[n++] = items_[head_];
+        head_ = (head_ + 1) % items_.size();
+        --size_;
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) f(batch[i]);
+    return n;
+  }
+  [[nodiscard]] std::uint64_t dropped() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return dropped_;
+  }
+
+ private:
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::array<OutboxItem, kCapacity> items_{};
+  std::size_t head_ = 0;
+  std::size_t size_ = 0;
+  std::uint64_t dropped_ = 0;
+};
+
+}  // namespace sensor_rig::drivers
