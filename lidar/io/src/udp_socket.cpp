@@ -12,15 +12,13 @@
 #include <string>
 #include <system_error>
 
+#include "sensor_rig/common/socket_options.hpp"
+
 namespace sensor_rig::lidar {
 namespace {
 
 [[noreturn]] void throw_errno(const std::string& what) {
   throw std::system_error(errno, std::generic_category(), what);
-}
-
-void set_int(int fd, int level, int opt, int value, const char* name) {
-  if (::setsockopt(fd, level, opt, &value, sizeof value) != 0) throw_errno(std::string("setsockopt ") + name);
 }
 
 }  // namespace
@@ -92,22 +90,22 @@ UniqueFd UdpSocketBuilder::build() const {
   const int type = SOCK_DGRAM | SOCK_CLOEXEC | (nonblocking_ ? SOCK_NONBLOCK : 0);
   UniqueFd fd(::socket(AF_INET, type, 0));
   if (!fd) throw_errno("socket(AF_INET, SOCK_DGRAM)");
-  if (reuse_) set_int(fd.get(), SOL_SOCKET, SO_REUSEADDR, 1, "SO_REUSEADDR");
+  if (reuse_) set_socket_option(fd.get(), SOL_SOCKET, SO_REUSEADDR, 1, "SO_REUSEADDR");
   if (rcvbuf_ > 0) {
     // The kernel doubles the request; ask for half so the granted size matches the request.
     const int half = rcvbuf_ / 2 > 0 ? rcvbuf_ / 2 : 1;
-    if (::setsockopt(fd.get(), SOL_SOCKET, SO_RCVBUFFORCE, &half, sizeof half) != 0) {
-      set_int(fd.get(), SOL_SOCKET, SO_RCVBUF, half, "SO_RCVBUF");  // unprivileged: capped by rmem_max
+    if (!try_socket_option(fd.get(), SOL_SOCKET, SO_RCVBUFFORCE, half)) {
+      set_socket_option(fd.get(), SOL_SOCKET, SO_RCVBUF, half, "SO_RCVBUF");  // unprivileged: capped by rmem_max
     }
   }
   if (sndbuf_ > 0) {
     const int half = sndbuf_ / 2 > 0 ? sndbuf_ / 2 : 1;
-    if (::setsockopt(fd.get(), SOL_SOCKET, SO_SNDBUFFORCE, &half, sizeof half) != 0) {
-      set_int(fd.get(), SOL_SOCKET, SO_SNDBUF, half, "SO_SNDBUF");
+    if (!try_socket_option(fd.get(), SOL_SOCKET, SO_SNDBUFFORCE, half)) {
+      set_socket_option(fd.get(), SOL_SOCKET, SO_SNDBUF, half, "SO_SNDBUF");
     }
   }
-  if (timestamps_) set_int(fd.get(), SOL_SOCKET, SO_TIMESTAMPNS, 1, "SO_TIMESTAMPNS");
-  if (drops_) set_int(fd.get(), SOL_SOCKET, SO_RXQ_OVFL, 1, "SO_RXQ_OVFL");
+  if (timestamps_) set_socket_option(fd.get(), SOL_SOCKET, SO_TIMESTAMPNS, 1, "SO_TIMESTAMPNS");
+  if (drops_) set_socket_option(fd.get(), SOL_SOCKET, SO_RXQ_OVFL, 1, "SO_RXQ_OVFL");
   if (bind_) {
     const sockaddr_in addr = resolve(*bind_);
     if (::bind(fd.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {

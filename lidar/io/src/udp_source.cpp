@@ -8,6 +8,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "sensor_rig/common/socket_options.hpp"
+
 namespace sensor_rig::lidar {
 
 static_assert(sizeof(sockaddr_in) <= 64);
@@ -96,19 +98,9 @@ RecvResult UdpSource::receive(std::span<PacketSlot> out, int timeout_ms) noexcep
     slot.truncated = (h.msg_flags & MSG_TRUNC) != 0;
     slot.src_addr = ntohl(addrs_[i].sin_addr.s_addr);
     slot.src_port = ntohs(addrs_[i].sin_port);
-    slot.rx_ns = 0;
-    for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(const_cast<msghdr*>(&h), c)) {
-      if (c->cmsg_level != SOL_SOCKET) continue;
-      if (c->cmsg_type == SCM_TIMESTAMPNS && c->cmsg_len >= CMSG_LEN(sizeof(timespec))) {
-        timespec ts{};
-        std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
-        slot.rx_ns = static_cast<Nanos>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
-      } else if (c->cmsg_type == SO_RXQ_OVFL && c->cmsg_len >= CMSG_LEN(sizeof(std::uint32_t))) {
-        std::uint32_t drops = 0;
-        std::memcpy(&drops, CMSG_DATA(c), sizeof drops);
-        stats_.kernel_drops = drops;
-      }
-    }
+    const ReceiveControl control = read_receive_control(h);
+    slot.rx_ns = control.kernel_rx_ns;
+    if (control.rxq_dropped) stats_.kernel_drops = *control.rxq_dropped;
     if (slot.rx_ns == 0) {
       if (fallback_ns == 0) fallback_ns = vehicle_now_ns();
       slot.rx_ns = fallback_ns;
