@@ -14,6 +14,7 @@
 #include <span>
 #include <string>
 
+#include "scan_checks.hpp"
 #include "sensor_rig/lidar/hesai/packet.hpp"
 
 #ifndef RIG_FUZZ_CORPUS_MAIN
@@ -24,13 +25,6 @@ namespace {
 
 using namespace sensor_rig;
 using namespace sensor_rig::lidar;
-
-void check(const Scan& s, int channels) {
-  for (const auto& p : s.points) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || p.ring >= channels) std::abort();
-  }
-  if (s.packets == 0) std::abort();
-}
 
 }  // namespace
 
@@ -68,13 +62,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (auto info = hesai::read_packet_info(pkt, model); info && info->tail_time_ns) {
       t = *info->tail_time_ns + dec.first_firing_offset_ns(info->returns);  // may jump anywhere
     }
-    if (auto s = dec.push(PacketView{pkt, t, hesai::kDataPort}, t)) check(*s, channels);
+    if (auto s = dec.push(PacketView{pkt, t, hesai::kDataPort}, t)) fuzz::check_scan(*s, channels);
   }
-  if (auto s = dec.flush()) check(*s, channels);
+  if (auto s = dec.flush()) fuzz::check_scan(*s, channels);
   const auto& st = dec.stats();
   std::uint64_t by_status = 0;
   for (auto n : st.by_status) by_status += n;
-  if (by_status != st.packets || st.packets != st.packets_used + st.dropped()) std::abort();
+  if (by_status != st.packets) std::abort();
+  fuzz::check_counters(st);
   return 0;
 }
 
@@ -106,13 +101,6 @@ std::vector<std::byte> packet(h::builder::Kind kind, std::uint8_t return_mode, i
   return h::builder::build_packet(s);
 }
 
-void write(const std::filesystem::path& dir, const std::string& name, std::uint8_t mode,
-           const std::vector<std::vector<std::byte>>& packets) {
-  std::ofstream f(dir / name, std::ios::binary);
-  f.put(static_cast<char>(mode));
-  for (const auto& p : packets) f.write(reinterpret_cast<const char*>(p.data()), static_cast<std::streamsize>(p.size()));
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -121,17 +109,17 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(dir);
   using h::builder::Kind;
   // mode: bit 0 model (0 Pandar40P, 1 PandarXT32), bits 1-2 returns, bits 3-4 cut, bit 5 partial.
-  write(dir, "p40_strongest_cut", 0x20,
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "p40_strongest_cut", 0x20,
         {packet(Kind::k40P, 0x37, 35800, 20, 1, 100), packet(Kind::k40P, 0x37, 0, 20, 2, 656),
          packet(Kind::k40P, 0x37, 200, 20, 3, 1212), packet(Kind::k40P, 0x37, 400, 20, 4, 1768)});
-  write(dir, "p40_dual", 0x04,
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "p40_dual", 0x04,
         {packet(Kind::k40P, 0x39, 9000, 20, 5, 100), packet(Kind::k40P, 0x39, 9100, 20, 6, 378)});
-  write(dir, "xt32_dual_first_last", 0x01 | 0x04 | 0x08,
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "xt32_dual_first_last", 0x01 | 0x04 | 0x08,
         {packet(Kind::kXT32, 0x3B, 8950, 18, 7, 999'800), packet(Kind::kXT32, 0x3B, 9022, 18, 8, 200)});
-  write(dir, "xt32_last", 0x01 | 0x02, {packet(Kind::kXT32, 0x38, 35900, 18, 9, 5)});
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "xt32_last", 0x01 | 0x02, {packet(Kind::kXT32, 0x38, 35900, 18, 9, 5)});
   auto short_pkt = packet(Kind::k40P, 0x37, 0, 20, 10, 0);
   short_pkt.resize(700);
-  write(dir, "wrong_size", 0, {short_pkt});
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "wrong_size", 0, {short_pkt});
   std::ofstream(dir / "calibration_40p", std::ios::binary) << '\x80' << "Laser id,Elevation,Azimuth\n1,14.794,-1.042\n"
                                                            << "2,10.944,-1.042\n3,x,0\n";
   std::ofstream(dir / "firetime_xt32", std::ios::binary) << '\x81' << "\xEF\xBB\xBF" "Channel,fire time(us)\n1,6\n2,7.512\n";

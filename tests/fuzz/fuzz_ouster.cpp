@@ -15,6 +15,7 @@
 #include <span>
 #include <string>
 
+#include "scan_checks.hpp"
 #include "sensor_rig/lidar/mock/ouster_packet_builder.hpp"
 
 namespace ot = sensor_rig::lidar::ouster::builder;
@@ -42,12 +43,6 @@ const ouster::SensorMetadata& metadata_for(Profile p) {
   return all[static_cast<std::size_t>(p)];
 }
 
-void check(const Scan& s) {
-  for (const auto& p : s.points)
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || p.ring >= kPixels) std::abort();
-  if (s.packets == 0) std::abort();
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -72,11 +67,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (std::size_t off = 0; off < bytes.size(); off += n) {
     const auto pkt = bytes.subspan(off, std::min(n, bytes.size() - off));
     if (auto ts = dec.first_column_time(pkt)) t = static_cast<Nanos>(*ts & 0x3FFFFFFFFFFFFFFFULL);
-    if (auto s = dec.push(PacketView{pkt, t, 7502}, t)) check(*s);
+    if (auto s = dec.push(PacketView{pkt, t, 7502}, t)) fuzz::check_scan(*s, kPixels);
   }
-  if (auto s = dec.flush()) check(*s);
+  if (auto s = dec.flush()) fuzz::check_scan(*s, kPixels);
   const auto& st = dec.stats();
-  if (st.packets != st.packets_used + st.dropped()) std::abort();
+  fuzz::check_counters(st);
   return 0;
 }
 
@@ -106,13 +101,6 @@ std::vector<std::uint8_t> frame_packet(Profile prof, std::uint32_t frame, std::s
   return ot::encode_packet(prof, kPixels, frame, cols, 7654321);
 }
 
-void write(const std::filesystem::path& dir, const std::string& name, std::uint8_t mode,
-           const std::vector<std::vector<std::uint8_t>>& packets) {
-  std::ofstream f(dir / name, std::ios::binary);
-  f.put(static_cast<char>(mode));
-  for (const auto& p : packets) f.write(reinterpret_cast<const char*>(p.data()), static_cast<std::streamsize>(p.size()));
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -125,12 +113,12 @@ int main(int argc, char** argv) {
     std::vector<std::vector<std::uint8_t>> pk;
     for (std::size_t k = 0; k < 4; ++k) pk.push_back(frame_packet(p, 7, k, static_cast<unsigned>(prof * 10 + k)));
     pk.push_back(frame_packet(p, 8, 0, 99));
-    write(dir, "profile" + std::to_string(prof), static_cast<std::uint8_t>(prof | ((prof % 3) << 3)), pk);
+    sensor_rig::lidar::fuzz::write_corpus_file(dir, "profile" + std::to_string(prof), static_cast<std::uint8_t>(prof | ((prof % 3) << 3)), pk);
   }
   // Joined mid-frame, partial scans emitted; a truncated tail.
   auto tail = frame_packet(Profile::kLegacy, 2, 3, 5);
   tail.resize(tail.size() / 2);
-  write(dir, "legacy_partial_truncated", 0x20,
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "legacy_partial_truncated", 0x20,
         {frame_packet(Profile::kLegacy, 1, 2, 1), frame_packet(Profile::kLegacy, 1, 3, 2), tail});
   std::ofstream(dir / "metadata_nested", std::ios::binary)
       << '\x80' << ot::nested_metadata("RNG19_RFL8_SIG16_NIR16_DUAL", 4, 64);

@@ -15,6 +15,7 @@
 #include <span>
 #include <string>
 
+#include "scan_checks.hpp"
 #include "sensor_rig/lidar/velodyne/packet.hpp"
 
 #ifndef RIG_FUZZ_CORPUS_MAIN
@@ -26,13 +27,6 @@ namespace {
 
 using namespace sensor_rig;
 using namespace sensor_rig::lidar;
-
-void check(const Scan& s, int lasers) {
-  for (const auto& p : s.points) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || p.ring >= lasers) std::abort();
-  }
-  if (s.packets == 0) std::abort();
-}
 
 }  // namespace
 
@@ -68,11 +62,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       // Packet time as a driver would take it: from the sensor clock (may jump anywhere).
       t = velodyne::sensor_time_to_ns(info->sensor_time_us, t);
     }
-    if (auto s = dec.push(PacketView{pkt, t, velodyne::kDataPort}, t)) check(*s, lasers);
+    if (auto s = dec.push(PacketView{pkt, t, velodyne::kDataPort}, t)) fuzz::check_scan(*s, lasers);
     (void)to_string(dec.last_status());
   }
-  if (auto s = dec.flush()) check(*s, lasers);
-  if (dec.stats().packets != dec.stats().packets_used + dec.stats().dropped()) std::abort();
+  if (auto s = dec.flush()) fuzz::check_scan(*s, lasers);
+  fuzz::check_counters(dec.stats());
   return 0;
 }
 
@@ -109,13 +103,6 @@ std::vector<std::uint8_t> packet(v::ProductId pid, v::ReturnMode mode, int az0, 
   return out;
 }
 
-void write(const std::filesystem::path& dir, const std::string& name, std::uint8_t mode,
-           const std::vector<std::vector<std::uint8_t>>& packets) {
-  std::ofstream f(dir / name, std::ios::binary);
-  f.put(static_cast<char>(mode));
-  for (const auto& p : packets) f.write(reinterpret_cast<const char*>(p.data()), static_cast<std::streamsize>(p.size()));
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -125,22 +112,22 @@ int main(int argc, char** argv) {
   using v::ProductId;
   using v::ReturnMode;
   // mode: model = mode % 3 (0 VLP-16, 1 VLP-32C, 2 HDL-32E), returns = (mode / 3) % 3.
-  write(dir, "vlp16_strongest_wrap", 0x40,
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "vlp16_strongest_wrap", 0x40,
         {packet(ProductId::kVLP16, ReturnMode::kStrongest, 35500, 40, 1000, 1),
          packet(ProductId::kVLP16, ReturnMode::kStrongest, 35980, 40, 2327, 2),
          packet(ProductId::kVLP16, ReturnMode::kStrongest, 460, 40, 3654, 3)});
-  write(dir, "vlp16_dual", 6,
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "vlp16_dual", 6,
         {packet(ProductId::kVLP16, ReturnMode::kDual, 100, 40, 1000, 4),
          packet(ProductId::kVLP16, ReturnMode::kDual, 340, 40, 2327, 5)});
-  write(dir, "vlp32c_last_cut90", 0x10 | 4,
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "vlp32c_last_cut90", 0x10 | 4,
         {packet(ProductId::kVLP32C, ReturnMode::kLast, 8900, 20, 5000, 6),
          packet(ProductId::kVLP32C, ReturnMode::kLast, 9140, 20, 5664, 7)});
-  write(dir, "hdl32e_strongest", 2 | 0x08,
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "hdl32e_strongest", 2 | 0x08,
         {packet(ProductId::kHDL32E, ReturnMode::kStrongest, 35900, 20, 3'599'999'000U, 8),
          packet(ProductId::kHDL32E, ReturnMode::kStrongest, 140, 20, 553, 9)});
   auto short_pkt = packet(ProductId::kVLP16, ReturnMode::kStrongest, 0, 40, 0, 10);
   short_pkt.resize(700);
-  write(dir, "wrong_size", 0, {short_pkt});
+  sensor_rig::lidar::fuzz::write_corpus_file(dir, "wrong_size", 0, {short_pkt});
   std::ofstream(dir / "calibration_xml", std::ios::binary)
       << '\x80'
       << "<?xml version=\"1.0\"?>\n<boost_serialization>\n<DB>\n<distLSB_>0.2</distLSB_>\n<points_>\n"
