@@ -39,6 +39,28 @@ CameraMockConfig parse_mock(const config::Node& n) {
   return m;
 }
 
+// outputs: {image_color: none|bgr8|rgb8, compressed: bool, jpeg_quality: 1..100, queue_depth: 1..2}
+CameraOutputsConfig parse_outputs(const config::Node& n, camera::PixelFormat format) {
+  CameraOutputsConfig o;
+  if (!n.expect_map()) return o;
+  n.allow_keys({"image_color", "compressed", "jpeg_quality", "queue_depth"});
+  const auto color = n.get_choice("image_color", {"none", "bgr8", "rgb8"}, "none");
+  o.color = color != "none";
+  o.color_order = color == "rgb8" ? camera::ColorOrder::kRgb : camera::ColorOrder::kBgr;
+  o.compressed = n.get_bool("compressed", false);
+  o.jpeg_quality = static_cast<int>(n.get_int("jpeg_quality", 1, 100, 90));
+  o.queue_depth = static_cast<int>(n.get_int("queue_depth", 1, 2, 1));
+  const auto& fi = camera::info(format);
+  const std::string fmt = fi.genicam != nullptr ? fi.genicam : fi.v4l2_name != nullptr ? fi.v4l2_name : "?";
+  if (o.color && !camera::is_bayer8(format))
+    n.fail("image_color", "needs an 8-bit Bayer pixel_format (BayerRG8, BayerBG8, BayerGR8, BayerGB8), not " + fmt);
+  const bool jpeg_input = camera::is_bayer8(format) || format == camera::PixelFormat::kMono8 ||
+                          format == camera::PixelFormat::kRgb8 || format == camera::PixelFormat::kBgr8;
+  if (o.compressed && !jpeg_input)
+    n.fail("compressed", "JPEG needs an 8-bit Bayer, Mono8, RGB8 or BGR8 pixel_format, not " + fmt);
+  return o;
+}
+
 }  // namespace
 
 CameraConfig parse_camera_config(const config::Node& n) {
@@ -46,7 +68,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
   if (!n.expect_map()) return c;
   n.allow_keys({"name", "backend", "device", "pixel_format", "width", "height", "frame_rate", "calibration", "exposure_us",
                 "gain_db", "features", "trigger", "packet_size", "packet_delay_ns", "socket_buffer_bytes", "buffers",
-                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock"});
+                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock", "outputs"});
   c.name = n.get_string("name");
   for (char ch : c.name)
     if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) {
@@ -124,6 +146,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
   c.watchdog_ms = static_cast<int>(n.get_int("watchdog_ms", 0, 900, 0));
   if (auto q = n.child("qos")) c.qos = dds::QosSpec::from_config(*q, c.qos);
   if (auto m = n.child("mock")) c.mock = parse_mock(*m);
+  if (auto o = n.child("outputs")) c.outputs = parse_outputs(*o, s.format);
   using K = CameraMockConfig::Kind;
   const bool aravis_mock = c.mock.kind == K::kGige || c.mock.kind == K::kAravisInProcess;
   if (aravis_mock && s.backend != "aravis") n.fail("mock", std::string("mock ") + to_string(c.mock.kind) + " needs backend: aravis");

@@ -11,6 +11,7 @@
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/frame_clock.hpp"
+#include "image_outputs.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -32,6 +33,7 @@ struct CameraDriver::Impl {
   TriggerGroup* trigger;
   FrameClock clock;
   std::vector<double> d;  // CameraInfo.d storage
+  std::unique_ptr<ImageOutputs> outputs;  // image_color / compressed on their own thread; null: none
   std::thread thread;
   std::atomic<bool> stop_flag{false};
 
@@ -63,7 +65,8 @@ struct CameraDriver::Impl {
         stamps(st),
         trigger(t),
         clock(static_cast<Nanos>(c.source.exposure_us * 1000.0)),
-        d(c.info.d) {}
+        d(c.info.d),
+        outputs(c.outputs.any() ? std::make_unique<ImageOutputs>(c, p, st) : nullptr) {}
 
   msg::CameraInfo camera_info(const msg::Time& stamp) {
     msg::CameraInfo ci{};
@@ -112,6 +115,8 @@ struct CameraDriver::Impl {
     dds::SampleStamps s{st.vehicle_ns, m.first_rx_ns, m.complete_ns, ready, publish, written,
                         m.packets, static_cast<std::uint32_t>(dropped), img.data._length};
     stamps.write(image_topic_name, img.header.stamp, img.header.frame_id, m.seq, s);
+    // A copy into the worker's queue (never waits for the worker); the raw frame is already out.
+    if (outputs) outputs->offer(m, st.vehicle_ns, f.data());
     std::lock_guard lock(mutex);
     if (!rc.ok()) {
       ++write_errors;
@@ -229,7 +234,9 @@ camera::FrameSource& CameraDriver::source() { return *impl_->src; }
 std::string CameraDriver::topic() const { return impl_->image_topic_name; }
 
 void CameraDriver::start() {
+  if (impl_->outputs) impl_->outputs->start();
   impl_->thread = std::thread([this] { impl_->run(); });
+  (void)pthread_setname_np(impl_->thread.native_handle(), ("cam:" + impl_->cfg.name).substr(0, 15).c_str());
   if (const int prio = impl_->cfg.realtime_priority; prio > 0) {
     sched_param sp{};
     sp.sched_priority = prio;
@@ -243,6 +250,7 @@ void CameraDriver::stop() {
   impl_->stop_flag.store(true);
   if (!impl_->thread.joinable()) return;
   impl_->thread.join();
+  if (impl_->outputs) impl_->outputs->stop();
   const auto st = status();
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
@@ -290,6 +298,7 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("sync_residual_p99_ns", impl_->sync.residual_p99_ns);
   s.add("ptp", "not used (device ticks mapped)");
   if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
+  if (impl_->outputs) impl_->outputs->add_status(s);
   return s;
 }
 

@@ -86,5 +86,36 @@ TEST(CameraConfig, CalibrationOfAnotherSizeIsAnError) {
   EXPECT_NE(p.problems.find("file not found"), std::string::npos);
 }
 
+TEST(CameraConfig, OutputsKeysAndDefaults) {
+  auto p = parse("name: c\ndevice: 127.0.0.3\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_FALSE(p.cfg.outputs.any());
+  p = parse("name: c\ndevice: 127.0.0.3\noutputs: {image_color: rgb8, compressed: true, jpeg_quality: 75, queue_depth: 2}\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_TRUE(p.cfg.outputs.color);
+  EXPECT_EQ(p.cfg.outputs.color_order, camera::ColorOrder::kRgb);
+  EXPECT_TRUE(p.cfg.outputs.compressed);
+  EXPECT_EQ(p.cfg.outputs.jpeg_quality, 75);
+  EXPECT_EQ(p.cfg.outputs.queue_depth, 2);
+  p = parse("name: c\ndevice: 127.0.0.3\noutputs: {image_color: bgr8}\n");
+  EXPECT_EQ(p.cfg.outputs.color_order, camera::ColorOrder::kBgr);
+  EXPECT_FALSE(p.cfg.outputs.compressed);
+  EXPECT_EQ(p.cfg.outputs.queue_depth, 1);
+}
+
+TEST(CameraConfig, BadOutputsAreReportedAtTheirKeys) {
+  auto p = parse("name: c\nbackend: v4l2\ndevice: /dev/video0\npixel_format: YUYV\noutputs: {image_color: bgr8, compressed: true}\n");
+  EXPECT_NE(p.problems.find("cams.yaml:5:"), std::string::npos) << p.problems;
+  EXPECT_NE(p.problems.find("image_color: needs an 8-bit Bayer pixel_format"), std::string::npos) << p.problems;
+  EXPECT_NE(p.problems.find("compressed: JPEG needs"), std::string::npos) << p.problems;
+  p = parse("name: c\ndevice: 127.0.0.3\noutputs: {image_color: yuv, queue_depth: 3, jpeg_quality: 0, colour: 1}\n");
+  for (const char* needle : {"image_color", "queue_depth", "jpeg_quality", "colour"})
+    EXPECT_NE(p.problems.find(needle), std::string::npos) << needle << "\n" << p.problems;
+  p = parse("name: c\ndevice: 127.0.0.3\npixel_format: Mono8\noutputs: {compressed: true}\n");
+  EXPECT_EQ(p.problems, "");
+  p = parse("name: c\ndevice: 127.0.0.3\npixel_format: Mono8\noutputs: {image_color: bgr8}\n");
+  EXPECT_NE(p.problems.find("image_color: needs an 8-bit Bayer"), std::string::npos) << p.problems;
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "sensor_rig/camera/calibration.hpp"
+#include "sensor_rig/camera/debayer.hpp"
 #include "sensor_rig/camera/source.hpp"
 #include "sensor_rig/common/config_node.hpp"
 #include "sensor_rig/dds/qos.hpp"
@@ -28,6 +29,17 @@ inline dds::QosSpec camera_qos() {
   return q;
 }
 
+// Optional outputs beside image_raw, made by one worker thread per camera off the capture thread:
+// .../image_color (Bayer 8-bit debayered to bgr8/rgb8) and .../image_raw/compressed (JPEG).
+struct CameraOutputsConfig {
+  bool color = false;                                  // image_color
+  camera::ColorOrder color_order = camera::ColorOrder::kBgr;
+  bool compressed = false;                             // image_raw/compressed
+  int jpeg_quality = 90;                               // 1..100
+  int queue_depth = 1;                                 // 1..2 frames waiting; more: the oldest is dropped
+  [[nodiscard]] bool any() const noexcept { return color || compressed; }
+};
+
 struct CameraConfig {
   std::string name;                 // /sensors/camera/<name>/image_raw, frame camera_<name>
   camera::SourceConfig source;      // backend, device, format, size, rate, exposure, gain, trigger
@@ -39,6 +51,7 @@ struct CameraConfig {
   int watchdog_ms = 0;              // no frame for this long: reported and reopened; 0 = auto
   dds::QosSpec qos = camera_qos();
   CameraMockConfig mock;
+  CameraOutputsConfig outputs;
 
   [[nodiscard]] int watchdog() const noexcept;  // the effective watchdog (< 1 s)
 };

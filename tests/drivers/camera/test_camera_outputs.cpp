@@ -1,0 +1,157 @@
+// image_color and image_raw/compressed end to end: a source of known Bayer frames -> the node ->
+// DDS readers: the colour image is the scene's colour, the JPEG decodes back to it, both carry the
+// raw image's stamp, and the counters reach /diagnostics.
+#include <gtest/gtest.h>
+#include <turbojpeg.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <map>
+#include <vector>
+
+#include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/drivers/camera/camera_driver.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+template <class Pred>
+bool wait_for(Pred p, int ms) {
+  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
+  while (!p()) {
+    if (monotonic_now_ns() > deadline) return false;
+    ::usleep(5'000);
+  }
+  return true;
+}
+
+// Frames of a uniform colour (R 200, G 120, B 40) seen through a BGGR filter, every 20 ms.
+class BayerSceneSource : public camera::FrameSource {
+ public:
+  BayerSceneSource(std::uint32_t w, std::uint32_t h) : w_(w), h_(h), pool_(3, static_cast<std::size_t>(w) * h) {
+    for (std::size_t b = 0; b < pool_.count(); ++b) {
+      auto buf = pool_.buffer(b);
+      for (std::uint32_t y = 0; y < h; ++y)
+        for (std::uint32_t x = 0; x < w; ++x) {
+          // BGGR: (even y, even x) B, (odd, odd) R, else G.
+          const bool ye = y % 2 == 0, xe = x % 2 == 0;
+          buf[y * w + x] = ye && xe ? 40 : (!ye && !xe ? 200 : 120);
+        }
+    }
+  }
+  void open() override { open_ = true; }
+  void close() noexcept override { open_ = false; }
+  [[nodiscard]] bool is_open() const noexcept override { return open_; }
+  camera::Capture next(int timeout_ms) override {
+    ::usleep(static_cast<useconds_t>(std::min(timeout_ms, 20)) * 1000);
+    camera::Capture c;
+    const auto idx = pool_.acquire();
+    if (!idx) return c;
+    camera::FrameMeta m;
+    m.seq = ++seq_;
+    m.width = w_;
+    m.height = h_;
+    m.step = w_;
+    m.format = camera::PixelFormat::kBayerBG8;
+    m.domain = camera::TimeDomain::kMonotonic;
+    m.device_ns = monotonic_now_ns() - 1'000'000;
+    m.first_rx_ns = vehicle_now_ns();
+    m.complete_ns = m.first_rx_ns;
+    m.complete_mono_ns = monotonic_now_ns();
+    c.status = camera::CaptureStatus::kFrame;
+    c.frame = camera::Frame(m, pool_.buffer(*idx), [this, i = *idx] { pool_.release(i); });
+    ++stats_.completed;
+    return c;
+  }
+  [[nodiscard]] camera::SourceStats stats() const override { return stats_; }
+  [[nodiscard]] std::string describe() const override { return "bayer scene"; }
+
+ private:
+  std::uint32_t w_, h_;
+  camera::BufferPool pool_;
+  bool open_ = false;
+  std::uint64_t seq_ = 0;
+  camera::SourceStats stats_;
+};
+
+std::string value(const dds::DriverStatus& s, const std::string& key) {
+  for (const auto& [k, v] : s.values)
+    if (k == key) return v;
+  return {};
+}
+
+TEST(CameraOutputs, ColourAndJpegOfAKnownBayerSceneOffTheCaptureThread) {
+  dds::Participant p;
+  dds::StampsWriter stamps(p);
+  CameraConfig cfg;
+  cfg.name = "outputs_" + std::to_string(::getpid());
+  cfg.frame_id = "camera_" + cfg.name;
+  cfg.source.backend = "aravis";
+  cfg.source.format = camera::PixelFormat::kBayerBG8;
+  cfg.source.width = 320;
+  cfg.source.height = 240;
+  cfg.source.frame_rate = 50;
+  cfg.info = camera::uncalibrated(320, 240);
+  cfg.outputs.color = true;
+  cfg.outputs.color_order = camera::ColorOrder::kRgb;
+  cfg.outputs.compressed = true;
+  cfg.outputs.jpeg_quality = 90;
+  const std::string base = "/sensors/camera/" + cfg.name;
+  dds::Topic<msg::Image> raw_t(p, base + "/image_raw", cfg.qos);
+  dds::Reader<msg::Image> raw(p, raw_t, cfg.qos);
+  dds::Topic<msg::Image> color_t(p, base + "/image_color", cfg.qos);
+  dds::Reader<msg::Image> color(p, color_t, cfg.qos);
+  dds::Topic<msg::CompressedImage> jpeg_t(p, base + "/image_raw/compressed", cfg.qos);
+  dds::Reader<msg::CompressedImage> jpeg(p, jpeg_t, cfg.qos);
+  CameraDriver driver(cfg, std::make_unique<BayerSceneSource>(320, 240), p, stamps);
+  driver.start();
+  ASSERT_TRUE(color.wait_for_writers(1, 5000));
+  ASSERT_TRUE(jpeg.wait_for_writers(1, 5000));
+  ASSERT_TRUE(raw.wait_for_writers(1, 5000));
+
+  std::map<Nanos, bool> raw_stamps;
+  int colours = 0, jpegs = 0;
+  ASSERT_TRUE(wait_for(
+      [&] {
+        raw.take([&](const msg::Image& m, const dds_sample_info_t&) { raw_stamps[msg::from_time(m.header.stamp)] = true; });
+        color.take([&](const msg::Image& m, const dds_sample_info_t&) {
+          ++colours;
+          EXPECT_STREQ(m.encoding, "rgb8");
+          EXPECT_EQ(m.step, 320u * 3);
+          ASSERT_EQ(m.data._length, 320u * 240 * 3);
+          for (std::size_t i = 0; i < m.data._length; i += 3) {
+            ASSERT_EQ(m.data._buffer[i], 200) << "pixel " << i / 3;
+            ASSERT_EQ(m.data._buffer[i + 1], 120) << "pixel " << i / 3;
+            ASSERT_EQ(m.data._buffer[i + 2], 40) << "pixel " << i / 3;
+          }
+          EXPECT_TRUE(raw_stamps.contains(msg::from_time(m.header.stamp)) || raw_stamps.empty());
+        });
+        jpeg.take([&](const msg::CompressedImage& m, const dds_sample_info_t&) {
+          ++jpegs;
+          EXPECT_STREQ(m.format, "bayer_bggr8; jpeg compressed rgb8");
+          EXPECT_STREQ(m.header.frame_id, cfg.frame_id.c_str());
+          tjhandle h = tjInitDecompress();
+          std::vector<std::uint8_t> px(320 * 240 * 3);
+          ASSERT_EQ(tjDecompress2(h, m.data._buffer, m.data._length, px.data(), 320, 0, 240, TJPF_RGB, 0), 0);
+          tjDestroy(h);
+          double err = 0;
+          for (std::size_t i = 0; i < px.size(); i += 3)
+            err += std::abs(px[i] - 200) + std::abs(px[i + 1] - 120) + std::abs(px[i + 2] - 40);
+          EXPECT_LT(err / static_cast<double>(px.size()), 3.0);
+        });
+        return colours >= 5 && jpegs >= 5;
+      },
+      10000))
+      << "colour " << colours << " jpeg " << jpegs;
+  const auto st = driver.status();
+  EXPECT_GE(std::stoull(value(st, "color_frames")), 5u);
+  EXPECT_GE(std::stoull(value(st, "compressed_frames")), 5u);
+  EXPECT_GT(std::stoull(value(st, "compressed_bytes")), 0u);
+  EXPECT_EQ(value(st, "worker_errors"), "0");
+  const auto offered = std::stoull(value(st, "worker_offered"));
+  EXPECT_GE(offered, std::stoull(value(st, "worker_processed")) + std::stoull(value(st, "worker_dropped")));
+  driver.stop();
+}
+
+}  // namespace
+}  // namespace sensor_rig::drivers
