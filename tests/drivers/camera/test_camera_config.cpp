@@ -1,6 +1,7 @@
 // The `cameras:` item parser: contract keys, defaults, and every bad value reported at its line.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 
 #include "sensor_rig/drivers/camera/camera_config.hpp"
@@ -115,6 +116,23 @@ TEST(CameraConfig, BadOutputsAreReportedAtTheirKeys) {
   EXPECT_EQ(p.problems, "");
   p = parse("name: c\ndevice: 127.0.0.3\npixel_format: Mono8\noutputs: {image_color: bgr8}\n");
   EXPECT_NE(p.problems.find("image_color: needs an 8-bit Bayer"), std::string::npos) << p.problems;
+}
+
+TEST(CameraConfig, MockRigCamerasParseAndFrontNarrowHasItsOutputs) {
+  const char* src = std::getenv("RIG_SOURCE_DIR");
+  if (src == nullptr) GTEST_SKIP() << "RIG_SOURCE_DIR not set (run through ctest)";
+  auto problems = std::make_shared<config::Problems>();
+  const auto root = config::Node::load_file(std::string(src) + "/config/mock_rig.yaml", problems);
+  int n = 0;
+  bool front_outputs = false;
+  for (const auto& item : root.items("cameras", true)) {
+    const auto c = parse_camera_config(item);
+    ++n;
+    if (c.name == "front_narrow") front_outputs = c.outputs.color && c.outputs.compressed;
+  }
+  EXPECT_EQ(n, 7);
+  EXPECT_TRUE(front_outputs);
+  EXPECT_EQ(problems->str(), "");
 }
 
 }  // namespace
