@@ -9,7 +9,7 @@ build=${1:-build}
 only=${2:-}
 [ -f "$build/compile_commands.json" ] || { echo "tidy: no $build/compile_commands.json (configure and build it first)" >&2; exit 2; }
 src=$(sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$build/CMakeCache.txt")
-regex="^${src}/${only:-(bench|camera|dbw|drivers|lidar|msgs|tests|timesync)/}"
+regex="^${src}/${only:-(bench|camera|common|dbw|dds|drivers|lidar|rig|tests|timesync)/}"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 python3 - "$build/compile_commands.json" "$regex" >"$out/files" <<'PY'

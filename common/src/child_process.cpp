@@ -19,6 +19,7 @@ ChildProcess::ChildProcess(std::vector<std::string> argv, int rt_priority) {
   name_ = argv[0];
   for (std::size_t i = 1; i < argv.size() && i < 3; ++i) name_ += " " + argv[i];
   std::vector<char*> args;
+  args.reserve(argv.size() + 1);
   for (auto& a : argv) args.push_back(a.data());
   args.push_back(nullptr);
   const pid_t parent = ::getpid();

@@ -23,11 +23,12 @@ void Problems::throw_if_any() const {
   if (!items_.empty()) throw ConfigError(str());
 }
 
-Node::Node(YAML::Node node, std::shared_ptr<const std::string> file, std::string path,
+Node::Node(const YAML::Node& node, std::shared_ptr<const std::string> file, std::string path,
            std::shared_ptr<Problems> problems)
-    : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)), problems_(std::move(problems)) {}
+    // YAML::Node is a handle (no move constructor): copying it shares the tree.
+    : node_(node), file_(std::move(file)), path_(std::move(path)), problems_(std::move(problems)) {}
 
-Node Node::load_file(const std::string& path, std::shared_ptr<Problems> problems) {
+Node Node::load_file(const std::string& path, const std::shared_ptr<Problems>& problems) {
   auto file = std::make_shared<const std::string>(path);
   try {
     return Node(YAML::LoadFile(path), file, "", problems);
@@ -39,7 +40,7 @@ Node Node::load_file(const std::string& path, std::shared_ptr<Problems> problems
   return Node(YAML::Node(), file, "", problems);
 }
 
-Node Node::load_string(const std::string& text, const std::string& name, std::shared_ptr<Problems> problems) {
+Node Node::load_string(const std::string& text, const std::string& name, const std::shared_ptr<Problems>& problems) {
   auto file = std::make_shared<const std::string>(name);
   try {
     return Node(YAML::Load(text), file, "", problems);
@@ -132,7 +133,7 @@ std::vector<Node> Node::items(std::string_view key, bool required) const {
   return out;
 }
 
-std::string Node::get_string(std::string_view key, std::optional<std::string> fallback) const {
+std::string Node::get_string(std::string_view key, const std::optional<std::string>& fallback) const {
   const auto v = raw(key);
   if (!v.IsDefined() || v.IsNull()) {
     if (!fallback) fail(key, "required key is missing");
@@ -200,11 +201,11 @@ double Node::get_double(std::string_view key, double lo, double hi, std::optiona
 
 std::string Node::get_choice(std::string_view key, std::initializer_list<std::string_view> choices,
                              std::optional<std::string> fallback) const {
-  return get_choice_of(key, std::vector<std::string_view>(choices), std::move(fallback));
+  return get_choice_of(key, std::vector<std::string_view>(choices), fallback);
 }
 
 std::string Node::get_choice_of(std::string_view key, const std::vector<std::string_view>& choices,
-                                std::optional<std::string> fallback) const {
+                                const std::optional<std::string>& fallback) const {
   const bool present = has(key);
   std::string s = get_string(key, fallback);
   if (!present) return s;
@@ -216,7 +217,7 @@ std::string Node::get_choice_of(std::string_view key, const std::vector<std::str
   return fallback.value_or(choices.empty() ? std::string() : std::string(choices.front()));
 }
 
-std::string Node::get_path(std::string_view key, std::optional<std::string> fallback) const {
+std::string Node::get_path(std::string_view key, const std::optional<std::string>& fallback) const {
   const bool present = has(key);
   std::string s = get_string(key, fallback);
   if (!present || s.empty()) return s;

@@ -12,12 +12,12 @@ namespace sensor_rig::log {
 namespace {
 Level initial_level() {
   const char* env = std::getenv("RIG_LOG_LEVEL");
-  if (env == nullptr) return Level::info;
+  if (env == nullptr) return Level::kInfo;
   const std::string v(env);
-  if (v == "debug") return Level::debug;
-  if (v == "warn") return Level::warn;
-  if (v == "error") return Level::error;
-  return Level::info;
+  if (v == "debug") return Level::kDebug;
+  if (v == "warn") return Level::kWarn;
+  if (v == "error") return Level::kError;
+  return Level::kInfo;
 }
 std::atomic<Level> g_level{initial_level()};
 std::mutex g_mutex;

@@ -27,6 +27,7 @@ void StampsWriter::write(const std::string& topic, const msg::Time& stamp, const
   m.packets = s.packets;
   m.dropped = s.dropped;
   m.size_bytes = s.size_bytes;
+  m.missing_packets = s.missing_packets;
   writer_.write(m, vehicle_now_ns());
 }
 

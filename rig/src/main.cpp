@@ -7,7 +7,9 @@
 #include "sensor_rig/common/shutdown.hpp"
 #include "rig_commands.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"sensor-rig: drivers, mocks and measurements for an automated car's perception unit", "rig"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "sensor-rig 0.1.0");
@@ -30,4 +32,15 @@ int main(int argc, char** argv) {
     return sensor_rig::cli::kRuntime;
   }
   return ctx.exit_code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (...) {  // building the command tree failed (out of memory): nothing else to say
+    std::fputs("error: rig could not start\n", stderr);
+    return sensor_rig::cli::kRuntime;
+  }
 }

@@ -2,17 +2,16 @@
 // subscriber (one waitset over all its readers, stamps on receipt, per-message CSV).
 #include "sensor_rig/bench/perf/node.hpp"
 
-#include <dds/ddsc/dds_loan_api.h>
-#include <dds/ddsi/ddsi_serdata.h>
-#include <dds/ddsi/ddsi_shm_transport.h>
 #include <sched.h>
 #include <time.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include <fstream>
@@ -23,6 +22,8 @@
 #include "sensor_rig/bench/perf/records.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dds/shared_memory.hpp"
+#include "sensor_rig/dds/waitset.hpp"
 #include "sensor_rig/lidar/point_cloud.hpp"
 
 namespace sensor_rig::bench::perf {
@@ -97,7 +98,7 @@ struct OwnedSample {
 // How the samples travelled (summary.json "loans"): loaned iceoryx chunks or copies.
 struct DataPath {
   bool shared_memory = false;  // Cyclone uses iceoryx for this endpoint
-  bool loan_available = false; // writer: dds_is_loan_available (fixed-size types over shm)
+  bool loan_available = false; // writer: loans possible (fixed-size types over shm)
   std::uint64_t loaned_writes = 0, copied_writes = 0, failed_writes = 0;
   std::uint64_t zero_copy_takes = 0, copied_takes = 0;
 };
@@ -123,8 +124,8 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
   dds::Topic<T> topic(p, topic_name(a.run_id, topic_index), perf_qos(a.depth));
   dds::Writer<T> writer(p, topic, perf_qos(a.depth));
   DataPath path;
-  path.loan_available = dds_is_loan_available(writer.handle());
-  path.shared_memory = dds_is_shared_memory_available(writer.handle());
+  path.loan_available = dds::loan_available(writer.handle());
+  path.shared_memory = dds::uses_shared_memory(writer.handle());
   const bool loan = a.loan && path.loan_available;
   if (!writer.wait_for_readers(static_cast<std::uint32_t>(a.expected_matches), a.discovery_timeout_ms)) {
     log::error("perf", "publisher " + std::to_string(a.index) + ": only " + std::to_string(writer.matched()) + " of " +
@@ -150,9 +151,9 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
     if (vehicle_now_ns() < r.deadline_ns) sleep_until_realtime(r.deadline_ns);
     if (shutdown_requested() || vehicle_now_ns() >= end) break;  // the rest stay "not sent"
     T* sample = owned.sample.get();
-    void* loaned = nullptr;
     if (loan) {
-      if (dds_loan_sample(writer.handle(), &loaned) != DDS_RETCODE_OK || loaned == nullptr) {
+      void* loaned = dds::loan_sample(writer.handle());
+      if (loaned == nullptr) {
         ++path.failed_writes;
         continue;  // no chunk: not sent
       }
@@ -161,9 +162,9 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
     write_ids(*sample, pub_id, i);
     const Nanos stamp = vehicle_now_ns();  // immediately before publishing
     write_stamp(*sample, stamp);
-    const dds_return_t rc = writer.write(*sample, stamp).code();
+    const dds::Result rc = writer.write(*sample, stamp);
     const Nanos after = vehicle_now_ns();
-    if (rc != DDS_RETCODE_OK) {
+    if (!rc.ok()) {
       ++path.failed_writes;
       continue;
     }
@@ -186,7 +187,7 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
     ::sched_setscheduler(0, SCHED_OTHER, &sp);  // this thread: wrap-up at normal priority
   }
   // Let reliable delivery finish before the writer goes (bounded).
-  dds_wait_for_acks(writer.handle(), DDS_SECS(5));
+  dds::wait_for_acks(writer.handle(), 5'000'000'000);
   File f = open_csv(a.csv);
   write_pub_csv(f.get(), records);
   write_stats(a.stats, Role::kPublisher, path);
@@ -194,32 +195,6 @@ int run_publisher(const NodeArgs& a, const dds::Participant& p) {
     log::warn("perf", "publisher " + std::to_string(a.index) + ": " + std::to_string(path.failed_writes) + " writes failed");
   }
   return 0;
-}
-
-// Zero-copy take for shared memory: Cyclone 0.10's dds_take with a loan copies the sample into a
-// reader-owned buffer (sizeof(T) x batch); dds_takecdr hands out the serdata that references the
-// iceoryx chunk itself, as rmw_cyclonedds does for loaned messages. Data that came another way
-// (network, serialized in the chunk) is deserialized into `scratch`.
-template <class T, class F>
-int take_zero_copy(dds_entity_t reader, T& scratch, DataPath& path, F&& fn) {
-  int n = 0;
-  for (;;) {
-    ddsi_serdata* sd = nullptr;
-    dds_sample_info_t si{};
-    if (dds_takecdr(reader, &sd, 1, &si, DDS_ANY_STATE) <= 0 || sd == nullptr) break;
-    if (si.valid_data) {
-      if (sd->iox_chunk != nullptr && shm_get_data_state(sd->iox_chunk) == IOX_CHUNK_CONTAINS_RAW_DATA) {
-        fn(*static_cast<const T*>(sd->iox_chunk));
-        ++path.zero_copy_takes;
-      } else if (ddsi_serdata_to_sample(sd, &scratch, nullptr, nullptr)) {
-        fn(scratch);
-        ++path.copied_takes;
-      }
-      ++n;
-    }
-    ddsi_serdata_unref(sd);
-  }
-  return n;
 }
 
 template <class T>
@@ -231,14 +206,9 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
     readers.push_back(std::make_unique<dds::Reader<T>>(p, *topics.back(), perf_qos(a.depth)));
   }
   // One waitset over every reader plus a guard condition the stop watcher triggers.
-  dds::Entity waitset(dds::check(dds_create_waitset(p.handle()), "dds_create_waitset"));
-  std::vector<dds::Entity> conds;
-  for (std::size_t i = 0; i < readers.size(); ++i) {
-    conds.emplace_back(dds::check(dds_create_readcondition(readers[i]->handle(), DDS_ANY_STATE), "dds_create_readcondition"));
-    dds::check(dds_waitset_attach(waitset.handle(), conds.back().handle(), static_cast<dds_attach_t>(i)), "dds_waitset_attach");
-  }
-  dds::Entity guard(dds::check(dds_create_guardcondition(p.handle()), "dds_create_guardcondition"));
-  dds::check(dds_waitset_attach(waitset.handle(), guard.handle(), static_cast<dds_attach_t>(-1)), "dds_waitset_attach");
+  dds::WaitSet waitset(p);
+  for (std::size_t i = 0; i < readers.size(); ++i) waitset.attach_reader(readers[i]->handle(), static_cast<std::int64_t>(i));
+  waitset.attach_guard(-1);
 
   const auto deadline = monotonic_now_ns() + static_cast<Nanos>(a.discovery_timeout_ms) * 1'000'000;
   for (const auto& r : readers) {
@@ -253,12 +223,11 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
   write_sub_header(f.get());
   std::fflush(f.get());
   announce_ready();
-  const dds_entity_t guard_h = guard.handle();
-  StopWatcher stop([guard_h] { dds_set_guardcondition(guard_h, true); });
+  StopWatcher stop([&waitset] { waitset.wake(); });
 
   constexpr bool kFixed = !std::is_same_v<T, PerfSeq> && !std::is_same_v<T, PointCloud2>;
   DataPath path;
-  path.shared_memory = dds_is_shared_memory_available(readers.front()->handle());
+  path.shared_memory = dds::uses_shared_memory(readers.front()->handle());
   const bool zero_copy = kFixed && a.loan && path.shared_memory;
   log::info("perf", "subscriber " + std::to_string(a.index) + ": shared memory " + (path.shared_memory ? "yes" : "no") +
                         ", zero-copy take " + (zero_copy ? "yes" : "no"));
@@ -272,7 +241,13 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
       const PerfStamp st = read_stamp(s);
       write_sub_row(f.get(), SubRecord{topic, st.seq, st.stamp_ns, recv});
     };
-    if (zero_copy) return take_zero_copy(readers[ri]->handle(), *scratch.sample, path, record);
+    if (zero_copy) {
+      dds::TakeCounts counts;
+      const int n = dds::take_in_place(readers[ri]->handle(), *scratch.sample, counts, record);
+      path.zero_copy_takes += counts.zero_copy;
+      path.copied_takes += counts.copied;
+      return n;
+    }
     int total = 0;
     for (int got = 1; got > 0;) {
       got = readers[ri]->take([&](const T& s, const dds_sample_info_t&) { record(s); }, batch);
@@ -282,12 +257,12 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
     path.copied_takes += static_cast<std::uint64_t>(total);
     return total;
   };
-  std::vector<dds_attach_t> triggered(readers.size() + 1);
+  std::vector<std::int64_t> triggered;
   Nanos last_flush = monotonic_now_ns();
   while (!stop.stopped() && !shutdown_requested()) {
-    const dds_return_t n = dds_waitset_wait(waitset.handle(), triggered.data(), triggered.size(), DDS_SECS(1));
-    for (dds_return_t k = 0; k < n; ++k) {
-      if (triggered[static_cast<std::size_t>(k)] >= 0) take_all(static_cast<std::size_t>(triggered[static_cast<std::size_t>(k)]));
+    waitset.wait(triggered, 1'000'000'000);
+    for (const auto tag : triggered) {
+      if (tag >= 0) take_all(static_cast<std::size_t>(tag));
     }
     if (monotonic_now_ns() - last_flush > 1'000'000'000) {  // a killed node keeps what it had
       std::fflush(f.get());
@@ -301,7 +276,7 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
     int got = 0;
     for (std::size_t i = 0; i < readers.size(); ++i) got += take_all(i);
     if (got > 0) idle_since = monotonic_now_ns();
-    else dds_sleepfor(DDS_MSECS(10));
+    else std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   std::fflush(f.get());
   write_stats(a.stats, Role::kSubscriber, path);

@@ -39,12 +39,12 @@ class Problems {
 
 class Node {
  public:
-  Node(YAML::Node node, std::shared_ptr<const std::string> file, std::string path,
+  Node(const YAML::Node& node, std::shared_ptr<const std::string> file, std::string path,
        std::shared_ptr<Problems> problems);
 
   // Loads a YAML file; a syntax error becomes a Problem with its position.
-  static Node load_file(const std::string& path, std::shared_ptr<Problems> problems);
-  static Node load_string(const std::string& text, const std::string& name, std::shared_ptr<Problems> problems);
+  static Node load_file(const std::string& path, const std::shared_ptr<Problems>& problems);
+  static Node load_string(const std::string& text, const std::string& name, const std::shared_ptr<Problems>& problems);
 
   [[nodiscard]] bool valid() const { return node_.IsDefined() && !node_.IsNull(); }
   [[nodiscard]] bool has(std::string_view key) const;
@@ -61,7 +61,7 @@ class Node {
   [[nodiscard]] std::optional<Node> child(std::string_view key, bool required = false) const;
   [[nodiscard]] std::vector<Node> items(std::string_view key, bool required = false) const;
 
-  std::string get_string(std::string_view key, std::optional<std::string> fallback = std::nullopt) const;
+  std::string get_string(std::string_view key, const std::optional<std::string>& fallback = std::nullopt) const;
   bool get_bool(std::string_view key, std::optional<bool> fallback = std::nullopt) const;
   std::int64_t get_int(std::string_view key, std::int64_t lo, std::int64_t hi,
                        std::optional<std::int64_t> fallback = std::nullopt) const;
@@ -84,14 +84,14 @@ class Node {
     return fallback;  // reported as a problem by get_choice_of
   }
   // A path relative to the config file's directory (absolute paths pass through).
-  std::string get_path(std::string_view key, std::optional<std::string> fallback = std::nullopt) const;
+  std::string get_path(std::string_view key, const std::optional<std::string>& fallback = std::nullopt) const;
 
   // Reports a problem at `key` (or at this node when key is empty).
   void fail(std::string_view key, std::string message) const;
 
  private:
   std::string get_choice_of(std::string_view key, const std::vector<std::string_view>& choices,
-                            std::optional<std::string> fallback) const;
+                            const std::optional<std::string>& fallback) const;
   [[nodiscard]] std::string key_path(std::string_view key) const;
   [[nodiscard]] YAML::Node raw(std::string_view key) const;
 

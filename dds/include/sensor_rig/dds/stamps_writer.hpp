@@ -19,6 +19,7 @@ struct SampleStamps {
   std::uint32_t packets = 0;
   std::uint32_t dropped = 0;
   std::uint32_t size_bytes = 0;
+  std::uint32_t missing_packets = 0;  // packets the sample should have had and did not (LIDAR scans)
 };
 
 class StampsWriter {
