@@ -10,6 +10,7 @@
 
 #include "rig_cameras.hpp"
 #include "sensor_rig/dds/diagnostics.hpp"
+#include "sensor_rig/drivers/dbw/dds_types.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -42,9 +43,11 @@ std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const Li
   return argv;
 }
 
-std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, const DbwConfig& d) {
+std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, const DbwConfig& d, int domain) {
   std::vector<std::vector<std::string>> out;
   if (!d.enabled) return out;
+  const std::vector<std::string> dds_args =
+      domain >= 0 ? std::vector<std::string>{"--domain", std::to_string(domain)} : std::vector<std::string>{};
   if (d.mock_ecu) {
     std::vector<std::string> ecu{rig_exe, "mock", "paravan", "--transport", "unix-listen:" + d.bus};
     if (!d.protocol.empty()) ecu.insert(ecu.end(), {"--config", d.protocol});
@@ -54,15 +57,31 @@ std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, c
   std::vector<std::string> bridge{rig_exe, "dbw", "bridge", "--transport",
                                   d.transport.empty() ? "unix:" + d.bus : d.transport};
   if (!d.protocol.empty()) bridge.insert(bridge.end(), {"--config", d.protocol});
+  bridge.insert(bridge.end(), dds_args.begin(), dds_args.end());
   out.push_back(bridge);
   if (d.command_source.enabled) {
     const auto& c = d.command_source;
     out.push_back({rig_exe, "dbw", "send", "--enable", "--steer", std::to_string(c.steer_rad), "--throttle",
                    std::to_string(c.throttle), "--brake", std::to_string(c.brake), "--gear", std::to_string(c.gear),
                    "--rate", std::to_string(c.rate_hz), "--duration", "86400"});
+    out.back().insert(out.back().end(), dds_args.begin(), dds_args.end());
   }
   return out;
 }
+
+namespace {
+// Bounded wait until a started dbw process is ready for the next one: the mock ECU's bus socket
+// exists (the bridge can connect), the bridge's status writer is discovered (its DDS side is up,
+// so the command source's first samples, the enable edge, are not lost).
+bool wait_dbw_ready(const std::vector<std::string>& argv, const DbwConfig& d, const dds::Reader<msg::DbwStatus>& status) {
+  if (argv.size() > 2 && argv[1] == "mock") {
+    for (int i = 0; i < 500 && !std::filesystem::exists(d.bus); ++i) ::usleep(10'000);
+    return std::filesystem::exists(d.bus);
+  }
+  if (argv.size() > 2 && argv[1] == "dbw" && argv[2] == "bridge") return status.wait_for_writers(1, 5000);
+  return true;
+}
+}  // namespace
 
 SyntheticMetadataDir::SyntheticMetadataDir() {
   if (const char* d = std::getenv("RIG_LOG_DIR"); d != nullptr && *d != '\0') {
@@ -116,8 +135,6 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     return 1;
   }
 
-  // Child tools (dbw bridge, command source) take the DDS domain from ROS_DOMAIN_ID.
-  ::setenv("ROS_DOMAIN_ID", std::to_string(cfg.dds.domain_id).c_str(), 1);
   dds::Participant participant(cfg.dds);
   log::info("rig", "'" + cfg.name + "' on DDS domain " + std::to_string(cfg.dds.domain_id) + ", profile " +
                        (participant.profile().empty() ? std::string("$CYCLONEDDS_URI") : participant.profile()));
@@ -144,12 +161,15 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
 
   std::vector<ChildProcess> mocks;
   const std::string exe = self_executable();
-  for (const auto& argv : dbw_commands(exe, cfg.dbw)) {
+  // The dbw processes take the rig's DDS domain as an argument; the bridge's status tells when it is up.
+  const dds::Topic<msg::DbwStatus> dbw_status_topic(participant, drivers::kStatusTopic);
+  const dds::Reader<msg::DbwStatus> dbw_status(participant, dbw_status_topic);
+  for (const auto& argv : dbw_commands(exe, cfg.dbw, static_cast<int>(cfg.dds.domain_id))) {
     // The bridge is the only path to the actuators: its timeouts must not be scheduling delays.
     mocks.emplace_back(argv, cfg.dbw.realtime_priority);
     log::info("rig", "dbw: " + argv[1] + " " + argv[2] + ": pid " + std::to_string(mocks.back().pid()));
     // The ECU must listen before the bridge connects, the bridge subscribe before commands flow.
-    ::usleep(300'000);
+    if (!wait_dbw_ready(argv, cfg.dbw, dbw_status)) log::warn("rig", "dbw: " + argv[1] + " " + argv[2] + " not ready in time");
   }
   for (const auto& l : cfg.lidars) {
     auto argv = lidar_mock_command(exe, l);

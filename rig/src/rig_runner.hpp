@@ -38,7 +38,8 @@ bool needs_synthetic_metadata(const LidarConfig& l);
 
 // argv of the mock process for a LIDAR (`rig lidar replay ...`), empty when it has none.
 std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const LidarConfig& l);
-// argv of the drive-by-wire processes, in start order: mock ECU, bridge, command source.
-std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, const DbwConfig& d);
+// argv of the drive-by-wire processes, in start order: mock ECU, bridge, command source; `domain`
+// (>= 0) is passed to the bridge and the command source as --domain.
+std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, const DbwConfig& d, int domain = -1);
 
 }  // namespace sensor_rig::rig

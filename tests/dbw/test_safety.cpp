@@ -172,6 +172,11 @@ TYPED_TEST(SafetySuite, StaleOrReplayedCommandsAreIgnored) {
   replay.seq = 1;
   this->send(replay);
   EXPECT_EQ(this->core.counters().ignored_sequence, 1U);
+  this->step(1 * kMs);
+  auto repeated = this->cmd(true);
+  repeated.seq = this->seq - 3;  // the seq of the last accepted command (before old, replay), again
+  this->send(repeated);
+  EXPECT_EQ(this->core.counters().ignored_sequence, 2U);
   auto future = this->cmd(true);
   future.stamp = this->vnow() + 50 * kMs;
   this->send(future);
@@ -209,6 +214,7 @@ TYPED_TEST(SafetySuite, E2eErrorsBeyondTolerance) {
   this->cycle(true);
   EXPECT_EQ(this->core.state(), s::State::disengaged);
   for (int i = 0; i < 10; ++i) this->core.on_e2e(true, this->now);
+  EXPECT_EQ(this->core.e2e_error_level(), 0);
   this->cycle(false);
   this->cycle(true);
   EXPECT_EQ(this->core.state(), s::State::engaged);
@@ -249,14 +255,16 @@ TYPED_TEST(SafetySuite, BusOffDisengagesAndBlocksEngage) {
   EXPECT_EQ(this->core.state(), s::State::engaged);
 }
 
-TYPED_TEST(SafetySuite, NanCommandDisengagesOnEveryAxis) {
-  for (std::size_t a = 0; a < s::kAxes; ++a) {
-    SCOPED_TRACE(std::string(s::to_string(static_cast<s::Axis>(a))));
+TYPED_TEST(SafetySuite, NanOrInfCommandDisengagesOnEveryAxis) {
+  for (std::size_t k = 0; k < 2 * s::kAxes; ++k) {
+    const std::size_t a = k % s::kAxes;
+    const double bad = k < s::kAxes ? std::numeric_limits<double>::quiet_NaN() : -std::numeric_limits<double>::infinity();
+    SCOPED_TRACE(std::string(s::to_string(static_cast<s::Axis>(a))) + " = " + std::to_string(bad));
     this->engage();
     auto c = this->cmd(true);
     this->step(10 * kMs);
     c.stamp = this->vnow();
-    s::set_axis_value(c, static_cast<s::Axis>(a), std::numeric_limits<double>::quiet_NaN());
+    s::set_axis_value(c, static_cast<s::Axis>(a), bad);
     this->send(c);
     EXPECT_EQ(this->core.state(), s::State::disengaged);
     EXPECT_EQ(this->core.reason(), s::Reason::invalid_command);
@@ -688,6 +696,62 @@ TYPED_TEST(SafetySuite, EventBufferIsBoundedAndCountsWhatItDrops) {
   EXPECT_EQ(this->core.counters().events_dropped, 1000U - s::SafetyCore::kMaxEvents);
   this->core.clear_events();
   EXPECT_TRUE(this->core.events().empty());
+}
+
+TYPED_TEST(SafetySuite, AnEdgeStartedBeforeADisengageDoesNotCount) {
+  this->ecu_ok();
+  this->send(this->cmd(false, 3));  // writer 3 released before ...
+  this->engage();                   // ... writer 0 engages ...
+  this->step(10 * kMs);
+  this->core.on_ecu_status({true, true, true, false, 0}, this->now);  // ... and the driver overrides
+  ASSERT_EQ(this->core.reason(), s::Reason::driver_override);
+  this->cycle(false);  // writer 0 releases (override over)
+  this->step(5 * kMs);
+  this->send(this->cmd(true, 3));  // writer 3's "edge" began before the disengage: no engagement
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+}
+
+TYPED_TEST(SafetySuite, UnmeasuredValuesKeepTheLastMeasurement) {
+  const auto& lim = TypeParam::limits[s::Axis::steering_angle];
+  const double measured = 0.5 * lim.max;
+  this->core.on_measured(measured, 0.0);
+  this->core.on_measured(std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN());
+  this->cycle(false);
+  this->step(10 * kMs);
+  this->ecu_ok();
+  auto c = this->cmd(true);
+  c.steering_angle = measured + 3 * lim.max_rate * 0.010;  // three steps from the kept measurement
+  this->send(c);
+  if (lim.action == s::LimitAction::reject) {
+    EXPECT_EQ(this->core.state(), s::State::disengaged);
+    return;
+  }
+  ASSERT_EQ(this->core.state(), s::State::engaged);
+  EXPECT_NEAR(this->core.tick(this->now).command.steering_angle, measured + lim.max_rate * 0.010, 1e-9);
+}
+
+TYPED_TEST(SafetySuite, ARejectedEnableIsNoHalfOfAnEdge) {
+  this->cycle(false);
+  this->step(10 * kMs);
+  auto bad = this->cmd(true);
+  bad.throttle = std::numeric_limits<double>::quiet_NaN();
+  this->send(bad);  // rejected while disengaged
+  EXPECT_EQ(this->core.counters().rejected, 1U);
+  this->cycle(true);  // valid, enable still true: not an edge
+  EXPECT_EQ(this->core.state(), s::State::disengaged);
+  this->cycle(false);
+  this->cycle(true);
+  EXPECT_EQ(this->core.state(), s::State::engaged);
+}
+
+TEST(SafetyConfig, DefaultsAreTheDocumentedOnes) {
+  const s::SafetyConfig c;
+  EXPECT_EQ(c.command_timeout_ns, 100 * kMs);
+  EXPECT_EQ(c.ecu_timeout_ns, 100 * kMs);
+  EXPECT_EQ(c.max_future_ns, 20 * kMs);
+  EXPECT_EQ(c.rate_rx_slack_ns, 2 * kMs);
+  EXPECT_EQ(c.e2e_tolerance, 3);
+  EXPECT_EQ(s::e2e_level_max(c), 7);
 }
 
 TEST(LimitChecker, TablesAreSane) {
