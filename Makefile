@@ -5,7 +5,7 @@ DURATION  ?= 0
 CONFIG    ?= config/mock_rig.yaml
 CMAKE_ARGS ?=
 
-.PHONY: all setup build demo test test-asan bench fuzz tidy clean
+.PHONY: all setup build demo test test-asan test-tsan bench fuzz tidy clean
 
 all: build
 
@@ -31,6 +31,7 @@ test: setup
 	cmake --build $(BUILD) -j$(JOBS)
 	cd $(BUILD) && ctest --output-on-failure --timeout 300 -j$(JOBS)
 	$(MAKE) test-asan
+	$(MAKE) test-tsan
 
 # Optimized (-O2 -g) under the sanitizers: the end-to-end tests run synthetic sensors in real time,
 # and at -O0 three instrumented renderers need more than the two cores (scans arrive seconds late).
@@ -43,6 +44,16 @@ test-asan: setup
 	# one at a time, as each already runs several instrumented processes on the two cores.
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -R '^(lidar_e2e_test|dbw_rig_test)$$' -j1
+
+# The drive-by-wire bridge's threads under ThreadSanitizer: only the dbw tests that run threads
+# (transports, the node's DDS/CAN/publisher threads in one process), built alone in build-tsan.
+TSAN_FLAGS = -fsanitize=thread -g -O1
+test-tsan: setup
+	cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_BENCH=OFF \
+	  -DCMAKE_C_FLAGS="$(TSAN_FLAGS)" -DCMAKE_CXX_FLAGS="$(TSAN_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS=-fsanitize=thread
+	cmake --build build-tsan -j$(JOBS) --target test_dbw_transport test_dbw_bridge_core test_dbw_bridge_threads
+	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
+	  ctest --output-on-failure -R '^test_dbw_(transport|bridge_core|bridge_threads)$$' -j1
 
 # Benchmarks: optimized build, figures go to BENCHMARKS.md (by hand, with machine and command).
 bench: setup
@@ -62,4 +73,4 @@ tidy: build
 	scripts/tidy.sh $(BUILD) $(TIDY_ONLY)
 
 clean:
-	rm -rf build build-asan build-release build-fuzz
+	rm -rf build build-asan build-tsan build-release build-fuzz

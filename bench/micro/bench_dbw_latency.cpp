@@ -4,7 +4,7 @@
 // command silence -> first disengage frame on the bus (kernel receive time at the ECU), CPU share of
 // the bridge's own two threads (CLOCK_THREAD_CPUTIME_ID over the bridge's run, SECONDS + 1.2 s;
 // Cyclone's threads not included) and of the whole process while commands flow (bridge, mock ECU,
-// command source, all DDS threads).
+// command source, all DDS threads), and the process's peak RSS (memory flat over 10^6 commands).
 #include <sys/resource.h>
 #include <time.h>
 
@@ -97,11 +97,11 @@ int main(int argc, char** argv) {
   std::printf("{\"rate_hz\":%.0f,\"seconds\":%.1f,\"commands\":%llu,\"cmd_to_can_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
               "\"take_to_send_us\":{\"p50\":%.1f,\"p99\":%.1f},\"silence_to_disengage_frame_ms\":%.3f,"
               "\"timeout_ms\":%.0f,\"tx_period_ms\":%.0f,\"bridge_threads_cpu_percent_of_one_core\":%.2f,"
-              "\"process_cpu_percent_of_one_core\":%.2f}\n",
+              "\"process_cpu_percent_of_one_core\":%.2f,\"max_rss_kb\":%ld}\n",
               rate, seconds, static_cast<unsigned long long>(stats.commands), stats.latency_p50_us, stats.latency_p99_us,
               stats.latency_max_us, stats.take_to_send_p50_us, stats.take_to_send_p99_us, silence_ms,
               static_cast<double>(protocol.timing().command_timeout_ns) * 1e-6,
               static_cast<double>(protocol.timing().tx_period_ns) * 1e-6,
-              100.0 * stats.bridge_threads_cpu_s / bo.duration_s, 100.0 * cpu_s / seconds);
+              100.0 * stats.bridge_threads_cpu_s / bo.duration_s, 100.0 * cpu_s / seconds, r1.ru_maxrss);
   return 0;
 }

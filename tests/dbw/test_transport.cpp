@@ -5,6 +5,8 @@
 #include <cerrno>
 #include <filesystem>
 #include <fstream>
+#include <atomic>
+#include <chrono>
 #include <thread>
 
 #include "sensor_rig/dbw/can/candump.hpp"
@@ -94,6 +96,40 @@ TEST(Transport, ListeningBusRelaysBetweenAllPeers) {
   bus.reset();
   EXPECT_FALSE(fs::exists(path));
   EXPECT_THROW(can::open_transport("unix:" + path), can::TransportError);
+}
+
+TEST(Transport, ListeningBusSendsAndReceivesFromTwoThreadsWhilePeersComeAndGo) {
+  // The bridge sends from two threads while a third receives; peers join and leave meanwhile.
+  const std::string path = temp_path("canbus_mt");
+  auto bus = can::open_transport("unix-listen:" + path);
+  auto talker = can::open_transport("unix:" + path);
+  std::atomic<bool> stop{false};
+  std::atomic<int> received{0};
+  std::thread rx_thread([&] {
+    can::RxFrame rx;
+    while (!stop) {
+      if (bus->receive(rx, 2) == can::IoStatus::ok) ++received;
+    }
+  });
+  std::thread churn([&] {
+    for (int i = 0; i < 50 && !stop; ++i) {
+      auto p = can::open_transport("unix:" + path);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  });
+  int sent = 0;
+  for (int i = 0; i < 500; ++i) {
+    if (bus->send(frame(0x10, 1)) == can::IoStatus::ok) ++sent;
+    if (i % 5 == 0) talker->send(frame(0x11, 1));
+  }
+  churn.join();
+  for (int i = 0; i < 200 && received < 100; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  stop = true;
+  rx_thread.join();
+  EXPECT_EQ(sent, 500);
+  EXPECT_EQ(received, 100);
+  EXPECT_EQ(bus->stats().sent, 500U);
+  EXPECT_EQ(bus->stats().received, 100U);
 }
 
 TEST(Transport, InheritedDescriptorSpec) {
