@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 #include "sensor_rig/common/latency_window.hpp"
 #include "sensor_rig/common/shutdown.hpp"
@@ -101,6 +102,27 @@ struct TopicStats {
     }
     for (auto it = unmatched_data.begin(); it != unmatched_data.end();)
       it = now - it->second.receive_ns > kLossTimeoutNs ? unmatched_data.erase(it) : std::next(it);
+  }
+};
+
+// One synchronized set (/rig/sets/<name>): rate and spread from its samples, incomplete sets from
+// the rig's /diagnostics (rig/sets/<name>: an incomplete set is never published).
+struct SetStats {
+  std::uint64_t received = 0, received_window = 0, incomplete = 0, dropped = 0, lost = 0;
+  std::uint64_t next_seq = 0;
+  bool any = false;
+  std::size_t members = 0;
+  LatencyWindow spread, run_spread;
+  void on_set(const msg::SyncSet& m) {
+    if (any && m.set_seq > next_seq) lost += m.set_seq - next_seq;  // published, not received
+    any = true;
+    next_seq = m.set_seq + 1;
+    ++received;
+    ++received_window;
+    members = m.members._length;
+    const double ms = static_cast<double>(m.spread_ns) * 1e-6;
+    spread.add(ms);
+    run_spread.add(ms);
   }
 };
 
@@ -218,6 +240,28 @@ dds::QosSpec reader_qos_for(const dds_qos_t* writer_qos) {
   return q;
 }
 
+class SetReader {
+ public:
+  SetReader(const dds::Participant& p, const std::string& ros_name, dds_entity_t waitset)
+      : topic_(p, ros_name, qos()), reader_(p, topic_, qos()) {
+    cond_ = dds::Entity(dds::check(dds_create_readcondition(reader_.handle(), DDS_ANY_STATE), "readcondition"));
+    dds::check(dds_waitset_attach(waitset, cond_.handle(), 0), "waitset attach");
+  }
+  static dds::QosSpec qos() {
+    dds::QosSpec q;
+    q.depth = 16;
+    return q;
+  }
+  void poll(SetStats& stats) {
+    reader_.take([&](const msg::SyncSet& m, const dds_sample_info_t&) { stats.on_set(m); }, 256);
+  }
+
+ private:
+  dds::Topic<msg::SyncSet> topic_;
+  dds::Reader<msg::SyncSet> reader_;
+  dds::Entity cond_;
+};
+
 class Monitor {
  public:
   explicit Monitor(const MonitorOptions& o)
@@ -254,6 +298,23 @@ class Monitor {
           },
           1024);
       for (auto& [name, reader] : readers_) reader->poll(stats_[name]);
+      for (auto& [name, reader] : set_readers_) reader->poll(sets_[name]);
+      diagnostics_reader_.take(
+          [&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
+            for (std::uint32_t i = 0; i < a.status._length; ++i) {
+              const auto& st = a.status._buffer[i];
+              if (st.name == nullptr || std::string_view(st.name).rfind("rig/sets/", 0) != 0) continue;
+              auto it = sets_.find("/" + std::string(st.name));
+              if (it == sets_.end()) continue;
+              for (std::uint32_t k = 0; k < st.values._length; ++k) {
+                const auto& kv = st.values._buffer[k];
+                if (kv.key == nullptr || kv.value == nullptr) continue;
+                if (std::string_view(kv.key) == "incomplete") it->second.incomplete = std::strtoull(kv.value, nullptr, 10);
+                if (std::string_view(kv.key) == "dropped") it->second.dropped = std::strtoull(kv.value, nullptr, 10);
+              }
+            }
+          },
+          16);
       const Nanos mono = monotonic_now_ns();
       if (mono >= next_report) {
         for (auto& [name, st] : stats_) st.expire(vehicle_now_ns());
@@ -279,6 +340,13 @@ class Monitor {
       const std::string ros = dds::dds_to_ros_topic(ep->topic_name);
       if (readers_.contains(ros) || ros == dds::kStampsTopic) continue;
       if (!wanted_.empty() && !wanted_.contains(ros)) continue;
+      if (std::string_view(ep->type_name) == "sensor_rig_msgs::msg::dds_::SyncSet_") {
+        if (!set_readers_.contains(ros)) {
+          set_readers_.emplace(ros, std::make_unique<SetReader>(participant_, ros, waitset_.handle()));
+          sets_[ros];
+        }
+        continue;
+      }
       const auto it = known_types().find(ep->type_name);
       if (it == known_types().end()) continue;
       readers_.emplace(ros, it->second(participant_, ros, reader_qos_for(ep->qos), waitset_.handle()));
@@ -307,6 +375,13 @@ class Monitor {
         if (p.n > 0) lat[kStages[i]] = {{"p50", p.p50}, {"p99", p.p99}, {"max", p.max}, {"n", p.n}};
       }
       j["latency_ms"] = lat;
+      all.push_back(j);
+    }
+    for (auto& [name, st] : sets_) {
+      const auto p = st.run_spread.take();
+      nlohmann::json j{{"set", name}, {"duration_s", run_s}, {"received", st.received}, {"lost", st.lost},
+                       {"incomplete", st.incomplete}, {"dropped", st.dropped}};
+      if (p.n > 0) j["spread_ms"] = {{"p50", p.p50}, {"p99", p.p99}, {"max", p.max}, {"n", p.n}};
       all.push_back(j);
     }
     std::ofstream(opt_.summary_file) << all.dump(2) << "\n";
@@ -359,12 +434,48 @@ class Monitor {
       st.received_window = 0;
       st.bytes_window = 0;
     }
+    report_sets(window_s, table);
     if (!opt_.json) {
       if (stats_.empty()) table << "(waiting for publishers...)\n";
       if (!tty) table << "\n";
       std::fputs(table.str().c_str(), stdout);
     }
     std::fflush(stdout);
+  }
+
+  // Synchronized sets, below the topics: rate, spread p50/p99/max, incomplete (from /diagnostics).
+  void report_sets(double window_s, std::ostringstream& table) {
+    if (sets_.empty()) return;
+    if (!opt_.json) {
+      char line[256];
+      std::snprintf(line, sizeof line, "%-30s %7s %7s %10s %7s | %s\n", "set", "rate", "recv", "incomplete", "dropped",
+                    "spread ms p50/p99/max");
+      table << line;
+    }
+    for (auto& [name, st] : sets_) {
+      const double rate = window_s > 0 ? static_cast<double>(st.received_window) / window_s : 0.0;
+      const auto p = st.spread.take();
+      if (opt_.json) {
+        nlohmann::json j;
+        j["set"] = name;
+        j["rate_hz"] = std::round(rate * 100) / 100;
+        j["members"] = st.members;
+        j["received"] = st.received;
+        j["lost"] = st.lost;
+        j["incomplete"] = st.incomplete;
+        j["dropped"] = st.dropped;
+        if (p.n > 0) j["spread_ms"] = {{"p50", p.p50}, {"p99", p.p99}, {"max", p.max}};
+        std::printf("%s\n", j.dump().c_str());
+      } else {
+        char line[256];
+        std::snprintf(line, sizeof line, "%-30s %5.1fHz %7llu %10llu %7llu | %s\n", name.c_str(), rate,
+                      static_cast<unsigned long long>(st.received), static_cast<unsigned long long>(st.incomplete),
+                      static_cast<unsigned long long>(st.dropped),
+                      p.n > 0 ? fmt("%.2f/%.2f/%.2f", p.p50, p.p99, p.max).c_str() : "-");
+        table << line;
+      }
+      st.received_window = 0;
+    }
   }
 
   MonitorOptions opt_;
@@ -377,6 +488,10 @@ class Monitor {
   std::set<std::string> wanted_;
   std::map<std::string, std::unique_ptr<TopicReader>> readers_;
   std::map<std::string, TopicStats> stats_;
+  dds::Topic<msg::DiagnosticArray> diagnostics_topic_{participant_, "/diagnostics"};
+  dds::Reader<msg::DiagnosticArray> diagnostics_reader_{participant_, diagnostics_topic_};
+  std::map<std::string, std::unique_ptr<SetReader>> set_readers_;
+  std::map<std::string, SetStats> sets_;
 };
 
 }  // namespace

@@ -16,7 +16,7 @@ RigConfig load_rig_config(const std::string& path) {
   RigConfig cfg;
   cfg.file = path;
   if (!root.expect_map()) problems->throw_if_any();
-  root.allow_keys({"rig", "lidars", "cameras", "dbw"});
+  root.allow_keys({"rig", "lidars", "cameras", "dbw", "sync_sets"});
   if (auto rig = root.child("rig", true)) {
     rig->allow_keys({"name", "dds", "diagnostics_period_ms"});
     cfg.name = rig->get_string("name", "rig");
@@ -41,6 +41,7 @@ RigConfig load_rig_config(const std::string& path) {
   }
   cfg.cameras = parse_cameras(root);
   if (auto d = root.child("dbw")) cfg.dbw = drivers::parse_dbw_config(*d);
+  cfg.sync_sets = parse_sync_sets(root, stamped_topics(cfg.lidars, cfg.cameras, cfg.dbw));
   problems->throw_if_any();
   return cfg;
 }
@@ -59,6 +60,7 @@ std::string describe(const RigConfig& cfg) {
     o << "\n";
   }
   o << describe_cameras(cfg.cameras);
+  o << describe_sync_sets(cfg.sync_sets);
   if (cfg.dbw.enabled) {
     o << "  dbw: bridge on " << (cfg.dbw.transport.empty() ? "unix:" + cfg.dbw.bus : cfg.dbw.transport)
       << ", protocol " << (cfg.dbw.protocol.empty() ? std::string("config/dbw/paravan_ref.yaml") : cfg.dbw.protocol)

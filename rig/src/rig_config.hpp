@@ -11,6 +11,7 @@
 #include "sensor_rig/drivers/camera/camera_config.hpp"
 #include "sensor_rig/drivers/dbw/dbw_config.hpp"
 #include "sensor_rig/drivers/lidar/lidar_config.hpp"
+#include "sync_sets_config.hpp"
 
 namespace sensor_rig::rig {
 
@@ -26,6 +27,7 @@ struct RigConfig {
   std::vector<LidarConfig> lidars;
   std::vector<drivers::CameraConfig> cameras;
   DbwConfig dbw;
+  std::vector<SyncSetConfig> sync_sets;
 };
 
 // Loads and validates; throws ConfigError listing every problem (file:line:col: key: message).

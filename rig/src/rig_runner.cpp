@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "rig_cameras.hpp"
+#include "sync_set_node.hpp"
 #include "sensor_rig/dds/diagnostics.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
@@ -158,6 +159,8 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     return 1;
   }
   cameras->start();  // GigE fakes first, then the nodes (which retry until their camera answers)
+  SyncSetNode sync_sets(cfg.sync_sets, participant);  // /rig/stamps -> /rig/sets/<name>
+  sync_sets.start();
 
   std::vector<ChildProcess> mocks;
   const std::string exe = self_executable();
@@ -185,6 +188,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     std::vector<dds::DriverStatus> statuses;
     for (const auto& d : lidars) statuses.push_back(d->status());
     cameras->supervise(statuses);
+    sync_sets.supervise(statuses);
     for (std::size_t i = 0; i < mocks.size(); ++i) {
       if (!mocks[i].running() && !reported_dead[i]) {
         reported_dead[i] = true;
@@ -197,6 +201,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   log::info("rig", "stopping");
   // Stop in reverse: the command source first, so the bridge sees silence and disengages.
   for (auto it = mocks.rbegin(); it != mocks.rend(); ++it) it->stop();
+  sync_sets.stop();
   cameras->stop();
   for (auto& d : lidars) d->stop();
   return 0;
