@@ -774,6 +774,27 @@ TEST(LimitChecker, TablesAreSane) {
   EXPECT_EQ(s::find_vehicle("nope"), nullptr);
 }
 
+TEST(LimitChecker, RangeBelowAndAboveEveryAxisFollowsTheTablesAction) {
+  for (const auto* v : s::kVehicles) {
+    SCOPED_TRACE(std::string(v->name));
+    const s::LimitChecker chk(*v);  // no previous command: the range alone
+    for (std::size_t a = 0; a < s::kAxes; ++a) {
+      const auto axis = static_cast<s::Axis>(a);
+      const auto& lim = (*v)[axis];
+      for (const double want : {lim.min - 0.01, lim.max + 0.01}) {
+        SCOPED_TRACE(std::string(s::to_string(axis)) + " " + std::to_string(want));
+        s::Command c;
+        s::set_axis_value(c, axis, want);
+        const auto r = chk.check(c, 0.01);
+        ASSERT_EQ(r.count, 1);
+        EXPECT_FALSE(r.violations[0].rate);
+        EXPECT_EQ(r.violations[0].rejected, lim.action == s::LimitAction::reject);
+        EXPECT_DOUBLE_EQ(s::axis_value(r.applied, axis), want < lim.min ? lim.min : lim.max);
+      }
+    }
+  }
+}
+
 TEST(LimitChecker, ZeroOrNegativeIntervalAllowsNoChange) {
   s::LimitChecker chk(s::kParavanRef);
   s::Command c;
