@@ -49,7 +49,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   LidarConfig l;
   if (!n.expect_map()) return l;
   n.allow_keys({"name", "model", "host", "port", "position_port", "receive_buffer_bytes", "calibration",
-                "metadata", "returns", "min_range", "max_range", "cut_angle", "time_source", "hour_source", "clock_correction",
+                "metadata", "returns", "min_range", "max_range", "cut_angle", "fov", "azimuth", "time_source", "hour_source", "clock_correction",
                 "frame_id", "realtime_priority", "qos", "mock"});
   l.name = n.get_string("name");
   for (char c : l.name)
@@ -77,6 +77,17 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   l.max_range_m = n.get_double("max_range", 1.0, 1000.0, 200.0);
   if (l.min_range_m >= l.max_range_m) n.fail("max_range", "must be greater than min_range");
   l.cut_angle_deg = n.get_double("cut_angle", 0.0, 359.99, 0.0);
+  if (auto f = n.child("fov")) {  // the sensor's own FOV setting: only gaps inside it are missing packets
+    if (f->expect_map()) {
+      f->allow_keys({"start", "end"});
+      l.fov_start_deg = f->get_double("start", 0.0, 360.0);
+      l.fov_end_deg = f->get_double("end", 0.0, 360.0);
+    }
+  }
+  l.azimuth = n.get_enum<lidar::AzimuthInterpolation>(
+      "azimuth", {{"per-laser", lidar::AzimuthInterpolation::kPerLaser},
+                  {"per-sequence", lidar::AzimuthInterpolation::kPerSequence}},
+      lidar::AzimuthInterpolation::kPerLaser);
   using timesync::Correction;
   using timesync::HourSource;
   using timesync::TimeSource;
@@ -123,6 +134,9 @@ lidar::DecoderOptions decoder_options(const LidarConfig& c) {
   d.min_range_m = c.min_range_m;
   d.max_range_m = c.max_range_m;
   d.cut_angle_deg = c.cut_angle_deg;
+  d.fov_start_deg = c.fov_start_deg;
+  d.fov_end_deg = c.fov_end_deg;
+  d.azimuth = c.azimuth;
   return d;
 }
 

@@ -61,6 +61,8 @@ struct LidarDriver::Impl {
   Nanos last_scan_host_ns = 0;
   double scan_rate_hz = 0.0;
   std::size_t last_points = 0;
+  std::uint32_t last_missing = 0;      // missing packets of the last published scan
+  std::uint64_t incomplete_scans = 0;  // published scans with missing packets
   std::string last_error;
   lidar::DecoderCounters decoder_stats;
   lidar::UdpSourceStats udp_stats;
@@ -127,7 +129,7 @@ struct LidarDriver::Impl {
     const auto rc = writer.write(pc, publish);
     const Nanos written = vehicle_now_ns();
     dds::SampleStamps st{scan.stamp, scan.first_rx_ns, scan.last_rx_ns, ready,        publish,
-                    written,    scan.packets,     scan.dropped,     pc.row_step};
+                    written,    scan.packets,     scan.dropped,     pc.row_step,  scan.missing_packets};
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
     std::lock_guard lock(mutex);
     if (!rc.ok()) {
@@ -136,6 +138,8 @@ struct LidarDriver::Impl {
     }
     ++scans;
     last_points = scan.points.size();
+    last_missing = scan.missing_packets;
+    if (scan.missing_packets > 0) ++incomplete_scans;
     if (last_scan_host_ns != 0) {
       const double dt = static_cast<double>(publish - last_scan_host_ns) * 1e-9;
       if (dt > 0) scan_rate_hz = scan_rate_hz == 0.0 ? 1.0 / dt : 0.8 * scan_rate_hz + 0.2 / dt;
@@ -199,7 +203,7 @@ void LidarDriver::stop() {
   const auto st = status();
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
-    if (k == "scans" || k == "packets" || k.rfind("dropped", 0) == 0 || k == "packets_dropped" || k == "kernel_drops" ||
+    if (k == "scans" || k == "packets" || k.rfind("dropped", 0) == 0 || k == "packets_dropped" || k == "kernel_drops" || k == "missing_packets" || k == "time_jumps" ||
         k == "stamp_source" || k == "sync")
       line += " " + k + "=" + v;
   log::info("lidar", line);
@@ -223,6 +227,9 @@ dds::DriverStatus LidarDriver::status() const {
   } else if (!impl_->last_error.empty()) {
     s.level = dds::Level::kWarn;
     s.message = impl_->last_error;
+  } else if (impl_->last_missing > 0) {
+    s.level = dds::Level::kWarn;
+    s.message = "last scan incomplete: " + std::to_string(impl_->last_missing) + " packets missing";
   } else {
     s.message = "running";
   }
@@ -237,6 +244,11 @@ dds::DriverStatus LidarDriver::status() const {
   for (std::size_t i = 1; i < d.by_status.size(); ++i)
     if (d.by_status[i] != 0)
       s.add_number(std::string("dropped_") + lidar::to_string(static_cast<lidar::PacketStatus>(i)), d.by_status[i]);
+  s.add_number("missing_packets_last_scan", impl_->last_missing);
+  s.add_number("missing_packets", d.missing_packets);
+  s.add_number("incomplete_scans", impl_->incomplete_scans);
+  s.add_number("implausible_steps", d.implausible_steps);
+  s.add_number("time_jumps", d.time_jumps);
   s.add_number("kernel_drops", u.kernel_drops);
   s.add_number("truncated", u.truncated);
   s.add_number("write_errors", impl_->write_errors);

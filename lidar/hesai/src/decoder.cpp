@@ -2,10 +2,12 @@
 #include "sensor_rig/lidar/hesai/decoder.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <numbers>
 #include <string>
 
+#include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 #include "sensor_rig/lidar/hesai/packet.hpp"
 
@@ -45,9 +47,10 @@ inline int az_step(int a, int b) noexcept {
   const int d = b - a;
   return d < 0 ? d + kAzimuthCount : d;
 }
-// `target` in (prev, prev + step] on a forward step shorter than half a turn.
-inline bool crosses(int prev, int step, int target) noexcept {
-  if (step <= 0 || step >= kAzimuthCount / 2) return false;
+// `target` in (prev, prev + step] on a forward step shorter than half a turn (any forward step
+// when `any_length`: the first group after a judged gap).
+inline bool crosses(int prev, int step, int target, bool any_length = false) noexcept {
+  if (step <= 0 || (step >= kAzimuthCount / 2 && !any_length)) return false;
   const int to = az_step(prev, target);
   return to > 0 && to <= step;
 }
@@ -97,6 +100,11 @@ struct DecoderImpl {
   bool window_open = false;  // between the window's start and the cut: points past the cut go to next()
   int prev_az = 0;
   Nanos prev_stamp = 0;
+  detail::AzimuthFov fov;
+  int prev_trailing_bad = 0;
+  std::int64_t prev_sensor_us = 0;  // the previous packet's tail time of day (µs)
+  bool have_seq = false;
+  std::uint32_t prev_seq = 0;       // UDP sequence number (expected value after a mismatch)
 
   explicit DecoderImpl(DecoderConfig config)
       : cfg(std::move(config)), mi(&model_info(cfg.model)), scans(scan_options(cfg), stats) {
@@ -108,6 +116,9 @@ struct DecoderImpl {
       throw DecoderConfigError("cut angle " + std::to_string(cfg.cut_angle_deg) + " is not in [0, 360)");
     if (cfg.max_packet_gap_ns <= 0) throw DecoderConfigError("max_packet_gap_ns must be positive");
     if (!(cfg.dual_distance_threshold_m >= 0.0)) throw DecoderConfigError("dual_distance_threshold_m must be >= 0");
+    if (!(cfg.fov_start_deg >= 0.0 && cfg.fov_start_deg <= 360.0 && cfg.fov_end_deg >= 0.0 && cfg.fov_end_deg <= 360.0))
+      throw DecoderConfigError("fov: start and end must be in [0, 360] degrees");
+    fov = detail::make_fov(cfg.fov_start_deg, cfg.fov_end_deg);
     if (!cfg.calibration) cfg.calibration = default_calibration(cfg.model);
     if (!cfg.firing_times) cfg.firing_times = default_firing_times(cfg.model);
     const auto n = static_cast<std::size_t>(mi->channels);
@@ -170,6 +181,8 @@ struct DecoderImpl {
   void restart() noexcept {
     have_prev = false;
     window_open = false;
+    have_seq = false;
+    prev_trailing_bad = 0;
   }
 };
 
@@ -180,33 +193,101 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   last_returns = n;
   const float unit = cfg.model == Model::kPandarXT32 ? static_cast<float>(p[offsetof(HeaderXT, dis_unit)]) * 0.001F
                                                      : static_cast<float>(mi->distance_unit_m);
+  const int groups = mi->blocks / n;
+  int az[16];
+  for (int g = 0; g < groups; ++g)
+    az[g] = le16(p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size + mi->block_azimuth);
+  // One corrupted azimuth must not cut the scan: groups off the packet's line are not decoded.
+  const detail::AzimuthFit fit = detail::fit_azimuths(az, groups);
+  if (fit.good * 2 <= groups) {
+    ++stats.implausible_steps;
+    scans.reject(PacketStatus::kBadAzimuth);
+    last = PacketStatus::kBadAzimuth;
+    return std::nullopt;
+  }
+  int first_good = 0;
+  while ((fit.bad >> first_good) & 1U) ++first_good;
+  const std::uint8_t* utc = p + mi->tail_utc;  // year, month, day, hour, minute, second
+  const std::int64_t sensor_us = ((static_cast<std::int64_t>(utc[3]) * 60 + utc[4]) * 60 + utc[5]) * 1'000'000 +
+                                 static_cast<std::int64_t>(le32(p + mi->tail_timestamp));
+  const bool has_seq = packet.data.size() == mi->packet_size_alt || cfg.model == Model::kPandarXT32;
+  const std::uint32_t seq = has_seq ? le32(p + packet.data.size() - 4) : 0;
+
+  // Lost packets: the UDP sequence number where the azimuth and time step agree with it, else
+  // the azimuth step (inside the FOV) and the sensor's time step; a step back is a duplicate or
+  // a late packet.
   std::optional<Scan> out;
-  if (have_prev && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {
+  if (have_prev && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {  // ends the scan; continuity starts over
     ++stats.time_jumps;
     scans.merge(out, scans.end_scan(false));
     scans.drop_next();
     have_prev = false;
+    have_seq = false;
   }
+  std::uint32_t missing = 0;
+  if (have_prev) {
+    constexpr std::int64_t kDayUs = 86'400'000'000LL;
+    std::int64_t dt_us = sensor_us - prev_sensor_us;
+    if (dt_us < -kDayUs / 2) dt_us += kDayUs;
+    const auto gap = detail::azimuth_gap(
+        fov, {.prev_az = prev_az,
+              .groups_since_prev = prev_trailing_bad + first_good + 1,
+              .first_az = az[first_good],
+              .group_step = fit.step,
+              .groups_per_packet = groups,
+              .dt_ns = dt_us * 1000,
+              .packet_period_ns = static_cast<Nanos>(mi->group_period_ns) * groups});
+    if (gap.backwards) {
+      scans.reject(PacketStatus::kOutOfOrder);
+      last = PacketStatus::kOutOfOrder;
+      return out;
+    }
+    missing = gap.missing;
+    if (has_seq && have_seq) {
+      const std::uint32_t d = seq - prev_seq;
+      const std::uint32_t slack = 1 + gap.missing / 8;
+      if (d != 0 && d < 0x8000'0000U && (d - 1 <= gap.missing + slack && d - 1 + slack >= gap.missing)) {
+        missing = d - 1;
+      } else {
+        ++stats.sequence_mismatches;
+        ++stats.implausible_steps;
+      }
+    }
+  }
+  if (has_seq) {
+    prev_seq = have_seq && missing + 1 != seq - prev_seq ? prev_seq + missing + 1 : seq;
+    have_seq = true;
+  }
+
   prev_stamp = stamp;
+  prev_sensor_us = sensor_us;
   scans.begin_packet();
+  if (missing > 0) scans.add_missing(missing);
+  if (fit.bad != 0) {
+    const auto nb = static_cast<std::uint64_t>(std::popcount(fit.bad));
+    stats.corrupt_blocks += nb;
+    stats.implausible_steps += nb;
+    ++scans.scan().dropped;
+  }
 
   const auto& tab = angles();
   const auto rm = static_cast<ReturnMode>(mode);
   const bool xt = cfg.model == Model::kPandarXT32;
   const float thresh = static_cast<float>(cfg.dual_distance_threshold_m);
-  const int groups = mi->blocks / n;
   for (int g = 0; g < groups; ++g) {
+    if ((fit.bad >> g) & 1U) continue;
     const std::uint8_t* blk = p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size;
-    const int a = le16(blk + mi->block_azimuth);
+    const int a = az[g];
     const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
     bool cut_here = false;
     if (have_prev) {
       const int step = az_step(prev_az, a);
-      if (crosses(prev_az, step, reset_raw)) {
+      const bool judged = g == first_good;  // the step from the previous packet (forward, any length)
+      if (crosses(prev_az, step, reset_raw, judged)) {
         window_open = true;
         if (!scans.next().started) scans.next().from_cut = true;
       }
-      cut_here = crosses(prev_az, step, emit_raw);
+      cut_here = crosses(prev_az, step, emit_raw, judged);
     } else {
       // First block (or after a time jump) inside the window: the window's start was not seen.
       window_open = in_sector(reset_raw, emit_raw, a) && a != emit_raw;
@@ -288,6 +369,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     have_prev = true;
     prev_az = a;
   }
+  int last_good = groups - 1;
+  while ((fit.bad >> last_good) & 1U) --last_good;
+  prev_trailing_bad = groups - 1 - last_good;
   return out;
 }
 

@@ -77,6 +77,20 @@ struct DecoderImpl {
   Nanos prev_stamp = 0;
   bool have_fid = false;
   std::uint32_t prev_fid = 0;
+  bool have_base = false;
+  long prev_base = 0;          // measurement id of the previous packet's column 0
+  std::uint64_t prev_ts = 0;   // its first valid column's sensor time
+  long packets_per_frame = 1;
+
+  // Packet slots strictly between slot `from` and slot `to` of one frame (to > from) that hold
+  // columns of the column window (the sensor's FOV: only those can be missing).
+  [[nodiscard]] std::uint32_t window_slots(long from, long to) const noexcept {
+    const long cpp = static_cast<long>(layout.columns_per_packet);
+    long n = 0;
+    for (long i = from + 1; i < to; ++i)
+      if ((i + 1) * cpp - 1 >= static_cast<long>(window_first) && i * cpp <= static_cast<long>(window_last)) ++n;
+    return static_cast<std::uint32_t>(n);
+  }
 
   explicit DecoderImpl(DecoderConfig config)
       : cfg(std::move(config)), layout(validated(cfg).layout()), lut(cfg.metadata), scans(scan_options(cfg), stats) {
@@ -94,6 +108,7 @@ struct DecoderImpl {
     window_first = wraps ? 0U : static_cast<std::uint32_t>(m.column_window_first);
     window_last = static_cast<std::uint32_t>(wraps ? m.columns_per_frame - 1 : m.column_window_last);
     span_ns = static_cast<Nanos>(std::llround(m.column_period_ns() * static_cast<double>(m.columns_per_packet)));
+    packets_per_frame = static_cast<long>((m.columns_per_frame + m.columns_per_packet - 1) / m.columns_per_packet);
     cols.resize(layout.columns_per_packet);
     col_ok.resize(layout.columns_per_packet);
 
@@ -159,6 +174,7 @@ struct DecoderImpl {
   void restart() noexcept {
     have_fid = false;
     have_stamp = false;
+    have_base = false;
   }
 };
 
@@ -201,17 +217,58 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     have_stamp = true;
   }
   const std::uint32_t fid = frame_id_at(p, layout);
-  const bool new_frame = have_fid && fid != prev_fid;
+  // Frame and packet continuity. The measurement ids say where in the frame a packet is; a frame
+  // id that changes while they continue the frame is corrupted (counted, not a cut); a frame that
+  // starts (ids wrap) with the frame id unchanged is a new frame if its time is later (a
+  // corrupted frame id), else a late packet. Lost packets: the window's packet slots skipped,
+  // plus whole frames the column times say were skipped.
+  bool new_frame = have_fid && fid != prev_fid;
+  std::uint32_t missing_before = 0, missing_after = 0;
+  const long cpp = static_cast<long>(layout.columns_per_packet);
+  const long slot = base >= 0 ? base / cpp : 0;
+  if (n_valid > 0 && have_base && have_fid) {
+    const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
+    const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
+    const double col_ns = m.column_period_ns();
+    const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
+    if (ahead == 1 && dt <= 0) {  // same or earlier position, not later in time: duplicate or late
+      scans.reject(PacketStatus::kOutOfOrder);
+      last = PacketStatus::kOutOfOrder;
+      return out;
+    }
+    // Whole frames lost in between: the column times say more than the ids do.
+    const double expected = static_cast<double>((ahead * packets_per_frame + slot - prev_slot) * cpp) * col_ns;
+    const double frame_ns = static_cast<double>(m.columns_per_frame) * col_ns;
+    const long extra = frame_ns > 0.0 ? std::max(0L, std::lround((static_cast<double>(dt) - expected) / frame_ns)) : 0;
+    if (ahead == 0 && extra == 0) {
+      if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
+      new_frame = false;
+      missing_before = window_slots(prev_slot, slot);
+    } else {
+      if (!new_frame) ++stats.implausible_steps;  // a new frame with the frame id unchanged: corrupted
+      new_frame = true;
+      missing_before = window_slots(prev_slot, packets_per_frame);
+      missing_after = window_slots(-1, slot) +
+                      static_cast<std::uint32_t>(ahead + extra - 1) * window_slots(-1, packets_per_frame);
+    }
+  }
+  if (n_valid > 0) {
+    have_base = true;
+    prev_base = base;
+    prev_ts = first_ts;
+  }
   PendingScan& cur = scans.current();
+  if (missing_before > 0) scans.add_missing(missing_before);
   if (new_frame && cur.scan.packets > 0) out = scans.end_scan(cur.from_cut);
+  if (missing_after > 0) scans.add_missing(missing_after);
   if (cur.scan.packets == 0) {
     cur.from_cut = new_frame || (n_valid > 0 && base <= static_cast<long>(window_first));
     cur.scan.first_rx_ns = packet.rx_ns;
   }
   ++cur.scan.packets;
   cur.scan.last_rx_ns = packet.rx_ns;
+  if (!have_fid || new_frame) prev_fid = fid;  // a corrupted frame id is not remembered
   have_fid = true;
-  prev_fid = fid;
   if (n_valid == 0) return out;
 
   if (!cur.started) {

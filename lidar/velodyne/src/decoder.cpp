@@ -7,6 +7,7 @@
 #include "sensor_rig/lidar/velodyne/decoder.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "angle_table.hpp"
+#include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 
 namespace sensor_rig::lidar::velodyne {
@@ -92,6 +94,9 @@ struct DecoderImpl {
   int prev_az = 0;
   int last_gap = 0;  // azimuth advance of the last decoded block (hundredths of a degree)
   Nanos prev_stamp = 0;
+  detail::AzimuthFov fov;
+  int prev_trailing_bad = 0;       // groups after prev_az in the previous packet that were corrupt
+  std::uint32_t prev_sensor_us = 0;  // the previous packet's own time (µs since the hour)
 
   explicit DecoderImpl(DecoderConfig config)
       : cfg(std::move(config)), info(&model_info(cfg.model)), scans(scan_options(cfg), stats) {
@@ -112,6 +117,9 @@ struct DecoderImpl {
                                             : static_cast<float>(cfg.max_range_m);
     cut = static_cast<int>(std::lround(cfg.cut_angle_deg * 100.0)) % kAzimuthCount;
     block_ns = static_cast<std::uint32_t>(std::lround(info->block_us * 1000.0));
+    if (!(cfg.fov_start_deg >= 0.0 && cfg.fov_start_deg <= 360.0 && cfg.fov_end_deg >= 0.0 && cfg.fov_end_deg <= 360.0))
+      throw std::invalid_argument("fov: start and end must be in [0, 360] degrees");
+    fov = detail::make_fov(cfg.fov_start_deg, cfg.fov_end_deg);
 
     // Ring = rank by elevation (ties by laser id), 0 = lowest.
     std::vector<int> order(static_cast<std::size_t>(info->lasers));
@@ -194,6 +202,7 @@ struct DecoderImpl {
   void restart() noexcept {
     have_prev = false;
     early_cut = false;
+    prev_trailing_bad = 0;
   }
 };
 
@@ -204,47 +213,114 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   const std::uint8_t single_type = mode == static_cast<std::uint8_t>(ReturnMode::kLast)        ? kReturnLast
                                    : mode == static_cast<std::uint8_t>(ReturnMode::kStrongest) ? kReturnStrongest
                                                                                               : kReturnUnknown;
+  const int step = dual ? 2 : 1;
+  const int groups = static_cast<int>(kBlocksPerPacket) / step;  // firing groups (dual: block pairs)
+  int az[kBlocksPerPacket];
+  int na[kBlocksPerPacket];  // reduced to [0, 36000) for the fit
+  for (int k = 0; k < groups; ++k) {
+    az[k] = rd16(p + static_cast<std::size_t>(k * step) * sizeof(RawBlock) + 2);
+    na[k] = az[k] == kAzimuthCount ? 0 : az[k];
+  }
+  // One corrupted azimuth must not cut the scan: groups off the packet's line are not decoded.
+  const detail::AzimuthFit fit = detail::fit_azimuths(na, groups);
+  if (fit.good * 2 <= groups) {  // no line at all: the packet is garbage
+    ++stats.implausible_steps;
+    scans.reject(PacketStatus::kBadAzimuth);
+    last = PacketStatus::kBadAzimuth;
+    return std::nullopt;
+  }
+  int first_good = 0;
+  while ((fit.bad >> first_good) & 1U) ++first_good;
+  const std::uint32_t sensor_us = le32(p + offsetof(RawDataPacket, timestamp));
+
+  // A time jump ends the scan (partial); continuity starts over.
   std::optional<Scan> out;
   if (have_prev && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {
     ++stats.time_jumps;
     out = scans.end_scan(false);
     have_prev = false;
   }
+  // Lost packets: the azimuth step from the previous packet (inside the FOV) and the sensor's
+  // own time step; a step back is a duplicate or a late packet.
+  detail::GapResult gap{};
+  if (have_prev) {
+    constexpr std::int64_t kHourUs = 3'600'000'000LL;
+    std::int64_t dt_us = static_cast<std::int64_t>(sensor_us) - prev_sensor_us;
+    if (dt_us < -kHourUs / 2) dt_us += kHourUs;
+    gap = detail::azimuth_gap(fov, {.prev_az = prev_az,
+                                    .groups_since_prev = prev_trailing_bad + first_good + 1,
+                                    .first_az = na[first_good],
+                                    .group_step = fit.step,
+                                    .groups_per_packet = groups,
+                                    .dt_ns = dt_us * 1000,
+                                    .packet_period_ns = static_cast<Nanos>(block_ns) * groups});
+    if (gap.backwards) {
+      scans.reject(PacketStatus::kOutOfOrder);
+      last = PacketStatus::kOutOfOrder;
+      return out;
+    }
+  }
+
   prev_stamp = stamp;
+  prev_sensor_us = sensor_us;
   scans.begin_packet();
+  if (fit.bad != 0) {
+    const auto n = static_cast<std::uint32_t>(std::popcount(fit.bad));
+    stats.corrupt_blocks += n;
+    stats.implausible_steps += n;
+    ++scans.scan().dropped;
+  }
 
-  const int step = dual ? 2 : 1;
-  int az[kBlocksPerPacket];
-  for (std::size_t b = 0; b < kBlocksPerPacket; ++b) az[b] = rd16(p + b * sizeof(RawBlock) + 2);
-
-  for (int b = 0; b < static_cast<int>(kBlocksPerPacket); b += step) {
-    const int a = az[b];
+  for (int k = 0; k < groups; ++k) {
+    if ((fit.bad >> k) & 1U) continue;
+    const int b = k * step;
+    const int a = az[k];
     // For the cut, 360.00° is the last position of the revolution (VeloView splits after it).
     const int a_cut = a == kAzimuthCount ? kAzimuthCount - 1 : a;
     if (have_prev && !out) {
+      // The first group's step was judged by azimuth_gap (forward, whatever its length: lost
+      // packets, the FOV's blind arc); later steps inside a packet are on the fitted line.
       const int s = az_step(prev_az, a_cut);
-      const bool crosses = s < kAzimuthCount / 2 && s > 0 && az_step(prev_az, cut) > 0 && az_step(prev_az, cut) <= s;
-      if (early_cut) {
+      const bool plausible = k == first_good || s < kAzimuthCount / 2;
+      const bool crosses = plausible && s > 0 && az_step(prev_az, cut) > 0 && az_step(prev_az, cut) <= s;
+      bool cut_done = false;
+      if (k == first_good && gap.missing > 0) {
+        // Packets lost across the cut: those past it belong to the next scan.
+        std::uint32_t after = 0;
+        if (crosses && !early_cut)
+          after = detail::missing_after_cut(fov, cut, na[k], fit.step, k + 1, groups, gap.missing);
+        scans.add_missing(gap.missing - after);
+        if (crosses && !early_cut) {
+          out = scans.end_scan(scans.current().from_cut, true);
+          scans.add_missing(after);
+          cut_done = true;
+        }
+      }
+      if (!cut_done && early_cut) {
         if (!crosses) ++stats.early_cut_misses;  // prediction wrong: this block joined the new scan early
-      } else if (crosses) {
+      } else if (!cut_done && crosses) {
         out = scans.end_scan(scans.current().from_cut, true);
       }
     }
     early_cut = false;
     have_prev = true;
     prev_az = a_cut;
-    const Nanos block_stamp = stamp + static_cast<Nanos>(b / step) * block_ns;
+    const Nanos block_stamp = stamp + static_cast<Nanos>(k) * block_ns;
     scans.current().touch(block_stamp, packet.rx_ns);
     const auto t_base = static_cast<std::uint32_t>(block_stamp - scans.scan().stamp);
-    // Azimuth advance over this block: to the next block, or from the previous one for the last.
-    std::uint32_t gap = static_cast<std::uint32_t>(b + step < static_cast<int>(kBlocksPerPacket)
-                                                       ? az_step(a, az[b + step])
-                                                       : az_step(az[b - step], a));
-    if (gap > 1000) gap = 0;  // not a plausible rotation step: do not interpolate
-    last_gap = static_cast<int>(gap);
+    // Azimuth advance over this block: to the next block, or from the previous one for the last
+    // (a packet with a corrupted block: the fitted step).
+    std::uint32_t agap = 0;
+    if (fit.bad != 0) {
+      agap = static_cast<std::uint32_t>(std::lround(fit.step));
+    } else {
+      agap = static_cast<std::uint32_t>(k + 1 < groups ? az_step(a, az[k + 1]) : az_step(az[k - 1], a));
+    }
+    if (agap > 1000) agap = 0;  // not a plausible rotation step: do not interpolate
+    last_gap = static_cast<int>(agap);
 
     BlockAngles ang;
-    block_angles(a, gap, ang);
+    block_angles(a, agap, ang);
     const std::uint8_t* e = p + static_cast<std::size_t>(b) * sizeof(RawBlock) + 4;
     if (!dual) {
       for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
@@ -282,11 +358,14 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       }
     }
   }
+  int last_good = groups - 1;
+  while ((fit.bad >> last_good) & 1U) --last_good;
+  prev_trailing_bad = groups - 1 - last_good;
   // End the scan now when the next block will cross the cut: waiting for the next packet to show
   // it would add one packet interval (1.3 ms on a VLP-16) to every scan's latency. A margin of
   // two hundredths of a degree keeps azimuth jitter from making the prediction wrong.
   constexpr int kEarlyCutMargin = 2;
-  if (!out && have_prev && last_gap > 0) {
+  if (!out && have_prev && last_gap > 0 && prev_trailing_bad == 0) {
     const int to_cut = az_step(prev_az, cut);
     if (to_cut > 0 && to_cut + kEarlyCutMargin <= last_gap) {
       out = scans.end_scan(scans.current().from_cut, true);

@@ -11,6 +11,7 @@ const char* to_string(PacketStatus s) noexcept {
     case PacketStatus::kBadAzimuth: return "bad_azimuth";
     case PacketStatus::kNotData: return "not_data";
     case PacketStatus::kTimeBackwards: return "time_backwards";
+    case PacketStatus::kOutOfOrder: return "out_of_order";
   }
   return "unknown";
 }

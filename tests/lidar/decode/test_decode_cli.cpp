@@ -53,8 +53,9 @@ TEST_F(DecodeCli, Vlp16CaptureMatchesVeloView) {
   std::int64_t prev = 0;
   for (std::size_t i = 0; i < scans.size(); ++i) {
     const auto& j = scans[i];
-    ASSERT_EQ(j.size(), 5U) << line;
+    ASSERT_EQ(j.size(), 6U) << line;
     EXPECT_EQ(j.at("scan").get<std::size_t>(), i);
+    EXPECT_EQ(j.at("missing_packets").get<int>(), 0) << "the capture lost nothing";
     EXPECT_GT(j.at("stamp_ns").get<std::int64_t>(), prev);
     prev = j.at("stamp_ns").get<std::int64_t>();
     EXPECT_GE(j.at("packets").get<int>(), 38);
@@ -114,6 +115,16 @@ TEST_F(DecodeCli, BadUsageExitsTwo) {
   EXPECT_EQ(r.code, 2);
   r = run("lidar decode --pcap /nonexistent.pcap --model VLP-16 --out " + dir_.string());
   EXPECT_EQ(r.code, 2);
+  // Range bounds that are not finite numbers, bad azimuth words and FOVs: clear errors.
+  for (const char* bad : {"--max-range nan", "--max-range inf", "--min-range nan", "--azimuth sideways",
+                          "--fov 10", "--fov 10,400"}) {
+    r = run("lidar decode --pcap " + pcap + " --model VLP-16 " + bad + " --out " + dir_.string());
+    EXPECT_EQ(r.code, 2) << bad;
+    EXPECT_FALSE(r.err.empty()) << bad;
+    EXPECT_TRUE(r.out.empty()) << bad;
+  }
+  r = run("lidar decode --pcap " + pcap + " --model VLP-16 --max-range nan --out " + dir_.string());
+  EXPECT_NE(r.err.find("not a finite number"), std::string::npos) << r.err;
   const auto bad_cal = dir_ / "bad.yaml";
   std::ofstream(bad_cal) << "lasers:\n- {laser_id: 0, vert_correction: x}\n";
   r = run("lidar decode --pcap " + pcap + " --model VLP-16 --calibration " + bad_cal.string() + " --out " + dir_.string());

@@ -133,6 +133,7 @@ TEST(VelodyneTiming, Vlp16SecondSequenceIsInterpolated) {
   PacketBuilder b;
   b.azimuths(0, 40).ret(0, 0, 5000, 1).ret(0, 16, 5000, 1).ret(0, 31, 5000, 1);
   auto cfg = vlp16_no_offsets();
+  cfg.interpolation = velodyne::AzimuthInterpolation::kPerSequence;  // VeloView's
   auto pts = decode_one(cfg, b);
   ASSERT_EQ(pts.size(), 3U);
   const auto az = [](const PointXYZIRT& p) { return -std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)) / kDeg; };

@@ -169,16 +169,18 @@ TEST(HesaiDrops, TruncatedAndGarbagePacketsAreCounted) {
   auto with_seq = s;
   with_seq.with_sequence = true;
   EXPECT_EQ(push(d40, build_packet(with_seq)), PacketStatus::kOk) << "1266 bytes: with the UDP sequence";
-  EXPECT_EQ(push(d40, good), PacketStatus::kOk);
+  // The same azimuths again (and the same time): a duplicate, counted and not decoded twice.
+  EXPECT_EQ(push(d40, good), PacketStatus::kOutOfOrder);
   const auto& st = d40.stats();
   EXPECT_EQ(st.packets, 9U);
-  EXPECT_EQ(st.packets_used, 2U);
-  EXPECT_EQ(st.dropped(), 7U);
+  EXPECT_EQ(st.packets_used, 1U);
+  EXPECT_EQ(st.dropped(), 8U);
   EXPECT_EQ(st.by_status[static_cast<std::size_t>(PacketStatus::kWrongSize)], 2U);
+  EXPECT_EQ(st.by_status[static_cast<std::size_t>(PacketStatus::kOutOfOrder)], 1U);
   const auto scan = d40.flush();
   ASSERT_TRUE(scan);
-  EXPECT_EQ(scan->dropped, 7U);
-  EXPECT_EQ(scan->packets, 2U);
+  EXPECT_EQ(scan->dropped, 8U);
+  EXPECT_EQ(scan->packets, 1U);
 
   DecoderConfig xc;
   xc.model = Model::kPandarXT32;

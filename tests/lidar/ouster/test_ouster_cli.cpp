@@ -56,6 +56,7 @@ TEST_F(OusterCli, LegacyCaptureGivesOneFrame) {
   EXPECT_EQ(j.at("points").get<int>(), 27310);
   EXPECT_EQ(j.at("packets").get<int>(), 64);
   EXPECT_EQ(j.at("dropped").get<int>(), 0);
+  EXPECT_EQ(j.at("missing_packets").get<int>(), 0);
   EXPECT_EQ(j.at("stamp_ns").get<long long>(), 3577133606620LL) << "first column's sensor time";
   const auto pts = read_pcd((out / "scan_000000.pcd").string());
   ASSERT_EQ(pts.size(), 27310U);
@@ -104,8 +105,9 @@ TEST_F(OusterCli, MetadataThatIsADirectoryOrEmptyExits2NamingIt) {
   EXPECT_NE(e.err.find("is empty"), std::string::npos) << e.err;
 }
 
-TEST_F(OusterCli, WrongLayoutMetadataCountsEveryPacketAsDropped) {
-  // 64-beam metadata for the 32-beam capture: every packet has the wrong size, none is decoded.
+TEST_F(OusterCli, WrongLayoutMetadataExits2) {
+  // 16-beam metadata for the 32-beam capture: every packet has the wrong size, none could be
+  // decoded: a clear error (exit 2) naming the packet size and the metadata, never silent.
   auto j = nlohmann::json::parse(read_text(meta_));
   j["data_format"]["pixels_per_column"] = 16;
   j["data_format"]["pixel_shift_by_row"] = std::vector<int>(16, 0);
@@ -115,9 +117,10 @@ TEST_F(OusterCli, WrongLayoutMetadataCountsEveryPacketAsDropped) {
   std::ofstream(meta16) << j.dump();
   const CliRun r = run("lidar decode --pcap " + pcap_ + " --model OS-LEGACY --metadata " + meta16.string() + " --out " +
                        (dir_ / "w").string());
-  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;
-  EXPECT_NE(r.err.find("64 dropped"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("data packets is 6464 bytes"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("m16.json"), std::string::npos) << r.err;
 }
 
 }  // namespace

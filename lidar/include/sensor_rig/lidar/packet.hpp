@@ -23,8 +23,9 @@ enum class PacketStatus : std::uint8_t {
   kBadAzimuth,
   kNotData,        // e.g. a position packet on the data port
   kTimeBackwards,  // sensor time jumped back beyond tolerance
+  kOutOfOrder,     // steps back (a duplicate or a late, reordered packet): not decoded again
 };
-inline constexpr std::size_t kPacketStatusCount = 7;  // PacketStatus values
+inline constexpr std::size_t kPacketStatusCount = 8;  // PacketStatus values
 
 const char* to_string(PacketStatus s) noexcept;
 

@@ -53,7 +53,9 @@ struct Scan {
   Nanos stamp = 0;                  // vehicle time of the scan's first firing (header.stamp)
   std::vector<PointXYZIRT> points;  // published as-is
   std::uint32_t packets = 0;        // data packets that contributed
-  std::uint32_t dropped = 0;        // packets rejected while assembling (corrupt, wrong size, ...)
+  std::uint32_t dropped = 0;        // packets rejected (corrupt, wrong size, out of order) or with a
+                                    // corrupted group dropped (implausible azimuth) while assembling
+  std::uint32_t missing_packets = 0;  // packets the scan should have had (inside the FOV) and did not
   Nanos first_rx_ns = 0;            // kernel receive time of the first packet (0 if unknown)
   Nanos last_rx_ns = 0;             // kernel receive time of the last packet
   std::uint64_t seq = 0;            // scan counter of this decoder, from 0

@@ -32,6 +32,8 @@ struct ScanStats {
   std::uint64_t scans = 0;                                    // emitted
   std::uint64_t partial_scans_discarded = 0;
   std::uint64_t time_jumps = 0;  // scans ended early because the packet time jumped
+  std::uint64_t missing_packets = 0;      // lost between received packets (inside the FOV), summed over scans
+  std::uint64_t implausible_steps = 0;    // corrupted azimuths / frame or measurement ids: dropped, not cuts
   [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
 };
 
@@ -107,6 +109,19 @@ class ScanAssembler {
     ++stats_.packets_used;
     ++stats_.by_status[0];
     return true;
+  }
+  // An accepted packet the decoder then rejects (steps back, no plausible azimuth): counted as
+  // `status` instead, a drop in the current scan.
+  void reject(PacketStatus status) noexcept {
+    --stats_.packets_used;
+    --stats_.by_status[0];
+    ++stats_.by_status[static_cast<std::size_t>(status)];
+    ++cur_.scan.dropped;
+  }
+  // `n` packets were lost inside the current scan.
+  void add_missing(std::uint32_t n) noexcept {
+    cur_.scan.missing_packets += n;
+    stats_.missing_packets += n;
   }
   // A new packet is being decoded: no scan has counted it yet.
   void begin_packet() noexcept {

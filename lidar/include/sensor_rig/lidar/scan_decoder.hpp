@@ -37,6 +37,12 @@ struct DecoderOptions {
   double max_range_m = std::numeric_limits<double>::infinity();
   double cut_angle_deg = 0.0;        // azimuth where a scan ends (vendors without azimuth cut by frame id)
   bool emit_partial_scans = false;   // also emit the scan started mid-rotation / ended by a time jump
+  // The sensor's FOV setting (it sends only the clockwise arc start -> end, degrees); equal = the
+  // whole turn. Only gaps inside it are missing packets (Velodyne, Hesai; Ouster: the metadata's
+  // column window).
+  double fov_start_deg = 0.0;
+  double fov_end_deg = 0.0;
+  AzimuthInterpolation azimuth = AzimuthInterpolation::kPerLaser;  // Velodyne only
 };
 
 // Copies the options every vendor's DecoderConfig shares: returns, range gate, partial scans and
@@ -47,6 +53,11 @@ void apply_common_options(const DecoderOptions& o, VendorConfig& cfg) {
   cfg.min_range_m = o.min_range_m;
   cfg.max_range_m = o.max_range_m;
   if constexpr (requires { cfg.cut_angle_deg; }) cfg.cut_angle_deg = o.cut_angle_deg;
+  if constexpr (requires { cfg.fov_start_deg; }) {
+    cfg.fov_start_deg = o.fov_start_deg;
+    cfg.fov_end_deg = o.fov_end_deg;
+  }
+  if constexpr (requires { cfg.interpolation; }) cfg.interpolation = o.azimuth;
   cfg.emit_partial_scans = o.emit_partial_scans;
 }
 

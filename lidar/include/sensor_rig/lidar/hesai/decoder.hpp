@@ -51,11 +51,17 @@ struct DecoderConfig {
   // A packet time more than this after the previous one (or any step back > 1 ms) ends the
   // current scan as partial.
   Nanos max_packet_gap_ns = 1'000'000'000;
+  // The sensor's own FOV setting (it sends only this clockwise arc); start == end: the whole turn.
+  double fov_start_deg = 0.0;
+  double fov_end_deg = 0.0;
 };
 
 inline constexpr std::size_t kStatusCount = kPacketStatusCount;
 
-struct DecoderStats : ScanStats {};
+struct DecoderStats : ScanStats {
+  std::uint64_t corrupt_blocks = 0;       // azimuth groups off their packet's line: not decoded
+  std::uint64_t sequence_mismatches = 0;  // UDP sequence numbers the azimuth/time step contradicts (not trusted)
+};
 
 struct DecoderImpl;
 

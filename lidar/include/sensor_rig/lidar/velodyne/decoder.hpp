@@ -29,18 +29,18 @@ namespace sensor_rig::lidar::velodyne {
 // single-return packets carry one echo, which is kept whatever is selected here.
 using ReturnSelection = lidar::ReturnSelection;
 
-// Azimuth of a point inside a block, interpolated from the block azimuths by firing time.
-// kPerSequence is VeloView's (and Velodyne's reference) convention: a VLP-16 block's second
-// firing sequence is half a block later, every other laser uses its block azimuth. kPerLaser also
-// interpolates each laser's firing time (as the ROS driver does for the VLP-16), up to ~0.3°
-// different at 20 Hz. Per-point time `t` is per laser in both cases.
-enum class AzimuthInterpolation : std::uint8_t { kPerSequence, kPerLaser };
+// Azimuth of a point inside a block, interpolated from the block azimuths by firing time
+// (lidar::AzimuthInterpolation). kPerLaser (default) interpolates each laser by its own firing
+// time, as the manuals' precision-azimuth formula and the ROS driver; kPerSequence is VeloView's
+// convention (a VLP-16 block's second firing sequence half a block later, every other laser at
+// its block azimuth), up to ~0.3° different at 20 Hz. Per-point time `t` is per laser in both.
+using AzimuthInterpolation = lidar::AzimuthInterpolation;
 
 struct DecoderConfig {
   Model model = Model::kVLP16;
   std::optional<Calibration> calibration;  // nullopt: the model's built-in manual values
   ReturnSelection returns = ReturnSelection::kStrongest;
-  AzimuthInterpolation interpolation = AzimuthInterpolation::kPerSequence;
+  AzimuthInterpolation interpolation = AzimuthInterpolation::kPerLaser;
   double min_range_m = 0.0;                // points closer are dropped (zero distance always is)
   double max_range_m = std::numeric_limits<double>::infinity();
   double cut_angle_deg = 0.0;              // a scan ends when the azimuth crosses this; 0 = wrap
@@ -50,12 +50,17 @@ struct DecoderConfig {
   // A packet time more than this after the previous one (or any step back > 1 ms) ends the
   // current scan as partial: t stays meaningful and a sensor clock reset cannot stall the decoder.
   Nanos max_packet_gap_ns = 1'000'000'000;
+  // The sensor's own FOV setting (it sends only this clockwise arc); start == end: the whole turn.
+  // Only gaps inside it count as missing packets.
+  double fov_start_deg = 0.0;
+  double fov_end_deg = 0.0;
 };
 
 inline constexpr std::size_t kStatusCount = kPacketStatusCount;
 
 struct DecoderStats : ScanStats {
   std::uint64_t early_cut_misses = 0;  // scans ended at a packet's end whose next block did not cross
+  std::uint64_t corrupt_blocks = 0;    // blocks off their packet's azimuth line: not decoded (implausible_steps)
 };
 
 struct DecoderImpl;

@@ -41,6 +41,10 @@ struct LidarConfig {
   double min_range_m = 0.4;
   double max_range_m = 200.0;
   double cut_angle_deg = 0.0;
+  // fov: {start: DEG, end: DEG}: the sensor's own FOV setting (clockwise); equal = the whole turn.
+  double fov_start_deg = 0.0;
+  double fov_end_deg = 0.0;
+  lidar::AzimuthInterpolation azimuth = lidar::AzimuthInterpolation::kPerLaser;  // Velodyne: per-laser | per-sequence
   timesync::TimeSource time_source = timesync::TimeSource::kHost;    // sensor | host
   timesync::HourSource hour_source = timesync::HourSource::kGprmc;   // sensor time: gprmc (host as fallback) | host
   timesync::Correction clock_correction = timesync::Correction::kAuto;  // through the clock mapper: auto | always | never

@@ -1,0 +1,174 @@
+#pragma once
+// Packet-to-packet continuity of spinning sensors that stamp each firing group with its azimuth
+// (Velodyne, Hesai): which groups of a packet have an implausible azimuth (corrupted: dropped, not
+// a scan cut), and how many packets are missing between two packets (from the azimuth step, the
+// sensor's own time step and the configured field of view). Pure integer/double arithmetic on a
+// dozen values per packet; inline because it runs once per packet inside the decoders' hot path
+// (see scan_assembler.hpp for why those stay visible to the compiler).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+
+#include "sensor_rig/common/clock.hpp"
+
+namespace sensor_rig::lidar::detail {
+
+inline constexpr int kTurn = 36000;  // hundredths of a degree
+
+// Forward step from a to b in [0, kTurn).
+constexpr int turn_step(int a, int b) noexcept {
+  const int d = (b - a) % kTurn;
+  return d < 0 ? d + kTurn : d;
+}
+constexpr int turn_dist(int a, int b) noexcept {  // shortest distance, either way
+  const int s = turn_step(a, b);
+  return s > kTurn / 2 ? kTurn - s : s;
+}
+
+// The azimuth range a sensor sends (its own FOV setting), clockwise from `start` to `end`, in
+// hundredths of a degree; `full` = the whole turn.
+struct AzimuthFov {
+  int start = 0;
+  int end = 0;
+  bool full = true;
+  [[nodiscard]] int length() const noexcept { return full ? kTurn : (turn_step(start, end) == 0 ? kTurn : turn_step(start, end)); }
+};
+
+// Degrees -> AzimuthFov; start == end (or both 0 / 360) is the full turn.
+inline AzimuthFov make_fov(double start_deg, double end_deg) noexcept {
+  const int s = static_cast<int>(std::lround(start_deg * 100.0)) % kTurn;
+  const int e = static_cast<int>(std::lround(end_deg * 100.0)) % kTurn;
+  return s == e ? AzimuthFov{} : AzimuthFov{s, e, false};
+}
+
+// Length of the part of the arc (from, from + len] that lies outside the FOV.
+inline int arc_outside(const AzimuthFov& fov, int from, int len) noexcept {
+  if (fov.full || len <= 0) return 0;
+  const int q = fov.end;                     // the blind arc: [end, end + blind)
+  const int blind = kTurn - fov.length();
+  int total = 0;
+  const int p = ((from % kTurn) + kTurn) % kTurn;
+  for (int shift = -kTurn; shift <= kTurn; shift += kTurn) {
+    const int lo = std::max(p, q + shift);
+    const int hi = std::min(p + len, q + shift + blind);
+    if (hi > lo) total += hi - lo;
+  }
+  return std::min(total, len);
+}
+
+// How far a group's azimuth may be off the packet's line (jitter of real sensors: a few 0.01°).
+constexpr int fit_tolerance(int step) noexcept { return 5 + std::abs(step) / 4; }
+
+// The azimuths of one packet's firing groups against a straight line.
+struct AzimuthFit {
+  double step = 0.0;       // azimuth advance per group, 0.01°
+  std::uint32_t bad = 0;   // bit k: group k is off the line (corrupted azimuth)
+  int good = 0;            // groups on the line
+};
+
+// `az`: the n (<= 32) group azimuths, already reduced to [0, kTurn).
+inline AzimuthFit fit_azimuths(const int* az, int n) noexcept {
+  AzimuthFit f;
+  f.good = n;
+  if (n < 2) return f;
+  int lo = kTurn, hi = 0;
+  for (int k = 1; k < n; ++k) {
+    const int s = turn_step(az[k - 1], az[k]);
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  if (hi - lo <= fit_tolerance(hi) && hi < kTurn / 8) {  // the common case: one straight line
+    f.step = static_cast<double>(turn_step(az[0], az[n - 1])) / (n - 1);
+    return f;
+  }
+  // Lower median step (a corrupted azimuth makes two steps, both long: into it and out of it),
+  // then the line through the most groups; the others are off it.
+  int steps[32];
+  for (int k = 1; k < n; ++k) steps[k - 1] = turn_step(az[k - 1], az[k]);
+  const int mid = (n - 2) / 2;
+  std::nth_element(steps, steps + mid, steps + (n - 1));
+  const int med = steps[mid] >= kTurn / 2 ? 0 : steps[mid];
+  const int tol = fit_tolerance(med);
+  int best = 0, best_count = 0;
+  for (int k = 0; k < n; ++k) {
+    const int ok = az[k] - k * med;
+    int c = 0;
+    for (int j = 0; j < n; ++j) c += turn_dist(ok, az[j] - j * med) <= tol ? 1 : 0;
+    if (c > best_count) {
+      best_count = c;
+      best = k;
+    }
+  }
+  const int ref = az[best] - best * med;
+  f.good = 0;
+  for (int k = 0; k < n; ++k) {
+    if (turn_dist(ref, az[k] - k * med) <= tol) {
+      ++f.good;
+    } else {
+      f.bad |= 1U << k;
+    }
+  }
+  f.step = med;
+  return f;
+}
+
+// The step from the previous packet's last good group to this packet's first good group.
+struct GapInput {
+  int prev_az = 0;             // last good group azimuth of the previous packet
+  int groups_since_prev = 1;   // groups from that one to this packet's first good group, if none is lost
+  int first_az = 0;            // this packet's first good group azimuth
+  double group_step = 0.0;     // azimuth per group (AzimuthFit::step)
+  int groups_per_packet = 1;
+  Nanos dt_ns = 0;             // sensor time step between the packets (0 or less: unknown / none)
+  Nanos packet_period_ns = 0;  // sensor time per packet
+};
+struct GapResult {
+  bool backwards = false;    // duplicate or late (reordered) packet: not decoded, counted
+  std::uint32_t missing = 0; // packets lost in between (inside the FOV)
+  int arc = 0;               // forward azimuth arc from prev_az to first_az
+};
+
+inline GapResult azimuth_gap(const AzimuthFov& fov, const GapInput& in) noexcept {
+  GapResult r;
+  r.arc = turn_step(in.prev_az, in.first_az);
+  const int outside = arc_outside(fov, in.prev_az, r.arc);
+  const int visible = r.arc - outside;
+  const double pkt_arc = in.group_step * in.groups_per_packet;
+  double k_az = 0.0;
+  if (in.group_step > 0.5) k_az = (visible / in.group_step - in.groups_since_prev) / in.groups_per_packet;
+  const bool time_known = in.dt_ns > 0 && in.packet_period_ns > 0;
+  double k_t = -1.0;
+  if (time_known) {
+    k_t = static_cast<double>(in.dt_ns) / static_cast<double>(in.packet_period_ns) - 1.0;
+    if (pkt_arc > 0.5) k_t -= outside / pkt_arc;  // the sensor sent nothing there
+  }
+  // More than half of the visible arc ahead: a step back (duplicate, reordering), unless the
+  // sensor's clock says that much time passed.
+  if (visible * 2 > fov.length() && !(time_known && k_t >= 0.5)) {
+    r.backwards = true;
+    return r;
+  }
+  double k = std::max(0.0, k_az);
+  // The azimuth cannot tell whole turns apart; the sensor time can.
+  if (time_known && pkt_arc > 0.5) {
+    const double per_turn = fov.length() / pkt_arc;
+    if (k_t > k + per_turn / 2) k = k_t;
+  }
+  r.missing = static_cast<std::uint32_t>(std::lround(std::min(k, 1e6)));
+  return r;
+}
+
+// Of `missing` packets lost on an arc that crosses `cut`, those after the cut (the next scan's).
+inline std::uint32_t missing_after_cut(const AzimuthFov& fov, int cut, int first_az, double group_step,
+                                       int groups_before_first, int groups_per_packet,
+                                       std::uint32_t missing) noexcept {
+  if (group_step <= 0.5) return 0;
+  const int arc = turn_step(cut, first_az);
+  const int visible = arc - arc_outside(fov, cut, arc);
+  const double k = (visible / group_step - groups_before_first) / groups_per_packet;
+  const auto after = static_cast<std::uint32_t>(std::max(0L, std::lround(k)));
+  return std::min(after, missing);
+}
+
+}  // namespace sensor_rig::lidar::detail
