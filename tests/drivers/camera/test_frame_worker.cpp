@@ -69,7 +69,9 @@ void offer_burst(int depth) {
     ASSERT_TRUE(w.offer(meta, 0, frame));
     worst = std::max(worst, monotonic_now_ns() - t0);
   }
-  EXPECT_LT(worst, 20'000'000) << "offer() waited " << worst / 1000 << " us for a blocked worker";
+  // A producer that waited for the worker would sit out the gate's 10 s; 500 ms leaves room for a
+  // loaded machine's scheduling without hiding a wait.
+  EXPECT_LT(worst, 500'000'000) << "offer() waited " << worst / 1000 << " us for a blocked worker";
   auto c = w.counters();
   EXPECT_EQ(c.offered, static_cast<std::uint64_t>(kBurst + 1));
   EXPECT_EQ(c.processed, 0u);  // still in the first one
