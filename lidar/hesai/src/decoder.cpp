@@ -243,6 +243,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       return out;
     }
     missing = gap.missing;
+    if (gap.resync) {  // a jump back: no cut, nothing missing, continuity from this packet on
+      ++stats.implausible_steps;
+      have_prev = false;
+      have_seq = false;
+    }
     if (has_seq && have_seq) {
       const std::uint32_t d = seq - prev_seq;
       const std::uint32_t slack = 1 + gap.missing / 8;

@@ -231,25 +231,30 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
     const double col_ns = m.column_period_ns();
     const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
-    if (ahead == 1 && dt <= 0) {  // same or earlier position, not later in time: duplicate or late
+    const double reorder_ns = 16.0 * static_cast<double>(cpp) * col_ns;  // a reordering window of 16 packets
+    if (ahead == 1 && dt <= 0 && static_cast<double>(-dt) <= reorder_ns) {  // duplicate or late
       scans.reject(PacketStatus::kOutOfOrder);
       last = PacketStatus::kOutOfOrder;
       return out;
     }
-    // Whole frames lost in between: the column times say more than the ids do.
-    const double expected = static_cast<double>((ahead * packets_per_frame + slot - prev_slot) * cpp) * col_ns;
-    const double frame_ns = static_cast<double>(m.columns_per_frame) * col_ns;
-    const long extra = frame_ns > 0.0 ? std::max(0L, std::lround((static_cast<double>(dt) - expected) / frame_ns)) : 0;
-    if (ahead == 0 && extra == 0) {
-      if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
-      new_frame = false;
-      missing_before = window_slots(prev_slot, slot);
+    if (dt <= 0) {  // a jump back in time (sensor restart, a looping replay): continuity starts over
+      ++stats.implausible_steps;
     } else {
-      if (!new_frame) ++stats.implausible_steps;  // a new frame with the frame id unchanged: corrupted
-      new_frame = true;
-      missing_before = window_slots(prev_slot, packets_per_frame);
-      missing_after = window_slots(-1, slot) +
-                      static_cast<std::uint32_t>(ahead + extra - 1) * window_slots(-1, packets_per_frame);
+      // Whole frames lost in between: the column times say more than the ids do.
+      const double expected = static_cast<double>((ahead * packets_per_frame + slot - prev_slot) * cpp) * col_ns;
+      const double frame_ns = static_cast<double>(m.columns_per_frame) * col_ns;
+      const long extra = frame_ns > 0.0 ? std::max(0L, std::lround((static_cast<double>(dt) - expected) / frame_ns)) : 0;
+      if (ahead == 0 && extra == 0) {
+        if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
+        new_frame = false;
+        missing_before = window_slots(prev_slot, slot);
+      } else {
+        if (!new_frame) ++stats.implausible_steps;  // a new frame with the frame id unchanged: corrupted
+        new_frame = true;
+        missing_before = window_slots(prev_slot, packets_per_frame);
+        missing_after = window_slots(-1, slot) +
+                        static_cast<std::uint32_t>(ahead + extra - 1) * window_slots(-1, packets_per_frame);
+      }
     }
   }
   if (n_valid > 0) {

@@ -259,6 +259,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       last = PacketStatus::kOutOfOrder;
       return out;
     }
+    if (gap.resync) {  // a jump back: no cut, nothing missing, continuity from this packet on
+      ++stats.implausible_steps;
+      have_prev = false;
+      gap = {};
+    }
   }
 
   prev_stamp = stamp;

@@ -149,6 +149,22 @@ TEST_P(CaptureCompleteness, DuplicatePacketIsCountedNotDecodedTwice) {
   EXPECT_EQ(r.scans.front().dropped, 1U);
 }
 
+TEST_P(CaptureCompleteness, ReplayLoopStartsOverWithoutRejectingPackets) {
+  // A looping replay (rig lidar replay --loop) jumps back in azimuth and sensor time while the
+  // receive time goes on: not a duplicate, no packet is rejected, nothing is missing.
+  auto loop = pkts;
+  const Nanos pass = pkts.back().rx_ns - pkts.front().rx_ns + 1'000'000;
+  for (auto p : pkts) {
+    p.rx_ns += pass;
+    loop.push_back(std::move(p));
+  }
+  const Decoded r = run(opts, loop);
+  EXPECT_EQ(r.st.by_status[static_cast<std::size_t>(PacketStatus::kOutOfOrder)], 0U);
+  EXPECT_EQ(r.st.packets_used, loop.size());
+  EXPECT_EQ(r.missing(), 0U);
+  EXPECT_GE(r.scans.size() + 1, 2 * base.scans.size());
+}
+
 TEST_P(CaptureCompleteness, CorruptedAzimuthOrFrameIdIsADropNotACut) {
   const auto& c = GetParam();
   const std::size_t i = middle_of_first_scan();

@@ -125,13 +125,23 @@ struct GapInput {
 };
 struct GapResult {
   bool backwards = false;    // duplicate or late (reordered) packet: not decoded, counted
+  bool resync = false;       // a jump back farther than reordering explains (sensor restart, a
+                             // replayed capture looping): continuity starts over, nothing missing
   std::uint32_t missing = 0; // packets lost in between (inside the FOV)
   int arc = 0;               // forward azimuth arc from prev_az to first_az
 };
 
+// How far back (in packets) a packet may step and still be a duplicate or a reordered one.
+inline constexpr int kReorderPackets = 16;
+
 inline GapResult azimuth_gap(const AzimuthFov& fov, const GapInput& in) noexcept {
   GapResult r;
   r.arc = turn_step(in.prev_az, in.first_az);
+  // The sensor's clock went back farther than reordering explains: whatever the azimuth says.
+  if (in.packet_period_ns > 0 && in.dt_ns < -static_cast<Nanos>(kReorderPackets) * in.packet_period_ns) {
+    r.resync = true;
+    return r;
+  }
   const int outside = arc_outside(fov, in.prev_az, r.arc);
   const int visible = r.arc - outside;
   const double pkt_arc = in.group_step * in.groups_per_packet;
@@ -146,7 +156,13 @@ inline GapResult azimuth_gap(const AzimuthFov& fov, const GapInput& in) noexcept
   // More than half of the visible arc ahead: a step back (duplicate, reordering), unless the
   // sensor's clock says that much time passed.
   if (visible * 2 > fov.length() && !(time_known && k_t >= 0.5)) {
-    r.backwards = true;
+    const int back = kTurn - r.arc;
+    const double window = pkt_arc > 0.5 ? kReorderPackets * pkt_arc : 1000.0;
+    if (back <= window) {
+      r.backwards = true;
+    } else {
+      r.resync = true;
+    }
     return r;
   }
   double k = std::max(0.0, k_az);
