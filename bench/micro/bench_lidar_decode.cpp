@@ -76,13 +76,15 @@ std::vector<Packet> synthetic(velodyne::Model m) {
   return out;
 }
 
-void run(benchmark::State& state, velodyne::Model m, const std::vector<Packet>& packets, bool recycle) {
+void run(benchmark::State& state, velodyne::Model m, const std::vector<Packet>& packets, bool recycle,
+         velodyne::AzimuthInterpolation interpolation = velodyne::AzimuthInterpolation::kPerLaser) {
   if (packets.size() < 2) {
     state.SkipWithError("no packets");
     return;
   }
   velodyne::DecoderConfig cfg;
   cfg.model = m;
+  cfg.interpolation = interpolation;
   velodyne::Decoder dec(cfg);
   std::uint64_t points = 0;
   std::uint64_t pushed = 0;
@@ -126,6 +128,13 @@ void register_all() {
           [m = s.model, packets, recycle](benchmark::State& st) { run(st, m, *packets, recycle); })
           ->Unit(benchmark::kMillisecond);
     }
+    // VeloView's per-sequence azimuth (the default before per-laser): one table lookup per sequence.
+    benchmark::RegisterBenchmark(
+        ("decode/" + name + (real ? "/capture" : "/synthetic") + "/recycled_buffers/per_sequence").c_str(),
+        [m = s.model, packets](benchmark::State& st) {
+          run(st, m, *packets, true, velodyne::AzimuthInterpolation::kPerSequence);
+        })
+        ->Unit(benchmark::kMillisecond);
   }
 }
 

@@ -16,10 +16,14 @@ namespace sensor_rig::lidar::detail {
 
 inline constexpr int kTurn = 36000;  // hundredths of a degree
 
-// Forward step from a to b in [0, kTurn).
+// Forward step from a to b in [0, kTurn); a and b in [0, kTurn).
 constexpr int turn_step(int a, int b) noexcept {
-  const int d = (b - a) % kTurn;
+  const int d = b - a;
   return d < 0 ? d + kTurn : d;
+}
+constexpr int wrap_turn(int a) noexcept {  // any int -> [0, kTurn)
+  const int r = a % kTurn;
+  return r < 0 ? r + kTurn : r;
 }
 constexpr int turn_dist(int a, int b) noexcept {  // shortest distance, either way
   const int s = turn_step(a, b);
@@ -92,18 +96,18 @@ inline AzimuthFit fit_azimuths(const int* az, int n) noexcept {
   const int tol = fit_tolerance(med);
   int best = 0, best_count = 0;
   for (int k = 0; k < n; ++k) {
-    const int ok = az[k] - k * med;
+    const int ok = wrap_turn(az[k] - k * med);
     int c = 0;
-    for (int j = 0; j < n; ++j) c += turn_dist(ok, az[j] - j * med) <= tol ? 1 : 0;
+    for (int j = 0; j < n; ++j) c += turn_dist(ok, wrap_turn(az[j] - j * med)) <= tol ? 1 : 0;
     if (c > best_count) {
       best_count = c;
       best = k;
     }
   }
-  const int ref = az[best] - best * med;
+  const int ref = wrap_turn(az[best] - best * med);
   f.good = 0;
   for (int k = 0; k < n; ++k) {
-    if (turn_dist(ref, az[k] - k * med) <= tol) {
+    if (turn_dist(ref, wrap_turn(az[k] - k * med)) <= tol) {
       ++f.good;
     } else {
       f.bad |= 1U << k;
