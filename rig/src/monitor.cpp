@@ -304,7 +304,9 @@ class Monitor {
             for (std::uint32_t i = 0; i < a.status._length; ++i) {
               const auto& st = a.status._buffer[i];
               if (st.name == nullptr || std::string_view(st.name).rfind("rig/sets/", 0) != 0) continue;
-              auto it = sets_.find("/" + std::string(st.name));
+              std::string set_topic = "/";  // appended, not "/" + name: GCC 12 -O3 false -Wrestrict
+              set_topic += st.name;
+              auto it = sets_.find(set_topic);
               if (it == sets_.end()) continue;
               for (std::uint32_t k = 0; k < st.values._length; ++k) {
                 const auto& kv = st.values._buffer[k];
