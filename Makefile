@@ -52,7 +52,7 @@ test-tsan: setup
 	cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_BENCH=OFF \
 	  -DCMAKE_C_FLAGS="$(TSAN_FLAGS)" -DCMAKE_CXX_FLAGS="$(TSAN_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS=-fsanitize=thread
 	cmake --build build-tsan -j$(JOBS) --target test_dbw_transport test_dbw_bridge_core test_dbw_bridge_threads
-	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
+	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/tests/support/tsan.supp" \
 	  ctest --output-on-failure -R '^test_dbw_(transport|bridge_core|bridge_threads)$$' -j1
 
 # Benchmarks: optimized build, figures go to BENCHMARKS.md (by hand, with machine and command).
