@@ -5,6 +5,14 @@ target_compile_options(rig_warnings INTERFACE
   -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Woverloaded-virtual
   -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough)
 
+# GCC 12 at -O3 reports std::string concatenation and assignment as overlapping memcpy
+# (-Wrestrict false positives: GCC bugs 105329, 105651; fixed in GCC 13). The warning stays an
+# error with other compilers and versions.
+if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_GREATER_EQUAL 12
+   AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
+  target_compile_options(rig_warnings INTERFACE -Wno-restrict)
+endif()
+
 if(RIG_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
