@@ -13,6 +13,9 @@ inline std::string data_dir() {
   return d != nullptr && *d != '\0' ? d : RIG_TEST_DATA_DEFAULT;
 }
 
+// Defined by each benchmark that links bench_main.cpp: registers its cases at start-up.
+void register_benchmarks();
+
 inline std::string read_text(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   std::ostringstream s;

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "sensor_rig/lidar/pcap_reader.hpp"
+#include "decode_passes.hpp"
 #include "sensor_rig/lidar/velodyne/decoder.hpp"
 #include "sensor_rig/lidar/velodyne/packet_info.hpp"
 
@@ -22,27 +22,17 @@ namespace {
 using namespace sensor_rig;
 using namespace sensor_rig::lidar;
 
-struct Packet {
-  std::vector<std::byte> bytes;
-  Nanos stamp;
-};
-
 using bench::data_dir;
-using bench::read_text;
+using Packet = bench::StampedPacket;
 
-std::vector<Packet> load_capture(const std::string& path) {
-  std::vector<Packet> out;
-  if (!std::filesystem::exists(path)) return out;
-  PcapReader r(path);
-  while (auto rec = r.next()) {
-    if (rec->packet.data.size() != velodyne::kDataPacketSize) continue;
+std::vector<Packet> load_velodyne_capture(const std::string& path) {
+  return bench::load_capture(path, [](const PcapRecord& rec) -> std::optional<Nanos> {
+    if (rec.packet.data.size() != velodyne::kDataPacketSize) return std::nullopt;
     // A packet without readable time (damaged capture) is still decoded (and counted as a drop):
     // stamped with its record time, as the decode CLI does.
-    const auto info = velodyne::read_packet_info(rec->packet.data);
-    const Nanos stamp = info ? velodyne::sensor_time_to_ns(info->sensor_time_us, rec->packet.rx_ns) : rec->packet.rx_ns;
-    out.push_back({std::vector<std::byte>(rec->packet.data.begin(), rec->packet.data.end()), stamp});
-  }
-  return out;
+    const auto info = velodyne::read_packet_info(rec.packet.data);
+    return info ? velodyne::sensor_time_to_ns(info->sensor_time_us, rec.packet.rx_ns) : rec.packet.rx_ns;
+  });
 }
 
 // One revolution and a half of synthetic packets: random ranges, ~5 % no return.
@@ -86,31 +76,13 @@ void run(benchmark::State& state, velodyne::Model m, const std::vector<Packet>& 
   cfg.model = m;
   cfg.interpolation = interpolation;
   velodyne::Decoder dec(cfg);
-  std::uint64_t points = 0;
-  std::uint64_t pushed = 0;
-  // Each pass continues the timeline so the decoder sees one long, steady stream.
-  const Nanos pass_ns = packets.back().stamp - packets.front().stamp + (packets[1].stamp - packets[0].stamp);
-  Nanos offset = 0;
-  for (auto _ : state) {
-    for (const auto& p : packets) {
-      auto scan = dec.push(PacketView{p.bytes, p.stamp + offset, velodyne::kDataPort}, p.stamp + offset);
-      if (scan) {
-        points += scan->points.size();
-        benchmark::DoNotOptimize(scan->points.data());
-        if (recycle) dec.recycle(std::move(scan->points));  // as a publisher returning the loan
-      }
-    }
-    pushed += packets.size();
-    offset += pass_ns;
-  }
+  bench::decode_passes(state, dec, packets, velodyne::kDataPort, bench::pass_duration(packets), recycle);
   if (dec.stats().time_jumps != 0) state.SkipWithError("time jumps in the packet stream");
-  state.counters["ns_per_packet"] =
-      benchmark::Counter(static_cast<double>(pushed) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
-  state.SetItemsProcessed(static_cast<std::int64_t>(pushed));
 }
 
-void register_all() {
+}  // namespace
+
+void sensor_rig::bench::register_benchmarks() {
   struct Src {
     velodyne::Model model;
     const char* file;
@@ -119,7 +91,7 @@ void register_all() {
                       Src{velodyne::Model::kHDL32E, "hdl32e_veloview_monterey-first-100-packets.pcap"},
                       Src{velodyne::Model::kVLP32C, nullptr}}) {
     const std::string name(velodyne::model_info(s.model).name);
-    auto capture = s.file ? load_capture(data_dir() + "/lidar/velodyne/" + s.file) : std::vector<Packet>{};
+    auto capture = s.file ? load_velodyne_capture(data_dir() + "/lidar/velodyne/" + s.file) : std::vector<Packet>{};
     const bool real = !capture.empty();
     auto packets = std::make_shared<std::vector<Packet>>(real ? std::move(capture) : synthetic(s.model));
     for (const bool recycle : {false, true}) {
@@ -138,12 +110,3 @@ void register_all() {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  register_all();
-  benchmark::Initialize(&argc, argv);
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}

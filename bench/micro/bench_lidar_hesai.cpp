@@ -14,34 +14,25 @@
 #include <vector>
 
 #include "bench_data.hpp"
+#include "decode_passes.hpp"
 #include "sensor_rig/lidar/mock/hesai_packet_builder.hpp"
 #include "sensor_rig/lidar/hesai/decoder.hpp"
-#include "sensor_rig/lidar/pcap_reader.hpp"
 
 namespace {
 
 using namespace sensor_rig;
 using namespace sensor_rig::lidar;
 
-struct Packet {
-  std::vector<std::byte> bytes;
-  Nanos stamp;
-};
-
 using bench::data_dir;
 using bench::read_text;
+using Packet = bench::StampedPacket;
 
-std::vector<Packet> load_capture(const std::string& path, hesai::Model m) {
-  std::vector<Packet> out;
-  if (!std::filesystem::exists(path)) return out;
-  PcapReader r(path);
-  while (auto rec = r.next()) {
-    const auto info = hesai::read_packet_info(rec->packet.data, m);
-    if (!info || !info->tail_time_ns) continue;
-    out.push_back({std::vector<std::byte>(rec->packet.data.begin(), rec->packet.data.end()),
-                   *info->tail_time_ns + hesai::first_firing_offset_ns(m, info->returns)});
-  }
-  return out;
+std::vector<Packet> load_hesai_capture(const std::string& path, hesai::Model m) {
+  return bench::load_capture(path, [m](const PcapRecord& rec) -> std::optional<Nanos> {
+    const auto info = hesai::read_packet_info(rec.packet.data, m);
+    if (!info || !info->tail_time_ns) return std::nullopt;
+    return *info->tail_time_ns + hesai::first_firing_offset_ns(m, info->returns);
+  });
 }
 
 // Two turns of single-return XT32 packets at 10 Hz (so passes continue seamlessly): random ranges, ~5 % no return.
@@ -70,32 +61,16 @@ void run(benchmark::State& state, const hesai::DecoderConfig& cfg, const std::ve
     return;
   }
   hesai::Decoder dec(cfg);
-  std::uint64_t points = 0, pushed = 0;
-  const Nanos pass_ns = packets.back().stamp - packets.front().stamp + (packets[1].stamp - packets[0].stamp);
-  Nanos offset = 0;
-  for (auto _ : state) {
-    for (const auto& p : packets) {
-      auto scan = dec.push(PacketView{p.bytes, p.stamp + offset, hesai::kDataPort}, p.stamp + offset);
-      if (scan) {
-        points += scan->points.size();
-        benchmark::DoNotOptimize(scan->points.data());
-        dec.recycle(std::move(scan->points));
-      }
-    }
-    pushed += packets.size();
-    offset += pass_ns;
-  }
+  bench::decode_passes(state, dec, packets, hesai::kDataPort, bench::pass_duration(packets), /*recycle=*/true);
   if (dec.stats().dropped() != 0) state.SkipWithError("packets dropped");
-  state.counters["ns_per_packet"] =
-      benchmark::Counter(static_cast<double>(pushed) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
-  state.SetItemsProcessed(static_cast<std::int64_t>(pushed));
 }
 
-void register_all() {
+}  // namespace
+
+void sensor_rig::bench::register_benchmarks() {
   const std::string dir = data_dir() + "/lidar/hesai/";
   auto capture = std::make_shared<std::vector<Packet>>(
-      load_capture(dir + "pandar40p_nebula_1673400149412331409.pcap", hesai::Model::kPandar40P));
+      load_hesai_capture(dir + "pandar40p_nebula_1673400149412331409.pcap", hesai::Model::kPandar40P));
   for (const auto r : {hesai::ReturnSelection::kDual, hesai::ReturnSelection::kStrongest}) {
     hesai::DecoderConfig cfg;
     cfg.model = hesai::Model::kPandar40P;
@@ -116,12 +91,3 @@ void register_all() {
       ->Unit(benchmark::kMillisecond);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  register_all();
-  benchmark::Initialize(&argc, argv);
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}

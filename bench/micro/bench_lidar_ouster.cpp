@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bench_data.hpp"
+#include "decode_passes.hpp"
 #include "sensor_rig/lidar/mock/ouster_packet_builder.hpp"
 #include "sensor_rig/lidar/ouster/decoder.hpp"
 #include "sensor_rig/lidar/ouster/metadata.hpp"
@@ -36,7 +37,7 @@ struct Stream {
   std::string error;
 };
 
-std::shared_ptr<Stream> load_capture() {
+std::shared_ptr<Stream> load_ouster_capture() {
   auto s = std::make_shared<Stream>();
   const std::string dir = data_dir() + "/lidar/ouster/";
   const std::string pcap = dir + "OS-1-32-G_v2.1.1_1024x10.pcap";
@@ -95,33 +96,18 @@ void run(benchmark::State& state, const Stream& s, os::ReturnSelection sel, bool
   cfg.metadata = s.meta;
   cfg.returns = sel;
   os::Decoder dec(cfg);
-  std::vector<Nanos> stamps;
-  for (const auto& p : s.packets) stamps.push_back(static_cast<Nanos>(dec.first_column_time(p).value_or(0)));
+  // Stamped by the first column's sensor time, as the node's sensor-time stamping does.
+  std::vector<bench::StampedPacket> packets;
+  for (const auto& p : s.packets) packets.push_back({p, static_cast<Nanos>(dec.first_column_time(p).value_or(0))});
   const Nanos pass_ns = 100'000'000;  // one frame at 10 Hz
-  Nanos offset = 0;
-  std::uint64_t points = 0;
-  std::uint64_t pushed = 0;
-  for (auto _ : state) {
-    for (std::size_t i = 0; i < s.packets.size(); ++i) {
-      auto scan = dec.push(PacketView{s.packets[i], 0, 7502}, stamps[i] + offset);
-      if (scan) {
-        points += scan->points.size();
-        benchmark::DoNotOptimize(scan->points.data());
-        if (recycle) dec.recycle(std::move(scan->points));
-      }
-    }
-    pushed += s.packets.size();
-    offset += pass_ns;
-  }
+  bench::decode_passes(state, dec, packets, s.meta.udp_port_lidar, pass_ns, recycle);
   if (dec.stats().time_jumps != 0 || dec.stats().dropped() != 0) state.SkipWithError("time jumps or drops");
-  state.counters["ns_per_packet"] =
-      benchmark::Counter(static_cast<double>(pushed) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
-  state.SetItemsProcessed(static_cast<std::int64_t>(pushed));
 }
 
-void register_all() {
-  const auto capture = load_capture();
+}  // namespace
+
+void sensor_rig::bench::register_benchmarks() {
+  const auto capture = load_ouster_capture();
   for (const bool recycle : {false, true}) {
     benchmark::RegisterBenchmark(
         (std::string("decode/OS-1-32-G/LEGACY/capture") + (recycle ? "/recycled_buffers" : "/new_buffers")).c_str(),
@@ -138,12 +124,3 @@ void register_all() {
       ->Unit(benchmark::kMicrosecond);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  register_all();
-  benchmark::Initialize(&argc, argv);
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
