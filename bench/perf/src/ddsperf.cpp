@@ -10,7 +10,7 @@
 #include <memory>
 #include <sstream>
 
-#include "process.hpp"
+#include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/bench/perf/roudi.hpp"
 #include "sensor_rig/bench/perf/runner.hpp"
 #include "sensor_rig/common/cli.hpp"
@@ -109,10 +109,13 @@ int run_ddsperf(const DdsperfOptions& o) {
     const auto ping_log = (fs::path(o.out) / ("ping_" + size_label(size) + ".log")).string();
     fs::remove(pong_log);
     fs::remove(ping_log);
-    Child pong({kDdsperf, "-D", std::to_string(std::stoi(dur) + 5), "-i", std::to_string(domain), "pong"}, pong_log, false);
-    Child ping({kDdsperf, "-D", dur, "-i", std::to_string(domain), "ping", rate, "size",
-                std::to_string(s)},
-               ping_log, false);
+    ChildOptions pong_opt, ping_opt;
+    pong_opt.log_file = pong_log;
+    pong_opt.process_group = 0;
+    ping_opt.log_file = ping_log;
+    ping_opt.process_group = 0;
+    ChildProcess pong({kDdsperf, "-D", std::to_string(std::stoi(dur) + 5), "-i", std::to_string(domain), "pong"}, pong_opt);
+    ChildProcess ping({kDdsperf, "-D", dur, "-i", std::to_string(domain), "ping", rate, "size", std::to_string(s)}, ping_opt);
     std::fprintf(stderr, "[perf] ddsperf %s %s %s for %s s\n", to_string(o.transport).c_str(), size_label(size).c_str(), rate, dur.c_str());
     if (!ping.wait_exit(static_cast<int>(o.duration_s * 1000) + 20000)) ping.signal(SIGTERM);
     ping.wait_exit(2000);

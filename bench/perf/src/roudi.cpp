@@ -1,38 +1,9 @@
 #include "sensor_rig/bench/perf/roudi.hpp"
 
-#include <signal.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <filesystem>
-#include <fstream>
 #include <sstream>
-#include <thread>
-
-#include "process.hpp"
-#include "sensor_rig/common/clock.hpp"
-#include "sensor_rig/common/log.hpp"
 
 namespace sensor_rig::bench::perf {
-namespace {
-constexpr const char* kRoudiBin = "/usr/bin/iox-roudi";
-
-std::string read_all(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Files iceoryx 2.0 leaves when RouDi dies without cleaning up: the management and payload
-// segments (the latter named after the user's group) and the single-instance lock.
-std::vector<std::string> leftovers() {
-  std::vector<std::string> v = {"/dev/shm/iceoryx_mgmt", "/tmp/iox-unique-roudi.lock"};
-  if (const char* user = std::getenv("USER"); user != nullptr && *user != '\0') v.push_back(std::string("/dev/shm/") + user);
-  if (::getuid() == 0) v.emplace_back("/dev/shm/root");
-  return v;
-}
-}  // namespace
 
 std::string roudi_config(std::uint32_t size, int chunks) {
   std::ostringstream s;
@@ -50,55 +21,6 @@ std::string roudi_config(std::uint32_t size, int chunks) {
 
 int roudi_chunks_for(int publishers, int subscriptions) {
   return std::clamp(32 + 4 * publishers + 4 * subscriptions, 32, 1024);
-}
-
-RouDi::RouDi(const std::string& config_file, const std::string& log_file, bool allow_external) {
-  if (const auto running = find_processes("iox-roudi"); !running.empty()) {
-    if (!allow_external) {
-      throw std::runtime_error("a RouDi (iox-roudi pid " + std::to_string(running.front()) +
-                               ") is already running; only one can run per machine");
-    }
-    external_pid_ = running.front();
-    log::warn("perf", "using the running RouDi (iox-roudi pid " + std::to_string(external_pid_) +
-                          "); its mempools may not fit the run's sample size");
-    return;
-  }
-  if (::access(kRoudiBin, X_OK) != 0) throw std::runtime_error("shared memory needs iox-roudi (Debian package iceoryx)");
-  // Leftovers of a RouDi that died uncleanly would make ours fail; nothing else uses these names.
-  for (const auto& f : leftovers()) std::filesystem::remove(f);
-  const Nanos start = monotonic_now_ns();
-  std::filesystem::remove(log_file);
-  child_ = std::make_unique<Child>(std::vector<std::string>{kRoudiBin, "-c", config_file, "-l", "info", "-m", "on"},
-                                   log_file, false);
-  for (;;) {
-    if (read_all(log_file).find("RouDi is ready for clients") != std::string::npos) break;
-    if (child_->poll_exit()) {
-      throw std::runtime_error("iox-roudi exited during startup; its log " + log_file + ":\n" + read_all(log_file));
-    }
-    if (monotonic_now_ns() - start > 60'000'000'000) throw std::runtime_error("iox-roudi not ready after 60 s; see " + log_file);
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  startup_s_ = static_cast<double>(monotonic_now_ns() - start) / 1e9;
-}
-
-int RouDi::pid() const noexcept { return child_ ? child_->pid() : external_pid_; }
-
-RouDi::~RouDi() { stop(); }
-
-void RouDi::stop() {
-  if (!child_) return;
-  child_->signal(SIGTERM);
-  if (!child_->wait_exit(15000)) {
-    child_->signal(SIGKILL);
-    child_->wait_exit(5000);
-  }
-  stopped_cpu_s_ = child_->info().cpu_s;
-  stopped_max_rss_kb_ = child_->info().max_rss_kb;
-  child_.reset();
-  if (find_processes("iox-roudi").empty()) {
-    std::error_code ec;
-    for (const auto& f : leftovers()) std::filesystem::remove(f, ec);
-  }
 }
 
 }  // namespace sensor_rig::bench::perf

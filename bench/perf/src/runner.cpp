@@ -12,10 +12,10 @@
 #include <optional>
 #include <thread>
 
-#include "process.hpp"
 #include "sensor_rig/bench/perf/analysis.hpp"
 #include "sensor_rig/bench/perf/node.hpp"
 #include "sensor_rig/bench/perf/roudi.hpp"
+#include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/shutdown.hpp"
@@ -53,13 +53,13 @@ std::vector<std::string> node_argv(const std::string& exe, const RunSpec& spec, 
 }
 
 // Stops children politely (STOP / SIGTERM), then by force; only the ones given, only while running.
-void stop_children(const std::vector<Child*>& kids, int grace_ms) {
-  for (Child* c : kids) {
+void stop_children(const std::vector<ChildProcess*>& kids, int grace_ms) {
+  for (ChildProcess* c : kids) {
     c->send_line("STOP");
     c->close_stdin();
   }
   const Nanos end = monotonic_now_ns() + static_cast<Nanos>(grace_ms) * 1'000'000;
-  for (Child* c : kids) {
+  for (ChildProcess* c : kids) {
     const auto left = static_cast<int>(std::max<Nanos>(0, end - monotonic_now_ns()) / 1'000'000);
     c->wait_exit(left);
   }
@@ -124,15 +124,19 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
   // Exec through /proc/self/exe (resolved in the child, a copy of us): the very binary that runs
   // this runner, even if it was replaced on disk by a rebuild since.
   const std::string exe = "/proc/self/exe";
-  input.extra["rig"] = self_exe();
-  std::vector<std::unique_ptr<Child>> kids;
+  input.extra["rig"] = self_executable();
+  std::vector<std::unique_ptr<ChildProcess>> kids;
   pid_t pgid = 0;
   for (const auto& n : plan) {
     const std::string csv = (out / ((n.role == Role::kPublisher ? "pub_" : "sub_") + std::to_string(n.index) + ".csv")).string();
     const std::string err = (out / ("node_" + std::to_string(n.index) + ".log")).string();
     const std::string stats = (out / ("node_" + std::to_string(n.index) + ".json")).string();
     fs::remove(err);
-    kids.push_back(std::make_unique<Child>(node_argv(exe, spec, n, run_id, domain, profile, csv, stats), err, true, pgid));
+    ChildOptions co;
+    co.log_file = err;
+    co.pipe_stdio = true;
+    co.process_group = pgid;  // the nodes share a group of their own: Ctrl-C reaches the runner only
+    kids.push_back(std::make_unique<ChildProcess>(node_argv(exe, spec, n, run_id, domain, profile, csv, stats), co));
     if (pgid == 0) pgid = kids.front()->pid();
     NodeOutcome o;
     o.plan = n;
@@ -162,7 +166,7 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
           ++n_ready;
         }
       }
-      if (!ready[i] && (kids[i]->stdout_eof() || kids[i]->poll_exit())) {
+      if (!ready[i] && (kids[i]->stdout_eof() || !kids[i]->running())) {
         input.warnings.push_back("node " + std::to_string(i) + " ended before discovery completed (see node_" + std::to_string(i) + ".log)");
         failed_start = true;
       }
@@ -194,7 +198,7 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
     for (;;) {
       int pubs_alive = 0, alive = 0;
       for (std::size_t i = 0; i < kids.size(); ++i) {
-        if (!kids[i]->poll_exit()) {
+        if (kids[i]->running()) {
           ++alive;
           if (plan[i].role == Role::kPublisher) ++pubs_alive;
         }
@@ -202,7 +206,7 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
       const Nanos now = vehicle_now_ns();
       if (!fault_done && now >= t0 + static_cast<Nanos>(opt.fault_kill_subscriber_s * 1e9)) {
         fault_done = true;
-        Child& victim = *kids.back();  // the last node is always a subscriber
+        ChildProcess& victim = *kids.back();  // the last node is always a subscriber
         PERF_PROGRESS(opt.progress, "fault injection: SIGKILL subscriber node %d (pid %d)", n_nodes - 1, victim.pid());
         victim.signal(SIGKILL);
         input.extra["fault_injection"] = {{"killed_node", n_nodes - 1}, {"at_s", opt.fault_kill_subscriber_s}};
@@ -220,12 +224,12 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
   }
 
   // Stop: subscribers drain on STOP; anything still running after the grace period is terminated.
-  std::vector<Child*> all;
+  std::vector<ChildProcess*> all;
   all.reserve(kids.size());
   for (auto& k : kids) all.push_back(k.get());
   stop_children(all, 5000);
   for (std::size_t i = 0; i < kids.size(); ++i) {
-    if (kids[i]->running() && !kids[i]->poll_exit()) {
+    if (kids[i]->running()) {
       input.nodes[i].stopped_by_runner = true;
       kids[i]->signal(SIGTERM);
     }
@@ -237,7 +241,7 @@ nlohmann::json run(const RunSpec& spec, const RunOptions& opt) {
     }
   }
   for (std::size_t i = 0; i < kids.size(); ++i) {
-    const auto& e = kids[i]->info();
+    const auto& e = kids[i]->exit_info();
     auto& o = input.nodes[i];
     o.exited = e.exited;
     o.exit_code = e.exit_code;

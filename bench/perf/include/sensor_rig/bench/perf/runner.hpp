@@ -6,9 +6,13 @@
 
 #include "sensor_rig/bench/perf/spec.hpp"
 
+namespace sensor_rig::dds {
+class RouDi;
+}
+
 namespace sensor_rig::bench::perf {
 
-class RouDi;
+using dds::RouDi;
 
 struct RunOptions {
   std::string profile;            // Cyclone XML; empty: config/cyclonedds/perf-<transport>.xml
