@@ -150,6 +150,10 @@ NmeaStatus parse_rmc(std::string_view s, RmcFix& out) noexcept {
   if (!parse_angle(f[3], f[4], 'S', fix.latitude_deg) || !parse_angle(f[5], f[6], 'W', fix.longitude_deg)) {
     return NmeaStatus::kMalformed;
   }
+  if (fix.latitude_deg > 90.0 || fix.latitude_deg < -90.0 || fix.longitude_deg > 180.0 || fix.longitude_deg < -180.0)
+    return NmeaStatus::kMalformed;
+  fix.has_position = !f[3].empty() && (f[4] == "N" || f[4] == "S") && !f[5].empty() && (f[6] == "E" || f[6] == "W");
+  if (nf > 12 && f[12].size() == 1) fix.mode = f[12][0];
   fix.year = yy < 80 ? 2000 + yy : 1900 + yy;  // NMEA carries two digits; GPS epochs are >= 1980
   fix.second = ss + fraction;
   const std::int64_t days = days_from_civil(fix.year, fix.month, fix.day);

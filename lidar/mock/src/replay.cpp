@@ -9,6 +9,7 @@
 
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
+#include "sensor_rig/lidar/ouster/imu_packet.hpp"
 #include "sensor_rig/lidar/velodyne/packet.hpp"
 
 namespace sensor_rig::lidar::mock {
@@ -39,7 +40,10 @@ PcapStream::~PcapStream() = default;
 std::optional<StreamPacket> PcapStream::next() {
   auto rec = reader_->next();
   if (!rec) return std::nullopt;
-  return StreamPacket{rec->packet.rx_ns, rec->packet.data, rec->packet.dst_port == velodyne::kPositionPort};
+  // The second port's packets: Velodyne position packets (8308), Ouster IMU packets (48 bytes, no
+  // lidar packet of any model is that small).
+  const bool second = rec->packet.dst_port == velodyne::kPositionPort || rec->packet.data.size() == ouster::kImuPacketSize;
+  return StreamPacket{rec->packet.rx_ns, rec->packet.data, second};
 }
 
 bool PcapStream::rewind() {

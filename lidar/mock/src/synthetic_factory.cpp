@@ -135,6 +135,7 @@ std::unique_ptr<SyntheticSensor> make_synthetic_sensor(const SyntheticOptions& o
   SyntheticOusterConfig c;
   c.metadata = synthetic_ouster_metadata(o);
   c.start_ns = o.start_ns;
+  c.imu_period_ns = o.ouster_imu_period_ns;
   return std::make_unique<SyntheticOuster>(std::move(c), std::move(scene));
 }
 

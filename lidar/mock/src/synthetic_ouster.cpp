@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "sensor_rig/lidar/ouster/imu_packet.hpp"
+
 namespace sensor_rig::lidar::mock {
 namespace {
 
@@ -180,10 +182,24 @@ Nanos SyntheticOuster::first_packet_offset_ns() const noexcept {
 }
 
 SyntheticPacket SyntheticOuster::next() {
+  const Nanos lidar_time = column_time((next_ + 1) * layout_.columns_per_packet);
+  if (config_.imu_period_ns > 0) {
+    // Time order; a tie goes to the lidar packet (the stream's first packet is a lidar packet).
+    const Nanos imu_time = column_time(layout_.columns_per_packet) + static_cast<Nanos>(imu_next_) * config_.imu_period_ns;
+    if (imu_time < lidar_time) {
+      ouster::ImuSample s;
+      s.sys_ts_ns = s.accel_ts_ns = s.gyro_ts_ns = static_cast<std::uint64_t>(imu_time);
+      s.accel_g = config_.imu_accel_g;
+      s.gyro_dps = config_.imu_gyro_dps;
+      imu_buf_.resize(ouster::kImuPacketSize);
+      ouster::encode_imu_packet(s, std::span<std::byte, ouster::kImuPacketSize>(imu_buf_.data(), ouster::kImuPacketSize));
+      ++imu_next_;
+      return SyntheticPacket{imu_time, imu_buf_, true};
+    }
+  }
   render_packet(next_, buf_);
-  const Nanos complete = column_time((next_ + 1) * layout_.columns_per_packet);  // the last column's period ends
-  ++next_;
-  return SyntheticPacket{complete, buf_, false};
+  ++next_;  // lidar_time: the last column's period ends
+  return SyntheticPacket{lidar_time, buf_, false};
 }
 
 }  // namespace sensor_rig::lidar::mock

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstdio>
 #include <cstring>
 #include <string>
 
@@ -157,6 +158,60 @@ TEST(PositionPacket, FormatRoundTrips) {
   const std::string v = format_rmc({t, false, 0.0, 0.0});
   ASSERT_EQ(parse_rmc(v, fix), NmeaStatus::kOk) << v;
   EXPECT_FALSE(fix.valid);
+}
+
+// What the NavSatFix of the LIDAR node is built from: coordinates present, status, mode indicator.
+std::string with_checksum(std::string_view body) {
+  char tail[8];
+  std::snprintf(tail, sizeof tail, "*%02X", nmea_checksum(body));
+  return "$" + std::string(body) + tail;
+}
+
+TEST(Rmc, FixUsabilityFromStatusFieldsAndMode) {
+  RmcFix fix;
+  ASSERT_EQ(parse_rmc(kHdl32Sentence, fix), NmeaStatus::kOk);
+  EXPECT_TRUE(fix.has_position);
+  EXPECT_EQ(fix.mode, 'D');
+  EXPECT_TRUE(fix.usable_fix());
+  // Void fix: parsed (its time is still good for the clock), not a usable position.
+  ASSERT_EQ(parse_rmc(with_checksum("GPRMC,220632,V,3707.8324,N,12139.2864,W,,,111212,,"), fix), NmeaStatus::kOk);
+  EXPECT_FALSE(fix.valid);
+  EXPECT_TRUE(fix.has_position);
+  EXPECT_EQ(fix.mode, '\0');
+  EXPECT_FALSE(fix.usable_fix());
+  // Status A but empty coordinates (a receiver before its first fix) or a missing hemisphere.
+  ASSERT_EQ(parse_rmc(with_checksum("GPRMC,220632,A,,,,,,,111212,,,A"), fix), NmeaStatus::kOk);
+  EXPECT_FALSE(fix.has_position);
+  EXPECT_FALSE(fix.usable_fix());
+  ASSERT_EQ(parse_rmc(with_checksum("GPRMC,220632,A,3707.8324,,12139.2864,W,,,111212,,,A"), fix), NmeaStatus::kOk);
+  EXPECT_FALSE(fix.has_position);
+  // NMEA 2.3 mode N = data not valid.
+  ASSERT_EQ(parse_rmc(with_checksum("GPRMC,220632,A,3707.8324,N,12139.2864,W,,,111212,,,N"), fix), NmeaStatus::kOk);
+  EXPECT_TRUE(fix.has_position);
+  EXPECT_FALSE(fix.usable_fix());
+  // Southern / eastern hemispheres.
+  ASSERT_EQ(parse_rmc(with_checksum("GPRMC,220632,A,3352.1200,S,15112.6000,E,,,111212,,,A"), fix), NmeaStatus::kOk);
+  EXPECT_NEAR(fix.latitude_deg, -(33.0 + 52.12 / 60.0), 1e-9);
+  EXPECT_NEAR(fix.longitude_deg, 151.0 + 12.6 / 60.0, 1e-9);
+  EXPECT_TRUE(fix.usable_fix());
+}
+
+TEST(Rmc, CoordinatesOutOfRangeAreMalformed) {
+  RmcFix fix;
+  EXPECT_EQ(parse_rmc(with_checksum("GPRMC,220632,A,9100.0000,N,12139.2864,W,,,111212,,,A"), fix), NmeaStatus::kMalformed);
+  EXPECT_EQ(parse_rmc(with_checksum("GPRMC,220632,A,3707.8324,N,18100.0000,W,,,111212,,,A"), fix), NmeaStatus::kMalformed);
+  EXPECT_EQ(parse_rmc(with_checksum("GPRMC,220632,A,3707.8324,N,12160.0000,W,,,111212,,,A"), fix), NmeaStatus::kMalformed);
+  EXPECT_EQ(parse_rmc(with_checksum("GPRMC,220632,A,-3707.8324,N,12139.2864,W,,,111212,,,A"), fix), NmeaStatus::kMalformed);
+  // Every single-bit flip of the real sentence's body is caught by the checksum or the parser.
+  const std::string real(kHdl32Sentence.substr(0, kHdl32Sentence.find('*')));
+  for (std::size_t i = 1; i < real.size(); ++i) {
+    for (int bit = 0; bit < 7; ++bit) {
+      std::string s(kHdl32Sentence);
+      s[i] = static_cast<char>(s[i] ^ (1 << bit));
+      RmcFix f;
+      EXPECT_NE(parse_rmc(s, f), NmeaStatus::kOk) << s;
+    }
+  }
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ namespace sensor_rig::lidar::mock {
 struct StreamPacket {
   Nanos time_ns = 0;                 // the stream's own time (capture record time, sensor time)
   std::span<const std::byte> bytes;  // valid until the next call to next()
-  bool position = false;             // a position packet (UDP port 8308 in captures)
+  bool position = false;             // for the second port: Velodyne position (8308), Ouster IMU (48 B)
 };
 
 class PacketStream {
@@ -34,7 +34,8 @@ class PacketStream {
   [[nodiscard]] virtual std::string error() const { return {}; }  // why the stream ended early
 };
 
-// UDP payloads of a pcap file, position = destination port 8308. Throws PcapError on open.
+// UDP payloads of a pcap file, position = destination port 8308 or a 48-byte Ouster IMU packet.
+// Throws PcapError on open.
 class PcapStream final : public PacketStream {
  public:
   explicit PcapStream(std::string path);

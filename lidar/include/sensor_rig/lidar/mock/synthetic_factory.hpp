@@ -27,6 +27,7 @@ struct SyntheticOptions {
   std::string ouster_mode;            // nominal Ouster: lidar mode; empty = 1024x(rpm/60)
   std::string ouster_profile;         // nominal OS: UDP profile; empty = RNG19_RFL8_SIG16_NIR16
   std::uint16_t ouster_udp_port = 7502;  // nominal Ouster: udp_port_lidar (imu = +1)
+  Nanos ouster_imu_period_ns = 10'000'000;  // Ouster IMU packets (flagged position: the second port); 0 = none
 };
 
 // "VLP-16, VLP-32C, HDL-32E, OS-LEGACY, OS, Pandar40P, PandarXT32".

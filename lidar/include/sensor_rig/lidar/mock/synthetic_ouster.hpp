@@ -15,6 +15,11 @@
 // photons (r in m, at least 1 m), near-IR 100; no return: all zero.
 // SyntheticPacket::time_ns: when the packet is complete (its last column's period has ended; the
 // decoder's packet_span_ns() after the first column), i.e. when the sensor sends it.
+// IMU packets (ouster/imu_packet.hpp, the legacy 48-byte layout) every imu_period_ns, interleaved
+// in time order and flagged `position` (they go to the second port, udp_port_imu): the first at
+// the first lidar packet's time (after it), then every period; all three timestamps = the packet's
+// time_ns; a still sensor: acceleration and angular velocity as configured (default +1 g on z).
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -52,6 +57,9 @@ struct SyntheticOusterConfig {
   int start_column = 0;              // its measurement id
   std::uint32_t first_frame_id = 0;
   double max_range_m = 120.0;        // farther hits read as no return
+  Nanos imu_period_ns = 0;           // IMU packets every this long (100 Hz on the sensor: 10 ms); 0 = none
+  std::array<float, 3> imu_accel_g{0.0F, 0.0F, 1.0F};
+  std::array<float, 3> imu_gyro_dps{0.0F, 0.0F, 0.0F};
 };
 
 class SyntheticOuster final : public SyntheticSensor {
@@ -73,6 +81,7 @@ class SyntheticOuster final : public SyntheticSensor {
   [[nodiscard]] Nanos first_packet_offset_ns() const noexcept override;
   void set_start_ns(Nanos start_ns) noexcept override { config_.start_ns = start_ns; }
   [[nodiscard]] std::uint64_t packets_emitted() const noexcept { return next_; }
+  [[nodiscard]] std::uint64_t imu_packets_emitted() const noexcept { return imu_next_; }
 
  private:
   struct Ray {
@@ -86,7 +95,9 @@ class SyntheticOuster final : public SyntheticSensor {
   std::vector<Ray> rays_;  // column-major: rays_[mid * pixels + beam]
   double column_ns_ = 0;
   std::uint64_t next_ = 0;
+  std::uint64_t imu_next_ = 0;
   std::vector<std::byte> buf_;
+  std::vector<std::byte> imu_buf_;
 };
 
 }  // namespace sensor_rig::lidar::mock

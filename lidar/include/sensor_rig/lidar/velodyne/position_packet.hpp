@@ -56,6 +56,10 @@ struct RmcFix {
   Nanos hour_start_ns = 0;      // top of that hour: add the sensor's µs-since-hour to this
   double latitude_deg = 0.0;    // + north (0 when the field is empty)
   double longitude_deg = 0.0;   // + east
+  bool has_position = false;    // latitude and longitude fields (and their N/S, E/W) all present
+  char mode = '\0';             // NMEA 2.3 mode indicator (A autonomous, D differential, E, M, S, N not valid); 0 = absent
+  // A position fix a consumer may use: status A, both coordinates present, mode not 'N'.
+  [[nodiscard]] bool usable_fix() const noexcept { return valid && has_position && mode != 'N'; }
 };
 
 // Parses one sentence ("$GPRMC,...*hh", trailing CR/LF/NUL ignored). Checksum is verified.
