@@ -26,6 +26,20 @@ LidarMockConfig parse_mock(const config::Node& n) {
   return m;
 }
 
+LidarRecordConfig parse_record(const config::Node& n) {
+  LidarRecordConfig r;
+  if (!n.expect_map()) return r;
+  n.allow_keys({"directory", "max_file_mb", "max_file_s", "max_files"});
+  r.directory = n.get_path("directory");
+  if (r.directory.empty()) n.fail("directory", "must name a directory");
+  if (std::filesystem::exists(r.directory) && !std::filesystem::is_directory(r.directory))
+    n.fail("directory", "'" + r.directory + "' exists and is not a directory");
+  r.max_file_mb = n.get_double("max_file_mb", 1.0, 1024.0 * 1024.0, 256.0);
+  r.max_file_s = n.get_double("max_file_s", 0.0, 86400.0, 60.0);
+  r.max_files = static_cast<int>(n.get_int("max_files", 1, 100000, 10));
+  return r;
+}
+
 // Builds the decoder the driver will build: a calibration or metadata file made for another model
 // (or malformed) is an error at its key now, not a driver failing after `rig up` started the mocks.
 void check_decoder_files(const config::Node& n, const LidarConfig& l) {
@@ -48,9 +62,9 @@ void check_decoder_files(const config::Node& n, const LidarConfig& l) {
 LidarConfig parse_lidar_config(const config::Node& n) {
   LidarConfig l;
   if (!n.expect_map()) return l;
-  n.allow_keys({"name", "model", "host", "port", "position_port", "receive_buffer_bytes", "calibration",
+  n.allow_keys({"name", "model", "host", "port", "position_port", "imu_port", "receive_buffer_bytes", "calibration",
                 "metadata", "returns", "min_range", "max_range", "cut_angle", "fov", "azimuth", "time_source", "hour_source", "clock_correction",
-                "frame_id", "realtime_priority", "qos", "mock"});
+                "frame_id", "realtime_priority", "qos", "mock", "record"});
   l.name = n.get_string("name");
   for (char c : l.name)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
@@ -63,6 +77,17 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   l.host = n.get_string("host", "127.0.0.1");
   l.port = static_cast<int>(n.get_int("port", 1, 65535));
   l.position_port = static_cast<int>(n.get_int("position_port", 0, 65535, 0));
+  // The second port: Velodyne position packets (position_port), Ouster IMU packets (imu_port).
+  if (n.child("imu_port")) {
+    const auto imu_port = static_cast<int>(n.get_int("imu_port", 0, 65535, 0));
+    if (!lidar::mock::is_ouster_model(l.model)) {
+      n.fail("imu_port", "only Ouster sensors send IMU packets (model " + l.model + ")");
+    } else if (l.position_port != 0) {
+      n.fail("imu_port", "give imu_port (Ouster) or position_port (Velodyne), not both");
+    } else {
+      l.position_port = imu_port;
+    }
+  }
   l.receive_buffer_bytes = static_cast<int>(n.get_int("receive_buffer_bytes", 0, 1 << 30, 8 << 20));
   l.calibration = n.get_path("calibration", "");
   if (!l.calibration.empty() && !std::filesystem::exists(l.calibration))
@@ -102,6 +127,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
   if (auto m = n.child("mock")) l.mock = parse_mock(*m);
+  if (auto r = n.child("record")) l.record = parse_record(*r);
   check_decoder_files(n, l);
   const bool synthetic = l.mock.kind == LidarMockConfig::Kind::kSynthetic;
   // A synthetic Ouster without metadata: `rig up` writes the mock's own metadata for the driver.

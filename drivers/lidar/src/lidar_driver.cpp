@@ -1,12 +1,17 @@
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 
+#include <arpa/inet.h>
 #include <pthread.h>
 #include <sched.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/lidar/ouster/imu_packet.hpp"
+#include "sensor_rig/lidar/pcap_recorder.hpp"
 #include "sensor_rig/lidar/udp_source.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
@@ -30,6 +35,81 @@ timesync::StamperConfig lidar_stamper_config(const LidarConfig& c, Nanos packet_
   return stamper_config(c.time_source, c.hour_source, c.clock_correction, packet_span_ns);
 }
 
+std::unique_ptr<lidar::PcapRecorder> make_recorder(const LidarConfig& c) {
+  if (c.record.directory.empty()) return nullptr;
+  lidar::PcapRecorderConfig r;
+  r.directory = c.record.directory;
+  r.prefix = c.name;
+  r.max_file_bytes = static_cast<std::uint64_t>(c.record.max_file_mb * 1024.0 * 1024.0);
+  r.max_file_ns = static_cast<Nanos>(c.record.max_file_s * 1e9);
+  r.max_files = static_cast<std::size_t>(c.record.max_files);
+  return std::make_unique<lidar::PcapRecorder>(r);
+}
+
+std::uint32_t ipv4_of(const std::string& host) {
+  in_addr a{};
+  return ::inet_pton(AF_INET, host.c_str(), &a) == 1 ? ntohl(a.s_addr) : 0;
+}
+
+bool model_vendor_is(const LidarConfig& c, std::string_view vendor) {
+  const auto* m = lidar::find_model(c.model);
+  return m != nullptr && m->vendor == vendor;
+}
+
+// Side topics (IMU 100 Hz, GPS fix ~1 Hz): reliable, keep-last 10, volatile.
+dds::QosSpec side_qos() {
+  dds::QosSpec q;
+  q.depth = 10;
+  return q;
+}
+
+// sensor_msgs/NavSatStatus and NavSatFix constants (ROS 2).
+constexpr std::int8_t kStatusNoFix = -1;
+constexpr std::int8_t kStatusFix = 0;
+constexpr std::uint16_t kServiceGps = 1;
+constexpr std::uint8_t kCovarianceTypeUnknown = 0;
+
+// The ROS message of one $GPRMC fix: a usable fix is STATUS_FIX; a void fix ('V'), a fix without
+// coordinates or with mode 'N' is STATUS_NO_FIX with NaN coordinates (RMC has no altitude: NaN).
+// Stamp: the fix's UTC time (GPS time; vehicle time when the PU is disciplined by PTP/GPS).
+msg::NavSatFix navsat_fix(const vel::RmcFix& f, const char* frame_id) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  msg::NavSatFix m{};
+  m.header.stamp = msg::to_time(f.utc_ns);
+  m.header.frame_id = const_cast<char*>(frame_id);
+  const bool fix = f.usable_fix();
+  m.status.status = fix ? kStatusFix : kStatusNoFix;
+  m.status.service = kServiceGps;
+  m.latitude = fix ? f.latitude_deg : kNaN;
+  m.longitude = fix ? f.longitude_deg : kNaN;
+  m.altitude = kNaN;
+  m.position_covariance_type = kCovarianceTypeUnknown;
+  return m;
+}
+
+// The ROS message of one Ouster IMU sample, in SI units, in the IMU's own frame. No orientation:
+// orientation_covariance[0] = -1 (REP 145 / sensor_msgs/Imu); covariances as ouster-ros states them.
+msg::Imu imu_message(const lidar::ouster::ImuSample& s, Nanos stamp, const char* frame_id) {
+  msg::Imu m{};
+  m.header.stamp = msg::to_time(stamp);
+  m.header.frame_id = const_cast<char*>(frame_id);
+  m.orientation.w = 1.0;  // ignored (covariance -1), but a valid quaternion as ouster-ros sends
+  m.orientation_covariance[0] = -1.0;
+  const auto a = s.linear_acceleration_mps2();
+  const auto w = s.angular_velocity_radps();
+  m.linear_acceleration.x = a[0];
+  m.linear_acceleration.y = a[1];
+  m.linear_acceleration.z = a[2];
+  m.angular_velocity.x = w[0];
+  m.angular_velocity.y = w[1];
+  m.angular_velocity.z = w[2];
+  for (int i = 0; i < 3; ++i) {
+    m.linear_acceleration_covariance[4 * i] = 0.01;    // (m/s²)²
+    m.angular_velocity_covariance[4 * i] = 6e-4;       // (rad/s)²
+  }
+  return m;
+}
+
 }  // namespace
 
 struct LidarDriver::Impl {
@@ -37,8 +117,9 @@ struct LidarDriver::Impl {
   std::string topic_name;
   std::unique_ptr<lidar::ScanDecoder> decoder;
   bool velodyne = false;               // position packets and top-of-hour time are Velodyne's
+  bool ouster = false;                 // the second port carries IMU packets
   lidar::UdpSource data;
-  std::unique_ptr<lidar::UdpSource> position;
+  std::unique_ptr<lidar::UdpSource> position;  // second port: Velodyne position / Ouster IMU packets
   // 64 kB slots: the largest UDP payload (an OS-128 packet is ~25 kB; Velodyne 1206 B).
   lidar::SlotArena arena{64, 65536};
   lidar::SlotArena position_arena{4, 1024};
@@ -46,7 +127,19 @@ struct LidarDriver::Impl {
   dds::Writer<msg::PointCloud2> writer;
   dds::StampsWriter& stamps;
   timesync::PacketStamper stamper;  // one policy with `rig lidar decode` (timesync/packet_stamper.hpp)
+  // IMU samples: the same policy and sensor clock, sample time = the packet's time (no span).
+  timesync::PacketStamper imu_stamper;
+  std::string imu_topic_name;
+  std::string fix_topic_name;
+  std::string imu_frame_id;
+  std::string gps_frame_id;
+  std::unique_ptr<dds::Topic<msg::Imu>> imu_topic;
+  std::unique_ptr<dds::Writer<msg::Imu>> imu_writer;
+  std::unique_ptr<dds::Topic<msg::NavSatFix>> fix_topic;
+  std::unique_ptr<dds::Writer<msg::NavSatFix>> fix_writer;
   std::vector<msg::PointField> fields;
+  std::unique_ptr<lidar::PcapRecorder> recorder;  // `record:`: raw packets of both ports, as received
+  std::uint32_t host_ip = 0;
   std::thread thread;
   std::atomic<bool> stop_flag{false};
 
@@ -58,6 +151,15 @@ struct LidarDriver::Impl {
   PpsState pps = PpsState::kAbsent;
   bool have_position = false;
   std::optional<Nanos> gprmc_utc_ns;  // latest valid $GPRMC time
+  std::uint64_t position_dropped = 0;      // second-port packets of the wrong size
+  std::uint64_t gprmc_bad_checksum = 0;    // position packets whose sentence fails its checksum
+  std::uint64_t gprmc_malformed = 0;       // truncated, not RMC, bad fields
+  std::uint64_t fixes = 0;                 // NavSatFix published (one per new sentence)
+  std::uint64_t fixes_no_fix = 0;          // of those: STATUS_NO_FIX (void, empty fields, mode N)
+  std::optional<std::pair<Nanos, bool>> last_fix_key;  // (utc, status) of the last published sentence
+  std::uint64_t imu_samples = 0;           // Imu published
+  std::uint64_t imu_dropped_size = 0;      // second-port packets that are not 48 bytes
+  std::uint64_t imu_dropped_non_finite = 0;
   Nanos last_scan_host_ns = 0;
   double scan_rate_hz = 0.0;
   std::size_t last_points = 0;
@@ -65,6 +167,9 @@ struct LidarDriver::Impl {
   std::uint64_t incomplete_scans = 0;  // published scans with missing packets
   std::string last_error;
   lidar::DecoderCounters decoder_stats;
+  lidar::PcapRecorderStats record_stats;
+  std::string record_error;
+  std::string record_file;
   lidar::UdpSourceStats udp_stats;
   timesync::StamperStatus sync;
   timesync::ClockMapperStatus absolute_sync;
@@ -80,11 +185,34 @@ struct LidarDriver::Impl {
         topic(p, topic_name, c.qos),
         writer(p, topic, c.qos),
         stamps(s),
-        stamper(lidar_stamper_config(c, decoder->packet_span_ns())) {
-    if (c.position_port != 0)
+        stamper(lidar_stamper_config(c, decoder->packet_span_ns())),
+        imu_stamper(lidar_stamper_config(c, 0)),
+        imu_topic_name("/sensors/lidar/" + c.name + "/imu"),
+        fix_topic_name("/sensors/lidar/" + c.name + "/fix"),
+        imu_frame_id(c.frame_id + "_imu"),
+        gps_frame_id(c.frame_id + "_gps") {
+    ouster = model_vendor_is(c, "ouster");
+    if (c.position_port != 0 && (velodyne || ouster)) {
       position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
-          {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 4, false});
+          {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 16, false});
+      if (ouster) {
+        imu_topic = std::make_unique<dds::Topic<msg::Imu>>(p, imu_topic_name, side_qos());
+        imu_writer = std::make_unique<dds::Writer<msg::Imu>>(p, *imu_topic, side_qos());
+      } else {
+        fix_topic = std::make_unique<dds::Topic<msg::NavSatFix>>(p, fix_topic_name, side_qos());
+        fix_writer = std::make_unique<dds::Writer<msg::NavSatFix>>(p, *fix_topic, side_qos());
+      }
+    }
     fields = msg::point_fields(lidar::kPointFields);
+    recorder = make_recorder(c);
+    host_ip = ipv4_of(c.host);
+  }
+
+  // The datagram as received, before anything judges it (bad packets are what a recording is for).
+  void record(const lidar::PacketSlot& slot, int port) noexcept {
+    if (!recorder) return;
+    const lidar::UdpAddressing a{slot.src_addr, slot.src_port, host_ip, static_cast<std::uint16_t>(port)};
+    recorder->write(slot.bytes(), slot.rx_ns, a);
   }
 
   // Vehicle time of the packet's first firing (timesync/ decides how; see its README).
@@ -95,17 +223,75 @@ struct LidarDriver::Impl {
     return stamper.stamp(p);
   }
 
-  void handle_position() {
-    if (!position || !velodyne) return;
+  void handle_second_port() {
+    if (!position) return;
     const auto r = position->receive(position_arena.slots(), 0);
     for (std::size_t i = 0; i < r.count; ++i) {
-      vel::PositionPacket pp;
-      if (vel::parse_position_packet(position_arena.slots()[i].bytes(), pp) != lidar::PacketStatus::kOk) continue;
+      const auto& slot = position_arena.slots()[i];
+      record(slot, cfg.position_port);
+      if (ouster) {
+        handle_imu(slot.bytes(), slot.rx_ns);
+      } else {
+        handle_position(slot.bytes());
+      }
+    }
+  }
+
+  void handle_imu(std::span<const std::byte> bytes, Nanos rx_ns) {
+    lidar::ouster::ImuSample sample;
+    const auto st = lidar::ouster::parse_imu_packet(bytes, sample);
+    if (st != lidar::ouster::ImuPacketStatus::kOk) {
+      std::lock_guard lock(mutex);
+      ++(st == lidar::ouster::ImuPacketStatus::kWrongSize ? imu_dropped_size : imu_dropped_non_finite);
+      return;
+    }
+    // The gyro time stamps the sample (as ouster-ros); the sensor clock is the lidar columns' clock.
+    timesync::DevicePacket dp;
+    dp.kind = timesync::DeviceTimeKind::kAbsoluteNs;
+    dp.value = static_cast<std::int64_t>(sample.gyro_ts_ns);
+    dp.rx_ns = rx_ns;
+    const Nanos stamp = imu_stamper.stamp(dp);
+    const auto m = imu_message(sample, stamp, imu_frame_id.c_str());
+    const auto rc = imu_writer->write(m, vehicle_now_ns());
+    std::lock_guard lock(mutex);
+    ++imu_samples;
+    if (!rc.ok()) {
+      ++write_errors;
+      last_error = "dds write (imu): " + rc.message();
+    }
+  }
+
+  void handle_position(std::span<const std::byte> bytes) {
+    vel::PositionPacket pp;
+    if (vel::parse_position_packet(bytes, pp) != lidar::PacketStatus::kOk) {
+      std::lock_guard lock(mutex);
+      ++position_dropped;
+      return;
+    }
+    {
       std::lock_guard lock(mutex);
       ++position_packets;
       have_position = true;
       pps = pp.pps;
       if (pp.nmea == vel::NmeaStatus::kOk && pp.fix.valid) gprmc_utc_ns = pp.fix.utc_ns;
+      if (pp.nmea == vel::NmeaStatus::kBadChecksum) ++gprmc_bad_checksum;
+      if (pp.nmea == vel::NmeaStatus::kTruncated || pp.nmea == vel::NmeaStatus::kNotRmc ||
+          pp.nmea == vel::NmeaStatus::kMalformed)
+        ++gprmc_malformed;
+    }
+    if (pp.nmea != vel::NmeaStatus::kOk) return;  // missing (no GPS) or counted above: no message
+    // The sensor repeats its last sentence in every position packet: one message per new sentence.
+    const std::pair<Nanos, bool> key{pp.fix.utc_ns, pp.fix.usable_fix()};
+    if (last_fix_key == key) return;
+    last_fix_key = key;
+    const auto m = navsat_fix(pp.fix, gps_frame_id.c_str());
+    const auto rc = fix_writer->write(m, vehicle_now_ns());
+    std::lock_guard lock(mutex);
+    ++fixes;
+    if (!key.second) ++fixes_no_fix;
+    if (!rc.ok()) {
+      ++write_errors;
+      last_error = "dds write (fix): " + rc.message();
     }
   }
 
@@ -157,6 +343,7 @@ struct LidarDriver::Impl {
       }
       for (std::size_t i = 0; i < r.count; ++i) {
         const auto& s = slots[i];
+        record(s, cfg.port);
         const auto packet = lidar::view(s, static_cast<std::uint16_t>(cfg.port));
         if (!decoder->is_data_packet(packet)) continue;
         if (auto scan = decoder->push(packet, packet_stamp(s.bytes(), s.rx_ns))) {
@@ -165,10 +352,15 @@ struct LidarDriver::Impl {
           decoder->recycle(std::move(scan->points));
         }
       }
-      handle_position();
+      handle_second_port();
       std::lock_guard lock(mutex);
       decoder_stats = decoder->counters();
       udp_stats = data.stats();
+      if (recorder) {
+        record_stats = recorder->stats();
+        record_error = recorder->last_error();
+        record_file = recorder->current_file();
+      }
       sync = stamper.hour_status(vehicle_now_ns());
       absolute_sync = stamper.absolute_status(vehicle_now_ns());
       absolute_source = stamper.absolute_source();
@@ -199,11 +391,13 @@ void LidarDriver::stop() {
   impl_->stop_flag.store(true);
   if (!impl_->thread.joinable()) return;
   impl_->thread.join();
+  if (impl_->recorder) impl_->recorder->close();
   // One summary line per driver: what arrived, what was published, what was dropped and why.
   const auto st = status();
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
     if (k == "scans" || k == "packets" || k.rfind("dropped", 0) == 0 || k == "packets_dropped" || k == "kernel_drops" || k == "missing_packets" || k == "time_jumps" ||
+        k == "record_packets" || k == "record_errors" || k == "imu_samples" || k == "fixes" ||
         k == "stamp_source" || k == "sync")
       line += " " + k + "=" + v;
   log::info("lidar", line);
@@ -227,6 +421,9 @@ dds::DriverStatus LidarDriver::status() const {
   } else if (!impl_->last_error.empty()) {
     s.level = dds::Level::kWarn;
     s.message = impl_->last_error;
+  } else if (impl_->record_stats.errors > 0) {
+    s.level = dds::Level::kWarn;
+    s.message = impl_->record_error;
   } else if (impl_->last_missing > 0) {
     s.level = dds::Level::kWarn;
     s.message = "last scan incomplete: " + std::to_string(impl_->last_missing) + " packets missing";
@@ -252,10 +449,37 @@ dds::DriverStatus LidarDriver::status() const {
   s.add_number("kernel_drops", u.kernel_drops);
   s.add_number("truncated", u.truncated);
   s.add_number("write_errors", impl_->write_errors);
+  if (impl_->recorder) {
+    const auto& r = impl_->record_stats;
+    s.add("record_file", impl_->record_file);
+    s.add_number("record_packets", r.packets);
+    s.add_number("record_bytes", r.bytes);
+    s.add_number("record_dropped", r.dropped);
+    s.add_number("record_errors", r.errors);
+    s.add_number("record_files_opened", r.files_opened);
+    s.add_number("record_files_deleted", r.files_deleted);
+    if (!impl_->record_error.empty()) s.add("record_last_error", impl_->record_error);
+  }
   s.add("time_source", timesync::to_string(c.time_source));
-  s.add_number("position_packets", impl_->position_packets);
-  s.add("pps", impl_->have_position ? to_string(impl_->pps) : "no position packets");
-  s.add("gprmc", impl_->gprmc_utc_ns ? "valid" : "absent");
+  if (impl_->ouster && impl_->position) {
+    s.add("imu_topic", impl_->imu_topic_name);
+    s.add_number("imu_samples", impl_->imu_samples);
+    s.add_number("imu_dropped_wrong_size", impl_->imu_dropped_size);
+    s.add_number("imu_dropped_non_finite", impl_->imu_dropped_non_finite);
+  }
+  if (impl_->velodyne) {
+    s.add_number("position_packets", impl_->position_packets);
+    s.add_number("position_dropped_wrong_size", impl_->position_dropped);
+    s.add("pps", impl_->have_position ? to_string(impl_->pps) : "no position packets");
+    s.add("gprmc", impl_->gprmc_utc_ns ? "valid" : "absent");
+    s.add_number("gprmc_bad_checksum", impl_->gprmc_bad_checksum);
+    s.add_number("gprmc_malformed", impl_->gprmc_malformed);
+    if (impl_->fix_writer) {
+      s.add("fix_topic", impl_->fix_topic_name);
+      s.add_number("fixes", impl_->fixes);
+      s.add_number("fixes_no_fix", impl_->fixes_no_fix);
+    }
+  }
   const auto& t = impl_->sync;
   if (c.time_source == timesync::TimeSource::kHost) {
     s.add("stamp_source", "host");

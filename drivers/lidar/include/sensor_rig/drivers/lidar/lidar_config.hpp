@@ -22,6 +22,15 @@ struct LidarMockConfig {
   double corrupt_rate = 0.0;
 };
 
+// `record:` the raw packets as received (both ports) into rotating nanosecond pcap files
+// <directory>/<name>_<seq>_<UTC>.pcap (lidar/pcap_recorder.hpp). Errors never stop the driver.
+struct LidarRecordConfig {
+  std::string directory;               // empty = no recording; relative to the config file
+  double max_file_mb = 256;            // rotate before a file passes this size (MiB)
+  double max_file_s = 60;              // rotate when a file spans this long; 0 = size only
+  int max_files = 10;                  // keep at most this many files of this LIDAR (oldest deleted)
+};
+
 inline dds::QosSpec lidar_qos() {
   dds::QosSpec q;
   q.depth = 2;
@@ -29,11 +38,14 @@ inline dds::QosSpec lidar_qos() {
 }
 
 struct LidarConfig {
-  std::string name;                    // topic /sensors/lidar/<name>/points
+  std::string name;                    // topics /sensors/lidar/<name>/points, .../imu, .../fix
   std::string model;                   // a model of the decoder registry (lidar/scan_decoder.hpp)
   std::string host = "127.0.0.1";      // bind address
   int port = 2368;                     // data port
-  int position_port = 0;               // 0 = none (position packets ignored)
+  // The sensor's second port, 0 = none: Velodyne position packets (key position_port, 8308:
+  // GPRMC/PPS -> time and /sensors/lidar/<name>/fix), Ouster IMU packets (key imu_port, 7503 ->
+  // /sensors/lidar/<name>/imu). Its mock sends there too (`rig lidar replay --position-port`).
+  int position_port = 0;
   int receive_buffer_bytes = 8 << 20;
   std::string calibration;             // empty = model defaults
   std::string metadata;                // sensor metadata JSON (Ouster)
@@ -54,6 +66,7 @@ struct LidarConfig {
   // in the writer's history when the next scan is written; depth 1 drops it.
   dds::QosSpec qos = lidar_qos();
   LidarMockConfig mock;
+  LidarRecordConfig record;
 };
 
 // Parses one `lidars:` item; problems go to the node's problem list (reported all at once).

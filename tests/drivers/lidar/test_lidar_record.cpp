@@ -1,0 +1,196 @@
+// `record:` in the LIDAR node, in one process over loopback UDP and real DDS: a synthetic VLP-16
+// (data + position packets) sent to the driver is recorded as received; the recording read back
+// with the pcap reader has every datagram of both ports in order, and decodes to exactly the scans
+// the driver published. A recording directory that cannot be created is counted and reported
+// while the driver keeps publishing.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include "rig_process.hpp"
+#include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/drivers/lidar/lidar_driver.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
+#include "sensor_rig/lidar/pcap_reader.hpp"
+#include "sensor_rig/lidar/udp_sender.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+namespace fs = std::filesystem;
+
+template <class Pred>
+bool wait_for(Pred p, int ms) {
+  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
+  while (!p()) {
+    if (monotonic_now_ns() > deadline) return false;
+    ::usleep(5000);
+  }
+  return true;
+}
+
+std::string value(const dds::DriverStatus& s, const std::string& key) {
+  for (const auto& [k, v] : s.values)
+    if (k == key) return v;
+  return "<absent>";
+}
+
+struct Packet {
+  std::vector<std::byte> bytes;
+  bool position;
+};
+
+// `turns` revolutions of a synthetic VLP-16 at 600 rpm, position packets included.
+std::vector<Packet> vlp16(double turns) {
+  lidar::mock::SyntheticOptions o;
+  o.model = "VLP-16";
+  o.start_ns = vehicle_now_ns();
+  auto s = lidar::mock::make_synthetic_sensor(o, lidar::mock::Scene::standard());
+  std::vector<Packet> v;
+  const auto n = static_cast<std::size_t>(turns * 75.35);
+  while (v.size() < n) {
+    const auto p = s->next();
+    v.push_back({{p.bytes.begin(), p.bytes.end()}, p.position});
+  }
+  return v;
+}
+
+void send_all(const std::vector<Packet>& pkts, int port, int position_port) {
+  const std::vector<lidar::Endpoint> dest{{"127.0.0.1", static_cast<std::uint16_t>(port)},
+                                          {"127.0.0.1", static_cast<std::uint16_t>(position_port)}};
+  lidar::UdpSender sender(dest);
+  for (std::size_t i = 0; i < pkts.size(); ++i) {
+    sender.send(pkts[i].bytes, pkts[i].position ? 1 : 0);
+    if (i % 50 == 49) ::usleep(2000);  // within the socket buffer whatever rmem_max says
+  }
+}
+
+LidarConfig vlp16_config(const std::string& name) {
+  LidarConfig c;
+  c.name = name + "_" + std::to_string(::getpid());
+  c.model = "VLP-16";
+  c.port = test::free_udp_port();
+  c.position_port = test::free_udp_port();
+  c.time_source = timesync::TimeSource::kHost;
+  c.frame_id = "lidar_" + c.name;
+  return c;
+}
+
+TEST(LidarRecord, RecordingIsWhatArrivedAndDecodesToThePublishedScans) {
+  test::TempDir dir;
+  auto c = vlp16_config("rec");
+  c.record.directory = (dir.path / "rec").string();
+  c.record.max_file_mb = 1;  // ~800 packets a file: the recording rotates
+  c.record.max_files = 100;
+  dds::Participant p;    // the driver's
+  dds::Participant sub;  // the subscriber's (topic QoS may differ from the writer's only across participants)
+  dds::StampsWriter stamps(p);
+  dds::QosSpec q;
+  q.depth = 50;
+  dds::Topic<msg::PointCloud2> topic(sub, "/sensors/lidar/" + c.name + "/points", q);
+  dds::Reader<msg::PointCloud2> reader(sub, topic, q);
+  LidarDriver driver(c, p, stamps);
+  driver.start();
+  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  const auto sent = vlp16(25.5);  // 2.5 s worth of packets, sent in ~0.1 s
+  send_all(sent, c.port, c.position_port);
+  std::vector<std::uint32_t> published;
+  const auto take = [&] {
+    reader.take([&](const msg::PointCloud2& m, const dds_sample_info_t&) { published.push_back(m.width); });
+  };
+  ASSERT_TRUE(wait_for(
+      [&] {
+        take();
+        return value(driver.status(), "record_packets") == std::to_string(sent.size());
+      },
+      5000))
+      << value(driver.status(), "record_packets") << " of " << sent.size();
+  ::usleep(100'000);
+  take();
+  driver.stop();
+  EXPECT_EQ(value(driver.status(), "record_errors"), "0");
+
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(c.record.directory)) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 3u);
+  std::vector<Packet> recorded;
+  Nanos prev[2] = {0, 0};
+  for (const auto& f : files) {
+    lidar::PcapReader r(f.string());
+    while (auto rec = r.next()) {
+      const bool pos = rec->packet.dst_port == c.position_port;
+      // Kernel receive times, in order per socket (the driver reads the two sockets in turn).
+      EXPECT_GE(rec->packet.rx_ns, prev[pos ? 1 : 0]);
+      prev[pos ? 1 : 0] = rec->packet.rx_ns;
+      EXPECT_TRUE(pos || rec->packet.dst_port == c.port);
+      EXPECT_EQ(rec->dst_ip, 0x7F000001u);
+      recorded.push_back({{rec->packet.data.begin(), rec->packet.data.end()}, pos});
+    }
+    EXPECT_EQ(r.error(), "") << f;
+  }
+  ASSERT_EQ(recorded.size(), sent.size());
+  // Per port, the same datagrams in the same order (the two sockets interleave as they are read).
+  for (bool pos : {false, true}) {
+    std::vector<std::vector<std::byte>> a, b;
+    for (const auto& x : sent)
+      if (x.position == pos) a.push_back(x.bytes);
+    for (const auto& x : recorded)
+      if (x.position == pos) b.push_back(x.bytes);
+    EXPECT_EQ(a, b) << (pos ? "position" : "data");
+  }
+  // The recording decodes to the scans the driver published.
+  lidar::DecoderOptions o;
+  o.model = "VLP-16";
+  auto dec = lidar::make_decoder(o);
+  std::vector<std::uint32_t> decoded;
+  for (const auto& x : recorded) {
+    if (x.position) continue;
+    if (auto s = dec->push(lidar::PacketView{x.bytes, 0, static_cast<std::uint16_t>(c.port)}, 0))
+      decoded.push_back(static_cast<std::uint32_t>(s->points.size()));
+  }
+  EXPECT_GE(decoded.size(), 24u);
+  EXPECT_EQ(published, decoded);
+}
+
+TEST(LidarRecord, UnwritableDirectoryIsReportedAndTheDriverKeepsPublishing) {
+  test::TempDir dir;
+  std::ofstream(dir.path / "a_file") << "x";
+  auto c = vlp16_config("recbad");
+  c.record.directory = (dir.path / "a_file" / "sub").string();
+  dds::Participant p;    // the driver's
+  dds::Participant sub;  // the subscriber's (topic QoS may differ from the writer's only across participants)
+  dds::StampsWriter stamps(p);
+  dds::QosSpec q;
+  q.depth = 50;
+  dds::Topic<msg::PointCloud2> topic(sub, "/sensors/lidar/" + c.name + "/points", q);
+  dds::Reader<msg::PointCloud2> reader(sub, topic, q);
+  LidarDriver driver(c, p, stamps);
+  driver.start();
+  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  const auto sent = vlp16(6.5);
+  send_all(sent, c.port, c.position_port);
+  int scans = 0;
+  ASSERT_TRUE(wait_for(
+      [&] {
+        reader.take([&](const msg::PointCloud2&, const dds_sample_info_t&) { ++scans; });
+        return scans >= 4;
+      },
+      5000))
+      << scans;
+  ASSERT_TRUE(wait_for([&] { return value(driver.status(), "record_dropped") == std::to_string(sent.size()); }, 2000))
+      << value(driver.status(), "record_dropped");
+  const auto st = driver.status();
+  EXPECT_EQ(value(st, "record_packets"), "0");
+  EXPECT_NE(value(st, "record_errors"), "0");
+  EXPECT_EQ(st.level, dds::Level::kWarn);
+  EXPECT_NE(st.message.find("cannot create"), std::string::npos) << st.message;
+  driver.stop();
+}
+
+}  // namespace
+}  // namespace sensor_rig::drivers
