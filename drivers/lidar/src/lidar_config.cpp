@@ -78,7 +78,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   l.port = static_cast<int>(n.get_int("port", 1, 65535));
   l.position_port = static_cast<int>(n.get_int("position_port", 0, 65535, 0));
   // The second port: Velodyne position packets (position_port), Ouster IMU packets (imu_port).
-  if (n.child("imu_port")) {
+  if (n.has("imu_port")) {
     const auto imu_port = static_cast<int>(n.get_int("imu_port", 0, 65535, 0));
     if (!lidar::mock::is_ouster_model(l.model)) {
       n.fail("imu_port", "only Ouster sensors send IMU packets (model " + l.model + ")");

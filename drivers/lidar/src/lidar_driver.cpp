@@ -122,7 +122,7 @@ struct LidarDriver::Impl {
   std::unique_ptr<lidar::UdpSource> position;  // second port: Velodyne position / Ouster IMU packets
   // 64 kB slots: the largest UDP payload (an OS-128 packet is ~25 kB; Velodyne 1206 B).
   lidar::SlotArena arena{64, 65536};
-  lidar::SlotArena position_arena{4, 1024};
+  lidar::SlotArena position_arena{16, 1024};  // position (512 B) / IMU (48 B) packets
   dds::Topic<msg::PointCloud2> topic;
   dds::Writer<msg::PointCloud2> writer;
   dds::StampsWriter& stamps;
@@ -225,15 +225,19 @@ struct LidarDriver::Impl {
 
   void handle_second_port() {
     if (!position) return;
-    const auto r = position->receive(position_arena.slots(), 0);
-    for (std::size_t i = 0; i < r.count; ++i) {
-      const auto& slot = position_arena.slots()[i];
-      record(slot, cfg.position_port);
-      if (ouster) {
-        handle_imu(slot.bytes(), slot.rx_ns);
-      } else {
-        handle_position(slot.bytes());
+    // Everything queued (an idle data port wakes this loop only every 50 ms: 5 IMU packets).
+    for (;;) {
+      const auto r = position->receive(position_arena.slots(), 0);
+      for (std::size_t i = 0; i < r.count; ++i) {
+        const auto& slot = position_arena.slots()[i];
+        record(slot, cfg.position_port);
+        if (ouster) {
+          handle_imu(slot.bytes(), slot.rx_ns);
+        } else {
+          handle_position(slot.bytes());
+        }
       }
+      if (r.count < position_arena.slots().size()) break;
     }
   }
 

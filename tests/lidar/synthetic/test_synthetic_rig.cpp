@@ -41,6 +41,7 @@ std::string mixed_rig(const std::string& profile, const std::string& capture = "
   for (int i = 0; i < 3; ++i) {
     y << "  - {name: " << kNames[i] << ", model: " << kModels[i] << ", port: " << test::free_udp_port();
     if (i == 0) y << ", position_port: " << test::free_udp_port();
+    if (i == 1) y << ", imu_port: " << test::free_udp_port();
     y << ", time_source: sensor, qos: {reliability: reliable, depth: 20}, mock: {kind: synthetic, rpm: 600}}\n";
   }
   if (!capture.empty())
@@ -72,6 +73,27 @@ TEST(SyntheticRig, ConfigCheckAcceptsSyntheticModelsAndRefusesWhatTheyCannotDo) 
       dir.write("os.yaml", "lidars:\n  - {name: o, model: OS, port: 7502, mock: {kind: synthetic, rpm: 900}}\n") + " 2>&1");
   EXPECT_EQ(rc, 2) << out;
   EXPECT_NE(out.find("10 or 20 Hz"), std::string::npos) << out;
+  // The second port's key says what it carries; `record:` needs a directory.
+  std::tie(rc, out) = test::run(
+      rig_bin() + " config check " +
+      dir.write("imu.yaml", "lidars:\n  - {name: v, model: VLP-16, port: 2368, imu_port: 7503}\n") + " 2>&1");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find("only Ouster sensors send IMU packets"), std::string::npos) << out;
+  const auto file = dir.write("not_a_dir", "x");
+  std::tie(rc, out) = test::run(
+      rig_bin() + " config check " +
+      dir.write("rec.yaml", "lidars:\n  - {name: v, model: VLP-16, port: 2368, record: {directory: " + file +
+                                ", max_files: 0}}\n") +
+      " 2>&1");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find("not a directory"), std::string::npos) << out;
+  EXPECT_NE(out.find("max_files"), std::string::npos) << out;
+  std::tie(rc, out) = test::run(
+      rig_bin() + " config check " +
+      dir.write("rec_ok.yaml", "rig:\n  name: rec\nlidars:\n  - {name: o, model: OS-LEGACY, port: 7502, imu_port: 7503, record: {directory: " +
+                                   (dir.path / "rec").string() + "}, mock: {kind: synthetic}}\n") +
+      " 2>&1");
+  EXPECT_EQ(rc, 0) << out;
 }
 
 TEST(SyntheticRig, WriteMetadataAloneWritesWhatTheParserReads) {
@@ -108,6 +130,16 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
     topics.push_back(std::make_unique<dds::Topic<msg::PointCloud2>>(p, std::string("/sensors/lidar/") + n + "/points", q));
     readers.push_back(std::make_unique<dds::Reader<msg::PointCloud2>>(p, *topics.back(), q));
   }
+  // The second ports: the VLP-32C's GPRMC as NavSatFix, the Ouster's IMU packets as Imu.
+  dds::QosSpec side;
+  side.depth = 100;
+  dds::Topic<msg::NavSatFix> fix_topic(p, "/sensors/lidar/velodyne/fix", side);
+  dds::Reader<msg::NavSatFix> fixes(p, fix_topic, side);
+  dds::Topic<msg::Imu> imu_topic(p, "/sensors/lidar/ouster/imu", side);
+  dds::Reader<msg::Imu> imus(p, imu_topic, side);
+  std::vector<double> imu_az;
+  std::vector<Nanos> imu_stamps;
+  std::vector<std::pair<int, double>> fix_seen;  // status, latitude
   dds::Topic<msg::DiagnosticArray> diag_topic(p, "/diagnostics");
   dds::Reader<msg::DiagnosticArray> diag(p, diag_topic);
   for (auto& r : readers) ASSERT_TRUE(r->wait_for_writers(1, 15000)) << "driver did not come up";
@@ -123,6 +155,12 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
         stamps[i].push_back(msg::from_time(pc.header.stamp));
       });
     }
+    imus.take([&](const msg::Imu& m, const dds_sample_info_t&) {
+      imu_az.push_back(m.linear_acceleration.z);
+      imu_stamps.push_back(msg::from_time(m.header.stamp));
+      EXPECT_EQ(m.orientation_covariance[0], -1.0);
+    });
+    fixes.take([&](const msg::NavSatFix& m, const dds_sample_info_t&) { fix_seen.emplace_back(m.status.status, m.latitude); });
     diag.take([&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
       for (std::uint32_t k = 0; k < a.status._length; ++k) {
         auto& kv = status[a.status._buffer[k].name];
@@ -133,6 +171,19 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   EXPECT_EQ(rig.stop(), 0);
+
+  // The synthetic Ouster's IMU: 100 Hz, a still sensor (+1 g on z), sensor-clock stamps 10 ms apart.
+  ASSERT_GE(imu_az.size(), 200u) << "3 s of a 100 Hz IMU";
+  for (const double az : imu_az) EXPECT_NEAR(az, 9.80665, 1e-5);
+  const double imu_dt = static_cast<double>(imu_stamps.back() - imu_stamps.front()) / double(imu_stamps.size() - 1);
+  EXPECT_NEAR(imu_dt, 10e6, 1e6);
+  // The synthetic VLP-32C's GPRMC: one fix per new sentence (1 Hz), valid, Stuttgart.
+  ASSERT_GE(fix_seen.size(), 2u);
+  ASSERT_LE(fix_seen.size(), 5u) << "one message per new sentence, not per position packet";
+  for (const auto& [st, lat] : fix_seen) {
+    EXPECT_EQ(st, 0);
+    EXPECT_NEAR(lat, 48.7758, 1e-5);
+  }
 
   for (std::size_t i = 0; i < 3; ++i) {
     SCOPED_TRACE(kModels[i]);
