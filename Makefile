@@ -37,7 +37,8 @@ test: setup
 # and at -O0 three instrumented renderers need more than the two cores (scans arrive seconds late).
 test-asan: setup
 	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_SANITIZE=ON -DRIG_BENCH=OFF
-	cmake --build build-asan -j$(JOBS)
+	# Only what this stage runs: the unit executables, the two end-to-end tests and the `rig` they start.
+	cmake --build build-asan -j$(JOBS) --target unit_tests rig lidar_e2e_test dbw_rig_test
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -L unit -j$(JOBS)
 	# The runtime end to end under the sanitizers too: every `rig` process it starts is instrumented;

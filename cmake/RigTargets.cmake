@@ -45,6 +45,8 @@ function(rig_test name)
     set(A_TIMEOUT 120)
   endif()
   add_test(NAME ${name} COMMAND ${name})
+  # Per label, the executables: `unit_tests` builds just the unit ones (the sanitizer stages).
+  set_property(GLOBAL APPEND PROPERTY RIG_TEST_TARGETS_${A_LABEL} ${name})
   set_tests_properties(${name} PROPERTIES LABELS ${A_LABEL} TIMEOUT ${A_TIMEOUT}
     ENVIRONMENT "RIG_TEST_DATA=${RIG_TEST_DATA};RIG_BIN=${CMAKE_BINARY_DIR}/rig;RIG_SOURCE_DIR=${CMAKE_SOURCE_DIR}")
 endfunction()

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 
+#include "host_time_node.hpp"
 #include "rig_cameras.hpp"
 #include "sync_set_node.hpp"
 #include "sensor_rig/dds/diagnostics.hpp"
@@ -161,6 +162,8 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   cameras->start();  // GigE fakes first, then the nodes (which retry until their camera answers)
   SyncSetNode sync_sets(cfg.sync_sets, participant);  // /rig/stamps -> /rig/sets/<name>
   sync_sets.start();
+  HostTimeNode host_time({.pmc = pmc_program()});  // rig/time: PTP state, realtime steps
+  host_time.start();
 
   std::vector<ChildProcess> mocks;
   const std::string exe = self_executable();
@@ -189,6 +192,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     for (const auto& d : lidars) statuses.push_back(d->status());
     cameras->supervise(statuses);
     sync_sets.supervise(statuses);
+    host_time.supervise(statuses);
     for (std::size_t i = 0; i < mocks.size(); ++i) {
       if (!mocks[i].running() && !reported_dead[i]) {
         reported_dead[i] = true;
@@ -201,6 +205,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   log::info("rig", "stopping");
   // Stop in reverse: the command source first, so the bridge sees silence and disengages.
   for (auto it = mocks.rbegin(); it != mocks.rend(); ++it) it->stop();
+  host_time.stop();
   sync_sets.stop();
   cameras->stop();
   for (auto& d : lidars) d->stop();

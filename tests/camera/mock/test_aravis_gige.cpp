@@ -7,6 +7,7 @@
 
 #include "sensor_rig/camera/aravis_source.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "next_frame.hpp"
 
 namespace sensor_rig::camera {
 namespace {
@@ -32,15 +33,8 @@ class GigeFake : public ::testing::Test {
   }
 };
 
-Capture next_frame(FrameSource& s, int budget_ms = 3000) {
-  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(budget_ms) * 1'000'000;
-  Capture c;
-  while (monotonic_now_ns() < deadline) {
-    c = s.next(50);
-    if (c.status == CaptureStatus::kFrame || c.status == CaptureStatus::kDisconnected) return c;
-  }
-  return c;
-}
+// Incomplete frames (the packet-loss test) are skipped: they are counted, never returned as frames.
+Capture next_frame(FrameSource& s, int budget_ms = 3000) { return test::next_frame(s, budget_ms, /*skip_incomplete=*/true); }
 
 TEST_F(GigeFake, StreamsOverLoopbackWithThePacketSocketDisabled) {
   mock::GigeFakeOptions o;
@@ -61,6 +55,39 @@ TEST_F(GigeFake, StreamsOverLoopbackWithThePacketSocketDisabled) {
   const auto st = src.stats();
   EXPECT_EQ(st.completed, 10u);
   EXPECT_GT(src.details().packet_size, 0);
+  src.close();
+  fake.stop(500);
+}
+
+// The GigE fake (unlike the in-process one) gates its stream on TriggerSoftware in software
+// trigger mode: no trigger, no frame; each trigger, one frame.
+TEST_F(GigeFake, SoftwareTriggerModeGivesOneFramePerTriggerAndNoneWithout) {
+  mock::GigeFakeOptions o;
+  o.address = address(0);
+  auto fake = mock::start_gige_fake(o);
+  auto c = cfg(o.address);
+  c.trigger = TriggerMode::kSoftware;
+  AravisSource src(c);
+  src.open();
+  ASSERT_TRUE(src.is_open());
+  EXPECT_EQ(src.feature("TriggerMode"), "On");
+  EXPECT_EQ(src.feature("TriggerSource"), "Software");
+  // Untriggered: silence (several frame periods at 20 Hz).
+  const Nanos quiet_until = monotonic_now_ns() + 600'000'000;
+  while (monotonic_now_ns() < quiet_until) EXPECT_NE(src.next(50).status, CaptureStatus::kFrame);
+  EXPECT_EQ(src.stats().completed, 0u);
+  Nanos last = 0;
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(src.trigger());
+    auto cap = next_frame(src, 2000);
+    ASSERT_EQ(cap.status, CaptureStatus::kFrame) << "trigger " << i << ": " << cap.error;
+    EXPECT_GT(cap.frame.meta().device_ns, last);
+    last = cap.frame.meta().device_ns;
+    // Exactly one frame per trigger: nothing more until the next one.
+    const Nanos until = monotonic_now_ns() + 300'000'000;
+    while (monotonic_now_ns() < until) EXPECT_NE(src.next(50).status, CaptureStatus::kFrame);
+  }
+  EXPECT_EQ(src.stats().completed, 3u);
   src.close();
   fake.stop(500);
 }

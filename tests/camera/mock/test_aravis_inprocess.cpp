@@ -6,6 +6,7 @@
 
 #include "sensor_rig/camera/aravis_source.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "next_frame.hpp"
 
 namespace sensor_rig::camera {
 namespace {
@@ -23,15 +24,7 @@ SourceConfig fake(const std::string& serial, TriggerMode trigger = TriggerMode::
   return c;
 }
 
-Capture next_frame(FrameSource& s, int budget_ms = 2000) {
-  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(budget_ms) * 1'000'000;
-  Capture c;
-  while (monotonic_now_ns() < deadline) {
-    c = s.next(50);
-    if (c.status != CaptureStatus::kTimeout) return c;
-  }
-  return c;
-}
+Capture next_frame(FrameSource& s, int budget_ms = 2000) { return test::next_frame(s, budget_ms); }
 
 TEST(AravisInProcess, FreeRunFramesLandInPoolMemoryWithDeviceStamps) {
   AravisSource src(fake("FREE1"), mock::inprocess_fake_opener());

@@ -7,6 +7,7 @@
 
 #include "sensor_rig/camera/mock/fake_v4l2_device.hpp"
 #include "sensor_rig/camera/v4l2_source.hpp"
+#include "next_frame.hpp"
 
 namespace sensor_rig::camera {
 namespace {
@@ -22,16 +23,7 @@ SourceConfig yuyv(std::uint32_t w = 640, std::uint32_t h = 480, double rate = 50
   return c;
 }
 
-// Next frame within `budget_ms`, skipping timeouts; fails the test otherwise.
-Capture next_frame(FrameSource& s, int budget_ms = 1000) {
-  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(budget_ms) * 1'000'000;
-  Capture c;
-  while (monotonic_now_ns() < deadline) {
-    c = s.next(50);
-    if (c.status != CaptureStatus::kTimeout) return c;
-  }
-  return c;
-}
+Capture next_frame(FrameSource& s, int budget_ms = 1000) { return test::next_frame(s, budget_ms); }
 
 TEST(V4l2Fake, NegotiatesStreamsAndStampsEveryFrame) {
   auto dev = std::make_shared<mock::FakeV4l2Device>();

@@ -12,9 +12,12 @@
 #include "sensor_rig/camera/v4l2_source.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
+#include "wait.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
+
+using test::wait_for;
 
 std::string unique(const std::string& base) { return base + "_" + std::to_string(::getpid()); }
 
@@ -43,16 +46,6 @@ std::string value(const dds::DriverStatus& s, const std::string& key) {
   for (const auto& [k, v] : s.values)
     if (k == key) return v;
   return {};
-}
-
-template <class Pred>
-bool wait_for(Pred p, int ms) {
-  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
-  while (!p()) {
-    if (monotonic_now_ns() > deadline) return false;
-    ::usleep(10'000);
-  }
-  return true;
 }
 
 TEST(CameraDriver, PublishesRosLayoutImageAndCameraInfoAndSurvivesDeviceLoss) {

@@ -11,19 +11,12 @@
 
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
+#include "wait.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
 
-template <class Pred>
-bool wait_for(Pred p, int ms) {
-  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
-  while (!p()) {
-    if (monotonic_now_ns() > deadline) return false;
-    ::usleep(5'000);
-  }
-  return true;
-}
+using test::wait_for;
 
 // Frames of a uniform colour (R 200, G 120, B 40) seen through a BGGR filter, every 20 ms.
 class BayerSceneSource : public camera::FrameSource {

@@ -8,19 +8,12 @@
 #include <vector>
 
 #include "sensor_rig/drivers/camera/frame_worker.hpp"
+#include "wait.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
 
-template <class Pred>
-bool wait_for(Pred p, int ms) {
-  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
-  while (!p()) {
-    if (monotonic_now_ns() > deadline) return false;
-    ::usleep(2'000);
-  }
-  return true;
-}
+using test::wait_for;
 
 // A worker whose process() blocks until the gate opens and records the frame's first byte.
 struct Gated {
