@@ -9,7 +9,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "rig_process.hpp"
 #include "sensor_rig/dds/types.hpp"
@@ -190,6 +193,52 @@ TEST(LidarRecord, UnwritableDirectoryIsReportedAndTheDriverKeepsPublishing) {
   EXPECT_EQ(st.level, dds::Level::kWarn);
   EXPECT_NE(st.message.find("cannot create"), std::string::npos) << st.message;
   driver.stop();
+}
+
+// Record on the car, decode on the desk: one recorded file through the `rig` binary's
+// `rig lidar decode` gives the scans the driver published (same count, same points per scan).
+TEST(LidarRecord, RigLidarDecodeOfTheRecordingGivesThePublishedScans) {
+  test::TempDir dir;
+  auto c = vlp16_config("recdec");
+  c.record.directory = (dir.path / "rec").string();
+  dds::Participant p;
+  dds::Participant sub;
+  dds::StampsWriter stamps(p);
+  dds::QosSpec q;
+  q.depth = 50;
+  dds::Topic<msg::PointCloud2> topic(sub, "/sensors/lidar/" + c.name + "/points", q);
+  dds::Reader<msg::PointCloud2> reader(sub, topic, q);
+  LidarDriver driver(c, p, stamps);
+  driver.start();
+  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  const auto sent = vlp16(8.5);
+  send_all(sent, c.port, c.position_port);
+  std::vector<std::uint32_t> published;
+  ASSERT_TRUE(wait_for(
+      [&] {
+        reader.take([&](const msg::PointCloud2& m, const dds_sample_info_t&) { published.push_back(m.width); });
+        return value(driver.status(), "record_packets") == std::to_string(sent.size());
+      },
+      5000));
+  ::usleep(100'000);
+  reader.take([&](const msg::PointCloud2& m, const dds_sample_info_t&) { published.push_back(m.width); });
+  driver.stop();
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(c.record.directory)) files.push_back(e.path());
+  ASSERT_EQ(files.size(), 1u);
+  const auto [rc, out] = test::run(test::rig_bin() + " lidar decode --pcap " + files[0].string() +
+                                   " --model VLP-16 --out " + (dir.path / "pcd").string() + " 2>/dev/null");
+  ASSERT_EQ(rc, 0) << out;
+  std::vector<std::uint32_t> decoded;
+  std::istringstream lines(out);
+  for (std::string line; std::getline(lines, line);) {
+    const auto j = nlohmann::json::parse(line);
+    decoded.push_back(j["points"].get<std::uint32_t>());
+    EXPECT_EQ(j["missing_packets"].get<int>(), 0);
+    EXPECT_EQ(j["dropped"].get<int>(), 0);
+  }
+  EXPECT_GE(decoded.size(), 7u);
+  EXPECT_EQ(decoded, published);
 }
 
 }  // namespace
