@@ -14,7 +14,7 @@
 #include "sensor_rig/bench/perf/records.hpp"
 #include "sensor_rig/bench/perf/spec.hpp"
 #include "sensor_rig/bench/perf/stats.hpp"
-#include "svg.hpp"
+#include "sensor_rig/common/svg.hpp"
 
 namespace sensor_rig::bench::perf {
 namespace fs = std::filesystem;

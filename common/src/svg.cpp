@@ -1,11 +1,12 @@
-#include "svg.hpp"
+#include "sensor_rig/common/svg.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
-namespace sensor_rig::bench::perf::svg {
+namespace sensor_rig::svg {
 namespace {
 constexpr double kW = 860, kH = 300, kL = 70, kR = 20, kT = 30, kB = 60;
 
@@ -92,19 +93,29 @@ std::string escape(const std::string& s) {
   return r;
 }
 
-std::string scatter(const std::string& title, const Axis& xa, const Axis& ya, const std::vector<Series>& series) {
+std::string scatter(const std::string& title, const Axis& xa, const Axis& ya, const std::vector<Series>& series,
+                    const std::vector<double>& x_marks, const std::string& mark_name) {
   std::ostringstream o;
   const Map x{xa, kL, kW - kR}, y{ya, kH - kB, kT};
   frame(o, title, &x, y);
   double lx = kL + 10;
   for (const auto& s : series) {
-    o << "<g fill='" << s.color << "' fill-opacity='0.6'>";
+    o << "<g class='series' fill='" << s.color << "' fill-opacity='0.6'>";
     for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
       o << "<circle cx='" << num(x(s.x[i])) << "' cy='" << num(y(s.y[i])) << "' r='1.4'/>";
     }
     o << "</g><rect x='" << num(lx) << "' y='" << kH - 18 << "' width='10' height='10' fill='" << s.color << "'/>"
       << "<text x='" << num(lx + 14) << "' y='" << kH - 9 << "'>" << escape(s.name) << "</text>";
     lx += 24 + 6.5 * static_cast<double>(s.name.size());
+  }
+  if (!x_marks.empty()) {
+    constexpr const char* kMarkColor = "#d62728";
+    o << "<g class='marks' stroke='" << kMarkColor << "' stroke-width='1.5'>";
+    for (double v : x_marks)
+      o << "<line x1='" << num(x(v)) << "' x2='" << num(x(v)) << "' y1='" << kT << "' y2='" << kT + 8 << "'/>";
+    o << "</g><line x1='" << num(lx) << "' x2='" << num(lx) << "' y1='" << kH - 18 << "' y2='" << kH - 8
+      << "' stroke='" << kMarkColor << "' stroke-width='1.5'/><text x='" << num(lx + 5) << "' y='" << kH - 9 << "'>"
+      << escape(mark_name) << " (" << x_marks.size() << ")</text>";
   }
   o << "</svg>";
   return o.str();
@@ -121,7 +132,7 @@ std::string boxes(const std::string& title, const Axis& ya, const std::vector<Bo
     const auto& v = b[i];
     o << "<line x1='" << num(cx) << "' x2='" << num(cx) << "' y1='" << num(y(v.p1)) << "' y2='" << num(y(v.p99)) << "' stroke='#333'/>";
     o << "<rect x='" << num(cx - w / 2) << "' y='" << num(y(v.p75)) << "' width='" << num(w) << "' height='"
-      << num(std::max(1.0, y(v.p25) - y(v.p75))) << "' fill='#9cc3e6' stroke='#333'/>";
+      << num(std::max(1.0, y(v.p25) - y(v.p75))) << "' fill='#9cc3e6' stroke='#333' class='box'/>";
     o << "<line x1='" << num(cx - w / 2) << "' x2='" << num(cx + w / 2) << "' y1='" << num(y(v.p50)) << "' y2='" << num(y(v.p50))
       << "' stroke='#c00' stroke-width='2'/>";
     o << "<circle cx='" << num(cx) << "' cy='" << num(y(v.max)) << "' r='2' fill='none' stroke='#333'/>";
@@ -178,4 +189,21 @@ std::string bars(const std::string& title, const Axis& ya, const std::vector<std
   return o.str();
 }
 
-}  // namespace sensor_rig::bench::perf::svg
+std::string document(const std::vector<std::string>& charts) {
+  // Each chart is one of ours: "<svg ... height='H' ...>"; nested at its offset.
+  std::ostringstream o;
+  double top = 0;
+  std::ostringstream body;
+  for (const auto& c : charts) {
+    double h = kH;
+    if (const auto at = c.find("height='"); at != std::string::npos) h = std::atof(c.c_str() + at + 8);
+    body << "<svg y='" << num(top) << "'" << c.substr(4);
+    top += h + 10;
+  }
+  o << "<?xml version='1.0' encoding='UTF-8'?>\n<svg xmlns='http://www.w3.org/2000/svg' width='" << kW
+    << "' height='" << num(std::max(top, 1.0)) << "'><rect width='100%' height='100%' fill='white'/>" << body.str()
+    << "</svg>\n";
+  return o.str();
+}
+
+}  // namespace sensor_rig::svg
