@@ -9,7 +9,7 @@
 //   total    = subscriber receive - acquisition
 //   to_wire  = DDS write returned - last kernel receive (process + write: the driver's own latency)
 // Stages other than dds need the driver's per-sample stamps (rt/rig/stamps); topics published by
-// others show dds only. A sample announced by its stamps that does not arrive within 2 s is lost.
+// others show dds only. A sample announced by its stamps that does not arrive in time (2 s) is lost.
 #include <functional>
 #include <string>
 #include <vector>
@@ -24,6 +24,9 @@ struct MonitorOptions {
   bool json = false;                // one JSON line per topic per second instead of the table
   int period_ms = 1000;
   std::string summary_file;         // when set: whole-run percentiles per topic and stage, as JSON
+  std::string record_file;          // when set: one CSV row per stamped sample (sample_record.hpp)
+  std::string plot_file;            // when set: at the end, the latency plot of the run (SVG)
+  double loss_timeout_s = 2.0;      // a sample announced by its stamps and not received by then is lost
   dds::DomainConfig dds;
   std::function<bool()> keep_going;  // optional: checked every loop; false ends the monitor
 };

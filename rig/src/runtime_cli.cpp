@@ -1,10 +1,12 @@
-// `rig up`, `rig demo`, `rig config check`, `rig monitor`.
+// `rig up`, `rig demo`, `rig config check`, `rig monitor`, `rig report`.
 #include <cstdio>
 #include <filesystem>
 
+#include "latency_plot.hpp"
 #include "monitor.hpp"
 #include "rig_config.hpp"
 #include "rig_runner.hpp"
+#include "sample_record.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -87,10 +89,34 @@ void add_monitor(CLI::App& app, cli::Context& ctx) {
   cmd->add_option("--domain", *domain, "DDS domain id")->check(CLI::Range(0, 232));
   cmd->add_option("--dds-profile", *profile, "Cyclone XML profile (default: loopback)");
   cmd->add_option("--summary", opt->summary_file, "At the end, write whole-run percentiles per topic/stage (JSON)");
+  cmd->add_option("--record", opt->record_file, "Write one CSV row per sample: its stage times, missing packets");
+  cmd->add_option("--plot", opt->plot_file, "At the end, write the latency plot of the run (SVG)");
+  cmd->add_option("--loss-timeout", opt->loss_timeout_s, "A stamped sample not received after S seconds is lost")
+      ->check(CLI::PositiveNumber);
   cmd->callback([&ctx, opt, profile, domain] {
     opt->dds.domain_id = static_cast<dds_domainid_t>(*domain);
     opt->dds.profile = *profile;
     ctx.exit_code = run_monitor(*opt);
+  });
+}
+
+void add_report(CLI::App& app, cli::Context& ctx) {
+  auto* cmd = app.add_subcommand("report", "Plots of a `rig monitor --record` recording");
+  auto record = std::make_shared<std::string>();
+  auto plot = std::make_shared<std::string>();
+  cmd->add_option("RECORD", *record, "CSV written by `rig monitor --record`")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--plot", *plot, "SVG: per topic, latency per stage over time (lost marked) and box plots")
+      ->required();
+  cmd->callback([&ctx, record, plot] {
+    std::vector<SampleRecord> rows;
+    try {
+      rows = read_records(*record);
+    } catch (const std::runtime_error& e) {
+      throw cli::UsageError(e.what());  // not a recording: bad input, exit 2
+    }
+    write_latency_plot(*plot, rows);
+    std::fprintf(stderr, "%s: %zu samples -> %s\n", record->c_str(), rows.size(), plot->c_str());
+    ctx.exit_code = 0;
   });
 }
 
@@ -101,6 +127,7 @@ void register_cli(CLI::App& app, cli::Context& ctx) {
   add_demo(app, ctx);
   add_config(app, ctx);
   add_monitor(app, ctx);
+  add_report(app, ctx);
 }
 
 }  // namespace sensor_rig::rig

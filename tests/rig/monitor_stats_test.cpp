@@ -1,0 +1,188 @@
+// The monitor's per-topic join of data and source stamps, and its sample record (CSV), without DDS.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "monitor_stats.hpp"
+#include "sample_record.hpp"
+#include "rig_process.hpp"
+
+namespace sensor_rig::rig {
+namespace {
+
+constexpr Nanos kT0 = 1'700'000'000'000'000'000;
+constexpr Nanos kMs = 1'000'000;
+
+// The stamps a driver publishes for sample `seq` acquired at kT0 + seq * 100 ms.
+msg::SourceStamps stamps(std::uint64_t seq, std::uint32_t missing = 0) {
+  msg::SourceStamps s{};
+  const Nanos acq = kT0 + static_cast<Nanos>(seq) * 100 * kMs;
+  s.header.stamp = msg::to_time(acq);
+  s.seq = seq;
+  s.acquisition_ns = acq;
+  s.first_rx_ns = acq + 1 * kMs;
+  s.last_rx_ns = acq + 101 * kMs;
+  s.ready_ns = acq + 102 * kMs;
+  s.publish_ns = acq + 103 * kMs;
+  s.written_ns = acq + 104 * kMs;
+  s.missing_packets = missing;
+  s.size_bytes = 1000;
+  return s;
+}
+Nanos stamp_of(std::uint64_t seq) { return kT0 + static_cast<Nanos>(seq) * 100 * kMs; }
+Arrival arrival(std::uint64_t seq) { return {stamp_of(seq) + 110 * kMs, stamp_of(seq) + 103 * kMs}; }
+
+struct Recorded {
+  TopicStats st;
+  std::vector<SampleRecord> rows;
+  Recorded() {
+    st.name = "/sensors/lidar/front/points";
+    st.counting_since = 0;
+    st.on_record = [this](const SampleRecord& r) { rows.push_back(r); };
+  }
+};
+
+TEST(MonitorStats, JoinsDataAndStampsInEitherOrderWithEveryStage) {
+  Recorded t;
+  t.st.on_stamps(stamps(0), stamp_of(0));
+  t.st.on_data(stamp_of(0), 1000, arrival(0));
+  t.st.on_data(stamp_of(1), 1000, arrival(1));  // data first
+  t.st.on_stamps(stamps(1, 3), stamp_of(1));
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[0].seq, 0u);
+  EXPECT_EQ(t.rows[1].seq, 1u);
+  EXPECT_EQ(t.rows[1].missing_packets, 3u);
+  EXPECT_EQ(t.rows[1].received_ns, arrival(1).receive_ns);
+  EXPECT_EQ(t.rows[0].topic, "/sensors/lidar/front/points");
+  EXPECT_EQ(t.st.missing_packets, 3u);
+  const auto p = t.st.stages[kSensor].take();
+  EXPECT_EQ(p.n, 2u);
+  EXPECT_DOUBLE_EQ(p.max, 1.0);
+  EXPECT_DOUBLE_EQ(t.st.stages[kTotal].take().p50, 110.0);
+  EXPECT_DOUBLE_EQ(t.st.stages[kDds].take().p50, 7.0);
+}
+
+TEST(MonitorStats, LostSampleHoldsLaterRowsSoSeqStaysInOrder) {
+  Recorded t;
+  for (std::uint64_t seq = 0; seq < 4; ++seq) t.st.on_stamps(stamps(seq), stamp_of(seq));
+  t.st.on_data(stamp_of(0), 1000, arrival(0));
+  t.st.on_data(stamp_of(2), 1000, arrival(2));  // 1 not (yet) here: 2 waits
+  t.st.on_data(stamp_of(3), 1000, arrival(3));
+  ASSERT_EQ(t.rows.size(), 1u);
+  t.st.expire(stamp_of(1) + 500 * kMs, 2000 * kMs);  // not yet lost
+  EXPECT_EQ(t.rows.size(), 1u);
+  EXPECT_EQ(t.st.lost, 0u);
+  t.st.expire(stamp_of(1) + 2001 * kMs, 2000 * kMs);
+  EXPECT_EQ(t.st.lost, 1u);
+  ASSERT_EQ(t.rows.size(), 4u);
+  for (std::uint64_t seq = 0; seq < 4; ++seq) EXPECT_EQ(t.rows[seq].seq, seq);
+  EXPECT_TRUE(t.rows[1].lost());
+  EXPECT_FALSE(t.rows[2].lost());
+  EXPECT_EQ(t.rows[1].publish_ns, stamp_of(1) + 103 * kMs);  // the stamps it had are kept
+}
+
+TEST(MonitorStats, StampsBeforeSubscribingAreNotCountedNorRecorded) {
+  Recorded t;
+  t.st.counting_since = stamp_of(2);
+  t.st.on_stamps(stamps(0), stamp_of(0));
+  t.st.expire(stamp_of(0) + 10'000 * kMs, 2000 * kMs);
+  EXPECT_EQ(t.st.lost, 0u);
+  EXPECT_TRUE(t.rows.empty());
+  EXPECT_TRUE(t.st.has_stamps);
+}
+
+TEST(MonitorStats, ReleaseAllAtTheEndKeepsUndecidedOut) {
+  Recorded t;
+  t.st.on_stamps(stamps(0), stamp_of(0));  // never arrives, never expires
+  t.st.on_stamps(stamps(1), stamp_of(1));
+  t.st.on_data(stamp_of(1), 1000, arrival(1));
+  EXPECT_TRUE(t.rows.empty());
+  t.st.release_all();
+  ASSERT_EQ(t.rows.size(), 1u);
+  EXPECT_EQ(t.rows[0].seq, 1u);
+}
+
+TEST(SampleRecord, StageLatenciesNeedBothStamps) {
+  SampleRecord r;
+  r.acquisition_ns = kT0;
+  r.publish_ns = kT0 + 5 * kMs;
+  r.received_ns = kT0 + 7 * kMs;
+  const auto s = stage_latencies_ms(r);
+  EXPECT_FALSE(s[kSensor]);
+  EXPECT_FALSE(s[kWrite]);
+  ASSERT_TRUE(s[kDds]);
+  EXPECT_DOUBLE_EQ(*s[kDds], 2.0);
+  ASSERT_TRUE(s[kTotal]);
+  EXPECT_DOUBLE_EQ(*s[kTotal], 7.0);
+}
+
+TEST(SampleRecord, CsvLineRoundTripsWithEmptyUnknownTimes) {
+  SampleRecord r;
+  r.topic = "/sensors/camera/front_narrow/image_raw";
+  r.seq = 42;
+  r.acquisition_ns = kT0;
+  r.publish_ns = kT0 + 3;
+  r.written_ns = kT0 + 4;
+  r.missing_packets = 7;
+  r.dropped = 1;
+  r.size_bytes = 2'304'000;
+  const std::string line = to_csv_line(r);
+  EXPECT_EQ(line, "/sensors/camera/front_narrow/image_raw,42,1700000000000000000,,,1700000000000000003,"
+                  "1700000000000000004,,7,1,2304000\n");
+  const auto back = parse_csv_line(line.substr(0, line.size() - 1));
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->topic, r.topic);
+  EXPECT_EQ(back->seq, 42u);
+  EXPECT_EQ(back->first_rx_ns, 0);
+  EXPECT_EQ(back->written_ns, kT0 + 4);
+  EXPECT_TRUE(back->lost());
+  EXPECT_EQ(back->size_bytes, 2'304'000u);
+  EXPECT_EQ(std::count(record_csv_header().begin(), record_csv_header().end(), ','), 10);
+}
+
+TEST(SampleRecord, BadLinesAreRefused) {
+  for (const char* bad : {"", "/a,1,2", "/a,1,,,,,,,,,", "/a,1,,,,,,,0,0,0,9", "/a,x,,,,,,,0,0,0", "/a,1,,,,,,,0,0,-1",
+                          ",1,,,,,,,0,0,0", "/a,1,12abc,,,,,,0,0,0", "/a,99999999999999999999,,,,,,,0,0,0"})
+    EXPECT_FALSE(parse_csv_line(bad)) << bad;
+  EXPECT_TRUE(parse_csv_line("/a,1,,,,,,,0,0,0"));
+}
+
+TEST(SampleRecord, FileHoldsWholeLinesAndReadsBack) {
+  test::TempDir dir;
+  const std::string path = (dir.path / "r.csv").string();
+  {
+    RecordFile f(path);
+    SampleRecord r;
+    r.topic = "/t";
+    for (std::uint64_t seq = 0; seq < 3; ++seq) {
+      r.seq = seq;
+      f.add(r);
+    }
+    // Nothing but the header until flush(): a kill in between leaves no half line.
+    std::ifstream in(path);
+    std::stringstream s;
+    s << in.rdbuf();
+    EXPECT_EQ(s.str(), std::string(record_csv_header()) + "\n");
+    f.flush();
+    EXPECT_EQ(f.rows(), 3u);
+  }
+  const auto rows = read_records(path);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[2].seq, 2u);
+  const std::string other = dir.write("other.csv", "t,seq\n/t,1\n");
+  EXPECT_THROW(read_records(other), std::runtime_error);
+  const std::string broken = dir.write("broken.csv", std::string(record_csv_header()) + "\n/t,1,,,,,,,0,0,0\n/t,2,oops\n");
+  try {
+    read_records(broken);
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("broken.csv:3"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(RecordFile((dir.path / "no/such/dir/r.csv").string()), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace sensor_rig::rig
