@@ -191,11 +191,11 @@ void ClockMapper::refit() noexcept {
 }
 
 void ClockMapper::update_lock_state(bool drift_fitted) noexcept {
-  if (state_ == SyncState::kConverging && used_ >= cfg_.lock_buckets && drift_fitted) {
-    state_ = SyncState::kLocked;
-  } else if (state_ == SyncState::kJumped && buckets_since_seed_ >= cfg_.relock_buckets) {
-    state_ = SyncState::kLocked;
-  }
+  // Converging locks once the drift is fitted over enough buckets; after a jump, once enough
+  // buckets since the new seed confirm it.
+  const bool converged = state_ == SyncState::kConverging && used_ >= cfg_.lock_buckets && drift_fitted;
+  const bool relocked = state_ == SyncState::kJumped && buckets_since_seed_ >= cfg_.relock_buckets;
+  if (converged || relocked) state_ = SyncState::kLocked;
 }
 
 void ClockMapper::push_residual(double r) noexcept {
