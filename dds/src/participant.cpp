@@ -7,6 +7,7 @@
 
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/dds/participant.hpp"
+#include "sensor_rig/dds/roudi.hpp"
 #include "sensor_rig/dds/topic.hpp"
 
 #ifndef RIG_DEFAULT_SOURCE_DIR
@@ -22,12 +23,33 @@ std::string read_file(const std::string& path) {
   s << in.rdbuf();
   return s.str();
 }
+
+// Appended to the profile (Cyclone reads a list of files and XML fragments, later ones adding to
+// earlier ones). Only iceoryx's warnings: its info level logs every endpoint.
+constexpr const char* kShmFragment =
+    "<CycloneDDS><Domain Id=\"any\"><SharedMemory><Enable>true</Enable><LogLevel>warn</LogLevel></SharedMemory>"
+    "</Domain></CycloneDDS>";
+
+// What dds_create_domain gets: the profile's XML, plus the shared-memory fragment.
+std::string domain_config(const std::string& profile, Transport t) {
+  std::string xml;
+  if (!profile.empty()) {
+    xml = read_file(profile);
+  } else if (const char* uri = std::getenv("CYCLONEDDS_URI"); uri != nullptr) {
+    xml = uri;
+  }
+  if (t == Transport::kShm) xml += std::string(xml.empty() ? "" : ",") + kShmFragment;
+  return xml;
+}
 }  // namespace
+
+std::string to_string(Transport t) { return t == Transport::kShm ? "shm" : "udp"; }
 
 // Cyclone allows one explicit configuration per domain id and process; the domain lives while a
 // participant uses it (deleting it would delete every participant in it).
 struct DomainHandle {
   std::string profile;
+  Transport transport = Transport::kUdp;
   Entity domain;
 };
 
@@ -44,19 +66,41 @@ std::string resolve_profile(const DomainConfig& cfg) {
   return (base / "config/cyclonedds/loopback.xml").string();
 }
 
+std::string cyclone_uri(const DomainConfig& cfg) {
+  const std::string profile = resolve_profile(cfg);
+  std::string uri;
+  if (!profile.empty()) {
+    uri = "file://" + std::filesystem::absolute(profile).string();
+  } else if (const char* env = std::getenv("CYCLONEDDS_URI"); env != nullptr) {
+    uri = env;
+  }
+  if (cfg.transport == Transport::kShm) uri += std::string(uri.empty() ? "" : ",") + kShmFragment;
+  return uri;
+}
+
 Participant::Participant(const DomainConfig& cfg) : profile_(resolve_profile(cfg)) {
-  if (!profile_.empty()) {
+  if (cfg.transport == Transport::kShm) {
+    const auto probe = probe_roudi();
+    if (!probe.answers) {
+      throw std::runtime_error("DDS transport shm needs a running iceoryx RouDi: " +
+                               (probe.pid != 0 ? probe.problem : std::string("no iox-roudi process")) +
+                               " (`rig up` starts one for a config with transport shm)");
+    }
+  }
+  if (!profile_.empty() || cfg.transport == Transport::kShm) {
     std::lock_guard lock(g_domains_mutex);
     domain_ = g_domains[cfg.domain_id].lock();
     if (!domain_) {
-      const std::string xml = read_file(profile_);
+      const std::string xml = domain_config(profile_, cfg.transport);
       domain_ = std::make_shared<DomainHandle>();
       domain_->profile = profile_;
+      domain_->transport = cfg.transport;
       domain_->domain = Entity(check(dds_create_domain(cfg.domain_id, xml.c_str()), "dds_create_domain"));
       g_domains[cfg.domain_id] = domain_;
-    } else if (domain_->profile != profile_) {
+    } else if (domain_->profile != profile_ || domain_->transport != cfg.transport) {
       throw std::runtime_error("domain " + std::to_string(cfg.domain_id) + " already configured with '" +
-                               domain_->profile + "', cannot also use '" + profile_ + "'");
+                               domain_->profile + "' over " + to_string(domain_->transport) + ", cannot also use '" +
+                               profile_ + "' over " + to_string(cfg.transport));
     }
   }
   participant_ = Entity(check(dds_create_participant(cfg.domain_id, nullptr, nullptr), "dds_create_participant"));

@@ -32,6 +32,7 @@ int take_in_place(dds_entity_t reader, void* scratch, void (*fn)(void* ctx, cons
       } else if (ddsi_serdata_to_sample(sd, scratch, nullptr, nullptr)) {
         fn(ctx, scratch);
         ++counts.copied;
+        if (sd->iox_chunk != nullptr) ++counts.serialized_chunk;  // variable-size types over shm
       }
       ++n;
     }

@@ -22,11 +22,17 @@ RigConfig load_rig_config(const std::string& path) {
     cfg.name = rig->get_string("name", "rig");
     cfg.diagnostics_period_ms = static_cast<int>(rig->get_int("diagnostics_period_ms", 100, 60000, 1000));
     if (auto d = rig->child("dds")) {
-      d->allow_keys({"domain", "profile"});
+      d->allow_keys({"domain", "profile", "transport", "roudi_config"});
       cfg.dds.domain_id = static_cast<dds_domainid_t>(d->get_int("domain", 0, 232, 0));
       cfg.dds.profile = d->get_path("profile", "");
       if (!cfg.dds.profile.empty() && !std::filesystem::exists(cfg.dds.profile))
         d->fail("profile", "file not found: " + cfg.dds.profile);
+      cfg.dds.transport = d->get_enum("transport", {{"udp", dds::Transport::kUdp}, {"shm", dds::Transport::kShm}}, dds::Transport::kUdp);
+      cfg.roudi_config = d->get_path("roudi_config", "");
+      if (!cfg.roudi_config.empty() && !std::filesystem::exists(cfg.roudi_config))
+        d->fail("roudi_config", "file not found: " + cfg.roudi_config);
+      if (!cfg.roudi_config.empty() && cfg.dds.transport != dds::Transport::kShm)
+        d->fail("roudi_config", "only used with transport: shm");
     }
   }
   std::set<std::string> names;
@@ -49,7 +55,8 @@ RigConfig load_rig_config(const std::string& path) {
 std::string describe(const RigConfig& cfg) {
   std::ostringstream o;
   o << "rig '" << cfg.name << "' (" << cfg.file << "), DDS domain " << cfg.dds.domain_id << ", profile "
-    << (cfg.dds.profile.empty() ? std::string("default") : cfg.dds.profile) << "\n";
+    << (cfg.dds.profile.empty() ? std::string("default") : cfg.dds.profile) << ", transport "
+    << dds::to_string(cfg.dds.transport) << "\n";
   for (const auto& l : cfg.lidars) {
     o << "  lidar " << l.name << ": " << l.model << " udp " << l.host << ":" << l.port
       << (l.position_port ? " position " + std::to_string(l.position_port) : std::string()) << ", returns "

@@ -22,7 +22,8 @@ using drivers::LidarMockConfig;
 struct RigConfig {
   std::string file;   // where it was loaded from
   std::string name = "rig";
-  dds::DomainConfig dds;
+  dds::DomainConfig dds;  // rig.dds: domain, profile, transport (udp | shm)
+  std::string roudi_config;  // rig.dds.roudi_config: iceoryx mempools for shm (default config/iceoryx/rig-roudi.toml)
   int diagnostics_period_ms = 1000;
   std::vector<LidarConfig> lidars;
   std::vector<drivers::CameraConfig> cameras;

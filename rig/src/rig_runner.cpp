@@ -136,10 +136,12 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     log::error("rig", e.what());
     return 1;
   }
-
+  // Shared memory: the parent `rig up` runs RouDi (run_shm_supervisor); without one, stop here
+  // (Participant says why) rather than let iceoryx wait 60 s and abort.
   dds::Participant participant(cfg.dds);
   log::info("rig", "'" + cfg.name + "' on DDS domain " + std::to_string(cfg.dds.domain_id) + ", profile " +
-                       (participant.profile().empty() ? std::string("$CYCLONEDDS_URI") : participant.profile()));
+                       (participant.profile().empty() ? std::string("$CYCLONEDDS_URI") : participant.profile()) +
+                       ", transport " + dds::to_string(cfg.dds.transport));
   dds::StampsWriter stamps(participant);
   dds::DiagnosticsPublisher diagnostics(participant);
 
@@ -172,7 +174,11 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   const dds::Reader<msg::DbwStatus> dbw_status(participant, dbw_status_topic);
   for (const auto& argv : dbw_commands(exe, cfg.dbw, static_cast<int>(cfg.dds.domain_id))) {
     // The bridge is the only path to the actuators: its timeouts must not be scheduling delays.
-    mocks.emplace_back(argv, cfg.dbw.realtime_priority);
+    // Its participant takes the rig's DDS configuration (profile, shared memory) from CYCLONEDDS_URI.
+    ChildOptions co;
+    co.rt_priority = cfg.dbw.realtime_priority;
+    co.env = {"CYCLONEDDS_URI=" + dds::cyclone_uri(cfg.dds)};
+    mocks.emplace_back(argv, co);
     log::info("rig", "dbw: " + argv[1] + " " + argv[2] + ": pid " + std::to_string(mocks.back().pid()));
     // The ECU must listen before the bridge connects, the bridge subscribe before commands flow.
     if (!wait_dbw_ready(argv, cfg.dbw, dbw_status)) log::warn("rig", "dbw: " + argv[1] + " " + argv[2] + " not ready in time");

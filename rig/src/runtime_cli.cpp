@@ -1,16 +1,21 @@
 // `rig up`, `rig demo`, `rig config check`, `rig monitor`, `rig report`.
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
+#include <map>
 
 #include "latency_plot.hpp"
 #include "monitor.hpp"
 #include "rig_config.hpp"
 #include "rig_runner.hpp"
+#include "rig_shm.hpp"
 #include "sample_record.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dds/roudi.hpp"
 
 #ifndef RIG_DEFAULT_SOURCE_DIR
 #define RIG_DEFAULT_SOURCE_DIR "."
@@ -30,10 +35,35 @@ void add_up(CLI::App& app, cli::Context& ctx) {
   auto duration = std::make_shared<double>(0);
   cmd->add_option("CONFIG", *config, "Rig config (YAML)")->required();
   cmd->add_option("--duration", *duration, "Stop after S seconds (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
-  cmd->callback([&ctx, config, duration] {
+  auto supervised = std::make_shared<bool>(false);
+  cmd->add_flag("--roudi-supervised", *supervised)->group("");  // internal: the parent `rig up` runs RouDi
+  cmd->callback([&ctx, config, duration, supervised] {
     const auto cfg = load_rig_config(*config);
+    if (cfg.dds.transport == dds::Transport::kShm && !*supervised) {
+      ctx.exit_code = run_shm_supervisor(cfg, *config, *duration);
+      return;
+    }
     ctx.exit_code = run_rig(cfg, RunOptions{*duration});
   });
+}
+
+// Over shared memory the monitor runs as a process of its own: stopping RouDi SIGTERMs every
+// process registered with it, and this one must outlive `rig up` to report its exit.
+int run_demo_monitor_process(const RigConfig& cfg, ChildProcess& rig, double duration_s, bool json) {
+  for (int i = 0; i < 600 && rig.running() && !dds::probe_roudi().answers; ++i) ::usleep(100'000);
+  std::vector<std::string> argv{self_executable(), "monitor", "--domain", std::to_string(cfg.dds.domain_id),
+                                "--transport", "shm", "--duration", std::to_string(duration_s)};
+  if (!cfg.dds.profile.empty()) argv.insert(argv.end(), {"--dds-profile", cfg.dds.profile});
+  if (json) argv.emplace_back("--json");
+  ChildProcess monitor(argv);
+  while (monitor.running() && rig.running() && !shutdown_requested()) wait_for_shutdown(100);
+  const int monitor_status = monitor.stop(5000);
+  if (!rig.running() && !shutdown_requested()) {
+    std::fprintf(stderr, "rig demo: `rig up` exited with status %d (see its messages above)\n", rig.exit_status());
+    return cli::kRuntime;
+  }
+  rig.stop(20000);
+  return monitor_status;
 }
 
 void add_demo(CLI::App& app, cli::Context& ctx) {
@@ -49,6 +79,10 @@ void add_demo(CLI::App& app, cli::Context& ctx) {
     std::fprintf(stderr, "%s", describe(cfg).c_str());
     // Real processes: mocks and drivers in `rig up`, the monitor here.
     ChildProcess rig({self_executable(), "up", *config});
+    if (cfg.dds.transport == dds::Transport::kShm) {
+      ctx.exit_code = run_demo_monitor_process(cfg, rig, *duration, *json);
+      return;
+    }
     MonitorOptions mo;
     mo.duration_s = *duration;
     mo.json = *json;
@@ -88,14 +122,19 @@ void add_monitor(CLI::App& app, cli::Context& ctx) {
   cmd->add_flag("--json", opt->json, "One JSON line per topic per second");
   cmd->add_option("--domain", *domain, "DDS domain id")->check(CLI::Range(0, 232));
   cmd->add_option("--dds-profile", *profile, "Cyclone XML profile (default: loopback)");
+  auto transport = std::make_shared<dds::Transport>(dds::Transport::kUdp);
+  cmd->add_option("--transport", *transport, "udp, or shm: iceoryx shared memory (a RouDi must run, as `rig up` starts)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, dds::Transport>{{"udp", dds::Transport::kUdp},
+                                                                                {"shm", dds::Transport::kShm}}));
   cmd->add_option("--summary", opt->summary_file, "At the end, write whole-run percentiles per topic/stage (JSON)");
   cmd->add_option("--record", opt->record_file, "Write one CSV row per sample: its stage times, missing packets");
   cmd->add_option("--plot", opt->plot_file, "At the end, write the latency plot of the run (SVG)");
   cmd->add_option("--loss-timeout", opt->loss_timeout_s, "A stamped sample not received after S seconds is lost")
       ->check(CLI::PositiveNumber);
-  cmd->callback([&ctx, opt, profile, domain] {
+  cmd->callback([&ctx, opt, profile, domain, transport] {
     opt->dds.domain_id = static_cast<dds_domainid_t>(*domain);
     opt->dds.profile = *profile;
+    opt->dds.transport = *transport;
     ctx.exit_code = run_monitor(*opt);
   });
 }

@@ -21,6 +21,7 @@ void wait_for_acks(dds_entity_t writer, Nanos timeout_ns) noexcept;
 struct TakeCounts {
   std::uint64_t zero_copy = 0;  // read in place from the iceoryx chunk
   std::uint64_t copied = 0;     // came another way (network, serialized chunk): deserialized into scratch
+  std::uint64_t serialized_chunk = 0;  // of the copied: came through iceoryx, serialized in the chunk
 };
 
 // Takes every available sample of `reader` and calls fn(ctx, sample) with a pointer valid during

@@ -1,0 +1,107 @@
+#!/usr/bin/env bash
+# The mock rig (config/mock_rig.yaml) over each DDS transport, back to back: rig.dds.transport udp,
+# then shm (rig up's own iox-roudi). Per transport: the whole rig's CPU (rig up + every process it
+# started: LIDAR mocks, GigE fakes, dbw processes, RouDi; the monitor apart) as % of one core, and
+# per topic the `dds` stage (DDS source timestamp -> monitor receive) p50/p99/max from a monitor
+# that uses the same transport.
+# Usage: scripts/bench_rig_transport.sh BUILD_DIR [SECONDS] [TRANSPORTS...]
+set -euo pipefail
+build=${1:-build-release}
+secs=${2:-30}
+shift $(( $# > 2 ? 2 : $# ))
+transports=("${@:-udp}")
+[ $# -eq 0 ] && transports=(udp shm)
+root=$(cd "$(dirname "$0")/.." && pwd)
+out=$(mktemp -d)
+domain=$((150 + $$ % 50))
+rig_pid=""
+conf=""
+cleanup() {
+  if [ -n "$rig_pid" ] && kill -0 "$rig_pid" 2>/dev/null; then kill -INT "$rig_pid"; sleep 3; kill -KILL "$rig_pid" 2>/dev/null || true; fi
+  [ -n "$conf" ] && rm -f "$conf"
+  rm -rf "$out"
+}
+trap cleanup EXIT
+for t in "${transports[@]}"; do
+  # Relative paths in a rig config resolve against its directory: the generated one sits in config/.
+  conf="$root/config/.bench_transport_$$.yaml"
+  sed -e "s/^    domain: 0$/    domain: $domain/" -e "s|^    profile: cyclonedds/loopback.xml.*|&\n    transport: $t|" \
+    "$root/config/mock_rig.yaml" >"$conf"
+  grep -q "transport: $t" "$conf" || { echo "could not set the transport in $conf" >&2; exit 1; }
+  "$build/rig" up "$conf" --duration $((secs + 14)) 2>"$out/up_$t.log" &
+  rig_pid=$!
+  sleep 8  # RouDi, fakes, streams, DDS matched
+  "$build/rig" monitor --domain "$domain" --transport "$t" --duration "$secs" --json --summary "$out/summary_$t.json" \
+    >/dev/null 2>"$out/monitor_$t.log" &
+  mon_pid=$!
+  python3 - "$rig_pid" "$mon_pid" "$secs" "$out/cpu_$t.json" <<'PY'
+import json, os, sys, time
+rig, mon, secs, dst = int(sys.argv[1]), int(sys.argv[2]), float(sys.argv[3]), sys.argv[4]
+hz = os.sysconf("SC_CLK_TCK")
+def stat(path):
+    s = open(path).read()
+    f = s[s.rindex(")") + 2 :].split()
+    return s[s.index("(") + 1 : s.rindex(")")], int(f[1]), int(f[11]) + int(f[12])
+def tree(root):
+    kids = {}
+    for p in os.listdir("/proc"):
+        if p.isdigit():
+            try:
+                kids.setdefault(stat(f"/proc/{p}/stat")[1], []).append(int(p))
+            except OSError:
+                pass
+    out, todo = [], [root]
+    while todo:
+        p = todo.pop(); out.append(p); todo += kids.get(p, [])
+    return out
+def sample():
+    procs = {}
+    for p in tree(rig) + [mon]:
+        try:
+            comm, _, t = stat(f"/proc/{p}/stat"); procs[p] = (comm, t)
+        except OSError:
+            pass
+    return time.monotonic(), procs
+time.sleep(1.0)
+t0, p0 = sample()
+time.sleep(max(1.0, secs - 4.0))
+t1, p1 = sample()
+dt = t1 - t0
+procs = [{"pid": p, "comm": c, "cpu_pct": 100.0 * (t - p0[p][1]) / hz / dt, "monitor": p == mon}
+         for p, (c, t) in p1.items() if p in p0]
+json.dump({"seconds": dt, "procs": procs}, open(dst, "w"))
+PY
+  wait "$mon_pid" || true
+  wait "$rig_pid" || echo "rig up ($t) exited with $?; its log: $out/up_$t.log" >&2
+  rig_pid=""
+  grep -E "shm:|error" "$out/up_$t.log" | sed "s/^/  [$t] /" >&2 || true
+done
+python3 - "$out" "$secs" "${transports[@]}" <<'PY'
+import json, sys
+out, secs, ts = sys.argv[1], float(sys.argv[2]), sys.argv[3:]
+rows = {t: {r["topic"]: r for r in json.load(open(f"{out}/summary_{t}.json"))} for t in ts}
+cpu = {t: json.load(open(f"{out}/cpu_{t}.json")) for t in ts}
+print(f"mock rig, {secs:.0f} s per transport; dds stage = source timestamp -> monitor receive (ms)")
+hdr = "".join(f" | {t + ' p50':>9} {'p99':>7} {'max':>7} {'recv':>5} {'lost':>4}" for t in ts)
+print(f"{'topic':46}{hdr}")
+for topic in sorted(set().union(*[set(r) for r in rows.values()])):
+    line = f"{topic:46}"
+    for t in ts:
+        r = rows[t].get(topic)
+        if r is None:
+            line += f" | {'-':>9} {'-':>7} {'-':>7} {'-':>5} {'-':>4}"
+            continue
+        d = r["latency_ms"].get("dds", {})
+        line += f" | {d.get('p50', float('nan')):9.3f} {d.get('p99', float('nan')):7.3f} {d.get('max', float('nan')):7.3f} {r['received']:5d} {r['lost']:4d}"
+    print(line)
+for t in ts:
+    procs = cpu[t]["procs"]
+    whole = sum(p["cpu_pct"] for p in procs if not p["monitor"])
+    by = {}
+    for p in procs:
+        if not p["monitor"]:
+            by[p["comm"]] = by.get(p["comm"], 0.0) + p["cpu_pct"]
+    mon = sum(p["cpu_pct"] for p in procs if p["monitor"])
+    print(f"{t}: whole rig {whole:.1f} % of one core (" + ", ".join(f"{k} {v:.1f}" for k, v in sorted(by.items(), key=lambda kv: -kv[1]) if v >= 0.3)
+          + f"); monitor {mon:.1f} %")
+PY
