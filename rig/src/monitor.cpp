@@ -309,8 +309,9 @@ class Monitor {
     std::ostringstream table;
     if (tty) table << "\x1b[H\x1b[2J";
     if (!opt_.json)
-      table << fmt("%-30s %7s %8s %7s %5s %5s | %-13s %-13s %-13s %-15s | %s\n", "topic", "rate", "size", "recv",
-                   "lost", "drops", "sensor ms", "process ms", "dds ms", "total ms", "last sample (latencies: p50/p99)");
+      table << fmt("%-30s %7s %8s %7s %5s %5s %5s | %-13s %-13s %-13s %-15s | %s\n", "topic", "rate", "size", "recv",
+                   "lost", "drops", "miss", "sensor ms", "process ms", "dds ms", "total ms",
+                   "last sample (latencies: p50/p99)");
     for (auto& [name, st] : stats_) {
       if (!st.has_stamps && st.received == 0 && !readers_.contains(name)) continue;
       std::array<Percentiles, kStageCount> p;
@@ -336,6 +337,7 @@ class Monitor {
     const nlohmann::json j{{"topic", name},       {"rate_hz", std::round(hz * 100) / 100},
                            {"size_bytes", st.last_size}, {"received", st.received},
                            {"lost", st.lost},     {"source_drops", st.source_drops},
+                           {"missing_packets", st.missing_packets},
                            {"info", st.info},     {"latency_ms", lat}};
     std::printf("%s\n", j.dump().c_str());
   }
@@ -343,10 +345,13 @@ class Monitor {
   static std::string topic_row(const std::string& name, const TopicStats& st, double hz,
                                const std::array<Percentiles, kStageCount>& p) {
     const auto cell = [&](Stage s) { return p[s].n == 0 ? std::string("-") : fmt("%.2f/%.2f", p[s].p50, p[s].p99); };
-    return fmt("%-30s %5.1fHz %7.1fk %7llu %5llu %5llu | %-13s %-13s %-13s %-15s | ", name.c_str(), hz,
+    // miss: packets the sensor sent for these samples and the driver never got (LIDAR scans).
+    const std::string miss = st.has_stamps ? std::to_string(st.missing_packets) : "-";
+    return fmt("%-30s %5.1fHz %7.1fk %7llu %5llu %5llu %5s | %-13s %-13s %-13s %-15s | ", name.c_str(), hz,
                static_cast<double>(st.last_size) / 1024.0, static_cast<unsigned long long>(st.received),
                static_cast<unsigned long long>(st.lost), static_cast<unsigned long long>(st.source_drops),
-               cell(kSensor).c_str(), cell(kProcess).c_str(), cell(kDds).c_str(), cell(kTotal).c_str()) +
+               miss.c_str(), cell(kSensor).c_str(), cell(kProcess).c_str(), cell(kDds).c_str(),
+               cell(kTotal).c_str()) +
            st.info + "\n";
   }
 

@@ -30,13 +30,13 @@ constexpr Nanos kMs = 1'000'000;
 // The real `rig monitor` as a child process; SIGKILL in the destructor if still running.
 class MonitorProcess {
  public:
-  explicit MonitorProcess(const std::vector<std::string>& args) {
+  MonitorProcess(const std::vector<std::string>& args, const std::string& stdout_path) {
     std::vector<char*> argv;
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
     posix_spawn_file_actions_t fa;
     posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, stdout_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (::posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
     posix_spawn_file_actions_destroy(&fa);
   }
@@ -103,11 +103,12 @@ TEST(MonitorRecord, CsvHoldsEverySampleInSeqOrderWithOrderedStagesAndTheLoss) {
   const char* bin = std::getenv("RIG_BIN");
   if (bin == nullptr) GTEST_SKIP() << "RIG_BIN not set (run through ctest)";
   test::TempDir dir;
-  const std::string csv = (dir.path / "record.csv").string();
+  const std::string csv = (dir.path / "record.csv").string(), json_out = (dir.path / "monitor.jsonl").string();
   const std::string profile = (test::source_dir() / "config/cyclonedds/loopback.xml").string();
   const std::string prefix = "/test/record/" + std::to_string(::getpid());
   MonitorProcess monitor({bin, "monitor", "--domain", std::to_string(kDomain), "--dds-profile", profile, "--json",
-                          "--record", csv, "--loss-timeout", "0.3", prefix + "/a/points", prefix + "/b/points"});
+                          "--record", csv, "--loss-timeout", "0.3", prefix + "/a/points", prefix + "/b/points"},
+                         json_out);
   ASSERT_TRUE(monitor.started());
 
   dds::Participant p(dds::DomainConfig{kDomain, profile});
@@ -134,6 +135,17 @@ TEST(MonitorRecord, CsvHoldsEverySampleInSeqOrderWithOrderedStagesAndTheLoss) {
     if (std::count(text.begin(), text.end(), '\n') >= 31) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  // Issue 11: the JSON line of topic a counts the packets its samples missed (sum of seq % 3 = 19).
+  bool missing_reported = false;
+  const Nanos json_deadline = monotonic_now_ns() + 3'000'000'000;
+  while (!missing_reported && monotonic_now_ns() < json_deadline) {
+    std::istringstream lines(read_all(json_out));
+    for (std::string line; std::getline(lines, line);)
+      if (line.find("/a/points") != std::string::npos && line.find("\"missing_packets\":19,") != std::string::npos)
+        missing_reported = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_TRUE(missing_reported) << read_all(json_out);
   const int st = monitor.kill();
   EXPECT_TRUE(WIFSIGNALED(st));
   text = read_all(csv);
