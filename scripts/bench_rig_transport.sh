@@ -79,7 +79,7 @@ done
 python3 - "$out" "$secs" "${transports[@]}" <<'PY'
 import json, sys
 out, secs, ts = sys.argv[1], float(sys.argv[2]), sys.argv[3:]
-rows = {t: {r["topic"]: r for r in json.load(open(f"{out}/summary_{t}.json"))} for t in ts}
+rows = {t: {r["topic"]: r for r in json.load(open(f"{out}/summary_{t}.json")) if "topic" in r} for t in ts}
 cpu = {t: json.load(open(f"{out}/cpu_{t}.json")) for t in ts}
 print(f"mock rig, {secs:.0f} s per transport; dds stage = source timestamp -> monitor receive (ms)")
 hdr = "".join(f" | {t + ' p50':>9} {'p99':>7} {'max':>7} {'recv':>5} {'lost':>4}" for t in ts)
