@@ -96,5 +96,19 @@ TEST(DdsDiscovery, SeesAnotherParticipantsWritersWithTypeGuidHostAndReliability)
   EXPECT_FALSE(other_went);
 }
 
+TEST(DdsDiscovery, ALateReaderSeesWritersThatWereThereBefore) {
+  Participant theirs(DomainConfig{kDomain, {}});
+  const std::string name = unique_topic("before");
+  Topic<msg::SourceStamps> topic(theirs, name);
+  Writer<msg::SourceStamps> writer(theirs, topic);
+  Participant mine(DomainConfig{kDomain, {}});
+  DiscoveryReader discovery(mine);
+  WaitSet ws(mine);
+  ws.attach_reader(discovery.handle(), 1);
+  const auto seen = take_until(discovery, ws, "rt" + name, [](const auto& s) { return !s.empty(); });
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen.begin()->second.topic, "rt" + name);
+}
+
 }  // namespace
 }  // namespace sensor_rig::dds
