@@ -193,7 +193,7 @@ TEST_F(ShmRig, RoudiKilledMidRunIsReportedAndTheNextRunStartsClean) {
   ASSERT_TRUE(again.wait_exit(2000));
   for (int i = 0; i < 100 && process_exists(roudi2); ++i) ::usleep(50'000);
   EXPECT_FALSE(process_exists(roudi2)) << "RouDi outlived the rig that started it";
-  const auto [rc, out] = test::run(rig_bin() + " up " + cfg + " --duration 2 2>&1");
+  const auto [rc, out] = test::run(rig_bin() + " up " + cfg + " --duration 1 2>&1");
   EXPECT_EQ(rc, 0) << out;
 }
 

@@ -57,7 +57,7 @@ class ChildProcess {
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
 
   // With pipe_stdio:
-  bool send_line(const std::string& line);  // false when the pipe is closed
+  bool send_line(const std::string& line);  // false when the pipe is closed (SIGPIPE ignored, as rig does)
   void close_stdin() { in_.reset(); }
   // What is available on stdout (non-blocking) as complete lines; sets stdout_eof().
   std::vector<std::string> read_lines();
