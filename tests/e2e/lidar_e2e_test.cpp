@@ -184,21 +184,30 @@ TEST(LidarEndToEnd, SyntheticMockRigPublishesAllThreeModels) {
     }
   }
 
-  // Diagnostics: one status per driver, with its counters, as diagnostic_msgs/DiagnosticArray.
+  // Diagnostics: one status per driver, with its counters, as diagnostic_msgs/DiagnosticArray;
+  // and the PU clock's rig/time (no linuxptp on a test host: a state, never a missing status).
   std::set<std::string> seen;
-  for (int tries = 0; tries < 30 && seen.size() < 3; ++tries) {
+  std::string ptp_state;
+  for (int tries = 0; tries < 30 && (seen.size() < 3 || ptp_state.empty()); ++tries) {
     diag.wait(200);
     diag.take([&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
       for (std::uint32_t k = 0; k < a.status._length; ++k) {
         const auto& st = a.status._buffer[k];
         std::map<std::string, std::string> kv;
         for (std::uint32_t v = 0; v < st.values._length; ++v) kv[st.values._buffer[v].key] = st.values._buffer[v].value;
-        if (kv.contains("scans") && std::stoull(kv["scans"]) > 0 && st.level == 0) seen.insert(st.name);
-        EXPECT_EQ(kv["packets_dropped"], "0") << st.name;
+        const std::string name = st.name;
+        if (name == "rig/time") {
+          ptp_state = kv["ptp_state"];
+          EXPECT_TRUE(kv.contains("realtime_steps"));
+          continue;
+        }
+        if (kv.contains("scans") && std::stoull(kv["scans"]) > 0 && st.level == 0) seen.insert(name);
+        EXPECT_EQ(kv["packets_dropped"], "0") << name;
       }
     });
   }
   EXPECT_EQ(seen, (std::set<std::string>{"lidar/l0", "lidar/l1", "lidar/l2"}));
+  EXPECT_FALSE(ptp_state.empty()) << "no rig/time status in /diagnostics";
 
   // The monitor, as a separate process: one JSON line per topic per second with every stage.
   const auto [rc, out] = test::run(rig_bin() + " monitor --json --duration 3.5 --domain 18 --dds-profile " +
