@@ -158,7 +158,8 @@ void AravisSource::configure() {
   }
   // 6. any feature by name, in config order.
   for (const auto& [name, value] : cfg_.features) {
-    const std::string assignment = name + "=" + value;
+    std::string assignment = name;
+    assignment.append("=").append(value);
     arv_device_set_features_from_string(dev, assignment.c_str(), &err);
     check("feature " + assignment);
   }
@@ -215,7 +216,8 @@ void AravisSource::start_stream() {
   st_->buffers.clear();
   for (std::size_t i = 0; i < st_->pool->count(); ++i) {
     auto buf = st_->pool->buffer(i);
-    ArvBuffer* b = arv_buffer_new_full(st_->payload, buf.data(), reinterpret_cast<gpointer>(static_cast<std::uintptr_t>(i)), nullptr);
+    // The pool index rides in the buffer's user data (GLib's GUINT_TO_POINTER idiom).
+    ArvBuffer* b = arv_buffer_new_full(st_->payload, buf.data(), reinterpret_cast<gpointer>(static_cast<std::uintptr_t>(i)), nullptr);  // NOLINT(performance-no-int-to-ptr)
     st_->buffers.push_back(b);
     arv_stream_push_buffer(st_->stream, b);
   }

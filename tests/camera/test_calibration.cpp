@@ -68,7 +68,7 @@ TEST(Calibration, MonocularDefaultsForRAndP) {
 }
 
 TEST(Calibration, BadFilesSayWhy) {
-  const auto fails_with = [](std::string text, const char* needle) {
+  const auto fails_with = [](const std::string& text, const char* needle) {
     try {
       (void)parse_calibration(text, "bad.yaml");
       ADD_FAILURE() << "no error for: " << needle;

@@ -23,7 +23,7 @@ class HostTime : public ::testing::Test {
   test::TempDir dir_;
 
   std::string script(const std::string& name, const std::string& body) {
-    const auto path = (dir_.path / name).string();
+    auto path = (dir_.path / name).string();
     std::ofstream(path) << "#!/bin/sh\n" << body;
     ::chmod(path.c_str(), 0755);
     return path;
@@ -44,7 +44,7 @@ class HostTime : public ::testing::Test {
   }
 };
 
-const char* kSynchronized =
+constexpr const char* kSynchronized =
     "echo 'sending: GET TIME_STATUS_NP'\n"
     "printf '\\t90e2ba.fffe.20c7f8-0 seq 0 RESPONSE MANAGEMENT TIME_STATUS_NP \\n'\n"
     "printf '\\t\\tmaster_offset              -37\\n\\t\\tingress_time               1795255200034372012\\n'\n"

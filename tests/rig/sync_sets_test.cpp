@@ -118,7 +118,7 @@ TEST(SyncSetNode, PublishesCompleteSetsFromStampsAndCountsIncompleteOnes) {
     const Nanos t = t0 + k * 100'000'000LL;
     dds::SampleStamps s{};
     stamps.write("/test/a", msg::to_time(t), frame, static_cast<std::uint64_t>(k), s);
-    if (k != 7) stamps.write("/test/b", msg::to_time(t + 1'000'000), frame, static_cast<std::uint64_t>(100 + k), s);
+    if (k != 7) stamps.write("/test/b", msg::to_time(t + 1'000'000), frame, 100 + static_cast<std::uint64_t>(k), s);
   }
   std::map<std::uint64_t, std::uint64_t> got;  // a seq -> b seq
   std::vector<Nanos> spreads;

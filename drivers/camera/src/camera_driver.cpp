@@ -254,7 +254,7 @@ void CameraDriver::stop() {
   const auto st = status();
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
-    if (k == "frames" || k == "incomplete" || k == "reopens" || k == "stamp_source" || k == "sync") line += " " + k + "=" + v;
+    if (k == "frames" || k == "incomplete" || k == "reopens" || k == "stamp_source" || k == "sync") line.append(" ").append(k).append("=").append(v);
   log::info("camera", line);
 }
 

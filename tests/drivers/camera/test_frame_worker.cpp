@@ -53,7 +53,7 @@ void offer_burst(int depth) {
   ASSERT_TRUE(w.offer(meta, 0, frame));
   ASSERT_TRUE(wait_for([&] { return g.count() == 1; }, 5000));
   // 100 more while it is blocked: each offer returns at once (a copy and two short locks).
-  const int kBurst = 100;
+  constexpr int kBurst = 100;
   Nanos worst = 0;
   for (int i = 1; i <= kBurst; ++i) {
     meta.seq = static_cast<std::uint64_t>(i);
