@@ -43,7 +43,7 @@ BENCHMARK(BM_CandumpParseLine);
 
 void BM_E2eP01ProtectAndCheck(benchmark::State& st) {
   dbw::safety::E2eConfig c;
-  c.profile = dbw::safety::E2eProfile::p01;
+  c.profile = dbw::safety::E2eProfile::kP01;
   c.data_id = 0x100;
   dbw::safety::E2eSender tx(c);
   dbw::safety::E2eChecker rx(c);

@@ -89,9 +89,9 @@ int run_replay(const ReplayOptions& o) {
     can::RxFrame rx;
     while (!shutdown_requested()) {
       const auto st = src->receive(rx, 100);
-      if (st == can::IoStatus::timeout) continue;
-      if (st != can::IoStatus::ok) break;
-      if (out->send(rx.frame) == can::IoStatus::ok) {
+      if (st == can::IoStatus::kTimeout) continue;
+      if (st != can::IoStatus::kOk) break;
+      if (out->send(rx.frame) == can::IoStatus::kOk) {
         ++sent;
       } else {
         ++refused;

@@ -32,7 +32,7 @@ struct Loop {
       c.enable = enable;
       c.throttle = throttle;
       c.steering_angle = steer;
-      c.gear = s::Gear::drive;
+      c.gear = s::Gear::kDrive;
       bridge.on_command(c, now, now);
     }
     last_tx.clear();
@@ -49,7 +49,7 @@ struct Loop {
         bridge.on_frame(rx, now);
         if (f.error) {
           bus_off = dbw::can::classify_error_frame(f).bus_off;
-          bridge.on_bus_state(bus_off ? dbw::can::BusState::bus_off : dbw::can::BusState::active, now);
+          bridge.on_bus_state(bus_off ? dbw::can::BusState::kBusOff : dbw::can::BusState::kActive, now);
         }
       }
     }
@@ -68,7 +68,7 @@ TEST(BridgeLoop, CommandsMoveTheVehicleAndFeedbackReturns) {
   Loop l;
   for (int i = 0; i < 5; ++i) l.cycle(true, false);
   for (int i = 0; i < 200; ++i) l.cycle(true, true);
-  EXPECT_EQ(l.bridge.safety().state(), s::State::engaged);
+  EXPECT_EQ(l.bridge.safety().state(), s::State::kEngaged);
   EXPECT_TRUE(l.ecu.engaged());
   EXPECT_TRUE(l.bridge.ecu().engaged);
   EXPECT_DOUBLE_EQ(l.tx_enable(), 1.0);
@@ -83,7 +83,7 @@ TEST(BridgeLoop, CommandSilenceSendsNeutralWithinOnePeriodOfTheTimeout) {
   Loop l;
   l.cycle(true, false);
   for (int i = 0; i < 20; ++i) l.cycle(true, true);
-  ASSERT_EQ(l.bridge.safety().state(), s::State::engaged);
+  ASSERT_EQ(l.bridge.safety().state(), s::State::kEngaged);
   const Nanos last_cmd = l.now - 10 * kMs;
   Nanos first_neutral = 0;
   for (int i = 0; i < 20 && first_neutral == 0; ++i) {
@@ -92,7 +92,7 @@ TEST(BridgeLoop, CommandSilenceSendsNeutralWithinOnePeriodOfTheTimeout) {
   }
   ASSERT_GT(first_neutral, 0);
   EXPECT_LE(first_neutral - last_cmd, 100 * kMs + 10 * kMs);
-  EXPECT_EQ(l.bridge.safety().reason(), s::Reason::command_timeout);
+  EXPECT_EQ(l.bridge.safety().reason(), s::Reason::kCommandTimeout);
   for (int i = 0; i < 3; ++i) l.cycle(false, true);
   EXPECT_FALSE(l.ecu.engaged());
 }
@@ -125,14 +125,14 @@ TEST_P(BridgeFaults, EachInjectedFaultDisengagesWithItsReason) {
   Loop l({dbw::mock::parse_fault(GetParam().fault)});
   l.cycle(true, false);
   l.cycle(true, true);
-  ASSERT_EQ(l.bridge.safety().state(), s::State::engaged);
-  for (int i = 0; i < 100 && l.bridge.safety().state() == s::State::engaged; ++i) l.cycle(true, true);
-  EXPECT_EQ(l.bridge.safety().state(), s::State::disengaged);
+  ASSERT_EQ(l.bridge.safety().state(), s::State::kEngaged);
+  for (int i = 0; i < 100 && l.bridge.safety().state() == s::State::kEngaged; ++i) l.cycle(true, true);
+  EXPECT_EQ(l.bridge.safety().state(), s::State::kDisengaged);
   EXPECT_EQ(l.bridge.safety().reason(), GetParam().reason);
   // Enable held, fresh commands: the disengage latches and only neutral frames go out.
   for (int i = 0; i < 3; ++i) {
     l.cycle(true, true);
-    EXPECT_EQ(l.bridge.safety().state(), s::State::disengaged) << i;
+    EXPECT_EQ(l.bridge.safety().state(), s::State::kDisengaged) << i;
     if (!l.bus_off) {
       EXPECT_EQ(expect_all_neutral(l), 2) << i;
       EXPECT_DOUBLE_EQ(l.tx_enable(), 0.0);
@@ -145,12 +145,12 @@ TEST(BridgeLoop, AfterBusOffRecoveryOnlyNeutralFramesUntilANewEnableEdge) {
   Loop l({dbw::mock::parse_fault("bus-off@0.2+0.3")});
   l.cycle(true, false);
   for (int i = 0; i < 10; ++i) l.cycle(true, true, 0.3, 0.1);
-  ASSERT_EQ(l.bridge.safety().state(), s::State::engaged);
+  ASSERT_EQ(l.bridge.safety().state(), s::State::kEngaged);
   ASSERT_DOUBLE_EQ(l.tx_enable(), 1.0);
   int cycles = 0;
   while (!l.bus_off && cycles++ < 50) l.cycle(true, true, 0.5, 0.2);  // the command changes as the bus drops
   ASSERT_TRUE(l.bus_off);
-  EXPECT_EQ(l.bridge.safety().reason(), s::Reason::bus_off);
+  EXPECT_EQ(l.bridge.safety().reason(), s::Reason::kBusOff);
   // Bus-off: fresh enabled commands keep coming; every frame is refused.
   cycles = 0;
   while (l.bus_off && cycles++ < 50) l.cycle(true, true, 0.5, 0.2);
@@ -159,7 +159,7 @@ TEST(BridgeLoop, AfterBusOffRecoveryOnlyNeutralFramesUntilANewEnableEdge) {
   // Recovered: the first frames out are neutral, not the command of the bus-off period.
   for (int i = 0; i < 5; ++i) {
     l.cycle(true, true, 0.5, 0.2);
-    EXPECT_EQ(l.bridge.safety().state(), s::State::disengaged) << i;
+    EXPECT_EQ(l.bridge.safety().state(), s::State::kDisengaged) << i;
     EXPECT_EQ(expect_all_neutral(l), 2) << i;
   }
   EXPECT_FALSE(l.ecu.engaged());
@@ -167,10 +167,10 @@ TEST(BridgeLoop, AfterBusOffRecoveryOnlyNeutralFramesUntilANewEnableEdge) {
   l.cycle(true, false, 0.5, 0.2);
   EXPECT_EQ(expect_all_neutral(l), 2);
   l.cycle(true, true, 0.5, 0.2);
-  EXPECT_EQ(l.bridge.safety().state(), s::State::engaged);
+  EXPECT_EQ(l.bridge.safety().state(), s::State::kEngaged);
   EXPECT_DOUBLE_EQ(l.tx_enable(), 1.0);
   const auto* lon = l.p.tx("longitudinal");
-  const double slew = l.p.limits()[s::Axis::throttle].max_rate * 0.010;
+  const double slew = l.p.limits()[s::Axis::kThrottle].max_rate * 0.010;
   int seen = 0;
   for (const auto& f : l.last_tx) {
     if (lon->matches(f)) {
@@ -186,12 +186,12 @@ TEST(BridgeLoop, AfterBusOffRecoveryOnlyNeutralFramesUntilANewEnableEdge) {
 }
 
 INSTANTIATE_TEST_SUITE_P(All, BridgeFaults,
-                         ::testing::Values(FaultCase{"override@0.2", s::Reason::driver_override},
-                                           FaultCase{"ecu-fault@0.2", s::Reason::ecu_fault},
-                                           FaultCase{"bad-crc@0.2", s::Reason::e2e_errors},
-                                           FaultCase{"stuck-counter@0.2", s::Reason::e2e_errors},
-                                           FaultCase{"bus-off@0.2+0.3", s::Reason::bus_off},
-                                           FaultCase{"loss=1@0.2", s::Reason::ecu_timeout},
-                                           FaultCase{"no-status@0.2", s::Reason::ecu_timeout}));
+                         ::testing::Values(FaultCase{"override@0.2", s::Reason::kDriverOverride},
+                                           FaultCase{"ecu-fault@0.2", s::Reason::kEcuFault},
+                                           FaultCase{"bad-crc@0.2", s::Reason::kE2eErrors},
+                                           FaultCase{"stuck-counter@0.2", s::Reason::kE2eErrors},
+                                           FaultCase{"bus-off@0.2+0.3", s::Reason::kBusOff},
+                                           FaultCase{"loss=1@0.2", s::Reason::kEcuTimeout},
+                                           FaultCase{"no-status@0.2", s::Reason::kEcuTimeout}));
 
 }  // namespace

@@ -56,7 +56,7 @@ struct TickLoop {
     while (next_tick <= until) {
       now = next_tick;
       for (const auto& f : ecu.step(now)) {
-        if (bridge.on_frame({f, now}, now) == dbw::RxKind::status) last_status_rx = now;
+        if (bridge.on_frame({f, now}, now) == dbw::RxKind::kStatus) last_status_rx = now;
       }
       if (bridge.transmit_due(now, false)) transmit();
       next_tick += kMs;
@@ -77,7 +77,7 @@ TEST(BridgeSchedule, AHundredHertzSourceGoesOutAtOnceEveryTime) {
   TickLoop l;
   l.drive(10 * kMs, l.now + 100 * kMs, false);
   l.drive(10 * kMs, l.now + 1000 * kMs, true);
-  ASSERT_EQ(l.bridge.safety().state(), s::State::engaged);
+  ASSERT_EQ(l.bridge.safety().state(), s::State::kEngaged);
   EXPECT_EQ(l.bridge.counters().commands_deferred, 0U) << "a command at the bus rate waited";
   // Each command left when it arrived (half way between ticks), not at a tick.
   int at_command = 0;
@@ -89,7 +89,7 @@ TEST(BridgeSchedule, AFiveKilohertzFloodStaysOnTheBusSchedule) {
   TickLoop l;
   l.drive(10 * kMs, l.now + 100 * kMs, false);
   l.drive(10 * kMs, l.now + 50 * kMs, true);
-  ASSERT_EQ(l.bridge.safety().state(), s::State::engaged);
+  ASSERT_EQ(l.bridge.safety().state(), s::State::kEngaged);
   const std::size_t before = l.sets.size();
   const Nanos start = l.now;
   l.drive(200 * kUs, l.now + 1000 * kMs, true);  // 5 kHz for 1 s
@@ -102,28 +102,28 @@ TEST(BridgeSchedule, AFiveKilohertzFloodStaysOnTheBusSchedule) {
   for (std::size_t i = before + 1; i < l.sets.size(); ++i) {
     EXPECT_GE(l.sets[i].t - l.sets[i - 1].t, spacing) << "sets too close at +" << (l.sets[i].t - start) / kMs << " ms";
   }
-  EXPECT_EQ(l.bridge.safety().state(), s::State::engaged);
+  EXPECT_EQ(l.bridge.safety().state(), s::State::kEngaged);
 }
 
 TEST(BridgeSchedule, EcuTriggeredDisengageLeavesInTheSameTick) {
   TickLoop l({dbw::mock::parse_fault("override@0.5")});
   l.drive(10 * kMs, l.now + 100 * kMs, false);
   l.drive(10 * kMs, l.now + 300 * kMs, true);
-  ASSERT_EQ(l.bridge.safety().state(), s::State::engaged);
+  ASSERT_EQ(l.bridge.safety().state(), s::State::kEngaged);
   Nanos disengaged_at = 0;
   std::size_t first_after = 0;
   // Step the loop tick by tick; note the tick whose ECU frame disengaged.
   for (int i = 0; i < 1000 && disengaged_at == 0; ++i) {
     const std::size_t n = l.sets.size();
     l.run_until(l.now + kMs);
-    if (l.bridge.safety().state() == s::State::disengaged) {
+    if (l.bridge.safety().state() == s::State::kDisengaged) {
       disengaged_at = l.now;
       first_after = n;
     }
     if (i % 10 == 5) l.command(true);
   }
   ASSERT_GT(disengaged_at, 0);
-  ASSERT_EQ(l.bridge.safety().reason(), s::Reason::driver_override);
+  ASSERT_EQ(l.bridge.safety().reason(), s::Reason::kDriverOverride);
   ASSERT_LT(first_after, l.sets.size()) << "no frame set in the tick of the disengage";
   EXPECT_EQ(l.sets[first_after].t, l.last_status_rx) << "the neutral frame waited for the period";
   EXPECT_DOUBLE_EQ(l.sets[first_after].enable, 0.0);
@@ -133,7 +133,7 @@ TEST(BridgeSchedule, StopSendsNeutralAndNeverEngagesAgain) {
   TickLoop l;
   l.drive(10 * kMs, l.now + 100 * kMs, false);
   l.drive(10 * kMs, l.now + 300 * kMs, true);
-  ASSERT_EQ(l.bridge.safety().state(), s::State::engaged);
+  ASSERT_EQ(l.bridge.safety().state(), s::State::kEngaged);
   l.bridge.safety().shutdown(l.now);
   ASSERT_TRUE(l.bridge.transmit_due(l.now, false));
   l.transmit();

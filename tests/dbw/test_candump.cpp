@@ -13,7 +13,7 @@ namespace {
 
 TEST(Candump, ParsesTheDocumentedForms) {
   can::LogRecord r;
-  ASSERT_EQ(can::parse_candump_line("(1436509052.249713) can0 123#DEADBEEF", r), can::LineStatus::ok);
+  ASSERT_EQ(can::parse_candump_line("(1436509052.249713) can0 123#DEADBEEF", r), can::LineStatus::kOk);
   EXPECT_EQ(r.stamp, 1436509052249713000LL);
   EXPECT_EQ(r.stamp_text, "1436509052.249713");
   EXPECT_EQ(r.iface, "can0");
@@ -23,29 +23,29 @@ TEST(Candump, ParsesTheDocumentedForms) {
   EXPECT_EQ(r.frame.data[0], 0xDE);
   EXPECT_EQ(r.frame.data[3], 0xEF);
 
-  ASSERT_EQ(can::parse_candump_line("(46408.584930) vcan1 12345678#00.11.22\r", r), can::LineStatus::ok);
+  ASSERT_EQ(can::parse_candump_line("(46408.584930) vcan1 12345678#00.11.22\r", r), can::LineStatus::kOk);
   EXPECT_TRUE(r.frame.extended);
   EXPECT_EQ(r.frame.id, 0x12345678U);
   EXPECT_EQ(r.frame.len, 3);
   EXPECT_EQ(r.stamp, 46408584930000LL);
 
-  ASSERT_EQ(can::parse_candump_line("(1.5) can0 7FF##3" + std::string(24, 'A'), r), can::LineStatus::ok);
+  ASSERT_EQ(can::parse_candump_line("(1.5) can0 7FF##3" + std::string(24, 'A'), r), can::LineStatus::kOk);
   EXPECT_TRUE(r.frame.fd);
   EXPECT_TRUE(r.frame.brs);
   EXPECT_TRUE(r.frame.esi);
   EXPECT_EQ(r.frame.len, 12);
   EXPECT_EQ(r.stamp, 1'500'000'000LL);
 
-  ASSERT_EQ(can::parse_candump_line("(1.000001) can0 123#R", r), can::LineStatus::ok);
+  ASSERT_EQ(can::parse_candump_line("(1.000001) can0 123#R", r), can::LineStatus::kOk);
   EXPECT_TRUE(r.frame.rtr);
-  ASSERT_EQ(can::parse_candump_line("(1.000001) can0 123#R4", r), can::LineStatus::ok);
+  ASSERT_EQ(can::parse_candump_line("(1.000001) can0 123#R4", r), can::LineStatus::kOk);
   EXPECT_EQ(r.frame.len, 4);
-  ASSERT_EQ(can::parse_candump_line("(1.000001) can0 20000080#0000000000000000", r), can::LineStatus::ok);
+  ASSERT_EQ(can::parse_candump_line("(1.000001) can0 20000080#0000000000000000", r), can::LineStatus::kOk);
   EXPECT_TRUE(r.frame.error);
   EXPECT_EQ(r.frame.id, 0x80U);
-  ASSERT_EQ(can::parse_candump_line("(1.000001) can0 123# T", r), can::LineStatus::ok);
+  ASSERT_EQ(can::parse_candump_line("(1.000001) can0 123# T", r), can::LineStatus::kOk);
   EXPECT_EQ(r.frame.len, 0);
-  EXPECT_EQ(can::parse_candump_line("   ", r), can::LineStatus::blank);
+  EXPECT_EQ(can::parse_candump_line("   ", r), can::LineStatus::kBlank);
 }
 
 TEST(Candump, RejectsMalformedLines) {
@@ -54,7 +54,7 @@ TEST(Candump, RejectsMalformedLines) {
                           "(1.0) can0 123#0", "(1.0) can0 123#001122334455667788", "(x.0) can0 123#00",
                           "(1.0) can0 123##", "(1.0) can0 123##0112233445566778899", "(1.0) can0 123#GG",
                           "(1.0) can0 4FFFFFFF#00", "(1.0) can0 123#R9", "(1.0123456789) can0 123#00"}) {
-    EXPECT_EQ(can::parse_candump_line(bad, r), can::LineStatus::malformed) << bad;
+    EXPECT_EQ(can::parse_candump_line(bad, r), can::LineStatus::kMalformed) << bad;
   }
 }
 
@@ -124,7 +124,7 @@ TEST(CanWire, KernelStructRoundTrip) {
   EXPECT_EQ(buf[4], 3);
   EXPECT_EQ(buf[8], 1);
   can::Frame back;
-  ASSERT_EQ(can::from_wire(std::span(buf.data(), can::kClassicWireSize), back), can::WireStatus::ok);
+  ASSERT_EQ(can::from_wire(std::span(buf.data(), can::kClassicWireSize), back), can::WireStatus::kOk);
   EXPECT_EQ(back, f);
 
   f.extended = true;
@@ -135,12 +135,12 @@ TEST(CanWire, KernelStructRoundTrip) {
   ASSERT_EQ(can::to_wire(f, buf), can::kFdWireSize);
   std::memcpy(&id, buf.data(), 4);
   EXPECT_EQ(id, 0x9FFFFFFFU);  // CAN_EFF_FLAG
-  ASSERT_EQ(can::from_wire(buf, back), can::WireStatus::ok);
+  ASSERT_EQ(can::from_wire(buf, back), can::WireStatus::kOk);
   EXPECT_EQ(back, f);
 
-  EXPECT_EQ(can::from_wire(std::span(buf.data(), 10), back), can::WireStatus::bad_size);
+  EXPECT_EQ(can::from_wire(std::span(buf.data(), 10), back), can::WireStatus::kBadSize);
   buf[4] = 65;
-  EXPECT_EQ(can::from_wire(buf, back), can::WireStatus::bad_length);
+  EXPECT_EQ(can::from_wire(buf, back), can::WireStatus::kBadLength);
   can::Frame too_long;
   too_long.len = 9;
   EXPECT_EQ(can::to_wire(too_long, buf), 0U);

@@ -63,7 +63,7 @@ TEST(DbcShared, KnownContentOfRealFiles) {
   EXPECT_EQ(wheels->name, "WHEEL_SPEEDS");
   const auto* fr = wheels->find("WHEEL_SPEED_FR");
   ASSERT_NE(fr, nullptr);
-  EXPECT_EQ(fr->order, dbc::ByteOrder::motorola);
+  EXPECT_EQ(fr->order, dbc::ByteOrder::kMotorola);
   EXPECT_EQ(fr->start_bit, 6);
   EXPECT_EQ(fr->length, 15);
   EXPECT_DOUBLE_EQ(fr->offset, -67.67);
@@ -87,7 +87,7 @@ TEST(DbcShared, KnownContentOfRealFiles) {
   ASSERT_NE(accel, nullptr);
   ASSERT_NE(accel->multiplexor(), nullptr);
   EXPECT_EQ(accel->multiplexor()->name, "AKit_AccelReqType");
-  EXPECT_EQ(accel->find("AKit_SpeedReq")->mux, dbc::MuxRole::multiplexed);
+  EXPECT_EQ(accel->find("AKit_SpeedReq")->mux, dbc::MuxRole::kMultiplexed);
   EXPECT_EQ(accel->find("AKit_SpeedReq")->mux_value, 2U);
 }
 
@@ -153,13 +153,13 @@ TEST(DbcParse, EveryStatementKind) {
   EXPECT_EQ(cmd.find("Steer")->decimals, 3);
   EXPECT_EQ(cmd.find("A")->receivers.size(), 2U);
   EXPECT_EQ(cmd.find("Mode")->value_names.at(2), "none");
-  EXPECT_EQ(cmd.find("F")->value_type, dbc::ValueType::float32);
+  EXPECT_EQ(cmd.find("F")->value_type, dbc::ValueType::kFloat32);
   EXPECT_EQ(db.cycle_time_ms(cmd), 10);
   const auto& ext = db.messages[1];
   EXPECT_TRUE(ext.extended);
   EXPECT_EQ(ext.id, 2566914049U - 0x80000000U);
   EXPECT_EQ(ext.size, 64);
-  EXPECT_EQ(ext.find("D")->value_type, dbc::ValueType::float64);
+  EXPECT_EQ(ext.find("D")->value_type, dbc::ValueType::kFloat64);
   EXPECT_EQ(db.cycle_time_ms(ext), 100);  // BA_DEF_DEF_ default
   EXPECT_EQ(std::get<std::string>(db.attributes.at("BusType")), "CAN FD");
   EXPECT_DOUBLE_EQ(*dbc::attribute_number(*db.attribute(*cmd.find("Steer"), "GenSigStartValue")), 1.5);

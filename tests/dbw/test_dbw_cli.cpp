@@ -107,7 +107,7 @@ TEST_F(DbwCli, ReplaySendsTheLogAtItsScaledTiming) {
     std::snprintf(line, sizeof line, "(%.6f) can%d %s", t, i % 2, frames[i % 5]);
     text << line << "\n";
     can::LogRecord r;
-    ASSERT_EQ(can::parse_candump_line(line, r), can::LineStatus::ok) << line;
+    ASSERT_EQ(can::parse_candump_line(line, r), can::LineStatus::kOk) << line;
     expected.push_back(r);
   }
   std::ofstream(dir / "gen.log") << text.str();
@@ -118,7 +118,7 @@ TEST_F(DbwCli, ReplaySendsTheLogAtItsScaledTiming) {
                                                               " --transport unix:" + sock + " --rate 2"); });
   std::vector<can::RxFrame> got;
   can::RxFrame rx;
-  while (got.size() < expected.size() && bus->receive(rx, 3000) == can::IoStatus::ok) got.push_back(rx);
+  while (got.size() < expected.size() && bus->receive(rx, 3000) == can::IoStatus::kOk) got.push_back(rx);
   runner.join();
   EXPECT_EQ(replay.code, 0) << replay.err;
   EXPECT_NE(replay.err.find(std::to_string(expected.size()) + " frames sent, 0 refused"), std::string::npos) << replay.err;

@@ -33,7 +33,7 @@ TEST(E2eCrc, AutosarCheckValues) {
 
 s::E2eConfig p01(s::P01IdMode mode) {
   s::E2eConfig c;
-  c.profile = s::E2eProfile::p01;
+  c.profile = s::E2eProfile::kP01;
   c.data_id = 0x123;
   c.id_mode = mode;
   return c;
@@ -45,26 +45,26 @@ TEST(E2eP01, PublishedVectors) {
     std::uint8_t counter;
     std::array<std::uint8_t, 2> head;
   };
-  const V vs[] = {{s::P01IdMode::both, 0, {0xCC, 0x00}},   {s::P01IdMode::both, 1, {0x91, 0x01}},
-                  {s::P01IdMode::alt, 0, {0xCE, 0x00}},    {s::P01IdMode::alt, 1, {0x02, 0x01}},
-                  {s::P01IdMode::low, 0, {0xCE, 0x00}},    {s::P01IdMode::low, 1, {0x93, 0x01}},
-                  {s::P01IdMode::nibble, 0, {0x2A, 0x10}}, {s::P01IdMode::nibble, 1, {0x77, 0x11}}};
+  const V vs[] = {{s::P01IdMode::kBoth, 0, {0xCC, 0x00}},   {s::P01IdMode::kBoth, 1, {0x91, 0x01}},
+                  {s::P01IdMode::kAlt, 0, {0xCE, 0x00}},    {s::P01IdMode::kAlt, 1, {0x02, 0x01}},
+                  {s::P01IdMode::kLow, 0, {0xCE, 0x00}},    {s::P01IdMode::kLow, 1, {0x93, 0x01}},
+                  {s::P01IdMode::kNibble, 0, {0x2A, 0x10}}, {s::P01IdMode::kNibble, 1, {0x77, 0x11}}};
   for (const auto& v : vs) {
     std::array<std::uint8_t, 8> d{};
     ASSERT_TRUE(s::protect(p01(v.mode), d, v.counter));
     EXPECT_EQ(d[0], v.head[0]) << static_cast<int>(v.mode) << "/" << int(v.counter);
     EXPECT_EQ(d[1], v.head[1]) << static_cast<int>(v.mode) << "/" << int(v.counter);
     s::E2eChecker chk(p01(v.mode));
-    EXPECT_EQ(chk.check(d), s::E2eStatus::ok);
+    EXPECT_EQ(chk.check(d), s::E2eStatus::kOk);
     d[1] ^= 0x20;  // corrupt the nibble/counter byte
     s::E2eChecker chk2(p01(v.mode));
-    EXPECT_NE(chk2.check(d), s::E2eStatus::ok);
+    EXPECT_NE(chk2.check(d), s::E2eStatus::kOk);
   }
 }
 
 TEST(E2eP02, PublishedVectors) {
   s::E2eConfig c;
-  c.profile = s::E2eProfile::p02;
+  c.profile = s::E2eProfile::kP02;
   std::array<std::uint8_t, 8> d{};
   ASSERT_TRUE(s::protect(c, d, 1));
   EXPECT_EQ(d, (std::array<std::uint8_t, 8>{0x45, 0x01, 0, 0, 0, 0, 0, 0}));
@@ -78,20 +78,20 @@ TEST(E2eP02, PublishedVectors) {
   s::E2eChecker chk(c);
   const std::array<std::uint8_t, 8> good{0xBC, 0x02, 2, 3, 4, 5, 6, 7};
   const std::array<std::uint8_t, 8> bad{0xBC, 0x01, 2, 3, 4, 5, 6, 7};
-  EXPECT_EQ(chk.check(good), s::E2eStatus::ok);
+  EXPECT_EQ(chk.check(good), s::E2eStatus::kOk);
   s::E2eChecker chk2(c);
-  EXPECT_EQ(chk2.check(bad), s::E2eStatus::bad_crc);
+  EXPECT_EQ(chk2.check(bad), s::E2eStatus::kBadCrc);
 }
 
 TEST(E2eChecker, CounterSequence) {
-  for (auto profile : {s::E2eProfile::counter, s::E2eProfile::j1850, s::E2eProfile::p01, s::E2eProfile::p02}) {
+  for (auto profile : {s::E2eProfile::kCounter, s::E2eProfile::kJ1850, s::E2eProfile::kP01, s::E2eProfile::kP02}) {
     SCOPED_TRACE(std::string(s::to_string(profile)));
     s::E2eConfig c;
     c.profile = profile;
     c.data_id = 0x42;
-    c.crc_byte = profile == s::E2eProfile::p02 ? 0 : 7;
+    c.crc_byte = profile == s::E2eProfile::kP02 ? 0 : 7;
     c.counter_byte = 1;
-    c.counter_high_nibble = profile == s::E2eProfile::counter;
+    c.counter_high_nibble = profile == s::E2eProfile::kCounter;
     c.max_delta = 2;
     s::E2eSender tx(c);
     s::E2eChecker rx(c);
@@ -100,20 +100,20 @@ TEST(E2eChecker, CounterSequence) {
     for (int i = 0; i < 40; ++i) {  // wraps around
       d[3] = static_cast<std::uint8_t>(i);
       ASSERT_TRUE(tx.protect(d));
-      ASSERT_EQ(rx.check(d), s::E2eStatus::ok) << i;
+      ASSERT_EQ(rx.check(d), s::E2eStatus::kOk) << i;
     }
-    EXPECT_EQ(rx.check(d), s::E2eStatus::repeated);  // stuck counter
+    EXPECT_EQ(rx.check(d), s::E2eStatus::kRepeated);  // stuck counter
     ASSERT_TRUE(tx.protect(d));                       // lose one frame
     ASSERT_TRUE(tx.protect(d));
-    EXPECT_EQ(rx.check(d), s::E2eStatus::ok_some_lost);
+    EXPECT_EQ(rx.check(d), s::E2eStatus::kOkSomeLost);
     for (int i = 0; i < 3; ++i) ASSERT_TRUE(tx.protect(d));
-    EXPECT_EQ(rx.check(d), s::E2eStatus::wrong_sequence);
+    EXPECT_EQ(rx.check(d), s::E2eStatus::kWrongSequence);
     ASSERT_TRUE(tx.protect(d));
-    EXPECT_EQ(rx.check(d), s::E2eStatus::ok);  // resynchronised
+    EXPECT_EQ(rx.check(d), s::E2eStatus::kOk);  // resynchronised
     if (s::has_crc(profile)) {
       ASSERT_TRUE(tx.protect(d));
       d[4] ^= 0x01;  // single bit flip in the payload
-      EXPECT_EQ(rx.check(d), s::E2eStatus::bad_crc);
+      EXPECT_EQ(rx.check(d), s::E2eStatus::kBadCrc);
     }
     EXPECT_LE(s::read_counter(c, d), mod - 1);
   }
@@ -121,21 +121,21 @@ TEST(E2eChecker, CounterSequence) {
 
 TEST(E2eChecker, LayoutErrors) {
   s::E2eConfig c;
-  c.profile = s::E2eProfile::p01;
+  c.profile = s::E2eProfile::kP01;
   c.crc_byte = 9;
   std::array<std::uint8_t, 8> d{};
   EXPECT_FALSE(s::protect(c, d, 0));
   s::E2eChecker chk(c);
-  EXPECT_EQ(chk.check(d), s::E2eStatus::bad_layout);
+  EXPECT_EQ(chk.check(d), s::E2eStatus::kBadLayout);
   c.crc_byte = 0;
   d[1] = 0x0F;  // counter 15 is invalid in profile 1
   s::E2eChecker chk2(c);
-  EXPECT_EQ(chk2.check(d), s::E2eStatus::bad_layout);
+  EXPECT_EQ(chk2.check(d), s::E2eStatus::kBadLayout);
   c.crc_byte = 1;  // CRC and counter in the same byte
   EXPECT_FALSE(s::protect(c, d, 0));
   s::E2eProfile p{};
   EXPECT_TRUE(s::parse_profile("p02", p));
-  EXPECT_EQ(p, s::E2eProfile::p02);
+  EXPECT_EQ(p, s::E2eProfile::kP02);
   EXPECT_FALSE(s::parse_profile("p99", p));
 }
 

@@ -157,8 +157,8 @@ TEST_F(MockEcuTest, InjectedFaultsShowOnTheBus) {
       }
       if (!p.rx("status")->matches(f)) continue;
       const auto st = chk.check(f.payload());
-      if (st == s::E2eStatus::bad_crc) ++seen["bad_crc@" + std::to_string(static_cast<int>(t * 10))];
-      if (st == s::E2eStatus::repeated) ++seen["repeated"];
+      if (st == s::E2eStatus::kBadCrc) ++seen["bad_crc@" + std::to_string(static_cast<int>(t * 10))];
+      if (st == s::E2eStatus::kRepeated) ++seen["repeated"];
       if (*dbw::Protocol::value(*p.rx("status"), "override", f) > 0.5) ++seen["override"];
       if (*dbw::Protocol::value(*p.rx("status"), "fault", f) > 0.5) ++seen["fault"];
       if (t > 0.5 && t < 0.55) ++seen["during_bus_off"];
@@ -182,13 +182,13 @@ TEST_F(MockEcuTest, FrameLossDropsAboutTheConfiguredShare) {
 
 TEST(MockFaults, ParseSpecs) {
   const auto f = mock::parse_fault("bus-off@5+0.3");
-  EXPECT_EQ(f.kind, mock::FaultKind::bus_off);
+  EXPECT_EQ(f.kind, mock::FaultKind::kBusOff);
   EXPECT_DOUBLE_EQ(f.start_s, 5.0);
   EXPECT_DOUBLE_EQ(f.duration_s, 0.3);
   EXPECT_TRUE(f.active(5.1));
   EXPECT_FALSE(f.active(5.3));
   EXPECT_DOUBLE_EQ(mock::parse_fault("loss=0.25").value, 0.25);
-  EXPECT_EQ(mock::parse_fault("no-status@1+0.2").kind, mock::FaultKind::no_status);
+  EXPECT_EQ(mock::parse_fault("no-status@1+0.2").kind, mock::FaultKind::kNoStatus);
   EXPECT_THROW(mock::parse_fault("melt"), std::invalid_argument);
   EXPECT_THROW(mock::parse_fault("loss=2"), std::invalid_argument);
   EXPECT_THROW(mock::parse_fault("override@x"), std::invalid_argument);

@@ -25,13 +25,13 @@ TEST(Protocol, ReferenceLoadsWithE2eLayout) {
   const auto* st = p.tx("steering");
   ASSERT_NE(st, nullptr);
   EXPECT_EQ(st->message->id, 0x100U);
-  EXPECT_EQ(st->e2e.profile, sensor_rig::dbw::safety::E2eProfile::p01);
+  EXPECT_EQ(st->e2e.profile, sensor_rig::dbw::safety::E2eProfile::kP01);
   EXPECT_EQ(st->e2e.crc_byte, 0U);
   EXPECT_EQ(st->e2e.counter_byte, 1U);
   EXPECT_FALSE(st->e2e.counter_high_nibble);
   EXPECT_EQ(st->e2e.data_id, 0x100);
   EXPECT_NE(p.rx("status"), nullptr);
-  EXPECT_EQ(p.rx("wheels")->e2e.profile, sensor_rig::dbw::safety::E2eProfile::none);
+  EXPECT_EQ(p.rx("wheels")->e2e.profile, sensor_rig::dbw::safety::E2eProfile::kNone);
   EXPECT_EQ(p.db().cycle_time_ms(*st->message), 10);
 
   sensor_rig::dbw::safety::E2eSender tx(st->e2e);
@@ -41,7 +41,7 @@ TEST(Protocol, ReferenceLoadsWithE2eLayout) {
   EXPECT_DOUBLE_EQ(*Protocol::value(*st, "angle", f), -0.25);
   EXPECT_DOUBLE_EQ(*Protocol::value(*st, "enable", f), 1.0);
   sensor_rig::dbw::safety::E2eChecker rx(st->e2e);
-  EXPECT_EQ(rx.check(f.payload()), sensor_rig::dbw::safety::E2eStatus::ok);
+  EXPECT_EQ(rx.check(f.payload()), sensor_rig::dbw::safety::E2eStatus::kOk);
   EXPECT_FALSE(p.encode(*st, {{"angle", std::nan("")}}, &tx, f));
 }
 
@@ -88,11 +88,11 @@ TEST(Protocol, LimitOverridesFromTheMapping) {
   std::ofstream(dir / "l.yaml") << sensor_rig::dbw::test::read_text(ref_yaml())
                                 << "limits:\n  steering_angle: {max: 0.3, rate: 0.2, action: reject}\n";
   const auto p = Protocol::load((dir / "l.yaml").string());
-  const auto& a = p.limits()[sensor_rig::dbw::safety::Axis::steering_angle];
+  const auto& a = p.limits()[sensor_rig::dbw::safety::Axis::kSteeringAngle];
   EXPECT_DOUBLE_EQ(a.max, 0.3);
   EXPECT_DOUBLE_EQ(a.min, -0.6);  // untouched keys keep the table's value
   EXPECT_DOUBLE_EQ(a.max_rate, 0.2);
-  EXPECT_EQ(a.action, sensor_rig::dbw::safety::LimitAction::reject);
+  EXPECT_EQ(a.action, sensor_rig::dbw::safety::LimitAction::kReject);
   std::ofstream(dir / "bad.yaml") << sensor_rig::dbw::test::read_text(ref_yaml()) << "limits:\n  throttle: {min: 1, max: 0.5}\n";
   EXPECT_THROW((void)Protocol::load((dir / "bad.yaml").string()), sensor_rig::ConfigError);
   fs::remove_all(dir);

@@ -75,9 +75,9 @@ class SplitProtocol : public ::testing::Test {
 
 TEST_F(SplitProtocol, RolesInSeparateMessagesEachWithItsOwnE2e) {
   const auto p = load(kSplitMapping);
-  EXPECT_EQ(p.tx("steer")->e2e.profile, s::E2eProfile::p01);
-  EXPECT_EQ(p.tx("gas")->e2e.profile, s::E2eProfile::counter);
-  EXPECT_EQ(p.tx("brk")->e2e.profile, s::E2eProfile::p02);
+  EXPECT_EQ(p.tx("steer")->e2e.profile, s::E2eProfile::kP01);
+  EXPECT_EQ(p.tx("gas")->e2e.profile, s::E2eProfile::kCounter);
+  EXPECT_EQ(p.tx("brk")->e2e.profile, s::E2eProfile::kP02);
   EXPECT_EQ(p.tx("brk")->e2e.data_id_list[5], 165);
   dbw::BridgeCore bridge(p);
   Nanos now = 1'000'000'000'000;
@@ -97,7 +97,7 @@ TEST_F(SplitProtocol, RolesInSeparateMessagesEachWithItsOwnE2e) {
     bridge.on_command(c, now, now);
     now += 10 * kMs;
   }
-  ASSERT_EQ(bridge.safety().state(), s::State::engaged);
+  ASSERT_EQ(bridge.safety().state(), s::State::kEngaged);
   std::vector<dbw::can::Frame> frames;
   bridge.frames(now, frames);
   ASSERT_EQ(frames.size(), 3U);
@@ -122,12 +122,12 @@ TEST_F(SplitProtocol, RolesInSeparateMessagesEachWithItsOwnE2e) {
   // Each frame passes its own message's check; the P02 CRC uses the mapping's DataIDList.
   for (const auto& rm : p.tx_messages()) {
     s::E2eChecker chk(rm.e2e);
-    EXPECT_EQ(chk.check(by_label[rm.role].payload()), s::E2eStatus::ok) << rm.role;
+    EXPECT_EQ(chk.check(by_label[rm.role].payload()), s::E2eStatus::kOk) << rm.role;
   }
   s::E2eConfig default_list = p.tx("brk")->e2e;
   for (std::size_t i = 0; i < 16; ++i) default_list.data_id_list[i] = static_cast<std::uint8_t>(i);
   s::E2eChecker wrong(default_list);
-  EXPECT_EQ(wrong.check(by_label["brk"].payload()), s::E2eStatus::bad_crc);
+  EXPECT_EQ(wrong.check(by_label["brk"].payload()), s::E2eStatus::kBadCrc);
   EXPECT_EQ(by_label["gas"].data[0], 0) << "counter-only message: no CRC written";
 }
 
@@ -192,10 +192,10 @@ TEST_F(NewEagle, MappingLoadsWithRolesInSeparateMessages) {
   EXPECT_EQ(p->tx("steering")->message->id, 0x2F03U);
   EXPECT_EQ(p->tx("accelerator")->signal("throttle")->name, "AKit_AccelPdlReq");
   EXPECT_EQ(p->tx("brake")->signal("brake")->name, "AKit_BrakePedalReq");
-  EXPECT_EQ(p->tx("steering")->e2e.profile, s::E2eProfile::counter);
+  EXPECT_EQ(p->tx("steering")->e2e.profile, s::E2eProfile::kCounter);
   EXPECT_EQ(p->tx("steering")->e2e.counter_byte, 6U);  // AKit_SteerRollingCntr 48|4
   EXPECT_EQ(p->rx("steering_report")->e2e.counter_byte, 7U);  // DBW_SteeringRollingCntr 56|4
-  EXPECT_EQ(p->rx("misc")->e2e.profile, s::E2eProfile::none);
+  EXPECT_EQ(p->rx("misc")->e2e.profile, s::E2eProfile::kNone);
   EXPECT_EQ(p->limits().name, "eclass_track");
 }
 
@@ -211,7 +211,7 @@ TEST_F(NewEagle, BridgeEncodesACommandIntoTheProtocolsFrames) {
     c.steering_angle = 0.1;  // rad at the road wheels, left
     c.throttle = 0.3;
     c.brake = 0.0;
-    c.gear = s::Gear::drive;
+    c.gear = s::Gear::kDrive;
     bridge.on_command(c, now, now);
   };
   bridge.safety().on_measured(0.1, 0.0);  // the wheel stands at the command (eclass_track rejects steps)
@@ -222,7 +222,7 @@ TEST_F(NewEagle, BridgeEncodesACommandIntoTheProtocolsFrames) {
     ecu_ready(bridge, now);
     command(true);
   }
-  ASSERT_EQ(bridge.safety().state(), s::State::engaged);
+  ASSERT_EQ(bridge.safety().state(), s::State::kEngaged);
   std::vector<dbw::can::Frame> frames;
   bridge.frames(now, frames);
   ASSERT_EQ(frames.size(), 5U);
@@ -276,7 +276,7 @@ TEST_F(NewEagle, ReportsComeBackInRoleUnits) {
   ASSERT_TRUE(p->encode(*rm, {{"steering_angle", -0.2}}, &counter, f));
   // On the bus: steering-wheel degrees, as the DBC says.
   EXPECT_NEAR(*dbw::dbc::decode(*rm->message->find("DBW_SteeringWhlAngleAct"), f.payload()), -0.2 * kDegPerRoadRad, 0.05 + 1e-9);
-  EXPECT_EQ(bridge.on_frame({f, now}, now), dbw::RxKind::feedback);
+  EXPECT_EQ(bridge.on_frame({f, now}, now), dbw::RxKind::kFeedback);
   EXPECT_NEAR(bridge.feedback().steering_angle, -0.2, 0.05 / kDegPerRoadRad + 1e-9);
   ASSERT_TRUE(p->encode(*p->rx("misc"), {{"ready", 1}, {"override", 1}, {"speed", 12.5}}, nullptr, f));
   bridge.on_frame({f, now}, now);

@@ -30,15 +30,15 @@ TEST(SocketCanHil, LoopbackBetweenTwoSockets) {
   f.len = 4;
   f.data = {1, 2, 3, 4};
   const auto before = sensor_rig::vehicle_now_ns();
-  ASSERT_EQ(a->send(f), can::IoStatus::ok);
+  ASSERT_EQ(a->send(f), can::IoStatus::kOk);
   can::RxFrame rx;
-  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame, f);
   EXPECT_GE(rx.stamp, before);
   f.fd = true;
   f.len = 64;
   const auto st = a->send(f);
-  EXPECT_TRUE(st == can::IoStatus::ok || st == can::IoStatus::invalid) << can::to_string(st);
+  EXPECT_TRUE(st == can::IoStatus::kOk || st == can::IoStatus::kInvalid) << can::to_string(st);
 }
 
 TEST(SocketCanHil, ReportsMissingKernelSupportClearly) {

@@ -1,6 +1,7 @@
 // CAN transports over real sockets: socketpair, the unix-listen bus with several peers, replay timing.
 #include <gtest/gtest.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <filesystem>
@@ -33,41 +34,43 @@ std::string temp_path(const char* name) {
 TEST(Transport, SocketpairCarriesClassicAndFdWithKernelStamps) {
   auto [a, b] = can::make_socketpair();
   const auto before = sensor_rig::vehicle_now_ns();
-  ASSERT_EQ(a->send(frame(0x123, 8)), can::IoStatus::ok);
-  ASSERT_EQ(a->send(frame(0x456, 64, true)), can::IoStatus::ok);
+  ASSERT_EQ(a->send(frame(0x123, 8)), can::IoStatus::kOk);
+  ASSERT_EQ(a->send(frame(0x456, 64, true)), can::IoStatus::kOk);
   can::RxFrame rx;
-  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame, frame(0x123, 8));
   EXPECT_GE(rx.stamp, before);
   EXPECT_LE(rx.stamp, sensor_rig::vehicle_now_ns());
-  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame, frame(0x456, 64, true));
-  EXPECT_EQ(b->receive(rx, 10), can::IoStatus::timeout);
+  EXPECT_EQ(b->receive(rx, 10), can::IoStatus::kTimeout);
   EXPECT_EQ(a->stats().sent, 2U);
   EXPECT_EQ(b->stats().received, 2U);
+  EXPECT_EQ(a->stats().options_refused, 0U);
+  EXPECT_EQ(b->stats().options_refused, 0U);
   can::Frame bad = frame(1, 8);
   bad.len = 9;
-  EXPECT_EQ(a->send(bad), can::IoStatus::invalid);
+  EXPECT_EQ(a->send(bad), can::IoStatus::kInvalid);
   a.reset();
-  EXPECT_EQ(b->receive(rx, 100), can::IoStatus::closed);
-  EXPECT_EQ(b->send(frame(1, 1)), can::IoStatus::closed);
+  EXPECT_EQ(b->receive(rx, 100), can::IoStatus::kClosed);
+  EXPECT_EQ(b->send(frame(1, 1)), can::IoStatus::kClosed);
 }
 
 TEST(Transport, BusOffRefusesSendsUntilRestart) {
   auto [ecu, bridge] = can::make_socketpair();
-  ASSERT_EQ(ecu->send(can::make_error_frame(true, false)), can::IoStatus::ok);
+  ASSERT_EQ(ecu->send(can::make_error_frame(true, false)), can::IoStatus::kOk);
   can::RxFrame rx;
-  ASSERT_EQ(bridge->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(bridge->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_TRUE(rx.frame.error);
-  EXPECT_EQ(bridge->bus_state(), can::BusState::bus_off);
-  EXPECT_EQ(bridge->send(frame(0x10, 2)), can::IoStatus::bus_off);  // refused, not queued
-  ASSERT_EQ(ecu->send(can::make_error_frame(false, true)), can::IoStatus::ok);
-  ASSERT_EQ(bridge->receive(rx, 1000), can::IoStatus::ok);
-  EXPECT_EQ(bridge->bus_state(), can::BusState::active);
-  ASSERT_EQ(bridge->send(frame(0x11, 2)), can::IoStatus::ok);
-  ASSERT_EQ(ecu->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(bridge->bus_state(), can::BusState::kBusOff);
+  EXPECT_EQ(bridge->send(frame(0x10, 2)), can::IoStatus::kBusOff);  // refused, not queued
+  ASSERT_EQ(ecu->send(can::make_error_frame(false, true)), can::IoStatus::kOk);
+  ASSERT_EQ(bridge->receive(rx, 1000), can::IoStatus::kOk);
+  EXPECT_EQ(bridge->bus_state(), can::BusState::kActive);
+  ASSERT_EQ(bridge->send(frame(0x11, 2)), can::IoStatus::kOk);
+  ASSERT_EQ(ecu->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame.id, 0x11U);  // the refused frame never went out
-  EXPECT_EQ(ecu->receive(rx, 20), can::IoStatus::timeout);
+  EXPECT_EQ(ecu->receive(rx, 20), can::IoStatus::kTimeout);
   EXPECT_EQ(bridge->stats().bus_off_events, 1U);
 }
 
@@ -77,22 +80,22 @@ TEST(Transport, ListeningBusRelaysBetweenAllPeers) {
   auto p1 = can::open_transport("unix:" + path);
   auto p2 = can::open_transport("unix:" + path);
   can::RxFrame rx;
-  ASSERT_EQ(p1->send(frame(0x1, 1)), can::IoStatus::ok);
-  ASSERT_EQ(bus->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(p1->send(frame(0x1, 1)), can::IoStatus::kOk);
+  ASSERT_EQ(bus->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame.id, 0x1U);
-  ASSERT_EQ(p2->receive(rx, 1000), can::IoStatus::ok);  // a sniffer sees other peers' frames
+  ASSERT_EQ(p2->receive(rx, 1000), can::IoStatus::kOk);  // a sniffer sees other peers' frames
   EXPECT_EQ(rx.frame.id, 0x1U);
-  EXPECT_EQ(p1->receive(rx, 20), can::IoStatus::timeout);  // no echo to the sender
-  ASSERT_EQ(bus->send(frame(0x2, 2)), can::IoStatus::ok);
-  ASSERT_EQ(p1->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(p1->receive(rx, 20), can::IoStatus::kTimeout);  // no echo to the sender
+  ASSERT_EQ(bus->send(frame(0x2, 2)), can::IoStatus::kOk);
+  ASSERT_EQ(p1->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame.id, 0x2U);
-  ASSERT_EQ(p2->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(p2->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame.id, 0x2U);
   p2.reset();  // a peer leaving does not disturb the bus
-  ASSERT_EQ(bus->send(frame(0x3, 3)), can::IoStatus::ok);
-  ASSERT_EQ(p1->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(bus->send(frame(0x3, 3)), can::IoStatus::kOk);
+  ASSERT_EQ(p1->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame.id, 0x3U);
-  EXPECT_EQ(bus->receive(rx, 20), can::IoStatus::timeout);
+  EXPECT_EQ(bus->receive(rx, 20), can::IoStatus::kTimeout);
   bus.reset();
   EXPECT_FALSE(fs::exists(path));
   EXPECT_THROW(can::open_transport("unix:" + path), can::TransportError);
@@ -108,7 +111,7 @@ TEST(Transport, ListeningBusSendsAndReceivesFromTwoThreadsWhilePeersComeAndGo) {
   std::thread rx_thread([&] {
     can::RxFrame rx;
     while (!stop) {
-      if (bus->receive(rx, 2) == can::IoStatus::ok) ++received;
+      if (bus->receive(rx, 2) == can::IoStatus::kOk) ++received;
     }
   });
   std::thread churn([&] {
@@ -119,7 +122,7 @@ TEST(Transport, ListeningBusSendsAndReceivesFromTwoThreadsWhilePeersComeAndGo) {
   });
   int sent = 0;
   for (int i = 0; i < 500; ++i) {
-    if (bus->send(frame(0x10, 1)) == can::IoStatus::ok) ++sent;
+    if (bus->send(frame(0x10, 1)) == can::IoStatus::kOk) ++sent;
     if (i % 5 == 0) talker->send(frame(0x11, 1));
   }
   churn.join();
@@ -137,10 +140,19 @@ TEST(Transport, InheritedDescriptorSpec) {
   ASSERT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET, 0, sv), 0);
   auto a = can::open_transport("fd:" + std::to_string(sv[0]));
   auto b = can::open_transport("socketpair:" + std::to_string(sv[1]));
-  ASSERT_EQ(a->send(frame(0x7, 7)), can::IoStatus::ok);
+  ASSERT_EQ(a->send(frame(0x7, 7)), can::IoStatus::kOk);
   can::RxFrame rx;
-  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(b->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame, frame(0x7, 7));
+}
+
+TEST(Transport, OptionalSocketOptionTheKernelRefusesIsCountedNotFatal) {
+  int p[2];
+  ASSERT_EQ(::pipe(p), 0);  // not a socket: SO_TIMESTAMPNS fails with ENOTSOCK
+  ::close(p[1]);
+  auto t = can::open_transport("fd:" + std::to_string(p[0]));  // logs a warning
+  EXPECT_EQ(t->stats().options_refused, 1U);
+  EXPECT_EQ(t->stats().last_errno, ENOTSOCK);
 }
 
 TEST(Transport, BadSpecsThrowClearErrors) {
@@ -161,25 +173,25 @@ TEST(Transport, ReplayKeepsRecordedTiming) {
   auto t = can::open_transport("candump:" + path);
   can::RxFrame rx;
   const auto t0 = sensor_rig::monotonic_now_ns();
-  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.stamp, 1'000'000'000'000'000'000LL);
-  EXPECT_EQ(t->receive(rx, 5), can::IoStatus::timeout);  // next one is 60 ms later
-  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::ok);
+  EXPECT_EQ(t->receive(rx, 5), can::IoStatus::kTimeout);  // next one is 60 ms later
+  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::kOk);
   EXPECT_EQ(rx.frame.id, 0x11U);
   const auto dt1 = sensor_rig::monotonic_now_ns() - t0;
-  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::ok);
+  ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::kOk);
   const auto dt2 = sensor_rig::monotonic_now_ns() - t0;
   EXPECT_GE(dt1, 59'000'000);
   EXPECT_LT(dt1, 90'000'000);
   EXPECT_GE(dt2, 119'000'000);
   EXPECT_LT(dt2, 160'000'000);
-  EXPECT_EQ(t->receive(rx, 10), can::IoStatus::closed);
+  EXPECT_EQ(t->receive(rx, 10), can::IoStatus::kClosed);
   EXPECT_EQ(t->stats().rx_dropped, 1U);
 
   auto fast = can::open_transport("candump:" + path + "@0");
   const auto f0 = sensor_rig::monotonic_now_ns();
   int n = 0;
-  while (fast->receive(rx, 1000) == can::IoStatus::ok) ++n;
+  while (fast->receive(rx, 1000) == can::IoStatus::kOk) ++n;
   EXPECT_EQ(n, 3);
   EXPECT_LT(sensor_rig::monotonic_now_ns() - f0, 30'000'000);
   fs::remove(path);

@@ -12,7 +12,7 @@ namespace can = sensor_rig::dbw::can;
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view line(reinterpret_cast<const char*>(data), size);
   can::LogRecord r;
-  if (can::parse_candump_line(line, r) != can::LineStatus::ok) return 0;
+  if (can::parse_candump_line(line, r) != can::LineStatus::kOk) return 0;
   if (r.frame.len > (r.frame.fd ? 64 : 8)) std::abort();
   can::Frame back;
   if (!can::parse_frame(can::format_frame(r.frame), back) || !(back == r.frame)) std::abort();

@@ -38,9 +38,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (!v) std::abort();
       (void)dbc::format_value(s, *v);
       (void)dbc::signal_active(m, s, payload);
-      if (s.value_type != dbc::ValueType::integer || !std::isfinite(*v)) continue;
+      if (s.value_type != dbc::ValueType::kInteger || !std::isfinite(*v)) continue;
       const auto st = dbc::encode(s, *v, payload);
-      if (st == dbc::EncodeStatus::out_of_frame) std::abort();
+      if (st == dbc::EncodeStatus::kOutOfFrame) std::abort();
     }
   }
   return 0;

@@ -18,10 +18,16 @@ safety::SafetyConfig safety_config(const Protocol& p) {
 }
 
 BridgeCore::BridgeCore(const Protocol& p) : p_(p), safety_(safety_config(p)), schedule_(p.timing().tx_period_ns) {
-  static constexpr std::array<std::pair<std::string_view, TxField>, static_cast<std::size_t>(TxField::count)> kFields{{
-      {"enable", TxField::enable}, {"state", TxField::state}, {"mode", TxField::mode}, {"angle", TxField::angle},
-      {"torque", TxField::torque}, {"gear", TxField::gear}, {"throttle", TxField::throttle}, {"brake", TxField::brake},
-      {"accel", TxField::accel}}};
+  static constexpr std::array<std::pair<std::string_view, TxField>, static_cast<std::size_t>(TxField::kCount)> kFields{
+      {{"enable", TxField::kEnable},
+       {"state", TxField::kState},
+       {"mode", TxField::kMode},
+       {"angle", TxField::kAngle},
+       {"torque", TxField::kTorque},
+       {"gear", TxField::kGear},
+       {"throttle", TxField::kThrottle},
+       {"brake", TxField::kBrake},
+       {"accel", TxField::kAccel}}};
   for (const auto& m : p_.tx_messages()) {
     senders_.emplace_back(m.e2e);
     auto& bindings = tx_bindings_.emplace_back();
@@ -53,30 +59,30 @@ bool BridgeCore::transmit_due(Nanos now, bool command_changed) {
 // Applies every role the message maps; a message may carry status and feedback roles at once.
 RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
   ++counters_.frames_received;
-  if (rx.frame.error) return RxKind::error_frame;
+  if (rx.frame.error) return RxKind::kErrorFrame;
   const auto& rxm = p_.rx_messages();
   for (std::size_t i = 0; i < rxm.size(); ++i) {
     const RoleMessage& rm = rxm[i];
     if (!rm.matches(rx.frame)) continue;
-    const bool protected_msg = rm.e2e.profile != safety::E2eProfile::none;
+    const bool protected_msg = rm.e2e.profile != safety::E2eProfile::kNone;
     if (rx.frame.len < rm.message->size) {
       if (protected_msg) safety_.on_e2e(false, now);
-      return RxKind::e2e_error;
+      return RxKind::kE2eError;
     }
     if (protected_msg) {
       const bool ok = safety::is_ok(checkers_[i].check(rx.frame.payload()));
       safety_.on_e2e(ok, now);
-      if (!ok) return RxKind::e2e_error;
+      if (!ok) return RxKind::kE2eError;
     }
     auto has = [&](std::string_view role) { return rm.signal(role) != nullptr; };
     auto get = [&](std::string_view role, double fallback) { return Protocol::value(rm, role, rx.frame).value_or(fallback); };
-    RxKind kind = RxKind::other;
+    RxKind kind = RxKind::kOther;
     if (has("fl")) {
       fb_.wheels[0] = get("fl", fb_.wheels[0]);
       fb_.wheels[1] = get("fr", fb_.wheels[1]);
       fb_.wheels[2] = get("rl", fb_.wheels[2]);
       fb_.wheels[3] = get("rr", fb_.wheels[3]);
-      kind = RxKind::wheels;
+      kind = RxKind::kWheels;
     }
     if (has("speed") || has("steering_angle") || has("yaw_rate")) {
       fb_.stamp = rx.stamp;
@@ -87,7 +93,7 @@ RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
       // Only what this message measured (NaN: unchanged).
       constexpr double kKeep = std::numeric_limits<double>::quiet_NaN();
       safety_.on_measured(has("steering_angle") ? fb_.steering_angle : kKeep, has("speed") ? fb_.speed : kKeep);
-      kind = RxKind::feedback;
+      kind = RxKind::kFeedback;
     }
     if (has("ready") || has("override") || has("fault")) {
       // The message carrying the ECU's readiness is its heartbeat: every one refreshes the status.
@@ -98,11 +104,11 @@ RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
       ecu_.fault = flag("fault", ecu_.fault);
       if (has("fault_code")) ecu_.fault_code = static_cast<std::uint8_t>(get("fault_code", 0.0));
       safety_.on_ecu_status(ecu_, now);
-      if (kind == RxKind::other) kind = RxKind::status;
+      if (kind == RxKind::kOther) kind = RxKind::kStatus;
     }
     return kind;
   }
-  return RxKind::other;
+  return RxKind::kOther;
 }
 
 // Every tx message gets every command value it maps (and the enable of the decision): a protocol may
@@ -114,24 +120,24 @@ void BridgeCore::frames(Nanos now, std::vector<can::Frame>& out) {
   applied_sent_ = safety_.counters().applied;
   const double en = d.active ? 1.0 : 0.0;
   const safety::Command& c = d.command;  // zeros when not active: the neutral/disengage request
-  std::array<double, static_cast<std::size_t>(TxField::count)> v{};
-  v[static_cast<std::size_t>(TxField::enable)] = en;
-  v[static_cast<std::size_t>(TxField::state)] = en;
-  v[static_cast<std::size_t>(TxField::angle)] = c.steering_angle;
-  v[static_cast<std::size_t>(TxField::torque)] = c.steering_torque;
-  v[static_cast<std::size_t>(TxField::gear)] = static_cast<double>(c.gear);
-  v[static_cast<std::size_t>(TxField::throttle)] = c.throttle;
-  v[static_cast<std::size_t>(TxField::brake)] = c.brake;
-  v[static_cast<std::size_t>(TxField::accel)] = c.accel;
+  std::array<double, static_cast<std::size_t>(TxField::kCount)> v{};
+  v[static_cast<std::size_t>(TxField::kEnable)] = en;
+  v[static_cast<std::size_t>(TxField::kState)] = en;
+  v[static_cast<std::size_t>(TxField::kAngle)] = c.steering_angle;
+  v[static_cast<std::size_t>(TxField::kTorque)] = c.steering_torque;
+  v[static_cast<std::size_t>(TxField::kGear)] = static_cast<double>(c.gear);
+  v[static_cast<std::size_t>(TxField::kThrottle)] = c.throttle;
+  v[static_cast<std::size_t>(TxField::kBrake)] = c.brake;
+  v[static_cast<std::size_t>(TxField::kAccel)] = c.accel;
   const auto& txm = p_.tx_messages();
   for (std::size_t i = 0; i < txm.size(); ++i) {
     can::Frame f;
     bool ok = Protocol::start_frame(txm[i], f);
     for (const auto& b : tx_bindings_[i]) {
       const auto st = dbc::encode(*b.signal, v[static_cast<std::size_t>(b.field)] * b.scale, f.payload());
-      ok = ok && st != dbc::EncodeStatus::not_finite && st != dbc::EncodeStatus::out_of_frame;
+      ok = ok && st != dbc::EncodeStatus::kNotFinite && st != dbc::EncodeStatus::kOutOfFrame;
     }
-    if (ok && txm[i].e2e.profile != safety::E2eProfile::none) ok = senders_[i].protect(f.payload());
+    if (ok && txm[i].e2e.profile != safety::E2eProfile::kNone) ok = senders_[i].protect(f.payload());
     if (ok) {
       out.push_back(f);
     } else {

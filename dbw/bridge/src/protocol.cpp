@@ -44,11 +44,11 @@ bool nibble_of(const dbc::Signal& s, std::size_t& byte, bool& high) {
   if (s.length != 4) return false;
   const int in_byte = s.start_bit % 8;
   byte = s.start_bit / 8U;
-  if (s.order == dbc::ByteOrder::intel && (in_byte == 0 || in_byte == 4)) {
+  if (s.order == dbc::ByteOrder::kIntel && (in_byte == 0 || in_byte == 4)) {
     high = in_byte == 4;
     return true;
   }
-  if (s.order == dbc::ByteOrder::motorola && (in_byte == 3 || in_byte == 7)) {
+  if (s.order == dbc::ByteOrder::kMotorola && (in_byte == 3 || in_byte == 7)) {
     high = in_byte == 7;
     return true;
   }
@@ -57,8 +57,8 @@ bool nibble_of(const dbc::Signal& s, std::size_t& byte, bool& high) {
 bool byte_of(const dbc::Signal& s, std::size_t& byte) {
   if (s.length != 8) return false;
   byte = s.start_bit / 8U;
-  return (s.order == dbc::ByteOrder::intel && s.start_bit % 8 == 0) ||
-         (s.order == dbc::ByteOrder::motorola && s.start_bit % 8 == 7);
+  return (s.order == dbc::ByteOrder::kIntel && s.start_bit % 8 == 0) ||
+         (s.order == dbc::ByteOrder::kMotorola && s.start_bit % 8 == 7);
 }
 
 // signals: {role: SIGNAL} or {role: {signal: SIGNAL, scale: X}} (bus value = role value * scale).
@@ -126,8 +126,8 @@ void bind_e2e(const config::Node& n, const safety::E2eConfig& base, RoleMessage&
   }
   const bool has_counter = n.has("counter");
   const bool has_crc = n.has("crc");
-  if ((!has_counter && !has_crc) || rm.e2e.profile == safety::E2eProfile::none) {
-    rm.e2e.profile = safety::E2eProfile::none;
+  if ((!has_counter && !has_crc) || rm.e2e.profile == safety::E2eProfile::kNone) {
+    rm.e2e.profile = safety::E2eProfile::kNone;
     return;
   }
   if (has_counter) {
@@ -146,7 +146,7 @@ void bind_e2e(const config::Node& n, const safety::E2eConfig& base, RoleMessage&
       n.fail("crc", "'" + cname + "' must be an 8-bit, byte-aligned signal of " + msg);
     }
   } else if (safety::has_crc(rm.e2e.profile)) {
-    rm.e2e.profile = safety::E2eProfile::counter;
+    rm.e2e.profile = safety::E2eProfile::kCounter;
   }
   rm.e2e.data_id = static_cast<std::uint16_t>(n.get_int("data_id", 0, 0xFFFF, 0));
   for (std::size_t i = 0; i < 16; ++i) rm.e2e.data_id_list[i] = static_cast<std::uint8_t>((rm.e2e.data_id + i) & 0xFF);
@@ -230,10 +230,10 @@ Protocol Protocol::load(const std::string& yaml_path) {
       l.min = a->get_double("min", -1e6, 1e6, l.min);
       l.max = a->get_double("max", -1e6, 1e6, l.max);
       l.max_rate = a->get_double("rate", 0.0, 1e6, l.max_rate);
-      l.action = a->get_choice("action", {"clamp", "reject"}, std::string(l.action == safety::LimitAction::clamp ? "clamp" : "reject")) ==
+      l.action = a->get_choice("action", {"clamp", "reject"}, std::string(l.action == safety::LimitAction::kClamp ? "clamp" : "reject")) ==
                          "reject"
-                     ? safety::LimitAction::reject
-                     : safety::LimitAction::clamp;
+                     ? safety::LimitAction::kReject
+                     : safety::LimitAction::kClamp;
       if (!(l.min < l.max)) a->fail("max", "must be greater than min");
     }
   }
@@ -310,7 +310,7 @@ bool Protocol::start_frame(const RoleMessage& rm, can::Frame& out) noexcept {
   out.len = rm.message->size;
   out.fd = rm.message->size > can::kClassicMaxLen;
   for (const auto& [sig, v] : rm.constants) {
-    if (dbc::encode(*sig, v, out.payload()) == dbc::EncodeStatus::out_of_frame) return false;
+    if (dbc::encode(*sig, v, out.payload()) == dbc::EncodeStatus::kOutOfFrame) return false;
   }
   return true;
 }
@@ -322,10 +322,10 @@ bool Protocol::encode(const RoleMessage& rm, std::initializer_list<std::pair<std
     const dbc::Signal* s = rm.signal(role);
     if (s == nullptr) continue;
     const auto st = dbc::encode(*s, v * rm.scale(role), out.payload());
-    if (st == dbc::EncodeStatus::not_finite || st == dbc::EncodeStatus::out_of_frame) return false;
-    if (st == dbc::EncodeStatus::clamped && clamped != nullptr) ++*clamped;
+    if (st == dbc::EncodeStatus::kNotFinite || st == dbc::EncodeStatus::kOutOfFrame) return false;
+    if (st == dbc::EncodeStatus::kClamped && clamped != nullptr) ++*clamped;
   }
-  if (e2e != nullptr && rm.e2e.profile != safety::E2eProfile::none) return e2e->protect(out.payload());
+  if (e2e != nullptr && rm.e2e.profile != safety::E2eProfile::kNone) return e2e->protect(out.payload());
   return true;
 }
 

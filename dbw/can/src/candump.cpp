@@ -114,25 +114,25 @@ bool parse_frame(std::string_view text, Frame& out) {
 LineStatus parse_candump_line(std::string_view line, LogRecord& out) {
   while (!line.empty() && (line.back() == '\r' || line.back() == '\n' || line.back() == ' ')) line.remove_suffix(1);
   while (!line.empty() && line.front() == ' ') line.remove_prefix(1);
-  if (line.empty()) return LineStatus::blank;
-  if (line.front() != '(') return LineStatus::malformed;
+  if (line.empty()) return LineStatus::kBlank;
+  if (line.front() != '(') return LineStatus::kMalformed;
   const auto close = line.find(')');
-  if (close == std::string_view::npos) return LineStatus::malformed;
+  if (close == std::string_view::npos) return LineStatus::kMalformed;
   const std::string_view stamp = line.substr(1, close - 1);
-  if (!parse_stamp(stamp, out.stamp)) return LineStatus::malformed;
+  if (!parse_stamp(stamp, out.stamp)) return LineStatus::kMalformed;
   std::string_view rest = line.substr(close + 1);
-  if (rest.empty() || rest.front() != ' ') return LineStatus::malformed;
+  if (rest.empty() || rest.front() != ' ') return LineStatus::kMalformed;
   rest.remove_prefix(1);
   const auto sp = rest.find(' ');
-  if (sp == std::string_view::npos || sp == 0) return LineStatus::malformed;
+  if (sp == std::string_view::npos || sp == 0) return LineStatus::kMalformed;
   const std::string_view iface = rest.substr(0, sp);
   std::string_view frame = rest.substr(sp + 1);
   // candump -L may append " T"/" R" (direction) in newer versions: take the first token.
   if (const auto sp2 = frame.find(' '); sp2 != std::string_view::npos) frame = frame.substr(0, sp2);
-  if (!parse_frame(frame, out.frame)) return LineStatus::malformed;
+  if (!parse_frame(frame, out.frame)) return LineStatus::kMalformed;
   out.stamp_text.assign(stamp);
   out.iface.assign(iface);
-  return LineStatus::ok;
+  return LineStatus::kOk;
 }
 
 std::string format_frame(const Frame& f) {
@@ -181,11 +181,11 @@ bool CandumpReader::next(LogRecord& out) {
   while (std::getline(in_, buf_)) {
     ++line_;
     switch (parse_candump_line(buf_, out)) {
-      case LineStatus::ok:
+      case LineStatus::kOk:
         return true;
-      case LineStatus::blank:
+      case LineStatus::kBlank:
         break;
-      case LineStatus::malformed:
+      case LineStatus::kMalformed:
         if (malformed_++ == 0) first_bad_line_ = line_;
         break;
     }

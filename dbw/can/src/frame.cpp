@@ -61,26 +61,26 @@ WireStatus from_wire(std::span<const std::uint8_t> in, Frame& out) noexcept {
   if (in.size() == kClassicWireSize) {
     can_frame w{};
     std::memcpy(&w, in.data(), sizeof w);
-    if (w.len > kClassicMaxLen) return WireStatus::bad_length;
+    if (w.len > kClassicMaxLen) return WireStatus::kBadLength;
     set_id(w.can_id, out);
     out.len = w.len;
     if (!out.rtr) std::memcpy(out.data.data(), w.data, w.len);
-    return WireStatus::ok;
+    return WireStatus::kOk;
   }
   if (in.size() == kFdWireSize) {
     canfd_frame w{};
     std::memcpy(&w, in.data(), sizeof w);
-    if (w.len > kFdMaxLen) return WireStatus::bad_length;
+    if (w.len > kFdMaxLen) return WireStatus::kBadLength;
     set_id(w.can_id, out);
-    if (out.rtr) return WireStatus::bad_id;  // no remote frames in CAN FD
+    if (out.rtr) return WireStatus::kBadId;  // no remote frames in CAN FD
     out.fd = true;
     out.brs = (w.flags & CANFD_BRS) != 0;
     out.esi = (w.flags & CANFD_ESI) != 0;
     out.len = w.len;
     std::memcpy(out.data.data(), w.data, w.len);
-    return WireStatus::ok;
+    return WireStatus::kOk;
   }
-  return WireStatus::bad_size;
+  return WireStatus::kBadSize;
 }
 
 }  // namespace sensor_rig::dbw::can

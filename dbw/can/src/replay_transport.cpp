@@ -14,14 +14,14 @@ ReplayTransport::ReplayTransport(const std::string& path, double rate) : path_(p
 
 IoStatus ReplayTransport::send(const Frame& /*f*/) noexcept {
   ++stats_.sent;
-  return IoStatus::ok;
+  return IoStatus::kOk;
 }
 
 IoStatus ReplayTransport::receive(RxFrame& out, int timeout_ms) noexcept {
   if (!pending_) {
     if (!reader_->next(next_)) {
       stats_.rx_dropped = reader_->malformed();
-      return IoStatus::closed;
+      return IoStatus::kClosed;
     }
     pending_ = true;
     if (first_log_ns_ < 0) {
@@ -37,7 +37,7 @@ IoStatus ReplayTransport::receive(RxFrame& out, int timeout_ms) noexcept {
       const Nanos wait_ns = due - now;
       if (timeout_ms >= 0 && wait_ns > static_cast<Nanos>(timeout_ms) * 1'000'000LL) {
         ::poll(nullptr, 0, timeout_ms);
-        return IoStatus::timeout;
+        return IoStatus::kTimeout;
       }
       timespec ts{static_cast<time_t>(wait_ns / 1'000'000'000LL), static_cast<long>(wait_ns % 1'000'000'000LL)};
       ::clock_nanosleep(CLOCK_MONOTONIC, 0, &ts, nullptr);
@@ -49,7 +49,7 @@ IoStatus ReplayTransport::receive(RxFrame& out, int timeout_ms) noexcept {
   iface_ = next_.iface;
   ++stats_.received;
   if (out.frame.error) note_error_frame(out.frame);
-  return IoStatus::ok;
+  return IoStatus::kOk;
 }
 
 }  // namespace sensor_rig::dbw::can

@@ -39,13 +39,13 @@ int remaining_ms(Nanos deadline) {
 
 SeqpacketTransport::SeqpacketTransport(UniqueFd fd, std::string name) : fd_(std::move(fd)), name_(std::move(name)) {
   if (!fd_) throw TransportError("invalid descriptor for " + name_);
-  detail::enable_timestamps(fd_.get());
+  detail::enable_timestamps(fd_.get(), name_, stats_);
 }
 
 IoStatus SeqpacketTransport::send(const Frame& f) noexcept {
-  if (state_ == BusState::bus_off) {
+  if (state_ == BusState::kBusOff) {
     ++stats_.send_refused;
-    return IoStatus::bus_off;
+    return IoStatus::kBusOff;
   }
   return detail::send_frame(fd_.get(), f, stats_);
 }
@@ -54,13 +54,13 @@ IoStatus SeqpacketTransport::receive(RxFrame& out, int timeout_ms) noexcept {
   const Nanos deadline = deadline_after(timeout_ms);
   while (true) {
     const IoStatus w = detail::wait_readable(fd_.get(), remaining_ms(deadline));
-    if (w != IoStatus::ok) return w;
+    if (w != IoStatus::kOk) return w;
     const IoStatus r = detail::recv_frame(fd_.get(), out, stats_);
-    if (r == IoStatus::timeout || r == IoStatus::invalid) {
-      if (remaining_ms(deadline) == 0) return IoStatus::timeout;
+    if (r == IoStatus::kTimeout || r == IoStatus::kInvalid) {
+      if (remaining_ms(deadline) == 0) return IoStatus::kTimeout;
       continue;
     }
-    if (r == IoStatus::ok && out.frame.error) note_error_frame(out.frame);
+    if (r == IoStatus::kOk && out.frame.error) note_error_frame(out.frame);
     return r;
   }
 }
@@ -77,7 +77,7 @@ std::unique_ptr<Transport> SeqpacketTransport::connect(const std::string& path) 
 
 // ---- bus owner -------------------------------------------------------------------------------
 
-BusListener::BusListener(const std::string& path) : path_(path) {
+BusListener::BusListener(const std::string& path) : path_(path), name_("unix-listen:" + path) {
   listen_ = UniqueFd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
   if (!listen_) throw TransportError(errno_text("socket(AF_UNIX, SOCK_SEQPACKET)"));
   const sockaddr_un a = unix_address(path);
@@ -100,7 +100,7 @@ void BusListener::accept_peers() noexcept {
   while (true) {
     UniqueFd c(::accept4(listen_.get(), nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK));
     if (!c) return;
-    detail::enable_timestamps(c.get());
+    detail::enable_timestamps(c.get(), name_, stats_);
     epoll_event ev{};
     ev.events = EPOLLIN;
     ev.data.fd = c.get();
@@ -126,7 +126,7 @@ void BusListener::relay(const Frame& f, int except_fd) noexcept {
       ++i;
       continue;
     }
-    if (detail::send_frame(fd, f, scratch) == IoStatus::closed) {
+    if (detail::send_frame(fd, f, scratch) == IoStatus::kClosed) {
       drop_peer(fd);
       continue;
     }
@@ -135,14 +135,14 @@ void BusListener::relay(const Frame& f, int except_fd) noexcept {
 }
 
 IoStatus BusListener::send(const Frame& f) noexcept {
-  if (state_ == BusState::bus_off) {
+  if (state_ == BusState::kBusOff) {
     ++stats_.send_refused;
-    return IoStatus::bus_off;
+    return IoStatus::kBusOff;
   }
   std::array<std::uint8_t, kFdWireSize> buf{};
   if (to_wire(f, buf) == 0) {
     ++stats_.send_refused;
-    return IoStatus::invalid;
+    return IoStatus::kInvalid;
   }
   {
     std::lock_guard<std::mutex> lock(peers_mu_);
@@ -150,7 +150,7 @@ IoStatus BusListener::send(const Frame& f) noexcept {
     relay(f, -1);
   }
   ++stats_.sent;
-  return IoStatus::ok;
+  return IoStatus::kOk;
 }
 
 IoStatus BusListener::receive(RxFrame& out, int timeout_ms) noexcept {
@@ -161,9 +161,9 @@ IoStatus BusListener::receive(RxFrame& out, int timeout_ms) noexcept {
     if (n < 0) {
       if (errno == EINTR) continue;
       stats_.last_errno = errno;
-      return IoStatus::error;
+      return IoStatus::kError;
     }
-    if (n == 0) return IoStatus::timeout;
+    if (n == 0) return IoStatus::kTimeout;
     std::lock_guard<std::mutex> lock(peers_mu_);
     if (ev.data.fd == listen_.get()) {
       accept_peers();
@@ -172,13 +172,13 @@ IoStatus BusListener::receive(RxFrame& out, int timeout_ms) noexcept {
     // The sending thread may have dropped this peer since epoll_wait returned.
     if (std::none_of(peers_.begin(), peers_.end(), [&](const UniqueFd& p) { return p.get() == ev.data.fd; })) continue;
     const IoStatus r = detail::recv_frame(ev.data.fd, out, stats_);
-    if (r == IoStatus::closed || r == IoStatus::error) {
+    if (r == IoStatus::kClosed || r == IoStatus::kError) {
       drop_peer(ev.data.fd);
       continue;
     }
-    if (r != IoStatus::ok) continue;
+    if (r != IoStatus::kOk) continue;
     relay(out.frame, ev.data.fd);  // everyone on the bus sees every frame
-    return IoStatus::ok;
+    return IoStatus::kOk;
   }
 }
 

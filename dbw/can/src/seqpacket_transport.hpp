@@ -32,7 +32,7 @@ class BusListener final : public Transport {
   IoStatus send(const Frame& f) noexcept override;
   IoStatus receive(RxFrame& out, int timeout_ms) noexcept override;
   [[nodiscard]] int poll_fd() const noexcept override { return epoll_.get(); }
-  [[nodiscard]] std::string name() const override { return "unix-listen:" + path_; }
+  [[nodiscard]] std::string name() const override { return name_; }
   [[nodiscard]] std::size_t peers() const {
     std::lock_guard<std::mutex> lock(peers_mu_);
     return peers_.size();
@@ -43,6 +43,7 @@ class BusListener final : public Transport {
   void drop_peer(int fd) noexcept;
   void relay(const Frame& f, int except_fd) noexcept;
   std::string path_;
+  std::string name_;  // unix-listen:PATH
   UniqueFd listen_;
   UniqueFd epoll_;
   // send() and receive() may run on different threads: both accept, relay to and drop peers.

@@ -6,12 +6,41 @@
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
+#include <string>
+#include <system_error>
+
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/socket_options.hpp"
 
 namespace sensor_rig::dbw::can::detail {
 
-void enable_timestamps(int fd) noexcept {
-  const int on = 1;
-  (void)::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
+void require_option(int fd, int level, int opt, int value, const char* name, std::string_view owner) {
+  try {
+    set_socket_option(fd, level, opt, value, name);
+  } catch (const std::system_error& e) {
+    throw TransportError(std::string(owner) + ": " + e.what());
+  }
+}
+
+bool optional_option(int fd, int level, int opt, int value, const char* name, std::string_view owner,
+                     std::string_view without, TransportStats& stats) noexcept {
+  if (try_socket_option(fd, level, opt, value)) return true;
+  const int e = errno;
+  stats.last_errno = e;
+  ++stats.options_refused;
+  try {
+    log::warn("can", std::string(owner) + ": setsockopt " + name + ": " + std::strerror(e) + " (" +
+                         std::string(without) + ")");
+  } catch (...) {
+    // No memory for the message: the count stands.
+  }
+  return false;
+}
+
+bool enable_timestamps(int fd, std::string_view owner, TransportStats& stats) noexcept {
+  return optional_option(fd, SOL_SOCKET, SO_TIMESTAMPNS, 1, "SO_TIMESTAMPNS", owner,
+                         "frames are stamped on receipt in user space", stats);
 }
 
 IoStatus send_frame(int fd, const Frame& f, TransportStats& stats) noexcept {
@@ -19,19 +48,19 @@ IoStatus send_frame(int fd, const Frame& f, TransportStats& stats) noexcept {
   const std::size_t n = to_wire(f, buf);
   if (n == 0) {
     ++stats.send_refused;
-    return IoStatus::invalid;
+    return IoStatus::kInvalid;
   }
   const ssize_t r = ::send(fd, buf.data(), n, MSG_DONTWAIT | MSG_NOSIGNAL);
   if (r == static_cast<ssize_t>(n)) {
     ++stats.sent;
-    return IoStatus::ok;
+    return IoStatus::kOk;
   }
   stats.last_errno = r < 0 ? errno : EMSGSIZE;
   ++stats.send_refused;
-  if (r < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS)) return IoStatus::would_block;
-  if (r < 0 && (errno == EPIPE || errno == ECONNRESET || errno == ENOTCONN)) return IoStatus::closed;
-  if (r < 0 && errno == ENETDOWN) return IoStatus::bus_off;
-  return IoStatus::error;
+  if (r < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS)) return IoStatus::kWouldBlock;
+  if (r < 0 && (errno == EPIPE || errno == ECONNRESET || errno == ENOTCONN)) return IoStatus::kClosed;
+  if (r < 0 && errno == ENETDOWN) return IoStatus::kBusOff;
+  return IoStatus::kError;
 }
 
 IoStatus recv_frame(int fd, RxFrame& out, TransportStats& stats) noexcept {
@@ -45,37 +74,30 @@ IoStatus recv_frame(int fd, RxFrame& out, TransportStats& stats) noexcept {
   msg.msg_controllen = ctrl.size();
   const ssize_t n = ::recvmsg(fd, &msg, MSG_DONTWAIT);
   if (n < 0) {
-    if (errno == EAGAIN || errno == EWOULDBLOCK) return IoStatus::timeout;
+    if (errno == EAGAIN || errno == EWOULDBLOCK) return IoStatus::kTimeout;
     stats.last_errno = errno;
-    if (errno == ECONNRESET) return IoStatus::closed;
-    return IoStatus::error;
+    if (errno == ECONNRESET) return IoStatus::kClosed;
+    return IoStatus::kError;
   }
-  if (n == 0) return IoStatus::closed;
-  out.stamp = 0;
-  for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
-    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
-      timespec ts{};
-      std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
-      out.stamp = static_cast<Nanos>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
-    }
-  }
+  if (n == 0) return IoStatus::kClosed;
+  out.stamp = read_receive_control(msg).kernel_rx_ns;
   if (out.stamp == 0) out.stamp = vehicle_now_ns();
   if ((msg.msg_flags & MSG_TRUNC) != 0 ||
-      from_wire(std::span<const std::uint8_t>(buf.data(), static_cast<std::size_t>(n)), out.frame) != WireStatus::ok) {
+      from_wire(std::span<const std::uint8_t>(buf.data(), static_cast<std::size_t>(n)), out.frame) != WireStatus::kOk) {
     ++stats.rx_dropped;
-    return IoStatus::invalid;
+    return IoStatus::kInvalid;
   }
   ++stats.received;
-  return IoStatus::ok;
+  return IoStatus::kOk;
 }
 
 IoStatus wait_readable(int fd, int timeout_ms) noexcept {
   pollfd p{fd, POLLIN, 0};
   while (true) {
     const int r = ::poll(&p, 1, timeout_ms);
-    if (r > 0) return IoStatus::ok;
-    if (r == 0) return IoStatus::timeout;
-    if (errno != EINTR) return IoStatus::error;
+    if (r > 0) return IoStatus::kOk;
+    if (r == 0) return IoStatus::kTimeout;
+    if (errno != EINTR) return IoStatus::kError;
   }
 }
 

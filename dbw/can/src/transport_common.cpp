@@ -7,23 +7,23 @@ namespace sensor_rig::dbw::can {
 
 const char* to_string(IoStatus s) noexcept {
   switch (s) {
-    case IoStatus::ok: return "ok";
-    case IoStatus::timeout: return "timeout";
-    case IoStatus::would_block: return "would_block";
-    case IoStatus::bus_off: return "bus_off";
-    case IoStatus::closed: return "closed";
-    case IoStatus::invalid: return "invalid";
-    case IoStatus::error: return "error";
+    case IoStatus::kOk: return "ok";
+    case IoStatus::kTimeout: return "timeout";
+    case IoStatus::kWouldBlock: return "would_block";
+    case IoStatus::kBusOff: return "bus_off";
+    case IoStatus::kClosed: return "closed";
+    case IoStatus::kInvalid: return "invalid";
+    case IoStatus::kError: return "error";
   }
   return "?";
 }
 
 const char* to_string(BusState s) noexcept {
   switch (s) {
-    case BusState::active: return "active";
-    case BusState::warning: return "warning";
-    case BusState::passive: return "passive";
-    case BusState::bus_off: return "bus_off";
+    case BusState::kActive: return "active";
+    case BusState::kWarning: return "warning";
+    case BusState::kPassive: return "passive";
+    case BusState::kBusOff: return "bus_off";
   }
   return "?";
 }
@@ -55,14 +55,14 @@ ErrorInfo Transport::note_error_frame(const Frame& f) noexcept {
   const ErrorInfo e = classify_error_frame(f);
   ++stats_.error_frames;
   if (e.bus_off) {
-    if (state_ != BusState::bus_off) ++stats_.bus_off_events;
-    state_ = BusState::bus_off;
+    if (state_ != BusState::kBusOff) ++stats_.bus_off_events;
+    state_ = BusState::kBusOff;
   } else if (e.restarted || e.back_to_active) {
-    state_ = BusState::active;
-  } else if (e.passive && state_ != BusState::bus_off) {
-    state_ = BusState::passive;
-  } else if (e.warning && state_ == BusState::active) {
-    state_ = BusState::warning;
+    state_ = BusState::kActive;
+  } else if (e.passive && state_ != BusState::kBusOff) {
+    state_ = BusState::kPassive;
+  } else if (e.warning && state_ == BusState::kActive) {
+    state_ = BusState::kWarning;
   }
   return e;
 }

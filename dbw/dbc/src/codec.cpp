@@ -17,7 +17,7 @@ constexpr int kMaxBit = static_cast<int>(kMaxFrameBytes * 8);
 template <class F>
 bool for_each_bit(const Signal& s, F&& f) noexcept {
   const int len = s.length;
-  if (s.order == ByteOrder::motorola) {
+  if (s.order == ByteOrder::kMotorola) {
     int pos = s.start_bit;
     for (int i = 0; i < len; ++i) {
       if (pos < 0 || pos >= kMaxBit) return false;
@@ -54,7 +54,7 @@ std::optional<std::uint64_t> extract_raw(const Signal& s, std::span<const std::u
   const std::size_t need = signal_extent(s);
   if (need == 0 || need > data.size()) return std::nullopt;
   std::uint64_t raw = 0;
-  if (s.order == ByteOrder::intel) {
+  if (s.order == ByteOrder::kIntel) {
     // Fast path: gather the covered bytes little-endian, then shift.
     const int first = s.start_bit / 8;
     const int shift = s.start_bit % 8;
@@ -89,13 +89,13 @@ bool insert_raw(const Signal& s, std::uint64_t raw, std::span<std::uint8_t> data
 double to_physical(const Signal& s, std::uint64_t raw) noexcept {
   double v = 0.0;
   switch (s.value_type) {
-    case ValueType::float32:
+    case ValueType::kFloat32:
       v = static_cast<double>(std::bit_cast<float>(static_cast<std::uint32_t>(raw)));
       break;
-    case ValueType::float64:
+    case ValueType::kFloat64:
       v = std::bit_cast<double>(raw);
       break;
-    case ValueType::integer:
+    case ValueType::kInteger:
       if (s.is_signed) {
         std::uint64_t r = raw;
         if (s.length < 64 && ((r >> (s.length - 1)) & 1ULL) != 0) r |= ~mask_of(s.length);
@@ -115,15 +115,15 @@ std::optional<double> decode(const Signal& s, std::span<const std::uint8_t> data
 }
 
 EncodeStatus to_raw(const Signal& s, double physical, std::uint64_t& raw) noexcept {
-  if (!std::isfinite(physical)) return EncodeStatus::not_finite;
+  if (!std::isfinite(physical)) return EncodeStatus::kNotFinite;
   const double scaled = (physical - s.offset) / s.factor;
-  if (s.value_type == ValueType::float32) {
+  if (s.value_type == ValueType::kFloat32) {
     raw = std::bit_cast<std::uint32_t>(static_cast<float>(scaled));
-    return EncodeStatus::ok;
+    return EncodeStatus::kOk;
   }
-  if (s.value_type == ValueType::float64) {
+  if (s.value_type == ValueType::kFloat64) {
     raw = std::bit_cast<std::uint64_t>(scaled);
-    return EncodeStatus::ok;
+    return EncodeStatus::kOk;
   }
   double v = std::nearbyint(scaled);
   double lo = 0.0;
@@ -134,13 +134,13 @@ EncodeStatus to_raw(const Signal& s, double physical, std::uint64_t& raw) noexce
   } else {
     hi = s.length >= 53 ? std::nextafter(std::ldexp(1.0, s.length), 0.0) : std::ldexp(1.0, s.length) - 1.0;
   }
-  EncodeStatus st = EncodeStatus::ok;
+  EncodeStatus st = EncodeStatus::kOk;
   if (v < lo) {
     v = lo;
-    st = EncodeStatus::clamped;
+    st = EncodeStatus::kClamped;
   } else if (v > hi) {
     v = hi;
-    st = EncodeStatus::clamped;
+    st = EncodeStatus::kClamped;
   }
   raw = s.is_signed ? static_cast<std::uint64_t>(static_cast<std::int64_t>(v)) : static_cast<std::uint64_t>(v);
   raw &= mask_of(s.length);
@@ -150,13 +150,13 @@ EncodeStatus to_raw(const Signal& s, double physical, std::uint64_t& raw) noexce
 EncodeStatus encode(const Signal& s, double physical, std::span<std::uint8_t> data) noexcept {
   std::uint64_t raw = 0;
   const EncodeStatus st = to_raw(s, physical, raw);
-  if (st == EncodeStatus::not_finite) return st;
-  if (!insert_raw(s, raw, data)) return EncodeStatus::out_of_frame;
+  if (st == EncodeStatus::kNotFinite) return st;
+  if (!insert_raw(s, raw, data)) return EncodeStatus::kOutOfFrame;
   return st;
 }
 
 bool signal_active(const Message& m, const Signal& s, std::span<const std::uint8_t> data) noexcept {
-  if (s.mux != MuxRole::multiplexed) return true;
+  if (s.mux != MuxRole::kMultiplexed) return true;
   const Signal* mux = m.multiplexor();
   if (mux == nullptr) return false;
   const auto raw = extract_raw(*mux, data);
@@ -166,7 +166,7 @@ bool signal_active(const Message& m, const Signal& s, std::span<const std::uint8
 std::string format_value(const Signal& s, double physical) {
   if (physical == 0.0) physical = 0.0;  // no "-0"
   char buf[64];
-  if (s.value_type == ValueType::integer && s.decimals <= 15 && std::fabs(physical) < 1e15) {
+  if (s.value_type == ValueType::kInteger && s.decimals <= 15 && std::fabs(physical) < 1e15) {
     const int n = std::snprintf(buf, sizeof buf, "%.*f", s.decimals, physical);
     std::string out(buf, static_cast<std::size_t>(n));
     if (out == "-0" || (out.rfind("-0.", 0) == 0 && out.find_first_not_of("-0.") == std::string::npos)) {

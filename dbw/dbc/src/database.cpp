@@ -11,7 +11,7 @@ const Signal* Message::find(std::string_view signal) const noexcept {
 
 const Signal* Message::multiplexor() const noexcept {
   for (const auto& s : signals) {
-    if (s.mux == MuxRole::multiplexor) return &s;
+    if (s.mux == MuxRole::kMultiplexor) return &s;
   }
   return nullptr;
 }

@@ -124,9 +124,9 @@ class Parser {
     if (c_.peek() != ':') {
       const std::string mux = c_.identifier("multiplexer indicator");
       if (mux == "M") {
-        s.mux = MuxRole::multiplexor;
+        s.mux = MuxRole::kMultiplexor;
       } else if (mux.size() >= 2 && mux[0] == 'm' && std::isdigit(static_cast<unsigned char>(mux[1])) != 0) {
-        s.mux = MuxRole::multiplexed;
+        s.mux = MuxRole::kMultiplexed;
         std::size_t i = 1;
         std::uint64_t v = 0;
         while (i < mux.size() && std::isdigit(static_cast<unsigned char>(mux[i])) != 0) {
@@ -154,7 +154,7 @@ class Parser {
     if (start >= kMaxFrameBytes * 8) c_.fail("signal " + s.name + ": start bit " + std::to_string(start) + " beyond 64 bytes");
     s.start_bit = static_cast<std::uint16_t>(start);
     s.length = static_cast<std::uint16_t>(len);
-    s.order = order == '1' ? ByteOrder::intel : ByteOrder::motorola;
+    s.order = order == '1' ? ByteOrder::kIntel : ByteOrder::kMotorola;
     s.is_signed = sign == '-';
     c_.expect('(', "before factor");
     const std::string_view ft = c_.number_text("factor");
@@ -181,7 +181,7 @@ class Parser {
               ") does not fit in " + std::to_string(current->size) + "-byte message " + current->name);
     }
     if (current->find(s.name) != nullptr) c_.fail("duplicate signal " + s.name + " in " + current->name);
-    if (s.mux == MuxRole::multiplexor && current->multiplexor() != nullptr) {
+    if (s.mux == MuxRole::kMultiplexor && current->multiplexor() != nullptr) {
       c_.fail("second multiplexor " + s.name + " in " + current->name);
     }
     current->signals.push_back(std::move(s));
@@ -237,22 +237,22 @@ class Parser {
     AttributeDefinition d;
     if (c_.next_is_identifier()) {
       const std::string scope = c_.identifier("attribute scope");
-      if (scope == "BU_") d.scope = AttributeScope::node;
-      else if (scope == "BO_") d.scope = AttributeScope::message;
-      else if (scope == "SG_") d.scope = AttributeScope::signal;
-      else if (scope == "EV_") d.scope = AttributeScope::env_var;
+      if (scope == "BU_") d.scope = AttributeScope::kNode;
+      else if (scope == "BO_") d.scope = AttributeScope::kMessage;
+      else if (scope == "SG_") d.scope = AttributeScope::kSignal;
+      else if (scope == "EV_") d.scope = AttributeScope::kEnvVar;
       else c_.fail("unknown attribute scope '" + scope + "'");
     }
     d.name = c_.quoted("attribute name");
     const std::string kind = c_.identifier("attribute type");
     if (kind == "INT" || kind == "HEX" || kind == "FLOAT") {
-      d.kind = kind == "INT" ? AttributeKind::integer : kind == "HEX" ? AttributeKind::hex : AttributeKind::floating;
+      d.kind = kind == "INT" ? AttributeKind::kInteger : kind == "HEX" ? AttributeKind::kHex : AttributeKind::kFloating;
       d.minimum = c_.number("attribute minimum");
       d.maximum = c_.number("attribute maximum");
     } else if (kind == "STRING") {
-      d.kind = AttributeKind::string;
+      d.kind = AttributeKind::kString;
     } else if (kind == "ENUM") {
-      d.kind = AttributeKind::enumeration;
+      d.kind = AttributeKind::kEnumeration;
       do {
         d.enum_values.push_back(c_.quoted("enum value"));
       } while (c_.accept(','));
@@ -269,7 +269,7 @@ class Parser {
     const std::string_view t = c_.number_text("attribute value");
     const auto it = db_.attribute_definitions.find(name);
     const bool is_float = t.find_first_of(".eE") != std::string_view::npos ||
-                          (it != db_.attribute_definitions.end() && it->second.kind == AttributeKind::floating);
+                          (it != db_.attribute_definitions.end() && it->second.kind == AttributeKind::kFloating);
     if (is_float) return to_double(t);
     return static_cast<std::int64_t>(to_double(t));
   }
@@ -342,10 +342,10 @@ class Parser {
     const std::uint64_t t = c_.unsigned_integer("signal value type");
     if (t == 1) {
       if (s.length != 32) c_.fail("float signal " + s.name + " must be 32 bits");
-      s.value_type = ValueType::float32;
+      s.value_type = ValueType::kFloat32;
     } else if (t == 2) {
       if (s.length != 64) c_.fail("double signal " + s.name + " must be 64 bits");
-      s.value_type = ValueType::float64;
+      s.value_type = ValueType::kFloat64;
     } else if (t != 0) {
       c_.fail("signal value type must be 0, 1 or 2");
     }
@@ -364,7 +364,7 @@ class Parser {
   void finish() {
     for (const auto& m : db_.messages) {
       bool has_multiplexed = false;
-      for (const auto& s : m.signals) has_multiplexed = has_multiplexed || s.mux == MuxRole::multiplexed;
+      for (const auto& s : m.signals) has_multiplexed = has_multiplexed || s.mux == MuxRole::kMultiplexed;
       if (has_multiplexed && m.multiplexor() == nullptr) {
         throw DbcError(source_name(), m.line, "message " + m.name + " has multiplexed signals but no multiplexor (M)");
       }

@@ -22,15 +22,15 @@ Fault parse_fault(const std::string& spec) {
   take('+', f.duration_s);
   take('@', f.start_s);
   take('=', f.value);
-  if (name == "loss") f.kind = FaultKind::frame_loss;
-  else if (name == "bad-crc") f.kind = FaultKind::bad_crc;
-  else if (name == "stuck-counter") f.kind = FaultKind::stuck_counter;
-  else if (name == "override") f.kind = FaultKind::driver_override;
-  else if (name == "ecu-fault") f.kind = FaultKind::ecu_fault;
-  else if (name == "bus-off") f.kind = FaultKind::bus_off;
-  else if (name == "no-status") f.kind = FaultKind::no_status;
+  if (name == "loss") f.kind = FaultKind::kFrameLoss;
+  else if (name == "bad-crc") f.kind = FaultKind::kBadCrc;
+  else if (name == "stuck-counter") f.kind = FaultKind::kStuckCounter;
+  else if (name == "override") f.kind = FaultKind::kDriverOverride;
+  else if (name == "ecu-fault") f.kind = FaultKind::kEcuFault;
+  else if (name == "bus-off") f.kind = FaultKind::kBusOff;
+  else if (name == "no-status") f.kind = FaultKind::kNoStatus;
   else throw std::invalid_argument("unknown fault '" + name + "' (loss=P, bad-crc, stuck-counter, override, ecu-fault, bus-off, no-status; [@start][+duration])");
-  if (f.kind == FaultKind::frame_loss && (f.value < 0.0 || f.value > 1.0)) throw std::invalid_argument("loss probability must be 0..1");
+  if (f.kind == FaultKind::kFrameLoss && (f.value < 0.0 || f.value > 1.0)) throw std::invalid_argument("loss probability must be 0..1");
   return f;
 }
 
@@ -97,10 +97,10 @@ void MockEcu::emit(const RoleMessage& rm, std::initializer_list<std::pair<std::s
   can::Frame f;
   const std::uint8_t counter = sender.next_counter();
   if (!p_.encode(rm, values, &sender, f)) return;
-  if (fault_active(FaultKind::stuck_counter, t_s)) sender.set_counter(counter);
-  if (fault_active(FaultKind::bad_crc, t_s) && safety::has_crc(rm.e2e.profile)) f.data[rm.e2e.crc_byte] ^= 0x5A;
+  if (fault_active(FaultKind::kStuckCounter, t_s)) sender.set_counter(counter);
+  if (fault_active(FaultKind::kBadCrc, t_s) && safety::has_crc(rm.e2e.profile)) f.data[rm.e2e.crc_byte] ^= 0x5A;
   double loss = 0.0;
-  if (fault_active(FaultKind::frame_loss, t_s, &loss) && std::uniform_real_distribution<double>(0.0, 1.0)(rng_) < loss) {
+  if (fault_active(FaultKind::kFrameLoss, t_s, &loss) && std::uniform_real_distribution<double>(0.0, 1.0)(rng_) < loss) {
     ++counters_.tx_dropped;
     return;
   }
@@ -120,7 +120,7 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
   const double dt = static_cast<double>(now - last_step_) * 1e-9;
   last_step_ = now;
 
-  const bool bus_off_now = fault_active(FaultKind::bus_off, t_s);
+  const bool bus_off_now = fault_active(FaultKind::kBusOff, t_s);
   if (bus_off_now && !bus_off_) {
     bus_off_ = true;
     disengage("bus-off");
@@ -129,8 +129,8 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
     bus_off_ = false;
     out.push_back(can::make_error_frame(false, true));
   }
-  const bool override_now = fault_active(FaultKind::driver_override, t_s);
-  const bool fault_now = fault_active(FaultKind::ecu_fault, t_s);
+  const bool override_now = fault_active(FaultKind::kDriverOverride, t_s);
+  const bool fault_now = fault_active(FaultKind::kEcuFault, t_s);
   if (override_now) disengage("driver override");
   if (fault_now) disengage("ecu fault");
 
@@ -166,7 +166,7 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
     const auto& s = model_.state();
     for (std::size_t i = 0; i < rxm.size(); ++i) {
       if (rxm[i].role == "status") {
-        if (fault_active(FaultKind::no_status, t_s)) continue;
+        if (fault_active(FaultKind::kNoStatus, t_s)) continue;
         emit(rxm[i], {{"ready", ready ? 1 : 0}, {"engaged", engaged_ ? 1 : 0}, {"override", override_now ? 1 : 0},
                       {"fault", fault_now ? 1 : 0}, {"fault_code", fault_now ? 1 : 0}},
              senders_[i], t_s, out);

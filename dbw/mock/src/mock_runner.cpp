@@ -30,7 +30,7 @@ RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
     if (end > 0 && now >= end) break;
     if (now >= next_tick) {
       for (const auto& f : ecu.step(now)) {
-        if (bus.send(f) != can::IoStatus::ok) ++r.send_failures;
+        if (bus.send(f) != can::IoStatus::kOk) ++r.send_failures;
         write_log(vehicle_now_ns(), f);
       }
       next_tick += tick;
@@ -49,10 +49,10 @@ RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
     }
     const int wait_ms = static_cast<int>((next_tick - now + 999'999) / 1'000'000);
     const auto st = bus.receive(rx, wait_ms);
-    if (st == can::IoStatus::ok) {
+    if (st == can::IoStatus::kOk) {
       write_log(rx.stamp, rx.frame);
       ecu.on_frame(rx.frame, monotonic_now_ns());
-    } else if (st == can::IoStatus::closed) {
+    } else if (st == can::IoStatus::kClosed) {
       break;
     }
   }

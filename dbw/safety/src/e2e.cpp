@@ -40,71 +40,73 @@ std::uint8_t crc8h2f(std::span<const std::uint8_t> data, std::uint8_t start, boo
 }
 
 bool parse_profile(std::string_view n, E2eProfile& out) noexcept {
-  if (n == "none") out = E2eProfile::none;
-  else if (n == "counter") out = E2eProfile::counter;
-  else if (n == "j1850") out = E2eProfile::j1850;
-  else if (n == "p01") out = E2eProfile::p01;
-  else if (n == "p02") out = E2eProfile::p02;
+  if (n == "none") out = E2eProfile::kNone;
+  else if (n == "counter") out = E2eProfile::kCounter;
+  else if (n == "j1850") out = E2eProfile::kJ1850;
+  else if (n == "p01") out = E2eProfile::kP01;
+  else if (n == "p02") out = E2eProfile::kP02;
   else return false;
   return true;
 }
 
 std::string_view to_string(E2eProfile p) noexcept {
   switch (p) {
-    case E2eProfile::none: return "none";
-    case E2eProfile::counter: return "counter";
-    case E2eProfile::j1850: return "j1850";
-    case E2eProfile::p01: return "p01";
-    case E2eProfile::p02: return "p02";
+    case E2eProfile::kNone: return "none";
+    case E2eProfile::kCounter: return "counter";
+    case E2eProfile::kJ1850: return "j1850";
+    case E2eProfile::kP01: return "p01";
+    case E2eProfile::kP02: return "p02";
   }
   return "?";
 }
 
 bool parse_id_mode(std::string_view n, P01IdMode& out) noexcept {
-  if (n == "both") out = P01IdMode::both;
-  else if (n == "alt") out = P01IdMode::alt;
-  else if (n == "low") out = P01IdMode::low;
-  else if (n == "nibble") out = P01IdMode::nibble;
+  if (n == "both") out = P01IdMode::kBoth;
+  else if (n == "alt") out = P01IdMode::kAlt;
+  else if (n == "low") out = P01IdMode::kLow;
+  else if (n == "nibble") out = P01IdMode::kNibble;
   else return false;
   return true;
 }
 
 std::string_view to_string(E2eStatus s) noexcept {
   switch (s) {
-    case E2eStatus::ok: return "ok";
-    case E2eStatus::ok_some_lost: return "ok_some_lost";
-    case E2eStatus::repeated: return "repeated";
-    case E2eStatus::wrong_sequence: return "wrong_sequence";
-    case E2eStatus::bad_crc: return "bad_crc";
-    case E2eStatus::bad_layout: return "bad_layout";
+    case E2eStatus::kOk: return "ok";
+    case E2eStatus::kOkSomeLost: return "ok_some_lost";
+    case E2eStatus::kRepeated: return "repeated";
+    case E2eStatus::kWrongSequence: return "wrong_sequence";
+    case E2eStatus::kBadCrc: return "bad_crc";
+    case E2eStatus::kBadLayout: return "bad_layout";
   }
   return "?";
 }
 
-std::uint8_t counter_modulus(E2eProfile p) noexcept { return p == E2eProfile::p01 ? 15 : 16; }
-bool has_crc(E2eProfile p) noexcept { return p == E2eProfile::j1850 || p == E2eProfile::p01 || p == E2eProfile::p02; }
+std::uint8_t counter_modulus(E2eProfile p) noexcept { return p == E2eProfile::kP01 ? 15 : 16; }
+bool has_crc(E2eProfile p) noexcept {
+  return p == E2eProfile::kJ1850 || p == E2eProfile::kP01 || p == E2eProfile::kP02;
+}
 
 std::uint8_t compute_crc(const E2eConfig& c, std::span<const std::uint8_t> d, std::uint8_t counter) noexcept {
   const auto lo = static_cast<std::uint8_t>(c.data_id & 0xFFU);
   const auto hi = static_cast<std::uint8_t>(c.data_id >> 8);
   const auto j = [](std::span<const std::uint8_t> s, std::uint8_t st, bool f) { return crc8_sae_j1850(s, st, f); };
   switch (c.profile) {
-    case E2eProfile::p01: {
+    case E2eProfile::kP01: {
       // Continuing from 0xFF means an internal start of 0x00; the final XOR is undone at the end.
       std::uint8_t crc = 0xFF;
       const std::uint8_t zero = 0;
       switch (c.id_mode) {
-        case P01IdMode::both:
+        case P01IdMode::kBoth:
           crc = crc8_sae_j1850({&lo, 1}, crc, false);
           crc = crc8_sae_j1850({&hi, 1}, crc, false);
           break;
-        case P01IdMode::low:
+        case P01IdMode::kLow:
           crc = crc8_sae_j1850({&lo, 1}, crc, false);
           break;
-        case P01IdMode::alt:
+        case P01IdMode::kAlt:
           crc = crc8_sae_j1850({(counter % 2 == 0) ? &lo : &hi, 1}, crc, false);
           break;
-        case P01IdMode::nibble:
+        case P01IdMode::kNibble:
           crc = crc8_sae_j1850({&lo, 1}, crc, false);
           crc = crc8_sae_j1850({&zero, 1}, crc, false);
           break;
@@ -112,12 +114,12 @@ std::uint8_t compute_crc(const E2eConfig& c, std::span<const std::uint8_t> d, st
       crc = over_payload(j, d, c.crc_byte, crc);
       return static_cast<std::uint8_t>(crc ^ 0xFF);
     }
-    case E2eProfile::p02: {
+    case E2eProfile::kP02: {
       std::uint8_t crc = crc8h2f(d.subspan(1), 0xFF, true);
       const std::uint8_t id = c.data_id_list[counter & 0x0FU];
       return crc8h2f({&id, 1}, crc, false);
     }
-    case E2eProfile::j1850: {
+    case E2eProfile::kJ1850: {
       std::uint8_t crc = 0xFF;
       bool first = true;
       if (c.crc_byte > 0) {
@@ -130,8 +132,8 @@ std::uint8_t compute_crc(const E2eConfig& c, std::span<const std::uint8_t> d, st
       }
       return crc8_sae_j1850({&lo, 1}, crc, first);
     }
-    case E2eProfile::none:
-    case E2eProfile::counter:
+    case E2eProfile::kNone:
+    case E2eProfile::kCounter:
       break;
   }
   return 0;
@@ -145,22 +147,22 @@ std::uint8_t read_counter(const E2eConfig& c, std::span<const std::uint8_t> d) n
 
 namespace {
 bool layout_fits(const E2eConfig& c, std::size_t size) noexcept {
-  if (c.profile == E2eProfile::none) return true;
+  if (c.profile == E2eProfile::kNone) return true;
   if (c.counter_byte >= size) return false;
   if (has_crc(c.profile) && c.crc_byte >= size) return false;
-  if (c.profile == E2eProfile::p02 && (c.crc_byte != 0 || size < 2)) return false;
+  if (c.profile == E2eProfile::kP02 && (c.crc_byte != 0 || size < 2)) return false;
   return !(has_crc(c.profile) && c.crc_byte == c.counter_byte);
 }
 }  // namespace
 
 bool protect(const E2eConfig& c, std::span<std::uint8_t> d, std::uint8_t counter) noexcept {
   if (!layout_fits(c, d.size())) return false;
-  if (c.profile == E2eProfile::none) return true;
+  if (c.profile == E2eProfile::kNone) return true;
   counter = static_cast<std::uint8_t>(counter % counter_modulus(c.profile));
   auto& cb = d[c.counter_byte];
   cb = c.counter_high_nibble ? static_cast<std::uint8_t>((cb & 0x0FU) | (counter << 4))
                              : static_cast<std::uint8_t>((cb & 0xF0U) | counter);
-  if (c.profile == E2eProfile::p01 && c.id_mode == P01IdMode::nibble) {
+  if (c.profile == E2eProfile::kP01 && c.id_mode == P01IdMode::kNibble) {
     // The Data ID high byte's low nibble travels in the other nibble of the counter byte.
     const auto nib = static_cast<std::uint8_t>((c.data_id >> 8) & 0x0FU);
     cb = c.counter_high_nibble ? static_cast<std::uint8_t>((cb & 0xF0U) | nib)
@@ -171,30 +173,30 @@ bool protect(const E2eConfig& c, std::span<std::uint8_t> d, std::uint8_t counter
 }
 
 E2eStatus E2eChecker::check(std::span<const std::uint8_t> d) noexcept {
-  if (c_.profile == E2eProfile::none) return E2eStatus::ok;
-  if (!layout_fits(c_, d.size())) return E2eStatus::bad_layout;
+  if (c_.profile == E2eProfile::kNone) return E2eStatus::kOk;
+  if (!layout_fits(c_, d.size())) return E2eStatus::kBadLayout;
   const std::uint8_t counter = read_counter(c_, d);
   const std::uint8_t mod = counter_modulus(c_.profile);
-  if (counter >= mod) return E2eStatus::bad_layout;
-  if (c_.profile == E2eProfile::p01 && c_.id_mode == P01IdMode::nibble) {
+  if (counter >= mod) return E2eStatus::kBadLayout;
+  if (c_.profile == E2eProfile::kP01 && c_.id_mode == P01IdMode::kNibble) {
     const std::uint8_t b = d[c_.counter_byte];
     const auto nib = static_cast<std::uint8_t>(c_.counter_high_nibble ? (b & 0x0FU) : (b >> 4));
-    if (nib != ((c_.data_id >> 8) & 0x0FU)) return E2eStatus::bad_crc;
+    if (nib != ((c_.data_id >> 8) & 0x0FU)) return E2eStatus::kBadCrc;
   }
-  if (has_crc(c_.profile) && d[c_.crc_byte] != compute_crc(c_, d, counter)) return E2eStatus::bad_crc;
+  if (has_crc(c_.profile) && d[c_.crc_byte] != compute_crc(c_, d, counter)) return E2eStatus::kBadCrc;
   if (!synced_) {
     synced_ = true;
     last_ = counter;
-    return E2eStatus::ok;
+    return E2eStatus::kOk;
   }
   const auto delta = static_cast<std::uint8_t>((counter + mod - last_) % mod);
-  if (delta == 0) return E2eStatus::repeated;
+  if (delta == 0) return E2eStatus::kRepeated;
   if (delta > c_.max_delta) {
     last_ = counter;  // resynchronise on the new sequence
-    return E2eStatus::wrong_sequence;
+    return E2eStatus::kWrongSequence;
   }
   last_ = counter;
-  return delta == 1 ? E2eStatus::ok : E2eStatus::ok_some_lost;
+  return delta == 1 ? E2eStatus::kOk : E2eStatus::kOkSomeLost;
 }
 
 bool E2eSender::protect(std::span<std::uint8_t> d) noexcept {

@@ -11,12 +11,12 @@ constexpr double kPi = 3.14159265358979323846;
 
 std::string_view to_string(Axis a) noexcept {
   switch (a) {
-    case Axis::steering_angle: return "steering_angle";
-    case Axis::steering_torque: return "steering_torque";
-    case Axis::throttle: return "throttle";
-    case Axis::brake: return "brake";
-    case Axis::accel: return "accel";
-    case Axis::count: break;
+    case Axis::kSteeringAngle: return "steering_angle";
+    case Axis::kSteeringTorque: return "steering_torque";
+    case Axis::kThrottle: return "throttle";
+    case Axis::kBrake: return "brake";
+    case Axis::kAccel: return "accel";
+    case Axis::kCount: break;
   }
   return "?";
 }
@@ -30,24 +30,24 @@ const VehicleLimits* find_vehicle(std::string_view name) noexcept {
 
 double axis_value(const Command& c, Axis a) noexcept {
   switch (a) {
-    case Axis::steering_angle: return c.steering_angle;
-    case Axis::steering_torque: return c.steering_torque;
-    case Axis::throttle: return c.throttle;
-    case Axis::brake: return c.brake;
-    case Axis::accel: return c.accel;
-    case Axis::count: break;
+    case Axis::kSteeringAngle: return c.steering_angle;
+    case Axis::kSteeringTorque: return c.steering_torque;
+    case Axis::kThrottle: return c.throttle;
+    case Axis::kBrake: return c.brake;
+    case Axis::kAccel: return c.accel;
+    case Axis::kCount: break;
   }
   return 0.0;
 }
 
 void set_axis_value(Command& c, Axis a, double v) noexcept {
   switch (a) {
-    case Axis::steering_angle: c.steering_angle = v; break;
-    case Axis::steering_torque: c.steering_torque = v; break;
-    case Axis::throttle: c.throttle = v; break;
-    case Axis::brake: c.brake = v; break;
-    case Axis::accel: c.accel = v; break;
-    case Axis::count: break;
+    case Axis::kSteeringAngle: c.steering_angle = v; break;
+    case Axis::kSteeringTorque: c.steering_torque = v; break;
+    case Axis::kThrottle: c.throttle = v; break;
+    case Axis::kBrake: c.brake = v; break;
+    case Axis::kAccel: c.accel = v; break;
+    case Axis::kCount: break;
   }
 }
 
@@ -83,10 +83,10 @@ LimitResult LimitChecker::check(const Command& req, double dt_s, double speed_mp
     double v = want;
     if (v < lim.min || v > lim.max) {
       const double c = std::clamp(v, lim.min, lim.max);
-      r.add({axis, false, lim.action == LimitAction::reject, false, want, c});
+      r.add({axis, false, lim.action == LimitAction::kReject, false, want, c});
       v = c;
     }
-    if (axis == Axis::steering_angle) {
+    if (axis == Axis::kSteeringAngle) {
       // Clamped, never rejected: dropping the steering at speed is worse than holding the limit.
       const double lat = lateral_angle_limit(limits_, std::isfinite(speed_mps) ? speed_mps : 0.0);
       if (std::fabs(v) > lat) {
@@ -100,12 +100,12 @@ LimitResult LimitChecker::check(const Command& req, double dt_s, double speed_mp
       const double step = lim.max_rate * std::max(dt_s, 0.0);
       if (std::fabs(v - prev) > step * (1.0 + 1e-9)) {
         const double c = std::clamp(v, prev - step, prev + step);
-        r.add({axis, true, lim.action == LimitAction::reject, false, want, c});
+        r.add({axis, true, lim.action == LimitAction::kReject, false, want, c});
         v = c;
       }
     }
     // After the rate limit: releasing the throttle at once is always allowed.
-    if (axis == Axis::throttle && std::isfinite(req.brake) && req.brake > limits_.brake_throttle_cutoff && v > 0.0) {
+    if (axis == Axis::kThrottle && std::isfinite(req.brake) && req.brake > limits_.brake_throttle_cutoff && v > 0.0) {
       r.add({axis, false, false, false, want, 0.0, false, true});
       v = 0.0;
     }

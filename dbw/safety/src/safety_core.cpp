@@ -6,35 +6,35 @@
 
 namespace sensor_rig::dbw::safety {
 
-std::string_view to_string(State s) noexcept { return s == State::engaged ? "engaged" : "disengaged"; }
+std::string_view to_string(State s) noexcept { return s == State::kEngaged ? "engaged" : "disengaged"; }
 
 std::string_view to_string(Reason r) noexcept {
   switch (r) {
-    case Reason::none: return "none";
-    case Reason::enabled: return "enabled";
-    case Reason::enable_released: return "enable_released";
-    case Reason::command_timeout: return "command_timeout";
-    case Reason::ecu_timeout: return "ecu_timeout";
-    case Reason::e2e_errors: return "e2e_errors";
-    case Reason::driver_override: return "driver_override";
-    case Reason::ecu_fault: return "ecu_fault";
-    case Reason::ecu_not_ready: return "ecu_not_ready";
-    case Reason::invalid_command: return "invalid_command";
-    case Reason::bus_off: return "bus_off";
-    case Reason::no_command: return "no_command";
-    case Reason::not_owner: return "not_owner";
-    case Reason::shutdown: return "shutdown";
+    case Reason::kNone: return "none";
+    case Reason::kEnabled: return "enabled";
+    case Reason::kEnableReleased: return "enable_released";
+    case Reason::kCommandTimeout: return "command_timeout";
+    case Reason::kEcuTimeout: return "ecu_timeout";
+    case Reason::kE2eErrors: return "e2e_errors";
+    case Reason::kDriverOverride: return "driver_override";
+    case Reason::kEcuFault: return "ecu_fault";
+    case Reason::kEcuNotReady: return "ecu_not_ready";
+    case Reason::kInvalidCommand: return "invalid_command";
+    case Reason::kBusOff: return "bus_off";
+    case Reason::kNoCommand: return "no_command";
+    case Reason::kNotOwner: return "not_owner";
+    case Reason::kShutdown: return "shutdown";
   }
   return "?";
 }
 
 std::string_view to_string(EventKind k) noexcept {
   switch (k) {
-    case EventKind::transition: return "transition";
-    case EventKind::engage_refused: return "engage_refused";
-    case EventKind::limit: return "limit";
-    case EventKind::command_ignored: return "command_ignored";
-    case EventKind::fault: return "fault";
+    case EventKind::kTransition: return "transition";
+    case EventKind::kEngageRefused: return "engage_refused";
+    case EventKind::kLimit: return "limit";
+    case EventKind::kCommandIgnored: return "command_ignored";
+    case EventKind::kFault: return "fault";
   }
   return "?";
 }
@@ -64,20 +64,20 @@ std::vector<Event> SafetyCore::take_events() {
 }
 
 bool SafetyCore::has_fresh_command(Nanos now) const noexcept {
-  return state_ == State::engaged && now - last_cmd_rx_ <= cfg_.command_timeout_ns;
+  return state_ == State::kEngaged && now - last_cmd_rx_ <= cfg_.command_timeout_ns;
 }
 
 bool SafetyCore::ecu_fresh(Nanos now) const noexcept { return have_ecu_ && now - last_ecu_ <= cfg_.ecu_timeout_ns; }
 
 Reason SafetyCore::engage_blocker(Nanos now) const noexcept {
-  if (stopping_) return Reason::shutdown;
-  if (bus_off_) return Reason::bus_off;
-  if (!ecu_fresh(now)) return Reason::ecu_timeout;
-  if (ecu_.override) return Reason::driver_override;
-  if (ecu_.fault) return Reason::ecu_fault;
-  if (!ecu_.ready) return Reason::ecu_not_ready;
-  if (e2e_level_ > cfg_.e2e_tolerance) return Reason::e2e_errors;
-  return Reason::none;
+  if (stopping_) return Reason::kShutdown;
+  if (bus_off_) return Reason::kBusOff;
+  if (!ecu_fresh(now)) return Reason::kEcuTimeout;
+  if (ecu_.override) return Reason::kDriverOverride;
+  if (ecu_.fault) return Reason::kEcuFault;
+  if (!ecu_.ready) return Reason::kEcuNotReady;
+  if (e2e_level_ > cfg_.e2e_tolerance) return Reason::kE2eErrors;
+  return Reason::kNone;
 }
 
 WriterState& SafetyCore::writer(WriterId id) noexcept {
@@ -90,7 +90,7 @@ WriterState& SafetyCore::writer(WriterId id) noexcept {
       w = WriterState{id};
       return w;
     }
-    const bool owns = state_ == State::engaged && w.id == owner_;
+    const bool owns = state_ == State::kEngaged && w.id == owner_;
     if (!owns && (oldest == nullptr || w.last_rx < oldest->last_rx)) oldest = &w;
   }
   *oldest = WriterState{id};  // forgotten: it must show a new edge to engage
@@ -104,52 +104,52 @@ void SafetyCore::disarm_all() noexcept {
 void SafetyCore::engage(WriterState& w, const Command& applied, Nanos now) {
   w.armed = false;  // an edge is used once, engaged or refused
   const Reason block = engage_blocker(now);
-  if (block != Reason::none) {
-    emit(now, EventKind::engage_refused, block);
+  if (block != Reason::kNone) {
+    emit(now, EventKind::kEngageRefused, block);
     return;
   }
-  state_ = State::engaged;
-  reason_ = Reason::enabled;
+  state_ = State::kEngaged;
+  reason_ = Reason::kEnabled;
   owner_ = w.id;
   ++counters_.applied;
   latest_ = applied;
   last_cmd_rx_ = now;
   checker_.accept(applied);
   ++counters_.engagements;
-  emit(now, EventKind::transition, Reason::enabled);
+  emit(now, EventKind::kTransition, Reason::kEnabled);
 }
 
 void SafetyCore::disengage(Reason r, Nanos now) {
-  if (state_ != State::engaged) return;
-  state_ = State::disengaged;
+  if (state_ != State::kEngaged) return;
+  state_ = State::kDisengaged;
   reason_ = r;
   owner_ = 0;
   ++counters_.disengagements;
   checker_.reset();
   disarm_all();  // every writer must show false then true again
-  emit(now, EventKind::transition, r);
+  emit(now, EventKind::kTransition, r);
 }
 
 void SafetyCore::on_command(const Command& cmd, Nanos now, Nanos vehicle_now) {
   ++counters_.commands;
   // A disable from any writer takes effect at once, whatever its seq or stamp: stopping is safe.
-  if (!cmd.enable) disengage(Reason::enable_released, now);
+  if (!cmd.enable) disengage(Reason::kEnableReleased, now);
   WriterState& w = writer(cmd.writer);
   if (w.used && cmd.seq <= w.last_seq) {
     ++counters_.ignored_sequence;
-    emit(now, EventKind::command_ignored, Reason::none);
+    emit(now, EventKind::kCommandIgnored, Reason::kNone);
     return;
   }
   const Nanos age = vehicle_now - cmd.stamp;
   if (age > cfg_.command_timeout_ns || age < -cfg_.max_future_ns) {
     ++counters_.ignored_stale;
-    emit(now, EventKind::command_ignored, Reason::command_timeout);
+    emit(now, EventKind::kCommandIgnored, Reason::kCommandTimeout);
     return;
   }
   if (w.used && cmd.stamp <= w.last_stamp) {
     // A later seq with an equal or earlier stamp: no time has passed for it, so it can carry no change.
     ++counters_.ignored_stamp;
-    emit(now, EventKind::command_ignored, Reason::invalid_command);
+    emit(now, EventKind::kCommandIgnored, Reason::kInvalidCommand);
     return;
   }
   const Nanos rate_dt = w.used && w.valid ? std::min(cmd.stamp - w.last_stamp, now - w.last_rx + cfg_.rate_rx_slack_ns) : 0;
@@ -157,19 +157,19 @@ void SafetyCore::on_command(const Command& cmd, Nanos now, Nanos vehicle_now) {
   w.last_seq = cmd.seq;
   w.last_stamp = cmd.stamp;
   w.last_rx = now;
-  if (state_ == State::engaged && w.id != owner_) {
+  if (state_ == State::kEngaged && w.id != owner_) {
     w.valid = true;
     ++counters_.ignored_writer;
-    emit(now, EventKind::command_ignored, Reason::not_owner);
+    emit(now, EventKind::kCommandIgnored, Reason::kNotOwner);
     return;
   }
-  const bool engaging = state_ == State::disengaged && cmd.enable && w.armed;
+  const bool engaging = state_ == State::kDisengaged && cmd.enable && w.armed;
   if (engaging) {
     // Rate limits start from the actuators as measured, not from a step out of nothing.
     Command measured{};
     measured.steering_angle = measured_steering_;
     checker_.accept(measured);
-  } else if (state_ == State::disengaged) {
+  } else if (state_ == State::kDisengaged) {
     checker_.reset();  // nothing is applied: range checks only
   }
   const LimitResult lr = checker_.check(cmd, static_cast<double>(rate_dt) * 1e-9, measured_speed_);
@@ -177,15 +177,15 @@ void SafetyCore::on_command(const Command& cmd, Nanos now, Nanos vehicle_now) {
     ++counters_.rejected;
     w.valid = false;
     w.armed = false;  // a rejected command cannot be half of an enable edge
-    emit(now, EventKind::limit, Reason::invalid_command, lr.violations[0]);
-    disengage(Reason::invalid_command, now);
+    emit(now, EventKind::kLimit, Reason::kInvalidCommand, lr.violations[0]);
+    disengage(Reason::kInvalidCommand, now);
     return;
   }
   // Each kind of violation is reported when it starts (a run of clamped commands: one event).
   std::uint32_t kinds = 0;
   for (std::size_t i = 0; i < lr.count; ++i) {
     const std::uint32_t bit = violation_bit(lr.violations[i]);
-    if ((reported_limits_ & bit) == 0) emit(now, EventKind::limit, Reason::none, lr.violations[i]);
+    if ((reported_limits_ & bit) == 0) emit(now, EventKind::kLimit, Reason::kNone, lr.violations[i]);
     kinds |= bit;
   }
   reported_limits_ = kinds;
@@ -193,7 +193,7 @@ void SafetyCore::on_command(const Command& cmd, Nanos now, Nanos vehicle_now) {
   w.valid = true;
   if (!cmd.enable) {
     w.armed = true;
-  } else if (state_ == State::engaged) {
+  } else if (state_ == State::kEngaged) {
     ++counters_.applied;
     latest_ = lr.applied;
     last_cmd_rx_ = now;
@@ -207,13 +207,13 @@ void SafetyCore::on_ecu_status(const EcuStatus& st, Nanos now) {
   ecu_ = st;
   have_ecu_ = true;
   last_ecu_ = now;
-  if (state_ != State::engaged) return;
+  if (state_ != State::kEngaged) return;
   if (st.override) {
-    disengage(Reason::driver_override, now);
+    disengage(Reason::kDriverOverride, now);
   } else if (st.fault) {
-    disengage(Reason::ecu_fault, now);
+    disengage(Reason::kEcuFault, now);
   } else if (!st.ready) {
-    disengage(Reason::ecu_not_ready, now);
+    disengage(Reason::kEcuNotReady, now);
   }
 }
 
@@ -224,14 +224,14 @@ void SafetyCore::on_e2e(bool ok, Nanos now) {
   }
   ++counters_.e2e_errors;
   e2e_level_ = std::min(e2e_level_ + 1, e2e_level_max(cfg_));
-  if (e2e_level_ == cfg_.e2e_tolerance + 1) emit(now, EventKind::fault, Reason::e2e_errors);
-  if (e2e_level_ > cfg_.e2e_tolerance) disengage(Reason::e2e_errors, now);
+  if (e2e_level_ == cfg_.e2e_tolerance + 1) emit(now, EventKind::kFault, Reason::kE2eErrors);
+  if (e2e_level_ > cfg_.e2e_tolerance) disengage(Reason::kE2eErrors, now);
 }
 
 void SafetyCore::on_bus_state(bool bus_off, Nanos now) {
-  if (bus_off && !bus_off_) emit(now, EventKind::fault, Reason::bus_off);
+  if (bus_off && !bus_off_) emit(now, EventKind::kFault, Reason::kBusOff);
   bus_off_ = bus_off;
-  if (bus_off) disengage(Reason::bus_off, now);
+  if (bus_off) disengage(Reason::kBusOff, now);
 }
 
 void SafetyCore::on_measured(double steering_angle, double speed_mps) noexcept {
@@ -241,20 +241,20 @@ void SafetyCore::on_measured(double steering_angle, double speed_mps) noexcept {
 
 void SafetyCore::shutdown(Nanos now) {
   stopping_ = true;
-  disengage(Reason::shutdown, now);
+  disengage(Reason::kShutdown, now);
 }
 
 Decision SafetyCore::tick(Nanos now) {
-  if (state_ == State::engaged) {
+  if (state_ == State::kEngaged) {
     if (now - last_cmd_rx_ > cfg_.command_timeout_ns) {
-      disengage(Reason::command_timeout, now);
+      disengage(Reason::kCommandTimeout, now);
     } else if (!ecu_fresh(now)) {
-      disengage(Reason::ecu_timeout, now);
+      disengage(Reason::kEcuTimeout, now);
     }
   }
   Decision d;
   d.state = state_;
-  d.active = state_ == State::engaged;
+  d.active = state_ == State::kEngaged;
   if (d.active) d.command = latest_;
   return d;
 }

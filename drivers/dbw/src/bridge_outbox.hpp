@@ -17,8 +17,8 @@ namespace sensor_rig::drivers {
 
 // The bridge's state as rt/vehicle/dbw/status reports it (plain values, copied under the lock).
 struct StatusSnapshot {
-  dbw::safety::State state = dbw::safety::State::disengaged;
-  dbw::safety::Reason reason = dbw::safety::Reason::none;
+  dbw::safety::State state = dbw::safety::State::kDisengaged;
+  dbw::safety::Reason reason = dbw::safety::Reason::kNone;
   dbw::safety::SafetyCounters counters{};
   dbw::safety::EcuStatus ecu{};
   const char* bus_state = "active";

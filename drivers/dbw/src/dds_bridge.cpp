@@ -38,7 +38,7 @@ safety::Command to_command(const msg::DbwCommand& m, safety::WriterId writer) {
   c.throttle = m.throttle;
   c.brake = m.brake;
   c.accel = m.accel;
-  c.gear = m.gear <= 4 ? static_cast<safety::Gear>(m.gear) : safety::Gear::none;
+  c.gear = m.gear <= 4 ? static_cast<safety::Gear>(m.gear) : safety::Gear::kNone;
   if (m.gear > 4) c.throttle = std::nan("");  // an unknown gear makes the command invalid
   return c;
 }
@@ -118,7 +118,7 @@ class Runner {
     frames_.clear();
     core_.frames(mono, frames_);
     for (const auto& f : frames_) {
-      if (bus_.send(f) == can::IoStatus::ok) {
+      if (bus_.send(f) == can::IoStatus::kOk) {
         ++core_.counters().frames_sent;
       } else {
         ++core_.counters().frames_refused;
@@ -146,7 +146,7 @@ class Runner {
     OutboxItem item;
     item.status = snapshot();
     for (const auto& e : events) {
-      if (e.kind == safety::EventKind::transition && e.reason == safety::Reason::command_timeout && last_cmd_rx_ > 0) {
+      if (e.kind == safety::EventKind::kTransition && e.reason == safety::Reason::kCommandTimeout && last_cmd_rx_ > 0) {
         silence_to_neutral_ms_ = static_cast<double>(monotonic_now_ns() - last_cmd_rx_) * 1e-6;
       }
       item.event = e;
@@ -198,14 +198,14 @@ class Runner {
       std::lock_guard<std::mutex> lock(mu_);
       const Nanos mono = monotonic_now_ns();
       const Nanos vnow = vehicle_now_ns();
-      if (st == can::IoStatus::ok) {
-        if (core_.on_frame(rx, mono) == RxKind::feedback) {
+      if (st == can::IoStatus::kOk) {
+        if (core_.on_frame(rx, mono) == RxKind::kFeedback) {
           OutboxItem item;
           item.kind = OutboxItem::Kind::kState;
           item.feedback = core_.feedback();
           outbox_.push(item, false);
         }
-      } else if (st == can::IoStatus::closed) {
+      } else if (st == can::IoStatus::kClosed) {
         log::error("dbw", "CAN transport closed: " + bus_.name());
         core_.safety().on_bus_state(true, mono);  // nothing reaches the ECU any more
         hand_over_events(mono, vnow);
@@ -273,8 +273,8 @@ class Runner {
     switch (it.kind) {
       case OutboxItem::Kind::kEvent: {
         const auto& e = it.event;
-        if (e.kind == safety::EventKind::transition || e.kind == safety::EventKind::engage_refused ||
-            e.kind == safety::EventKind::fault) {
+        if (e.kind == safety::EventKind::kTransition || e.kind == safety::EventKind::kEngageRefused ||
+            e.kind == safety::EventKind::kFault) {
           log::info("dbw", std::string(safety::to_string(e.kind)) + ": " + std::string(safety::to_string(e.reason)) +
                                " -> " + std::string(safety::to_string(e.state)));
         }
@@ -299,7 +299,7 @@ class Runner {
     const std::string event(e == nullptr ? std::string_view("periodic") : safety::to_string(e->kind));
     const std::string event_reason(e == nullptr ? std::string_view("none") : safety::to_string(e->reason));
     char detail[160] = "";
-    if (e != nullptr && e->kind == safety::EventKind::limit) {
+    if (e != nullptr && e->kind == safety::EventKind::kLimit) {
       const auto& v = e->violation;
       const char* what = v.rate ? "rate" : v.lateral ? "lateral" : v.interlock ? "brake-interlock" : "range";
       std::snprintf(detail, sizeof detail, "%s %s: requested %g applied %g%s", std::string(safety::to_string(v.axis)).c_str(),
@@ -313,7 +313,7 @@ class Runner {
     // An event's sample shows the state right after that event (a limit reported while engaging
     // precedes the engagement); the rest is the status once the whole step was handled.
     const safety::State state = e != nullptr ? e->state : snap.state;
-    m.state = state == safety::State::engaged ? 1 : 0;
+    m.state = state == safety::State::kEngaged ? 1 : 0;
     m.reason = const_cast<char*>(reason.c_str());
     m.event = const_cast<char*>(event.c_str());
     m.event_reason = const_cast<char*>(event_reason.c_str());

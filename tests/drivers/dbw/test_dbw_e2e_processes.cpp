@@ -2,10 +2,8 @@
 // bus -> `rig mock paravan` (ECU + vehicle model) -> feedback -> rt/vehicle/state, and the status
 // topic with reasons and config hash; the mock's candump log holds both directions.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdlib>
-#include <filesystem>
+#include <algorithm>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -16,25 +14,15 @@
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
 #include "sensor_rig/dbw/can/candump.hpp"
 
-namespace fs = std::filesystem;
 namespace dbw = sensor_rig::dbw;
 namespace msg = sensor_rig::msg;
 namespace dds = sensor_rig::dds;
 
 namespace {
 
-using sensor_rig::dbw::test::spawn;
-using sensor_rig::dbw::test::wait_exit;
-
 TEST(DbwProcesses, CommandsThroughBridgeAndMockEcuComeBackAsVehicleState) {
-  const char* bin = std::getenv("RIG_BIN");
-  if (bin == nullptr || !fs::exists(bin)) GTEST_SKIP() << "RIG_BIN not set or rig not built";
-  const std::string tag = std::to_string(::getpid());
-  ::setenv("ROS_DOMAIN_ID", std::to_string(100 + ::getpid() % 100).c_str(), 1);
-  const fs::path dir = fs::temp_directory_path() / ("dbw_e2e_" + tag);
-  fs::create_directories(dir);
-  const std::string sock = (dir / "bus.sock").string();
-  const std::string log = (dir / "bus.log").string();
+  dbw::test::RigProcesses rig("dbw_e2e");
+  if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
 
   dds::Participant participant(sensor_rig::drivers::domain_config());
   dds::Topic<msg::VehicleState> state_topic(participant, sensor_rig::drivers::kStateTopic);
@@ -44,15 +32,12 @@ TEST(DbwProcesses, CommandsThroughBridgeAndMockEcuComeBackAsVehicleState) {
   deep.depth = 64;
   dds::Reader<msg::DbwStatus> status_reader(participant, status_topic, deep);
 
-  const pid_t mock = spawn({bin, "mock", "paravan", "--transport", "unix-listen:" + sock, "--log", log, "--duration", "6"},
-                           (dir / "mock.out").string());
-  for (int i = 0; i < 200 && !fs::exists(sock); ++i) ::usleep(10'000);
-  ASSERT_TRUE(fs::exists(sock)) << "mock ECU did not create its bus socket";
-  const pid_t bridge = spawn({bin, "dbw", "bridge", "--transport", "unix:" + sock, "--duration", "5"}, (dir / "bridge.out").string());
+  const pid_t mock = rig.start_mock({"--duration", "6"});
+  ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
+  const pid_t bridge = rig.start("bridge", {"dbw", "bridge", "--transport", rig.bus(), "--duration", "5"});
   ASSERT_TRUE(status_reader.wait_for_writers(1, 5000)) << "bridge status writer not discovered";
-  const pid_t send = spawn({bin, "dbw", "send", "--enable", "--steer", "0.1", "--throttle", "0.4", "--gear", "4", "--rate",
-                            "100", "--duration", "2"},
-                           (dir / "send.out").string());
+  const pid_t send = rig.start("send", {"dbw", "send", "--enable", "--steer", "0.1", "--throttle", "0.4", "--gear", "4",
+                                        "--rate", "100", "--duration", "2"});
 
   double max_speed = 0.0;
   double last_steer = 0.0;
@@ -72,9 +57,9 @@ TEST(DbwProcesses, CommandsThroughBridgeAndMockEcuComeBackAsVehicleState) {
       if (std::string(s.event) == "transition" && std::string(s.event_reason) == "command_timeout") timeout_reason = true;
     }, 64);
   }
-  EXPECT_EQ(wait_exit(send, 5000), 0);
-  EXPECT_EQ(wait_exit(bridge, 5000), 0);
-  EXPECT_EQ(wait_exit(mock, 5000), 0);
+  EXPECT_EQ(rig.wait_exit(send, 5000), 0);
+  EXPECT_EQ(rig.wait_exit(bridge, 5000), 0);
+  EXPECT_EQ(rig.wait_exit(mock, 5000), 0);
   EXPECT_TRUE(engaged);
   EXPECT_TRUE(timeout_reason) << "no command_timeout transition after the source stopped";
   EXPECT_EQ(hash.size(), 16U);
@@ -82,7 +67,7 @@ TEST(DbwProcesses, CommandsThroughBridgeAndMockEcuComeBackAsVehicleState) {
   EXPECT_NEAR(last_steer, 0.1, 0.01);
 
   // The mock's bus log: both directions, the PU's steering request enabled then neutral.
-  std::ifstream in(log);
+  std::ifstream in(rig.bus_log());
   dbw::can::CandumpReader reader(in);
   dbw::can::LogRecord rec;
   int pu_enabled = 0, pu_neutral_after = 0, ecu_frames = 0;
@@ -98,7 +83,6 @@ TEST(DbwProcesses, CommandsThroughBridgeAndMockEcuComeBackAsVehicleState) {
   EXPECT_GT(pu_enabled, 150);
   EXPECT_GT(pu_neutral_after, 10);
   EXPECT_GT(ecu_frames, 300);
-  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -5,12 +5,10 @@
 // neutral/disengage requests from every disengage to the next engagement, the PU heartbeat all the
 // time, and nothing from the PU while the bus is off.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -208,13 +206,8 @@ BusLog read_bus_log(const std::string& path, const dbw::Protocol& p) {
 }
 
 TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFollow) {
-  const char* bin = std::getenv("RIG_BIN");
-  if (bin == nullptr || !fs::exists(bin)) GTEST_SKIP() << "RIG_BIN not set or rig not built";
-  ::setenv("ROS_DOMAIN_ID", std::to_string(100 + (::getpid() + 37) % 100).c_str(), 1);
-  const fs::path dir = fs::temp_directory_path() / ("dbw_faults_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const std::string sock = (dir / "bus.sock").string();
-  const std::string log_path = (dir / "bus.log").string();
+  dbw::test::RigProcesses rig("dbw_faults", 37);
+  if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
   // The research car's table: steering out of range is rejected, throttle above 0.6 clamped.
   const fs::path cfg = dbw::test::source_dir() / "config/dbw";
   std::string yaml = dbw::test::read_text(cfg / "paravan_ref.yaml");
@@ -224,8 +217,8 @@ TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFol
   // an episode with a timeout before its fault (the loss/status-silence faults outlast them).
   yaml.replace(yaml.find("command_timeout_ms: 100"), 23, "command_timeout_ms: 300");
   yaml.replace(yaml.find("ecu_timeout_ms: 100"), 19, "ecu_timeout_ms: 200");
-  std::ofstream(dir / "eclass.yaml") << yaml;
-  const std::string mapping = (dir / "eclass.yaml").string();
+  std::ofstream(rig.dir() / "eclass.yaml") << yaml;
+  const std::string mapping = rig.path("eclass.yaml");
   const auto protocol = dbw::Protocol::load(mapping);
 
   std::vector<Episode> eps = {
@@ -240,8 +233,7 @@ TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFol
       episode("steering out of range", "", 0, 0, "invalid_command"),
       episode("throttle clamped, then released", "", 0, 0, "enable_released"),
   };
-  std::vector<std::string> mock_args = {bin, "mock", "paravan", "--transport", "unix-listen:" + sock, "--config", mapping,
-                                        "--log", log_path, "--duration", "25"};
+  std::vector<std::string> mock_args = {"--config", mapping, "--duration", "25"};
   for (const auto& e : eps) {
     if (e.fault.empty()) continue;
     char spec[64];
@@ -250,11 +242,9 @@ TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFol
   }
   CommandSource src;
   const Nanos t0 = vehicle_now_ns();
-  const pid_t mock = dbw::test::spawn(mock_args, (dir / "mock.out").string());
-  for (int i = 0; i < 300 && !fs::exists(sock); ++i) ::usleep(10'000);
-  ASSERT_TRUE(fs::exists(sock)) << "mock ECU did not create its bus socket";
-  const pid_t bridge = dbw::test::spawn({bin, "dbw", "bridge", mapping, "--transport", "unix:" + sock, "--duration", "24"},
-                                        (dir / "bridge.out").string());
+  const pid_t mock = rig.start_mock(mock_args);
+  ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
+  const pid_t bridge = rig.start("bridge", {"dbw", "bridge", mapping, "--transport", rig.bus(), "--duration", "24"});
   ASSERT_TRUE(src.wait_for_bridge(5000)) << "bridge not discovered";
   auto at = [t0](double s) { return t0 + static_cast<Nanos>(s * 1e9); };
 
@@ -302,10 +292,10 @@ TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFol
   };
   EXPECT_TRUE(has_detail("steering_angle range: requested 0.9 applied 0.5 (rejected)"));
   EXPECT_TRUE(has_detail("throttle range: requested 0.9 applied 0.6 (clamped)"));
-  EXPECT_EQ(dbw::test::stop(bridge), 0) << dbw::test::read_text(dir / "bridge.out");
-  EXPECT_EQ(dbw::test::stop(mock), 0) << dbw::test::read_text(dir / "mock.out");
+  EXPECT_EQ(rig.stop(bridge), 0) << rig.output("bridge");
+  EXPECT_EQ(rig.stop(mock), 0) << rig.output("mock");
 
-  const BusLog log = read_bus_log(log_path, protocol);
+  const BusLog log = read_bus_log(rig.bus_log(), protocol);
   EXPECT_EQ(log.malformed, 0U);
   ASSERT_GT(log.first_ecu, 0);
   EXPECT_LT(log.first_ecu - t0, 300 * kMs) << "the mock's fault clock started late: fault times are off";
@@ -353,7 +343,6 @@ TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFol
   }
   EXPECT_GT(max_throttle, 0.5);
   EXPECT_LE(max_throttle, 0.6 + 1e-9);
-  if (!HasFailure()) fs::remove_all(dir);
 }
 
 }  // namespace

@@ -2,10 +2,7 @@
 // valid, fresh, enabled steering and longitudinal requests still coming, stopping only the
 // PRV_PU_HEARTBEAT makes the ECU disengage after its timeout and report it in its status.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdlib>
-#include <filesystem>
 #include <string>
 
 #include "dbw_processes.hpp"
@@ -13,7 +10,6 @@
 #include "sensor_rig/dbw/bridge/protocol.hpp"
 #include "sensor_rig/dbw/can/transport.hpp"
 
-namespace fs = std::filesystem;
 namespace dbw = sensor_rig::dbw;
 using sensor_rig::monotonic_now_ns;
 using sensor_rig::Nanos;
@@ -34,7 +30,7 @@ struct Pu {
   void send(const char* role, std::initializer_list<std::pair<std::string_view, double>> v, dbw::safety::E2eSender& s) {
     dbw::can::Frame f;
     ASSERT_TRUE(p.encode(*p.tx(role), v, &s, f));
-    ASSERT_EQ(bus.send(f), dbw::can::IoStatus::ok);
+    ASSERT_EQ(bus.send(f), dbw::can::IoStatus::kOk);
   }
   // One 10 ms PU period: requests (and the heartbeat unless `silent_heartbeat`), then ECU frames.
   void period(bool enable, bool heartbeat) {
@@ -45,7 +41,7 @@ struct Pu {
     const Nanos end = monotonic_now_ns() + 10 * kMs;
     dbw::can::RxFrame rx;
     for (Nanos now = monotonic_now_ns(); now < end; now = monotonic_now_ns()) {
-      if (bus.receive(rx, static_cast<int>((end - now) / kMs) + 1) != dbw::can::IoStatus::ok) continue;
+      if (bus.receive(rx, static_cast<int>((end - now) / kMs) + 1) != dbw::can::IoStatus::kOk) continue;
       if (!p.rx("status")->matches(rx.frame)) continue;
       ecu_engaged = dbw::Protocol::value(*p.rx("status"), "engaged", rx.frame).value_or(-1);
       status_at = monotonic_now_ns();
@@ -54,17 +50,12 @@ struct Pu {
 };
 
 TEST(DbwHeartbeatProcesses, MockEcuDisengagesWhenOnlyThePuHeartbeatStops) {
-  const char* bin = std::getenv("RIG_BIN");
-  if (bin == nullptr || !fs::exists(bin)) GTEST_SKIP() << "RIG_BIN not set or rig not built";
-  const fs::path dir = fs::temp_directory_path() / ("dbw_hb_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const std::string sock = (dir / "bus.sock").string();
-  const pid_t mock = dbw::test::spawn({bin, "mock", "paravan", "--transport", "unix-listen:" + sock, "--duration", "10"},
-                                      (dir / "mock.out").string());
-  for (int i = 0; i < 300 && !fs::exists(sock); ++i) ::usleep(10'000);
-  ASSERT_TRUE(fs::exists(sock)) << "mock ECU did not create its bus socket";
+  dbw::test::RigProcesses rig("dbw_hb");
+  if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
+  const pid_t mock = rig.start_mock({"--duration", "10"});
+  ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
   const auto p = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());
-  auto bus = dbw::can::open_transport("unix:" + sock);
+  auto bus = dbw::can::open_transport(rig.bus());
   Pu pu{p, *bus};
 
   for (int i = 0; i < 5; ++i) pu.period(false, true);
@@ -83,10 +74,9 @@ TEST(DbwHeartbeatProcesses, MockEcuDisengagesWhenOnlyThePuHeartbeatStops) {
   for (int i = 0; i < 10; ++i) pu.period(true, true);
   EXPECT_EQ(pu.ecu_engaged, 0.0);
   bus.reset();
-  EXPECT_EQ(dbw::test::stop(mock), 0);
-  const std::string out = dbw::test::read_text(dir / "mock.out");
+  EXPECT_EQ(rig.stop(mock), 0);
+  const std::string out = rig.output("mock");
   EXPECT_NE(out.find("pu timeouts 1,"), std::string::npos) << out;
-  fs::remove_all(dir);
 }
 
 }  // namespace

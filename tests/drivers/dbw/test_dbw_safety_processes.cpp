@@ -8,9 +8,7 @@
 // Assertions on rt/vehicle/dbw/status and on the mock's bus log, decoded with the protocol.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <unistd.h>
 
-#include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
@@ -23,7 +21,6 @@
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
 
-namespace fs = std::filesystem;
 namespace dbw = sensor_rig::dbw;
 namespace msg = sensor_rig::msg;
 namespace dds = sensor_rig::dds;
@@ -55,6 +52,8 @@ class StatusWatch {
         },
         256);
   }
+  // The bridge's status writer matched (it is up and on the domain).
+  bool wait_for_bridge(int ms) { return reader_.wait_for_writers(1, ms); }
   // Polls until `pred` or `ms` passed; returns pred().
   template <class P>
   bool wait(int ms, P pred) {
@@ -117,34 +116,26 @@ int active_frames(const std::vector<PuFrame>& frames, Nanos from, Nanos to) {
 }
 
 TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
-  const char* bin_env = std::getenv("RIG_BIN");
-  if (bin_env == nullptr || !fs::exists(bin_env)) GTEST_SKIP() << "RIG_BIN not set or rig not built";
-  const std::string bin = bin_env;
-  const int domain = 100 + (::getpid() + 71) % 100;
-  const std::string dom = std::to_string(domain);
-  const fs::path dir = fs::temp_directory_path() / ("dbw_safety_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const std::string sock = (dir / "bus.sock").string();
-  const std::string log_path = (dir / "bus.log").string();
+  dbw::test::RigProcesses rig("dbw_safety", 71, dbw::test::DomainBy::kFlag);
+  if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
+  const std::string dom = std::to_string(rig.domain());
   const auto protocol = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());
-  namespace t = dbw::test;
   auto send = [&](const std::string& name, bool enable, double seconds, double clock_offset = 0.0) {
-    std::vector<std::string> a{bin, "dbw", "send", "--domain", dom, "--steer", "0.05", "--throttle", "0.2", "--rate", "100",
+    std::vector<std::string> a{"dbw", "send", "--domain", dom, "--steer", "0.05", "--throttle", "0.2", "--rate", "100",
                                "--duration", std::to_string(seconds), "--clock-offset", std::to_string(clock_offset)};
     if (enable) a.push_back("--enable");
-    return t::spawn(a, (dir / (name + ".out")).string());
+    return rig.start(name, a);
   };
   auto bridge = [&](const std::string& name) {
-    return t::spawn({bin, "dbw", "bridge", "--domain", dom, "--transport", "unix:" + sock, "--duration", "60"},
-                    (dir / (name + ".out")).string());
+    return rig.start(name, {"dbw", "bridge", "--domain", dom, "--transport", rig.bus(), "--duration", "60"});
   };
 
-  StatusWatch st(domain);
-  const pid_t mock = t::spawn({bin, "mock", "paravan", "--transport", "unix-listen:" + sock, "--log", log_path, "--duration", "60"},
-                              (dir / "mock.out").string());
-  for (int i = 0; i < 300 && !fs::exists(sock); ++i) ::usleep(10'000);
-  ASSERT_TRUE(fs::exists(sock)) << "mock ECU did not create its bus socket";
+  StatusWatch st(rig.domain());
+  const pid_t mock = rig.start_mock({"--duration", "60"});
+  ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
   pid_t bridge_a = bridge("bridge_a");
+  // A sender's first sample (enable false, then true: the edge) must reach a running bridge.
+  ASSERT_TRUE(st.wait_for_bridge(10000)) << "bridge not discovered";
 
   // 1. Sender 1 engages and holds enable; sender 2 (seq from 1) disables.
   const pid_t s1 = send("s1", true, 3.0);
@@ -154,8 +145,8 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   ASSERT_TRUE(st.wait(3000, [&] { return st.first_after(s2_start, 0) != nullptr; })) << "sender 2's disable was ignored";
   const Transition d1 = *st.first_after(s2_start, 0);
   EXPECT_EQ(d1.reason, "enable_released");
-  EXPECT_EQ(t::wait_exit(s2, 5000), 0);
-  EXPECT_EQ(t::wait_exit(s1, 5000), 0);  // held enable until its end
+  EXPECT_EQ(rig.wait_exit(s2, 5000), 0);
+  EXPECT_EQ(rig.wait_exit(s1, 5000), 0);  // held enable until its end
   st.poll(50);
   EXPECT_EQ(st.first_after(d1.t + 1, 1), nullptr) << "sender 1 re-engaged without a new edge";
 
@@ -164,10 +155,10 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   const pid_t s3 = send("s3", true, 4.0);
   ASSERT_TRUE(st.wait(4000, [&] { return st.first_after(s3_start, 1) != nullptr; })) << "sender 3 did not engage";
   ::kill(bridge_a, SIGKILL);
-  t::wait_exit(bridge_a, 2000);
+  rig.wait_exit(bridge_a, 2000);
   const Nanos restart = vehicle_now_ns();
   const pid_t bridge_b = bridge("bridge_b");
-  EXPECT_EQ(t::wait_exit(s3, 6000), 0);  // enable held throughout
+  EXPECT_EQ(rig.wait_exit(s3, 6000), 0);  // enable held throughout
   const Nanos s3_end = vehicle_now_ns();
   st.poll(50);
   EXPECT_EQ(st.first_after(restart, 1), nullptr) << "the restarted bridge engaged without an edge";
@@ -175,7 +166,7 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   // 3. A sender 5 s behind cannot engage; after sender 5 engages, that sender's disable counts.
   const Nanos s4_start = vehicle_now_ns();
   const pid_t s4 = send("s4", true, 1.0, -5.0);
-  EXPECT_EQ(t::wait_exit(s4, 5000), 0);
+  EXPECT_EQ(rig.wait_exit(s4, 5000), 0);
   st.poll(50);
   EXPECT_EQ(st.first_after(s4_start, 1), nullptr) << "commands stamped 5 s in the past engaged";
   const Nanos s5_start = vehicle_now_ns();
@@ -185,8 +176,8 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   const pid_t s6 = send("s6", false, 0.3, -5.0);
   ASSERT_TRUE(st.wait(3000, [&] { return st.first_after(s6_start, 0) != nullptr; })) << "a late clock's disable was ignored";
   EXPECT_EQ(st.first_after(s6_start, 0)->reason, "enable_released");
-  EXPECT_EQ(t::wait_exit(s6, 5000), 0);
-  EXPECT_EQ(t::wait_exit(s5, 5000), 0);
+  EXPECT_EQ(rig.wait_exit(s6, 5000), 0);
+  EXPECT_EQ(rig.wait_exit(s5, 5000), 0);
 
   // 4. Sender 7 engages; SIGTERM to the bridge while engaged.
   const Nanos s7_start = vehicle_now_ns();
@@ -195,13 +186,13 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   st.wait(300, [] { return false; });
   ::kill(bridge_b, SIGTERM);
   const Nanos term = vehicle_now_ns();
-  EXPECT_EQ(t::wait_exit(bridge_b, 5000), 0) << t::read_text(dir / "bridge_b.out");
+  EXPECT_EQ(rig.wait_exit(bridge_b, 5000), 0) << rig.output("bridge_b");
   ::kill(s7, SIGINT);
-  t::wait_exit(s7, 5000);
-  EXPECT_EQ(t::stop(mock), 0);
-  EXPECT_NE(t::read_text(dir / "bridge_b.out").find("\"neutral_sets_on_stop\":3"), std::string::npos);
+  rig.wait_exit(s7, 5000);
+  EXPECT_EQ(rig.stop(mock), 0);
+  EXPECT_NE(rig.output("bridge_b").find("\"neutral_sets_on_stop\":3"), std::string::npos);
 
-  const auto frames = pu_frames(log_path, protocol);
+  const auto frames = pu_frames(rig.bus_log(), protocol);
   ASSERT_FALSE(frames.empty());
   // Between sender 2's disable and sender 3's engagement: neutral only (sender 1 held enable).
   const Transition* e3 = st.first_after(s3_start, 1);
@@ -219,7 +210,6 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   }
   EXPECT_GE(neutral_after_term, 2 * 3) << "neutral frame sets after SIGTERM (steering + longitudinal, 3 periods)";
   EXPECT_TRUE(frames.back().neutral) << "an active frame was the last on the bus";
-  if (!HasFailure()) fs::remove_all(dir);
 }
 
 }  // namespace

@@ -24,7 +24,7 @@ struct VehicleFeedback {
   double wheels[4] = {0, 0, 0, 0};
 };
 
-enum class RxKind : std::uint8_t { other, status, feedback, wheels, error_frame, e2e_error };
+enum class RxKind : std::uint8_t { kOther, kStatus, kFeedback, kWheels, kErrorFrame, kE2eError };
 
 struct BridgeCounters {
   std::uint64_t frames_sent = 0;
@@ -41,7 +41,7 @@ class BridgeCore {
   // True when the command changed what goes on the bus (applied, or a transition).
   bool on_command(const safety::Command& c, Nanos now, Nanos vehicle_now);
   RxKind on_frame(const can::RxFrame& rx, Nanos now);
-  void on_bus_state(can::BusState s, Nanos now) { safety_.on_bus_state(s == can::BusState::bus_off, now); }
+  void on_bus_state(can::BusState s, Nanos now) { safety_.on_bus_state(s == can::BusState::kBusOff, now); }
   // Whether to transmit a frame set now: a transition not yet on the bus (at once, in the same tick
   // as its cause), a new command within the bus schedule (a held one goes at the first tick that
   // allows it), or the periodic repeat. Evaluates the timeouts first. `command_changed`: the caller
@@ -59,7 +59,18 @@ class BridgeCore {
 
  private:
   // What a tx message carries, resolved once: the hot path does no role-name lookups.
-  enum class TxField : std::uint8_t { enable, state, mode, angle, torque, gear, throttle, brake, accel, count };
+  enum class TxField : std::uint8_t {
+    kEnable,
+    kState,
+    kMode,
+    kAngle,
+    kTorque,
+    kGear,
+    kThrottle,
+    kBrake,
+    kAccel,
+    kCount
+  };
   struct TxBinding {
     const dbc::Signal* signal;
     TxField field;

@@ -23,7 +23,7 @@ struct LogRecord {
   Frame frame;
 };
 
-enum class LineStatus : std::uint8_t { ok, blank, malformed };
+enum class LineStatus : std::uint8_t { kOk, kBlank, kMalformed };
 LineStatus parse_candump_line(std::string_view line, LogRecord& out);
 [[nodiscard]] std::string format_candump_line(Nanos stamp, std::string_view iface, const Frame& f);
 // "123#DEADBEEF" part only.

@@ -37,7 +37,7 @@ struct Frame {
 inline constexpr std::size_t kClassicWireSize = 16;
 inline constexpr std::size_t kFdWireSize = 72;
 
-enum class WireStatus : std::uint8_t { ok, bad_size, bad_length, bad_id };
+enum class WireStatus : std::uint8_t { kOk, kBadSize, kBadLength, kBadId };
 // Writes the kernel struct bytes of `f` into `out` (>= 72 bytes); returns the size used (16 or 72), 0 on error.
 std::size_t to_wire(const Frame& f, std::span<std::uint8_t> out) noexcept;
 // Parses kernel struct bytes (16 = can_frame, 72 = canfd_frame).

@@ -21,17 +21,17 @@ struct TransportError : std::runtime_error {
 };
 
 enum class IoStatus : std::uint8_t {
-  ok,
-  timeout,      // nothing within the wait
-  would_block,  // send buffer full: the frame was NOT queued (never retried later: no stale frames)
-  bus_off,      // controller is bus-off: frame refused
-  closed,       // peer gone / end of log
-  invalid,      // frame malformed (bad length) or not representable on this transport
-  error,        // other OS error (errno kept in stats)
+  kOk,
+  kTimeout,     // nothing within the wait
+  kWouldBlock,  // send buffer full: the frame was NOT queued (never retried later: no stale frames)
+  kBusOff,      // controller is bus-off: frame refused
+  kClosed,      // peer gone / end of log
+  kInvalid,     // frame malformed (bad length) or not representable on this transport
+  kError,       // other OS error (errno kept in stats)
 };
 [[nodiscard]] const char* to_string(IoStatus s) noexcept;
 
-enum class BusState : std::uint8_t { active, warning, passive, bus_off };
+enum class BusState : std::uint8_t { kActive, kWarning, kPassive, kBusOff };
 [[nodiscard]] const char* to_string(BusState s) noexcept;
 
 struct RxFrame {
@@ -69,6 +69,7 @@ struct TransportStats {
   StatValue<std::uint64_t> rx_dropped = 0;    // malformed wire records, kernel drops
   StatValue<std::uint64_t> error_frames = 0;
   StatValue<std::uint64_t> bus_off_events = 0;
+  StatValue<std::uint64_t> options_refused = 0;  // optional socket options the kernel refused (each logged)
   StatValue<int> last_errno = 0;
 };
 
@@ -106,7 +107,7 @@ class Transport {
   // Updates bus state from an error frame; returns the info.
   ErrorInfo note_error_frame(const Frame& f) noexcept;
   // Written by the receiving thread, read by senders on other threads (the bridge's DDS thread).
-  std::atomic<BusState> state_{BusState::active};
+  std::atomic<BusState> state_{BusState::kActive};
   TransportStats stats_;
 };
 

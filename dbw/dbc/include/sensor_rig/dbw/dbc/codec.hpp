@@ -27,7 +27,7 @@ bool insert_raw(const Signal& s, std::uint64_t raw, std::span<std::uint8_t> data
 [[nodiscard]] std::optional<double> decode(const Signal& s, std::span<const std::uint8_t> data) noexcept;
 [[nodiscard]] double to_physical(const Signal& s, std::uint64_t raw) noexcept;
 
-enum class EncodeStatus : std::uint8_t { ok, clamped, not_finite, out_of_frame };
+enum class EncodeStatus : std::uint8_t { kOk, kClamped, kNotFinite, kOutOfFrame };
 // Physical -> raw, rounded to the nearest step, clamped to what the bits can hold (reported).
 [[nodiscard]] EncodeStatus to_raw(const Signal& s, double physical, std::uint64_t& raw) noexcept;
 EncodeStatus encode(const Signal& s, double physical, std::span<std::uint8_t> data) noexcept;

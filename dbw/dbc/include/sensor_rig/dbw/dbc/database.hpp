@@ -12,9 +12,9 @@
 
 namespace sensor_rig::dbw::dbc {
 
-enum class ByteOrder : std::uint8_t { intel, motorola };  // DBC @1 (little endian), @0 (big endian)
-enum class ValueType : std::uint8_t { integer, float32, float64 };  // SIG_VALTYPE_ 0/1/2
-enum class MuxRole : std::uint8_t { none, multiplexor, multiplexed };
+enum class ByteOrder : std::uint8_t { kIntel, kMotorola };  // DBC @1 (little endian), @0 (big endian)
+enum class ValueType : std::uint8_t { kInteger, kFloat32, kFloat64 };  // SIG_VALTYPE_ 0/1/2
+enum class MuxRole : std::uint8_t { kNone, kMultiplexor, kMultiplexed };
 
 using AttributeValue = std::variant<std::int64_t, double, std::string>;
 using Attributes = std::map<std::string, AttributeValue, std::less<>>;
@@ -23,9 +23,9 @@ struct Signal {
   std::string name;
   std::uint16_t start_bit = 0;  // as written in the DBC (Motorola: MSB in sawtooth numbering)
   std::uint16_t length = 1;     // bits, 1..64
-  ByteOrder order = ByteOrder::intel;
+  ByteOrder order = ByteOrder::kIntel;
   bool is_signed = false;
-  ValueType value_type = ValueType::integer;
+  ValueType value_type = ValueType::kInteger;
   double factor = 1.0;
   double offset = 0.0;
   double minimum = 0.0;
@@ -33,7 +33,7 @@ struct Signal {
   int decimals = 0;  // decimals needed to print physical values exactly (from factor/offset text)
   std::string unit;
   std::vector<std::string> receivers;
-  MuxRole mux = MuxRole::none;
+  MuxRole mux = MuxRole::kNone;
   std::uint64_t mux_value = 0;  // for multiplexed signals: the multiplexor value selecting it
   std::map<std::int64_t, std::string> value_names;  // VAL_
   std::string comment;
@@ -57,13 +57,13 @@ struct Message {
   [[nodiscard]] const Signal* multiplexor() const noexcept;
 };
 
-enum class AttributeKind : std::uint8_t { integer, hex, floating, string, enumeration };
-enum class AttributeScope : std::uint8_t { network, node, message, signal, env_var };
+enum class AttributeKind : std::uint8_t { kInteger, kHex, kFloating, kString, kEnumeration };
+enum class AttributeScope : std::uint8_t { kNetwork, kNode, kMessage, kSignal, kEnvVar };
 
 struct AttributeDefinition {
   std::string name;
-  AttributeScope scope = AttributeScope::network;
-  AttributeKind kind = AttributeKind::integer;
+  AttributeScope scope = AttributeScope::kNetwork;
+  AttributeKind kind = AttributeKind::kInteger;
   double minimum = 0.0;
   double maximum = 0.0;
   std::vector<std::string> enum_values;

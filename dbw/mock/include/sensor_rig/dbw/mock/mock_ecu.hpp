@@ -15,13 +15,13 @@
 
 namespace sensor_rig::dbw::mock {
 
-enum class FaultKind : std::uint8_t { frame_loss, bad_crc, stuck_counter, driver_override, ecu_fault, bus_off, no_status };
+enum class FaultKind : std::uint8_t { kFrameLoss, kBadCrc, kStuckCounter, kDriverOverride, kEcuFault, kBusOff, kNoStatus };
 
 // "name[=value][@start_s][+duration_s]": loss=0.2, bad-crc@2, stuck-counter@2+1, override@3+0.5,
 // ecu-fault@4, bus-off@5+0.3, no-status@6+0.3 (the status message, the ECU's heartbeat, stops; the
 // rest goes on). Without a start: from the beginning; without duration: until the end.
 struct Fault {
-  FaultKind kind = FaultKind::frame_loss;
+  FaultKind kind = FaultKind::kFrameLoss;
   double value = 1.0;  // loss probability
   double start_s = 0.0;
   double duration_s = -1.0;

@@ -23,14 +23,14 @@ struct VehicleState {
   double steer = 0.0;                  // actual road-wheel angle, rad
   double accel = 0.0;                  // actual longitudinal acceleration, m/s^2
   double yaw_rate = 0.0;               // rad/s
-  safety::Gear gear = safety::Gear::drive;
+  safety::Gear gear = safety::Gear::kDrive;
 };
 
 struct ActuatorRequest {
   double steer = 0.0;     // rad
   double throttle = 0.0;  // 0..1
   double brake = 0.0;     // 0..1
-  safety::Gear gear = safety::Gear::none;
+  safety::Gear gear = safety::Gear::kNone;
 };
 
 class VehicleModel {

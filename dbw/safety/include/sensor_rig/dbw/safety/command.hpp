@@ -6,7 +6,7 @@
 
 namespace sensor_rig::dbw::safety {
 
-enum class Gear : std::uint8_t { none = 0, park = 1, reverse = 2, neutral = 3, drive = 4 };
+enum class Gear : std::uint8_t { kNone = 0, kPark = 1, kReverse = 2, kNeutral = 3, kDrive = 4 };
 
 // Who sent a command: the DDS publication handle of its writer (0 when there is only one source).
 using WriterId = std::uint64_t;
@@ -21,7 +21,7 @@ struct Command {
   double throttle = 0.0;         // 0..1
   double brake = 0.0;            // 0..1
   double accel = 0.0;            // requested longitudinal acceleration, m/s^2
-  Gear gear = Gear::none;        // none = keep
+  Gear gear = Gear::kNone;       // none = keep
 };
 
 }  // namespace sensor_rig::dbw::safety

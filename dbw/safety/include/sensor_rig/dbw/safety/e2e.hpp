@@ -23,16 +23,16 @@ namespace sensor_rig::dbw::safety {
 [[nodiscard]] std::uint8_t crc8h2f(std::span<const std::uint8_t> data, std::uint8_t start = 0xFF,
                                    bool first = true) noexcept;
 
-enum class E2eProfile : std::uint8_t { none, counter, j1850, p01, p02 };
-enum class P01IdMode : std::uint8_t { both, alt, low, nibble };
+enum class E2eProfile : std::uint8_t { kNone, kCounter, kJ1850, kP01, kP02 };
+enum class P01IdMode : std::uint8_t { kBoth, kAlt, kLow, kNibble };
 [[nodiscard]] bool parse_profile(std::string_view name, E2eProfile& out) noexcept;
 [[nodiscard]] std::string_view to_string(E2eProfile p) noexcept;
 [[nodiscard]] bool parse_id_mode(std::string_view name, P01IdMode& out) noexcept;
 
 struct E2eConfig {
-  E2eProfile profile = E2eProfile::none;
+  E2eProfile profile = E2eProfile::kNone;
   std::uint16_t data_id = 0;                    // p01, j1850
-  P01IdMode id_mode = P01IdMode::both;          // p01
+  P01IdMode id_mode = P01IdMode::kBoth;         // p01
   std::array<std::uint8_t, 16> data_id_list{};  // p02
   std::size_t crc_byte = 0;                     // byte holding the CRC (p02: 0)
   std::size_t counter_byte = 1;                 // byte holding the 4-bit counter
@@ -50,15 +50,15 @@ struct E2eConfig {
 bool protect(const E2eConfig& c, std::span<std::uint8_t> data, std::uint8_t counter) noexcept;
 
 enum class E2eStatus : std::uint8_t {
-  ok,             // CRC good, counter advanced by 1 (or first frame)
-  ok_some_lost,   // CRC good, counter advanced by 2..max_delta
-  repeated,       // same counter as the previous frame (stuck counter)
-  wrong_sequence, // counter jumped further than max_delta
-  bad_crc,
-  bad_layout,     // frame too short for the configured positions, or p01 counter 15
+  kOk,             // CRC good, counter advanced by 1 (or first frame)
+  kOkSomeLost,     // CRC good, counter advanced by 2..max_delta
+  kRepeated,       // same counter as the previous frame (stuck counter)
+  kWrongSequence,  // counter jumped further than max_delta
+  kBadCrc,
+  kBadLayout,  // frame too short for the configured positions, or p01 counter 15
 };
 [[nodiscard]] std::string_view to_string(E2eStatus s) noexcept;
-[[nodiscard]] inline bool is_ok(E2eStatus s) noexcept { return s == E2eStatus::ok || s == E2eStatus::ok_some_lost; }
+[[nodiscard]] inline bool is_ok(E2eStatus s) noexcept { return s == E2eStatus::kOk || s == E2eStatus::kOkSomeLost; }
 
 // Receiver state per protected message.
 class E2eChecker {

@@ -10,17 +10,17 @@
 
 namespace sensor_rig::dbw::safety {
 
-enum class Axis : std::uint8_t { steering_angle, steering_torque, throttle, brake, accel, count };
-inline constexpr std::size_t kAxes = static_cast<std::size_t>(Axis::count);
+enum class Axis : std::uint8_t { kSteeringAngle, kSteeringTorque, kThrottle, kBrake, kAccel, kCount };
+inline constexpr std::size_t kAxes = static_cast<std::size_t>(Axis::kCount);
 [[nodiscard]] std::string_view to_string(Axis a) noexcept;
 
-enum class LimitAction : std::uint8_t { clamp, reject };
+enum class LimitAction : std::uint8_t { kClamp, kReject };
 
 struct AxisLimit {
   double min = 0.0;
   double max = 0.0;
   double max_rate = 0.0;  // |d/dt| per second; 0 = unlimited
-  LimitAction action = LimitAction::clamp;
+  LimitAction action = LimitAction::kClamp;
 };
 
 struct VehicleLimits {
@@ -40,11 +40,11 @@ struct VehicleLimits {
 // ±8 Nm, pedals 0..1 slewing at 2/s, acceleration -8..3 m/s^2 with jerk 5 m/s^3.
 inline constexpr VehicleLimits kParavanRef{
     "paravan_ref",
-    {{{-0.6, 0.6, 0.8, LimitAction::clamp},
-      {-8.0, 8.0, 40.0, LimitAction::clamp},
-      {0.0, 1.0, 2.0, LimitAction::clamp},
-      {0.0, 1.0, 4.0, LimitAction::clamp},
-      {-8.0, 3.0, 5.0, LimitAction::clamp}}},
+    {{{-0.6, 0.6, 0.8, LimitAction::kClamp},
+      {-8.0, 8.0, 40.0, LimitAction::kClamp},
+      {0.0, 1.0, 2.0, LimitAction::kClamp},
+      {0.0, 1.0, 4.0, LimitAction::kClamp},
+      {-8.0, 3.0, 5.0, LimitAction::kClamp}}},
     2.94,
     3.0,
     0.05};
@@ -53,11 +53,11 @@ inline constexpr VehicleLimits kParavanRef{
 // violations are rejected (disengage) instead of clamped.
 inline constexpr VehicleLimits kEClassTrack{
     "eclass_track",
-    {{{-0.5, 0.5, 0.5, LimitAction::reject},
-      {-5.0, 5.0, 20.0, LimitAction::reject},
-      {0.0, 0.6, 1.0, LimitAction::clamp},
-      {0.0, 1.0, 3.0, LimitAction::clamp},
-      {-6.0, 2.0, 3.0, LimitAction::clamp}}},
+    {{{-0.5, 0.5, 0.5, LimitAction::kReject},
+      {-5.0, 5.0, 20.0, LimitAction::kReject},
+      {0.0, 0.6, 1.0, LimitAction::kClamp},
+      {0.0, 1.0, 3.0, LimitAction::kClamp},
+      {-6.0, 2.0, 3.0, LimitAction::kClamp}}},
     2.94,
     2.5,
     0.05};
@@ -66,7 +66,7 @@ inline constexpr std::array<const VehicleLimits*, 2> kVehicles{&kParavanRef, &kE
 [[nodiscard]] const VehicleLimits* find_vehicle(std::string_view name) noexcept;
 
 struct Violation {
-  Axis axis = Axis::steering_angle;
+  Axis axis = Axis::kSteeringAngle;
   bool rate = false;       // rate (or jerk) limit, else range
   bool rejected = false;   // rejected rather than clamped
   bool not_finite = false; // NaN/inf: always rejected

@@ -27,23 +27,23 @@
 
 namespace sensor_rig::dbw::safety {
 
-enum class State : std::uint8_t { disengaged, engaged };
+enum class State : std::uint8_t { kDisengaged, kEngaged };
 
 enum class Reason : std::uint8_t {
-  none,
-  enabled,            // engaged on an enable edge
-  enable_released,
-  command_timeout,
-  ecu_timeout,
-  e2e_errors,
-  driver_override,
-  ecu_fault,
-  ecu_not_ready,
-  invalid_command,    // NaN/inf or a rejected limit violation
-  bus_off,
-  no_command,         // engage refused: no fresh command
-  not_owner,          // command ignored: another writer owns the engagement
-  shutdown,           // the bridge is stopping
+  kNone,
+  kEnabled,  // engaged on an enable edge
+  kEnableReleased,
+  kCommandTimeout,
+  kEcuTimeout,
+  kE2eErrors,
+  kDriverOverride,
+  kEcuFault,
+  kEcuNotReady,
+  kInvalidCommand,  // NaN/inf or a rejected limit violation
+  kBusOff,
+  kNoCommand,  // engage refused: no fresh command
+  kNotOwner,   // command ignored: another writer owns the engagement
+  kShutdown,   // the bridge is stopping
 };
 [[nodiscard]] std::string_view to_string(State s) noexcept;
 [[nodiscard]] std::string_view to_string(Reason r) noexcept;
@@ -71,21 +71,21 @@ struct EcuStatus {
   std::uint8_t fault_code = 0;
 };
 
-enum class EventKind : std::uint8_t { transition, engage_refused, limit, command_ignored, fault };
+enum class EventKind : std::uint8_t { kTransition, kEngageRefused, kLimit, kCommandIgnored, kFault };
 [[nodiscard]] std::string_view to_string(EventKind k) noexcept;
 
 struct Event {
   Nanos t = 0;  // the `now` of the call that caused it (monotonic)
-  EventKind kind = EventKind::transition;
-  State state = State::disengaged;  // state after the event
-  Reason reason = Reason::none;
+  EventKind kind = EventKind::kTransition;
+  State state = State::kDisengaged;  // state after the event
+  Reason reason = Reason::kNone;
   Violation violation{};  // kind == limit
 };
 
 struct Decision {
   bool active = false;  // true: send `command`; false: send the neutral/disengage frame
   Command command{};
-  State state = State::disengaged;
+  State state = State::kDisengaged;
 };
 
 struct SafetyCounters {
@@ -159,8 +159,8 @@ class SafetyCore {
 
   SafetyConfig cfg_;
   LimitChecker checker_;
-  State state_ = State::disengaged;
-  Reason reason_ = Reason::none;
+  State state_ = State::kDisengaged;
+  Reason reason_ = Reason::kNone;
   Command latest_{};           // the owner's latest applied command
   WriterId owner_ = 0;
   Nanos last_cmd_rx_ = 0;      // monotonic receipt of `latest_`
