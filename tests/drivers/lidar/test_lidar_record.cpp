@@ -20,27 +20,15 @@
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
 #include "sensor_rig/lidar/udp_sender.hpp"
+#include "status_value.hpp"
+#include "wait.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
 
+using test::wait_for;
+
 namespace fs = std::filesystem;
-
-template <class Pred>
-bool wait_for(Pred p, int ms) {
-  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
-  while (!p()) {
-    if (monotonic_now_ns() > deadline) return false;
-    ::usleep(5000);
-  }
-  return true;
-}
-
-std::string value(const dds::DriverStatus& s, const std::string& key) {
-  for (const auto& [k, v] : s.values)
-    if (k == key) return v;
-  return "<absent>";
-}
 
 struct Packet {
   std::vector<std::byte> bytes;
@@ -108,14 +96,14 @@ TEST(LidarRecord, RecordingIsWhatArrivedAndDecodesToThePublishedScans) {
   ASSERT_TRUE(wait_for(
       [&] {
         take();
-        return value(driver.status(), "record_packets") == std::to_string(sent.size());
+        return test::status_value(driver.status(), "record_packets") == std::to_string(sent.size());
       },
       5000))
-      << value(driver.status(), "record_packets") << " of " << sent.size();
+      << test::status_value(driver.status(), "record_packets") << " of " << sent.size();
   ::usleep(100'000);
   take();
   driver.stop();
-  EXPECT_EQ(value(driver.status(), "record_errors"), "0");
+  EXPECT_EQ(test::status_value(driver.status(), "record_errors"), "0");
 
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(c.record.directory)) files.push_back(e.path());
@@ -185,11 +173,11 @@ TEST(LidarRecord, UnwritableDirectoryIsReportedAndTheDriverKeepsPublishing) {
       },
       5000))
       << scans;
-  ASSERT_TRUE(wait_for([&] { return value(driver.status(), "record_dropped") == std::to_string(sent.size()); }, 2000))
-      << value(driver.status(), "record_dropped");
+  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "record_dropped") == std::to_string(sent.size()); }, 2000))
+      << test::status_value(driver.status(), "record_dropped");
   const auto st = driver.status();
-  EXPECT_EQ(value(st, "record_packets"), "0");
-  EXPECT_NE(value(st, "record_errors"), "0");
+  EXPECT_EQ(test::status_value(st, "record_packets"), "0");
+  EXPECT_NE(test::status_value(st, "record_errors"), "0");
   EXPECT_EQ(st.level, dds::Level::kWarn);
   EXPECT_NE(st.message.find("cannot create"), std::string::npos) << st.message;
   driver.stop();
@@ -217,7 +205,7 @@ TEST(LidarRecord, RigLidarDecodeOfTheRecordingGivesThePublishedScans) {
   ASSERT_TRUE(wait_for(
       [&] {
         reader.take([&](const msg::PointCloud2& m, const dds_sample_info_t&) { published.push_back(m.width); });
-        return value(driver.status(), "record_packets") == std::to_string(sent.size());
+        return test::status_value(driver.status(), "record_packets") == std::to_string(sent.size());
       },
       5000));
   ::usleep(100'000);

@@ -19,29 +19,16 @@
 #include "sensor_rig/lidar/ouster/imu_packet.hpp"
 #include "sensor_rig/lidar/udp_sender.hpp"
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
+#include "status_value.hpp"
+#include "wait.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
 
+using test::wait_for;
+
 namespace vel = lidar::velodyne;
-// True as soon as `p()` holds, false after `ms` (tests/support/wait.hpp is not in every checkout).
-template <class Pred>
-bool wait_for(Pred p, int ms) {
-  const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
-  while (!p()) {
-    if (monotonic_now_ns() > deadline) return false;
-    ::usleep(5000);
-  }
-  return true;
-}
-
 std::string unique(const std::string& base) { return base + "_" + std::to_string(::getpid()); }
-
-std::string value(const dds::DriverStatus& s, const std::string& key) {
-  for (const auto& [k, v] : s.values)
-    if (k == key) return v;
-  return "<absent>";
-}
 
 dds::QosSpec reader_qos() {
   dds::QosSpec q;
@@ -143,11 +130,11 @@ TEST(LidarSideTopics, OusterImuPacketsBecomeImuInSiUnits) {
     exact += m.stamp == gyro ? 1 : 0;  // sensor_synced: the gyro's own time (not the accel's, 1 µs before)
   }
   EXPECT_GE(exact, 1);
-  ASSERT_TRUE(wait_for([&] { return value(driver.status(), "imu_dropped_non_finite") == "1"; }, 1000));
+  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "imu_dropped_non_finite") == "1"; }, 1000));
   const auto st = driver.status();
-  EXPECT_EQ(value(st, "imu_samples"), "5");
-  EXPECT_EQ(value(st, "imu_dropped_wrong_size"), "2");
-  EXPECT_EQ(value(st, "imu_topic"), "/sensors/lidar/" + c.name + "/imu");
+  EXPECT_EQ(test::status_value(st, "imu_samples"), "5");
+  EXPECT_EQ(test::status_value(st, "imu_dropped_wrong_size"), "2");
+  EXPECT_EQ(test::status_value(st, "imu_topic"), "/sensors/lidar/" + c.name + "/imu");
   driver.stop();
 }
 
@@ -247,13 +234,13 @@ TEST(LidarSideTopics, VelodyneGprmcBecomesNavSatFixAndBadSentencesAreCounted) {
   EXPECT_NEAR(seen[4].lat, 37.0 + 7.8324 / 60.0, 1e-9);
   EXPECT_NEAR(seen[4].lon, -(121.0 + 39.2864 / 60.0), 1e-9);
 
-  ASSERT_TRUE(wait_for([&] { return value(driver.status(), "position_dropped_wrong_size") == "1"; }, 1000));
+  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "position_dropped_wrong_size") == "1"; }, 1000));
   const auto st = driver.status();
-  EXPECT_EQ(value(st, "fixes"), "5");
-  EXPECT_EQ(value(st, "fixes_no_fix"), "3");
-  EXPECT_EQ(value(st, "gprmc_bad_checksum"), "1");
-  EXPECT_EQ(value(st, "gprmc_malformed"), "1");
-  EXPECT_EQ(value(st, "position_packets"), "10");
+  EXPECT_EQ(test::status_value(st, "fixes"), "5");
+  EXPECT_EQ(test::status_value(st, "fixes_no_fix"), "3");
+  EXPECT_EQ(test::status_value(st, "gprmc_bad_checksum"), "1");
+  EXPECT_EQ(test::status_value(st, "gprmc_malformed"), "1");
+  EXPECT_EQ(test::status_value(st, "position_packets"), "10");
   driver.stop();
 }
 
