@@ -58,7 +58,7 @@ void register_dbw_cli(CLI::App& app, cli::Context& ctx) {
   auto& dbw = *app.add_subcommand("dbw", "Drive-by-wire: command source, bridge")->require_subcommand(1);
   auto so = std::make_shared<CommandSourceOptions>();
   auto* send = dbw.add_subcommand("send", "publish a fixed command on /vehicle/dbw/cmd at a rate, then stop");
-  send->add_flag("--enable", so->enable, "request engagement (the first sample has enable=false: an edge)");
+  send->add_flag("--enable", so->enable, "request engagement (enable=false for the first 200 ms: an edge the bridge sees even if it matches this writer late)");
   send->add_option("--steer", so->steer, "road-wheel angle, rad (positive left)");
   send->add_option("--throttle", so->throttle, "0..1");
   send->add_option("--brake", so->brake, "0..1");

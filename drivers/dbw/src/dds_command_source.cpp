@@ -1,6 +1,7 @@
 // `rig dbw send`: a fixed command at a fixed rate on /vehicle/dbw/cmd; ends by simply stopping.
 #include <time.h>
 
+#include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/drivers/dbw/dds_bridge.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
@@ -10,11 +11,16 @@ namespace sensor_rig::drivers {
 
 using namespace sensor_rig::dbw;  // NOLINT(google-build-using-namespace): the node of the dbw area
 
+namespace {
+constexpr Nanos kEdgeHoldNs = 200'000'000;
+}  // namespace
+
 std::uint64_t run_command_source(const CommandSourceOptions& o) {
   dds::Participant participant(domain_config(o.domain));
   dds::Topic<msg::DbwCommand> topic(participant, kCmdTopic);
   dds::Writer<msg::DbwCommand> writer(participant, topic);
-  writer.wait_for_readers(1, static_cast<int>(o.wait_for_reader_s * 1000));
+  if (!writer.wait_for_readers(1, static_cast<int>(o.wait_for_reader_s * 1000)))
+    log::warn("dbw", "send: no bridge matched within " + std::to_string(o.wait_for_reader_s) + " s; sending anyway");
   const Nanos period = static_cast<Nanos>(1e9 / o.rate_hz);
   const auto offset = static_cast<Nanos>(o.clock_offset_s * 1e9);  // this process's clock, as if off
   const Nanos start = monotonic_now_ns();
@@ -29,7 +35,11 @@ std::uint64_t run_command_source(const CommandSourceOptions& o) {
     const Nanos stamp = vehicle_now_ns() + offset;
     c.header.stamp = msg::to_time(stamp);
     c.seq = ++sent;
-    c.enable = o.enable && !(o.enable_edge && sent == 1);
+    // The edge: enable=false for the first kEdgeHoldNs, not one sample. The writer having matched
+    // the bridge does not mean the bridge has matched the writer yet (discovery runs both ways):
+    // a volatile reader that matches late never sees the samples before, and a lost single
+    // false sample would leave the bridge without an edge, never engaging.
+    c.enable = o.enable && !(o.enable_edge && (sent == 1 || next - start < kEdgeHoldNs));
     c.steering_angle = o.steer;
     c.steering_torque = 0.0;
     c.throttle = o.throttle;

@@ -48,7 +48,9 @@ class StatusWatch {
     reader_.take(
         [this](const msg::DbwStatus& s, const dds_sample_info_t&) {
           engaged = s.state == 1;
-          if (std::string(s.event) == "transition") transitions.push_back({msg::from_time(s.header.stamp), s.state, s.event_reason});
+          const std::string event = s.event;
+          if (event == "transition") transitions.push_back({msg::from_time(s.header.stamp), s.state, s.event_reason});
+          if (event != "periodic") events += event + ":" + std::string(s.event_reason) + " ";
         },
         256);
   }
@@ -68,6 +70,7 @@ class StatusWatch {
     return nullptr;
   }
   std::vector<Transition> transitions;
+  std::string events;  // every non-periodic status event, for failure messages
   bool engaged = false;
 
  private:
@@ -153,7 +156,7 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   // 2. Sender 3 engages; the bridge is killed and restarted under it.
   const Nanos s3_start = vehicle_now_ns();
   const pid_t s3 = send("s3", true, 4.0);
-  ASSERT_TRUE(st.wait(4000, [&] { return st.first_after(s3_start, 1) != nullptr; })) << "sender 3 did not engage";
+  ASSERT_TRUE(st.wait(4000, [&] { return st.first_after(s3_start, 1) != nullptr; })) << "sender 3 did not engage; bridge events: " << st.events;
   ::kill(bridge_a, SIGKILL);
   rig.wait_exit(bridge_a, 2000);
   const Nanos restart = vehicle_now_ns();
@@ -171,7 +174,7 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   EXPECT_EQ(st.first_after(s4_start, 1), nullptr) << "commands stamped 5 s in the past engaged";
   const Nanos s5_start = vehicle_now_ns();
   const pid_t s5 = send("s5", true, 3.0);
-  ASSERT_TRUE(st.wait(4000, [&] { return st.first_after(s5_start, 1) != nullptr; })) << "sender 5 did not engage";
+  ASSERT_TRUE(st.wait(4000, [&] { return st.first_after(s5_start, 1) != nullptr; })) << "sender 5 did not engage; bridge events: " << st.events;
   const Nanos s6_start = vehicle_now_ns();
   const pid_t s6 = send("s6", false, 0.3, -5.0);
   ASSERT_TRUE(st.wait(3000, [&] { return st.first_after(s6_start, 0) != nullptr; })) << "a late clock's disable was ignored";
@@ -182,7 +185,7 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   // 4. Sender 7 engages; SIGTERM to the bridge while engaged.
   const Nanos s7_start = vehicle_now_ns();
   const pid_t s7 = send("s7", true, 5.0);
-  ASSERT_TRUE(st.wait(4000, [&] { return st.first_after(s7_start, 1) != nullptr; })) << "sender 7 did not engage";
+  ASSERT_TRUE(st.wait(4000, [&] { return st.first_after(s7_start, 1) != nullptr; })) << "sender 7 did not engage; bridge events: " << st.events;
   st.wait(300, [] { return false; });
   ::kill(bridge_b, SIGTERM);
   const Nanos term = vehicle_now_ns();

@@ -52,7 +52,7 @@ struct CommandSourceOptions {
   double rate_hz = 50.0;
   double duration_s = 1.0;
   double wait_for_reader_s = 2.0;  // wait this long for the bridge to match before sending
-  bool enable_edge = true;         // with --enable: first sample enable=false so the bridge sees an edge
+  bool enable_edge = true;         // with --enable: enable=false for the first 200 ms so the bridge sees an edge
   int domain = -1;                 // DDS domain; -1: ROS_DOMAIN_ID or 0
   double clock_offset_s = 0.0;     // added to every stamp (tests: a process whose clock is off)
 };
