@@ -10,7 +10,7 @@ namespace {
 constexpr std::uint32_t kIpProtoOffset = 9;
 constexpr std::uint32_t kIpSrcOffset = 12;
 constexpr std::uint32_t kIpFragOffset = 6;
-constexpr std::uint32_t kFragOffsetMask = 0x1fff;  // non-zero: not the first fragment
+constexpr std::uint32_t kFragmentBits = 0x3fff;  // more-fragments flag | fragment offset: any fragment
 
 // Instructions with symbolic jump targets, resolved to relative offsets at the end.
 struct Asm {
@@ -56,7 +56,9 @@ std::vector<sock_filter> build_sensor_filter(const SensorFilter& f) {
     a.jump(BPF_JMP | BPF_JEQ | BPF_K, f.src_host, -1, reject);
   }
   a.op(BPF_LD | BPF_H | BPF_ABS, kIpFragOffset);
-  a.jump(BPF_JMP | BPF_JSET | BPF_K, kFragOffsetMask, accept, -1);  // no UDP header to look at
+  // Any fragment: later ones carry no UDP header, and the first alone cannot tell whether the
+  // datagram completes; the reassembler, then the port check after it, decide.
+  a.jump(BPF_JMP | BPF_JSET | BPF_K, kFragmentBits, accept, -1);
   a.op(BPF_LDX | BPF_B | BPF_MSH, 0);                                 // X = IPv4 header length
   a.op(BPF_LD | BPF_H | BPF_IND, 2);                                  // UDP destination port
   a.jump(BPF_JMP | BPF_JEQ | BPF_K, f.dst_port, accept, reject);

@@ -1,6 +1,6 @@
 // The ring source's classic BPF program, run in userspace on synthetic IPv4 packets (the kernel
 // runs the same instructions; test_lidar_udp checks it on a real socket): UDP to the sensor's port
-// and non-first fragments pass, everything else is rejected; with a sensor address, only its packets.
+// and UDP fragments pass, everything else is rejected; with a sensor address, only its packets.
 #include <gtest/gtest.h>
 
 #include "ipv4_packets.hpp"
@@ -39,15 +39,18 @@ TEST(PacketFilter, PortIsFoundBehindHeaderOptions) {
   EXPECT_FALSE(passes({7502, 0}, udp_to(7503, opts)));
 }
 
-TEST(PacketFilter, FragmentsFirstByPortTheRestBySender) {
+TEST(PacketFilter, FragmentsPassBySenderTheReassemblerDecides) {
   const Ip ip;
   const auto frags = test::fragments(ip, test::udp_segment(40000, 7502, test::payload_of(4000, 2)), 1480);
   ASSERT_EQ(frags.size(), 3u);
   for (const auto& fr : frags) EXPECT_TRUE(passes({7502, 0}, fr));
-  // The first fragment carries the UDP header: another port is rejected; later ones cannot be told.
+  // Another port's fragments pass too (later ones cannot be told apart); not a TCP fragment.
   const auto other = test::fragments(ip, test::udp_segment(40000, 9999, test::payload_of(4000, 2)), 1480);
-  EXPECT_FALSE(passes({7502, 0}, other[0]));
-  EXPECT_TRUE(passes({7502, 0}, other[1]));
+  EXPECT_TRUE(passes({7502, 0}, other[0]));
+  EXPECT_TRUE(passes({7502, 0}, other[2]));
+  Ip tcp = ip;
+  tcp.proto = 6;
+  EXPECT_FALSE(passes({7502, 0}, test::fragments(tcp, test::payload_of(4000, 2), 1480)[1]));
   // With the sensor's address: another sender's later fragments are rejected too.
   EXPECT_TRUE(passes({7502, ip.src}, frags[1]));
   EXPECT_FALSE(passes({7502, ip.src + 1}, frags[1]));

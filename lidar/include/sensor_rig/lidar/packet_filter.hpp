@@ -4,9 +4,11 @@
 // uses, so the program is tested without a socket. Pure: no I/O.
 //
 // The program runs on a SOCK_DGRAM packet socket bound to ETH_P_IP: offsets start at the IPv4
-// header. It accepts IPv4 UDP to the sensor's port, and every non-first IPv4 fragment (those carry
-// no UDP header, so the port cannot be seen: the reassembler and the port check after it decide).
-// With src_host set, only packets from the sensor's address pass (several sensors on one link).
+// header. It accepts IPv4 UDP to the sensor's port, and every IPv4 UDP fragment (later fragments
+// carry no UDP header, so the port cannot be seen: the reassembler and the port check after it
+// decide; the datagrams of other ports are then counted as filtered, not lost as timeouts).
+// With src_host set, only packets from the sensor's address pass: give it, so other hosts'
+// fragments on the link never reach the ring (several sensors on one interface).
 #include <linux/filter.h>
 
 #include <cstddef>
