@@ -1,5 +1,8 @@
 #include "sensor_rig/drivers/lidar/lidar_config.hpp"
 
+#include <arpa/inet.h>
+#include <net/if.h>
+
 #include <filesystem>
 
 #include "sensor_rig/lidar/decoder_files.hpp"
@@ -57,12 +60,41 @@ void check_decoder_files(const config::Node& n, const LidarConfig& l) {
   }
 }
 
+// source / interface / sensor_address. Whether the interface exists is the driver's to say at
+// start (a USB NIC may come later than the config check); the name's form is checked here.
+void parse_source(const config::Node& n, LidarConfig& l) {
+  l.source = n.get_enum<LidarSource>("source", {{"udp", LidarSource::kUdp}, {"packet", LidarSource::kPacket}},
+                                     LidarSource::kUdp);
+  const bool packet = l.source == LidarSource::kPacket;
+  if (n.has("interface")) {
+    l.interface = n.get_string("interface");
+    if (!packet) {
+      n.fail("interface", "only used with source: packet (the UDP source binds host:port)");
+    } else if (l.interface.empty() || l.interface.size() >= IF_NAMESIZE ||
+               l.interface.find_first_of("/ \t:") != std::string::npos) {
+      n.fail("interface", "'" + l.interface + "' is not a network interface name");
+    }
+  } else if (packet) {
+    n.fail("source", "source: packet needs interface: <ifname> (the interface the sensor is on)");
+  }
+  if (n.has("sensor_address")) {
+    l.sensor_address = n.get_string("sensor_address");
+    in_addr a{};
+    if (!packet) {
+      n.fail("sensor_address", "only used with source: packet (it selects the sensor's packets on the interface)");
+    } else if (::inet_pton(AF_INET, l.sensor_address.c_str(), &a) != 1) {
+      n.fail("sensor_address", "'" + l.sensor_address + "' is not an IPv4 address");
+    }
+  }
+}
+
 }  // namespace
 
 LidarConfig parse_lidar_config(const config::Node& n) {
   LidarConfig l;
   if (!n.expect_map()) return l;
-  n.allow_keys({"name", "model", "host", "port", "position_port", "imu_port", "receive_buffer_bytes", "calibration",
+  n.allow_keys({"name", "model", "host", "port", "position_port", "imu_port", "receive_buffer_bytes", "source",
+                "interface", "sensor_address", "calibration",
                 "metadata", "returns", "min_range", "max_range", "cut_angle", "fov", "azimuth", "time_source", "hour_source", "clock_correction",
                 "frame_id", "realtime_priority", "qos", "mock", "record"});
   l.name = n.get_string("name");
@@ -89,6 +121,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
     }
   }
   l.receive_buffer_bytes = static_cast<int>(n.get_int("receive_buffer_bytes", 0, 1 << 30, 8 << 20));
+  parse_source(n, l);
   l.calibration = n.get_path("calibration", "");
   if (!l.calibration.empty() && !std::filesystem::exists(l.calibration))
     n.fail("calibration", "file not found: " + l.calibration);

@@ -12,10 +12,12 @@
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/lidar/ouster/imu_packet.hpp"
 #include "sensor_rig/lidar/pcap_recorder.hpp"
+#include "sensor_rig/lidar/ring_source.hpp"
 #include "sensor_rig/lidar/udp_source.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
 #include "sensor_rig/drivers/lidar/lidar_stamping.hpp"
+#include "sensor_rig/drivers/lidar/sweep_samples.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 
 namespace sensor_rig::drivers {
@@ -49,6 +51,27 @@ std::unique_ptr<lidar::PcapRecorder> make_recorder(const LidarConfig& c) {
 std::uint32_t ipv4_of(const std::string& host) {
   in_addr a{};
   return ::inet_pton(AF_INET, host.c_str(), &a) == 1 ? ntohl(a.s_addr) : 0;
+}
+
+// The data port's source as the config asks: a UDP socket, or the packet ring on an interface.
+// No SO_REUSEADDR: a second driver on the same port must fail, not silently share packets.
+std::unique_ptr<lidar::UdpSource> make_udp_source(const LidarConfig& c) {
+  if (c.source != LidarSource::kUdp) return nullptr;
+  return std::make_unique<lidar::UdpSource>(
+      lidar::UdpSourceConfig{{c.host, static_cast<std::uint16_t>(c.port)}, c.receive_buffer_bytes, 64, false});
+}
+
+std::unique_ptr<lidar::RingSource> make_ring_source(const LidarConfig& c) {
+  if (c.source != LidarSource::kPacket) return nullptr;
+  lidar::RingSourceConfig r;
+  r.interface = c.interface;
+  r.port = static_cast<std::uint16_t>(c.port);
+  r.sensor_host = c.sensor_address.empty() ? 0 : ipv4_of(c.sensor_address);
+  try {
+    return std::make_unique<lidar::RingSource>(r);
+  } catch (const std::exception& e) {  // unknown interface, no CAP_NET_RAW: say which LIDAR
+    throw std::runtime_error("lidar " + c.name + ": " + e.what());
+  }
 }
 
 bool model_vendor_is(const LidarConfig& c, std::string_view vendor) {
@@ -110,6 +133,23 @@ msg::Imu imu_message(const lidar::ouster::ImuSample& s, Nanos stamp, const char*
   return m;
 }
 
+// The packet ring's counters in /diagnostics; kernel_drops is the ring's, as the UDP source's is its socket's.
+void add_ring_counters(dds::DriverStatus& s, const lidar::RingSourceStats& r) {
+  s.add("source", "packet");
+  s.add_number("kernel_drops", r.ring_drops);
+  s.add_number("truncated", r.truncated);
+  s.add_number("ring_packets", r.ring_packets);
+  s.add_number("ring_drops", r.ring_drops);
+  s.add_number("ring_freeze_q", r.ring_freeze_q);
+  s.add_number("ring_filtered", r.filtered);
+  s.add_number("reassembled", r.reassembly.reassembled);
+  s.add_number("reassembly_duplicates", r.reassembly.duplicates);
+  s.add_number("reassembly_dropped", r.reassembly.dropped_total());
+  for (std::size_t i = 0; i < r.reassembly.dropped.size(); ++i)
+    s.add_number(std::string("reassembly_dropped_") + lidar::to_string(static_cast<lidar::ReassemblyDrop>(i)),
+                 r.reassembly.dropped[i]);
+}
+
 }  // namespace
 
 struct LidarDriver::Impl {
@@ -118,7 +158,8 @@ struct LidarDriver::Impl {
   std::unique_ptr<lidar::ScanDecoder> decoder;
   bool velodyne = false;               // position packets and top-of-hour time are Velodyne's
   bool ouster = false;                 // the second port carries IMU packets
-  lidar::UdpSource data;
+  std::unique_ptr<lidar::UdpSource> udp;    // source: udp
+  std::unique_ptr<lidar::RingSource> ring;  // source: packet
   std::unique_ptr<lidar::UdpSource> position;  // second port: Velodyne position / Ouster IMU packets
   // 64 kB slots: the largest UDP payload (an OS-128 packet is ~25 kB; Velodyne 1206 B).
   lidar::SlotArena arena{64, 65536};
@@ -142,6 +183,8 @@ struct LidarDriver::Impl {
   std::uint32_t host_ip = 0;
   std::thread thread;
   std::atomic<bool> stop_flag{false};
+  std::vector<timesync::SweepObserver*> sweep_observers;  // set before start(), read by the thread
+  std::vector<timesync::SweepSample> sweep_buffer;
 
   // Counters shared with status(); written by the driver thread only.
   mutable std::mutex mutex;
@@ -160,6 +203,7 @@ struct LidarDriver::Impl {
   std::uint64_t imu_samples = 0;           // Imu published
   std::uint64_t imu_dropped_size = 0;      // second-port packets that are not 48 bytes
   std::uint64_t imu_dropped_non_finite = 0;
+  std::uint64_t sweep_samples_sent = 0;    // to the sweep observers (LIDAR-triggered cameras)
   Nanos last_scan_host_ns = 0;
   double scan_rate_hz = 0.0;
   std::size_t last_points = 0;
@@ -171,6 +215,7 @@ struct LidarDriver::Impl {
   std::string record_error;
   std::string record_file;
   lidar::UdpSourceStats udp_stats;
+  lidar::RingSourceStats ring_stats;
   timesync::StamperStatus sync;
   timesync::ClockMapperStatus absolute_sync;
   timesync::AbsoluteSource absolute_source = timesync::AbsoluteSource::kNone;
@@ -180,8 +225,8 @@ struct LidarDriver::Impl {
         topic_name("/sensors/lidar/" + c.name + "/points"),
         decoder(make_driver_decoder(c)),
         velodyne(lidar::find_model(c.model) != nullptr && lidar::find_model(c.model)->vendor == "velodyne"),
-        // No SO_REUSEADDR: a second driver on the same port must fail, not silently share packets.
-        data(lidar::UdpSourceConfig{{c.host, static_cast<std::uint16_t>(c.port)}, c.receive_buffer_bytes, 64, false}),
+        udp(make_udp_source(c)),
+        ring(make_ring_source(c)),
         topic(p, topic_name, c.qos),
         writer(p, topic, c.qos),
         stamps(s),
@@ -299,7 +344,17 @@ struct LidarDriver::Impl {
     }
   }
 
+  // Before the write: a triggered camera learns the sweep's phase as early as possible.
+  void notify_sweep(const lidar::Scan& scan) {
+    if (sweep_observers.empty()) return;
+    sweep_samples(scan, sweep_buffer);
+    for (auto* o : sweep_observers) o->observe_sweep(sweep_buffer);
+    std::lock_guard lock(mutex);
+    sweep_samples_sent += sweep_buffer.size();
+  }
+
   void publish(lidar::Scan& scan) {
+    notify_sweep(scan);
     const Nanos ready = vehicle_now_ns();
     msg::PointCloud2 pc{};
     pc.header.stamp = msg::to_time(scan.stamp);
@@ -337,10 +392,16 @@ struct LidarDriver::Impl {
     last_scan_host_ns = publish;
   }
 
+  lidar::RecvResult receive(std::span<lidar::PacketSlot> slots, int timeout_ms) noexcept {
+    return ring ? ring->receive(slots, timeout_ms) : udp->receive(slots, timeout_ms);
+  }
+
+  [[nodiscard]] std::uint16_t data_port() const noexcept { return ring ? ring->port() : udp->port(); }
+
   void run() {
     auto slots = arena.slots();
     while (!stop_flag.load() && !shutdown_requested()) {
-      const auto r = data.receive(slots, 50);
+      const auto r = receive(slots, 50);
       if (r.status == lidar::RecvStatus::kError) {
         std::lock_guard lock(mutex);
         last_error = std::string("receive: ") + std::strerror(r.error);
@@ -359,7 +420,11 @@ struct LidarDriver::Impl {
       handle_second_port();
       std::lock_guard lock(mutex);
       decoder_stats = decoder->counters();
-      udp_stats = data.stats();
+      if (ring) {
+        ring_stats = ring->stats();
+      } else {
+        udp_stats = udp->stats();
+      }
       if (recorder) {
         record_stats = recorder->stats();
         record_error = recorder->last_error();
@@ -377,6 +442,10 @@ LidarDriver::LidarDriver(const LidarConfig& cfg, const dds::Participant& partici
 
 LidarDriver::~LidarDriver() { stop(); }
 
+void LidarDriver::add_sweep_observer(timesync::SweepObserver* o) {
+  if (o != nullptr) impl_->sweep_observers.push_back(o);
+}
+
 void LidarDriver::start() {
   impl_->thread = std::thread([this] { impl_->run(); });
   if (const int prio = impl_->cfg.realtime_priority; prio > 0) {
@@ -387,8 +456,10 @@ void LidarDriver::start() {
       log::warn("lidar", impl_->cfg.name + ": SCHED_FIFO " + std::to_string(prio) + " refused (" + std::strerror(rc) +
                              "), running with normal priority");
   }
-  log::info("lidar", impl_->cfg.name + ": " + impl_->cfg.model + " on udp " + impl_->cfg.host + ":" +
-                         std::to_string(impl_->data.port()) + " -> " + impl_->topic_name);
+  const auto& c = impl_->cfg;
+  const std::string from = impl_->ring ? "packet ring on " + c.interface + " port " + std::to_string(impl_->data_port())
+                                       : "udp " + c.host + ":" + std::to_string(impl_->data_port());
+  log::info("lidar", c.name + ": " + c.model + " on " + from + " -> " + impl_->topic_name);
 }
 
 void LidarDriver::stop() {
@@ -402,7 +473,7 @@ void LidarDriver::stop() {
   for (const auto& [k, v] : st.values)
     if (k == "scans" || k == "packets" || k.rfind("dropped", 0) == 0 || k == "packets_dropped" || k == "kernel_drops" || k == "missing_packets" || k == "time_jumps" ||
         k == "record_packets" || k == "record_errors" || k == "imu_samples" || k == "fixes" ||
-        k == "stamp_source" || k == "sync")
+        k == "stamp_source" || k == "sync" || k == "ring_drops" || k == "reassembly_dropped")
       line += " " + k + "=" + v;
   log::info("lidar", line);
 }
@@ -414,7 +485,7 @@ dds::DriverStatus LidarDriver::status() const {
   std::lock_guard lock(impl_->mutex);
   dds::DriverStatus s;
   s.name = "lidar/" + c.name;
-  s.hardware_id = c.model + "@" + c.host + ":" + std::to_string(c.port);
+  s.hardware_id = c.model + "@" + (c.source == LidarSource::kPacket ? c.interface : c.host) + ":" + std::to_string(c.port);
   const Nanos age = impl_->last_scan_host_ns == 0 ? -1 : vehicle_now_ns() - impl_->last_scan_host_ns;
   if (impl_->scans == 0) {
     s.level = dds::Level::kWarn;
@@ -450,9 +521,18 @@ dds::DriverStatus LidarDriver::status() const {
   s.add_number("incomplete_scans", impl_->incomplete_scans);
   s.add_number("implausible_steps", d.implausible_steps);
   s.add_number("time_jumps", d.time_jumps);
-  s.add_number("kernel_drops", u.kernel_drops);
-  s.add_number("truncated", u.truncated);
+  if (impl_->ring) {
+    add_ring_counters(s, impl_->ring_stats);
+  } else {
+    s.add("source", "udp");
+    s.add_number("kernel_drops", u.kernel_drops);
+    s.add_number("truncated", u.truncated);
+  }
   s.add_number("write_errors", impl_->write_errors);
+  if (!impl_->sweep_observers.empty()) {
+    s.add_number("sweep_observers", impl_->sweep_observers.size());
+    s.add_number("sweep_samples", impl_->sweep_samples_sent);
+  }
   if (impl_->recorder) {
     const auto& r = impl_->record_stats;
     s.add("record_file", impl_->record_file);

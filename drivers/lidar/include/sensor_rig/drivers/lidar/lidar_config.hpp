@@ -31,6 +31,11 @@ struct LidarRecordConfig {
   int max_files = 10;                  // keep at most this many files of this LIDAR (oldest deleted)
 };
 
+// Where the data port's datagrams are read: a UDP socket (the kernel's IP stack reassembles and
+// queues), or an AF_PACKET TPACKET_V3 ring on one interface (lidar/ring_source.hpp: kernel-filtered,
+// block-batched, reassembled here, ring drops counted). The second port always uses a UDP socket.
+enum class LidarSource { kUdp, kPacket };
+
 inline dds::QosSpec lidar_qos() {
   dds::QosSpec q;
   q.depth = 2;
@@ -47,6 +52,9 @@ struct LidarConfig {
   // /sensors/lidar/<name>/imu). Its mock sends there too (`rig lidar replay --position-port`).
   int position_port = 0;
   int receive_buffer_bytes = 8 << 20;
+  LidarSource source = LidarSource::kUdp;  // source: udp | packet
+  std::string interface;               // packet: the interface the sensor is on (required)
+  std::string sensor_address;          // packet: the sensor's IPv4 address; empty = any sender
   std::string calibration;             // empty = model defaults
   std::string metadata;                // sensor metadata JSON (Ouster)
   lidar::ReturnSelection returns = lidar::ReturnSelection::kStrongest;
