@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <sstream>
 
@@ -9,6 +10,7 @@
 #include "sensor_rig/dds/participant.hpp"
 #include "sensor_rig/dds/roudi.hpp"
 #include "sensor_rig/dds/topic.hpp"
+#include "security_qos.hpp"
 
 #ifndef RIG_DEFAULT_SOURCE_DIR
 #define RIG_DEFAULT_SOURCE_DIR "."
@@ -78,7 +80,7 @@ std::string cyclone_uri(const DomainConfig& cfg) {
   return uri;
 }
 
-Participant::Participant(const DomainConfig& cfg) : profile_(resolve_profile(cfg)) {
+Participant::Participant(const DomainConfig& cfg, const SecurityConfig& security) : profile_(resolve_profile(cfg)) {
   if (cfg.transport == Transport::kShm) {
     const auto probe = probe_roudi();
     if (!probe.answers) {
@@ -103,7 +105,20 @@ Participant::Participant(const DomainConfig& cfg) : profile_(resolve_profile(cfg
                                profile_ + "' over " + to_string(cfg.transport));
     }
   }
-  participant_ = Entity(check(dds_create_participant(cfg.domain_id, nullptr, nullptr), "dds_create_participant"));
+  if (!security.enabled()) {
+    participant_ = Entity(check(dds_create_participant(cfg.domain_id, nullptr, nullptr), "dds_create_participant"));
+    return;
+  }
+  const std::unique_ptr<dds_qos_t, decltype(&dds_delete_qos)> qos(dds_create_qos(), &dds_delete_qos);
+  set_security_properties(qos.get(), security);
+  const dds_entity_t p = dds_create_participant(cfg.domain_id, qos.get(), nullptr);
+  if (p < 0) {
+    // Cyclone logs the reason (certificate, signature, governance, permissions) on stderr.
+    throw DdsError("DDS Security: participant with identity '" + security.identity + "' (" +
+                       security.identity_certificate + ") refused; Cyclone's log above says why",
+                   p);
+  }
+  participant_ = Entity(p);
 }
 
 std::string ros_to_dds_topic(const std::string& ros_name) {

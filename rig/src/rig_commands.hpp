@@ -6,7 +6,10 @@ namespace sensor_rig {
 namespace lidar { void register_cli(CLI::App& app, cli::Context& ctx); }
 namespace dbw { void register_cli(CLI::App& app, cli::Context& ctx); }
 namespace bench { void register_cli(CLI::App& app, cli::Context& ctx); }
-namespace rig { void register_cli(CLI::App& app, cli::Context& ctx); }
+namespace rig {
+void register_cli(CLI::App& app, cli::Context& ctx);
+void register_security_cli(CLI::App& app, cli::Context& ctx);  // security init
+}  // namespace rig
 namespace drivers {
 void register_lidar_cli(CLI::App& app, cli::Context& ctx);
 void register_dbw_cli(CLI::App& app, cli::Context& ctx);
@@ -14,6 +17,7 @@ void register_dbw_cli(CLI::App& app, cli::Context& ctx);
 
 inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
   rig::register_cli(app, ctx);  // up, demo, config, monitor
+  rig::register_security_cli(app, ctx);
 #ifdef RIG_HAVE_LIDAR
   lidar::register_cli(app, ctx);    // lidar replay
   drivers::register_lidar_cli(app, ctx);  // lidar decode (source -> timesync -> decoder -> PCD)

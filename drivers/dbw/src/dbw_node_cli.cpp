@@ -5,6 +5,7 @@
 
 #include "sensor_rig/dbw/bridge/defaults.hpp"
 #include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/dds/security.hpp"
 #include "sensor_rig/drivers/dbw/dds_bridge.hpp"
 
 namespace sensor_rig::drivers {
@@ -18,6 +19,8 @@ struct BridgeOptions {
   double duration = 0.0;
   bool json = false;
   int domain = -1;
+  std::string security_dir;
+  std::string identity = "dbw_bridge";
 };
 
 int run_bridge(const BridgeOptions& o) {
@@ -34,6 +37,8 @@ int run_bridge(const BridgeOptions& o) {
   DdsBridgeOptions bo;
   bo.duration_s = o.duration;
   bo.domain = o.domain;
+  bo.security_dir = o.security_dir;
+  bo.identity = o.identity;
   const auto s = run_dds_bridge(protocol, *bus, bo);
   std::printf("{\"commands\":%llu,\"frames_sent\":%llu,\"latency_us\":{\"p50\":%.1f,\"p99\":%.1f,\"max\":%.1f},"
               "\"take_to_send_us\":{\"p50\":%.1f,\"p99\":%.1f},\"silence_to_neutral_ms\":%.3f,"
@@ -50,6 +55,21 @@ int run_bridge(const BridgeOptions& o) {
     return cli::kRuntime;
   }
   return cli::kOk;
+}
+
+// DDS Security (issue 13): the participant authenticates as IDENTITY of a `rig security init` DIR.
+void add_security_options(CLI::App& cmd, std::string& dir, std::string& identity) {
+  cmd.add_option("--security", dir, "DDS Security: a `rig security init` directory (default: off)");
+  cmd.add_option("--identity", identity, "DDS Security identity in that directory")->capture_default_str();
+}
+// Missing identity files are a usage error (exit 2), found before anything starts.
+void check_security_options(const std::string& dir, const std::string& identity) {
+  if (dir.empty()) return;
+  try {
+    (void)dds::security_files(dir, identity);
+  } catch (const std::runtime_error& e) {
+    throw cli::UsageError(e.what());
+  }
 }
 
 }  // namespace
@@ -69,7 +89,9 @@ void register_dbw_cli(CLI::App& app, cli::Context& ctx) {
   send->add_option("--domain", so->domain, "DDS domain (default: ROS_DOMAIN_ID, else 0)")->check(CLI::Range(0, 232));
   send->add_option("--clock-offset", so->clock_offset_s,
                    "seconds added to every stamp, as if this process's clock were off (testing)");
+  add_security_options(*send, so->security_dir, so->identity);
   send->callback([so, &ctx] {
+    check_security_options(so->security_dir, so->identity);
     const auto n = run_command_source(*so);
     std::fprintf(stderr, "dbw send: %llu commands\n", static_cast<unsigned long long>(n));
     ctx.exit_code = cli::kOk;
@@ -82,7 +104,11 @@ void register_dbw_cli(CLI::App& app, cli::Context& ctx) {
   br->add_option("--transport", bo->transport, "CAN transport: unix:PATH (default /tmp/rig_paravan.sock), socketcan:IFACE, fd:N");
   br->add_option("--duration", bo->duration, "seconds to run (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
   br->add_option("--domain", bo->domain, "DDS domain (default: ROS_DOMAIN_ID, else 0)")->check(CLI::Range(0, 232));
-  br->callback([bo, &ctx] { ctx.exit_code = run_bridge(*bo); });
+  add_security_options(*br, bo->security_dir, bo->identity);
+  br->callback([bo, &ctx] {
+    check_security_options(bo->security_dir, bo->identity);
+    ctx.exit_code = run_bridge(*bo);
+  });
 }
 
 }  // namespace sensor_rig::drivers

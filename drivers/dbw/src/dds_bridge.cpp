@@ -68,7 +68,8 @@ dds::QosSpec status_qos() {
 class Runner {
  public:
   Runner(const Protocol& p, can::Transport& bus, const DdsBridgeOptions& o)
-      : p_(p), bus_(bus), o_(o), core_(p), participant_(domain_config(o.domain)), cmd_topic_(participant_, kCmdTopic),
+      : p_(p), bus_(bus), o_(o), core_(p), participant_(domain_config(o.domain), security_config(o.security_dir, o.identity)),
+        cmd_topic_(participant_, kCmdTopic),
         status_topic_(participant_, kStatusTopic, status_qos()), state_topic_(participant_, kStateTopic),
         reader_(participant_, cmd_topic_), status_writer_(participant_, status_topic_, status_qos()),
         state_writer_(participant_, state_topic_), stamps_(participant_), diagnostics_(participant_) {

@@ -1,6 +1,9 @@
 // `rig dbw send`: a fixed command at a fixed rate on /vehicle/dbw/cmd; ends by simply stopping.
 #include <time.h>
 
+#include <stdexcept>
+#include <string>
+
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/drivers/dbw/dds_bridge.hpp"
@@ -13,12 +16,25 @@ using namespace sensor_rig::dbw;  // NOLINT(google-build-using-namespace): the n
 
 namespace {
 constexpr Nanos kEdgeHoldNs = 200'000'000;
+
+// With DDS Security Cyclone refuses the writer when the identity's permissions do not grant
+// publishing commands: say so in those words.
+dds::Writer<msg::DbwCommand> make_writer(dds::Participant& p, dds::Topic<msg::DbwCommand>& t,
+                                         const CommandSourceOptions& o) {
+  try {
+    return dds::Writer<msg::DbwCommand>(p, t);
+  } catch (const dds::DdsError& e) {
+    if (!e.not_allowed_by_security()) throw;
+    throw std::runtime_error("identity '" + o.identity + "' may not publish " + kCmdTopic +
+                             " (its permissions in " + o.security_dir + " do not grant it): " + e.what());
+  }
+}
 }  // namespace
 
 std::uint64_t run_command_source(const CommandSourceOptions& o) {
-  dds::Participant participant(domain_config(o.domain));
+  dds::Participant participant(domain_config(o.domain), security_config(o.security_dir, o.identity));
   dds::Topic<msg::DbwCommand> topic(participant, kCmdTopic);
-  dds::Writer<msg::DbwCommand> writer(participant, topic);
+  const auto writer = make_writer(participant, topic, o);
   if (!writer.wait_for_readers(1, static_cast<int>(o.wait_for_reader_s * 1000)))
     log::warn("dbw", "send: no bridge matched within " + std::to_string(o.wait_for_reader_s) + " s; sending anyway");
   const Nanos period = static_cast<Nanos>(1e9 / o.rate_hz);

@@ -13,6 +13,8 @@ namespace sensor_rig::dds {
 struct DdsError : std::runtime_error {
   DdsError(const std::string& what, dds_return_t rc)
       : std::runtime_error(what + ": " + dds_strretcode(rc)), code(rc) {}
+  // DDS Security's access control refused it (the permissions do not grant it).
+  [[nodiscard]] bool not_allowed_by_security() const { return code == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY; }
   dds_return_t code;
 };
 

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "sensor_rig/dds/entity.hpp"
+#include "sensor_rig/dds/security.hpp"
 
 namespace sensor_rig::dds {
 
@@ -31,8 +32,12 @@ struct DomainHandle;  // a configured Cyclone domain, shared by the participants
 class Participant {
  public:
   // With Transport::kShm, throws std::runtime_error when no RouDi answers (iceoryx would wait 60 s
-  // for one and then abort the process).
-  explicit Participant(const DomainConfig& cfg = {});
+  // for one and then abort the process). With security, throws DdsError when Cyclone refuses the
+  // participant (a plugin that does not load, a certificate or signed document that does not verify).
+  explicit Participant(const DomainConfig& cfg = {}) : Participant(cfg, SecurityConfig{}) {}
+  // With DDS Security for this participant (not the domain: secured and ordinary participants may
+  // share a process); off when security is empty. See security.hpp.
+  Participant(const DomainConfig& cfg, const SecurityConfig& security);
   [[nodiscard]] dds_entity_t handle() const noexcept { return participant_.handle(); }
   [[nodiscard]] const std::string& profile() const noexcept { return profile_; }
 

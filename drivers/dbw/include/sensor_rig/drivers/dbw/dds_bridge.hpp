@@ -20,6 +20,8 @@ struct DdsBridgeOptions {
   bool print_stats = true;  // summary on stderr at the end
   int domain = -1;          // DDS domain; -1: ROS_DOMAIN_ID or 0
   int neutral_periods_on_stop = 3;  // neutral frame sets sent when stopping
+  std::string security_dir;         // DDS Security (`rig security init` directory); empty: off
+  std::string identity = "dbw_bridge";
 };
 
 struct DdsBridgeStats {
@@ -55,6 +57,8 @@ struct CommandSourceOptions {
   bool enable_edge = true;         // with --enable: enable=false for the first 200 ms so the bridge sees an edge
   int domain = -1;                 // DDS domain; -1: ROS_DOMAIN_ID or 0
   double clock_offset_s = 0.0;     // added to every stamp (tests: a process whose clock is off)
+  std::string security_dir;        // DDS Security (`rig security init` directory); empty: off
+  std::string identity = "dbw_command";
 };
 // Publishes commands on rt/vehicle/dbw/cmd; returns the number sent.
 std::uint64_t run_command_source(const CommandSourceOptions& o);

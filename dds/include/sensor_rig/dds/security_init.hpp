@@ -1,0 +1,38 @@
+#pragma once
+// `rig security init DIR`: two CAs (identities, permissions), one identity per node, the domain's
+// governance and each identity's permissions, S/MIME-signed as DDS Security requires. Layout in
+// security.hpp. What the governance protects and why: dds/README.md "DDS Security".
+#include <string>
+#include <vector>
+
+namespace sensor_rig::dds {
+
+// The DDS topic the rules protect (ROS 2 /vehicle/dbw/cmd).
+inline constexpr const char* kProtectedCommandTopic = "rt/vehicle/dbw/cmd";
+
+enum class KeyType { kEcP256, kRsa2048 };  // what Cyclone's auth plugin accepts
+
+struct SecurityInitOptions {
+  std::string dir;
+  std::string bridge = "dbw_bridge";                   // subscribes commands, publishes status/state
+  std::vector<std::string> commanders = {"dbw_command"};  // may publish commands
+  std::vector<std::string> readers = {"reader"};          // may subscribe to everything, publish nothing
+  KeyType key_type = KeyType::kEcP256;
+  int days = 3650;                    // validity of certificates and grants
+  bool allow_unauthenticated = true;  // ordinary (unsecured) ROS 2 nodes still read the sensor topics
+  std::string organization = "sensor-rig";
+  bool force = false;  // replace what an earlier init wrote (else: refuse)
+};
+
+// Writes the directory; returns the files written. Throws std::runtime_error (bad names, a
+// directory already initialised without force, OpenSSL failures with its error text).
+std::vector<std::string> init_security_dir(const SecurityInitOptions& o);
+
+// The governance and permissions documents (unsigned XML), for init and for the tests.
+std::string governance_xml(bool allow_unauthenticated);
+enum class Role { kBridge, kCommander, kReader };
+std::string permissions_xml(const std::string& identity, const std::string& subject, Role role, int days);
+// The subject of an identity's certificate, as the grant names it (RFC 2253: "CN=x,O=y").
+std::string identity_subject(const std::string& identity, const std::string& organization);
+
+}  // namespace sensor_rig::dds

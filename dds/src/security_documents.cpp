@@ -1,0 +1,105 @@
+// The governance and permissions XML of `rig security init` (OMG DDS Security 1.1, §9.4).
+#include <ctime>
+#include <sstream>
+
+#include "sensor_rig/dds/security_init.hpp"
+
+namespace sensor_rig::dds {
+namespace {
+// Domain ids 0..230: the most Cyclone's governance/permissions parser accepts (ROS 2 allows 232).
+constexpr const char* kDomains = "<domains><id_range><min>0</min><max>230</max></id_range></domains>";
+
+std::string utc(std::time_t t) {
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+  return buf;
+}
+
+std::string topics(std::initializer_list<const char*> names) {
+  std::string s = "<topics>";
+  for (const char* n : names) s += std::string("<topic>") + n + "</topic>";
+  return s + "</topics>";
+}
+}  // namespace
+
+std::string identity_subject(const std::string& identity, const std::string& organization) {
+  return "CN=" + identity + ",O=" + organization;
+}
+
+// One rule for the command topic, then everything else open. Command topic: only participants
+// whose permissions grant it may read or write it (read and write access control), and every
+// submessage carries a MAC per receiver (SIGN_WITH_ORIGIN_AUTHENTICATION): an authenticated reader
+// that holds the writer's key still cannot forge a command as that writer. Not encrypted (a command
+// is not secret; integrity is what matters), its endpoints announced only to authenticated
+// participants (discovery protection). Other topics: no protection, so with
+// allow_unauthenticated_participants an ordinary ROS 2 node reads the sensors as before.
+std::string governance_xml(bool allow_unauthenticated) {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+       "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
+       "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd\">\n"
+       "  <domain_access_rules>\n    <domain_rule>\n      "
+    << kDomains << "\n      <allow_unauthenticated_participants>" << (allow_unauthenticated ? "true" : "false")
+    << "</allow_unauthenticated_participants>\n"
+       "      <enable_join_access_control>true</enable_join_access_control>\n"
+       "      <discovery_protection_kind>NONE</discovery_protection_kind>\n"
+       "      <liveliness_protection_kind>NONE</liveliness_protection_kind>\n"
+       "      <rtps_protection_kind>NONE</rtps_protection_kind>\n"
+       "      <topic_access_rules>\n"
+       "        <topic_rule>\n"
+       "          <topic_expression>"
+    << kProtectedCommandTopic
+    << "</topic_expression>\n"
+       "          <enable_discovery_protection>true</enable_discovery_protection>\n"
+       "          <enable_liveliness_protection>false</enable_liveliness_protection>\n"
+       "          <enable_read_access_control>true</enable_read_access_control>\n"
+       "          <enable_write_access_control>true</enable_write_access_control>\n"
+       "          <metadata_protection_kind>SIGN_WITH_ORIGIN_AUTHENTICATION</metadata_protection_kind>\n"
+       "          <data_protection_kind>NONE</data_protection_kind>\n"
+       "        </topic_rule>\n"
+       "        <topic_rule>\n"
+       "          <topic_expression>*</topic_expression>\n"
+       "          <enable_discovery_protection>false</enable_discovery_protection>\n"
+       "          <enable_liveliness_protection>false</enable_liveliness_protection>\n"
+       "          <enable_read_access_control>false</enable_read_access_control>\n"
+       "          <enable_write_access_control>false</enable_write_access_control>\n"
+       "          <metadata_protection_kind>NONE</metadata_protection_kind>\n"
+       "          <data_protection_kind>NONE</data_protection_kind>\n"
+       "        </topic_rule>\n"
+       "      </topic_access_rules>\n    </domain_rule>\n  </domain_access_rules>\n</dds>\n";
+  return x.str();
+}
+
+// Grants per role. Only the command topic is access controlled (governance); the other topics are
+// listed so a grant reads as what the node does.
+std::string permissions_xml(const std::string& identity, const std::string& subject, Role role, int days) {
+  const std::time_t now = std::time(nullptr);
+  std::string rule;
+  switch (role) {
+    case Role::kBridge:
+      rule = "<publish>" + topics({"rt/vehicle/dbw/status", "rt/vehicle/state", "rt/rig/stamps", "rt/diagnostics"}) +
+             "</publish><subscribe>" + topics({kProtectedCommandTopic}) + "</subscribe>";
+      break;
+    case Role::kCommander:
+      rule = "<publish>" + topics({kProtectedCommandTopic}) + "</publish><subscribe>" +
+             topics({"rt/vehicle/dbw/status", "rt/vehicle/state"}) + "</subscribe>";
+      break;
+    case Role::kReader:
+      rule = "<subscribe>" + topics({"*"}) + "</subscribe>";
+      break;
+  }
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+       "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
+       "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd\">\n"
+       "  <permissions>\n    <grant name=\""
+    << identity << "\">\n      <subject_name>" << subject << "</subject_name>\n      <validity><not_before>"
+    << utc(now - 86400) << "</not_before><not_after>" << utc(now + static_cast<std::time_t>(days) * 86400)
+    << "</not_after></validity>\n      <allow_rule>" << kDomains << rule
+    << "</allow_rule>\n      <default>DENY</default>\n    </grant>\n  </permissions>\n</dds>\n";
+  return x.str();
+}
+
+}  // namespace sensor_rig::dds

@@ -1,0 +1,84 @@
+// `rig security init DIR`: CAs, identities, governance and permissions (layout: security.hpp).
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <stdexcept>
+
+#include "sensor_rig/dds/security_init.hpp"
+#include "x509.hpp"
+
+namespace sensor_rig::dds {
+namespace fs = std::filesystem;
+namespace {
+
+// A name that is a directory name, a certificate CN and an XML grant name without escaping.
+void check_name(const std::string& n) {
+  const bool ok = !n.empty() && n.size() <= 64 && n.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                                       "0123456789_-") == std::string::npos;
+  if (!ok || n == "private") {
+    throw std::runtime_error("identity name '" + n + "': use 1-64 letters, digits, '_' or '-' (not 'private')");
+  }
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::trunc);
+  out << text;
+  if (!out.flush()) throw std::runtime_error("cannot write '" + path + "'");
+}
+}  // namespace
+
+std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
+  if (o.dir.empty()) throw std::runtime_error("security init: no directory given");
+  if (o.days < 1 || o.days > 36500) throw std::runtime_error("security init: --days must be 1..36500");
+  if (o.organization.empty() || o.organization.find_first_of(",=+<>#;\"\\") != std::string::npos)
+    throw std::runtime_error("security init: organization '" + o.organization + "' must be plain text");
+  std::vector<std::pair<std::string, Role>> ids{{o.bridge, Role::kBridge}};
+  for (const auto& n : o.commanders) ids.emplace_back(n, Role::kCommander);
+  for (const auto& n : o.readers) ids.emplace_back(n, Role::kReader);
+  std::set<std::string> seen;
+  for (const auto& [name, role] : ids) {
+    check_name(name);
+    if (!seen.insert(name).second) throw std::runtime_error("security init: identity '" + name + "' named twice");
+  }
+  const fs::path dir(o.dir);
+  if (fs::exists(dir / "identity_ca.pem") && !o.force) {
+    throw std::runtime_error("security init: '" + o.dir +
+                             "' already holds a CA (identity_ca.pem); --force replaces everything in it");
+  }
+  fs::create_directories(dir / "private");
+  fs::permissions(dir / "private", fs::perms::owner_all, fs::perm_options::replace);
+  std::vector<std::string> written;
+  const auto out = [&](const fs::path& p) { return written.emplace_back(p.string()); };
+
+  // Two CAs: who a node is (identity) and what it may do (permissions) are signed separately, so
+  // the permissions key can stay with whoever decides grants.
+  const auto id_ca_key = x509::make_key(o.key_type);
+  const auto id_ca = x509::make_cert("sensor-rig identity CA", o.organization, id_ca_key.get(), nullptr, nullptr,
+                                     o.days, true);
+  const auto perm_ca_key = x509::make_key(o.key_type);
+  const auto perm_ca = x509::make_cert("sensor-rig permissions CA", o.organization, perm_ca_key.get(), nullptr,
+                                       nullptr, o.days, true);
+  x509::write_cert(out(dir / "identity_ca.pem"), id_ca.get());
+  x509::write_key(out(dir / "private/identity_ca_key.pem"), id_ca_key.get());
+  x509::write_cert(out(dir / "permissions_ca.pem"), perm_ca.get());
+  x509::write_key(out(dir / "private/permissions_ca_key.pem"), perm_ca_key.get());
+
+  const std::string governance = governance_xml(o.allow_unauthenticated);
+  write_text(out(dir / "governance.xml"), governance);
+  x509::write_smime(out(dir / "governance.p7s"), governance, perm_ca.get(), perm_ca_key.get());
+
+  for (const auto& [name, role] : ids) {
+    const fs::path d = dir / name;
+    fs::create_directories(d);
+    const auto key = x509::make_key(o.key_type);
+    const auto cert = x509::make_cert(name, o.organization, key.get(), id_ca.get(), id_ca_key.get(), o.days, false);
+    x509::write_cert(out(d / "cert.pem"), cert.get());
+    x509::write_key(out(d / "key.pem"), key.get());
+    const std::string perms = permissions_xml(name, identity_subject(name, o.organization), role, o.days);
+    write_text(out(d / "permissions.xml"), perms);
+    x509::write_smime(out(d / "permissions.p7s"), perms, perm_ca.get(), perm_ca_key.get());
+  }
+  return written;
+}
+
+}  // namespace sensor_rig::dds

@@ -1,0 +1,115 @@
+#include "x509.hpp"
+
+#include <fcntl.h>
+#include <openssl/err.h>
+#include <openssl/pem.h>
+#include <openssl/pkcs7.h>
+#include <openssl/rand.h>
+#include <openssl/rsa.h>
+#include <openssl/x509v3.h>
+#include <unistd.h>
+
+#include <cstdint>
+#include <stdexcept>
+
+namespace sensor_rig::dds::x509 {
+namespace {
+struct BioFree {
+  void operator()(BIO* b) const { BIO_free_all(b); }
+};
+using Bio = std::unique_ptr<BIO, BioFree>;
+
+[[noreturn]] void fail(const std::string& what) {
+  std::string detail;
+  while (const unsigned long e = ERR_get_error()) {  // NOLINT(google-runtime-int): OpenSSL's type
+    char buf[256];
+    ERR_error_string_n(e, buf, sizeof buf);
+    detail += std::string(detail.empty() ? "" : "; ") + buf;
+  }
+  throw std::runtime_error("OpenSSL: " + what + (detail.empty() ? "" : ": " + detail));
+}
+
+void ok(int rc, const char* what) {
+  if (rc <= 0) fail(what);
+}
+
+void add_ext(X509* cert, X509* issuer, int nid, const char* value) {
+  X509V3_CTX ctx;
+  X509V3_set_ctx(&ctx, issuer, cert, nullptr, nullptr, 0);
+  X509_EXTENSION* ext = X509V3_EXT_conf_nid(nullptr, &ctx, nid, value);
+  if (ext == nullptr) fail(std::string("extension ") + value);
+  const int rc = X509_add_ext(cert, ext, -1);
+  X509_EXTENSION_free(ext);
+  ok(rc, "X509_add_ext");
+}
+
+Bio open_file(const std::string& path, int mode) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, mode);
+  if (fd < 0) throw std::runtime_error("cannot write '" + path + "'");
+  Bio b(BIO_new_fd(fd, BIO_CLOSE));
+  if (!b) {
+    ::close(fd);
+    fail("BIO_new_fd");
+  }
+  return b;
+}
+}  // namespace
+
+Key make_key(KeyType t) {
+  Key k(t == KeyType::kEcP256 ? EVP_EC_gen("P-256") : EVP_RSA_gen(2048));
+  if (!k) fail("key generation");
+  return k;
+}
+
+Cert make_cert(const std::string& common_name, const std::string& organization, EVP_PKEY* key, X509* issuer,
+               EVP_PKEY* issuer_key, int days, bool ca) {
+  Cert c(X509_new());
+  if (!c) fail("X509_new");
+  ok(X509_set_version(c.get(), 2), "X509_set_version");
+  std::uint64_t serial = 0;
+  ok(RAND_bytes(reinterpret_cast<unsigned char*>(&serial), sizeof serial), "RAND_bytes");
+  ok(ASN1_INTEGER_set_uint64(X509_get_serialNumber(c.get()), serial >> 1), "serial");  // positive
+  if (X509_gmtime_adj(X509_getm_notBefore(c.get()), -86400) == nullptr) fail("notBefore");
+  if (X509_gmtime_adj(X509_getm_notAfter(c.get()), static_cast<long>(days) * 86400) == nullptr) fail("notAfter");
+  ok(X509_set_pubkey(c.get(), key), "X509_set_pubkey");
+  X509_NAME* name = X509_get_subject_name(c.get());
+  // O first, then CN: RFC 2253 (last first) reads "CN=...,O=...", the grants' subject_name.
+  const auto add = [&](const char* field, const std::string& v) {
+    ok(X509_NAME_add_entry_by_txt(name, field, MBSTRING_UTF8, reinterpret_cast<const unsigned char*>(v.c_str()), -1,
+                                  -1, 0),
+       field);
+  };
+  add("O", organization);
+  add("CN", common_name);
+  X509* signer = issuer != nullptr ? issuer : c.get();
+  ok(X509_set_issuer_name(c.get(), X509_get_subject_name(signer)), "X509_set_issuer_name");
+  add_ext(c.get(), signer, NID_basic_constraints, ca ? "critical,CA:TRUE" : "critical,CA:FALSE");
+  add_ext(c.get(), signer, NID_key_usage,
+          ca ? "critical,keyCertSign,cRLSign,digitalSignature" : "critical,digitalSignature,keyAgreement");
+  add_ext(c.get(), signer, NID_subject_key_identifier, "hash");
+  if (issuer != nullptr) add_ext(c.get(), signer, NID_authority_key_identifier, "keyid:always");
+  ok(X509_sign(c.get(), issuer_key != nullptr ? issuer_key : key, EVP_sha256()), "X509_sign");
+  return c;
+}
+
+void write_cert(const std::string& path, X509* cert) {
+  Bio b = open_file(path, 0644);
+  ok(PEM_write_bio_X509(b.get(), cert), "PEM_write_bio_X509");
+}
+
+void write_key(const std::string& path, EVP_PKEY* key) {
+  Bio b = open_file(path, 0600);
+  ok(PEM_write_bio_PrivateKey(b.get(), key, nullptr, nullptr, 0, nullptr, nullptr), "PEM_write_bio_PrivateKey");
+}
+
+void write_smime(const std::string& path, const std::string& text, X509* cert, EVP_PKEY* key) {
+  Bio in(BIO_new_mem_buf(text.data(), static_cast<int>(text.size())));
+  if (!in) fail("BIO_new_mem_buf");
+  constexpr int kFlags = PKCS7_DETACHED | PKCS7_TEXT | PKCS7_STREAM;
+  std::unique_ptr<PKCS7, decltype(&PKCS7_free)> p7(PKCS7_sign(cert, key, nullptr, in.get(), kFlags), &PKCS7_free);
+  if (!p7) fail("PKCS7_sign");
+  Bio out = open_file(path, 0644);
+  ok(SMIME_write_PKCS7(out.get(), p7.get(), in.get(), kFlags), "SMIME_write_PKCS7");
+}
+
+}  // namespace sensor_rig::dds::x509

@@ -1,0 +1,47 @@
+// `rig security init DIR`: the CAs, identities, governance and permissions of DDS Security for the
+// drive-by-wire command topic (what they allow: dds/README.md "DDS Security").
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+#include "rig_commands.hpp"
+#include "sensor_rig/dds/security_init.hpp"
+
+namespace sensor_rig::rig {
+
+void register_security_cli(CLI::App& app, cli::Context& ctx) {
+  auto& sec = *app.add_subcommand("security", "DDS Security for /vehicle/dbw/cmd: keys and signed rules")
+                   ->require_subcommand(1);
+  auto o = std::make_shared<dds::SecurityInitOptions>();
+  auto rsa = std::make_shared<bool>(false);
+  auto no_unauth = std::make_shared<bool>(false);
+  auto* init = sec.add_subcommand("init", "create CAs, identities (bridge, command sources, readers), governance "
+                                          "and permissions (S/MIME) in DIR");
+  init->add_option("DIR", o->dir, "directory to write (created)")->required();
+  init->add_option("--bridge", o->bridge, "identity of the DBW bridge (subscribes commands)")->capture_default_str();
+  init->add_option("--command", o->commanders, "identities allowed to publish commands (repeat)")
+      ->capture_default_str();
+  init->add_option("--reader", o->readers, "read-only identities (repeat)")->capture_default_str();
+  init->add_flag("--rsa", *rsa, "RSA-2048 keys (default ECDSA P-256)");
+  init->add_option("--days", o->days, "validity of certificates and grants")->check(CLI::Range(1, 36500))
+      ->capture_default_str();
+  init->add_option("--organization", o->organization, "O= of every certificate")->capture_default_str();
+  init->add_flag("--no-unauthenticated", *no_unauth,
+                 "governance without allow_unauthenticated_participants: ordinary ROS 2 nodes see nothing");
+  init->add_flag("--force", o->force, "replace an earlier init in DIR");
+  init->callback([o, rsa, no_unauth, &ctx] {
+    o->key_type = *rsa ? dds::KeyType::kRsa2048 : dds::KeyType::kEcP256;
+    o->allow_unauthenticated = !*no_unauth;
+    std::vector<std::string> files;
+    try {
+      files = dds::init_security_dir(*o);
+    } catch (const std::runtime_error& e) {
+      throw cli::UsageError(e.what());
+    }
+    for (const auto& f : files) std::printf("%s\n", f.c_str());
+    std::fprintf(stderr, "security init: %zu files in %s (keep private/ off the car)\n", files.size(), o->dir.c_str());
+    ctx.exit_code = cli::kOk;
+  });
+}
+
+}  // namespace sensor_rig::rig
