@@ -24,8 +24,12 @@ struct RingSourceConfig {
   std::string interface;           // e.g. "eth1"; must exist when the source is built
   std::uint16_t port = 2368;       // the sensor's destination UDP port
   std::uint32_t sensor_host = 0;   // the sensor's IPv4 address (host byte order); 0 = any sender
-  std::size_t block_bytes = 1 << 20;  // multiple of the page size, >= 128 KiB (a 64 kB datagram fits)
-  std::size_t block_count = 16;
+  // Many small blocks: a block is handed over when full or after retire_timeout_ms, so at low rates
+  // each block holds only that long's packets and block_count x retire_timeout_ms (here 512 ms) is
+  // how long the reader may stall before the ring freezes and drops (16 x 1 MiB blocks dropped on
+  // a loaded host: 64 ms of stall at 4 ms). 128 KiB: a 64 kB datagram fits.
+  std::size_t block_bytes = 128 << 10;  // multiple of the page size, >= 128 KiB
+  std::size_t block_count = 128;        // 16 MiB of ring per sensor
   // A block not yet full is handed over after this long: the added latency at low packet rates.
   int retire_timeout_ms = 4;
   Ipv4ReassemblerConfig reassembly{};
