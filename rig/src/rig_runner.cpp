@@ -60,6 +60,8 @@ std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, c
                                   d.transport.empty() ? "unix:" + d.bus : d.transport};
   if (!d.protocol.empty()) bridge.insert(bridge.end(), {"--config", d.protocol});
   bridge.insert(bridge.end(), dds_args.begin(), dds_args.end());
+  const auto bridge_security = drivers::security_args(d, true);  // dbw.security: DDS Security identities
+  bridge.insert(bridge.end(), bridge_security.begin(), bridge_security.end());
   out.push_back(bridge);
   if (d.command_source.enabled) {
     const auto& c = d.command_source;
@@ -67,6 +69,8 @@ std::vector<std::vector<std::string>> dbw_commands(const std::string& rig_exe, c
                    std::to_string(c.throttle), "--brake", std::to_string(c.brake), "--gear", std::to_string(c.gear),
                    "--rate", std::to_string(c.rate_hz), "--duration", "86400"});
     out.back().insert(out.back().end(), dds_args.begin(), dds_args.end());
+    const auto send_security = drivers::security_args(d, false);
+    out.back().insert(out.back().end(), send_security.begin(), send_security.end());
   }
   return out;
 }

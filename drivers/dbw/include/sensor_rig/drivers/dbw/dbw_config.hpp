@@ -25,7 +25,18 @@ struct DbwConfig {
     double brake = 0.0;
     int gear = 4;
   } command_source;
+  // DDS Security on /vehicle/dbw/cmd (`security: {dir: DIR}`): the bridge and the command source run
+  // as these identities of a `rig security init` directory; the rig's other nodes stay ordinary.
+  struct Security {
+    bool enabled = false;
+    std::string dir;
+    std::string bridge_identity = "dbw_bridge";
+    std::string command_identity = "dbw_command";
+  } security;
 };
+
+// `--security DIR --identity NAME` for the bridge (bridge = true) or the command source; empty when off.
+std::vector<std::string> security_args(const DbwConfig& d, bool bridge);
 
 // Parses the `dbw:` map; problems go to the node's problem list (reported all at once).
 DbwConfig parse_dbw_config(const config::Node& n);

@@ -1,0 +1,143 @@
+// Issue 13, "only the permitted source may drive", across real processes: `rig security init`
+// makes a directory; `rig mock paravan` and `rig dbw bridge --security DIR` (identity dbw_bridge)
+// run; then, while no one else sends:
+//  1. a sender without credentials (an ordinary participant) with --enable,
+//  2. a sender with a valid identity (`reader`) carrying forged write permissions (signed by a
+//     permissions CA of its own: Cyclone accepts them locally, the bridge must refuse them),
+//  3. `reader` with its real permissions (Cyclone refuses its writer: exit 1 naming the grant);
+// none engages or is counted by the bridge, and the bus holds no enabled request; then
+//  4. the permitted `dbw_command` engages: enabled requests on the bus, and the bridge counted at
+//     most what that sender sent (nothing from 1 and 2, which each sent more).
+// The test's own participant is an ordinary one: the bridge's status stays readable without
+// credentials (allow_unauthenticated_participants).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+
+#include "dbw_processes.hpp"
+#include "dbw_test_data.hpp"
+#include "sensor_rig/dbw/can/candump.hpp"
+#include "sensor_rig/drivers/dbw/dds_domain.hpp"
+#include "sensor_rig/drivers/dbw/dds_types.hpp"
+
+namespace dbw = sensor_rig::dbw;
+namespace msg = sensor_rig::msg;
+namespace dds = sensor_rig::dds;
+namespace fs = std::filesystem;
+using sensor_rig::Nanos;
+using sensor_rig::vehicle_now_ns;
+
+namespace {
+
+// PU steering requests with the enable bit set (paravan_ref: 0x100, byte 1 bit 4), at or after t.
+int enabled_requests(const std::string& bus_log, Nanos t) {
+  std::ifstream in(bus_log);
+  dbw::can::CandumpReader reader(in);
+  dbw::can::LogRecord rec;
+  int n = 0;
+  while (reader.next(rec)) n += rec.frame.id == 0x100 && (rec.frame.data[1] & 0x10) != 0 && rec.stamp >= t ? 1 : 0;
+  return n;
+}
+
+// The number in "key":N of the bridge's JSON summary; -1 when absent.
+long long json_number(const std::string& text, const std::string& key) {
+  std::smatch m;
+  if (!std::regex_search(text, m, std::regex("\"" + key + "\":([0-9]+)"))) return -1;
+  return std::stoll(m[1]);
+}
+
+// A directory whose `reader` has the real identity (certificate and key from `real`) but
+// permissions granting commands, signed by the permissions CA of another init (`rogue`, where
+// `reader` was made a command source).
+void forge(const fs::path& real, const fs::path& rogue, const fs::path& out) {
+  fs::create_directories(out / "reader");
+  const auto copy = [](const fs::path& from, const fs::path& to) {
+    fs::copy_file(from, to, fs::copy_options::overwrite_existing);
+  };
+  copy(real / "identity_ca.pem", out / "identity_ca.pem");
+  copy(real / "reader/cert.pem", out / "reader/cert.pem");
+  copy(real / "reader/key.pem", out / "reader/key.pem");
+  copy(rogue / "permissions_ca.pem", out / "permissions_ca.pem");
+  copy(rogue / "governance.p7s", out / "governance.p7s");
+  copy(rogue / "reader/permissions.p7s", out / "reader/permissions.p7s");
+}
+
+TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
+  dbw::test::RigProcesses rig("dbw_security", 53, dbw::test::DomainBy::kFlag);
+  if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
+  const std::string dom = std::to_string(rig.domain());
+  const std::string sec = rig.path("sec");
+  ASSERT_EQ(rig.wait_exit(rig.start("init", {"security", "init", sec}), 10000), 0) << rig.output("init");
+  ASSERT_EQ(rig.wait_exit(rig.start("init_rogue", {"security", "init", rig.path("rogue"), "--command", "reader",
+                                                   "--reader", "other"}),
+                          10000),
+            0)
+      << rig.output("init_rogue");
+  forge(sec, rig.path("rogue"), rig.path("forged"));
+
+  dds::Participant participant(sensor_rig::drivers::domain_config(rig.domain()));  // no credentials
+  dds::Topic<msg::DbwStatus> status_topic(participant, sensor_rig::drivers::kStatusTopic);
+  dds::QosSpec deep;
+  deep.depth = 64;
+  dds::Reader<msg::DbwStatus> status(participant, status_topic, deep);
+  bool engaged = false;
+  unsigned long long counted = 0;
+  const auto poll = [&](int ms) {
+    const Nanos end = vehicle_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
+    while (vehicle_now_ns() < end) {
+      status.wait(20);
+      status.take([&](const msg::DbwStatus& s, const dds_sample_info_t&) {
+        engaged = engaged || s.state == 1;
+        counted = std::max<unsigned long long>(counted, s.commands);
+      }, 64);
+    }
+  };
+
+  const pid_t mock = rig.start_mock({"--duration", "30"});
+  ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
+  const pid_t bridge = rig.start("bridge", {"dbw", "bridge", "--domain", dom, "--transport", rig.bus(), "--duration",
+                                            "30", "--security", sec});
+  ASSERT_TRUE(status.wait_for_writers(1, 10000)) << "secured bridge's status not readable without credentials\n"
+                                                 << rig.output("bridge");
+  const auto send = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> a{"dbw", "send", "--domain", dom, "--enable", "--steer", "0.05", "--throttle", "0.2",
+                               "--rate", "200", "--duration", "1.5"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return rig.start(name, a);
+  };
+
+  // 1-3 at once: none may engage.
+  const pid_t plain = send("plain", {});
+  const pid_t forged = send("forged", {"--security", rig.path("forged"), "--identity", "reader"});
+  const pid_t reader = send("reader", {"--security", sec, "--identity", "reader"});
+  EXPECT_EQ(rig.wait_exit(reader, 10000), 1) << rig.output("reader");
+  EXPECT_NE(rig.output("reader").find("identity 'reader' may not publish /vehicle/dbw/cmd"), std::string::npos)
+      << rig.output("reader");
+  EXPECT_EQ(rig.wait_exit(plain, 10000), 0) << rig.output("plain");
+  EXPECT_EQ(rig.wait_exit(forged, 10000), 0) << rig.output("forged");
+  EXPECT_NE(rig.output("plain").find("dbw send: 300 commands"), std::string::npos) << rig.output("plain");
+  EXPECT_NE(rig.output("forged").find("dbw send: 300 commands"), std::string::npos) << rig.output("forged");
+  poll(300);
+  EXPECT_FALSE(engaged) << "a sender without permission engaged the bridge";
+  EXPECT_EQ(counted, 0U) << "the bridge took commands from a sender without permission";
+  EXPECT_EQ(enabled_requests(rig.bus_log(), 0), 0) << "an enabled request reached the bus";
+
+  // 4. The permitted source drives.
+  const Nanos permitted_start = vehicle_now_ns();
+  const pid_t permitted = send("permitted", {"--security", sec});
+  EXPECT_EQ(rig.wait_exit(permitted, 10000), 0) << rig.output("permitted");
+  poll(300);
+  EXPECT_TRUE(engaged) << "the permitted source did not engage\n" << rig.output("bridge");
+  EXPECT_GT(counted, 0U);
+  EXPECT_EQ(rig.stop(bridge), 0) << rig.output("bridge");
+  EXPECT_EQ(rig.stop(mock), 0);
+  const long long taken = json_number(rig.output("bridge"), "commands");
+  EXPECT_GT(taken, 200) << rig.output("bridge");
+  EXPECT_LE(taken, 300) << "the bridge counted commands beyond the permitted sender's 300";
+  EXPECT_GT(enabled_requests(rig.bus_log(), permitted_start), 10) << "no enabled request on the bus";
+}
+
+}  // namespace
