@@ -7,11 +7,13 @@
 # receive thread per sensor, no decoding) from 1 s before the first packet to 2 s after the last,
 # so received + lost = sent. Per source and sensor: rates, lost datagrams, the source's own drop
 # counters (UDP: SO_RXQ_OVFL; ring: PACKET_STATISTICS drops/freezes, reassembly drops), the receive
-# thread's CPU (% of one core over the window, µs per datagram); per source the host's system and
+# thread's CPU (% of one core over the window, µs per datagram), the delivery delay (handed over -
+# kernel stamp, p50/p99/max); per source the host's system and
 # softirq share (of all cores) and the load average.
 # Needs root (namespaces, AF_PACKET).
 # Usage: scripts/bench_lidar_sources.sh BUILD_DIR [SECONDS_PER_SOURCE] [SOURCES...]
 #   BUILD_DIR holds rig and bench_lidar_sources (configure with -DRIG_BENCH=ON); default 60 s, udp packet.
+#   RETIRE_MS=N: the ring's block retire timeout (default 4 ms; the ring's delivery delay vs CPU).
 set -euo pipefail
 build=${1:-build-release}
 secs=${2:-60}
@@ -52,7 +54,7 @@ done
 ip -n "$rx" link set br0 mtu 1500
 
 for src in "${sources[@]}"; do
-  ip netns exec "$rx" "$build/bench_lidar_sources" --source="$src" --interface=br0 --ports=2368,7502,2370 \
+  ip netns exec "$rx" "$build/bench_lidar_sources" --source="$src" --interface=br0 ${RETIRE_MS:+--retire-ms=$RETIRE_MS} --ports=2368,7502,2370 \
     --sensors=10.213.1.2,10.213.1.3,10.213.1.4 --seconds=$((secs + 3)) >"$out/recv_$src.json" &
   bench=$!
   sleep 1
@@ -90,7 +92,7 @@ for r in rows:
     print(f"{src:6} {name:9} sent {n:7} ({rate:6.0f}/s, late {sent.get('late', '?')})  received {r['packets']:7}"
           f"  lost {n - r['packets']:5}  drops {r['drops']}  freezes {r['freeze_q']}  reasm_drops {r['reassembly_dropped']}"
           f"  reassembled {r['reassembled']}  {r['mbytes_per_s']:6.2f} MB/s  cpu {r['cpu_pct']:5.2f} %"
-          f"  {r['cpu_us_per_packet']:5.2f} us/pkt")
+          f"  {r['cpu_us_per_packet']:5.2f} us/pkt  delay p50/p99/max {r['delay_us_p50']:.0f}/{r['delay_us_p99']:.0f}/{r['delay_us_max']:.0f} us")
 print(json.dumps({"source": src, "rows": rows}))
 PY
 done

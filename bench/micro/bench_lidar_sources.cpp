@@ -1,9 +1,13 @@
-// bench_lidar_sources --source=udp|packet --ports=P1,P2,... [--interface=IF] [--sensors=ADDR1,ADDR2,...] [--seconds=S]
+// bench_lidar_sources --source=udp|packet --ports=P1,P2,... [--interface=IF] [--sensors=ADDR1,ADDR2,...]
+//                     [--retire-ms=MS] [--seconds=S]
 // The LIDAR data-port sources under a real load: one receive thread per port (as the LIDAR node
 // runs one per sensor), each with its own UdpSource or RingSource, receiving only (no decoding) for
-// SECONDS (default 60). --sensors: each port's sensor address (the ring's filter; as sensor_address). Prints one JSON line per port: datagrams and bytes received, the source's
+// SECONDS (default 60). --sensors: each port's sensor address (the ring's filter; as sensor_address);
+// --retire-ms: the ring's block retire timeout (default RingSourceConfig's). Prints one JSON line per port: datagrams and bytes received, the source's
 // drop counters (UDP: SO_RXQ_OVFL; ring: PACKET_STATISTICS drops and freeze count, reassembly
-// drops), and the thread's CPU (CLOCK_THREAD_CPUTIME_ID: share of wall time, and µs per datagram); then one line with the
+// drops), the thread's CPU (CLOCK_THREAD_CPUTIME_ID: share of wall time, and µs per datagram), and
+// the delivery delay (the time receive() handed a datagram over minus its kernel receive stamp:
+// queueing, the ring's block retire timeout, wake-up); then one line with the
 // process's CPU and the host's softirq/system share over the run (/proc/stat; kernel copies into
 // the ring or socket happen there, not in our threads) and the load average.
 // scripts/bench_lidar_sources.sh runs it against three synthetic LIDARs across a veth pair.
@@ -11,6 +15,7 @@
 #include <sys/resource.h>
 #include <time.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -34,7 +39,15 @@ struct PortResult {
   std::uint64_t packets = 0, bytes = 0, drops = 0, freeze_q = 0, ring_packets = 0, reassembled = 0,
                 reassembly_dropped = 0, filtered = 0, truncated = 0;
   Nanos cpu_ns = 0;
+  std::vector<Nanos> delays;  // per datagram: handed to us - kernel receive stamp
 };
+
+Nanos percentile(std::vector<Nanos>& v, double q) {
+  if (v.empty()) return 0;
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
 
 Nanos thread_cpu_ns() { return sensor_rig::clock_ns(CLOCK_THREAD_CPUTIME_ID); }
 
@@ -53,10 +66,15 @@ std::vector<unsigned long long> cpu_jiffies() {
 template <class Source>
 void receive_loop(Source& src, const std::atomic<bool>& stop, PortResult& out) {
   lidar::SlotArena arena(64, 65536);
+  out.delays.reserve(1 << 20);
   const Nanos cpu0 = thread_cpu_ns();
   while (!stop.load(std::memory_order_relaxed)) {
     const auto r = src.receive(arena.slots(), 50);
-    for (std::size_t i = 0; i < r.count; ++i) out.bytes += arena.slots()[i].size;
+    const Nanos now = r.count > 0 ? sensor_rig::vehicle_now_ns() : 0;
+    for (std::size_t i = 0; i < r.count; ++i) {
+      out.bytes += arena.slots()[i].size;
+      if (out.delays.size() < out.delays.capacity()) out.delays.push_back(now - arena.slots()[i].rx_ns);
+    }
     out.packets += r.count;
   }
   out.cpu_ns = thread_cpu_ns() - cpu0;
@@ -79,6 +97,7 @@ int main(int argc, char** argv) {
   std::string source = "udp", interface, sensors_text;
   std::vector<std::uint16_t> ports;
   double seconds = 60.0;
+  int retire_ms = lidar::RingSourceConfig{}.retire_timeout_ms;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* key) { return a.substr(std::string(key).size()); };
@@ -87,12 +106,13 @@ int main(int argc, char** argv) {
     if (a.rfind("--sensors=", 0) == 0) sensors_text = value("--sensors=");
     if (a.rfind("--ports=", 0) == 0) ports = parse_ports(value("--ports="));
     if (a.rfind("--seconds=", 0) == 0) seconds = std::atof(value("--seconds=").c_str());
+    if (a.rfind("--retire-ms=", 0) == 0) retire_ms = std::atoi(value("--retire-ms=").c_str());
   }
   if ((source != "udp" && source != "packet") || ports.empty() || !(seconds > 0) ||
       (source == "packet" && interface.empty())) {
     std::fprintf(stderr,
                  "usage: bench_lidar_sources --source=udp|packet --ports=P1,P2,... [--interface=IF (packet)] "
-                 "[--sensors=IPV4,... (one per port)] [--seconds=S]\n");
+                 "[--sensors=IPV4,... (one per port)] [--retire-ms=MS] [--seconds=S]\n");
     return 2;
   }
   std::vector<std::uint32_t> sensor_hosts(ports.size(), 0);
@@ -122,6 +142,7 @@ int main(int argc, char** argv) {
         c.interface = interface;
         c.port = port;
         c.sensor_host = sensor_hosts[i];
+        c.retire_timeout_ms = retire_ms;
         rings.emplace_back(c);
       }
     }
@@ -171,17 +192,20 @@ int main(int argc, char** argv) {
       r.truncated = s.truncated;
     }
     std::printf(
-        "{\"source\":\"%s\",\"port\":%u,\"seconds\":%.1f,\"packets\":%llu,\"packets_per_s\":%.0f,\"mbytes_per_s\":%.2f,"
+        "{\"source\":\"%s\",\"retire_ms\":%d,\"port\":%u,\"seconds\":%.1f,\"packets\":%llu,\"packets_per_s\":%.0f,\"mbytes_per_s\":%.2f,"
         "\"drops\":%llu,\"freeze_q\":%llu,\"ring_frames\":%llu,\"reassembled\":%llu,\"reassembly_dropped\":%llu,"
-        "\"filtered\":%llu,\"truncated\":%llu,\"cpu_pct\":%.2f,\"cpu_us_per_packet\":%.2f}\n",
-        source.c_str(), r.port, static_cast<double>(wall) * 1e-9, static_cast<unsigned long long>(r.packets),
+        "\"filtered\":%llu,\"truncated\":%llu,\"cpu_pct\":%.2f,\"cpu_us_per_packet\":%.2f,"
+        "\"delay_us_p50\":%.0f,\"delay_us_p99\":%.0f,\"delay_us_max\":%.0f}\n",
+        source.c_str(), source == "packet" ? retire_ms : 0, r.port, static_cast<double>(wall) * 1e-9, static_cast<unsigned long long>(r.packets),
         static_cast<double>(r.packets) / (static_cast<double>(wall) * 1e-9),
         static_cast<double>(r.bytes) / (static_cast<double>(wall) * 1e-3), static_cast<unsigned long long>(r.drops),
         static_cast<unsigned long long>(r.freeze_q), static_cast<unsigned long long>(r.ring_packets),
         static_cast<unsigned long long>(r.reassembled), static_cast<unsigned long long>(r.reassembly_dropped),
         static_cast<unsigned long long>(r.filtered), static_cast<unsigned long long>(r.truncated),
         100.0 * static_cast<double>(r.cpu_ns) / static_cast<double>(wall),
-        r.packets > 0 ? static_cast<double>(r.cpu_ns) * 1e-3 / static_cast<double>(r.packets) : 0.0);
+        r.packets > 0 ? static_cast<double>(r.cpu_ns) * 1e-3 / static_cast<double>(r.packets) : 0.0,
+        static_cast<double>(percentile(r.delays, 0.5)) * 1e-3, static_cast<double>(percentile(r.delays, 0.99)) * 1e-3,
+        static_cast<double>(percentile(r.delays, 1.0)) * 1e-3);
   }
   auto tv_ns = [](const timeval& t) { return static_cast<Nanos>(t.tv_sec) * 1'000'000'000LL + t.tv_usec * 1000LL; };
   const Nanos proc_cpu = tv_ns(ru1.ru_utime) - tv_ns(ru0.ru_utime) + tv_ns(ru1.ru_stime) - tv_ns(ru0.ru_stime);
