@@ -8,6 +8,8 @@
 // none engages or is counted by the bridge, and the bus holds no enabled request; then
 //  4. the permitted `dbw_command` engages: enabled requests on the bus, and the bridge counted at
 //     most what that sender sent (nothing from 1 and 2, which each sent more).
+// And credentials Cyclone refuses (a grant changed after signing, another identity's certificate,
+// no plugins) end `rig dbw send` with the reason instead of an ordinary participant.
 // The test's own participant is an ordinary one: the bridge's status stays readable without
 // credentials (allow_unauthenticated_participants).
 #include <gtest/gtest.h>
@@ -138,6 +140,53 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
   EXPECT_GT(taken, 200) << rig.output("bridge");
   EXPECT_LE(taken, 300) << "the bridge counted commands beyond the permitted sender's 300";
   EXPECT_GT(enabled_requests(rig.bus_log(), permitted_start), 10) << "no enabled request on the bus";
+}
+
+}  // namespace
+
+namespace {
+
+// Credentials Cyclone refuses, and plugins that are not there: `rig dbw send` exits 1 saying so
+// (no participant, nothing sent), instead of running as an ordinary participant.
+TEST(DbwSecurityProcesses, RefusedCredentialsAndMissingPluginsAreReported) {
+  dbw::test::RigProcesses rig("dbw_security_refused", 59, dbw::test::DomainBy::kFlag);
+  if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
+  const std::string sec = rig.path("sec");
+  ASSERT_EQ(rig.wait_exit(rig.start("init", {"security", "init", sec}), 10000), 0) << rig.output("init");
+  const auto send = [&](const std::string& name, const std::string& dir) {
+    return rig.wait_exit(rig.start(name, {"dbw", "send", "--domain", std::to_string(rig.domain()), "--rate", "10",
+                                          "--duration", "0.2", "--security", dir}),
+                         10000);
+  };
+  // A grant changed after signing.
+  const fs::path tampered = rig.path("tampered");
+  fs::copy(sec, tampered, fs::copy_options::recursive);
+  std::string perms = dbw::test::read_text(tampered / "dbw_command/permissions.p7s");
+  const std::string grant = "<topic>rt/vehicle/dbw/cmd</topic>";
+  perms.replace(perms.find(grant), grant.size(), "<topic>rt/vehicle/dbw/*</topic>");
+  std::ofstream(tampered / "dbw_command/permissions.p7s", std::ios::trunc) << perms;
+  EXPECT_EQ(send("tampered", tampered.string()), 1);
+  EXPECT_NE(rig.output("tampered").find("participant with identity 'dbw_command'"), std::string::npos)
+      << rig.output("tampered");
+  EXPECT_NE(rig.output("tampered").find("signature failure"), std::string::npos) << rig.output("tampered");
+  EXPECT_EQ(rig.output("tampered").find("dbw send:"), std::string::npos) << "it sent";
+  // Another identity's certificate under dbw_command's grant.
+  const fs::path swapped = rig.path("swapped");
+  fs::copy(sec, swapped, fs::copy_options::recursive);
+  fs::copy_file(fs::path(sec) / "reader/cert.pem", swapped / "dbw_command/cert.pem", fs::copy_options::overwrite_existing);
+  fs::copy_file(fs::path(sec) / "reader/key.pem", swapped / "dbw_command/key.pem", fs::copy_options::overwrite_existing);
+  EXPECT_EQ(send("swapped", swapped.string()), 1);
+  EXPECT_NE(rig.output("swapped").find("Subject name is invalid"), std::string::npos) << rig.output("swapped");
+  // No plugins where they are looked for.
+  ::setenv("RIG_DDS_SECURITY_PLUGINS", rig.path("no_plugins").c_str(), 1);
+  const int rc = send("no_plugins", sec);
+  ::unsetenv("RIG_DDS_SECURITY_PLUGINS");
+  EXPECT_EQ(rc, 1);
+  EXPECT_NE(rig.output("no_plugins").find("plugin libdds_security_auth.so not found"), std::string::npos)
+      << rig.output("no_plugins");
+  // A directory without the identity: a usage error before anything starts.
+  EXPECT_EQ(send("missing", rig.path("nothing_here")), 2);
+  EXPECT_NE(rig.output("missing").find("missing"), std::string::npos) << rig.output("missing");
 }
 
 }  // namespace
