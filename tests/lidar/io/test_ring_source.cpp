@@ -7,6 +7,9 @@
 #include <arpa/inet.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstdlib>
+
 #include <optional>
 #include <vector>
 
@@ -223,6 +226,54 @@ TEST(RingSource, VethNamespacesFragmentsReassembled) {
   EXPECT_EQ(st.filtered, other_fragmented);
   EXPECT_EQ(st.missing_timestamps, 0u);
   EXPECT_EQ(st.truncated, 0u);
+}
+
+
+// The interface going down (a NIC unplugged, a link reset) is an error the caller sees once, not a
+// hang or a busy loop; when it comes back the same socket receives again.
+TEST(RingSource, InterfaceDownIsReportedAndRecovers) {
+  test::VethNamespaces net;
+  if (!net.error().empty()) GTEST_SKIP() << net.error();
+  constexpr std::uint16_t kPort = 2368;
+  std::optional<RingSource> ring;
+  std::optional<UdpSender> tx;
+  std::string why;
+  test::VethNamespaces::in_namespace(net.ns_a(), [&] {
+    RingSourceConfig c;
+    c.interface = net.if_a();
+    c.port = kPort;
+    ring = ring_or_skip(c, why);
+  });
+  if (!ring) GTEST_SKIP() << why;
+  test::VethNamespaces::in_namespace(net.ns_b(), [&] {
+    const std::vector<Endpoint> dst{{test::VethNamespaces::kAddrA, kPort}};
+    tx.emplace(dst);
+  });
+  const auto p = payload(1206, 1);
+  ASSERT_EQ(tx->send(p).sent, 1u);
+  ASSERT_EQ(receive_all(*ring, 1).size(), 1u);
+  ASSERT_EQ(std::system(("ip -n " + net.ns_a() + " link set " + net.if_a() + " down").c_str()), 0);
+  SlotArena arena(4, 2048);
+  int errors = 0, timeouts = 0;
+  for (int k = 0; k < 5; ++k) {
+    const auto r = ring->receive(arena.slots(), 50);
+    if (r.status == RecvStatus::kError) {
+      ++errors;
+      EXPECT_EQ(r.error, ENETDOWN);
+    }
+    if (r.status == RecvStatus::kTimeout) ++timeouts;
+  }
+  EXPECT_EQ(errors, 1) << "reported once";
+  EXPECT_EQ(timeouts, 4) << "then the receive waits again (no busy loop)";
+  ASSERT_EQ(std::system(("ip -n " + net.ns_a() + " link set " + net.if_a() + " up").c_str()), 0);
+  // The link needs a moment to come up (both veth ends up, carrier): resend until one arrives.
+  std::size_t got = 0;
+  for (int k = 0; k < 40 && got == 0; ++k) {
+    tx->send(p);
+    got = receive_all(*ring, 1, 1).size();
+  }
+  EXPECT_EQ(got, 1u) << "the same socket receives again after the interface came back";
+  EXPECT_EQ(ring->stats().errors, 1u);
 }
 
 }  // namespace
