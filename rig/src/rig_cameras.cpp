@@ -40,6 +40,7 @@ std::string describe_cameras(const std::vector<drivers::CameraConfig>& cameras) 
                                                                                            : camera::info(c.source.format).v4l2_name)
       << " " << c.source.width << "x" << c.source.height << " @ " << c.source.frame_rate << " Hz, trigger "
       << camera::to_string(c.source.trigger) << (c.trigger_group.empty() ? "" : " (group " + c.trigger_group + ")")
+      << (c.lidar_trigger.enabled() ? " (lidar " + c.lidar_trigger.lidar + " sweep at " + std::to_string(c.lidar_trigger.azimuth_deg) + " deg)" : "")
       << (c.info.calibrated() ? ", calibrated" : ", uncalibrated") << " -> /sensors/camera/" << c.name << "/image_raw";
     if (c.mock.kind != drivers::CameraMockConfig::Kind::kNone) o << " [mock: " << drivers::to_string(c.mock.kind) << "]";
     o << "\n";
@@ -68,6 +69,8 @@ struct CameraRig::Impl {
   };
   std::vector<drivers::CameraConfig> cameras;
   std::map<std::string, std::unique_ptr<drivers::TriggerGroup>> groups;
+  std::vector<std::unique_ptr<drivers::LidarTrigger>> lidar_triggers;  // one per LIDAR-triggered camera
+  std::vector<int> lidar_trigger_priority;
   std::vector<std::unique_ptr<drivers::CameraDriver>> drivers;
   std::vector<Fake> fakes;
 };
@@ -77,8 +80,12 @@ CameraRig::CameraRig(const std::vector<drivers::CameraConfig>& cameras, const dd
     : impl_(std::make_unique<Impl>()) {
   impl_->cameras = resolve_camera_mocks(cameras);
   for (const auto& c : impl_->cameras) {
-    drivers::TriggerGroup* group = nullptr;
-    if (c.source.trigger == camera::TriggerMode::kSoftware) {
+    drivers::TriggerSource* group = nullptr;
+    if (c.lidar_trigger.enabled()) {
+      impl_->lidar_triggers.push_back(std::make_unique<drivers::LidarTrigger>(c.name, c.lidar_trigger));
+      impl_->lidar_trigger_priority.push_back(c.realtime_priority);
+      group = impl_->lidar_triggers.back().get();
+    } else if (c.source.trigger == camera::TriggerMode::kSoftware) {
       const std::string key = c.trigger_group.empty() ? "camera:" + c.name : c.trigger_group;
       auto& g = impl_->groups[key];
       if (!g) g = std::make_unique<drivers::TriggerGroup>(key, c.source.frame_rate);
@@ -89,6 +96,12 @@ CameraRig::CameraRig(const std::vector<drivers::CameraConfig>& cameras, const dd
 }
 
 CameraRig::~CameraRig() { stop(); }
+
+std::vector<std::pair<std::string, timesync::SweepObserver*>> CameraRig::sweep_observers() const {
+  std::vector<std::pair<std::string, timesync::SweepObserver*>> out;
+  for (const auto& t : impl_->lidar_triggers) out.emplace_back(t->config().lidar, t.get());
+  return out;
+}
 
 void CameraRig::start() {
   for (const auto& c : impl_->cameras) {
@@ -108,6 +121,7 @@ void CameraRig::start() {
   }
   for (auto& d : impl_->drivers) d->start();  // they open (and reopen) their cameras themselves
   for (auto& [name, g] : impl_->groups) g->start();
+  for (std::size_t i = 0; i < impl_->lidar_triggers.size(); ++i) impl_->lidar_triggers[i]->start(impl_->lidar_trigger_priority[i]);
 }
 
 void CameraRig::supervise(std::vector<dds::DriverStatus>& statuses) {
@@ -131,6 +145,7 @@ void CameraRig::supervise(std::vector<dds::DriverStatus>& statuses) {
 
 void CameraRig::stop() {
   for (auto& [name, g] : impl_->groups) g->stop();
+  for (auto& t : impl_->lidar_triggers) t->stop();
   for (auto& d : impl_->drivers) d->stop();
   for (auto& f : impl_->fakes)
     if (f.process.pid() > 0) f.process.stop(1000);

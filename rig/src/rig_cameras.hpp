@@ -3,6 +3,7 @@
 // across items) and, for `rig up`, their nodes, software trigger groups and mock devices.
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sensor_rig/common/child_process.hpp"
@@ -10,6 +11,7 @@
 #include "sensor_rig/dds/driver_status.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
+#include "sensor_rig/drivers/camera/lidar_trigger.hpp"
 
 namespace sensor_rig::rig {
 
@@ -28,6 +30,9 @@ class CameraRig {
   ~CameraRig();
   CameraRig(const CameraRig&) = delete;
   CameraRig& operator=(const CameraRig&) = delete;
+  // The LIDAR-triggered cameras' sweep observers, by LIDAR name: `rig up` hands them to those
+  // LIDAR drivers before they start.
+  [[nodiscard]] std::vector<std::pair<std::string, timesync::SweepObserver*>> sweep_observers() const;
   void start();
   // Restarts GigE fakes that exited (the node reopens its camera by itself); appends statuses.
   void supervise(std::vector<dds::DriverStatus>& statuses);

@@ -46,6 +46,16 @@ RigConfig load_rig_config(const std::string& path) {
     cfg.lidars.push_back(std::move(l));
   }
   cfg.cameras = parse_cameras(root);
+  // A LIDAR-triggered camera needs that LIDAR in this rig (its sweep drives the trigger).
+  const auto camera_items = root.items("cameras");
+  for (std::size_t i = 0; i < cfg.cameras.size() && i < camera_items.size(); ++i) {
+    const auto& lt = cfg.cameras[i].lidar_trigger;
+    if (!lt.enabled() || names.count(lt.lidar) != 0) continue;
+    std::string known;
+    for (const auto& l : cfg.lidars) known += (known.empty() ? "" : ", ") + l.name;
+    if (auto t = camera_items[i].child("trigger"))
+      t->fail("lidar", "no lidar named '" + lt.lidar + "' in lidars: (" + (known.empty() ? "none" : known) + ")");
+  }
   if (auto d = root.child("dbw")) cfg.dbw = drivers::parse_dbw_config(*d);
   cfg.sync_sets = parse_sync_sets(root, stamped_topics(cfg.lidars, cfg.cameras, cfg.dbw));
   problems->throw_if_any();

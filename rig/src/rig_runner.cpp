@@ -157,7 +157,6 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     log::error("rig", std::string("driver start failed: ") + e.what());
     return 1;
   }
-  for (auto& d : lidars) d->start();
   std::unique_ptr<CameraRig> cameras;
   try {
     cameras = std::make_unique<CameraRig>(cfg.cameras, participant, stamps);
@@ -165,6 +164,11 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     log::error("rig", std::string("camera driver start failed: ") + e.what());
     return 1;
   }
+  // LIDAR-triggered cameras learn the sweep from their LIDAR's driver (same process, no DDS).
+  for (const auto& [lidar, observer] : cameras->sweep_observers())
+    for (std::size_t i = 0; i < cfg.lidars.size(); ++i)
+      if (cfg.lidars[i].name == lidar) lidars[i]->add_sweep_observer(observer);
+  for (auto& d : lidars) d->start();
   cameras->start();  // GigE fakes first, then the nodes (which retry until their camera answers)
   SyncSetNode sync_sets(cfg.sync_sets, participant);  // /rig/stamps -> /rig/sets/<name>
   sync_sets.start();

@@ -109,8 +109,11 @@ CameraConfig parse_camera_config(const config::Node& n) {
     }
   }
   if (auto t = n.child("trigger")) {
-    t->allow_keys({"mode", "line", "group"});
-    const auto mode = t->get_choice("mode", {"free_run", "software", "line"}, "free_run");
+    t->allow_keys({"mode", "line", "group", "lidar", "azimuth_deg", "latency_us"});
+    auto& lt = c.lidar_trigger;
+    lt.lidar = t->get_string("lidar", "");
+    // A LIDAR trigger is a software trigger: mode may be left out, any other mode is a mistake.
+    const auto mode = t->get_choice("mode", {"free_run", "software", "line"}, lt.enabled() ? "software" : "free_run");
     s.trigger = mode == "software" ? camera::TriggerMode::kSoftware
                 : mode == "line"   ? camera::TriggerMode::kLine
                                    : camera::TriggerMode::kFreeRun;
@@ -120,6 +123,18 @@ CameraConfig parse_camera_config(const config::Node& n) {
       t->fail("mode", "trigger modes need the aravis backend (V4L2 cameras free-run)");
     if (!c.trigger_group.empty() && s.trigger != camera::TriggerMode::kSoftware)
       t->fail("group", "a trigger group needs mode: software");
+    if (lt.enabled()) {
+      if (!t->has("azimuth_deg")) t->fail("azimuth_deg", "required with lidar: the azimuth (degrees, LIDAR frame) to expose at");
+      lt.azimuth_deg = t->get_double("azimuth_deg", 0.0, 360.0, 0.0);
+      if (lt.azimuth_deg >= 360.0) t->fail("azimuth_deg", "must be in [0, 360)");
+      lt.latency_us = t->get_double("latency_us", 0.0, 100'000.0, 0.0);
+      if (s.trigger != camera::TriggerMode::kSoftware) t->fail("mode", "a LIDAR trigger needs mode: software");
+      // One trigger per camera: a group's tick and a sweep crossing cannot both fire it.
+      if (!c.trigger_group.empty()) t->fail("group", "a LIDAR-triggered camera is in no trigger group");
+    } else {
+      for (const char* k : {"azimuth_deg", "latency_us"})
+        if (t->has(k)) t->fail(k, "only with lidar: (a LIDAR-triggered camera)");
+    }
   }
   s.packet_size = static_cast<int>(n.get_int("packet_size", 0, 16384, 0));
   if (s.packet_size != 0 && s.packet_size < 576) n.fail("packet_size", "0 (negotiate) or 576..16384");

@@ -30,7 +30,7 @@ struct CameraDriver::Impl {
   dds::Topic<msg::CameraInfo> info_topic;
   dds::Writer<msg::CameraInfo> info_writer;
   dds::StampsWriter& stamps;
-  TriggerGroup* trigger;
+  TriggerSource* trigger;
   FrameClock clock;
   std::vector<double> d;  // CameraInfo.d storage
   std::unique_ptr<ImageOutputs> outputs;  // image_color / compressed on their own thread; null: none
@@ -51,9 +51,10 @@ struct CameraDriver::Impl {
   StampSource stamp_source = StampSource::kHostFallback;
   camera::SourceStats source_stats;
   timesync::ClockMapperStatus sync;
+  timesync::MonotonicStampsStatus monotonic;
 
   Impl(const CameraConfig& c, std::unique_ptr<camera::FrameSource> s, const dds::Participant& p, dds::StampsWriter& st,
-       TriggerGroup* t)
+       TriggerSource* t)
       : cfg(c),
         image_topic_name("/sensors/camera/" + c.name + "/image_raw"),
         info_topic_name("/sensors/camera/" + c.name + "/camera_info"),
@@ -213,17 +214,18 @@ struct CameraDriver::Impl {
       std::lock_guard lock(mutex);
       source_stats = src->stats();
       sync = clock.status(vehicle_now_ns());
+      monotonic = clock.monotonic();
     }
     src->close();
   }
 };
 
 CameraDriver::CameraDriver(const CameraConfig& cfg, const dds::Participant& participant, dds::StampsWriter& stamps,
-                           TriggerGroup* trigger)
+                           TriggerSource* trigger)
     : CameraDriver(cfg, make_camera_source(cfg), participant, stamps, trigger) {}
 
 CameraDriver::CameraDriver(const CameraConfig& cfg, std::unique_ptr<camera::FrameSource> source,
-                           const dds::Participant& participant, dds::StampsWriter& stamps, TriggerGroup* trigger)
+                           const dds::Participant& participant, dds::StampsWriter& stamps, TriggerSource* trigger)
     : impl_(std::make_unique<Impl>(cfg, std::move(source), participant, stamps, trigger)) {
   if (trigger != nullptr) trigger->add([src = impl_->src.get()] { return src->trigger(); });
 }
@@ -254,7 +256,9 @@ void CameraDriver::stop() {
   const auto st = status();
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
-    if (k == "frames" || k == "incomplete" || k == "reopens" || k == "stamp_source" || k == "sync") line.append(" ").append(k).append("=").append(v);
+    if (k == "frames" || k == "incomplete" || k == "reopens" || k == "stamp_source" || k == "sync" || k == "triggers" ||
+        k.rfind("phase_", 0) == 0)
+      line.append(" ").append(k).append("=").append(v);
   log::info("camera", line);
 }
 
@@ -297,8 +301,12 @@ dds::DriverStatus CameraDriver::status() const {
   s.add("sync_drift_ppm", std::to_string(impl_->sync.drift_ppm));
   s.add_number("sync_residual_p99_ns", impl_->sync.residual_p99_ns);
   s.add("ptp", "not used (device ticks mapped)");
+  // CLOCK_REALTIME stepped back: stamps held and slewed (timesync/README.md "Realtime steps").
+  s.add_number("stamp_backward_steps", impl_->monotonic.backward_steps);
+  s.add_number("stamp_correction_ns", impl_->monotonic.correction_ns);
   if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
   if (impl_->outputs) impl_->outputs->add_status(s);
+  if (impl_->trigger != nullptr) impl_->trigger->add_status(s);
   return s;
 }
 

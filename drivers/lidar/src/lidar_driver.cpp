@@ -18,6 +18,7 @@
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
 #include "sensor_rig/drivers/lidar/lidar_stamping.hpp"
 #include "sensor_rig/drivers/lidar/sweep_samples.hpp"
+#include "sensor_rig/timesync/monotonic_stamps.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 
 namespace sensor_rig::drivers {
@@ -185,6 +186,10 @@ struct LidarDriver::Impl {
   std::atomic<bool> stop_flag{false};
   std::vector<timesync::SweepObserver*> sweep_observers;  // set before start(), read by the thread
   std::vector<timesync::SweepSample> sweep_buffer;
+  // Per topic: device-clock stamps never go backwards when CLOCK_REALTIME steps back (held, then
+  // slewed out; timesync/README.md "Realtime steps"). Host-time stamps are the clock as it is.
+  timesync::MonotonicStamps scan_monotonic;
+  timesync::MonotonicStamps imu_monotonic;
 
   // Counters shared with status(); written by the driver thread only.
   mutable std::mutex mutex;
@@ -204,6 +209,7 @@ struct LidarDriver::Impl {
   std::uint64_t imu_dropped_size = 0;      // second-port packets that are not 48 bytes
   std::uint64_t imu_dropped_non_finite = 0;
   std::uint64_t sweep_samples_sent = 0;    // to the sweep observers (LIDAR-triggered cameras)
+  timesync::MonotonicStampsStatus stamp_monotonic;  // scan_monotonic's, for status()
   Nanos last_scan_host_ns = 0;
   double scan_rate_hz = 0.0;
   std::size_t last_points = 0;
@@ -299,7 +305,8 @@ struct LidarDriver::Impl {
     dp.kind = timesync::DeviceTimeKind::kAbsoluteNs;
     dp.value = static_cast<std::int64_t>(sample.gyro_ts_ns);
     dp.rx_ns = rx_ns;
-    const Nanos stamp = imu_stamper.stamp(dp);
+    Nanos stamp = imu_stamper.stamp(dp);
+    if (cfg.time_source == timesync::TimeSource::kSensor) stamp = imu_monotonic.apply(stamp);
     const auto m = imu_message(sample, stamp, imu_frame_id.c_str());
     const auto rc = imu_writer->write(m, vehicle_now_ns());
     std::lock_guard lock(mutex);
@@ -354,7 +361,8 @@ struct LidarDriver::Impl {
   }
 
   void publish(lidar::Scan& scan) {
-    notify_sweep(scan);
+    notify_sweep(scan);  // the sweep in vehicle time as it is: triggers aim at the clock
+    if (cfg.time_source == timesync::TimeSource::kSensor) scan.stamp = scan_monotonic.apply(scan.stamp);
     const Nanos ready = vehicle_now_ns();
     msg::PointCloud2 pc{};
     pc.header.stamp = msg::to_time(scan.stamp);
@@ -382,6 +390,7 @@ struct LidarDriver::Impl {
       last_error = "dds write: " + rc.message();
     }
     ++scans;
+    stamp_monotonic = scan_monotonic.status();
     last_points = scan.points.size();
     last_missing = scan.missing_packets;
     if (scan.missing_packets > 0) ++incomplete_scans;
@@ -545,6 +554,10 @@ dds::DriverStatus LidarDriver::status() const {
     if (!impl_->record_error.empty()) s.add("record_last_error", impl_->record_error);
   }
   s.add("time_source", timesync::to_string(c.time_source));
+  if (c.time_source == timesync::TimeSource::kSensor) {
+    s.add_number("stamp_backward_steps", impl_->stamp_monotonic.backward_steps);
+    s.add_number("stamp_correction_ns", impl_->stamp_monotonic.correction_ns);
+  }
   if (impl_->ouster && impl_->position) {
     s.add("imu_topic", impl_->imu_topic_name);
     s.add_number("imu_samples", impl_->imu_samples);

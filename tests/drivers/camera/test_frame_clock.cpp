@@ -70,5 +70,38 @@ TEST(FrameClock, SoftwareTriggeredFramesCarryTheirTick) {
   EXPECT_NE(clock.stamp(m, 2'100'000'000).source, StampSource::kTriggerTick);  // a tick after arrival: not its tick
 }
 
+// A V4L2 camera (CLOCK_MONOTONIC exposure stamps) while the host's CLOCK_REALTIME is stepped back
+// 1 s and later forward 1 s (injected through the frame's realtime/monotonic pair): the published
+// stamps never go backwards, the step back is counted and slewed out (0.9x rate), the step forward
+// passes at once; afterwards stamps are vehicle time again.
+TEST(FrameClock, MonotonicClockStampsStayMonotonicThroughRealtimeSteps) {
+  FrameClock clock;
+  const Nanos mono0 = 50'000'000'000;
+  const Nanos rt0 = 1'800'000'000'000'000'000;
+  Nanos last = 0;
+  Nanos offset = 0;  // injected realtime step
+  Nanos err_at_end = 0, correction_after_back = 0;
+  for (int i = 0; i < 400; ++i) {  // 40 s at 10 Hz
+    if (i == 50) offset = -1'000'000'000;
+    if (i == 300) offset = 0;
+    const Nanos mono = mono0 + static_cast<Nanos>(i) * 100'000'000;
+    camera::FrameMeta m;
+    m.domain = camera::TimeDomain::kMonotonic;
+    m.device_ns = mono;                                // exposure start
+    m.complete_mono_ns = mono + 30'000'000;            // dequeued 30 ms later
+    m.complete_ns = rt0 + (m.complete_mono_ns - mono0) + offset;
+    const auto s = clock.stamp(m);
+    EXPECT_EQ(s.source, StampSource::kMonotonic);
+    EXPECT_GE(s.vehicle_ns, last) << "frame " << i;
+    last = s.vehicle_ns;
+    if (i == 50) correction_after_back = clock.monotonic().correction_ns;
+    err_at_end = s.vehicle_ns - (rt0 + (mono - mono0) + offset);
+  }
+  EXPECT_EQ(clock.monotonic().backward_steps, 1u);
+  EXPECT_NEAR(static_cast<double>(correction_after_back), 0.9e9, 1e6);  // held: 1 s back less one frame
+  EXPECT_EQ(clock.monotonic().correction_ns, 0);                          // slewed out in ~11 s
+  EXPECT_EQ(err_at_end, 0);
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers

@@ -40,6 +40,16 @@ struct CameraOutputsConfig {
   [[nodiscard]] bool any() const noexcept { return color || compressed; }
 };
 
+// `trigger: {lidar: NAME, azimuth_deg: A, latency_us: L}`: software-triggered when that LIDAR's
+// sweep crosses azimuth A (its frame, REP 103: 0 forward, 90 left), fired L before the predicted
+// crossing so that the exposure starts on it (L: the camera's trigger-to-exposure latency).
+struct LidarTriggerConfig {
+  std::string lidar;              // empty: not LIDAR-triggered
+  double azimuth_deg = 0.0;       // [0, 360)
+  double latency_us = 0.0;        // trigger command -> exposure start
+  [[nodiscard]] bool enabled() const noexcept { return !lidar.empty(); }
+};
+
 struct CameraConfig {
   std::string name;                 // /sensors/camera/<name>/image_raw, frame camera_<name>
   camera::SourceConfig source;      // backend, device, format, size, rate, exposure, gain, trigger
@@ -47,6 +57,7 @@ struct CameraConfig {
   camera::CameraInfo info;          // loaded from `calibration` (or uncalibrated of the size)
   std::string frame_id;             // default camera_<name>
   std::string trigger_group;        // software trigger: cameras of a group share one tick
+  LidarTriggerConfig lidar_trigger; // software trigger at a LIDAR's sweep crossing (rig checks the name)
   int realtime_priority = 0;
   int watchdog_ms = 0;              // no frame for this long: reported and reopened; 0 = auto
   dds::QosSpec qos = camera_qos();

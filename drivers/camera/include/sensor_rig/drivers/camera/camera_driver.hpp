@@ -20,10 +20,10 @@ std::unique_ptr<camera::FrameSource> make_camera_source(const CameraConfig& cfg)
 class CameraDriver {
  public:
   CameraDriver(const CameraConfig& cfg, const dds::Participant& participant, dds::StampsWriter& stamps,
-               TriggerGroup* trigger = nullptr);
+               TriggerSource* trigger = nullptr);
   // With a given source (tests).
   CameraDriver(const CameraConfig& cfg, std::unique_ptr<camera::FrameSource> source, const dds::Participant& participant,
-               dds::StampsWriter& stamps, TriggerGroup* trigger = nullptr);
+               dds::StampsWriter& stamps, TriggerSource* trigger = nullptr);
   ~CameraDriver();
   CameraDriver(const CameraDriver&) = delete;
   CameraDriver& operator=(const CameraDriver&) = delete;

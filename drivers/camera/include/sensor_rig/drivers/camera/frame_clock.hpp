@@ -5,10 +5,13 @@
 //   every frame; mapped device time, never the arrival time alone (host fallback until locked);
 // - CLOCK_MONOTONIC (V4L2): plus the realtime-monotonic offset sampled at this frame;
 // - software trigger: the vehicle time of the trigger tick that exposed it (shared by a group).
+// Device-clock stamps never go backwards when CLOCK_REALTIME is stepped back (timesync's
+// MonotonicStamps: held, then slewed out); trigger ticks are the clock's readings as they are.
 #include <cstdint>
 
 #include "sensor_rig/camera/frame.hpp"
 #include "sensor_rig/timesync/clock_mapper.hpp"
+#include "sensor_rig/timesync/monotonic_stamps.hpp"
 
 namespace sensor_rig::drivers {
 
@@ -28,10 +31,14 @@ class FrameClock {
   // `tick_ns`: vehicle time of the software trigger tick that exposed the frame (0: none).
   FrameStamp stamp(const camera::FrameMeta& m, Nanos tick_ns = 0) noexcept;
   [[nodiscard]] timesync::ClockMapperStatus status(Nanos now) const { return mapper_.status(now); }
+  [[nodiscard]] const timesync::MonotonicStampsStatus& monotonic() const noexcept { return monotonic_.status(); }
   void reset() noexcept { mapper_.reset(); }
 
  private:
+  FrameStamp device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept;
+
   timesync::ClockMapper mapper_;
+  timesync::MonotonicStamps monotonic_;  // the topic's stamps across realtime steps (kept over reopens)
   Nanos exposure_ns_;
 };
 

@@ -10,21 +10,35 @@
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/dds/driver_status.hpp"
 
 namespace sensor_rig::drivers {
 
-class TriggerGroup {
+// What fires a software-triggered camera: a periodic group tick (TriggerGroup) or the sweep of a
+// LIDAR (LidarTrigger). The camera node registers its trigger and stamps each frame with the
+// exposure start of the latest trigger before the frame arrived.
+class TriggerSource {
+ public:
+  virtual ~TriggerSource() = default;
+  virtual void add(std::function<bool()> trigger) = 0;  // before start()
+  // Vehicle time of the exposure start of the latest trigger at or before `t` (0: none yet).
+  [[nodiscard]] virtual Nanos tick_before(Nanos t) const = 0;
+  // The trigger's own figures in the camera's /diagnostics status.
+  virtual void add_status(dds::DriverStatus& /*s*/) const {}
+};
+
+class TriggerGroup : public TriggerSource {
  public:
   TriggerGroup(std::string name, double rate_hz);
-  ~TriggerGroup();
+  ~TriggerGroup() override;
   TriggerGroup(const TriggerGroup&) = delete;
   TriggerGroup& operator=(const TriggerGroup&) = delete;
 
-  void add(std::function<bool()> trigger);  // before start()
+  void add(std::function<bool()> trigger) override;  // before start()
   void start();
   void stop();
   // Vehicle time of the latest tick at or before `t` (0: none yet).
-  [[nodiscard]] Nanos tick_before(Nanos t) const;
+  [[nodiscard]] Nanos tick_before(Nanos t) const override;
   [[nodiscard]] std::uint64_t ticks() const noexcept { return ticks_.load(); }
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
 

@@ -11,10 +11,9 @@
 #include "sensor_rig/drivers/lidar/lidar_config.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/timesync/sweep_phase.hpp"
 
 namespace sensor_rig::drivers {
-
-
 
 class LidarDriver {
  public:
@@ -24,6 +23,9 @@ class LidarDriver {
   LidarDriver(const LidarDriver&) = delete;
   LidarDriver& operator=(const LidarDriver&) = delete;
 
+  // Each scan's sweep samples (sweep_samples.hpp) go to `o` from the driver thread, before the
+  // scan is written (cameras triggered by this sweep: rig/ wires them). Before start(); not owned.
+  void add_sweep_observer(timesync::SweepObserver* o);
   void start();
   void stop();
   [[nodiscard]] dds::DriverStatus status() const;

@@ -1,0 +1,115 @@
+// CLOCK_REALTIME steps while a LIDAR runs, with an injected host clock: the stamper's mapping
+// follows the step (vehicle time is the stepped clock), RealtimeStepDetector counts it, and the
+// per-topic MonotonicStamps keeps the published stamps from going backwards (a step back is
+// slewed out at 10 % of elapsed time; a step forward passes at once).
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <vector>
+
+#include "sensor_rig/timesync/host_clock.hpp"
+#include "sensor_rig/timesync/monotonic_stamps.hpp"
+#include "sensor_rig/timesync/packet_stamper.hpp"
+
+namespace sensor_rig::timesync {
+namespace {
+
+constexpr Nanos kMs = 1'000'000;
+constexpr Nanos kSec = 1'000'000'000;
+constexpr Nanos kHour10 = 1'795'255'200'000'000'000;  // 2026-11-21 10:00:00 UTC
+constexpr Nanos kSpan = 1'327'104;                    // VLP-16 packet span
+
+TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
+  MonotonicStamps m(0.1);
+  EXPECT_EQ(m.apply(1000 * kMs), 1000 * kMs);
+  EXPECT_EQ(m.apply(1100 * kMs), 1100 * kMs);
+  EXPECT_EQ(m.apply(2100 * kMs), 2100 * kMs);  // forward step: at once
+  EXPECT_EQ(m.status().backward_steps, 0u);
+  EXPECT_EQ(m.apply(1200 * kMs), 2100 * kMs);  // 1 s back (+0.1 s elapsed): held
+  EXPECT_EQ(m.status().backward_steps, 1u);
+  EXPECT_EQ(m.status().correction_ns, 900 * kMs);
+  EXPECT_EQ(m.status().last_backward_ns, 900 * kMs);
+  // Then 0.9x real rate until the correction is gone (9 s for 0.9 s), never backwards.
+  Nanos last = 2100 * kMs, raw = 1200 * kMs;
+  for (int i = 0; i < 95; ++i) {
+    raw += 100 * kMs;
+    const Nanos out = m.apply(raw);
+    EXPECT_GT(out, last) << i;
+    EXPECT_GE(out, raw);
+    last = out;
+  }
+  EXPECT_EQ(m.status().correction_ns, 0);
+  EXPECT_EQ(m.apply(raw + 100 * kMs), raw + 100 * kMs);
+  EXPECT_EQ(m.status().max_correction_ns, 900 * kMs);
+  // A small backward wobble (a refit) is held, not counted as a step.
+  (void)m.apply(raw + 99 * kMs);
+  EXPECT_EQ(m.status().backward_steps, 1u);
+  EXPECT_EQ(m.status().held, 2u);
+  m.reset();
+  EXPECT_EQ(m.apply(5 * kMs), 5 * kMs);  // a new stream starts fresh
+  EXPECT_THROW(MonotonicStamps(0.0), std::invalid_argument);
+  EXPECT_THROW(MonotonicStamps(1.0), std::invalid_argument);
+}
+
+// A Velodyne (µs since the hour) or an Ouster/Hesai (absolute ns), free-running 2.5 s ahead of
+// the host at +20 ppm, 754 packets/s; the host's CLOCK_REALTIME is stepped back 1 s at 5 s and
+// forward 1 s at 20 s. Scans = every 75th packet's stamp (10 Hz).
+void run_steps(DeviceTimeKind kind) {
+  StamperConfig sc;
+  sc.source = TimeSource::kSensor;
+  sc.correction = Correction::kAuto;
+  sc.hour.hour_source = HourSource::kHost;
+  sc.packet_duration_ns = kSpan;
+  PacketStamper stamper(sc);
+  MonotonicStamps topic;
+  RealtimeStepDetector steps;
+  const Nanos period = kSec / 754;
+  const Nanos mono0 = 3 * kSec;
+  std::vector<Nanos> raw_scans, out_scans;
+  std::vector<Nanos> truth;  // vehicle time (the host's realtime, stepped) of each scan's first firing
+  Nanos realtime_offset = 0;  // injected: realtime = true time + offset
+  for (int i = 0; i < 25 * 754; ++i) {
+    const Nanos t = static_cast<Nanos>(i) * period;  // true elapsed time (= monotonic)
+    if (i == 5 * 754) realtime_offset = -kSec;
+    if (i == 20 * 754) realtime_offset = 0;
+    const Nanos host = kHour10 + t;
+    const Nanos device = host + 2500 * kMs + t / 50'000;  // +20 ppm
+    const Nanos rx = host + realtime_offset + kSpan + 120'000 + (i % 7) * 15'000;
+    DevicePacket p;
+    p.kind = kind;
+    p.value = kind == DeviceTimeKind::kMicrosSinceHour ? (device % (3600 * kSec)) / 1000 : device;
+    p.rx_ns = rx;
+    p.pps = PpsState::kAbsent;
+    const Nanos stamp = stamper.stamp(p);
+    if (i % 75 == 0) {
+      (void)steps.observe(host + realtime_offset, mono0 + t);  // the host-time node's 10 Hz check
+      raw_scans.push_back(stamp);
+      out_scans.push_back(topic.apply(stamp));
+      truth.push_back(host + realtime_offset);
+    }
+  }
+  // Detected and counted by the host clock check: one step back, one forward.
+  EXPECT_EQ(steps.steps(), 2u);
+  EXPECT_NEAR(static_cast<double>(steps.last_step_ns()), 1e9, 1e6);
+  EXPECT_NEAR(static_cast<double>(steps.total_step_ns()), 0.0, 2e6);
+  // The mapping follows vehicle time: the raw stamps do go back (what the filter is for) ...
+  bool raw_back = false;
+  for (std::size_t k = 1; k < raw_scans.size(); ++k) raw_back = raw_back || raw_scans[k] < raw_scans[k - 1];
+  EXPECT_TRUE(raw_back);
+  // ... the published ones never do, and the step back is counted once.
+  for (std::size_t k = 1; k < out_scans.size(); ++k) ASSERT_GE(out_scans[k], out_scans[k - 1]) << "scan " << k;
+  EXPECT_EQ(topic.status().backward_steps, 1u);
+  EXPECT_GT(topic.status().max_correction_ns, 900 * kMs);
+  EXPECT_LE(topic.status().max_correction_ns, 1100 * kMs);
+  // Before the step, 10 s after it (slewed out) and after the forward step: vehicle time.
+  for (std::size_t k : {std::size_t{40}, std::size_t{170}, std::size_t{190}, std::size_t{230}, out_scans.size() - 1})
+    EXPECT_NEAR(static_cast<double>(out_scans[k] - truth[k]), 0.0, 1e6) << "scan " << k;
+  // During the slew, stamps advance at 0.9x: held 0.9 s (the step less one scan), 3 s later 0.6 s left.
+  EXPECT_NEAR(static_cast<double>(out_scans[80] - truth[80]), 0.6e9, 0.05e9);
+}
+
+TEST(RealtimeSteps, VelodyneStampsStayMonotonicThroughHostClockSteps) { run_steps(DeviceTimeKind::kMicrosSinceHour); }
+TEST(RealtimeSteps, AbsoluteClockStampsStayMonotonicThroughHostClockSteps) { run_steps(DeviceTimeKind::kAbsoluteNs); }
+
+}  // namespace
+}  // namespace sensor_rig::timesync
