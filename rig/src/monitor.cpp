@@ -240,6 +240,7 @@ class Monitor {
         [&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
           for (std::uint32_t i = 0; i < a.status._length; ++i) {
             const auto& st = a.status._buffer[i];
+            if (st.name != nullptr && std::string_view(st.name).rfind("camera/", 0) == 0) take_trigger_status(st);
             if (st.name == nullptr || std::string_view(st.name).rfind("rig/sets/", 0) != 0) continue;
             std::string set_topic = "/";  // appended, not "/" + name: GCC 12 -O3 false -Wrestrict
             set_topic += st.name;
@@ -254,6 +255,16 @@ class Monitor {
           }
         },
         16);
+  }
+
+  // A LIDAR-triggered camera's phase error (camera/<name> with trigger_lidar).
+  void take_trigger_status(const msg::DiagnosticStatus& st) {
+    TriggerStats t;
+    for (std::uint32_t k = 0; k < st.values._length; ++k) {
+      const auto& kv = st.values._buffer[k];
+      if (kv.key != nullptr && kv.value != nullptr) (void)t.on_value(kv.key, kv.value);
+    }
+    if (!t.lidar.empty()) triggers_[st.name] = t;  // a camera without a LIDAR trigger: not shown
   }
 
   // Subscribes to every newly announced topic of a known type, with its writer's reliability.
@@ -298,6 +309,7 @@ class Monitor {
       if (p.n > 0) j["spread_ms"] = percentiles_json(p, true);
       all.push_back(j);
     }
+    for (const auto& [name, t] : triggers_) all.push_back(trigger_json(name, t));
     std::ofstream(opt_.summary_file) << all.dump(2) << "\n";
   }
 
@@ -321,6 +333,7 @@ class Monitor {
       st.received_window = 0;
     }
     report_sets(window_s, table);
+    report_triggers(table);
     if (!opt_.json) {
       if (stats_.empty()) table << "(waiting for publishers...)\n";
       if (!tty) table << "\n";
@@ -380,6 +393,30 @@ class Monitor {
     }
   }
 
+  static nlohmann::json trigger_json(const std::string& name, const TriggerStats& t) {
+    return nlohmann::json{{"trigger", name},         {"lidar", t.lidar},
+                          {"sweep", t.sweep},        {"triggers", t.triggers},
+                          {"measured", t.measured},  {"unmeasured", t.unmeasured},
+                          {"phase_error_ms", {{"p50", t.p50_ms}, {"p99", t.p99_ms}, {"max", t.max_ms}}}};
+  }
+
+  // LIDAR-triggered cameras, below the sets: |exposure start - sweep crossing| as the node measures it.
+  void report_triggers(std::ostringstream& table) {
+    if (triggers_.empty()) return;
+    if (!opt_.json)
+      table << fmt("%-30s %-10s %-10s %8s %8s | %s\n", "triggered camera", "lidar", "sweep", "triggers", "unmeas",
+                   "phase error ms p50/p99/max");
+    for (const auto& [name, t] : triggers_) {
+      if (opt_.json) {
+        std::printf("%s\n", trigger_json(name, t).dump().c_str());
+      } else {
+        table << fmt("%-30s %-10s %-10s %8llu %8llu | %.3f/%.3f/%.3f\n", name.c_str(), t.lidar.c_str(), t.sweep.c_str(),
+                     static_cast<unsigned long long>(t.triggers), static_cast<unsigned long long>(t.unmeasured),
+                     t.p50_ms, t.p99_ms, t.max_ms);
+      }
+    }
+  }
+
   MonitorOptions opt_;
   dds::Participant participant_;
   dds::Topic<msg::SourceStamps> stamps_topic_;
@@ -395,6 +432,7 @@ class Monitor {
   dds::Reader<msg::DiagnosticArray> diagnostics_reader_{participant_, diagnostics_topic_};
   std::map<std::string, std::unique_ptr<SetReader>> set_readers_;
   std::map<std::string, SetStats> sets_;
+  std::map<std::string, TriggerStats> triggers_;  // by status name camera/<name>
   // Last: destroyed first, its read conditions before the readers they belong to.
   dds::WaitSet waitset_{participant_};
 };

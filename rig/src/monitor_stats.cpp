@@ -1,5 +1,7 @@
 #include "monitor_stats.hpp"
 
+#include <cstdlib>
+
 #include <algorithm>
 
 namespace sensor_rig::rig {
@@ -104,6 +106,38 @@ void SetStats::on_set(const msg::SyncSet& m) {
   const double ms = static_cast<double>(m.spread_ns) * 1e-6;
   spread.add(ms);
   run_spread.add(ms);
+}
+
+bool TriggerStats::on_value(std::string_view key, std::string_view value) {
+  const std::string v(value);
+  char* end = nullptr;
+  const auto number = [&](double& out) {
+    const double d = std::strtod(v.c_str(), &end);
+    if (end == v.c_str()) return false;
+    out = d;
+    return true;
+  };
+  const auto count = [&](std::uint64_t& out) {
+    const auto n = std::strtoull(v.c_str(), &end, 10);
+    if (end == v.c_str()) return false;
+    out = n;
+    return true;
+  };
+  if (key == "trigger_lidar") {
+    lidar = v;
+    return true;
+  }
+  if (key == "trigger_sweep") {
+    sweep = v;
+    return true;
+  }
+  if (key == "triggers") return count(triggers);
+  if (key == "phase_measured") return count(measured);
+  if (key == "phase_unmeasured") return count(unmeasured);
+  if (key == "phase_error_p50_ms") return number(p50_ms);
+  if (key == "phase_error_p99_ms") return number(p99_ms);
+  if (key == "phase_error_max_ms") return number(max_ms);
+  return false;
 }
 
 }  // namespace sensor_rig::rig

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <string>
+#include <string_view>
 
 #include "sample_record.hpp"
 #include "sensor_rig/common/latency_window.hpp"
@@ -59,6 +60,16 @@ struct SetStats {
   std::size_t members = 0;
   LatencyWindow spread, run_spread;
   void on_set(const msg::SyncSet& m);
+};
+
+// A LIDAR-triggered camera (its /diagnostics status camera/<name> with trigger_lidar): the phase
+// error of its triggers as the camera node measures it (drivers/camera/lidar_trigger.hpp).
+struct TriggerStats {
+  std::string lidar, sweep;
+  std::uint64_t triggers = 0, measured = 0, unmeasured = 0;
+  double p50_ms = 0, p99_ms = 0, max_ms = 0;
+  // One key/value of the status; false when the key is not a trigger key (or the value is not a number).
+  bool on_value(std::string_view key, std::string_view value);
 };
 
 }  // namespace sensor_rig::rig

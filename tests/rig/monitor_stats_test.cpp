@@ -184,5 +184,28 @@ TEST(SampleRecord, FileHoldsWholeLinesAndReadsBack) {
   EXPECT_THROW(RecordFile((dir.path / "no/such/dir/r.csv").string()), std::runtime_error);
 }
 
+// A LIDAR-triggered camera's /diagnostics values as the monitor reads them.
+TEST(TriggerStats, ReadsTheCameraTriggerKeys) {
+  TriggerStats t;
+  EXPECT_TRUE(t.on_value("trigger_lidar", "front"));
+  EXPECT_TRUE(t.on_value("trigger_sweep", "locked"));
+  EXPECT_TRUE(t.on_value("triggers", "600"));
+  EXPECT_TRUE(t.on_value("phase_measured", "597"));
+  EXPECT_TRUE(t.on_value("phase_unmeasured", "3"));
+  EXPECT_TRUE(t.on_value("phase_error_p50_ms", "0.034"));
+  EXPECT_TRUE(t.on_value("phase_error_p99_ms", "0.506"));
+  EXPECT_TRUE(t.on_value("phase_error_max_ms", "6.814"));
+  EXPECT_FALSE(t.on_value("frames", "627"));
+  EXPECT_FALSE(t.on_value("triggers", "n/a"));  // not a number: refused, the count kept
+  EXPECT_EQ(t.lidar, "front");
+  EXPECT_EQ(t.sweep, "locked");
+  EXPECT_EQ(t.triggers, 600u);
+  EXPECT_EQ(t.measured, 597u);
+  EXPECT_EQ(t.unmeasured, 3u);
+  EXPECT_DOUBLE_EQ(t.p50_ms, 0.034);
+  EXPECT_DOUBLE_EQ(t.p99_ms, 0.506);
+  EXPECT_DOUBLE_EQ(t.max_ms, 6.814);
+}
+
 }  // namespace
 }  // namespace sensor_rig::rig
