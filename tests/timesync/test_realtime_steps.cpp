@@ -1,7 +1,8 @@
 // CLOCK_REALTIME steps while a LIDAR runs, with an injected host clock: the stamper's mapping
-// follows the step (vehicle time is the stepped clock), RealtimeStepDetector counts it, and the
-// per-topic MonotonicStamps keeps the published stamps from going backwards (a step back is
-// slewed out at 10 % of elapsed time; a step forward passes at once).
+// follows the step (vehicle time is the stepped clock), RealtimeStepDetector counts it and tells
+// the per-topic MonotonicStamps, which keeps the published stamps from going backwards (a step
+// back is slewed out at 10 % of elapsed time; a step forward passes at once); a device's own
+// backward jump, with no host step behind it, is passed through.
 #include <gtest/gtest.h>
 
 #include <stdexcept>
@@ -25,7 +26,8 @@ TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
   EXPECT_EQ(m.apply(1100 * kMs), 1100 * kMs);
   EXPECT_EQ(m.apply(2100 * kMs), 2100 * kMs);  // forward step: at once
   EXPECT_EQ(m.status().backward_steps, 0u);
-  EXPECT_EQ(m.apply(1200 * kMs), 2100 * kMs);  // 1 s back (+0.1 s elapsed): held
+  m.realtime_step(-1000 * kMs);                // the host's CLOCK_REALTIME went back 1 s
+  EXPECT_EQ(m.apply(1200 * kMs), 2100 * kMs);  // the mapping follows (+0.1 s elapsed): held
   EXPECT_EQ(m.status().backward_steps, 1u);
   EXPECT_EQ(m.status().correction_ns, 900 * kMs);
   EXPECT_EQ(m.status().last_backward_ns, 900 * kMs);
@@ -45,6 +47,21 @@ TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
   (void)m.apply(raw + 99 * kMs);
   EXPECT_EQ(m.status().backward_steps, 1u);
   EXPECT_EQ(m.status().held, 2u);
+  // A device's own glitch (no host step): 5 s ahead for one stamp, then back. Passed through, not
+  // held for 50 s of slewing.
+  const Nanos r = raw + 200 * kMs;
+  EXPECT_EQ(m.apply(r + 5000 * kMs), r + 5000 * kMs);
+  EXPECT_EQ(m.apply(r + 100 * kMs), r + 100 * kMs);
+  EXPECT_EQ(m.status().device_backward, 1u);
+  EXPECT_EQ(m.status().backward_steps, 1u);
+  EXPECT_EQ(m.status().correction_ns, 0);
+  // An announced step back the mapping never follows (a PTP-synced device stamps in its own time)
+  // expires: a device jump 20 s later is not absorbed by it.
+  m.realtime_step(-3000 * kMs);
+  (void)m.apply(r + 200 * kMs);
+  (void)m.apply(r + 20'000 * kMs);
+  EXPECT_EQ(m.apply(r + 17'500 * kMs), r + 17'500 * kMs);
+  EXPECT_EQ(m.status().backward_steps, 1u);
   m.reset();
   EXPECT_EQ(m.apply(5 * kMs), 5 * kMs);  // a new stream starts fresh
   EXPECT_THROW(MonotonicStamps(0.0), std::invalid_argument);
@@ -82,7 +99,7 @@ void run_steps(DeviceTimeKind kind) {
     p.pps = PpsState::kAbsent;
     const Nanos stamp = stamper.stamp(p);
     if (i % 75 == 0) {
-      (void)steps.observe(host + realtime_offset, mono0 + t);  // the host-time node's 10 Hz check
+      topic.realtime_step(steps.observe(host + realtime_offset, mono0 + t));  // the driver's check
       raw_scans.push_back(stamp);
       out_scans.push_back(topic.apply(stamp));
       truth.push_back(host + realtime_offset);

@@ -15,9 +15,21 @@ MonotonicStamps::MonotonicStamps(double slew_fraction, Nanos step_threshold_ns)
 void MonotonicStamps::reset() noexcept {
   have_ = false;
   st_.correction_ns = 0;
+  allowance_ = 0;
+}
+
+void MonotonicStamps::realtime_step(Nanos step_ns) noexcept {
+  if (step_ns >= 0) return;  // forward: the stamps jump forward, nothing to hold
+  allowance_ += -step_ns;
+  allowance_dated_ = false;  // dated by the next stamp (raw time, not the caller's clock)
 }
 
 Nanos MonotonicStamps::apply(Nanos raw) noexcept {
+  if (allowance_ > 0 && !allowance_dated_) {
+    allowance_until_ = raw + allowance_for_ns;
+    allowance_dated_ = true;
+  }
+  if (allowance_ > 0 && raw > allowance_until_) allowance_ = 0;  // the mapping never followed the step
   if (!have_) {
     have_ = true;
     last_raw_ = last_out_ = raw;
@@ -29,14 +41,21 @@ Nanos MonotonicStamps::apply(Nanos raw) noexcept {
   if (d > 0 && c > 0) c -= std::min(c, static_cast<Nanos>(std::ceil(slew_ * static_cast<double>(d))));
   Nanos out = raw + c;
   if (out < last_out_) {
-    // Backwards (a host step back, or a refit moving the mapping by a few µs): hold at the last
-    // output and slew the difference out from here on.
-    ++st_.held;
-    if (last_out_ - out > threshold_) {
+    const Nanos back = last_out_ - out;
+    if (back > threshold_) {
+      // A host step back the mapping now follows (about its size: at least half): absorb it.
+      if (allowance_ * 2 < back) {
+        ++st_.device_backward;  // the device's own jump: the stamps follow it
+        last_out_ = out;
+        return out;
+      }
+      allowance_ = 0;
       ++st_.backward_steps;
-      st_.last_backward_ns = last_out_ - out;
+      st_.last_backward_ns = back;
     }
-    c += last_out_ - out;
+    // Held at the last output; the difference is slewed out from here on.
+    ++st_.held;
+    c += back;
     st_.max_correction_ns = std::max(st_.max_correction_ns, c);
     out = last_out_;
   }

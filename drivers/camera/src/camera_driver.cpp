@@ -11,6 +11,7 @@
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/frame_clock.hpp"
+#include "sensor_rig/timesync/host_clock.hpp"
 #include "image_outputs.hpp"
 
 namespace sensor_rig::drivers {
@@ -52,6 +53,7 @@ struct CameraDriver::Impl {
   camera::SourceStats source_stats;
   timesync::ClockMapperStatus sync;
   timesync::MonotonicStampsStatus monotonic;
+  timesync::RealtimeStepDetector realtime_steps;  // told to the clock: stamps held over a step back
 
   Impl(const CameraConfig& c, std::unique_ptr<camera::FrameSource> s, const dds::Participant& p, dds::StampsWriter& st,
        TriggerSource* t)
@@ -186,6 +188,8 @@ struct CameraDriver::Impl {
       auto c = src->next(50);
       switch (c.status) {
         case camera::CaptureStatus::kFrame:
+          // Before the stamp: a step before this frame's dequeue is known when it is mapped.
+          clock.realtime_step(realtime_steps.observe(vehicle_now_ns(), monotonic_now_ns()));
           publish(c.frame);
           break;
         case camera::CaptureStatus::kIncomplete: {

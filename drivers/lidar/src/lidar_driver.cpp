@@ -18,6 +18,7 @@
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
 #include "sensor_rig/drivers/lidar/lidar_stamping.hpp"
 #include "sensor_rig/drivers/lidar/sweep_samples.hpp"
+#include "sensor_rig/timesync/host_clock.hpp"
 #include "sensor_rig/timesync/monotonic_stamps.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 
@@ -190,6 +191,7 @@ struct LidarDriver::Impl {
   // slewed out; timesync/README.md "Realtime steps"). Host-time stamps are the clock as it is.
   timesync::MonotonicStamps scan_monotonic;
   timesync::MonotonicStamps imu_monotonic;
+  timesync::RealtimeStepDetector realtime_steps;  // per receive batch, before the packets are mapped
 
   // Counters shared with status(); written by the driver thread only.
   mutable std::mutex mutex;
@@ -411,6 +413,10 @@ struct LidarDriver::Impl {
     auto slots = arena.slots();
     while (!stop_flag.load() && !shutdown_requested()) {
       const auto r = receive(slots, 50);
+      if (const Nanos step = realtime_steps.observe(vehicle_now_ns(), monotonic_now_ns()); step != 0) {
+        scan_monotonic.realtime_step(step);  // the mapping will follow it: hold the topics' stamps
+        imu_monotonic.realtime_step(step);
+      }
       if (r.status == lidar::RecvStatus::kError) {
         std::lock_guard lock(mutex);
         last_error = std::string("receive: ") + std::strerror(r.error);

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "sensor_rig/drivers/camera/frame_clock.hpp"
+#include "sensor_rig/timesync/host_clock.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -76,6 +77,7 @@ TEST(FrameClock, SoftwareTriggeredFramesCarryTheirTick) {
 // passes at once; afterwards stamps are vehicle time again.
 TEST(FrameClock, MonotonicClockStampsStayMonotonicThroughRealtimeSteps) {
   FrameClock clock;
+  timesync::RealtimeStepDetector steps;  // as the camera node runs it before each frame's stamp
   const Nanos mono0 = 50'000'000'000;
   const Nanos rt0 = 1'800'000'000'000'000'000;
   Nanos last = 0;
@@ -90,6 +92,7 @@ TEST(FrameClock, MonotonicClockStampsStayMonotonicThroughRealtimeSteps) {
     m.device_ns = mono;                                // exposure start
     m.complete_mono_ns = mono + 30'000'000;            // dequeued 30 ms later
     m.complete_ns = rt0 + (m.complete_mono_ns - mono0) + offset;
+    clock.realtime_step(steps.observe(m.complete_ns + 1'000'000, m.complete_mono_ns + 1'000'000));
     const auto s = clock.stamp(m);
     EXPECT_EQ(s.source, StampSource::kMonotonic);
     EXPECT_GE(s.vehicle_ns, last) << "frame " << i;
@@ -97,7 +100,9 @@ TEST(FrameClock, MonotonicClockStampsStayMonotonicThroughRealtimeSteps) {
     if (i == 50) correction_after_back = clock.monotonic().correction_ns;
     err_at_end = s.vehicle_ns - (rt0 + (mono - mono0) + offset);
   }
+  EXPECT_EQ(steps.steps(), 2u);
   EXPECT_EQ(clock.monotonic().backward_steps, 1u);
+  EXPECT_EQ(clock.monotonic().device_backward, 0u);
   EXPECT_NEAR(static_cast<double>(correction_after_back), 0.9e9, 1e6);  // held: 1 s back less one frame
   EXPECT_EQ(clock.monotonic().correction_ns, 0);                          // slewed out in ~11 s
   EXPECT_EQ(err_at_end, 0);

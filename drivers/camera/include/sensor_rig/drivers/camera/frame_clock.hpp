@@ -32,6 +32,8 @@ class FrameClock {
   FrameStamp stamp(const camera::FrameMeta& m, Nanos tick_ns = 0) noexcept;
   [[nodiscard]] timesync::ClockMapperStatus status(Nanos now) const { return mapper_.status(now); }
   [[nodiscard]] const timesync::MonotonicStampsStatus& monotonic() const noexcept { return monotonic_.status(); }
+  // CLOCK_REALTIME was stepped (the caller's RealtimeStepDetector): a step back is absorbed.
+  void realtime_step(Nanos step_ns) noexcept { monotonic_.realtime_step(step_ns); }
   void reset() noexcept { mapper_.reset(); }
 
  private:
