@@ -221,7 +221,10 @@ std::optional<Nanos> SweepPhase::next_crossing(double azimuth_deg, Nanos after_n
 }
 
 std::optional<Nanos> SweepPhase::crossing_near(double azimuth_deg, Nanos t_ns) const noexcept {
-  if (!have_fit_ || points_.size() < 6 || !std::isfinite(azimuth_deg) || fit_w_ == 0.0) return std::nullopt;
+  if (!have_fit_ || points_.size() < 6 || !std::isfinite(azimuth_deg)) return std::nullopt;
+  // An implausible rate (a fit from a few samples) would put the crossing anywhere, even past Nanos.
+  const double hz = std::abs(fit_w_) * 1e9 / 360.0;
+  if (!(hz >= cfg_.min_rate_hz && hz <= cfg_.max_rate_hz)) return std::nullopt;
   const double a = wrap360(azimuth_deg);
   const double target = a + 360.0 * std::round((fit_at(t_ns) - a) / 360.0);
   // Where the fitted line says the crossing was; the samples around it (chosen by time, which is

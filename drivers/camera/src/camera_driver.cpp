@@ -308,6 +308,7 @@ dds::DriverStatus CameraDriver::status() const {
   // CLOCK_REALTIME stepped back: stamps held and slewed (timesync/README.md "Realtime steps").
   s.add_number("stamp_backward_steps", impl_->monotonic.backward_steps);
   s.add_number("stamp_correction_ns", impl_->monotonic.correction_ns);
+  s.add_number("stamp_device_backward", impl_->monotonic.device_backward);
   if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
   if (impl_->outputs) impl_->outputs->add_status(s);
   if (impl_->trigger != nullptr) impl_->trigger->add_status(s);

@@ -563,6 +563,7 @@ dds::DriverStatus LidarDriver::status() const {
   if (c.time_source == timesync::TimeSource::kSensor) {
     s.add_number("stamp_backward_steps", impl_->stamp_monotonic.backward_steps);
     s.add_number("stamp_correction_ns", impl_->stamp_monotonic.correction_ns);
+    s.add_number("stamp_device_backward", impl_->stamp_monotonic.device_backward);
   }
   if (impl_->ouster && impl_->position) {
     s.add("imu_topic", impl_->imu_topic_name);
