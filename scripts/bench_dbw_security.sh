@@ -5,7 +5,8 @@
 # (latency_us p50/p99/max, the to_wire of rt/rig/stamps) and take -> written. Keys: a fresh
 # `rig security init` in a temporary directory (removed at the end).
 # Usage: scripts/bench_dbw_security.sh BUILD_DIR [SECONDS_PER_ROUND] [ROUNDS_PER_MODE]
-# SECURITY_DIR=DIR: use that `rig security init` directory (e.g. with an edited, re-signed governance).
+# CMD_PROTECTION=none|sign|encrypt|sign-origin|encrypt-origin: `rig security init --cmd-protection`.
+# SECURITY_DIR=DIR: use that `rig security init` directory instead of a fresh one.
 set -euo pipefail
 build=${1:-build-release}
 secs=${2:-5}
@@ -21,7 +22,8 @@ cleanup() {
 trap cleanup EXIT
 domain=$((120 + $$ % 50))
 sec_dir=${SECURITY_DIR:-$out/sec}
-[ -n "${SECURITY_DIR:-}" ] || "$rig" security init "$sec_dir" >/dev/null 2>&1
+[ -n "${SECURITY_DIR:-}" ] ||
+  "$rig" security init "$sec_dir" --cmd-protection "${CMD_PROTECTION:-sign-origin}" >/dev/null 2>&1
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg)"
 printf '%-9s %7s %9s %9s %9s %12s %12s\n' mode commands p50_us p99_us max_us take_p50_us take_p99_us
 for ((r = 0; r < rounds; ++r)); do

@@ -24,6 +24,17 @@ std::string topics(std::initializer_list<const char*> names) {
 }
 }  // namespace
 
+std::string to_governance_word(Protection p) {
+  switch (p) {
+    case Protection::kNone: return "NONE";
+    case Protection::kSign: return "SIGN";
+    case Protection::kEncrypt: return "ENCRYPT";
+    case Protection::kSignOrigin: return "SIGN_WITH_ORIGIN_AUTHENTICATION";
+    case Protection::kEncryptOrigin: return "ENCRYPT_WITH_ORIGIN_AUTHENTICATION";
+  }
+  return "SIGN_WITH_ORIGIN_AUTHENTICATION";
+}
+
 std::string identity_subject(const std::string& identity, const std::string& organization) {
   return "CN=" + identity + ",O=" + organization;
 }
@@ -31,11 +42,12 @@ std::string identity_subject(const std::string& identity, const std::string& org
 // One rule for the command topic, then everything else open. Command topic: only participants
 // whose permissions grant it may read or write it (read and write access control), and every
 // submessage carries a MAC per receiver (SIGN_WITH_ORIGIN_AUTHENTICATION): an authenticated reader
-// that holds the writer's key still cannot forge a command as that writer. Not encrypted (a command
+// that holds the writer's key still cannot forge a command as that writer (the default; `rig
+// security init --cmd-protection` chooses another, dds/README.md has the costs). Not encrypted (a command
 // is not secret; integrity is what matters), its endpoints announced only to authenticated
 // participants (discovery protection). Other topics: no protection, so with
 // allow_unauthenticated_participants an ordinary ROS 2 node reads the sensors as before.
-std::string governance_xml(bool allow_unauthenticated) {
+std::string governance_xml(bool allow_unauthenticated, Protection command_protection) {
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
        "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
@@ -56,7 +68,9 @@ std::string governance_xml(bool allow_unauthenticated) {
        "          <enable_liveliness_protection>false</enable_liveliness_protection>\n"
        "          <enable_read_access_control>true</enable_read_access_control>\n"
        "          <enable_write_access_control>true</enable_write_access_control>\n"
-       "          <metadata_protection_kind>SIGN_WITH_ORIGIN_AUTHENTICATION</metadata_protection_kind>\n"
+       "          <metadata_protection_kind>"
+    << to_governance_word(command_protection)
+    << "</metadata_protection_kind>\n"
        "          <data_protection_kind>NONE</data_protection_kind>\n"
        "        </topic_rule>\n"
        "        <topic_rule>\n"

@@ -63,7 +63,7 @@ std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
   x509::write_cert(out(dir / "permissions_ca.pem"), perm_ca.get());
   x509::write_key(out(dir / "private/permissions_ca_key.pem"), perm_ca_key.get());
 
-  const std::string governance = governance_xml(o.allow_unauthenticated);
+  const std::string governance = governance_xml(o.allow_unauthenticated, o.command_protection);
   write_text(out(dir / "governance.xml"), governance);
   x509::write_smime(out(dir / "governance.p7s"), governance, perm_ca.get(), perm_ca_key.get());
 

@@ -1,6 +1,7 @@
 // `rig security init DIR`: the CAs, identities, governance and permissions of DDS Security for the
 // drive-by-wire command topic (what they allow: dds/README.md "DDS Security").
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <stdexcept>
 
@@ -29,7 +30,18 @@ void register_security_cli(CLI::App& app, cli::Context& ctx) {
   init->add_flag("--no-unauthenticated", *no_unauth,
                  "governance without allow_unauthenticated_participants: ordinary ROS 2 nodes see nothing");
   init->add_flag("--force", o->force, "replace an earlier init in DIR");
-  init->callback([o, rsa, no_unauth, &ctx] {
+  auto protection = std::make_shared<std::string>("sign-origin");
+  init->add_option("--cmd-protection", *protection,
+                   "submessage protection of /vehicle/dbw/cmd (dds/README.md: what each costs)")
+      ->check(CLI::IsMember({"none", "sign", "encrypt", "sign-origin", "encrypt-origin"}))
+      ->capture_default_str();
+  init->callback([o, rsa, no_unauth, protection, &ctx] {
+    const std::map<std::string, dds::Protection> kinds{{"none", dds::Protection::kNone},
+                                                       {"sign", dds::Protection::kSign},
+                                                       {"encrypt", dds::Protection::kEncrypt},
+                                                       {"sign-origin", dds::Protection::kSignOrigin},
+                                                       {"encrypt-origin", dds::Protection::kEncryptOrigin}};
+    o->command_protection = kinds.at(*protection);
     o->key_type = *rsa ? dds::KeyType::kRsa2048 : dds::KeyType::kEcP256;
     o->allow_unauthenticated = !*no_unauth;
     std::vector<std::string> files;

@@ -170,6 +170,21 @@ TEST(SecurityInit, CertificatesSignaturesSubjectsAndGrants) {
   EXPECT_NE(read(s / "governance.xml").find("<allow_unauthenticated_participants>false"), std::string::npos);
 }
 
+TEST(SecurityInit, CommandProtectionKindOnlyInTheCommandRule) {
+  for (const auto& [p, word] : std::vector<std::pair<dds::Protection, std::string>>{
+           {dds::Protection::kNone, "NONE"},
+           {dds::Protection::kSign, "SIGN"},
+           {dds::Protection::kEncrypt, "ENCRYPT"},
+           {dds::Protection::kSignOrigin, "SIGN_WITH_ORIGIN_AUTHENTICATION"},
+           {dds::Protection::kEncryptOrigin, "ENCRYPT_WITH_ORIGIN_AUTHENTICATION"}}) {
+    const std::string xml = dds::governance_xml(true, p);
+    const std::string cmd = between(xml, "<topic_expression>rt/vehicle/dbw/cmd</topic_expression>", "</topic_rule>");
+    const std::string rest = between(xml, "<topic_expression>*</topic_expression>", "</topic_rule>");
+    EXPECT_NE(cmd.find("<metadata_protection_kind>" + word + "</metadata_protection_kind>"), std::string::npos) << word;
+    EXPECT_NE(rest.find("<metadata_protection_kind>NONE</metadata_protection_kind>"), std::string::npos) << word;
+  }
+}
+
 TEST(SecurityInit, RefusesBadNames) {
   Dir d;
   dds::SecurityInitOptions o;

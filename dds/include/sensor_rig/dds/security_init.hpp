@@ -12,6 +12,11 @@ inline constexpr const char* kProtectedCommandTopic = "rt/vehicle/dbw/cmd";
 
 enum class KeyType { kEcP256, kRsa2048 };  // what Cyclone's auth plugin accepts
 
+// metadata_protection_kind of the command topic (its submessages): none (access control only),
+// sign / encrypt (one key per writer), *-origin (plus a MAC per receiver). Default sign-origin.
+enum class Protection { kNone, kSign, kEncrypt, kSignOrigin, kEncryptOrigin };
+std::string to_governance_word(Protection p);  // NONE, SIGN, ..., SIGN_WITH_ORIGIN_AUTHENTICATION
+
 struct SecurityInitOptions {
   std::string dir;
   std::string bridge = "dbw_bridge";                   // subscribes commands, publishes status/state
@@ -20,6 +25,7 @@ struct SecurityInitOptions {
   KeyType key_type = KeyType::kEcP256;
   int days = 3650;                    // validity of certificates and grants
   bool allow_unauthenticated = true;  // ordinary (unsecured) ROS 2 nodes still read the sensor topics
+  Protection command_protection = Protection::kSignOrigin;
   std::string organization = "sensor-rig";
   bool force = false;  // replace what an earlier init wrote (else: refuse)
 };
@@ -29,7 +35,7 @@ struct SecurityInitOptions {
 std::vector<std::string> init_security_dir(const SecurityInitOptions& o);
 
 // The governance and permissions documents (unsigned XML), for init and for the tests.
-std::string governance_xml(bool allow_unauthenticated);
+std::string governance_xml(bool allow_unauthenticated, Protection command_protection = Protection::kSignOrigin);
 enum class Role { kBridge, kCommander, kReader };
 std::string permissions_xml(const std::string& identity, const std::string& subject, Role role, int days);
 // The subject of an identity's certificate, as the grant names it (RFC 2253: "CN=x,O=y").
