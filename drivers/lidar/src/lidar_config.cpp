@@ -60,7 +60,7 @@ void check_decoder_files(const config::Node& n, const LidarConfig& l) {
   }
 }
 
-// source / interface / sensor_address. Whether the interface exists is the driver's to say at
+// source / interface / sensor_address / ring_retire_ms. Whether the interface exists is the driver's to say at
 // start (a USB NIC may come later than the config check); the name's form is checked here.
 void parse_source(const config::Node& n, LidarConfig& l) {
   l.source = n.get_enum<LidarSource>("source", {{"udp", LidarSource::kUdp}, {"packet", LidarSource::kPacket}},
@@ -76,6 +76,10 @@ void parse_source(const config::Node& n, LidarConfig& l) {
     }
   } else if (packet) {
     n.fail("source", "source: packet needs interface: <ifname> (the interface the sensor is on)");
+  }
+  if (n.has("ring_retire_ms")) {
+    l.ring_retire_ms = static_cast<int>(n.get_int("ring_retire_ms", 1, 100));
+    if (!packet) n.fail("ring_retire_ms", "only used with source: packet");
   }
   if (n.has("sensor_address")) {
     l.sensor_address = n.get_string("sensor_address");
@@ -94,7 +98,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   LidarConfig l;
   if (!n.expect_map()) return l;
   n.allow_keys({"name", "model", "host", "port", "position_port", "imu_port", "receive_buffer_bytes", "source",
-                "interface", "sensor_address", "calibration",
+                "interface", "sensor_address", "ring_retire_ms", "calibration",
                 "metadata", "returns", "min_range", "max_range", "cut_angle", "fov", "azimuth", "time_source", "hour_source", "clock_correction",
                 "frame_id", "realtime_priority", "qos", "mock", "record"});
   l.name = n.get_string("name");

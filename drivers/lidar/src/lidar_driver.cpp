@@ -69,6 +69,7 @@ std::unique_ptr<lidar::RingSource> make_ring_source(const LidarConfig& c) {
   r.interface = c.interface;
   r.port = static_cast<std::uint16_t>(c.port);
   r.sensor_host = c.sensor_address.empty() ? 0 : ipv4_of(c.sensor_address);
+  r.retire_timeout_ms = c.ring_retire_ms;
   try {
     return std::make_unique<lidar::RingSource>(r);
   } catch (const std::exception& e) {  // unknown interface, no CAP_NET_RAW: say which LIDAR

@@ -36,11 +36,13 @@ Parsed parse(const std::string& yaml) {
 const std::string kHead = "name: front\nmodel: VLP-16\nport: 2368\n";  // lines 1-3
 
 TEST(LidarPacketSourceConfig, KeysAndTheirErrors) {
-  auto ok = parse(kHead + "source: packet\ninterface: eth1\nsensor_address: 192.168.1.201\n");
+  auto ok = parse(kHead + "source: packet\ninterface: eth1\nsensor_address: 192.168.1.201\nring_retire_ms: 1\n");
   ASSERT_TRUE(ok.problems.empty()) << ok.problems.front().str();
   EXPECT_EQ(ok.config.source, LidarSource::kPacket);
   EXPECT_EQ(ok.config.interface, "eth1");
   EXPECT_EQ(ok.config.sensor_address, "192.168.1.201");
+  EXPECT_EQ(ok.config.ring_retire_ms, 1);
+  EXPECT_EQ(parse(kHead + "source: packet\ninterface: eth1\n").config.ring_retire_ms, 4) << "default";
   EXPECT_EQ(parse(kHead).config.source, LidarSource::kUdp) << "udp is the default";
 
   struct Case {
@@ -57,6 +59,9 @@ TEST(LidarPacketSourceConfig, KeysAndTheirErrors) {
       {"source: raw\n", 4, "source", ""},
       {"source: packet\ninterface: eth1\nsensor_address: 300.1.2.3\n", 6, "sensor_address", "not an IPv4 address"},
       {"sensor_address: 10.0.0.2\n", 4, "sensor_address", "only used with source: packet"},
+      {"ring_retire_ms: 2\n", 4, "ring_retire_ms", "only used with source: packet"},
+      {"source: packet\ninterface: eth1\nring_retire_ms: 0\n", 6, "ring_retire_ms", ""},
+      {"source: packet\ninterface: eth1\nring_retire_ms: 500\n", 6, "ring_retire_ms", ""},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.tail);

@@ -55,6 +55,9 @@ struct LidarConfig {
   LidarSource source = LidarSource::kUdp;  // source: udp | packet
   std::string interface;               // packet: the interface the sensor is on (required)
   std::string sensor_address;          // packet: the sensor's IPv4 address; empty = any sender
+  // packet: a ring block not yet full is handed over after this long (the delivery delay at low
+  // rates; shorter costs CPU and shortens the stall the 128-block ring absorbs: 128 x this).
+  int ring_retire_ms = 4;
   std::string calibration;             // empty = model defaults
   std::string metadata;                // sensor metadata JSON (Ouster)
   lidar::ReturnSelection returns = lidar::ReturnSelection::kStrongest;
