@@ -24,7 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   cfg.max_fragments = 8;
   cfg.timeout_ns = 50'000'000;
   lidar::Ipv4Reassembler r(cfg);
-  static const auto filter = lidar::build_sensor_filter({7502, 0x0a000001});
+  static const auto kFilter = lidar::build_sensor_filter({7502, 0x0a000001});
   sensor_rig::Nanos now = 1'000'000'000;
   std::uint64_t pushed = 0;
   std::size_t at = 0;
@@ -35,7 +35,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::size_t n = len < size - at ? len : size - at;
     const auto pkt = std::as_bytes(std::span(data + at, n));
     at += n;
-    const auto keep = lidar::run_classic_bpf(filter, pkt);
+    const auto keep = lidar::run_classic_bpf(kFilter, pkt);
     if (keep != 0 && keep != lidar::kFilterAcceptBytes) std::abort();
     r.expire(now);
     const auto res = r.push(pkt, now);
