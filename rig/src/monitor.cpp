@@ -162,7 +162,7 @@ class Monitor {
  public:
   explicit Monitor(const MonitorOptions& o)
       : opt_(o),
-        participant_(o.dds),
+        participant_(o.dds, o.security),
         stamps_topic_(participant_, dds::kStampsTopic, dds::stamps_qos()),
         stamps_reader_(participant_, stamps_topic_, dds::stamps_qos()),
         discovery_(participant_),

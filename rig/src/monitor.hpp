@@ -28,6 +28,8 @@ struct MonitorOptions {
   std::string plot_file;            // when set: at the end, the latency plot of the run (SVG)
   double loss_timeout_s = 2.0;      // a sample announced by its stamps and not received by then is lost
   dds::DomainConfig dds;
+  // DDS Security (`--security DIR --identity reader`): to see /vehicle/dbw/cmd when it is protected.
+  dds::SecurityConfig security;
   std::function<bool()> keep_going;  // optional: checked every loop; false ends the monitor
 };
 

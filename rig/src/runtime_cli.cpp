@@ -16,6 +16,7 @@
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dds/roudi.hpp"
+#include "sensor_rig/dds/security.hpp"
 
 #ifndef RIG_DEFAULT_SOURCE_DIR
 #define RIG_DEFAULT_SOURCE_DIR "."
@@ -131,7 +132,19 @@ void add_monitor(CLI::App& app, cli::Context& ctx) {
   cmd->add_option("--plot", opt->plot_file, "At the end, write the latency plot of the run (SVG)");
   cmd->add_option("--loss-timeout", opt->loss_timeout_s, "A stamped sample not received after S seconds is lost")
       ->check(CLI::PositiveNumber);
-  cmd->callback([&ctx, opt, profile, domain, transport] {
+  auto security_dir = std::make_shared<std::string>();
+  auto identity = std::make_shared<std::string>("reader");
+  cmd->add_option("--security", *security_dir,
+                  "DDS Security: a `rig security init` directory, to read the protected /vehicle/dbw/cmd");
+  cmd->add_option("--identity", *identity, "DDS Security identity in that directory")->capture_default_str();
+  cmd->callback([&ctx, opt, profile, domain, transport, security_dir, identity] {
+    if (!security_dir->empty()) {
+      try {
+        opt->security = dds::security_files(*security_dir, *identity);
+      } catch (const std::runtime_error& e) {
+        throw cli::UsageError(e.what());
+      }
+    }
     opt->dds.domain_id = static_cast<dds_domainid_t>(*domain);
     opt->dds.profile = *profile;
     opt->dds.transport = *transport;
