@@ -26,7 +26,7 @@ void MonotonicStamps::realtime_step(Nanos step_ns) noexcept {
 
 Nanos MonotonicStamps::apply(Nanos raw) noexcept {
   if (allowance_ > 0 && !allowance_dated_) {
-    allowance_until_ = raw + allowance_for_ns;
+    allowance_until_ = raw + kAllowanceForNs;
     allowance_dated_ = true;
   }
   if (allowance_ > 0 && raw > allowance_until_) allowance_ = 0;  // the mapping never followed the step

@@ -14,7 +14,7 @@ void sweep_samples(const lidar::Scan& scan, std::vector<timesync::SweepSample>& 
   const double min_r2 = min_range_m * min_range_m;
   for (std::size_t i = 0; i < n; i += stride) {
     const auto& p = scan.points[i];
-    const double x = p.x, y = p.y;
+    const double x = static_cast<double>(p.x), y = static_cast<double>(p.y);
     if (!(x * x + y * y >= min_r2)) continue;  // also NaN
     double az = std::atan2(y, x) * (180.0 / std::numbers::pi);
     if (az < 0) az += 360.0;

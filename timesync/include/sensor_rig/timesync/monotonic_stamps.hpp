@@ -29,14 +29,14 @@ class MonotonicStamps {
   // Throws std::invalid_argument unless 0 < slew_fraction < 1 and step_threshold_ns >= 0.
   explicit MonotonicStamps(double slew_fraction = 0.1, Nanos step_threshold_ns = 1'000'000);
   // CLOCK_REALTIME was stepped by `step_ns` (RealtimeStepDetector::observe()'s value); a step back
-  // lets the next backward jump of about its size be absorbed (within `allowance_for_ns` of raw time).
+  // lets the next backward jump of about its size be absorbed (within `kAllowanceForNs` of raw time).
   void realtime_step(Nanos step_ns) noexcept;
   // The stamp to publish for the raw (mapped) stamp `raw_ns`.
   Nanos apply(Nanos raw_ns) noexcept;
   [[nodiscard]] const MonotonicStampsStatus& status() const noexcept { return st_; }
   void reset() noexcept;  // a new stream (device reopened): no history
 
-  static constexpr Nanos allowance_for_ns = 10'000'000'000;
+  static constexpr Nanos kAllowanceForNs = 10'000'000'000;
 
  private:
   double slew_;
