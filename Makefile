@@ -33,10 +33,15 @@ test: setup
 	$(MAKE) test-asan
 	$(MAKE) test-tsan
 
-# Optimized (-O2 -g) under the sanitizers: the end-to-end tests run synthetic sensors in real time,
-# and at -O0 three instrumented renderers need more than the two cores (scans arrive seconds late).
+# Optimized (-O2) under the sanitizers: the end-to-end tests run synthetic sensors in real time,
+# and at -O0 three instrumented renderers need more than the two cores (scans arrive seconds late);
+# -O1 was measured to miss scans in lidar_e2e_test on a loaded host. Line tables only (-g1): reports
+# still name file:line, and the build takes ~25 % less than with -g (measured on lidar_driver.cpp
+# and monitor.cpp); the code is the same.
+SAN_OPT = -O2 -g1 -DNDEBUG
 test-asan: setup
-	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_SANITIZE=ON -DRIG_BENCH=OFF
+	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_SANITIZE=ON -DRIG_BENCH=OFF \
+	  -DCMAKE_C_FLAGS_RELWITHDEBINFO="$(SAN_OPT)" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$(SAN_OPT)"
 	# Only what this stage runs: the unit executables, the two end-to-end tests and the `rig` they start.
 	cmake --build build-asan -j$(JOBS) --target unit_tests rig lidar_e2e_test dbw_rig_test
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \

@@ -50,12 +50,15 @@ void add_up(CLI::App& app, cli::Context& ctx) {
 
 // Over shared memory the monitor runs as a process of its own: stopping RouDi SIGTERMs every
 // process registered with it, and this one must outlive `rig up` to report its exit.
-int run_demo_monitor_process(const RigConfig& cfg, ChildProcess& rig, double duration_s, bool json) {
+int run_demo_monitor_process(const RigConfig& cfg, ChildProcess& rig, const MonitorOptions& mo) {
   for (int i = 0; i < 600 && rig.running() && !dds::probe_roudi().answers; ++i) ::usleep(100'000);
   std::vector<std::string> argv{self_executable(), "monitor", "--domain", std::to_string(cfg.dds.domain_id),
-                                "--transport", "shm", "--duration", std::to_string(duration_s)};
+                                "--transport", "shm", "--duration", std::to_string(mo.duration_s)};
   if (!cfg.dds.profile.empty()) argv.insert(argv.end(), {"--dds-profile", cfg.dds.profile});
-  if (json) argv.emplace_back("--json");
+  if (mo.json) argv.emplace_back("--json");
+  for (const auto& [flag, file] : {std::pair{"--record", mo.record_file}, std::pair{"--plot", mo.plot_file},
+                                   std::pair{"--summary", mo.summary_file}})
+    if (!file.empty()) argv.insert(argv.end(), {flag, file});
   ChildProcess monitor(argv);
   while (monitor.running() && rig.running() && !shutdown_requested()) wait_for_shutdown(100);
   const int monitor_status = monitor.stop(5000);
@@ -70,26 +73,26 @@ int run_demo_monitor_process(const RigConfig& cfg, ChildProcess& rig, double dur
 void add_demo(CLI::App& app, cli::Context& ctx) {
   auto* cmd = app.add_subcommand("demo", "The whole rig on mock devices with a live status table");
   auto config = std::make_shared<std::string>(default_mock_config());
-  auto duration = std::make_shared<double>(0);
-  auto json = std::make_shared<bool>(false);
+  auto mo = std::make_shared<MonitorOptions>();
   cmd->add_option("--config", *config, "Rig config (default config/mock_rig.yaml)");
-  cmd->add_option("--duration", *duration, "Stop after S seconds (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
-  cmd->add_flag("--json", *json, "Monitor output as JSON lines");
-  cmd->callback([&ctx, config, duration, json] {
+  cmd->add_option("--duration", mo->duration_s, "Stop after S seconds (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--json", mo->json, "Monitor output as JSON lines");
+  cmd->add_option("--record", mo->record_file, "Write one CSV row per sample: its stage times (as `rig monitor --record`)");
+  cmd->add_option("--plot", mo->plot_file, "At the end, write the latency plot of the run (SVG)");
+  cmd->add_option("--summary", mo->summary_file, "At the end, write whole-run percentiles per topic/stage (JSON)");
+  cmd->callback([&ctx, config, mo] {
     const auto cfg = load_rig_config(*config);  // validate before starting anything
     std::fprintf(stderr, "%s", describe(cfg).c_str());
     // Real processes: mocks and drivers in `rig up`, the monitor here.
     ChildProcess rig({self_executable(), "up", *config});
     if (cfg.dds.transport == dds::Transport::kShm) {
-      ctx.exit_code = run_demo_monitor_process(cfg, rig, *duration, *json);
+      ctx.exit_code = run_demo_monitor_process(cfg, rig, *mo);
       return;
     }
-    MonitorOptions mo;
-    mo.duration_s = *duration;
-    mo.json = *json;
-    mo.dds = cfg.dds;
-    mo.keep_going = [&rig] { return rig.running(); };
-    ctx.exit_code = run_monitor(mo);
+    mo->dds = cfg.dds;
+    mo->keep_going = [&rig] { return rig.running(); };
+    ctx.exit_code = run_monitor(*mo);
+    mo->keep_going = nullptr;  // it refers to this call's `rig`
     if (!rig.running() && !shutdown_requested()) {
       std::fprintf(stderr, "rig demo: `rig up %s` exited with status %d (see its messages above)\n", config->c_str(),
                    rig.exit_status());

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/types.hpp"
 
 namespace sensor_rig::dds {
@@ -21,6 +22,30 @@ TEST(DdsNames, TypeNamesMatchRmwCycloneDds) {
                "diagnostic_msgs::msg::dds_::DiagnosticArray_");
   EXPECT_STREQ(TypeSupport<msg::Image>::descriptor()->m_typename, "sensor_msgs::msg::dds_::Image_");
   EXPECT_EQ(TypeSupport<msg::PointCloud2>::descriptor()->m_nkeys, 0u);
+}
+
+// The nodes' publish bookkeeping: failures counted, the rate follows a change within a few
+// samples, a clock step back neither counts as a rate nor poisons it.
+TEST(PublishStats, CountsFailuresAndFollowsTheRate) {
+  PublishStats st;
+  const Result ok(0), bad(DDS_RETCODE_TIMEOUT);
+  Nanos t = 1'000'000'000;
+  EXPECT_TRUE(st.count(ok, t));
+  EXPECT_EQ(st.rate_hz(), 0.0);  // one sample: no interval yet
+  for (int i = 0; i < 20; ++i) EXPECT_TRUE(st.count(ok, t += 100'000'000));
+  EXPECT_NEAR(st.rate_hz(), 10.0, 1e-9);
+  EXPECT_FALSE(st.count(bad, t += 100'000'000));
+  EXPECT_EQ(st.write_errors(), 1u);
+  EXPECT_EQ(st.samples(), 22u);
+  const double before = st.rate_hz();
+  EXPECT_TRUE(st.count(ok, t -= 5'000'000'000));  // the clock stepped back 5 s
+  EXPECT_EQ(st.rate_hz(), before);
+  for (int i = 0; i < 25; ++i) st.count(ok, t += 200'000'000);  // then 5 Hz in the new timeline
+  EXPECT_NEAR(st.rate_hz(), 5.0, 0.05);
+  EXPECT_FALSE(st.count_write(bad));
+  EXPECT_EQ(st.write_errors(), 2u);
+  EXPECT_EQ(st.samples(), 48u);
+  EXPECT_EQ(st.last_ns(), t);
 }
 
 TEST(DdsTime, RoundTrip) {

@@ -1,6 +1,7 @@
 // `rig monitor --record`: the real monitor in its own process, a synthetic driver here (data
 // samples + their source stamps on rt/rig/stamps, one sample lost on purpose); the monitor is
-// then killed (SIGKILL) and its CSV must hold every sample, whole lines only.
+// then killed (SIGKILL) and its CSV must hold every sample, whole lines only. `rig demo --record
+// --plot` and `rig report --plot` over a recording.
 #include <gtest/gtest.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -216,6 +217,45 @@ TEST(RigReport, PlotsARecordingAndRefusesWhatIsNotOne) {
   std::tie(rc, out) = test::run(std::string(bin) + " report --plot " + svg + " " + not_a_record + " 2>&1");
   EXPECT_EQ(rc, 2) << out;
   EXPECT_NE(out.find("x.csv:1"), std::string::npos) << out;
+}
+
+// `rig demo --record --plot`: the whole path (rig up with a synthetic VLP-16 in its own process, the
+// monitor in this one) leaves a recording of the front LIDAR's scans with ordered stages and its plot.
+TEST(RigDemo, RecordsEverySampleAndPlotsTheRun) {
+  const char* bin = std::getenv("RIG_BIN");
+  if (bin == nullptr) GTEST_SKIP() << "RIG_BIN not set (run through ctest)";
+  test::TempDir dir;
+  const std::string csv = (dir.path / "demo.csv").string(), svg = (dir.path / "demo.svg").string();
+  const std::string profile = (test::source_dir() / "config/cyclonedds/loopback.xml").string();
+  std::ostringstream y;
+  y << "rig:\n  name: demo-record\n  dds: {domain: " << kDomain + 1 << ", profile: " << profile << "}\n"
+    << "lidars:\n  - name: front\n    model: VLP-16\n    port: " << test::free_udp_port()
+    << "\n    position_port: 0\n    realtime_priority: 0\n    mock: {kind: synthetic, rpm: 600}\n";
+  const std::string config = dir.write("rig.yaml", y.str());
+  const auto [rc, out] = test::run(std::string(bin) + " demo --config " + config + " --duration 4 --json --record " +
+                                   csv + " --plot " + svg + " 2>&1");
+  ASSERT_EQ(rc, 0) << out;
+  const auto rows = read_records(csv);
+  std::uint64_t received = 0, prev_seq = 0;
+  for (const auto& r : rows) {
+    ASSERT_EQ(r.topic, "/sensors/lidar/front/points");
+    if (received > 0) {
+      EXPECT_GT(r.seq, prev_seq);
+    }
+    prev_seq = r.seq;
+    if (r.lost()) continue;
+    ++received;
+    EXPECT_LE(r.first_rx_ns, r.last_rx_ns);
+    EXPECT_LE(r.last_rx_ns, r.publish_ns);
+    EXPECT_LE(r.publish_ns, r.written_ns);
+    EXPECT_LE(r.publish_ns, r.received_ns);
+    EXPECT_GT(r.size_bytes, 0u);
+  }
+  // 10 scans/s over the seconds the monitor counts (after discovery): a loose floor on a loaded host.
+  EXPECT_GE(received, 10u) << out;
+  const std::string text = read_all(svg);
+  EXPECT_NE(text.find("/sensors/lidar/front/points: latency per stage"), std::string::npos);
+  EXPECT_EQ(text.rfind("</svg>\n"), text.size() - 7);
 }
 
 }  // namespace

@@ -14,13 +14,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lidar_node_reader.hpp"
 #include "rig_process.hpp"
-#include "sensor_rig/dds/types.hpp"
-#include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
 #include "sensor_rig/lidar/udp_sender.hpp"
-#include "status_value.hpp"
 #include "wait.hpp"
 
 namespace sensor_rig::drivers {
@@ -71,43 +69,50 @@ LidarConfig vlp16_config(const std::string& name) {
   return c;
 }
 
+// The node with a reader of its clouds, and what a recording test does with them.
+struct RecordingNode : test::LidarNodeReader<msg::PointCloud2> {
+  explicit RecordingNode(const LidarConfig& config) : LidarNodeReader(config, "points", 50) {}
+  // Points per scan of the clouds received so far (appended to `widths`).
+  void take(std::vector<std::uint32_t>& widths) {
+    reader.take([&](const msg::PointCloud2& m, const dds_sample_info_t&) { widths.push_back(m.width); });
+  }
+  // Waits for every sent packet to be recorded, taking the clouds meanwhile; then stops the node.
+  [[nodiscard]] bool record_all_then_stop(std::size_t sent, std::vector<std::uint32_t>& widths) {
+    const bool all = wait_for(
+        [&] {
+          take(widths);
+          return status("record_packets") == std::to_string(sent);
+        },
+        5000);
+    ::usleep(100'000);  // the last scan's cloud may still be on its way
+    take(widths);
+    driver.stop();
+    return all;
+  }
+  // The recording's files, in name (= time) order.
+  [[nodiscard]] std::vector<fs::path> files() const {
+    std::vector<fs::path> v;
+    for (const auto& e : fs::directory_iterator(c.record.directory)) v.push_back(e.path());
+    std::sort(v.begin(), v.end());
+    return v;
+  }
+};
+
 TEST(LidarRecord, RecordingIsWhatArrivedAndDecodesToThePublishedScans) {
   test::TempDir dir;
   auto c = vlp16_config("rec");
   c.record.directory = (dir.path / "rec").string();
   c.record.max_file_mb = 1;  // ~800 packets a file: the recording rotates
   c.record.max_files = 100;
-  dds::Participant p;    // the driver's
-  dds::Participant sub;  // the subscriber's (topic QoS may differ from the writer's only across participants)
-  dds::StampsWriter stamps(p);
-  dds::QosSpec q;
-  q.depth = 50;
-  dds::Topic<msg::PointCloud2> topic(sub, "/sensors/lidar/" + c.name + "/points", q);
-  dds::Reader<msg::PointCloud2> reader(sub, topic, q);
-  LidarDriver driver(c, p, stamps);
-  driver.start();
-  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  RecordingNode node(c);
+  ASSERT_TRUE(node.start());
   const auto sent = vlp16(25.5);  // 2.5 s worth of packets, sent in ~0.1 s
   send_all(sent, c.port, c.position_port);
   std::vector<std::uint32_t> published;
-  const auto take = [&] {
-    reader.take([&](const msg::PointCloud2& m, const dds_sample_info_t&) { published.push_back(m.width); });
-  };
-  ASSERT_TRUE(wait_for(
-      [&] {
-        take();
-        return test::status_value(driver.status(), "record_packets") == std::to_string(sent.size());
-      },
-      5000))
-      << test::status_value(driver.status(), "record_packets") << " of " << sent.size();
-  ::usleep(100'000);
-  take();
-  driver.stop();
-  EXPECT_EQ(test::status_value(driver.status(), "record_errors"), "0");
+  ASSERT_TRUE(node.record_all_then_stop(sent.size(), published)) << node.status("record_packets") << " of " << sent.size();
+  EXPECT_EQ(node.status("record_errors"), "0");
 
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(c.record.directory)) files.push_back(e.path());
-  std::sort(files.begin(), files.end());
+  const auto files = node.files();
   ASSERT_GE(files.size(), 3u);
   std::vector<Packet> recorded;
   Nanos prev[2] = {0, 0};
@@ -153,34 +158,26 @@ TEST(LidarRecord, UnwritableDirectoryIsReportedAndTheDriverKeepsPublishing) {
   std::ofstream(dir.path / "a_file") << "x";
   auto c = vlp16_config("recbad");
   c.record.directory = (dir.path / "a_file" / "sub").string();
-  dds::Participant p;    // the driver's
-  dds::Participant sub;  // the subscriber's (topic QoS may differ from the writer's only across participants)
-  dds::StampsWriter stamps(p);
-  dds::QosSpec q;
-  q.depth = 50;
-  dds::Topic<msg::PointCloud2> topic(sub, "/sensors/lidar/" + c.name + "/points", q);
-  dds::Reader<msg::PointCloud2> reader(sub, topic, q);
-  LidarDriver driver(c, p, stamps);
-  driver.start();
-  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  RecordingNode node(c);
+  ASSERT_TRUE(node.start());
   const auto sent = vlp16(6.5);
   send_all(sent, c.port, c.position_port);
-  int scans = 0;
+  std::vector<std::uint32_t> scans;
   ASSERT_TRUE(wait_for(
       [&] {
-        reader.take([&](const msg::PointCloud2&, const dds_sample_info_t&) { ++scans; });
-        return scans >= 4;
+        node.take(scans);
+        return scans.size() >= 4;
       },
       5000))
-      << scans;
-  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "record_dropped") == std::to_string(sent.size()); }, 2000))
-      << test::status_value(driver.status(), "record_dropped");
-  const auto st = driver.status();
+      << scans.size();
+  ASSERT_TRUE(wait_for([&] { return node.status("record_dropped") == std::to_string(sent.size()); }, 2000))
+      << node.status("record_dropped");
+  const auto st = node.driver.status();
   EXPECT_EQ(test::status_value(st, "record_packets"), "0");
   EXPECT_NE(test::status_value(st, "record_errors"), "0");
   EXPECT_EQ(st.level, dds::Level::kWarn);
   EXPECT_NE(st.message.find("cannot create"), std::string::npos) << st.message;
-  driver.stop();
+  node.driver.stop();
 }
 
 // Record on the car, decode on the desk: one recorded file through the `rig` binary's
@@ -189,30 +186,13 @@ TEST(LidarRecord, RigLidarDecodeOfTheRecordingGivesThePublishedScans) {
   test::TempDir dir;
   auto c = vlp16_config("recdec");
   c.record.directory = (dir.path / "rec").string();
-  dds::Participant p;
-  dds::Participant sub;
-  dds::StampsWriter stamps(p);
-  dds::QosSpec q;
-  q.depth = 50;
-  dds::Topic<msg::PointCloud2> topic(sub, "/sensors/lidar/" + c.name + "/points", q);
-  dds::Reader<msg::PointCloud2> reader(sub, topic, q);
-  LidarDriver driver(c, p, stamps);
-  driver.start();
-  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  RecordingNode node(c);
+  ASSERT_TRUE(node.start());
   const auto sent = vlp16(8.5);
   send_all(sent, c.port, c.position_port);
   std::vector<std::uint32_t> published;
-  ASSERT_TRUE(wait_for(
-      [&] {
-        reader.take([&](const msg::PointCloud2& m, const dds_sample_info_t&) { published.push_back(m.width); });
-        return test::status_value(driver.status(), "record_packets") == std::to_string(sent.size());
-      },
-      5000));
-  ::usleep(100'000);
-  reader.take([&](const msg::PointCloud2& m, const dds_sample_info_t&) { published.push_back(m.width); });
-  driver.stop();
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(c.record.directory)) files.push_back(e.path());
+  ASSERT_TRUE(node.record_all_then_stop(sent.size(), published));
+  const auto files = node.files();
   ASSERT_EQ(files.size(), 1u);
   const auto [rc, out] = test::run(test::rig_bin() + " lidar decode --pcap " + files[0].string() +
                                    " --model VLP-16 --out " + (dir.path / "pcd").string() + " 2>/dev/null");

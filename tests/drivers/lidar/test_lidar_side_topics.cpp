@@ -12,6 +12,7 @@
 #include <numbers>
 #include <vector>
 
+#include "lidar_node_reader.hpp"
 #include "rig_process.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
@@ -29,12 +30,6 @@ using test::wait_for;
 
 namespace vel = lidar::velodyne;
 std::string unique(const std::string& base) { return base + "_" + std::to_string(::getpid()); }
-
-dds::QosSpec reader_qos() {
-  dds::QosSpec q;
-  q.depth = 100;
-  return q;
-}
 
 std::vector<std::byte> imu_bytes(const lidar::ouster::ImuSample& s) {
   std::vector<std::byte> b(lidar::ouster::kImuPacketSize);
@@ -61,14 +56,10 @@ TEST(LidarSideTopics, OusterImuPacketsBecomeImuInSiUnits) {
   c.time_source = timesync::TimeSource::kSensor;
   c.frame_id = "lidar_" + c.name;
 
-  dds::Participant p;    // the driver's
-  dds::Participant sub;  // the subscriber's (topic QoS may differ from the writer's only across participants)
-  dds::StampsWriter stamps(p);
-  dds::Topic<msg::Imu> topic(sub, "/sensors/lidar/" + c.name + "/imu", reader_qos());
-  dds::Reader<msg::Imu> reader(sub, topic, reader_qos());
-  LidarDriver driver(c, p, stamps);
-  driver.start();
-  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  test::LidarNodeReader<msg::Imu> node(c, "imu", 100);
+  ASSERT_TRUE(node.start());
+  auto& reader = node.reader;
+  auto& driver = node.driver;
 
   const std::vector<lidar::Endpoint> dest{{"127.0.0.1", static_cast<std::uint16_t>(c.position_port)}};
   lidar::UdpSender sender(dest);
@@ -123,10 +114,12 @@ TEST(LidarSideTopics, OusterImuPacketsBecomeImuInSiUnits) {
     EXPECT_NEAR(m.wx, 10 * d2r, 1e-7);
     EXPECT_NEAR(m.wy, -20 * d2r, 1e-7);
     EXPECT_NEAR(m.wz, 90 * d2r, 1e-6);
-    // Through timesync: the device clock agrees with the host, so its gyro time is taken as is
-    // (or, before the mapper has a sample, the receive time: within the loopback's latency).
+    // Through timesync: the device clock agrees with the host, so its gyro time is taken as is.
+    // Until the mapper has seen a few samples a stamp may sit at a receive time: on a loaded host
+    // this test can be descheduled between reading the clock and sending (seen: 53 ms, first three
+    // samples), so early samples are only bounded; the last one is the converged mapping.
     const Nanos gyro = gyro_times[static_cast<std::size_t>(k)];
-    EXPECT_NEAR(static_cast<double>(m.stamp - gyro), 0.0, 2e6) << k;
+    EXPECT_NEAR(static_cast<double>(m.stamp - gyro), 0.0, k + 1 == kGood ? 2e6 : 200e6) << k;
     exact += m.stamp == gyro ? 1 : 0;  // sensor_synced: the gyro's own time (not the accel's, 1 µs before)
   }
   EXPECT_GE(exact, 1);
@@ -166,14 +159,10 @@ TEST(LidarSideTopics, VelodyneGprmcBecomesNavSatFixAndBadSentencesAreCounted) {
   c.time_source = timesync::TimeSource::kSensor;
   c.frame_id = "lidar_" + c.name;
 
-  dds::Participant p;    // the driver's
-  dds::Participant sub;  // the subscriber's (topic QoS may differ from the writer's only across participants)
-  dds::StampsWriter stamps(p);
-  dds::Topic<msg::NavSatFix> topic(sub, "/sensors/lidar/" + c.name + "/fix", reader_qos());
-  dds::Reader<msg::NavSatFix> reader(sub, topic, reader_qos());
-  LidarDriver driver(c, p, stamps);
-  driver.start();
-  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  test::LidarNodeReader<msg::NavSatFix> node(c, "fix", 100);
+  ASSERT_TRUE(node.start());
+  auto& reader = node.reader;
+  auto& driver = node.driver;
   const std::vector<lidar::Endpoint> dest{{"127.0.0.1", static_cast<std::uint16_t>(c.position_port)}};
   lidar::UdpSender sender(dest);
 
