@@ -6,6 +6,7 @@
 
 #include "rig_cameras.hpp"
 #include "sensor_rig/common/config_node.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 
 namespace sensor_rig::rig {
 
@@ -41,8 +42,10 @@ RigConfig load_rig_config(const std::string& path) {
     auto l = drivers::parse_lidar_config(item);
     if (!l.name.empty() && !names.insert(l.name).second) item.fail("name", "duplicate device name '" + l.name + "'");
     if (!ports.insert(l.port).second) item.fail("port", "port " + std::to_string(l.port) + " used twice");
+    // The second port is `imu_port` in an Ouster's config, `position_port` otherwise: name what the file says.
+    const char* second_port_key = item.has("imu_port") ? "imu_port" : "position_port";
     if (l.position_port != 0 && !ports.insert(l.position_port).second)
-      item.fail("position_port", "port " + std::to_string(l.position_port) + " used twice");
+      item.fail(second_port_key, "port " + std::to_string(l.position_port) + " used twice");
     cfg.lidars.push_back(std::move(l));
   }
   cfg.cameras = parse_cameras(root);
@@ -68,8 +71,11 @@ std::string describe(const RigConfig& cfg) {
     << (cfg.dds.profile.empty() ? std::string("default") : cfg.dds.profile) << ", transport "
     << dds::to_string(cfg.dds.transport) << "\n";
   for (const auto& l : cfg.lidars) {
-    o << "  lidar " << l.name << ": " << l.model << " udp " << l.host << ":" << l.port
-      << (l.position_port ? " position " + std::to_string(l.position_port) : std::string()) << ", returns "
+    o << "  lidar " << l.name << ": " << l.model
+      << (l.source == drivers::LidarSource::kPacket ? " packet " + l.interface + " port " : " udp " + l.host + ":") << l.port
+      << (l.position_port ? std::string(lidar::mock::is_ouster_model(l.model) ? " imu " : " position ") + std::to_string(l.position_port)
+                          : std::string())
+      << ", returns "
       << lidar::to_string(l.returns) << ", time " << timesync::to_string(l.time_source) << ", qos " << dds::to_string(l.qos) << " -> /sensors/lidar/"
       << l.name << "/points";
     if (l.mock.kind == LidarMockConfig::Kind::kSynthetic) o << " [mock: synthetic " << l.mock.rpm << " rpm]";

@@ -92,6 +92,10 @@ TEST_F(ConfigCheck, EachMistakeExitsTwoAtItsLine) {
       {"out of range", {{7, "    min_range: 50"}}, "7 lidars[0].min_range", ""},
       {"duplicate name", {{8, "  - name: front"}}, "8 lidars[1].name", "duplicate"},
       {"duplicate port", {{10, "    port: 2368"}}, "10 lidars[1].port", "used twice"},
+      {"duplicate imu port (named as written)",
+       {{9, "    model: OS-LEGACY"}, {10, "    port: 7502\n    imu_port: 2368\n    mock: {kind: synthetic, rpm: 600}"}},
+       "11 lidars[1].imu_port",
+       "used twice"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.what);

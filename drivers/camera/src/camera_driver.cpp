@@ -9,6 +9,7 @@
 
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/frame_clock.hpp"
 #include "sensor_rig/timesync/host_clock.hpp"
@@ -39,13 +40,11 @@ struct CameraDriver::Impl {
   std::atomic<bool> stop_flag{false};
 
   mutable std::mutex mutex;  // counters shared with status(); written by the driver thread
-  std::uint64_t frames = 0;
-  std::uint64_t write_errors = 0;
+  dds::PublishStats published;  // image_raw: frames, rate, write failures
   std::uint64_t reopens = 0;
   std::uint64_t lost_reports = 0;
   std::uint64_t incomplete_since_publish = 0;
   Nanos last_frame_host_ns = 0;
-  double rate_hz = 0.0;
   bool open = false;
   std::string state = "opening";
   std::string last_error;
@@ -121,16 +120,8 @@ struct CameraDriver::Impl {
     // A copy into the worker's queue (never waits for the worker); the raw frame is already out.
     if (outputs) outputs->offer(m, st.vehicle_ns, f.data());
     std::lock_guard lock(mutex);
-    if (!rc.ok()) {
-      ++write_errors;
-      last_error = "dds write: " + rc.message();
-    }
-    ++frames;
+    if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
     stamp_source = st.source;
-    if (last_frame_host_ns != 0) {
-      const double dt = static_cast<double>(publish - last_frame_host_ns) * 1e-9;
-      if (dt > 0) rate_hz = rate_hz == 0.0 ? 1.0 / dt : 0.8 * rate_hz + 0.2 / dt;
-    }
     last_frame_host_ns = publish;
   }
 
@@ -274,9 +265,9 @@ dds::DriverStatus CameraDriver::status() const {
   s.hardware_id = std::string(c.source.backend) + ":" + c.source.device;
   const Nanos age = impl_->last_frame_host_ns == 0 ? -1 : vehicle_now_ns() - impl_->last_frame_host_ns;
   if (!impl_->open) {
-    s.level = impl_->frames == 0 && impl_->lost_reports == 0 ? dds::Level::kWarn : dds::Level::kError;
+    s.level = impl_->published.samples() == 0 && impl_->lost_reports == 0 ? dds::Level::kWarn : dds::Level::kError;
     s.message = impl_->state + (impl_->last_error.empty() ? "" : ": " + impl_->last_error);
-  } else if (impl_->frames == 0 && age > 1'000'000'000) {
+  } else if (impl_->published.samples() == 0 && age > 1'000'000'000) {
     s.level = dds::Level::kWarn;
     s.message = "waiting for frames";
   } else if (age > static_cast<Nanos>(c.watchdog()) * 1'000'000) {
@@ -288,8 +279,8 @@ dds::DriverStatus CameraDriver::status() const {
   const auto& st = impl_->source_stats;
   s.add("topic", impl_->image_topic_name);
   s.add("state", impl_->state);
-  s.add_number("frames", impl_->frames);
-  s.add("frame_rate_hz", std::to_string(impl_->rate_hz));
+  s.add_number("frames", impl_->published.samples());
+  s.add("frame_rate_hz", std::to_string(impl_->published.rate_hz()));
   s.add_number("incomplete", st.incomplete);
   s.add_number("timeouts", st.timeouts);
   s.add_number("underruns", st.underruns);
@@ -297,7 +288,7 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("resent_packets", st.resent_packets);
   s.add_number("lost_reports", impl_->lost_reports);
   s.add_number("reopens", impl_->reopens);
-  s.add_number("write_errors", impl_->write_errors);
+  s.add_number("write_errors", impl_->published.write_errors());
   s.add("trigger", camera::to_string(c.source.trigger));
   s.add("stamp_source", to_string(impl_->stamp_source));
   s.add("sync", timesync::to_string(impl_->sync.state));

@@ -20,6 +20,7 @@
 #include "sensor_rig/drivers/lidar/sweep_samples.hpp"
 #include "sensor_rig/timesync/host_clock.hpp"
 #include "sensor_rig/timesync/monotonic_stamps.hpp"
+#include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 
 namespace sensor_rig::drivers {
@@ -196,8 +197,7 @@ struct LidarDriver::Impl {
 
   // Counters shared with status(); written by the driver thread only.
   mutable std::mutex mutex;
-  std::uint64_t scans = 0;
-  std::uint64_t write_errors = 0;
+  dds::PublishStats published;  // scans: count, rate; every topic's write failures
   std::uint64_t position_packets = 0;
   PpsState pps = PpsState::kAbsent;
   bool have_position = false;
@@ -213,8 +213,6 @@ struct LidarDriver::Impl {
   std::uint64_t imu_dropped_non_finite = 0;
   std::uint64_t sweep_samples_sent = 0;    // to the sweep observers (LIDAR-triggered cameras)
   timesync::MonotonicStampsStatus stamp_monotonic;  // scan_monotonic's, for status()
-  Nanos last_scan_host_ns = 0;
-  double scan_rate_hz = 0.0;
   std::size_t last_points = 0;
   std::uint32_t last_missing = 0;      // missing packets of the last published scan
   std::uint64_t incomplete_scans = 0;  // published scans with missing packets
@@ -314,10 +312,7 @@ struct LidarDriver::Impl {
     const auto rc = imu_writer->write(m, vehicle_now_ns());
     std::lock_guard lock(mutex);
     ++imu_samples;
-    if (!rc.ok()) {
-      ++write_errors;
-      last_error = "dds write (imu): " + rc.message();
-    }
+    if (!published.count_write(rc)) last_error = "dds write (imu): " + rc.message();
   }
 
   void handle_position(std::span<const std::byte> bytes) {
@@ -348,10 +343,7 @@ struct LidarDriver::Impl {
     std::lock_guard lock(mutex);
     ++fixes;
     if (!key.second) ++fixes_no_fix;
-    if (!rc.ok()) {
-      ++write_errors;
-      last_error = "dds write (fix): " + rc.message();
-    }
+    if (!published.count_write(rc)) last_error = "dds write (fix): " + rc.message();
   }
 
   // Before the write: a triggered camera learns the sweep's phase as early as possible.
@@ -388,20 +380,11 @@ struct LidarDriver::Impl {
                     written,    scan.packets,     scan.dropped,     pc.row_step,  scan.missing_packets};
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
     std::lock_guard lock(mutex);
-    if (!rc.ok()) {
-      ++write_errors;
-      last_error = "dds write: " + rc.message();
-    }
-    ++scans;
+    if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
     stamp_monotonic = scan_monotonic.status();
     last_points = scan.points.size();
     last_missing = scan.missing_packets;
     if (scan.missing_packets > 0) ++incomplete_scans;
-    if (last_scan_host_ns != 0) {
-      const double dt = static_cast<double>(publish - last_scan_host_ns) * 1e-9;
-      if (dt > 0) scan_rate_hz = scan_rate_hz == 0.0 ? 1.0 / dt : 0.8 * scan_rate_hz + 0.2 / dt;
-    }
-    last_scan_host_ns = publish;
   }
 
   lidar::RecvResult receive(std::span<lidar::PacketSlot> slots, int timeout_ms) noexcept {
@@ -502,8 +485,8 @@ dds::DriverStatus LidarDriver::status() const {
   dds::DriverStatus s;
   s.name = "lidar/" + c.name;
   s.hardware_id = c.model + "@" + (c.source == LidarSource::kPacket ? c.interface : c.host) + ":" + std::to_string(c.port);
-  const Nanos age = impl_->last_scan_host_ns == 0 ? -1 : vehicle_now_ns() - impl_->last_scan_host_ns;
-  if (impl_->scans == 0) {
+  const Nanos age = impl_->published.last_ns() == 0 ? -1 : vehicle_now_ns() - impl_->published.last_ns();
+  if (impl_->published.samples() == 0) {
     s.level = dds::Level::kWarn;
     s.message = "waiting for packets";
   } else if (age > 1'000'000'000) {
@@ -524,8 +507,8 @@ dds::DriverStatus LidarDriver::status() const {
   const auto& d = impl_->decoder_stats;
   const auto& u = impl_->udp_stats;
   s.add("topic", impl_->topic_name);
-  s.add_number("scans", impl_->scans);
-  s.add("scan_rate_hz", std::to_string(impl_->scan_rate_hz));
+  s.add_number("scans", impl_->published.samples());
+  s.add("scan_rate_hz", std::to_string(impl_->published.rate_hz()));
   s.add_number("points_last_scan", impl_->last_points);
   s.add_number("packets", d.packets);
   s.add_number("packets_dropped", d.dropped());
@@ -544,7 +527,7 @@ dds::DriverStatus LidarDriver::status() const {
     s.add_number("kernel_drops", u.kernel_drops);
     s.add_number("truncated", u.truncated);
   }
-  s.add_number("write_errors", impl_->write_errors);
+  s.add_number("write_errors", impl_->published.write_errors());
   if (!impl_->sweep_observers.empty()) {
     s.add_number("sweep_observers", impl_->sweep_observers.size());
     s.add_number("sweep_samples", impl_->sweep_samples_sent);
