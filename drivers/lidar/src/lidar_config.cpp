@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 #include <net/if.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "sensor_rig/lidar/decoder_files.hpp"
@@ -144,8 +145,17 @@ LidarConfig parse_lidar_config(const config::Node& n) {
       f->allow_keys({"start", "end"});
       l.fov_start_deg = f->get_double("start", 0.0, 360.0);
       l.fov_end_deg = f->get_double("end", 0.0, 360.0);
+      // start == end reads as a full turn to the decoder; written other than 0..360 it is a typo.
+      const bool same = std::lround(l.fov_start_deg * 100) % 36000 == std::lround(l.fov_end_deg * 100) % 36000;
+      if (same && !(l.fov_start_deg == 0.0 && l.fov_end_deg == 360.0))
+        f->fail("end", "equals start: a full turn is {start: 0, end: 360}");
     }
+    if (lidar::mock::is_ouster_model(l.model))
+      n.fail("fov", "Ouster: the azimuth window is the sensor's own (its metadata), not a config key");
   }
+  const auto* entry = lidar::find_model(l.model);
+  if (n.has("azimuth") && entry != nullptr && entry->vendor != "velodyne")
+    n.fail("azimuth", "only Velodyne models interpolate azimuth per laser (model " + l.model + ")");
   l.azimuth = n.get_enum<lidar::AzimuthInterpolation>(
       "azimuth", {{"per-laser", lidar::AzimuthInterpolation::kPerLaser},
                   {"per-sequence", lidar::AzimuthInterpolation::kPerSequence}},

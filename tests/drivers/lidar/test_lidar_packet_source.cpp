@@ -76,6 +76,35 @@ TEST(LidarPacketSourceConfig, KeysAndTheirErrors) {
   }
 }
 
+// The scan-completeness keys: a FOV whose ends coincide (other than 0..360) is a typo, not a full
+// turn; Ouster's window is the sensor's own; only Velodyne decoders have an azimuth convention.
+TEST(LidarConfig, FovAndAzimuthErrors) {
+  EXPECT_TRUE(parse(kHead + "fov: {start: 0, end: 360}\nazimuth: per-sequence\n").problems.empty());
+  EXPECT_TRUE(parse(kHead + "fov: {start: 270, end: 90}\n").problems.empty()) << "a window across north";
+  struct Case {
+    std::string text;
+    int line;
+    std::string key, message;
+  };
+  const std::vector<Case> cases{
+      {kHead + "fov: {start: 90, end: 90}\n", 4, "fov.end", "equals start"},
+      {kHead + "fov: {start: 360, end: 0}\n", 4, "fov.end", "equals start"},
+      {kHead + "fov: {start: 10, end: 400}\n", 4, "fov.end", ""},
+      {"name: left\nmodel: OS-LEGACY\nport: 7502\nfov: {start: 0, end: 180}\nmock: {kind: synthetic}\n", 4, "fov", "Ouster"},
+      {"name: right\nmodel: Pandar40P\nport: 2369\nazimuth: per-laser\n", 4, "azimuth", "only Velodyne"},
+      {kHead + "azimuth: per-block\n", 4, "azimuth", ""},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.text);
+    const auto p = parse(c.text);
+    ASSERT_EQ(p.problems.size(), 1u) << (p.problems.empty() ? "" : p.problems.front().str());
+    const auto& e = p.problems.front();
+    EXPECT_EQ(e.line, c.line) << e.str();
+    EXPECT_NE(e.key.find(c.key), std::string::npos) << e.str();
+    EXPECT_NE(e.message.find(c.message), std::string::npos) << e.str();
+  }
+}
+
 LidarConfig vlp16_on(const std::string& interface, const std::string& name) {
   LidarConfig c;
   c.name = name + "_" + std::to_string(::getpid());
