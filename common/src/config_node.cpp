@@ -200,7 +200,7 @@ double Node::get_double(std::string_view key, double lo, double hi, std::optiona
 }
 
 std::string Node::get_choice(std::string_view key, std::initializer_list<std::string_view> choices,
-                             std::optional<std::string> fallback) const {
+                             const std::optional<std::string>& fallback) const {
   return get_choice_of(key, std::vector<std::string_view>(choices), fallback);
 }
 

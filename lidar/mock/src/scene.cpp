@@ -35,12 +35,12 @@ Scene Scene::standard(const SceneParams& p) {
   Scene s;
   const double g = -p.sensor_height_m;
   const double top = g + p.wall_height_m;
-  const double X = p.room_half_x_m, Y = p.room_half_y_m;
-  s.add({{-X, -Y, g}, {X, Y, g}, 20, "ground"});
-  s.add({{X, -Y, g}, {X, Y, top}, 60, "wall +x"});
-  s.add({{-X, -Y, g}, {-X, Y, top}, 70, "wall -x"});
-  s.add({{-X, Y, g}, {X, Y, top}, 80, "wall +y"});
-  s.add({{-X, -Y, g}, {X, -Y, top}, 90, "wall -y"});
+  const double hx = p.room_half_x_m, hy = p.room_half_y_m;
+  s.add({{-hx, -hy, g}, {hx, hy, g}, 20, "ground"});
+  s.add({{hx, -hy, g}, {hx, hy, top}, 60, "wall +x"});
+  s.add({{-hx, -hy, g}, {-hx, hy, top}, 70, "wall -x"});
+  s.add({{-hx, hy, g}, {hx, hy, top}, 80, "wall +y"});
+  s.add({{-hx, -hy, g}, {hx, -hy, top}, 90, "wall -y"});
   s.add({{7.0, -4.0, g}, {11.5, -2.2, g + 1.5}, 140, "car"});
   s.add({{-6.0, 5.0, g}, {-5.4, 5.6, top}, 200, "pillar"});
   s.add({{2.0, 9.0, g}, {3.2, 10.2, g + 0.8}, 110, "crate"});

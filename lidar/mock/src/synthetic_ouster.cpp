@@ -87,16 +87,16 @@ SyntheticOuster::SyntheticOuster(SyntheticOusterConfig config, Scene scene)
   buf_.resize(layout_.packet_size);
 
   // ouster-sdk's projection (the decoder's XyzLut, in double): ray of column c, beam r.
-  const auto W = static_cast<std::size_t>(m.columns_per_frame);
-  const auto H = static_cast<std::size_t>(m.pixels_per_column);
+  const auto width = static_cast<std::size_t>(m.columns_per_frame);
+  const auto height = static_cast<std::size_t>(m.pixels_per_column);
   const auto& b = m.beam_to_lidar;
   const auto& t = m.lidar_to_sensor;
   const double bx = b[3], bz = b[11];
   const double d = bz != 0.0 ? std::hypot(bx, bz) : bx;
-  rays_.resize(W * H);
-  for (std::size_t c = 0; c < W; ++c) {
-    const double e = 2.0 * std::numbers::pi * (1.0 - static_cast<double>(c) / static_cast<double>(W));
-    for (std::size_t r = 0; r < H; ++r) {
+  rays_.resize(width * height);
+  for (std::size_t c = 0; c < width; ++c) {
+    const double e = 2.0 * std::numbers::pi * (1.0 - static_cast<double>(c) / static_cast<double>(width));
+    for (std::size_t r = 0; r < height; ++r) {
       const double a = -m.beam_azimuth_deg[r] * kDegToRad;
       const double p = m.beam_altitude_deg[r] * kDegToRad;
       const double dir[3] = {std::cos(e + a) * std::cos(p), std::sin(e + a) * std::cos(p), std::sin(p)};
@@ -107,7 +107,7 @@ SyntheticOuster::SyntheticOuster(SyntheticOusterConfig config, Scene scene)
         ro[i] = (t[4 * i] * off[0] + t[4 * i + 1] * off[1] + t[4 * i + 2] * off[2] + t[4 * i + 3]) * 1e-3;
       }
       const double n = std::sqrt(rd[0] * rd[0] + rd[1] * rd[1] + rd[2] * rd[2]);  // 1 for a rotation
-      rays_[c * H + r] = Ray{{ro[0], ro[1], ro[2]}, {rd[0] / n, rd[1] / n, rd[2] / n}};
+      rays_[c * height + r] = Ray{{ro[0], ro[1], ro[2]}, {rd[0] / n, rd[1] / n, rd[2] / n}};
     }
   }
 }
@@ -130,9 +130,9 @@ void SyntheticOuster::render_packet(std::uint64_t index, std::span<std::byte> ou
   std::memset(p, 0, layout_.packet_size);
   const auto& m = config_.metadata;
   const auto& spec = ouster::profile_spec(layout_.profile);
-  const auto W = static_cast<std::uint64_t>(m.columns_per_frame);
+  const auto width = static_cast<std::uint64_t>(m.columns_per_frame);
   const std::uint64_t first = static_cast<std::uint64_t>(config_.start_column) + index * layout_.columns_per_packet;
-  const auto frame = static_cast<std::uint32_t>(config_.first_frame_id + first / W);
+  const auto frame = static_cast<std::uint32_t>(config_.first_frame_id + first / width);
   const bool legacy = layout_.header == ouster::HeaderType::kLegacy;
   if (!legacy) {
     const auto& h = ouster::header_spec(layout_.header);
@@ -147,14 +147,14 @@ void SyntheticOuster::render_packet(std::uint64_t index, std::span<std::byte> ou
   const auto& nir = spec.field(ouster::Field::kNearIr);
   for (std::size_t c = 0; c < layout_.columns_per_packet; ++c) {
     const std::uint64_t k = first + c;
-    const auto mid = static_cast<std::uint16_t>(k % W);
+    const auto mid = static_cast<std::uint16_t>(k % width);
     std::uint8_t* col = p + layout_.column_offset(c);
     put_le(col + kTimestampOffset, static_cast<std::uint64_t>(column_time(index * layout_.columns_per_packet + c)), 8);
     put_le(col + kMeasurementIdOffset, mid, 2);
     const bool valid = in_window(mid, m);
     if (legacy) {
       put_le(col + kLegacyFrameIdOffset, static_cast<std::uint16_t>(frame), 2);
-      put_le(col + kLegacyEncoderOffset, static_cast<std::uint64_t>(mid) * kEncoderTicks / W, 4);
+      put_le(col + kLegacyEncoderOffset, static_cast<std::uint64_t>(mid) * kEncoderTicks / width, 4);
       put_le(col + layout_.col_size - layout_.col_footer_size, valid ? kLegacyColumnValid : 0U, 4);
     } else {
       put_le(col + kStatusOffset, valid ? kColumnValid : 0U, 2);

@@ -44,9 +44,9 @@ std::array<double, 3> ImuSample::linear_acceleration_mps2() const noexcept {
 }
 
 std::array<double, 3> ImuSample::angular_velocity_radps() const noexcept {
-  constexpr double k = std::numbers::pi / 180.0;
-  return {static_cast<double>(gyro_dps[0]) * k, static_cast<double>(gyro_dps[1]) * k,
-          static_cast<double>(gyro_dps[2]) * k};
+  constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+  return {static_cast<double>(gyro_dps[0]) * kRadPerDeg, static_cast<double>(gyro_dps[1]) * kRadPerDeg,
+          static_cast<double>(gyro_dps[2]) * kRadPerDeg};
 }
 
 ImuPacketStatus parse_imu_packet(std::span<const std::byte> bytes, ImuSample& out) noexcept {

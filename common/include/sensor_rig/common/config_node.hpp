@@ -68,7 +68,7 @@ class Node {
   double get_double(std::string_view key, double lo, double hi, std::optional<double> fallback = std::nullopt) const;
   // One of `choices`; reports the allowed values otherwise.
   std::string get_choice(std::string_view key, std::initializer_list<std::string_view> choices,
-                         std::optional<std::string> fallback = std::nullopt) const;
+                         const std::optional<std::string>& fallback = std::nullopt) const;
   // One of `choices` as its enum value: text becomes an enum at load time, never compared later.
   template <class E>
   E get_enum(std::string_view key, std::initializer_list<std::pair<std::string_view, E>> choices, E fallback) const {
