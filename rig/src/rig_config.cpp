@@ -90,6 +90,9 @@ std::string describe(const RigConfig& cfg) {
       << " -> /vehicle/dbw/status, /vehicle/state";
     if (cfg.dbw.mock_ecu) o << " [mock ECU on " << cfg.dbw.bus << "]";
     if (cfg.dbw.command_source.enabled) o << " [command source " << cfg.dbw.command_source.rate_hz << " Hz]";
+    if (cfg.dbw.security.enabled)
+      o << " [DDS Security on /vehicle/dbw/cmd: " << cfg.dbw.security.dir << ", bridge '" << cfg.dbw.security.bridge_identity
+        << "', command '" << cfg.dbw.security.command_identity << "']";
     o << "\n";
   }
   return o.str();

@@ -173,4 +173,17 @@ TEST_F(ConfigCheck, EveryShippedConfigValidates) {
 }
 
 }  // namespace
+// The summary `rig config check` prints names what the rig will run secured.
+TEST_F(ConfigCheck, SummaryNamesTheSecuredCommandTopic) {
+  const auto init = run_rig("security init " + (dir_ / "sec").string());
+  ASSERT_EQ(init.code, 0) << init.err;
+  const auto r = run_rig("config check " + write("sec.yaml", "rig:\n  name: s\ndbw:\n  mock_ecu: true\n  security: {dir: " +
+                                                                (dir_ / "sec").string() + "}\n"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("[DDS Security on /vehicle/dbw/cmd: " + (dir_ / "sec").string() +
+                       ", bridge 'dbw_bridge', command 'dbw_command']"),
+            std::string::npos)
+      << r.out;
+}
+
 }  // namespace sensor_rig::test
