@@ -2,6 +2,7 @@
 
 #include <arv.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <thread>
@@ -23,6 +24,24 @@ void unref(T*& p) noexcept {
   if (p != nullptr) g_object_unref(p);
   p = nullptr;
 }
+
+// A GenICam feature's value as text; "" and `error` set when absent or unreadable.
+std::string feature_text(ArvDevice* dev, const char* name, std::string& error) {
+  ArvGcNode* node = arv_device_get_feature(dev, name);
+  if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) {
+    error = std::string("no feature ") + name;
+    return {};
+  }
+  GError* err = nullptr;
+  const char* v = arv_gc_feature_node_get_value_as_string(reinterpret_cast<ArvGcFeatureNode*>(node), &err);
+  if (err != nullptr) {
+    error = std::string(name) + ": " + take_error(err);
+    return {};
+  }
+  return v != nullptr ? v : "";
+}
+
+bool ptp_locked(const std::string& status) { return status == "Master" || status == "Slave"; }
 
 void on_control_lost(ArvDevice* /*device*/, gpointer user) {
   static_cast<std::atomic<bool>*>(user)->store(true);
@@ -98,6 +117,24 @@ void AravisSource::open() {
   try {
     configure();
     start_stream();
+    if (cfg_.ptp.enable) {
+      {
+        std::lock_guard pl(ptp_mutex_);
+        ptp_stop_ = false;
+      }
+      ptp_thread_ = std::thread([this] {
+        const auto period = std::chrono::milliseconds(std::max(cfg_.ptp.status_poll_ms, 10));
+        std::unique_lock pl(ptp_mutex_);
+        while (!ptp_cv_.wait_for(pl, period, [this] { return ptp_stop_; })) {
+          pl.unlock();
+          {
+            std::lock_guard gl(gc_mutex_);
+            if (!control_lost_.load()) poll_ptp();
+          }
+          pl.lock();
+        }
+      });
+    }
   } catch (...) {
     if (st_->stream != nullptr) arv_stream_set_emit_signals(st_->stream, FALSE);
     unref(st_->stream);
@@ -163,6 +200,18 @@ void AravisSource::configure() {
     arv_device_set_features_from_string(dev, assignment.c_str(), &err);
     check("feature " + assignment);
   }
+  // 6b. PTP, after the features (a feature may select the PTP profile or clock).
+  ptp_locked_.store(false);
+  {
+    std::lock_guard pl(ptp_mutex_);
+    const auto resets = ptp_.resets;
+    ptp_ = {};
+    ptp_.resets = resets;  // across reopens
+  }
+  if (cfg_.ptp.enable) {
+    std::lock_guard gl(gc_mutex_);
+    setup_ptp();
+  }
   // 7. trigger.
   switch (cfg_.trigger) {
     case TriggerMode::kFreeRun:
@@ -195,6 +244,111 @@ void AravisSource::configure() {
     arv_camera_gv_set_stream_options(
         cam, cfg_.packet_socket ? ARV_GV_STREAM_OPTION_NONE : ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
   }
+}
+
+std::string AravisSource::read_ptp_status(std::string& error) {
+  const Nanos t0 = monotonic_now_ns();
+  std::string status = feature_text(st_->device, ptp_status_feature_.c_str(), error);
+  const auto us = static_cast<std::int64_t>((monotonic_now_ns() - t0) / 1000);
+  std::lock_guard pl(ptp_mutex_);
+  ++ptp_.polls;
+  ptp_.poll_max_us = std::max(ptp_.poll_max_us, us);
+  return status;
+}
+
+void AravisSource::ptp_reset(const std::string& status) {
+  ArvDevice* dev = st_->device;
+  std::string name;
+  {
+    std::lock_guard pl(ptp_mutex_);
+    name = ptp_.enable_feature;
+  }
+  GError* err = nullptr;
+  arv_device_set_boolean_feature_value(dev, name.c_str(), FALSE, &err);
+  if (err == nullptr) arv_device_set_boolean_feature_value(dev, name.c_str(), TRUE, &err);
+  std::lock_guard pl(ptp_mutex_);
+  ++ptp_.resets;
+  if (err != nullptr) ptp_.error = "reset of " + name + " (status " + status + "): " + take_error(err);
+}
+
+void AravisSource::setup_ptp() {
+  ArvDevice* dev = st_->device;
+  std::string name;
+  for (const char* f : {"PtpEnable", "GevIEEE1588"})
+    if (arv_device_is_feature_available(dev, f, nullptr) != FALSE) {
+      name = f;
+      break;
+    }
+  if (name.empty())
+    throw CameraError("aravis " + cfg_.device + ": ptp enabled but the device has no PtpEnable or GevIEEE1588 feature");
+  ptp_status_feature_ = name == "PtpEnable" ? "PtpStatus" : "GevIEEE1588Status";
+  if (arv_device_is_feature_available(dev, ptp_status_feature_.c_str(), nullptr) == FALSE)
+    throw CameraError("aravis " + cfg_.device + ": ptp enabled but the device has " + name + " and no " + ptp_status_feature_);
+  GError* err = nullptr;
+  arv_device_set_boolean_feature_value(dev, name.c_str(), TRUE, &err);
+  if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": " + name + "=true: " + take_error(err));
+  {
+    std::lock_guard pl(ptp_mutex_);
+    ptp_.enabled = true;
+    ptp_.enable_feature = name;
+  }
+  std::string error;
+  std::string status = read_ptp_status(error);
+  if (!error.empty()) throw CameraError("aravis " + cfg_.device + ": " + error);
+  // Not running (yet): disable and enable once, as a faulty clock servo needs.
+  if (status == "Faulty" || status == "Disabled" || status == "Initializing") {
+    ptp_reset(status);
+    status = read_ptp_status(error);
+    if (!error.empty()) throw CameraError("aravis " + cfg_.device + ": " + error);
+  }
+  std::lock_guard pl(ptp_mutex_);
+  ptp_.status = status;
+  ptp_.locked = ptp_locked(status);
+  ptp_locked_.store(ptp_.locked);
+}
+
+void AravisSource::poll_ptp() {
+  if (st_->device == nullptr) return;
+  std::string error;
+  std::string status = read_ptp_status(error);
+  // Faulty/Disabled: reset. Initializing is what a reset leads to: wait for it.
+  if (error.empty() && (status == "Faulty" || status == "Disabled")) {
+    ptp_reset(status);
+    status = read_ptp_status(error);
+  }
+  std::lock_guard pl(ptp_mutex_);
+  if (!error.empty()) {
+    ptp_.error = error;
+    status = "unknown";
+  }
+  ptp_.status = status;
+  ptp_.locked = ptp_locked(status);
+  ptp_locked_.store(ptp_.locked);
+}
+
+void AravisSource::stop_ptp_thread() noexcept {
+  if (!ptp_thread_.joinable()) return;
+  {
+    std::lock_guard pl(ptp_mutex_);
+    ptp_stop_ = true;
+  }
+  ptp_cv_.notify_all();
+  ptp_thread_.join();
+}
+
+PtpState AravisSource::ptp() const {
+  std::lock_guard pl(ptp_mutex_);
+  return ptp_;
+}
+
+void AravisSource::set_feature(const std::string& name, const std::string& value) {
+  std::lock_guard lock(mutex_);
+  std::lock_guard gl(gc_mutex_);
+  if (st_->device == nullptr) throw CameraError("aravis " + cfg_.device + ": not open");
+  const std::string assignment = name + "=" + value;
+  GError* err = nullptr;
+  arv_device_set_features_from_string(st_->device, assignment.c_str(), &err);
+  if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": feature " + assignment + ": " + take_error(err));
 }
 
 void AravisSource::start_stream() {
@@ -239,6 +393,8 @@ void AravisSource::fold_stats() noexcept {
 }
 
 void AravisSource::close() noexcept {
+  stop_ptp_thread();  // before the camera goes; a status read in flight is at most one GVCP timeout
+  ptp_locked_.store(false);
   std::lock_guard lock(mutex_);
   if (st_->camera == nullptr) return;
   const bool lost = control_lost_.load();
@@ -265,6 +421,7 @@ void AravisSource::close() noexcept {
 
 std::string AravisSource::feature(const std::string& name) const {
   std::lock_guard lock(mutex_);
+  std::lock_guard gl(gc_mutex_);
   if (st_->device == nullptr) return {};
   ArvGcNode* node = arv_device_get_feature(st_->device, name.c_str());
   if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) return {};
@@ -279,6 +436,7 @@ std::string AravisSource::feature(const std::string& name) const {
 
 bool AravisSource::trigger() {
   std::lock_guard lock(mutex_);
+  std::lock_guard gl(gc_mutex_);
   if (st_->camera == nullptr || control_lost_.load()) return false;
   GError* err = nullptr;
   arv_camera_software_trigger(st_->camera, &err);
@@ -336,6 +494,10 @@ Capture AravisSource::next(int timeout_ms) {
   m.format = cfg_.format;
   m.device_ns = static_cast<Nanos>(arv_buffer_get_timestamp(b));
   m.domain = TimeDomain::kDeviceTicks;
+  if (ptp_locked_.load(std::memory_order_relaxed)) {  // PTP time: TAI (or UTC) ns since 1970
+    m.domain = TimeDomain::kVehicle;
+    if (cfg_.ptp.tai) m.device_ns -= static_cast<Nanos>(cfg_.ptp.tai_utc_offset_s) * 1'000'000'000;
+  }
   const auto sys = static_cast<Nanos>(arv_buffer_get_system_timestamp(b));
   m.first_rx_ns = sys > 0 && sys <= real ? sys : real;
   m.complete_ns = real;

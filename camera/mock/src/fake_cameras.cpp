@@ -107,7 +107,18 @@ std::vector<std::string> gige_fake_command(const GigeFakeOptions& o) {
   }
   std::vector<std::string> argv{find_program(o.program), "-i", o.address, "-s", serial};
   if (o.lost_packets_per_thousand > 0) argv.insert(argv.end(), {"-r", std::to_string(o.lost_packets_per_thousand)});
+  if (!o.genicam.empty()) argv.insert(argv.end(), {"-g", o.genicam});
   return argv;
+}
+
+std::string device_genicam_xml(const std::string& device) {
+  auto* dev = static_cast<ArvDevice*>(open_aravis_network_device(device));  // throws CameraError
+  std::size_t size = 0;
+  const char* xml = arv_device_get_genicam_xml(dev, &size);
+  std::string out = xml != nullptr ? std::string(xml, size) : std::string();
+  g_object_unref(dev);
+  if (out.empty()) throw CameraError("aravis " + device + ": no GenICam XML");
+  return out;
 }
 
 bool gvcp_port_bound(const std::string& address) {

@@ -5,6 +5,10 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+
 #include "sensor_rig/camera/aravis_source.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 #include "next_frame.hpp"
@@ -167,6 +171,189 @@ TEST_F(GigeFake, KilledFakeIsReportedWithin1sAndFramesResumeAfterRestart) {
   EXPECT_EQ(next_frame(src).status, CaptureStatus::kFrame);
   src.close();
   again.stop(500);
+}
+
+// PTP against the real network fake: its own GenICam XML (read from a running default fake, at
+// test time) plus PtpEnable (a Boolean on a free register of the fake's memory, 0x8000) and
+// PtpStatus (an Enumeration computed from that register: 0 Disabled, 1 Slave, 2 Listening, other
+// Faulty). The fake stamps each buffer with its host's CLOCK_REALTIME (g_get_real_time) at fill
+// time, so "PTP time" is host UTC: with timescale tai the camera's TAI is that minus 37 s after
+// conversion, with utc it is the receive time minus the transfer.
+constexpr const char* kPtpNodes = R"(
+  <Boolean Name="PtpEnable" NameSpace="Standard">
+    <pValue>PtpTestRegister</pValue>
+    <OnValue>1</OnValue>
+    <OffValue>0</OffValue>
+  </Boolean>
+  <IntReg Name="PtpTestRegister" NameSpace="Custom">
+    <Address>0x8000</Address>
+    <Length>4</Length>
+    <AccessMode>RW</AccessMode>
+    <pPort>Device</pPort>
+    <Cachable>NoCache</Cachable>
+    <Sign>Unsigned</Sign>
+    <Endianess>BigEndian</Endianess>
+  </IntReg>
+  <IntSwissKnife Name="PtpStatusValue" NameSpace="Custom">
+    <pVariable Name="R">PtpTestRegister</pVariable>
+    <Formula>R = 0 ? 2 : (R = 1 ? 5 : (R = 2 ? 3 : 1))</Formula>
+  </IntSwissKnife>
+  <Enumeration Name="PtpStatus" NameSpace="Standard">
+    <EnumEntry Name="Initializing" NameSpace="Standard"><Value>0</Value></EnumEntry>
+    <EnumEntry Name="Faulty" NameSpace="Standard"><Value>1</Value></EnumEntry>
+    <EnumEntry Name="Disabled" NameSpace="Standard"><Value>2</Value></EnumEntry>
+    <EnumEntry Name="Listening" NameSpace="Standard"><Value>3</Value></EnumEntry>
+    <EnumEntry Name="Master" NameSpace="Standard"><Value>4</Value></EnumEntry>
+    <EnumEntry Name="Slave" NameSpace="Standard"><Value>5</Value></EnumEntry>
+    <pValue>PtpStatusValue</pValue>
+  </Enumeration>
+)";
+
+class GigePtpFake : public GigeFake {
+ protected:
+  void SetUp() override {
+    GigeFake::SetUp();
+    if (IsSkipped()) return;
+    mock::GigeFakeOptions o;
+    o.address = address(1);
+    std::string xml;
+    {
+      auto plain = mock::start_gige_fake(o);
+      xml = mock::device_genicam_xml(o.address);
+      plain.stop(500);
+    }
+    const auto end = xml.rfind("</RegisterDescription>");
+    ASSERT_NE(end, std::string::npos) << "not a GenICam XML";
+    ASSERT_EQ(xml.find("PtpEnable"), std::string::npos) << "the fake has PTP features of its own now";
+    xml.insert(end, kPtpNodes);
+    char path[] = "/tmp/rig_ptp_fake_XXXXXX.xml";
+    const int fd = ::mkstemps(path, 4);
+    ASSERT_GE(fd, 0);
+    ::close(fd);
+    xml_path_ = path;
+    std::ofstream(xml_path_) << xml;
+    o.address = address(0);
+    o.genicam = xml_path_;
+    fake_ = mock::start_gige_fake(o);
+  }
+  void TearDown() override {
+    fake_.stop(500);
+    if (!xml_path_.empty()) std::remove(xml_path_.c_str());
+  }
+  static SourceConfig ptp_cfg(bool tai) {
+    auto c = cfg(address(0));
+    c.ptp.enable = true;
+    c.ptp.tai = tai;
+    c.ptp.status_poll_ms = 100;
+    return c;
+  }
+  std::string xml_path_;
+  ChildProcess fake_;
+};
+
+// The fake's realtime stamp, converted, against the receive time: the transfer of a 640x480 frame
+// on loopback (ms; generous for a loaded host), never after it.
+void expect_vehicle_stamp(const Frame& f) {
+  const auto& m = f.meta();
+  EXPECT_EQ(m.domain, TimeDomain::kVehicle);
+  EXPECT_LE(m.device_ns, m.complete_ns + 1'000'000);
+  EXPECT_GT(m.device_ns, m.complete_ns - 150'000'000) << "stamp " << (m.complete_ns - m.device_ns) / 1000000 << " ms before receipt";
+}
+
+TEST_F(GigePtpFake, EnablesPtpAndStampsInUtcFromTaiOrUtc) {
+  for (const bool tai : {true, false}) {
+    SCOPED_TRACE(tai ? "timescale tai" : "timescale utc");
+    const auto c = ptp_cfg(tai);
+    AravisSource src(c);
+    src.open();
+    EXPECT_EQ(src.feature("PtpEnable"), "true");
+    const auto p = src.ptp();
+    EXPECT_TRUE(p.enabled);
+    EXPECT_EQ(p.enable_feature, "PtpEnable");
+    EXPECT_EQ(p.status, "Slave");
+    EXPECT_TRUE(p.locked);
+    for (int i = 0; i < 3; ++i) {
+      auto cap = next_frame(src);
+      ASSERT_EQ(cap.status, CaptureStatus::kFrame) << cap.error;
+      if (tai) {
+        // The fake's clock is UTC: read as TAI it converts to 37 s before the receive time.
+        auto m = cap.frame.meta();
+        EXPECT_EQ(m.domain, TimeDomain::kVehicle);
+        m.device_ns += 37'000'000'000;
+        EXPECT_LE(m.device_ns, m.complete_ns + 1'000'000);
+        EXPECT_GT(m.device_ns, m.complete_ns - 150'000'000);
+      } else {
+        expect_vehicle_stamp(cap.frame);
+      }
+    }
+    src.close();
+  }
+}
+
+TEST_F(GigePtpFake, FaultyStatusIsResetAndUnlockedFramesKeepDeviceTicks) {
+  AravisSource src(ptp_cfg(false));
+  src.open();
+  ASSERT_TRUE(src.ptp().locked);
+  ASSERT_EQ(next_frame(src).frame.meta().domain, TimeDomain::kVehicle);
+  // Listening (not locked, not reset): device ticks again, within a few polls.
+  src.set_feature("PtpTestRegister", "2");
+  Nanos deadline = monotonic_now_ns() + 2'000'000'000;
+  while (src.ptp().locked && monotonic_now_ns() < deadline) ::usleep(20'000);
+  EXPECT_EQ(src.ptp().status, "Listening");
+  ASSERT_FALSE(src.ptp().locked);
+  (void)next_frame(src);  // a frame that may have been in flight at the change
+  auto cap = next_frame(src);
+  ASSERT_EQ(cap.status, CaptureStatus::kFrame) << cap.error;
+  EXPECT_EQ(cap.frame.meta().domain, TimeDomain::kDeviceTicks);
+  cap.frame.reset();
+  EXPECT_EQ(src.ptp().resets, 0u);
+  // Faulty: disabled and enabled by the status thread, locked again.
+  src.set_feature("PtpTestRegister", "7");
+  deadline = monotonic_now_ns() + 2'000'000'000;
+  while (src.ptp().resets == 0 && monotonic_now_ns() < deadline) ::usleep(20'000);
+  const auto p = src.ptp();
+  EXPECT_EQ(p.resets, 1u) << p.error;
+  EXPECT_EQ(p.status, "Slave");
+  EXPECT_TRUE(p.locked);
+  EXPECT_EQ(src.feature("PtpTestRegister"), "1");
+  EXPECT_GT(p.polls, 2u);
+  EXPECT_GT(p.poll_max_us, 0);
+  (void)next_frame(src);
+  cap = next_frame(src);
+  ASSERT_EQ(cap.status, CaptureStatus::kFrame) << cap.error;
+  expect_vehicle_stamp(cap.frame);
+  cap.frame.reset();
+  src.close();
+}
+
+TEST_F(GigePtpFake, PtpOffInTheConfigKeepsDeviceTicksAndLeavesPtpDisabled) {
+  AravisSource src(cfg(address(0)));
+  src.open();
+  EXPECT_FALSE(src.ptp().enabled);
+  EXPECT_EQ(src.feature("PtpEnable"), "false");
+  EXPECT_EQ(src.feature("PtpStatus"), "Disabled");
+  auto cap = next_frame(src);
+  ASSERT_EQ(cap.status, CaptureStatus::kFrame) << cap.error;
+  EXPECT_EQ(cap.frame.meta().domain, TimeDomain::kDeviceTicks);
+  cap.frame.reset();
+  src.close();
+}
+
+TEST_F(GigeFake, PtpEnabledOnACameraWithoutPtpFeaturesIsAnErrorAtOpen) {
+  mock::GigeFakeOptions o;
+  o.address = address(0);
+  auto fake = mock::start_gige_fake(o);
+  auto c = cfg(o.address);
+  c.ptp.enable = true;
+  AravisSource src(c);
+  try {
+    src.open();
+    ADD_FAILURE() << "opened";
+  } catch (const CameraError& e) {
+    EXPECT_NE(std::string(e.what()).find("no PtpEnable or GevIEEE1588"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(src.is_open());
+  fake.stop(500);
 }
 
 }  // namespace

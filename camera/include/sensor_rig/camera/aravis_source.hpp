@@ -6,12 +6,20 @@
 // fixed socket buffer. Aravis streams into buffers of a bounded pool: the pool memory is the
 // published Image.data (no copy). Incomplete frames are counted and never returned. Device loss
 // ("control-lost" from the heartbeat thread) turns next() into kDisconnected.
+// PTP (cfg.ptp.enable): after the named features PtpEnable (else GevIEEE1588) is set, the status
+// (PtpStatus / GevIEEE1588Status) read; Faulty, Disabled or Initializing at open is reset (disable,
+// enable). A thread of its own re-reads the status every status_poll_ms (a GVCP round trip: never
+// on the capture thread) and resets Faulty/Disabled; while Master/Slave, next() gives
+// TimeDomain::kVehicle stamps (TAI -> UTC), otherwise device ticks. A device without the features
+// is an error at open.
 // Aravis types stay in the .cpp: nothing above camera/ includes <arv.h>.
 #include <atomic>
+#include <condition_variable>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "sensor_rig/camera/source.hpp"
 
@@ -48,16 +56,27 @@ class AravisSource final : public FrameSource {
   [[nodiscard]] bool control_lost() const noexcept { return control_lost_.load(); }
   // A GenICam feature's value as text (enumerations, strings, numbers); "" when not open/absent.
   [[nodiscard]] std::string feature(const std::string& name) const;
+  // Sets a GenICam feature now ("name=value" as in SourceConfig::features); throws CameraError.
+  void set_feature(const std::string& name, const std::string& value);
+  [[nodiscard]] PtpState ptp() const override;
 
  private:
   struct State;
   void configure();
   void start_stream();
   void fold_stats() noexcept;
+  void setup_ptp();                    // under mutex_ + gc_mutex_, at open
+  void poll_ptp();                     // under gc_mutex_
+  void ptp_reset(const std::string& status);
+  std::string read_ptp_status(std::string& error);
+  void stop_ptp_thread() noexcept;
 
   SourceConfig cfg_;
   AravisDeviceOpener opener_;
   mutable std::mutex mutex_;  // camera control (open/close/trigger) from two threads
+  // GenICam access (trigger, features, the PTP poll): taken after mutex_; the PTP thread takes
+  // only this one, so stats() never waits for its GVCP round trip.
+  mutable std::mutex gc_mutex_;
   std::unique_ptr<State> st_;
   std::atomic<bool> control_lost_{false};
   SourceStats base_;  // totals of streams already closed
@@ -66,6 +85,14 @@ class AravisSource final : public FrameSource {
   std::atomic<std::uint64_t> incomplete_{0};
   std::atomic<std::uint64_t> completed_{0};
   AravisDetails details_;
+  // PTP: the state (under ptp_mutex_), the lock flag next() reads, the status thread.
+  mutable std::mutex ptp_mutex_;
+  PtpState ptp_;
+  std::string ptp_status_feature_;
+  std::atomic<bool> ptp_locked_{false};
+  std::thread ptp_thread_;
+  std::condition_variable ptp_cv_;
+  bool ptp_stop_ = false;  // under ptp_mutex_
 };
 
 // Aravis' own open by name, falling back to a serial-number match in the device list.

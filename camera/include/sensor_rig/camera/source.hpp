@@ -20,6 +20,16 @@ struct CameraError : std::runtime_error {
 enum class TriggerMode : std::uint8_t { kFreeRun = 0, kSoftware, kLine };
 const char* to_string(TriggerMode m) noexcept;
 
+// IEEE 1588 (PTP) on a GigE camera (aravis backend): PtpEnable (SFNC) or GevIEEE1588 (older).
+// While the device reports Master/Slave its frame timestamps are PTP time (TAI, or UTC when
+// `tai` is false) and frames carry TimeDomain::kVehicle (UTC); otherwise device ticks (mapped).
+struct PtpConfig {
+  bool enable = false;
+  bool tai = true;                // the camera's timescale: TAI (PTP's own) or UTC
+  int tai_utc_offset_s = 37;      // TAI - UTC (37 s since 2017)
+  int status_poll_ms = 1000;      // status re-read period (own thread, never per frame)
+};
+
 // What a backend is asked to configure (the driver's config minus DDS). Applied in this order:
 // pixel format, ROI, frame rate, exposure, gain, then `features` by name, then the trigger.
 struct SourceConfig {
@@ -39,6 +49,19 @@ struct SourceConfig {
   int socket_buffer_bytes = 8 << 20;   // GigE stream socket (fixed; >= 4 MB, SPEC §8)
   bool packet_socket = false;          // Aravis' packet socket: receives nothing from the fake as root
   int buffers = 4;                     // pool size
+  PtpConfig ptp;                       // aravis only
+};
+
+// The PTP state a source reports (diagnostics).
+struct PtpState {
+  bool enabled = false;           // configured and enabled on the device
+  std::string enable_feature;     // PtpEnable | GevIEEE1588
+  std::string status;             // the device's status text (Master, Slave, Faulty, ...)
+  bool locked = false;            // Master or Slave: frames carry PTP time
+  std::uint64_t resets = 0;       // disable + enable after Faulty/Disabled/Initializing
+  std::uint64_t polls = 0;        // status reads
+  std::int64_t poll_max_us = 0;   // the slowest status read (a GVCP round trip)
+  std::string error;              // the last failed status read / reset
 };
 
 enum class CaptureStatus : std::uint8_t {
@@ -78,6 +101,8 @@ class FrameSource {
   // Software trigger (TriggerMode::kSoftware); false when not open or refused.
   virtual bool trigger() { return false; }
   [[nodiscard]] virtual SourceStats stats() const = 0;
+  // PTP state; enabled == false when the source has no PTP (V4L2, or not configured).
+  [[nodiscard]] virtual PtpState ptp() const { return {}; }
   [[nodiscard]] virtual std::string describe() const = 0;  // "aravis 127.0.0.2 BayerRG8 1920x1200@10"
 };
 

@@ -29,6 +29,7 @@ struct GigeFakeOptions {
   std::string address = "127.0.0.2";
   std::string serial;                  // default: derived from the address
   int lost_packets_per_thousand = 0;   // arv-fake-gv-camera -r: GVSP packet loss
+  std::string genicam;                 // -g: a GenICam XML file instead of the built-in one
   std::string program = "arv-fake-gv-camera-0.8";
 };
 
@@ -36,6 +37,9 @@ struct GigeFakeOptions {
 std::vector<std::string> gige_fake_command(const GigeFakeOptions& o);
 // Starts the fake and waits (bounded) until its GVCP port answers; throws std::runtime_error.
 ChildProcess start_gige_fake(const GigeFakeOptions& o, std::chrono::milliseconds timeout = std::chrono::seconds(3));
+// The GenICam XML a device serves (opened through the network, as AravisSource does); throws
+// CameraError. Tests derive variants of the fake's own XML from it (e.g. PTP features).
+std::string device_genicam_xml(const std::string& device);
 // True when something listens on UDP <address>:3956 (from /proc/net/udp).
 bool gvcp_port_bound(const std::string& address);
 
