@@ -61,6 +61,19 @@ CameraOutputsConfig parse_outputs(const config::Node& n, camera::PixelFormat for
   return o;
 }
 
+// ptp: {enable: bool, timescale: tai|utc (tai), tai_utc_offset_s: 0..100 (37, only with tai)}
+camera::PtpConfig parse_ptp(const config::Node& n, const std::string& backend) {
+  camera::PtpConfig p;
+  if (!n.expect_map()) return p;
+  n.allow_keys({"enable", "timescale", "tai_utc_offset_s"});
+  p.enable = n.get_bool("enable", false);
+  p.tai = n.get_choice("timescale", {"tai", "utc"}, "tai") == "tai";
+  p.tai_utc_offset_s = static_cast<int>(n.get_int("tai_utc_offset_s", 0, 100, 37));
+  if (!p.tai && n.has("tai_utc_offset_s")) n.fail("tai_utc_offset_s", "only with timescale: tai (a UTC camera needs no offset)");
+  if (backend != "aravis") n.fail("", "PTP needs the aravis backend (a GigE camera)");
+  return p;
+}
+
 }  // namespace
 
 CameraConfig parse_camera_config(const config::Node& n) {
@@ -68,7 +81,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
   if (!n.expect_map()) return c;
   n.allow_keys({"name", "backend", "device", "pixel_format", "width", "height", "frame_rate", "calibration", "exposure_us",
                 "gain_db", "features", "trigger", "packet_size", "packet_delay_ns", "socket_buffer_bytes", "buffers",
-                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock", "outputs"});
+                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock", "outputs", "ptp"});
   c.name = n.get_string("name");
   for (char ch : c.name)
     if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) {
@@ -162,6 +175,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
   if (auto q = n.child("qos")) c.qos = dds::QosSpec::from_config(*q, c.qos);
   if (auto m = n.child("mock")) c.mock = parse_mock(*m);
   if (auto o = n.child("outputs")) c.outputs = parse_outputs(*o, s.format);
+  if (auto p = n.child("ptp")) s.ptp = parse_ptp(*p, s.backend);
   using K = CameraMockConfig::Kind;
   const bool aravis_mock = c.mock.kind == K::kGige || c.mock.kind == K::kAravisInProcess;
   if (aravis_mock && s.backend != "aravis") n.fail("mock", std::string("mock ") + to_string(c.mock.kind) + " needs backend: aravis");

@@ -50,6 +50,7 @@ struct CameraDriver::Impl {
   std::string last_error;
   StampSource stamp_source = StampSource::kHostFallback;
   camera::SourceStats source_stats;
+  camera::PtpState ptp;
   timesync::ClockMapperStatus sync;
   timesync::MonotonicStampsStatus monotonic;
   timesync::RealtimeStepDetector realtime_steps;  // told to the clock: stamps held over a step back
@@ -208,6 +209,7 @@ struct CameraDriver::Impl {
         lose("no frame for " + std::to_string(silent / 1'000'000) + " ms");
       std::lock_guard lock(mutex);
       source_stats = src->stats();
+      if (cfg.source.ptp.enable) ptp = src->ptp();
       sync = clock.status(vehicle_now_ns());
       monotonic = clock.monotonic();
     }
@@ -295,7 +297,20 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("sync_offset_ns", impl_->sync.offset_ns);
   s.add("sync_drift_ppm", std::to_string(impl_->sync.drift_ppm));
   s.add_number("sync_residual_p99_ns", impl_->sync.residual_p99_ns);
-  s.add("ptp", "not used (device ticks mapped)");
+  if (!c.source.ptp.enable) {
+    s.add("ptp", "not used (device ticks mapped)");
+  } else {
+    // The device's PTP state; stamps are PTP time (device_vehicle) only while it is locked.
+    const auto& p = impl_->ptp;
+    s.add("ptp", !p.enabled ? "not enabled (device not open)"
+                 : p.locked ? "locked (" + p.status + ", " + (c.source.ptp.tai ? "TAI -> UTC" : "UTC") + ")"
+                            : "not locked (" + p.status + "): device ticks mapped");
+    s.add("ptp_status", p.status);
+    s.add_number("ptp_resets", p.resets);
+    s.add_number("ptp_polls", p.polls);
+    s.add_number("ptp_poll_max_us", p.poll_max_us);
+    if (!p.error.empty()) s.add("ptp_error", p.error);
+  }
   // CLOCK_REALTIME stepped back: stamps held and slewed (timesync/README.md "Realtime steps").
   s.add_number("stamp_backward_steps", impl_->monotonic.backward_steps);
   s.add_number("stamp_correction_ns", impl_->monotonic.correction_ns);

@@ -118,6 +118,30 @@ TEST(CameraConfig, BadOutputsAreReportedAtTheirKeys) {
   EXPECT_NE(p.problems.find("image_color: needs an 8-bit Bayer"), std::string::npos) << p.problems;
 }
 
+TEST(CameraConfig, PtpKeysDefaultsAndErrors) {
+  auto p = parse("name: c\ndevice: 127.0.0.3\n");
+  EXPECT_FALSE(p.cfg.source.ptp.enable);
+  p = parse("name: c\ndevice: 127.0.0.3\nptp: {enable: true}\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_TRUE(p.cfg.source.ptp.enable);
+  EXPECT_TRUE(p.cfg.source.ptp.tai);
+  EXPECT_EQ(p.cfg.source.ptp.tai_utc_offset_s, 37);
+  p = parse("name: c\ndevice: 127.0.0.3\nptp: {enable: true, timescale: tai, tai_utc_offset_s: 36}\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_EQ(p.cfg.source.ptp.tai_utc_offset_s, 36);
+  p = parse("name: c\ndevice: 127.0.0.3\nptp: {enable: true, timescale: utc}\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_FALSE(p.cfg.source.ptp.tai);
+  p = parse("name: c\ndevice: 127.0.0.3\nptp: {enable: true, timescale: gps, tai_utc_offset_s: 200, domain: 0}\n");
+  for (const char* needle : {"cams.yaml:3:", "timescale", "tai_utc_offset_s", "domain"})
+    EXPECT_NE(p.problems.find(needle), std::string::npos) << needle << "\n" << p.problems;
+  p = parse("name: c\ndevice: 127.0.0.3\nptp: {enable: true, timescale: utc, tai_utc_offset_s: 37}\n");
+  EXPECT_NE(p.problems.find("tai_utc_offset_s: only with timescale: tai"), std::string::npos) << p.problems;
+  p = parse("name: c\nbackend: v4l2\ndevice: /dev/video0\npixel_format: YUYV\nptp: {enable: true}\n");
+  EXPECT_NE(p.problems.find("cams.yaml:5:"), std::string::npos) << p.problems;
+  EXPECT_NE(p.problems.find("PTP needs the aravis backend"), std::string::npos) << p.problems;
+}
+
 TEST(CameraConfig, MockRigCamerasParseAndFrontNarrowHasItsOutputs) {
   const char* src = std::getenv("RIG_SOURCE_DIR");
   if (src == nullptr) GTEST_SKIP() << "RIG_SOURCE_DIR not set (run through ctest)";
