@@ -8,6 +8,7 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -119,6 +120,62 @@ std::string device_genicam_xml(const std::string& device) {
   g_object_unref(dev);
   if (out.empty()) throw CameraError("aravis " + device + ": no GenICam XML");
   return out;
+}
+
+namespace {
+constexpr const char* kPtpNodes = R"(
+  <Boolean Name="PtpEnable" NameSpace="Standard">
+    <pValue>PtpTestRegister</pValue>
+    <OnValue>1</OnValue>
+    <OffValue>0</OffValue>
+  </Boolean>
+  <IntReg Name="PtpTestRegister" NameSpace="Custom">
+    <Address>0x8000</Address>
+    <Length>4</Length>
+    <AccessMode>RW</AccessMode>
+    <pPort>Device</pPort>
+    <Cachable>NoCache</Cachable>
+    <Sign>Unsigned</Sign>
+    <Endianess>BigEndian</Endianess>
+  </IntReg>
+  <IntSwissKnife Name="PtpStatusValue" NameSpace="Custom">
+    <pVariable Name="R">PtpTestRegister</pVariable>
+    <Formula>R = 0 ? 2 : (R = 1 ? 5 : (R = 2 ? 3 : 1))</Formula>
+  </IntSwissKnife>
+  <Enumeration Name="PtpStatus" NameSpace="Standard">
+    <EnumEntry Name="Initializing" NameSpace="Standard"><Value>0</Value></EnumEntry>
+    <EnumEntry Name="Faulty" NameSpace="Standard"><Value>1</Value></EnumEntry>
+    <EnumEntry Name="Disabled" NameSpace="Standard"><Value>2</Value></EnumEntry>
+    <EnumEntry Name="Listening" NameSpace="Standard"><Value>3</Value></EnumEntry>
+    <EnumEntry Name="Master" NameSpace="Standard"><Value>4</Value></EnumEntry>
+    <EnumEntry Name="Slave" NameSpace="Standard"><Value>5</Value></EnumEntry>
+    <pValue>PtpStatusValue</pValue>
+  </Enumeration>
+)";
+
+}  // namespace
+
+std::string write_ptp_fake_genicam(const std::string& address) {
+  GigeFakeOptions o;
+  o.address = address;
+  std::string xml;
+  {
+    auto plain = start_gige_fake(o);
+    xml = device_genicam_xml(o.address);
+    plain.stop(500);
+  }
+  const auto end = xml.rfind("</RegisterDescription>");
+  if (end == std::string::npos) throw std::runtime_error("the fake's GenICam data is not a RegisterDescription");
+  if (xml.find("\"PtpEnable\"") != std::string::npos) throw std::runtime_error("the fake has PTP features of its own now");
+  xml.insert(end, kPtpNodes);
+  char path[] = "/tmp/rig_ptp_fake_XXXXXX.xml";
+  const int fd = ::mkstemps(path, 4);
+  if (fd < 0) throw std::runtime_error(std::string("mkstemps: ") + std::strerror(errno));
+  ::close(fd);
+  std::ofstream out(path);
+  out << xml;
+  if (!out.flush()) throw std::runtime_error(std::string("cannot write ") + path);
+  return path;
 }
 
 bool gvcp_port_bound(const std::string& address) {

@@ -174,40 +174,10 @@ TEST_F(GigeFake, KilledFakeIsReportedWithin1sAndFramesResumeAfterRestart) {
 }
 
 // PTP against the real network fake: its own GenICam XML (read from a running default fake, at
-// test time) plus PtpEnable (a Boolean on a free register of the fake's memory, 0x8000) and
-// PtpStatus (an Enumeration computed from that register: 0 Disabled, 1 Slave, 2 Listening, other
-// Faulty). The fake stamps each buffer with its host's CLOCK_REALTIME (g_get_real_time) at fill
-// time, so "PTP time" is host UTC: with timescale tai the camera's TAI is that minus 37 s after
-// conversion, with utc it is the receive time minus the transfer.
-constexpr const char* kPtpNodes = R"(
-  <Boolean Name="PtpEnable" NameSpace="Standard">
-    <pValue>PtpTestRegister</pValue>
-    <OnValue>1</OnValue>
-    <OffValue>0</OffValue>
-  </Boolean>
-  <IntReg Name="PtpTestRegister" NameSpace="Custom">
-    <Address>0x8000</Address>
-    <Length>4</Length>
-    <AccessMode>RW</AccessMode>
-    <pPort>Device</pPort>
-    <Cachable>NoCache</Cachable>
-    <Sign>Unsigned</Sign>
-    <Endianess>BigEndian</Endianess>
-  </IntReg>
-  <IntSwissKnife Name="PtpStatusValue" NameSpace="Custom">
-    <pVariable Name="R">PtpTestRegister</pVariable>
-    <Formula>R = 0 ? 2 : (R = 1 ? 5 : (R = 2 ? 3 : 1))</Formula>
-  </IntSwissKnife>
-  <Enumeration Name="PtpStatus" NameSpace="Standard">
-    <EnumEntry Name="Initializing" NameSpace="Standard"><Value>0</Value></EnumEntry>
-    <EnumEntry Name="Faulty" NameSpace="Standard"><Value>1</Value></EnumEntry>
-    <EnumEntry Name="Disabled" NameSpace="Standard"><Value>2</Value></EnumEntry>
-    <EnumEntry Name="Listening" NameSpace="Standard"><Value>3</Value></EnumEntry>
-    <EnumEntry Name="Master" NameSpace="Standard"><Value>4</Value></EnumEntry>
-    <EnumEntry Name="Slave" NameSpace="Standard"><Value>5</Value></EnumEntry>
-    <pValue>PtpStatusValue</pValue>
-  </Enumeration>
-)";
+// test time) plus PtpEnable and PtpStatus (mock::write_ptp_fake_genicam: 0x8000 = 0 Disabled,
+// 1 Slave, 2 Listening, other Faulty). The fake stamps each buffer with its host's CLOCK_REALTIME
+// (g_get_real_time) at fill time, so "PTP time" is host UTC: with timescale tai the camera's TAI
+// is that minus 37 s after conversion, with utc it is the receive time minus the transfer.
 
 class GigePtpFake : public GigeFake {
  protected:
@@ -215,23 +185,7 @@ class GigePtpFake : public GigeFake {
     GigeFake::SetUp();
     if (IsSkipped()) return;
     mock::GigeFakeOptions o;
-    o.address = address(1);
-    std::string xml;
-    {
-      auto plain = mock::start_gige_fake(o);
-      xml = mock::device_genicam_xml(o.address);
-      plain.stop(500);
-    }
-    const auto end = xml.rfind("</RegisterDescription>");
-    ASSERT_NE(end, std::string::npos) << "not a GenICam XML";
-    ASSERT_EQ(xml.find("PtpEnable"), std::string::npos) << "the fake has PTP features of its own now";
-    xml.insert(end, kPtpNodes);
-    char path[] = "/tmp/rig_ptp_fake_XXXXXX.xml";
-    const int fd = ::mkstemps(path, 4);
-    ASSERT_GE(fd, 0);
-    ::close(fd);
-    xml_path_ = path;
-    std::ofstream(xml_path_) << xml;
+    xml_path_ = mock::write_ptp_fake_genicam(address(1));
     o.address = address(0);
     o.genicam = xml_path_;
     fake_ = mock::start_gige_fake(o);

@@ -40,6 +40,12 @@ ChildProcess start_gige_fake(const GigeFakeOptions& o, std::chrono::milliseconds
 // The GenICam XML a device serves (opened through the network, as AravisSource does); throws
 // CameraError. Tests derive variants of the fake's own XML from it (e.g. PTP features).
 std::string device_genicam_xml(const std::string& device);
+// A GenICam file for `arv-fake-gv-camera -g`: the fake's own XML (from a default fake started
+// on `address` for the moment) plus PTP features on a free register of its memory: PtpEnable
+// (Boolean, register PtpTestRegister at 0x8000) and PtpStatus (Enumeration computed from that
+// register: 0 Disabled, 1 Slave, 2 Listening, any other value Faulty). Returns the path of a new
+// temporary file (the caller removes it); throws std::runtime_error / CameraError.
+std::string write_ptp_fake_genicam(const std::string& address);
 // True when something listens on UDP <address>:3956 (from /proc/net/udp).
 bool gvcp_port_bound(const std::string& address);
 
