@@ -8,6 +8,7 @@
 #include <map>
 #include <mutex>
 
+#include "sensor_rig/camera/mock/fake_cameras.hpp"
 #include "sensor_rig/camera/mock/fake_v4l2_device.hpp"
 #include "sensor_rig/camera/v4l2_source.hpp"
 #include "sensor_rig/dds/types.hpp"
@@ -174,6 +175,54 @@ TEST(CameraDriver, StereoPairOnOneSoftwareTickStampsWithin1ms) {
   EXPECT_EQ(value(drivers[0]->status(), "stamp_source"), "trigger_tick");
   EXPECT_GT(group.ticks(), 5u);
   for (auto& d : drivers) d->stop();
+}
+
+// A PTP camera (the GigE fake with PtpEnable/PtpStatus, timescale tai): frames stamped with the
+// device's PTP time converted to UTC (the fake's clock is the host's UTC, so read as TAI its
+// stamps come out 37 s before receipt: the conversion is visible), /diagnostics shows the lock.
+TEST(CameraDriver, PtpLockedCameraStampsDeviceTimeAndReportsTheLock) {
+  const std::string addr = "127.0.0." + std::to_string(230 + ::getpid() % 20);
+  std::string why;
+  if (!camera::mock::ensure_loopback_address(addr, why)) GTEST_SKIP() << why;
+  const std::string xml = camera::mock::write_ptp_fake_genicam(addr);
+  camera::mock::GigeFakeOptions fo;
+  fo.address = addr;
+  fo.genicam = xml;
+  auto fake = camera::mock::start_gige_fake(fo);
+  dds::Participant p;
+  dds::StampsWriter stamps(p);
+  CameraConfig cfg;
+  cfg.name = unique("drv_ptp");
+  cfg.frame_id = "camera_" + cfg.name;
+  cfg.source.device = addr;
+  cfg.source.width = 640;
+  cfg.source.height = 480;
+  cfg.source.frame_rate = 20;
+  cfg.source.ptp.enable = true;  // timescale tai, 37 s
+  cfg.info = camera::uncalibrated(640, 480);
+  dds::Topic<msg::Image> it(p, "/sensors/camera/" + cfg.name + "/image_raw", cfg.qos);
+  dds::Reader<msg::Image> images(p, it, cfg.qos);
+  CameraDriver driver(cfg, p, stamps);
+  driver.start();
+  ASSERT_TRUE(images.wait_for_writers(1, 5000));
+  int got = 0;
+  ASSERT_TRUE(wait_for([&] {
+    images.take([&](const msg::Image& m, const dds_sample_info_t&) {
+      const Nanos behind = vehicle_now_ns() - msg::from_time(m.header.stamp);
+      EXPECT_GT(behind, 37'000'000'000 - 1'000'000);
+      EXPECT_LT(behind, 37'000'000'000 + 1'000'000'000);
+      ++got;
+    });
+    return got >= 3;
+  }, 5000));
+  const auto st = driver.status();
+  EXPECT_EQ(value(st, "ptp"), "locked (Slave, TAI -> UTC)");
+  EXPECT_EQ(value(st, "ptp_status"), "Slave");
+  EXPECT_EQ(value(st, "ptp_resets"), "0");
+  EXPECT_EQ(value(st, "stamp_source"), "device_vehicle");
+  driver.stop();
+  fake.stop(500);
+  std::remove(xml.c_str());
 }
 
 }  // namespace
