@@ -272,6 +272,8 @@ TEST_F(GigePtpFake, FaultyStatusIsResetAndUnlockedFramesKeepDeviceTicks) {
   EXPECT_EQ(src.feature("PtpTestRegister"), "1");
   EXPECT_GT(p.polls, 2u);
   EXPECT_GT(p.poll_max_us, 0);
+  RecordProperty("ptp_polls", static_cast<int>(p.polls));
+  RecordProperty("ptp_poll_max_us", static_cast<int>(p.poll_max_us));
   (void)next_frame(src);
   cap = next_frame(src);
   ASSERT_EQ(cap.status, CaptureStatus::kFrame) << cap.error;
