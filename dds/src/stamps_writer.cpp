@@ -28,6 +28,7 @@ void StampsWriter::write(const std::string& topic, const msg::Time& stamp, const
   m.dropped = s.dropped;
   m.size_bytes = s.size_bytes;
   m.missing_packets = s.missing_packets;
+  m.ecu_status_ns = s.ecu_status_ns;
   writer_.write(m, vehicle_now_ns());
 }
 

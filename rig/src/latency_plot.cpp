@@ -15,7 +15,7 @@ namespace sensor_rig::rig {
 namespace {
 
 constexpr std::array<const char*, kStageCount> kStageColors = {"#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd",
-                                                               "#8c564b", "#e377c2", "#17becf"};
+                                                               "#8c564b", "#e377c2", "#17becf", "#bcbd22"};
 
 // When a sample happened, for the time axis: its acquisition, else its publish time.
 Nanos when(const SampleRecord& r) { return r.acquisition_ns != 0 ? r.acquisition_ns : r.publish_ns; }

@@ -365,7 +365,7 @@ class Monitor {
                static_cast<unsigned long long>(st.lost), static_cast<unsigned long long>(st.source_drops),
                miss.c_str(), cell(kSensor).c_str(), cell(kProcess).c_str(), cell(kDds).c_str(),
                cell(kTotal).c_str()) +
-           st.info + "\n";
+           (p[kEcu].n == 0 ? std::string() : "ecu " + cell(kEcu) + " ms  ") + st.info + "\n";
   }
 
   // Synchronized sets, below the topics: rate, spread p50/p99/max, incomplete (from /diagnostics).

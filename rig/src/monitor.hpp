@@ -8,6 +8,7 @@
 //   dds      = subscriber receive - publish          (Cyclone transport)
 //   total    = subscriber receive - acquisition
 //   to_wire  = DDS write returned - last kernel receive (process + write: the driver's own latency)
+//   ecu      = first ECU status frame received - CAN frames written (/vehicle/dbw/cmd only)
 // Stages other than dds need the driver's per-sample stamps (rt/rig/stamps); topics published by
 // others show dds only. A sample announced by its stamps that does not arrive in time (2 s) is lost.
 #include <functional>

@@ -14,8 +14,8 @@ namespace {
 
 constexpr std::string_view kHeader =
     "topic,seq,acquisition_ns,first_rx_ns,last_rx_ns,publish_ns,written_ns,received_ns,missing_packets,dropped,"
-    "size_bytes";
-constexpr std::size_t kFields = 11;
+    "size_bytes,ecu_status_ns";
+constexpr std::size_t kFields = 12;
 
 double ms_between(Nanos from, Nanos to) { return static_cast<double>(to - from) * 1e-6; }
 
@@ -48,6 +48,7 @@ std::array<std::optional<double>, kStageCount> stage_latencies_ms(const SampleRe
   if (r.received_ns > 0 && r.publish_ns > 0) s[kDds] = ms_between(r.publish_ns, r.received_ns);
   if (r.received_ns > 0 && r.acquisition_ns > 0) s[kTotal] = ms_between(r.acquisition_ns, r.received_ns);
   if (r.written_ns > 0 && r.last_rx_ns > 0) s[kToWire] = ms_between(r.last_rx_ns, r.written_ns);
+  if (r.ecu_status_ns > 0 && r.written_ns > 0) s[kEcu] = ms_between(r.written_ns, r.ecu_status_ns);
   return s;
 }
 
@@ -63,6 +64,7 @@ std::string to_csv_line(const SampleRecord& r) {
     out += ',';
     out += std::to_string(v);
   }
+  put_time(out, r.ecu_status_ns);
   out += '\n';
   return out;
 }
@@ -84,8 +86,9 @@ std::optional<SampleRecord> parse_csv_line(std::string_view line) {
   bool ok = parse_number(f[1], r.seq);
   Nanos* times[] = {&r.acquisition_ns, &r.first_rx_ns, &r.last_rx_ns, &r.publish_ns, &r.written_ns, &r.received_ns};
   for (std::size_t i = 0; i < std::size(times); ++i) ok = ok && parse_number(f[2 + i], *times[i]);
-  for (std::size_t i = 8; i < kFields; ++i) ok = ok && !f[i].empty();  // counts are always written
+  for (std::size_t i = 8; i < 11; ++i) ok = ok && !f[i].empty();  // counts are always written
   ok = ok && parse_number(f[8], r.missing_packets) && parse_number(f[9], r.dropped) && parse_number(f[10], r.size_bytes);
+  ok = ok && parse_number(f[11], r.ecu_status_ns);
   if (!ok) return std::nullopt;
   return r;
 }

@@ -14,9 +14,10 @@
 namespace sensor_rig::rig {
 
 // Latency stages (rig/README.md "Monitor stages"); the order of the table, JSON and plot.
-inline constexpr std::array<const char*, 7> kStageNames = {"sensor", "assemble", "process", "write",
-                                                           "dds",    "total",    "to_wire"};
-enum Stage : std::size_t { kSensor, kAssemble, kProcess, kWrite, kDds, kTotal, kToWire };
+// ecu: drive-by-wire commands only, CAN frames written -> the first ECU status frame received after.
+inline constexpr std::array<const char*, 8> kStageNames = {"sensor", "assemble", "process", "write",
+                                                           "dds",    "total",    "to_wire", "ecu"};
+enum Stage : std::size_t { kSensor, kAssemble, kProcess, kWrite, kDds, kTotal, kToWire, kEcu };
 inline constexpr std::size_t kStageCount = kStageNames.size();
 
 // Times are vehicle ns; 0 = not known (the driver has no such stamp, or the sample was lost).
@@ -29,6 +30,7 @@ struct SampleRecord {
   Nanos publish_ns = 0;      // DDS write called (the sample's source timestamp)
   Nanos written_ns = 0;      // DDS write returned
   Nanos received_ns = 0;     // the monitor received it; 0 = lost
+  Nanos ecu_status_ns = 0;   // dbw commands: first ECU status frame received after written_ns; 0 = none
   std::uint32_t missing_packets = 0;
   std::uint32_t dropped = 0;
   std::uint32_t size_bytes = 0;

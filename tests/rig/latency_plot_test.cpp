@@ -27,6 +27,7 @@ SampleRecord sample(const std::string& topic, std::uint64_t n, bool lost = false
   r.last_rx_ns = r.first_rx_ns + 100 * kMs;
   r.publish_ns = r.last_rx_ns + 2 * kMs;
   r.written_ns = r.publish_ns + kMs / 2;
+  r.ecu_status_ns = r.written_ns + 3 * kMs;
   if (!lost) r.received_ns = r.publish_ns + kMs / 5 + static_cast<Nanos>(n) * kMs / 100;
   return r;
 }
@@ -72,9 +73,9 @@ TEST(LatencyPlot, PerTopicTimeChartWithLossMarksAndOneBoxPerStage) {
   EXPECT_EQ(title(*charts[0]).find("/sensors/camera/front_narrow/image_raw"), 0u);
   EXPECT_EQ(title(*charts[2]).find("/sensors/lidar/front/points"), 0u);
 
-  // Over time: one point per sample and stage (7 stages; a lost sample has 5: no dds, no total).
+  // Over time: one point per sample and stage (8 stages; a lost sample has 6: no dds, no total).
   const auto points = all(*charts[2], [](const Element& e) { return e.name == "circle"; });
-  EXPECT_EQ(points.size(), 48u * 7 + 2u * 5);
+  EXPECT_EQ(points.size(), 48u * 8 + 2u * 6);
   const auto marks = all(*charts[2], [](const Element& e) {
     return e.name == "g" && e.attrs.contains("class") && e.attrs.at("class") == "marks";
   });

@@ -85,4 +85,53 @@ class Outbox {
   std::uint64_t dropped_ = 0;
 };
 
+// Per-command stamps waiting for the ECU's answer (the `ecu` stage of rig monitor): the first ECU
+// status frame received after the command's CAN frames were written. The reference protocol (and
+// the mock ECU) echo no request or counter back, so that frame is the first that can reflect the
+// command — the stage includes the wait for the ECU's status period. Measured only: stamps whose
+// status never comes (ECU silent, timeout) go out with ecu_status_ns = 0. Fixed capacity, no
+// allocation; the caller serializes (the bridge's lock).
+class AwaitingEcu {
+ public:
+  static constexpr std::size_t kCapacity = 32;
+
+  // A command's stamps (stamps.written_ns set). `out` gets the oldest waiting one when full.
+  template <class Out>
+  void on_written(const OutboxItem& item, Out&& out) {
+    if (size_ == items_.size()) out(pop());
+    items_[(head_ + size_) % items_.size()] = item;
+    ++size_;
+  }
+  // A frame from the ECU, as BridgeCore::on_frame classified it, received at `rx_ns` (vehicle time,
+  // the frame's receive stamp). Only a status frame that passed its E2E check answers: every waiting
+  // command written before it is completed and handed to `out`, in order.
+  template <class Out>
+  void on_frame(dbw::RxKind kind, Nanos rx_ns, Out&& out) {
+    if (kind != dbw::RxKind::kStatus) return;
+    while (size_ > 0 && items_[head_].stamps.written_ns < rx_ns) {
+      OutboxItem it = pop();
+      it.stamps.ecu_status_ns = rx_ns;
+      out(it);
+    }
+  }
+  // Waiting stamps written at or before `now_ns - timeout_ns` go to `out` without an ECU stamp
+  // (`timeout_ns` < 0: all of them, e.g. when stopping).
+  template <class Out>
+  void expire(Nanos now_ns, Nanos timeout_ns, Out&& out) {
+    while (size_ > 0 && (timeout_ns < 0 || items_[head_].stamps.written_ns <= now_ns - timeout_ns)) out(pop());
+  }
+  [[nodiscard]] std::size_t size() const noexcept { return size_; }
+
+ private:
+  OutboxItem pop() noexcept {
+    OutboxItem it = items_[head_];
+    head_ = (head_ + 1) % items_.size();
+    --size_;
+    return it;
+  }
+  std::array<OutboxItem, kCapacity> items_{};
+  std::size_t head_ = 0;
+  std::size_t size_ = 0;
+};
+
 }  // namespace sensor_rig::drivers

@@ -90,6 +90,8 @@ class Runner {
     const double can_cpu_s = thread_cpu_s();
     stop_ = true;
     dds_thread.join();
+    // Stamps still waiting for an ECU status go out without it (the threads that complete them are done).
+    awaiting_ecu_.expire(0, -1, [this](const OutboxItem& it) { outbox_.push(it, false); });
     publishing_ = false;
     publisher.join();
     DdsBridgeStats s;
@@ -175,18 +177,19 @@ class Runner {
             ready = vehicle_now_ns();
             send_frames(mono);
             sent = vehicle_now_ns();
+            // The stamps wait (under mu_, as the CAN thread completes them) for the ECU status after.
+            OutboxItem item;
+            item.kind = OutboxItem::Kind::kStamps;
+            item.stamp = c.stamp;
+            item.seq = m.seq;
+            item.stamps = dds::SampleStamps{c.stamp, taken, taken, ready, ready, sent, 1, 0, static_cast<std::uint32_t>(sizeof m)};
+            awaiting_ecu_.on_written(item, [this](const OutboxItem& it) { outbox_.push(it, false); });
           }
           hand_over_events(mono, taken);
         }
         if (sent == 0) return;
         latency_.record(static_cast<double>(sent - info.source_timestamp) * 1e-3);
         take_to_send_.record(static_cast<double>(sent - taken) * 1e-3);
-        OutboxItem item;
-        item.kind = OutboxItem::Kind::kStamps;
-        item.stamp = c.stamp;
-        item.seq = m.seq;
-        item.stamps = dds::SampleStamps{c.stamp, taken, taken, ready, ready, sent, 1, 0, static_cast<std::uint32_t>(sizeof m)};
-        outbox_.push(item, false);
       });
     }
   }
@@ -199,13 +202,16 @@ class Runner {
       std::lock_guard<std::mutex> lock(mu_);
       const Nanos mono = monotonic_now_ns();
       const Nanos vnow = vehicle_now_ns();
+      const auto push = [this](const OutboxItem& it) { outbox_.push(it, false); };
       if (st == can::IoStatus::kOk) {
-        if (core_.on_frame(rx, mono) == RxKind::kFeedback) {
+        const RxKind kind = core_.on_frame(rx, mono);
+        if (kind == RxKind::kFeedback) {
           OutboxItem item;
           item.kind = OutboxItem::Kind::kState;
           item.feedback = core_.feedback();
           outbox_.push(item, false);
         }
+        awaiting_ecu_.on_frame(kind, rx.stamp, push);
       } else if (st == can::IoStatus::kClosed) {
         log::error("dbw", "CAN transport closed: " + bus_.name());
         core_.safety().on_bus_state(true, mono);  // nothing reaches the ECU any more
@@ -220,6 +226,7 @@ class Runner {
       // Timeouts at 1 ms resolution; a disengage (also one an ECU frame caused) goes out now.
       if (core_.transmit_due(mono, false)) send_frames(mono);
       hand_over_events(mono, vnow);
+      awaiting_ecu_.expire(vnow, p_.timing().ecu_timeout_ns, push);
     }
   }
 
@@ -404,6 +411,7 @@ class Runner {
   double silence_to_neutral_ms_ = -1.0;
   std::vector<can::Frame> frames_;
   Outbox outbox_;
+  AwaitingEcu awaiting_ecu_;  // under mu_
   LatencyHistogram latency_;       // DDS thread only (read after it ended)
   LatencyHistogram take_to_send_;  // DDS thread only
   std::uint64_t status_published_ = 0;  // publisher thread only

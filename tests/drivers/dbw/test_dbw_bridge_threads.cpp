@@ -8,7 +8,10 @@
 #include <atomic>
 #include <string>
 #include <thread>
+#include <vector>
 
+#include "bridge_outbox.hpp"
+#include "sensor_rig/dbw/bridge/bridge_core.hpp"
 #include "sensor_rig/dbw/bridge/defaults.hpp"
 #include "sensor_rig/dbw/mock/mock_runner.hpp"
 #include "sensor_rig/drivers/dbw/dds_bridge.hpp"
@@ -21,6 +24,94 @@ namespace msg = sensor_rig::msg;
 using sensor_rig::Nanos;
 
 namespace {
+
+using sensor_rig::drivers::AwaitingEcu;
+using sensor_rig::drivers::OutboxItem;
+
+OutboxItem written_at(std::uint64_t seq, Nanos written) {
+  OutboxItem it;
+  it.kind = OutboxItem::Kind::kStamps;
+  it.seq = seq;
+  it.stamps.written_ns = written;
+  return it;
+}
+
+// The `ecu` stage's source (issue 12), on synthetic frames: the mock ECU's status, feedback and wheel
+// frames classified by BridgeCore, each given a receive stamp of the test's choosing. Only a good
+// status frame received after a command's write completes it; a command whose status never comes
+// leaves on the timeout with no ECU stamp.
+TEST(DbwBridgeEcuStage, FirstGoodStatusAfterTheWriteCompletesTheStamps) {
+  const auto protocol = dbw::Protocol::load(dbw::default_protocol_config());
+  dbw::BridgeCore core(protocol);
+  dbw::mock::MockEcu ecu(protocol, {});
+  const Nanos period = protocol.timing().tx_period_ns;
+  // One step per ECU period: each gives a status frame (and feedback; wheels every other period).
+  std::vector<dbw::can::Frame> status, other;
+  for (int i = 0; i < 3; ++i) {
+    for (const auto& f : ecu.step(i * period)) {
+      const auto kind = core.on_frame({f, i * period}, i * period);
+      (kind == dbw::RxKind::kStatus ? status : other).push_back(f);
+    }
+  }
+  ASSERT_EQ(status.size(), 3U);
+  ASSERT_GE(other.size(), 3U);
+  dbw::BridgeCore bridge(protocol);  // a fresh core: the frames again, in their order, as received
+  std::vector<OutboxItem> out;
+  const auto push = [&](const OutboxItem& it) { out.push_back(it); };
+  AwaitingEcu awaiting;
+  const Nanos t0 = 1'000'000'000'000;
+  awaiting.on_written(written_at(1, t0 + 1000), push);
+  awaiting.on_written(written_at(2, t0 + 5000), push);
+  EXPECT_TRUE(out.empty());
+  // A feedback frame after both writes answers nothing.
+  awaiting.on_frame(bridge.on_frame({other[0], t0 + 6000}, 1), t0 + 6000, push);
+  EXPECT_TRUE(out.empty());
+  // A status received between the writes completes the first command only.
+  awaiting.on_frame(bridge.on_frame({status[0], t0 + 3000}, 2), t0 + 3000, push);
+  ASSERT_EQ(out.size(), 1U);
+  EXPECT_EQ(out[0].seq, 1U);
+  EXPECT_EQ(out[0].stamps.ecu_status_ns, t0 + 3000);
+  // The next status with a broken CRC fails its E2E check: no answer.
+  auto bad = status[1];
+  bad.data[0] ^= 0x5A;
+  const auto bad_kind = bridge.on_frame({bad, t0 + 7000}, 3);
+  EXPECT_NE(bad_kind, dbw::RxKind::kStatus);
+  awaiting.on_frame(bad_kind, t0 + 7000, push);
+  EXPECT_EQ(out.size(), 1U);
+  // The same status intact completes the second one with its own receive time.
+  awaiting.on_frame(bridge.on_frame({status[1], t0 + 9000}, 4), t0 + 9000, push);
+  ASSERT_EQ(out.size(), 2U);
+  EXPECT_EQ(out[1].seq, 2U);
+  EXPECT_EQ(out[1].stamps.ecu_status_ns, t0 + 9000);
+  EXPECT_EQ(awaiting.size(), 0U);
+
+  // No status back: nothing before the timeout, then the stamps without an ECU time (no stage).
+  const Nanos timeout = protocol.timing().ecu_timeout_ns;
+  awaiting.on_written(written_at(3, t0 + 20'000), push);
+  awaiting.on_frame(bridge.on_frame({other[1], t0 + 30'000}, 5), t0 + 30'000, push);
+  awaiting.expire(t0 + 20'000 + timeout - 1, timeout, push);
+  EXPECT_EQ(out.size(), 2U);
+  awaiting.expire(t0 + 20'000 + timeout, timeout, push);
+  ASSERT_EQ(out.size(), 3U);
+  EXPECT_EQ(out[2].seq, 3U);
+  EXPECT_EQ(out[2].stamps.ecu_status_ns, 0);
+  // A status received before a command was written does not answer it (written after rx).
+  awaiting.on_written(written_at(4, t0 + 50'000), push);
+  const auto early = bridge.on_frame({status[2], t0 + 50'000}, 6);
+  EXPECT_EQ(early, dbw::RxKind::kStatus);
+  awaiting.on_frame(early, t0 + 50'000, push);
+  EXPECT_EQ(out.size(), 3U);
+  // Full: the oldest waiting goes out unanswered rather than being overwritten.
+  for (std::uint64_t i = 0; i < AwaitingEcu::kCapacity - 1; ++i) awaiting.on_written(written_at(10 + i, t0 + 60'000), push);
+  EXPECT_EQ(out.size(), 3U);
+  awaiting.on_written(written_at(99, t0 + 70'000), push);
+  ASSERT_EQ(out.size(), 4U);
+  EXPECT_EQ(out[3].seq, 4U);
+  EXPECT_EQ(out[3].stamps.ecu_status_ns, 0);
+  awaiting.expire(0, -1, push);  // stopping: every waiting one, unanswered
+  EXPECT_EQ(out.size(), 4U + AwaitingEcu::kCapacity);
+  EXPECT_EQ(awaiting.size(), 0U);
+}
 
 TEST(DbwBridgeThreads, FastSourceScheduleAndStopInOneProcess) {
   const int domain = 100 + (::getpid() + 13) % 100;

@@ -20,6 +20,7 @@ struct SampleStamps {
   std::uint32_t dropped = 0;
   std::uint32_t size_bytes = 0;
   std::uint32_t missing_packets = 0;  // packets the sample should have had and did not (LIDAR scans)
+  Nanos ecu_status_ns = 0;  // dbw commands: the first ECU status frame received after written_ns; 0 = none
 };
 
 class StampsWriter {
