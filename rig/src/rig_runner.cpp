@@ -203,6 +203,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   while (!shutdown_requested()) {
     if (wait_for_shutdown(cfg.diagnostics_period_ms)) break;
     std::vector<dds::DriverStatus> statuses;
+    statuses.reserve(lidars.size());
     for (const auto& d : lidars) statuses.push_back(d->status());
     cameras->supervise(statuses);
     sync_sets.supervise(statuses);

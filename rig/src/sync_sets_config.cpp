@@ -56,7 +56,7 @@ std::vector<SyncSetConfig> parse_sync_sets(const config::Node& root, const std::
       const std::string topic = m.yaml().Scalar();
       if (!known_topics.contains(topic)) {
         std::string known;
-        for (const auto& k : known_topics) known += (known.empty() ? "" : ", ") + k;
+        for (const auto& k : known_topics) known.append(known.empty() ? "" : ", ").append(k);
         m.fail("", "unknown member topic '" + topic + "' (this rig publishes: " + known + ")");
       } else if (!seen.insert(topic).second) {
         m.fail("", "member '" + topic + "' listed twice");

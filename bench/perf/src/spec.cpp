@@ -112,7 +112,7 @@ std::vector<NodePlan> plan_nodes(const RunSpec& spec) {
   std::vector<NodePlan> plan;
   const int pubs = publisher_count(spec);
   const int subs = spec.topology == 3 ? 1 : spec.nodes - pubs;
-  plan.reserve(static_cast<std::size_t>(pubs + subs));
+  plan.reserve(static_cast<std::size_t>(pubs) + static_cast<std::size_t>(subs));
   for (int p = 0; p < pubs; ++p) {
     plan.push_back({static_cast<int>(plan.size()), Role::kPublisher, {p}, spec.topology == 2 ? subs : 1});
   }

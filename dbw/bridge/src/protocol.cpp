@@ -269,7 +269,7 @@ Protocol Protocol::load(const std::string& yaml_path) {
       const std::string msg = n->get_string("message");
       rm.message = p.db_->find(msg);
       if (rm.message == nullptr) {
-        n->fail("message", "no message '" + msg + "' in " + dbc_path);
+        n->fail("message", "no message '" + msg + "' in " + dbc_path);  // NOLINT(performance-inefficient-string-concatenation): a config error, once
         continue;
       }
       bind_signals(*n, spec, rm);

@@ -34,7 +34,7 @@ LogDecoder::LogDecoder(const dbc::Database& db, const std::vector<std::string>& 
       continue;
     }
     const dbc::Signal* s = m->find(sig);
-    if (s == nullptr) throw std::invalid_argument("no signal '" + sig + "' in message " + msg);
+    if (s == nullptr) throw std::invalid_argument("no signal '" + sig + "' in message " + msg);  // NOLINT(performance-inefficient-string-concatenation): an error, once
     e.signals.push_back(s);
   }
 }

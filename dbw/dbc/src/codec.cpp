@@ -42,7 +42,7 @@ std::size_t signal_extent(const Signal& s) noexcept {
   int highest = -1;
   const bool ok = for_each_bit(s, [&](int pos, int) { highest = pos > highest ? pos : highest; });
   if (!ok || highest < 0) return 0;
-  return static_cast<std::size_t>(highest / 8 + 1);
+  return static_cast<std::size_t>(highest / 8) + 1;
 }
 
 bool signal_fits(const Signal& s, std::size_t frame_bytes) noexcept {

@@ -473,7 +473,7 @@ void LidarDriver::stop() {
     if (k == "scans" || k == "packets" || k.rfind("dropped", 0) == 0 || k == "packets_dropped" || k == "kernel_drops" || k == "missing_packets" || k == "time_jumps" ||
         k == "record_packets" || k == "record_errors" || k == "imu_samples" || k == "fixes" ||
         k == "stamp_source" || k == "sync" || k == "ring_drops" || k == "reassembly_dropped")
-      line += " " + k + "=" + v;
+      line.append(" ").append(k).append("=").append(v);
   log::info("lidar", line);
 }
 

@@ -10,7 +10,7 @@
 namespace sensor_rig::lidar::mock {
 namespace {
 
-using ojson = nlohmann::ordered_json;
+using OrderedJson = nlohmann::ordered_json;
 
 constexpr const char* kModes[] = {"512x10", "1024x10", "2048x10", "512x20", "1024x20", "4096x5"};
 constexpr double kHalfFovDeg = 16.6;                                       // OS-1: 33.2° vertical
@@ -21,8 +21,8 @@ constexpr std::uint32_t kInitId = 0x5E1D42;
 
 double round3(double v) { return std::round(v * 1000.0) / 1000.0; }
 
-ojson matrix(const ouster::Mat4& m) {
-  ojson a = ojson::array();
+OrderedJson matrix(const ouster::Mat4& m) {
+  OrderedJson a = OrderedJson::array();
   for (const double v : m) a.push_back(v);
   return a;
 }
@@ -33,8 +33,8 @@ bool only_origin_offset(const ouster::Mat4& b) {
   return true;
 }
 
-ojson data_format(const ouster::SensorMetadata& m) {
-  ojson df;
+OrderedJson data_format(const ouster::SensorMetadata& m) {
+  OrderedJson df;
   df["pixels_per_column"] = m.pixels_per_column;
   df["columns_per_packet"] = m.columns_per_packet;
   df["columns_per_frame"] = m.columns_per_frame;
@@ -48,7 +48,7 @@ ojson data_format(const ouster::SensorMetadata& m) {
   return df;
 }
 
-void beams(ojson& o, const ouster::SensorMetadata& m) {
+void beams(OrderedJson& o, const ouster::SensorMetadata& m) {
   o["beam_altitude_angles"] = m.beam_altitude_deg;
   o["beam_azimuth_angles"] = m.beam_azimuth_deg;
   if (only_origin_offset(m.beam_to_lidar)) {
@@ -121,7 +121,7 @@ ouster::SensorMetadata nominal_ouster_metadata(const NominalOuster& n) {
 }
 
 std::string metadata_json(const ouster::SensorMetadata& m) {
-  ojson o;
+  OrderedJson o;
   if (!m.nested_format) {
     o["prod_line"] = m.prod_line;
     o["prod_sn"] = m.prod_sn;
@@ -137,19 +137,19 @@ std::string metadata_json(const ouster::SensorMetadata& m) {
     o["data_format"] = data_format(m);
     return o.dump(4) + "\n";
   }
-  ojson info;
+  OrderedJson info;
   info["prod_line"] = m.prod_line;
   info["prod_sn"] = m.prod_sn;
   info["build_rev"] = m.fw_rev;
   if (m.init_id != 0) info["initialization_id"] = m.init_id;
   info["status"] = "RUNNING";
-  ojson cfg;
+  OrderedJson cfg;
   cfg["lidar_mode"] = m.lidar_mode;
   cfg["udp_port_lidar"] = m.udp_port_lidar;
   cfg["udp_port_imu"] = m.udp_port_imu;
   cfg["udp_profile_lidar"] = std::string(ouster::profile_spec(m.profile).name);
   cfg["return_order"] = return_order(m.return_order);
-  ojson bi;
+  OrderedJson bi;
   beams(bi, m);
   o["sensor_info"] = info;
   o["config_params"] = cfg;
