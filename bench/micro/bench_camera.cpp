@@ -23,7 +23,7 @@ constexpr std::uint32_t kH = 1200;
 // A scene with smooth shading, edges and sensor noise, through an RGGB filter (JPEG speed depends
 // on content: pure noise or flat colour would flatter or punish it).
 const std::vector<std::uint8_t>& bayer_scene() {
-  static const std::vector<std::uint8_t> raw = [] {
+  static const std::vector<std::uint8_t> kRaw = [] {
     std::vector<std::uint8_t> r(static_cast<std::size_t>(kW) * kH);
     std::mt19937 rng(7);
     std::normal_distribution<double> noise(0.0, 3.0);
@@ -38,7 +38,7 @@ const std::vector<std::uint8_t>& bayer_scene() {
       }
     return r;
   }();
-  return raw;
+  return kRaw;
 }
 
 cam::ImageIn input() { return {bayer_scene(), kW, kH, kW, cam::PixelFormat::kBayerRG8}; }
@@ -78,12 +78,12 @@ void BM_Jpeg(benchmark::State& state) {
 BENCHMARK(BM_Jpeg)->Arg(90)->Arg(75)->Unit(benchmark::kMillisecond);
 
 // The worker's job per frame for image_color + compressed, with either debayer.
-template <bool kFast>
+template <bool Fast>
 void BM_WorkerJob(benchmark::State& state) {
   std::vector<std::uint8_t> bgr(static_cast<std::size_t>(kW) * kH * 3);
   cam::JpegEncoder enc(90);
   for (auto _ : state) {
-    if (kFast)
+    if (Fast)
       (void)cam::debayer(input(), cam::ColorOrder::kBgr, bgr);
     else
       (void)cam::debayer_reference(input(), cam::ColorOrder::kBgr, bgr);

@@ -14,7 +14,7 @@ namespace dbw = sensor_rig::dbw;
 
 namespace {
 
-const char* kWheels = R"(
+constexpr const char* kWheels = R"(
 BO_ 170 WHEEL_SPEEDS: 8 XXX
  SG_ WHEEL_SPEED_FR : 6|15@0+ (0.01,-67.67) [0|0] "km/h" XXX
  SG_ WHEEL_SPEED_FL : 22|15@0+ (0.01,-67.67) [0|0] "km/h" XXX

@@ -39,7 +39,9 @@ int main(int argc, char** argv) {
   }
   if (std::getenv("ROS_DOMAIN_ID") == nullptr) ::setenv("ROS_DOMAIN_ID", "161", 1);
   const auto protocol = dbw::Protocol::load(dbw::default_protocol_config());
-  auto [bridge_end, ecu_end] = dbw::can::make_socketpair();
+  auto ends = dbw::can::make_socketpair();  // named, not a structured binding: lambdas capture them
+  auto& bridge_end = ends.first;
+  auto& ecu_end = ends.second;
   const std::string log = "/tmp/bench_dbw_bus_" + std::to_string(::getpid()) + ".log";
   dbw::mock::MockEcu ecu(protocol, {});
   dbw::mock::RunOptions mo;

@@ -132,14 +132,14 @@ ReaderFactory factory() {
   };
 }
 const std::map<std::string, ReaderFactory, std::less<>>& known_types() {
-  static const std::map<std::string, ReaderFactory, std::less<>> types = {
+  static const std::map<std::string, ReaderFactory, std::less<>> kTypes = {
       {"sensor_msgs::msg::dds_::PointCloud2_", factory<msg::PointCloud2>()},
       {"sensor_msgs::msg::dds_::Image_", factory<msg::Image>()},
       {"sensor_rig_msgs::msg::dds_::DbwCommand_", factory<msg::DbwCommand>()},
       {"sensor_rig_msgs::msg::dds_::DbwStatus_", factory<msg::DbwStatus>()},
       {"sensor_rig_msgs::msg::dds_::VehicleState_", factory<msg::VehicleState>()},
   };
-  return types;
+  return kTypes;
 }
 constexpr std::string_view kSyncSetType = "sensor_rig_msgs::msg::dds_::SyncSet_";
 

@@ -58,7 +58,7 @@ void TopicStats::joined(SampleRecord r, const Arrival& a) {
 void TopicStats::decided(SampleRecord r) {
   if (!on_record) return;
   const std::uint64_t seq = r.seq;
-  decided_.insert_or_assign(seq, std::move(r));
+  decided_by_seq.insert_or_assign(seq, std::move(r));
   release(false);
 }
 
@@ -66,9 +66,9 @@ void TopicStats::release(bool all) {
   std::uint64_t first_open = std::numeric_limits<std::uint64_t>::max();
   if (!all)
     for (const auto& [stamp, r] : unmatched_stamps) first_open = std::min(first_open, r.seq);
-  while (!decided_.empty() && decided_.begin()->first < first_open) {
-    on_record(decided_.begin()->second);
-    decided_.erase(decided_.begin());
+  while (!decided_by_seq.empty() && decided_by_seq.begin()->first < first_open) {
+    on_record(decided_by_seq.begin()->second);
+    decided_by_seq.erase(decided_by_seq.begin());
   }
 }
 

@@ -29,7 +29,7 @@ struct TopicStats {
   std::array<LatencyWindow, kStageCount> run_stages;  // whole run, for --summary
   std::map<Nanos, Arrival> unmatched_data;
   std::map<Nanos, SampleRecord> unmatched_stamps;  // received_ns holds "seen at" until matched
-  std::map<std::uint64_t, SampleRecord> decided_;  // by seq, until the samples before are decided
+  std::map<std::uint64_t, SampleRecord> decided_by_seq;  // by seq, until the samples before are decided
   bool has_stamps = false;
   // Stamps published before this monitor subscribed to the data topic cannot be matched: ignored.
   Nanos counting_since = std::numeric_limits<Nanos>::max();
