@@ -104,6 +104,7 @@ RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
       ecu_.fault = flag("fault", ecu_.fault);
       if (has("fault_code")) ecu_.fault_code = static_cast<std::uint8_t>(get("fault_code", 0.0));
       safety_.on_ecu_status(ecu_, now);
+      ++counters_.status_frames;
       if (kind == RxKind::kOther) kind = RxKind::kStatus;
     }
     return kind;

@@ -102,17 +102,22 @@ class AwaitingEcu {
     items_[(head_ + size_) % items_.size()] = item;
     ++size_;
   }
-  // A frame from the ECU, as BridgeCore::on_frame classified it, received at `rx_ns` (vehicle time,
-  // the frame's receive stamp). Only a status frame that passed its E2E check answers: every waiting
-  // command written before it is completed and handed to `out`, in order.
+  // A frame from the ECU: handed to `core` (at monotonic `mono`), whose classification is returned.
+  // If the core took it as the ECU's status (it passed its E2E check and carries ready/override/
+  // fault: BridgeCounters::status_frames went up — also a message that carries feedback too), every
+  // waiting command written before the frame's receive stamp (vehicle time) is completed with that
+  // stamp and handed to `out`, in order.
   template <class Out>
-  void on_frame(dbw::RxKind kind, Nanos rx_ns, Out&& out) {
-    if (kind != dbw::RxKind::kStatus) return;
-    while (size_ > 0 && items_[head_].stamps.written_ns < rx_ns) {
+  dbw::RxKind on_frame(dbw::BridgeCore& core, const dbw::can::RxFrame& rx, Nanos mono, Out&& out) {
+    const std::uint64_t before = core.counters().status_frames;
+    const dbw::RxKind kind = core.on_frame(rx, mono);
+    if (core.counters().status_frames == before) return kind;
+    while (size_ > 0 && items_[head_].stamps.written_ns < rx.stamp) {
       OutboxItem it = pop();
-      it.stamps.ecu_status_ns = rx_ns;
+      it.stamps.ecu_status_ns = rx.stamp;
       out(it);
     }
+    return kind;
   }
   // Waiting stamps written at or before `now_ns - timeout_ns` go to `out` without an ECU stamp
   // (`timeout_ns` < 0: all of them, e.g. when stopping).

@@ -204,14 +204,13 @@ class Runner {
       const Nanos vnow = vehicle_now_ns();
       const auto push = [this](const OutboxItem& it) { outbox_.push(it, false); };
       if (st == can::IoStatus::kOk) {
-        const RxKind kind = core_.on_frame(rx, mono);
+        const RxKind kind = awaiting_ecu_.on_frame(core_, rx, mono, push);  // core_.on_frame + the ecu stage
         if (kind == RxKind::kFeedback) {
           OutboxItem item;
           item.kind = OutboxItem::Kind::kState;
           item.feedback = core_.feedback();
           outbox_.push(item, false);
         }
-        awaiting_ecu_.on_frame(kind, rx.stamp, push);
       } else if (st == can::IoStatus::kClosed) {
         log::error("dbw", "CAN transport closed: " + bus_.name());
         core_.safety().on_bus_state(true, mono);  // nothing reaches the ECU any more

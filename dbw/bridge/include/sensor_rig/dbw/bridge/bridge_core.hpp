@@ -32,6 +32,8 @@ struct BridgeCounters {
   std::uint64_t frames_received = 0;
   std::uint64_t encode_errors = 0;
   std::uint64_t commands_deferred = 0;  // changed commands held for the bus schedule
+  std::uint64_t status_frames = 0;      // good frames that refreshed the ECU status (its heartbeat),
+                                        // also one that carries feedback or wheels (RxKind says those)
 };
 
 class BridgeCore {
