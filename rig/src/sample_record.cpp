@@ -16,6 +16,8 @@ constexpr std::string_view kHeader =
     "topic,seq,acquisition_ns,first_rx_ns,last_rx_ns,publish_ns,written_ns,received_ns,missing_packets,dropped,"
     "size_bytes,ecu_status_ns";
 constexpr std::size_t kFields = 12;
+// Recordings made before the dbw `ecu` stage: the same columns without the last one.
+constexpr std::string_view kHeaderWithoutEcu = kHeader.substr(0, kHeader.rfind(','));
 
 double ms_between(Nanos from, Nanos to) { return static_cast<double>(to - from) * 1e-6; }
 
@@ -69,18 +71,21 @@ std::string to_csv_line(const SampleRecord& r) {
   return out;
 }
 
-std::optional<SampleRecord> parse_csv_line(std::string_view line) {
+std::optional<SampleRecord> parse_csv_line(std::string_view line) { return parse_csv_line(line, kFields); }
+
+std::optional<SampleRecord> parse_csv_line(std::string_view line, std::size_t fields) {
+  if (fields != kFields && fields != kFields - 1) return std::nullopt;
   if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
   std::array<std::string_view, kFields> f;
   std::size_t n = 0;
   for (std::size_t start = 0;;) {
     const std::size_t comma = line.find(',', start);
-    if (n == kFields) return std::nullopt;
+    if (n == fields) return std::nullopt;
     f[n++] = line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
     if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
-  if (n != kFields || f[0].empty() || f[1].empty()) return std::nullopt;
+  if (n != fields || f[0].empty() || f[1].empty()) return std::nullopt;
   SampleRecord r;
   r.topic = std::string(f[0]);
   bool ok = parse_number(f[1], r.seq);
@@ -88,7 +93,7 @@ std::optional<SampleRecord> parse_csv_line(std::string_view line) {
   for (std::size_t i = 0; i < std::size(times); ++i) ok = ok && parse_number(f[2 + i], *times[i]);
   for (std::size_t i = 8; i < 11; ++i) ok = ok && !f[i].empty();  // counts are always written
   ok = ok && parse_number(f[8], r.missing_packets) && parse_number(f[9], r.dropped) && parse_number(f[10], r.size_bytes);
-  ok = ok && parse_number(f[11], r.ecu_status_ns);
+  if (fields == kFields) ok = ok && parse_number(f[11], r.ecu_status_ns);
   if (!ok) return std::nullopt;
   return r;
 }
@@ -117,12 +122,15 @@ std::vector<SampleRecord> read_records(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read " + path);
   std::string line;
-  if (!std::getline(in, line) || line != kHeader)
+  if (!std::getline(in, line)) line.clear();
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  const std::size_t fields = line == kHeader ? kFields : line == kHeaderWithoutEcu ? kFields - 1 : 0;
+  if (fields == 0)
     throw std::runtime_error(path + ":1: not a `rig monitor --record` file (header: " + std::string(kHeader) + ")");
   std::vector<SampleRecord> out;
   for (std::size_t no = 2; std::getline(in, line); ++no) {
     if (line.empty()) continue;
-    auto r = parse_csv_line(line);
+    auto r = parse_csv_line(line, fields);
     if (!r) throw std::runtime_error(path + ":" + std::to_string(no) + ": bad record line");
     out.push_back(std::move(*r));
   }

@@ -46,6 +46,8 @@ std::array<std::optional<double>, kStageCount> stage_latencies_ms(const SampleRe
 std::string_view record_csv_header();
 std::string to_csv_line(const SampleRecord& r);
 std::optional<SampleRecord> parse_csv_line(std::string_view line);
+// The same for a recording with `fields` columns: 12, or 11 (before the `ecu_status_ns` column).
+std::optional<SampleRecord> parse_csv_line(std::string_view line, std::size_t fields);
 
 // A CSV file that only ever holds whole lines: lines are collected and written with one write(2)
 // per flush(), so a monitor killed at any moment leaves a valid file up to the last line.

@@ -165,6 +165,23 @@ TEST(SampleRecord, BadLinesAreRefused) {
   EXPECT_TRUE(parse_csv_line("/a,1,,,,,,,0,0,0,9"));
 }
 
+// A recording made before the `ecu_status_ns` column (11 columns) still reads: no ECU time.
+TEST(SampleRecord, RecordingWithoutTheEcuColumnReads) {
+  test::TempDir dir;
+  const std::string header(record_csv_header().substr(0, record_csv_header().rfind(',')));
+  const std::string old = dir.write("old.csv", header + "\n/a,1,,,,5,6,7,0,0,10\n/a,2,,,,8,9,,0,0,10\n");
+  const auto rows = read_records(old);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].received_ns, 7);
+  EXPECT_EQ(rows[0].ecu_status_ns, 0);
+  EXPECT_TRUE(rows[1].lost());
+  // Each file's own width: a 12-column line under the old header is bad input, and the reverse.
+  EXPECT_THROW(read_records(dir.write("mixed.csv", header + "\n/a,1,,,,5,6,7,0,0,10,11\n")), std::runtime_error);
+  EXPECT_THROW(read_records(dir.write("short.csv", std::string(record_csv_header()) + "\n/a,1,,,,5,6,7,0,0,10\n")),
+               std::runtime_error);
+  EXPECT_THROW(read_records(dir.write("none.csv", "topic,seq\n")), std::runtime_error);
+}
+
 TEST(SampleRecord, FileHoldsWholeLinesAndReadsBack) {
   test::TempDir dir;
   const std::string path = (dir.path / "r.csv").string();
