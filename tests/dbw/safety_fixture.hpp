@@ -17,10 +17,10 @@ using sensor_rig::Nanos;
 inline constexpr Nanos kMs = 1'000'000;
 
 struct ParavanRef {
-  static constexpr const s::VehicleLimits& limits = s::kParavanRef;
+  static constexpr const s::VehicleLimits& kLimits = s::kParavanRef;
 };
 struct EClassTrack {
-  static constexpr const s::VehicleLimits& limits = s::kEClassTrack;
+  static constexpr const s::VehicleLimits& kLimits = s::kEClassTrack;
 };
 
 template <class V>
@@ -28,10 +28,10 @@ class SafetySuite : public ::testing::Test {
  public:
   // The wheel stands where the commands below ask it to be: engaging needs no step (a table that
   // rejects rate violations refuses to jump from the measured angle).
-  SafetySuite() { core.on_measured(0.1 * V::limits[s::Axis::kSteeringAngle].max, 0.0); }
+  SafetySuite() { core.on_measured(0.1 * V::kLimits[s::Axis::kSteeringAngle].max, 0.0); }
   s::SafetyConfig cfg() {
     s::SafetyConfig c;
-    c.limits = V::limits;
+    c.limits = V::kLimits;
     return c;
   }
   s::SafetyCore core{cfg()};
@@ -46,7 +46,7 @@ class SafetySuite : public ::testing::Test {
     c.seq = ++seq;
     c.writer = writer;
     c.enable = enable;
-    c.steering_angle = 0.1 * V::limits[s::Axis::kSteeringAngle].max;
+    c.steering_angle = 0.1 * V::kLimits[s::Axis::kSteeringAngle].max;
     c.throttle = 0.1;
     return c;
   }

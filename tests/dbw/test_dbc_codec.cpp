@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -165,7 +166,7 @@ TEST(DbcCodec, PhysicalRoundTripAndClamping) {
   std::array<std::uint8_t, 8> d{};
   const auto s = sig(0, 8, dbc::ByteOrder::kIntel);
   EXPECT_EQ(dbc::encode(s, std::nan(""), d), dbc::EncodeStatus::kNotFinite);
-  EXPECT_EQ(dbc::encode(s, INFINITY, d), dbc::EncodeStatus::kNotFinite);
+  EXPECT_EQ(dbc::encode(s, std::numeric_limits<double>::infinity(), d), dbc::EncodeStatus::kNotFinite);
   const auto s64 = sig(7, 64, dbc::ByteOrder::kMotorola, true);
   EXPECT_EQ(dbc::encode(s64, -1.0, d), dbc::EncodeStatus::kOk);
   EXPECT_EQ(*dbc::extract_raw(s64, d), ~0ULL);

@@ -20,29 +20,29 @@ constexpr Nanos kMs = 1'000'000;
 
 class MockEcuTest : public ::testing::Test {
  protected:
-  dbw::Protocol p = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());
-  s::E2eSender steer{p.tx("steering")->e2e};
-  s::E2eSender lon{p.tx("longitudinal")->e2e};
-  s::E2eSender hb{p.tx("heartbeat")->e2e};
-  Nanos now = 1'000'000'000;
+  dbw::Protocol p_ = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());
+  s::E2eSender steer_{p_.tx("steering")->e2e};
+  s::E2eSender lon_{p_.tx("longitudinal")->e2e};
+  s::E2eSender hb_{p_.tx("heartbeat")->e2e};
+  Nanos now_ = 1'000'000'000;
 
   // One 10 ms PU cycle then 10 model steps of 1 ms; returns the ECU's frames.
   std::vector<dbw::can::Frame> cycle(mock::MockEcu& ecu, bool enable, double steer_rad, double throttle,
                                      bool corrupt = false, bool heartbeat = true) {
     dbw::can::Frame f;
-    EXPECT_TRUE(p.encode(*p.tx("steering"), {{"enable", enable ? 1 : 0}, {"angle", steer_rad}}, &steer, f));
+    EXPECT_TRUE(p_.encode(*p_.tx("steering"), {{"enable", enable ? 1 : 0}, {"angle", steer_rad}}, &steer_, f));
     if (corrupt) f.data[0] ^= 0xFF;
-    ecu.on_frame(f, now);
-    EXPECT_TRUE(p.encode(*p.tx("longitudinal"), {{"enable", enable ? 1 : 0}, {"throttle", throttle}, {"gear", 4}}, &lon, f));
-    ecu.on_frame(f, now);
+    ecu.on_frame(f, now_);
+    EXPECT_TRUE(p_.encode(*p_.tx("longitudinal"), {{"enable", enable ? 1 : 0}, {"throttle", throttle}, {"gear", 4}}, &lon_, f));
+    ecu.on_frame(f, now_);
     if (heartbeat) {
-      EXPECT_TRUE(p.encode(*p.tx("heartbeat"), {{"state", enable ? 1 : 0}}, &hb, f));
-      ecu.on_frame(f, now);
+      EXPECT_TRUE(p_.encode(*p_.tx("heartbeat"), {{"state", enable ? 1 : 0}}, &hb_, f));
+      ecu.on_frame(f, now_);
     }
     std::vector<dbw::can::Frame> out;
     for (int i = 0; i < 10; ++i) {
-      now += kMs;
-      auto v = ecu.step(now);
+      now_ += kMs;
+      auto v = ecu.step(now_);
       out.insert(out.end(), v.begin(), v.end());
     }
     return out;
@@ -50,7 +50,7 @@ class MockEcuTest : public ::testing::Test {
 };
 
 TEST_F(MockEcuTest, EngagesAndDrivesTheModel) {
-  mock::MockEcu ecu(p, {});
+  mock::MockEcu ecu(p_, {});
   cycle(ecu, false, 0, 0);
   for (int i = 0; i < 200; ++i) cycle(ecu, true, 0.2, 0.5);  // 2 s
   EXPECT_TRUE(ecu.engaged());
@@ -60,25 +60,25 @@ TEST_F(MockEcuTest, EngagesAndDrivesTheModel) {
   EXPECT_GT(st.yaw, 0.0);  // turning left
   EXPECT_NEAR(st.yaw_rate, st.speed * std::tan(st.steer) / 2.94, 1e-9);
   // Status/feedback frames decode and pass the PU's E2E check.
-  s::E2eChecker chk(p.rx("feedback")->e2e);
+  s::E2eChecker chk(p_.rx("feedback")->e2e);
   int feedback = 0;
   for (const auto& f : cycle(ecu, true, 0.2, 0.5)) {
-    if (!p.rx("feedback")->matches(f)) continue;
+    if (!p_.rx("feedback")->matches(f)) continue;
     ++feedback;
     EXPECT_TRUE(s::is_ok(chk.check(f.payload())));
-    EXPECT_NEAR(*dbw::Protocol::value(*p.rx("feedback"), "speed", f), ecu.model().state().speed, 0.1);
+    EXPECT_NEAR(*dbw::Protocol::value(*p_.rx("feedback"), "speed", f), ecu.model().state().speed, 0.1);
   }
   EXPECT_EQ(feedback, 1);
 }
 
 TEST_F(MockEcuTest, DisengagesOnPuSilenceAndBadE2e) {
-  mock::MockEcu ecu(p, {});
+  mock::MockEcu ecu(p_, {});
   cycle(ecu, false, 0, 0);
   cycle(ecu, true, 0, 0.2);
   ASSERT_TRUE(ecu.engaged());
   for (int i = 0; i < 101; ++i) {
-    now += kMs;
-    ecu.step(now);
+    now_ += kMs;
+    ecu.step(now_);
   }
   EXPECT_FALSE(ecu.engaged());
   EXPECT_EQ(ecu.last_disengage(), "pu timeout");
@@ -91,14 +91,14 @@ TEST_F(MockEcuTest, DisengagesOnPuSilenceAndBadE2e) {
 }
 
 TEST_F(MockEcuTest, OnlyThePuHeartbeatStoppingDisengagesAndIsReported) {
-  mock::MockEcu ecu(p, {});
+  mock::MockEcu ecu(p_, {});
   cycle(ecu, false, 0, 0);
   cycle(ecu, true, 0.1, 0.2);
   ASSERT_TRUE(ecu.engaged());
   auto reported_engaged = [&](const std::vector<dbw::can::Frame>& frames) {
     double v = -1;
     for (const auto& f : frames) {
-      if (p.rx("status")->matches(f)) v = *dbw::Protocol::value(*p.rx("status"), "engaged", f);
+      if (p_.rx("status")->matches(f)) v = *dbw::Protocol::value(*p_.rx("status"), "engaged", f);
     }
     return v;
   };
@@ -124,13 +124,13 @@ TEST_F(MockEcuTest, OnlyThePuHeartbeatStoppingDisengagesAndIsReported) {
 }
 
 TEST_F(MockEcuTest, NoStatusFaultSilencesOnlyTheStatusMessage) {
-  mock::MockEcu ecu(p, {mock::parse_fault("no-status@0.1+0.1")});
+  mock::MockEcu ecu(p_, {mock::parse_fault("no-status@0.1+0.1")});
   std::map<std::string, int> during, outside;
   for (int c = 0; c < 30; ++c) {
     const double t = (c + 1) * 0.01;  // end of this cycle, ECU time
     for (const auto& f : cycle(ecu, false, 0, 0)) {
       auto& m = t > 0.11 && t <= 0.2 ? during : outside;
-      for (const auto& rm : p.rx_messages()) {
+      for (const auto& rm : p_.rx_messages()) {
         if (rm.matches(f)) ++m[rm.role];
       }
     }
@@ -141,10 +141,10 @@ TEST_F(MockEcuTest, NoStatusFaultSilencesOnlyTheStatusMessage) {
 }
 
 TEST_F(MockEcuTest, InjectedFaultsShowOnTheBus) {
-  mock::MockEcu ecu(p, {mock::parse_fault("bad-crc@0.1+0.05"), mock::parse_fault("stuck-counter@0.2+0.05"),
+  mock::MockEcu ecu(p_, {mock::parse_fault("bad-crc@0.1+0.05"), mock::parse_fault("stuck-counter@0.2+0.05"),
                         mock::parse_fault("override@0.3+0.05"), mock::parse_fault("ecu-fault@0.4+0.05"),
                         mock::parse_fault("bus-off@0.5+0.05")});
-  s::E2eChecker chk(p.rx("status")->e2e);
+  s::E2eChecker chk(p_.rx("status")->e2e);
   std::map<std::string, int> seen;
   for (int c = 0; c < 60; ++c) {
     const double t = c * 0.01;
@@ -155,12 +155,12 @@ TEST_F(MockEcuTest, InjectedFaultsShowOnTheBus) {
         if (e.restarted) ++seen["restarted"];
         continue;
       }
-      if (!p.rx("status")->matches(f)) continue;
+      if (!p_.rx("status")->matches(f)) continue;
       const auto st = chk.check(f.payload());
       if (st == s::E2eStatus::kBadCrc) ++seen["bad_crc@" + std::to_string(static_cast<int>(t * 10))];
       if (st == s::E2eStatus::kRepeated) ++seen["repeated"];
-      if (*dbw::Protocol::value(*p.rx("status"), "override", f) > 0.5) ++seen["override"];
-      if (*dbw::Protocol::value(*p.rx("status"), "fault", f) > 0.5) ++seen["fault"];
+      if (*dbw::Protocol::value(*p_.rx("status"), "override", f) > 0.5) ++seen["override"];
+      if (*dbw::Protocol::value(*p_.rx("status"), "fault", f) > 0.5) ++seen["fault"];
       if (t > 0.5 && t < 0.55) ++seen["during_bus_off"];
     }
   }
@@ -174,7 +174,7 @@ TEST_F(MockEcuTest, InjectedFaultsShowOnTheBus) {
 }
 
 TEST_F(MockEcuTest, FrameLossDropsAboutTheConfiguredShare) {
-  mock::MockEcu ecu(p, {mock::parse_fault("loss=0.5")}, 7);
+  mock::MockEcu ecu(p_, {mock::parse_fault("loss=0.5")}, 7);
   for (int c = 0; c < 200; ++c) cycle(ecu, false, 0, 0);
   const double total = static_cast<double>(ecu.counters().tx_frames + ecu.counters().tx_dropped);
   EXPECT_NEAR(static_cast<double>(ecu.counters().tx_dropped) / total, 0.5, 0.08);

@@ -53,14 +53,14 @@ constexpr const char* kSplitMapping =
 class SplitProtocol : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir = fs::temp_directory_path() / ("split_proto_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    std::ofstream(dir / "split.dbc") << kSplitDbc;
+    dir_ = fs::temp_directory_path() / ("split_proto_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "split.dbc") << kSplitDbc;
   }
-  void TearDown() override { fs::remove_all(dir); }
+  void TearDown() override { fs::remove_all(dir_); }
   dbw::Protocol load(const std::string& yaml) {
-    std::ofstream(dir / "m.yaml", std::ios::trunc) << yaml;
-    return dbw::Protocol::load((dir / "m.yaml").string());
+    std::ofstream(dir_ / "m.yaml", std::ios::trunc) << yaml;
+    return dbw::Protocol::load((dir_ / "m.yaml").string());
   }
   std::string error_of(const std::string& yaml) {
     try {
@@ -70,7 +70,7 @@ class SplitProtocol : public ::testing::Test {
     }
     return "no error";
   }
-  fs::path dir;
+  fs::path dir_;
 };
 
 TEST_F(SplitProtocol, RolesInSeparateMessagesEachWithItsOwnE2e) {
@@ -89,7 +89,7 @@ TEST_F(SplitProtocol, RolesInSeparateMessagesEachWithItsOwnE2e) {
   for (int i = 0; i < 101; ++i) {
     bridge.on_frame({status, now}, now);
     c.stamp = now;
-    c.seq = static_cast<std::uint64_t>(i + 1);
+    c.seq = static_cast<std::uint64_t>(i) + 1;
     c.enable = i >= 1;
     c.steering_angle = -0.25;
     c.throttle = 0.4;
@@ -153,21 +153,21 @@ class NewEagle : public ::testing::Test {
   void SetUp() override {
     const fs::path dbc = dbw::test::data_dir() / "can/neweagle/New_Eagle_DBW_3.4.dbc";
     if (!fs::exists(dbc)) GTEST_SKIP() << "New Eagle DBC not found (" << dbc << "); set RIG_TEST_DATA";
-    dir = fs::temp_directory_path() / ("neweagle_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    fs::copy_file(dbc, dir / "New_Eagle_DBW_3.4.dbc", fs::copy_options::overwrite_existing);
-    fs::copy_file(dbw::test::source_dir() / "config/dbw/neweagle_dbw_3_4.yaml", dir / "m.yaml",
+    dir_ = fs::temp_directory_path() / ("neweagle_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    fs::copy_file(dbc, dir_ / "New_Eagle_DBW_3.4.dbc", fs::copy_options::overwrite_existing);
+    fs::copy_file(dbw::test::source_dir() / "config/dbw/neweagle_dbw_3_4.yaml", dir_ / "m.yaml",
                   fs::copy_options::overwrite_existing);
-    p = std::make_unique<dbw::Protocol>(dbw::Protocol::load((dir / "m.yaml").string()));
+    p_ = std::make_unique<dbw::Protocol>(dbw::Protocol::load((dir_ / "m.yaml").string()));
   }
   void TearDown() override {
-    if (!dir.empty()) fs::remove_all(dir);
+    if (!dir_.empty()) fs::remove_all(dir_);
   }
   // Every signal of every frame, decoded with the DBC alone: "Message.Signal" -> value.
   std::map<std::string, double> decode_all(const std::vector<dbw::can::Frame>& frames) const {
     std::map<std::string, double> v;
     for (const auto& f : frames) {
-      const auto* m = p->db().find(f.id, f.extended);
+      const auto* m = p_->db().find(f.id, f.extended);
       if (m == nullptr) {
         ADD_FAILURE() << "frame id " << f.id << " is not in the DBC";
         continue;
@@ -178,29 +178,29 @@ class NewEagle : public ::testing::Test {
   }
   void ecu_ready(dbw::BridgeCore& b, Nanos now) const {
     dbw::can::Frame f;
-    ASSERT_TRUE(p->encode(*p->rx("misc"), {{"ready", 1}}, nullptr, f));
+    ASSERT_TRUE(p_->encode(*p_->rx("misc"), {{"ready", 1}}, nullptr, f));
     b.on_frame({f, now}, now);
   }
-  fs::path dir;
-  std::unique_ptr<dbw::Protocol> p;
+  fs::path dir_;
+  std::unique_ptr<dbw::Protocol> p_;
 };
 
 TEST_F(NewEagle, MappingLoadsWithRolesInSeparateMessages) {
-  EXPECT_EQ(p->tx_messages().size(), 5U);
-  EXPECT_EQ(p->tx("steering")->message->name, "AKit_SteeringRequest");
-  EXPECT_TRUE(p->tx("steering")->message->extended);
-  EXPECT_EQ(p->tx("steering")->message->id, 0x2F03U);
-  EXPECT_EQ(p->tx("accelerator")->signal("throttle")->name, "AKit_AccelPdlReq");
-  EXPECT_EQ(p->tx("brake")->signal("brake")->name, "AKit_BrakePedalReq");
-  EXPECT_EQ(p->tx("steering")->e2e.profile, s::E2eProfile::kCounter);
-  EXPECT_EQ(p->tx("steering")->e2e.counter_byte, 6U);  // AKit_SteerRollingCntr 48|4
-  EXPECT_EQ(p->rx("steering_report")->e2e.counter_byte, 7U);  // DBW_SteeringRollingCntr 56|4
-  EXPECT_EQ(p->rx("misc")->e2e.profile, s::E2eProfile::kNone);
-  EXPECT_EQ(p->limits().name, "eclass_track");
+  EXPECT_EQ(p_->tx_messages().size(), 5U);
+  EXPECT_EQ(p_->tx("steering")->message->name, "AKit_SteeringRequest");
+  EXPECT_TRUE(p_->tx("steering")->message->extended);
+  EXPECT_EQ(p_->tx("steering")->message->id, 0x2F03U);
+  EXPECT_EQ(p_->tx("accelerator")->signal("throttle")->name, "AKit_AccelPdlReq");
+  EXPECT_EQ(p_->tx("brake")->signal("brake")->name, "AKit_BrakePedalReq");
+  EXPECT_EQ(p_->tx("steering")->e2e.profile, s::E2eProfile::kCounter);
+  EXPECT_EQ(p_->tx("steering")->e2e.counter_byte, 6U);  // AKit_SteerRollingCntr 48|4
+  EXPECT_EQ(p_->rx("steering_report")->e2e.counter_byte, 7U);  // DBW_SteeringRollingCntr 56|4
+  EXPECT_EQ(p_->rx("misc")->e2e.profile, s::E2eProfile::kNone);
+  EXPECT_EQ(p_->limits().name, "eclass_track");
 }
 
 TEST_F(NewEagle, BridgeEncodesACommandIntoTheProtocolsFrames) {
-  dbw::BridgeCore bridge(*p);
+  dbw::BridgeCore bridge(*p_);
   Nanos now = 1'000'000'000'000;
   std::uint64_t seq = 0;
   auto command = [&](bool enable) {
@@ -268,17 +268,17 @@ TEST_F(NewEagle, BridgeEncodesACommandIntoTheProtocolsFrames) {
 }
 
 TEST_F(NewEagle, ReportsComeBackInRoleUnits) {
-  dbw::BridgeCore bridge(*p);
+  dbw::BridgeCore bridge(*p_);
   const Nanos now = 1'000'000'000'000;
-  const auto* rm = p->rx("steering_report");
+  const auto* rm = p_->rx("steering_report");
   s::E2eSender counter(rm->e2e);
   dbw::can::Frame f;
-  ASSERT_TRUE(p->encode(*rm, {{"steering_angle", -0.2}}, &counter, f));
+  ASSERT_TRUE(p_->encode(*rm, {{"steering_angle", -0.2}}, &counter, f));
   // On the bus: steering-wheel degrees, as the DBC says.
   EXPECT_NEAR(*dbw::dbc::decode(*rm->message->find("DBW_SteeringWhlAngleAct"), f.payload()), -0.2 * kDegPerRoadRad, 0.05 + 1e-9);
   EXPECT_EQ(bridge.on_frame({f, now}, now), dbw::RxKind::kFeedback);
   EXPECT_NEAR(bridge.feedback().steering_angle, -0.2, 0.05 / kDegPerRoadRad + 1e-9);
-  ASSERT_TRUE(p->encode(*p->rx("misc"), {{"ready", 1}, {"override", 1}, {"speed", 12.5}}, nullptr, f));
+  ASSERT_TRUE(p_->encode(*p_->rx("misc"), {{"ready", 1}, {"override", 1}, {"speed", 12.5}}, nullptr, f));
   bridge.on_frame({f, now}, now);
   EXPECT_TRUE(bridge.ecu().ready);
   EXPECT_TRUE(bridge.ecu().override);

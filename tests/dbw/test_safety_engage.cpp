@@ -26,7 +26,7 @@ TYPED_TEST(SafetySuite, EngagesOnlyOnEnableEdgeWithEverythingFresh) {
   const auto d = this->core.tick(this->now);
   EXPECT_TRUE(d.active);
   // Ramped from the measured state (pedals released) at the table's slew over one 10 ms period.
-  EXPECT_DOUBLE_EQ(d.command.throttle, std::min(0.1, TypeParam::limits[s::Axis::kThrottle].max_rate * 0.010));
+  EXPECT_DOUBLE_EQ(d.command.throttle, std::min(0.1, TypeParam::kLimits[s::Axis::kThrottle].max_rate * 0.010));
 }
 
 TYPED_TEST(SafetySuite, EnableHeldAfterDisengageDoesNotReengage) {

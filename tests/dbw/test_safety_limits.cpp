@@ -30,7 +30,7 @@ TYPED_TEST(SafetySuite, NanOrInfCommandDisengagesOnEveryAxis) {
 }
 
 TYPED_TEST(SafetySuite, OutOfRangeClampedOrRejectedPerTableAndReported) {
-  const auto& lim = TypeParam::limits;
+  const auto& lim = TypeParam::kLimits;
   for (std::size_t a = 0; a < s::kAxes; ++a) {
     const auto axis = static_cast<s::Axis>(a);
     SCOPED_TRACE(std::string(s::to_string(axis)));
@@ -59,7 +59,7 @@ TYPED_TEST(SafetySuite, OutOfRangeClampedOrRejectedPerTableAndReported) {
 }
 
 TYPED_TEST(SafetySuite, RateLimitsHoldOverManySteps) {
-  const auto& lim = TypeParam::limits;
+  const auto& lim = TypeParam::kLimits;
   this->engage();
   for (std::size_t a = 0; a < s::kAxes; ++a) {
     const auto axis = static_cast<s::Axis>(a);
@@ -82,7 +82,7 @@ TYPED_TEST(SafetySuite, RateLimitsHoldOverManySteps) {
 }
 
 TYPED_TEST(SafetySuite, LaterSeqWithEqualOrEarlierStampCannotDodgeRateLimits) {
-  const auto& lim = TypeParam::limits;
+  const auto& lim = TypeParam::kLimits;
   for (std::size_t a = 0; a < s::kAxes; ++a) {
     const auto axis = static_cast<s::Axis>(a);
     if (lim[axis].max_rate <= 0) continue;
@@ -117,7 +117,7 @@ TYPED_TEST(SafetySuite, LaterSeqWithEqualOrEarlierStampCannotDodgeRateLimits) {
 }
 
 TYPED_TEST(SafetySuite, StampsRacingAheadOfArrivalCannotWidenAStep) {
-  const auto& lim = TypeParam::limits;
+  const auto& lim = TypeParam::kLimits;
   const double window_s = 0.001 + static_cast<double>(this->core.config().rate_rx_slack_ns) * 1e-9;
   for (std::size_t a = 0; a < s::kAxes; ++a) {
     const auto axis = static_cast<s::Axis>(a);
@@ -149,7 +149,7 @@ TYPED_TEST(SafetySuite, StampsRacingAheadOfArrivalCannotWidenAStep) {
 }
 
 TYPED_TEST(SafetySuite, SteadyRampWithDeliveryJitterIsNotLimited) {
-  const auto& lim = TypeParam::limits;
+  const auto& lim = TypeParam::kLimits;
   // Throttle and brake ramp in separate runs: together the pedal interlock would cut the throttle.
   for (const auto skip : {s::Axis::kBrake, s::Axis::kThrottle}) {
     SCOPED_TRACE(std::string("without ") + std::string(s::to_string(skip)));

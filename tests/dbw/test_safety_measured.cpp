@@ -13,7 +13,7 @@ namespace sensor_rig::dbw::safety::test {
 namespace {
 
 TYPED_TEST(SafetySuite, EngagementRampsFromTheMeasuredSteeringAngle) {
-  const auto& lim = TypeParam::limits[s::Axis::kSteeringAngle];
+  const auto& lim = TypeParam::kLimits[s::Axis::kSteeringAngle];
   for (const double measured : {0.0, 0.5 * lim.max, 0.5 * lim.min}) {
     SCOPED_TRACE(measured);
     this->core.on_measured(measured, 0.0);
@@ -39,14 +39,14 @@ TYPED_TEST(SafetySuite, EngagementRampsFromTheMeasuredSteeringAngle) {
     ASSERT_TRUE(d.active);
     EXPECT_LE(std::fabs(d.command.steering_angle - measured), lim.max_rate * 0.010 * (1 + 1e-9));
     EXPECT_DOUBLE_EQ(d.command.throttle, 0.0) << "throttle with the brake requested";
-    EXPECT_LE(d.command.brake, TypeParam::limits[s::Axis::kBrake].max_rate * 0.010 * (1 + 1e-9));
+    EXPECT_LE(d.command.brake, TypeParam::kLimits[s::Axis::kBrake].max_rate * 0.010 * (1 + 1e-9));
     this->cycle(false);
   }
 }
 
 TYPED_TEST(SafetySuite, ThrottleIsZeroWhileTheBrakeIsRequested) {
   this->engage();
-  const double cutoff = TypeParam::limits.brake_throttle_cutoff;
+  const double cutoff = TypeParam::kLimits.brake_throttle_cutoff;
   for (int i = 0; i < 30; ++i) this->cycle(true);  // throttle ramps to 0.1
   auto c = this->cmd(true);
   this->step(10 * kMs);
@@ -65,18 +65,18 @@ TYPED_TEST(SafetySuite, ThrottleIsZeroWhileTheBrakeIsRequested) {
 }
 
 TYPED_TEST(SafetySuite, LateralAccelerationLimitsTheSteeringAngleOverSpeed) {
-  const auto& v = TypeParam::limits;
+  const auto& v = TypeParam::kLimits;
   const auto& lim = v[s::Axis::kSteeringAngle];
   this->engage();
   // Steers toward `target` within the rate limit (a table may reject faster requests); returns the
   // last applied angle.
-  auto steer_toward = [this, &lim](double target, double speed, int steps) {
+  auto steer_toward = [this, max_rate = lim.max_rate](double target, double speed, int steps) {
     double applied = this->core.tick(this->now).command.steering_angle;
     for (int i = 0; i < steps; ++i) {
       this->step(10 * kMs);
       this->ecu_ok();
       auto c = this->cmd(true);
-      const double max_step = 0.9 * lim.max_rate * 0.010;
+      const double max_step = 0.9 * max_rate * 0.010;
       c.steering_angle = applied + std::clamp(target - applied, -max_step, max_step);
       this->send(c);
       EXPECT_EQ(this->core.state(), s::State::kEngaged);
@@ -98,7 +98,7 @@ TYPED_TEST(SafetySuite, LateralAccelerationLimitsTheSteeringAngleOverSpeed) {
 }
 
 TYPED_TEST(SafetySuite, UnmeasuredValuesKeepTheLastMeasurement) {
-  const auto& lim = TypeParam::limits[s::Axis::kSteeringAngle];
+  const auto& lim = TypeParam::kLimits[s::Axis::kSteeringAngle];
   const double measured = 0.5 * lim.max;
   this->core.on_measured(measured, 0.0);
   this->core.on_measured(std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN());

@@ -34,13 +34,13 @@ using namespace sensor_rig;
 using namespace sensor_rig::lidar;
 
 const ouster::SensorMetadata& metadata_for(Profile p) {
-  static const auto all = [] {
+  static const auto kAll = [] {
     std::vector<ouster::SensorMetadata> v;
     for (const auto& spec : ouster::all_profiles())
       v.push_back(ouster::parse_metadata(ot::nested_metadata(std::string(spec.name), kPixels, kColumns), "fuzz.json"));
     return v;
   }();
-  return all[static_cast<std::size_t>(p)];
+  return kAll[static_cast<std::size_t>(p)];
 }
 
 }  // namespace

@@ -113,7 +113,9 @@ TEST(DbwBridgeEcuStage, FirstGoodStatusAfterTheWriteCompletesTheStamps) {
 TEST(DbwBridgeThreads, FastSourceScheduleAndStopInOneProcess) {
   const int domain = 100 + (::getpid() + 13) % 100;
   const auto protocol = dbw::Protocol::load(dbw::default_protocol_config());
-  auto [bridge_end, ecu_end] = dbw::can::make_socketpair();
+  auto ends = dbw::can::make_socketpair();  // named, not a structured binding: lambdas capture them
+  auto& bridge_end = ends.first;
+  auto& ecu_end = ends.second;
   dbw::mock::MockEcu ecu(protocol, {});
   dbw::mock::RunOptions mo;
   mo.duration_s = 3.5;

@@ -102,18 +102,18 @@ TEST(LidarSideTopics, OusterImuPacketsBecomeImuInSiUnits) {
       << seen.size();
   ::usleep(100'000);
   reader.take([&](const msg::Imu&, const dds_sample_info_t&) { ADD_FAILURE() << "a bad IMU packet was published"; });
-  constexpr double g = 9.80665, d2r = std::numbers::pi / 180.0;
+  constexpr double kG = 9.80665, kD2r = std::numbers::pi / 180.0;
   int exact = 0;
   for (int k = 0; k < kGood; ++k) {
     const auto& m = seen[static_cast<std::size_t>(k)];
     EXPECT_EQ(m.frame, c.frame_id + "_imu");
     EXPECT_DOUBLE_EQ(m.orientation_cov0, -1.0);
-    EXPECT_NEAR(m.ax, 0.5 * g, 1e-9);
-    EXPECT_NEAR(m.ay, -0.25 * g, 1e-9);
-    EXPECT_NEAR(m.az, (1.0 + k) * g, 1e-6);
-    EXPECT_NEAR(m.wx, 10 * d2r, 1e-7);
-    EXPECT_NEAR(m.wy, -20 * d2r, 1e-7);
-    EXPECT_NEAR(m.wz, 90 * d2r, 1e-6);
+    EXPECT_NEAR(m.ax, 0.5 * kG, 1e-9);
+    EXPECT_NEAR(m.ay, -0.25 * kG, 1e-9);
+    EXPECT_NEAR(m.az, (1.0 + k) * kG, 1e-6);
+    EXPECT_NEAR(m.wx, 10 * kD2r, 1e-7);
+    EXPECT_NEAR(m.wy, -20 * kD2r, 1e-7);
+    EXPECT_NEAR(m.wz, 90 * kD2r, 1e-6);
     // Through timesync: the device clock agrees with the host, so its gyro time is taken as is.
     // Until the mapper has seen a few samples a stamp may sit at a receive time: on a loaded host
     // this test can be descheduled between reading the clock and sending (seen: 53 ms, first three

@@ -94,7 +94,7 @@ TEST_F(DecodeCli, CutAngleAndReturnOptions) {
   const double az = std::atan2(-static_cast<double>(pts[0].y), -static_cast<double>(pts[0].x)) * 180.0 / M_PI;
   EXPECT_NEAR(az, 0.0, 0.5);
   for (const auto& p : pts) {
-    const double d = std::hypot(p.x, p.y, p.z);
+    const double d = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z));
     ASSERT_GE(d, 0.99);
     ASSERT_LE(d, 50.01);
   }

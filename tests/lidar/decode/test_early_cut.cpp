@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 
 #include "sensor_rig/lidar/mock/synthetic_velodyne.hpp"
 #include "sensor_rig/lidar/velodyne/decoder.hpp"
@@ -37,7 +38,7 @@ TEST_P(EarlyCut, ScanEndsWithThePacketHoldingItsLastBlock) {
   dc.model = c.model;
   dc.cut_angle_deg = c.cut_deg;
   vel::Decoder dec(dc);
-  const int cut = static_cast<int>(c.cut_deg * 100.0 + 0.5);
+  const int cut = static_cast<int>(std::lround(c.cut_deg * 100.0));
 
   std::array<std::byte, vel::kDataPacketSize> pkt{};
   int scans = 0;

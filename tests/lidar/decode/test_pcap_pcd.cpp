@@ -90,7 +90,7 @@ struct PcapFile {
   std::string write(const std::string& name) const {
     const auto dir = std::filesystem::temp_directory_path() / ("rig_pcap_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
-    const auto path = (dir / name).string();
+    auto path = (dir / name).string();
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
                                                static_cast<std::streamsize>(bytes.size()));
     return path;
@@ -242,6 +242,7 @@ TEST(Pcd, RoundTripAndHeader) {
   const auto back = decode_pcd(bytes, "mem");
   ASSERT_EQ(back.size(), pts.size());
   for (std::size_t i = 0; i < pts.size(); ++i) {
+    // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison): the PCD holds the points byte for byte
     EXPECT_EQ(std::memcmp(&back[i], &pts[i], sizeof(PointXYZIRT)), 0) << i;
   }
   const auto dir = std::filesystem::temp_directory_path() / ("rig_pcd_test_" + std::to_string(::getpid()));

@@ -83,7 +83,7 @@ TEST_P(PrecisionAzimuth, MatchesTheManualsFormula) {
     // VeloView's per-sequence convention: the sequence start instead (VLP-16 K * 55.296 µs, else 0).
     const auto seq = decode(config(c.model, velodyne::AzimuthInterpolation::kPerSequence), b);
     ASSERT_EQ(seq.size(), 1U);
-    const double seq_us = c.model == Model::kVLP16 ? (c.channel / 16) * 55.296 : 0.0;
+    const double seq_us = c.model == Model::kVLP16 ? static_cast<double>(c.channel / 16) * 55.296 : 0.0;
     const double az_seq = (a0 + step * seq_us / c.block_us) / 100.0 * kDeg;
     EXPECT_NEAR(seq[0].x, d * std::cos(v) * std::cos(az_seq), tol) << "step " << step;
     EXPECT_NEAR(seq[0].y, -d * std::cos(v) * std::sin(az_seq), tol) << "step " << step;

@@ -97,7 +97,7 @@ TEST_P(VeloViewReference, FramesPointCountsAndPoints) {
       EXPECT_NEAR(q.y, -p.x, tol) << "frame " << frame << " point " << p.index;
       EXPECT_NEAR(q.z, p.z, tol) << "frame " << frame << " point " << p.index;
       EXPECT_EQ(q.intensity, static_cast<float>(p.intensity)) << "frame " << frame << " point " << p.index;
-      const double qx = q.x, qy = q.y, qz = q.z;
+      const double qx = static_cast<double>(q.x), qy = static_cast<double>(q.y), qz = static_cast<double>(q.z);
       worst = std::max({worst, std::abs(qx - p.y), std::abs(qy + p.x), std::abs(qz - p.z)});
     }
   }

@@ -77,7 +77,7 @@ TEST(Rmc, RejectsTruncatedAndMalformed) {
   EXPECT_EQ(parse_rmc("$GPGGA,220632,3707.8324,N,12139.2864,W,1,08,0.9,545.4,M,46.9,M,,*4B", fix),
             NmeaStatus::kBadChecksum);
   // Correct checksums, wrong content.
-  auto with_sum = [](std::string body) {
+  auto with_sum = [](const std::string& body) {
     std::string s = "$" + body + "*";
     char hex[3];
     std::snprintf(hex, sizeof hex, "%02X", nmea_checksum(s));

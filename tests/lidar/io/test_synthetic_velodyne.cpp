@@ -188,7 +188,7 @@ void round_trip(const Case& p, const SyntheticVelodyne& s, velodyne::AzimuthInte
   for (const Scan& scan : scans) {
     for (const PointXYZIRT& pt : scan.points) {
       ++points;
-      const Vec3 v{pt.x, pt.y, pt.z};
+      const Vec3 v{static_cast<double>(pt.x), static_cast<double>(pt.y), static_cast<double>(pt.z)};
       const double range = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
       const double tol = resolution / 2 + range * angle_tol + 5e-4;
       std::size_t which = 0;

@@ -233,7 +233,7 @@ TEST_F(OusterCapture, DecodedPointsMatchTheImage) {
       const double x = -lx / 1000.0;  // lidar_to_sensor: diag(-1, -1, 1), z + 36.18 mm
       const double y = -ly / 1000.0;
       const double z = (lz + 36.18) / 1000.0;
-      max_err = std::max({max_err, std::abs(double{p.x} - x), std::abs(double{p.y} - y), std::abs(double{p.z} - z)});
+      max_err = std::max({max_err, std::abs(static_cast<double>(p.x) - x), std::abs(static_cast<double>(p.y) - y), std::abs(static_cast<double>(p.z) - z)});
       ASSERT_EQ(p.intensity, static_cast<float>(im.signal[row * w + mid]));
       ASSERT_EQ(p.t, static_cast<std::uint32_t>(im.ts[mid] - im.ts[0]));
       ASSERT_EQ(p.return_type, kReturnStrongest);

@@ -272,7 +272,7 @@ TEST(OusterDecoder, InvalidColumnsAndRangeFilter) {
   EXPECT_EQ(dec.stats().invalid_columns, 4U);
   EXPECT_EQ(dec.stats().bad_measurement_ids, 1U);
   for (const auto& p : s->points) {
-    const double d = std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+    const double d = std::sqrt(static_cast<double>(p.x * p.x + p.y * p.y + p.z * p.z));
     EXPECT_GT(d, 3.9);
   }
 }

@@ -99,51 +99,51 @@ class CaptureCompleteness : public ::testing::TestWithParam<CaptureCase> {
     const auto& c = GetParam();
     if (!sensor_rig::test::exists(file(c.pcap)) || (*c.metadata != 0 && !sensor_rig::test::exists(file(c.metadata))))
       GTEST_SKIP() << "capture " << c.pcap << " not found under " << sensor_rig::test::data_dir() << " (RIG_TEST_DATA)";
-    opts = options(c.model, *c.metadata != 0 ? file(c.metadata) : "");
-    pkts = load(file(c.pcap), opts);
-    base = run(opts, pkts);
-    ASSERT_FALSE(base.scans.empty());
+    opts_ = options(c.model, *c.metadata != 0 ? file(c.metadata) : "");
+    pkts_ = load(file(c.pcap), opts_);
+    base_ = run(opts_, pkts_);
+    ASSERT_FALSE(base_.scans.empty());
   }
   // A packet in the middle of the first complete scan: index of its packets in `pkts`.
   [[nodiscard]] std::size_t middle_of_first_scan() const {
     // Packets before the first emitted scan's end: the scan's own packets are the last `packets` of them.
-    const auto dec = make_decoder(opts);
-    for (std::size_t i = 0; i < pkts.size(); ++i)
-      if (dec->push(PacketView{pkts[i].bytes, pkts[i].rx_ns, pkts[i].port}, pkts[i].rx_ns))
-        return i + 1 - base.scans.front().packets / 2;
-    return pkts.size() / 2;
+    const auto dec = make_decoder(opts_);
+    for (std::size_t i = 0; i < pkts_.size(); ++i)
+      if (dec->push(PacketView{pkts_[i].bytes, pkts_[i].rx_ns, pkts_[i].port}, pkts_[i].rx_ns))
+        return i + 1 - base_.scans.front().packets / 2;
+    return pkts_.size() / 2;
   }
-  DecoderOptions opts;
-  std::vector<Packet> pkts;
-  Decoded base;
+  DecoderOptions opts_;
+  std::vector<Packet> pkts_;
+  Decoded base_;
 };
 
 TEST_P(CaptureCompleteness, CompleteCaptureHasNothingMissing) {
   // The shared captures were recorded without loss: nothing is missing, nothing implausible.
-  EXPECT_EQ(base.missing(), 0U);
-  EXPECT_EQ(base.st.missing_packets, 0U);
-  EXPECT_EQ(base.st.implausible_steps, 0U);
-  for (const auto& s : base.scans) EXPECT_EQ(s.dropped, 0U) << "scan " << s.seq;
+  EXPECT_EQ(base_.missing(), 0U);
+  EXPECT_EQ(base_.st.missing_packets, 0U);
+  EXPECT_EQ(base_.st.implausible_steps, 0U);
+  for (const auto& s : base_.scans) EXPECT_EQ(s.dropped, 0U) << "scan " << s.seq;
 }
 
 TEST_P(CaptureCompleteness, RemovedPacketsAreCountedExactlyInTheirScan) {
   const std::size_t i = middle_of_first_scan();
   // One packet, then two neighbours a few packets later: 3 missing, all in scan 0.
-  const Decoded r = run(opts, without(pkts, {i, i + 3, i + 4}));
-  ASSERT_EQ(r.scans.size(), base.scans.size()) << "a loss must not split or merge scans";
+  const Decoded r = run(opts_, without(pkts_, {i, i + 3, i + 4}));
+  ASSERT_EQ(r.scans.size(), base_.scans.size()) << "a loss must not split or merge scans";
   EXPECT_EQ(r.scans.front().missing_packets, 3U);
   EXPECT_EQ(r.missing(), 3U);
-  EXPECT_EQ(r.scans.front().packets, base.scans.front().packets - 3);
+  EXPECT_EQ(r.scans.front().packets, base_.scans.front().packets - 3);
   for (std::size_t k = 1; k < r.scans.size(); ++k) EXPECT_EQ(r.scans[k].missing_packets, 0U) << k;
 }
 
 TEST_P(CaptureCompleteness, DuplicatePacketIsCountedNotDecodedTwice) {
-  auto dup = pkts;
+  auto dup = pkts_;
   const std::size_t i = middle_of_first_scan();
-  dup.insert(dup.begin() + static_cast<long>(i) + 1, pkts[i]);
-  const Decoded r = run(opts, dup);
-  ASSERT_EQ(r.scans.size(), base.scans.size());
-  EXPECT_EQ(r.points(), base.points());
+  dup.insert(dup.begin() + static_cast<long>(i) + 1, pkts_[i]);
+  const Decoded r = run(opts_, dup);
+  ASSERT_EQ(r.scans.size(), base_.scans.size());
+  EXPECT_EQ(r.points(), base_.points());
   EXPECT_EQ(r.missing(), 0U);
   EXPECT_EQ(r.st.by_status[static_cast<std::size_t>(PacketStatus::kOutOfOrder)], 1U);
   EXPECT_EQ(r.scans.front().dropped, 1U);
@@ -152,24 +152,24 @@ TEST_P(CaptureCompleteness, DuplicatePacketIsCountedNotDecodedTwice) {
 TEST_P(CaptureCompleteness, ReplayLoopStartsOverWithoutRejectingPackets) {
   // A looping replay (rig lidar replay --loop) jumps back in azimuth and sensor time while the
   // receive time goes on: not a duplicate, no packet is rejected, nothing is missing.
-  auto loop = pkts;
-  const Nanos pass = pkts.back().rx_ns - pkts.front().rx_ns + 1'000'000;
-  for (auto p : pkts) {
+  auto loop = pkts_;
+  const Nanos pass = pkts_.back().rx_ns - pkts_.front().rx_ns + 1'000'000;
+  for (auto p : pkts_) {
     p.rx_ns += pass;
     loop.push_back(std::move(p));
   }
-  const Decoded r = run(opts, loop);
+  const Decoded r = run(opts_, loop);
   EXPECT_EQ(r.st.by_status[static_cast<std::size_t>(PacketStatus::kOutOfOrder)], 0U);
   EXPECT_EQ(r.st.packets_used, loop.size());
   EXPECT_EQ(r.missing(), 0U);
-  EXPECT_GE(r.scans.size() + 1, 2 * base.scans.size());
+  EXPECT_GE(r.scans.size() + 1, 2 * base_.scans.size());
 }
 
 TEST_P(CaptureCompleteness, CorruptedAzimuthOrFrameIdIsADropNotACut) {
   const auto& c = GetParam();
   const std::size_t i = middle_of_first_scan();
   for (const int shift : {9000, 18000, 27000, 35000}) {
-    auto bad = pkts;
+    auto bad = pkts_;
     auto* p = reinterpret_cast<std::uint8_t*>(bad[i].bytes.data());
     if (c.azimuth_offset != 0) {
       const int a = le16(p + c.azimuth_offset);
@@ -177,19 +177,19 @@ TEST_P(CaptureCompleteness, CorruptedAzimuthOrFrameIdIsADropNotACut) {
     } else {  // Ouster LEGACY: column 0's frame id
       put_le16(p + 10, static_cast<std::uint16_t>(le16(p + 10) + shift / 9000));
     }
-    const Decoded r = run(opts, bad);
-    ASSERT_EQ(r.scans.size(), base.scans.size()) << "shift " << shift;
+    const Decoded r = run(opts_, bad);
+    ASSERT_EQ(r.scans.size(), base_.scans.size()) << "shift " << shift;
     EXPECT_EQ(r.st.implausible_steps, 1U) << shift;
     EXPECT_EQ(r.missing(), 0U) << shift;
-    EXPECT_EQ(r.scans.front().packets, base.scans.front().packets) << shift;
+    EXPECT_EQ(r.scans.front().packets, base_.scans.front().packets) << shift;
     for (std::size_t k = 1; k < r.scans.size(); ++k)
-      EXPECT_EQ(r.scans[k].points.size(), base.scans[k].points.size()) << shift << " scan " << k;
+      EXPECT_EQ(r.scans[k].points.size(), base_.scans[k].points.size()) << shift << " scan " << k;
     if (c.azimuth_offset != 0) {  // the corrupted group's points are not decoded
       EXPECT_EQ(r.scans.front().dropped, 1U) << shift;
-      EXPECT_LT(r.scans.front().points.size(), base.scans.front().points.size()) << shift;
-      EXPECT_GE(r.scans.front().points.size() + 2 * 40, base.scans.front().points.size()) << shift;
+      EXPECT_LT(r.scans.front().points.size(), base_.scans.front().points.size()) << shift;
+      EXPECT_GE(r.scans.front().points.size() + 2 * 40, base_.scans.front().points.size()) << shift;
     } else {  // a frame id is not data: every point stays
-      EXPECT_EQ(r.scans.front().points.size(), base.scans.front().points.size()) << shift;
+      EXPECT_EQ(r.scans.front().points.size(), base_.scans.front().points.size()) << shift;
     }
   }
 }

@@ -136,7 +136,7 @@ TEST_P(SyntheticHesaiModels, RoundTripThroughDecoderReproducesScene) {
     for (const PointXYZIRT& pt : scan.points) {
       ++points;
       const int ch = channel_of_ring[pt.ring];
-      const double x = pt.x, y = pt.y, z = pt.z;
+      const double x = static_cast<double>(pt.x), y = static_cast<double>(pt.y), z = static_cast<double>(pt.z);
       const double r = std::sqrt(x * x + y * y + z * z);
       // The sensor fired the channel firing_rotation later than the block azimuth says.
       const double delta = s.firing_rotation_deg(ch) * kDegToRad;

@@ -95,25 +95,25 @@ class SyntheticOusterProfiles : public testing::TestWithParam<Case> {};
 TEST_P(SyntheticOusterProfiles, PacketsAreGenuine) {
   const auto m = nominal(GetParam().profile, GetParam().beams, GetParam().mode);
   const auto s = make(m, 1024 - 64);  // four packets before the frame ends
-  const auto& L = s.layout();
+  const auto& l = s.layout();
   const double col_ns = 1e9 / (m.frames_per_second * m.columns_per_frame);
   EXPECT_NEAR(s.packets_per_second(), m.frames_per_second * m.columns_per_frame / 16.0, 1e-9);
-  std::vector<std::byte> buf(L.packet_size);
+  std::vector<std::byte> buf(l.packet_size);
   std::uint64_t prev_ts = 0;
   int prev_mid = -1;
   std::size_t returns = 0, pixels = 0;
   for (std::uint64_t k = 0; k < 200; ++k) {
     s.render_packet(k, buf);
-    ASSERT_EQ(ouster::check_packet(buf, L), PacketStatus::kOk) << "packet " << k;
-    const auto header = ouster::read_packet_header(buf, L);
+    ASSERT_EQ(ouster::check_packet(buf, l), PacketStatus::kOk) << "packet " << k;
+    const auto header = ouster::read_packet_header(buf, l);
     ASSERT_TRUE(header);
-    if (L.header != ouster::HeaderType::kLegacy) {
+    if (l.header != ouster::HeaderType::kLegacy) {
       EXPECT_EQ(header->packet_type, ouster::kLidarPacketType);
       EXPECT_EQ(header->init_id, m.init_id);
       EXPECT_EQ(header->prod_sn, 992300000001ULL);
     }
-    for (std::size_t c = 0; c < L.columns_per_packet; ++c) {
-      const auto col = ouster::read_column_header(buf, L, c);
+    for (std::size_t c = 0; c < l.columns_per_packet; ++c) {
+      const auto col = ouster::read_column_header(buf, l, c);
       ASSERT_TRUE(col);
       EXPECT_TRUE(col->valid());
       const int mid = (prev_mid + 1) % m.columns_per_frame;
@@ -123,7 +123,7 @@ TEST_P(SyntheticOusterProfiles, PacketsAreGenuine) {
       }
       // Frame ids count frames (16 bits in LEGACY columns, in the header otherwise) and wrap.
       const auto frame = static_cast<std::uint32_t>(65530 + (1024 - 64 + k * 16 + c) / 1024);
-      if (L.header == ouster::HeaderType::kLegacy) {
+      if (l.header == ouster::HeaderType::kLegacy) {
         EXPECT_EQ(col->frame_id, static_cast<std::uint16_t>(frame));
         EXPECT_EQ(col->encoder_count, col->measurement_id * 90112u / 1024u);
       } else {
@@ -131,10 +131,10 @@ TEST_P(SyntheticOusterProfiles, PacketsAreGenuine) {
       }
       prev_mid = col->measurement_id;
       prev_ts = col->timestamp_ns;
-      for (std::size_t px = 0; px < L.pixels_per_column; ++px, ++pixels)
-        returns += *ouster::read_field(buf, L, c, px, ouster::Field::kRange) != 0 ? 1 : 0;
+      for (std::size_t px = 0; px < l.pixels_per_column; ++px, ++pixels)
+        returns += *ouster::read_field(buf, l, c, px, ouster::Field::kRange) != 0 ? 1 : 0;
     }
-    EXPECT_EQ(ouster::read_column_header(buf, L, 0)->timestamp_ns, static_cast<std::uint64_t>(s.packet_time(k)));
+    EXPECT_EQ(ouster::read_column_header(buf, l, 0)->timestamp_ns, static_cast<std::uint64_t>(s.packet_time(k)));
   }
   // Beams below the horizon see the ground and walls; the top ones look over the walls.
   EXPECT_GT(returns, pixels / 2);
@@ -146,7 +146,7 @@ TEST_P(SyntheticOusterProfiles, PacketsAreGenuine) {
 TEST_P(SyntheticOusterProfiles, RoundTripThroughDecoderReproducesScene) {
   const auto m = nominal(GetParam().profile, GetParam().beams, GetParam().mode);
   const auto s = make(m, 512);  // starts mid-frame: the first scan is partial
-  const auto& L = s.layout();
+  const auto& l = s.layout();
   ouster::DecoderConfig dc;
   dc.metadata = m;
   dc.intensity = ouster::IntensitySource::kReflectivity;
@@ -156,15 +156,15 @@ TEST_P(SyntheticOusterProfiles, RoundTripThroughDecoderReproducesScene) {
 
   const auto per_frame = static_cast<std::uint64_t>(m.columns_per_frame / m.columns_per_packet);
   const std::uint64_t packets = per_frame / 2 + 2 * per_frame + 3;  // half, two whole frames, a bit
-  std::vector<std::byte> buf(L.packet_size);
+  std::vector<std::byte> buf(l.packet_size);
   std::vector<Scan> scans;
   std::vector<std::size_t> nonzero_per_frame(4, 0);
   for (std::uint64_t k = 0; k < packets; ++k) {
     s.render_packet(k, buf);
     const std::uint64_t frame = (k * 16 + 512) / static_cast<std::uint64_t>(m.columns_per_frame);
-    for (std::size_t c = 0; c < L.columns_per_packet; ++c)
-      for (std::size_t px = 0; px < L.pixels_per_column; ++px)
-        nonzero_per_frame[frame] += *ouster::read_field(buf, L, c, px, ouster::Field::kRange) != 0 ? 1 : 0;
+    for (std::size_t c = 0; c < l.columns_per_packet; ++c)
+      for (std::size_t px = 0; px < l.pixels_per_column; ++px)
+        nonzero_per_frame[frame] += *ouster::read_field(buf, l, c, px, ouster::Field::kRange) != 0 ? 1 : 0;
     const Nanos t = s.packet_time(k);
     if (auto scan = dec.push(PacketView{buf, t + 1'000'000, 7502}, t)) scans.push_back(std::move(*scan));
     ASSERT_EQ(dec.last_status(), PacketStatus::kOk);
@@ -185,7 +185,7 @@ TEST_P(SyntheticOusterProfiles, RoundTripThroughDecoderReproducesScene) {
     std::size_t off = 0, wrong_refl = 0;
     double worst = 0;
     for (const PointXYZIRT& pt : scan.points) {
-      const Vec3 v{pt.x, pt.y, pt.z};
+      const Vec3 v{static_cast<double>(pt.x), static_cast<double>(pt.y), static_cast<double>(pt.z)};
       const double r = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
       const double tol = unit_m / 2 + 2e-6 * r + 1e-4;
       std::size_t which = 0;
