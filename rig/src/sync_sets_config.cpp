@@ -57,6 +57,7 @@ std::vector<SyncSetConfig> parse_sync_sets(const config::Node& root, const std::
       if (!known_topics.contains(topic)) {
         std::string known;
         for (const auto& k : known_topics) known.append(known.empty() ? "" : ", ").append(k);
+        // NOLINTNEXTLINE(performance-inefficient-string-concatenation): a config error, once
         m.fail("", "unknown member topic '" + topic + "' (this rig publishes: " + known + ")");
       } else if (!seen.insert(topic).second) {
         m.fail("", "member '" + topic + "' listed twice");

@@ -83,6 +83,7 @@ TEST_P(PrecisionAzimuth, MatchesTheManualsFormula) {
     // VeloView's per-sequence convention: the sequence start instead (VLP-16 K * 55.296 µs, else 0).
     const auto seq = decode(config(c.model, velodyne::AzimuthInterpolation::kPerSequence), b);
     ASSERT_EQ(seq.size(), 1U);
+    // NOLINTNEXTLINE(bugprone-integer-division): the firing sequence (0 or 1) the channel is in
     const double seq_us = c.model == Model::kVLP16 ? static_cast<double>(c.channel / 16) * 55.296 : 0.0;
     const double az_seq = (a0 + step * seq_us / c.block_us) / 100.0 * kDeg;
     EXPECT_NEAR(seq[0].x, d * std::cos(v) * std::cos(az_seq), tol) << "step " << step;
