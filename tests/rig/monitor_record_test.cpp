@@ -33,6 +33,7 @@ class MonitorProcess {
  public:
   MonitorProcess(const std::vector<std::string>& args, const std::string& stdout_path) {
     std::vector<char*> argv;
+    argv.reserve(args.size() + 1);
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
     posix_spawn_file_actions_t fa;
