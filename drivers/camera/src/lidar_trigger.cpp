@@ -22,7 +22,6 @@ constexpr Nanos kSpinNs = 200'000;         // the last stretch is a busy wait (s
 constexpr Nanos kMaxSleepNs = 20'000'000;  // re-predict (and check stop) at least this often
 constexpr Nanos kLateNs = 1'000'000;
 constexpr std::size_t kErrorHistory = 1024;
-constexpr std::size_t kRecentTicks = 16;
 
 void sleep_until_realtime(Nanos t) {
   const timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
@@ -70,10 +69,7 @@ void LidarTrigger::stop() {
 
 Nanos LidarTrigger::tick_before(Nanos t) const {
   std::lock_guard lock(mutex_);
-  Nanos best = 0;
-  for (Nanos v : recent_exposures_)
-    if (v <= t && v > best) best = v;
-  return best;
+  return recent_exposures_.before(t);
 }
 
 void LidarTrigger::observe_sweep(std::span<const timesync::SweepSample> samples) noexcept {
@@ -135,8 +131,7 @@ void LidarTrigger::fire(Nanos target, Nanos aim) {
   ++figures_.triggers;
   figures_.refused += refused;
   if (fired - aim > kLateNs) ++figures_.late;
-  if (recent_exposures_.size() >= kRecentTicks) recent_exposures_.erase(recent_exposures_.begin());
-  recent_exposures_.push_back(exposure);
+  recent_exposures_.add(exposure);
   if (refused < members_.size()) pending_.push_back({target, exposure});
   if (pending_.size() > 64) {  // the LIDAR's samples stopped coming: never measured
     pending_.pop_front();

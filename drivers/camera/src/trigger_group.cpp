@@ -23,10 +23,7 @@ void TriggerGroup::stop() {
 
 Nanos TriggerGroup::tick_before(Nanos t) const {
   std::lock_guard lock(mutex_);
-  Nanos best = 0;
-  for (Nanos v : recent_)
-    if (v <= t && v > best) best = v;
-  return best;
+  return recent_.before(t);
 }
 
 void TriggerGroup::run() {
@@ -39,8 +36,7 @@ void TriggerGroup::run() {
     const Nanos tick = vehicle_now_ns();
     {
       std::lock_guard lock(mutex_);
-      if (recent_.size() >= 16) recent_.erase(recent_.begin());
-      recent_.push_back(tick);
+      recent_.add(tick);
     }
     for (auto& m : members_) (void)m();  // a closed camera refuses: its driver reports that
     ticks_.fetch_add(1);

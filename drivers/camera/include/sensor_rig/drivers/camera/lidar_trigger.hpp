@@ -77,7 +77,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   timesync::SweepPhase phase_;
   Nanos newest_sample_ns_ = 0;
   std::deque<Pending> pending_;
-  std::vector<Nanos> recent_exposures_;  // ring of the last 16 (frame stamps)
+  RecentTicks recent_exposures_;  // frame stamps
   std::vector<Nanos> errors_;            // ring of |error| (ns), last 1024
   std::size_t errors_next_ = 0;
   LidarTriggerFigures figures_;

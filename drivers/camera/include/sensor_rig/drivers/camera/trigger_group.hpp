@@ -3,6 +3,7 @@
 // rate, triggers every member back to back and records the tick's vehicle time, so the frames it
 // exposed carry the same stamp.
 #include <atomic>
+#include <cstddef>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -13,6 +14,27 @@
 #include "sensor_rig/dds/driver_status.hpp"
 
 namespace sensor_rig::drivers {
+
+// The last ticks (exposure starts) a trigger source fired, for matching a frame to its tick. Not
+// synchronized: the source guards it with its own mutex.
+class RecentTicks {
+ public:
+  void add(Nanos tick) {
+    if (ticks_.size() >= kKeep) ticks_.erase(ticks_.begin());
+    ticks_.push_back(tick);
+  }
+  // The latest tick at or before t; 0 when none.
+  [[nodiscard]] Nanos before(Nanos t) const noexcept {
+    Nanos best = 0;
+    for (Nanos v : ticks_)
+      if (v <= t && v > best) best = v;
+    return best;
+  }
+
+ private:
+  static constexpr std::size_t kKeep = 16;
+  std::vector<Nanos> ticks_;
+};
 
 // What fires a software-triggered camera: a periodic group tick (TriggerGroup) or the sweep of a
 // LIDAR (LidarTrigger). The camera node registers its trigger and stamps each frame with the
@@ -51,7 +73,7 @@ class TriggerGroup : public TriggerSource {
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> ticks_{0};
   mutable std::mutex mutex_;
-  std::vector<Nanos> recent_;  // ring of the last ticks
+  RecentTicks recent_;
 };
 
 }  // namespace sensor_rig::drivers
