@@ -9,6 +9,7 @@ PACKAGES=(
   libpcap-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libssl-dev
   libaravis-dev aravis-tools libusb-1.0-0-dev libturbojpeg0-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
+  libfastrtps-dev              # Fast DDS 2.9 (rmw_fastrtps' DDS): the foreign subscriber of tests/interop
   clang libclang-rt-14-dev clang-tidy
   python3
 )
