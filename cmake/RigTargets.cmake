@@ -37,6 +37,15 @@ function(rig_test name)
   cmake_parse_arguments(A "" "LABEL;TIMEOUT" "SOURCES;DEPS" ${ARGN})
   add_executable(${name} ${A_SOURCES})
   target_link_libraries(${name} PRIVATE ${A_DEPS} GTest::gtest GTest::gtest_main GTest::gmock rig_warnings)
+  # One precompiled GoogleTest/GoogleMock header for every test executable: parsing them was ~1.8 s
+  # of the ~6.7 s a test file takes at -O3 (measured on test_clock_mapper.cpp), times ~120 test files
+  # in two CI builds. Where a test's flags ever differ, GCC ignores the PCH and reads the headers.
+  if(NOT TARGET rig_test_pch)
+    add_library(rig_test_pch OBJECT ${CMAKE_SOURCE_DIR}/tests/support/test_pch.cpp)
+    target_link_libraries(rig_test_pch PRIVATE GTest::gtest GTest::gmock rig_warnings)
+    target_precompile_headers(rig_test_pch PRIVATE <gtest/gtest.h> <gmock/gmock.h>)
+  endif()
+  target_precompile_headers(${name} REUSE_FROM rig_test_pch)
   target_include_directories(${name} PRIVATE ${CMAKE_SOURCE_DIR}/tests/support)
   if(NOT A_LABEL)
     set(A_LABEL unit)

@@ -1,0 +1,1 @@
+// Anchor of the precompiled GoogleTest header that every test executable reuses (cmake/RigTargets.cmake).
