@@ -4,6 +4,7 @@
 
 #include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/errors.hpp"
+#include "sensor_rig/common/heap.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "rig_commands.hpp"
 
@@ -37,6 +38,8 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Every subcommand that publishes or subscribes clouds and images reuses its sample buffers.
+  (void)sensor_rig::keep_large_buffers();
   try {
     return run(argc, argv);
   } catch (...) {  // building the command tree failed (out of memory): nothing else to say
