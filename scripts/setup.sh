@@ -7,6 +7,7 @@ PACKAGES=(
   cyclonedds-dev cyclonedds-tools libcycloneddsidl0
   iceoryx libiceoryx-posh-dev libiceoryx-hoofs-dev libiceoryx-binding-c-dev
   libpcap-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev libssl-dev
+  libpcl-dev                   # the fused LIDAR cloud (drivers/fusion): PCL 1.13 common + filters
   libaravis-dev aravis-tools libusb-1.0-0-dev libturbojpeg0-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   libfastrtps-dev              # Fast DDS 2.9 (rmw_fastrtps' DDS): the foreign subscriber of tests/interop

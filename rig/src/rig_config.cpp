@@ -10,6 +10,20 @@
 
 namespace sensor_rig::rig {
 
+namespace {
+// fusion: every LIDAR takes part, each with its pose in base_link (an error at the LIDAR's item).
+void check_fusion(const config::Node& n, const std::vector<config::Node>& lidar_items, RigConfig& cfg) {
+  cfg.fusion = drivers::parse_fusion_config(n);
+  if (!cfg.fusion.enabled) return;
+  if (cfg.lidars.empty()) n.fail("enable", "the fused cloud needs LIDARs (lidars: is empty)");
+  if (cfg.lidars.size() > 255) n.fail("enable", "at most 255 LIDARs (a point's source id)");
+  for (std::size_t i = 0; i < cfg.lidars.size() && i < lidar_items.size(); ++i)
+    if (!cfg.lidars[i].extrinsics)
+      lidar_items[i].fail("extrinsics", "fusion is enabled: give this LIDAR's pose in " + cfg.fusion.frame_id +
+                                            " as extrinsics: {x, y, z, roll_deg, pitch_deg, yaw_deg}");
+}
+}  // namespace
+
 RigConfig load_rig_config(const std::string& path) {
   auto problems = std::make_shared<config::Problems>();
   auto root = config::Node::load_file(path, problems);
@@ -17,7 +31,7 @@ RigConfig load_rig_config(const std::string& path) {
   RigConfig cfg;
   cfg.file = path;
   if (!root.expect_map()) problems->throw_if_any();
-  root.allow_keys({"rig", "lidars", "cameras", "dbw", "sync_sets"});
+  root.allow_keys({"rig", "lidars", "cameras", "dbw", "sync_sets", "fusion"});
   if (auto rig = root.child("rig", true)) {
     rig->allow_keys({"name", "dds", "diagnostics_period_ms"});
     cfg.name = rig->get_string("name", "rig");
@@ -60,6 +74,7 @@ RigConfig load_rig_config(const std::string& path) {
       t->fail("lidar", "no lidar named '" + lt.lidar + "' in lidars: (" + (known.empty() ? "none" : known) + ")");
   }
   if (auto d = root.child("dbw")) cfg.dbw = drivers::parse_dbw_config(*d);
+  if (auto f = root.child("fusion")) check_fusion(*f, root.items("lidars"), cfg);
   cfg.sync_sets = parse_sync_sets(root, stamped_topics(cfg.lidars, cfg.cameras, cfg.dbw));
   problems->throw_if_any();
   return cfg;
@@ -84,6 +99,12 @@ std::string describe(const RigConfig& cfg) {
   }
   o << describe_cameras(cfg.cameras);
   o << describe_sync_sets(cfg.sync_sets);
+  if (cfg.fusion.enabled) {
+    const auto& f = cfg.fusion;
+    o << "  fusion: " << cfg.lidars.size() << " lidars -> " << drivers::kFusedTopic << " in " << f.frame_id
+      << ", crop box " << (f.crop_box.enabled ? "on" : "off") << ", voxel " << f.voxel_leaf_m << " m, timeout "
+      << f.timeout_ms << " ms\n";
+  }
   if (cfg.dbw.enabled) {
     o << "  dbw: bridge on " << (cfg.dbw.transport.empty() ? "unix:" + cfg.dbw.bus : cfg.dbw.transport)
       << ", protocol " << (cfg.dbw.protocol.empty() ? std::string("config/dbw/paravan_ref.yaml") : cfg.dbw.protocol)

@@ -10,6 +10,7 @@
 #include "sensor_rig/dds/qos.hpp"
 #include "sensor_rig/drivers/camera/camera_config.hpp"
 #include "sensor_rig/drivers/dbw/dbw_config.hpp"
+#include "sensor_rig/drivers/fusion/fusion_config.hpp"
 #include "sensor_rig/drivers/lidar/lidar_config.hpp"
 #include "sync_sets_config.hpp"
 
@@ -29,6 +30,7 @@ struct RigConfig {
   std::vector<drivers::CameraConfig> cameras;
   DbwConfig dbw;
   std::vector<SyncSetConfig> sync_sets;
+  drivers::FusionConfig fusion;  // fusion: the LIDARs as one cloud in base_link
 };
 
 // Loads and validates; throws ConfigError listing every problem (file:line:col: key: message).

@@ -13,6 +13,7 @@
 #include "sync_set_node.hpp"
 #include "sensor_rig/dds/diagnostics.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
+#include "sensor_rig/drivers/fusion/fusion_node.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -157,6 +158,18 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     log::error("rig", std::string("driver start failed: ") + e.what());
     return 1;
   }
+  // The fused cloud takes each LIDAR node's scans in this process (no DDS round trip).
+  std::unique_ptr<drivers::FusionNode> fusion;
+  if (cfg.fusion.enabled) {
+    try {
+      fusion = std::make_unique<drivers::FusionNode>(cfg.fusion, cfg.lidars, participant, stamps);
+    } catch (const std::exception& e) {
+      log::error("rig", std::string("fusion start failed: ") + e.what());
+      return 1;
+    }
+    for (std::size_t i = 0; i < lidars.size(); ++i) lidars[i]->add_scan_observer(fusion->input(i));
+    fusion->start();
+  }
   std::unique_ptr<CameraRig> cameras;
   try {
     cameras = std::make_unique<CameraRig>(cfg.cameras, participant, stamps);
@@ -205,6 +218,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     std::vector<dds::DriverStatus> statuses;
     statuses.reserve(lidars.size());
     for (const auto& d : lidars) statuses.push_back(d->status());
+    if (fusion) statuses.push_back(fusion->status());
     cameras->supervise(statuses);
     sync_sets.supervise(statuses);
     host_time.supervise(statuses);
@@ -224,6 +238,7 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   sync_sets.stop();
   cameras->stop();
   for (auto& d : lidars) d->stop();
+  if (fusion) fusion->stop();  // after the LIDARs: they hand it their scans
   return 0;
 }
 

@@ -172,6 +172,32 @@ TEST_F(ConfigCheck, EveryShippedConfigValidates) {
   EXPECT_GE(checked, 1) << "no config/*.yaml validated";
 }
 
+// fusion: (issue 11) every LIDAR needs its pose in base_link; the pose and the section are
+// validated like the rest, each mistake at its own line; a valid one is named in the summary.
+TEST_F(ConfigCheck, FusionMistakesAtTheirLines) {
+  const std::string file = write("fusion.yaml", with(kBase, {{7, "    min_range: 0.5\n    extrinsics: {x: 1.4, z: 1.9, pitch_deg: 95}"}}) +
+                                                    "fusion:\n"                                                  // 12
+                                                    "  enable: true\n"                                           // 13
+                                                    "  crop_box: {x_min: 4, x_max: -1, y_min: -1, y_max: 1, z_min: 0, z_max: 2}\n"  // 14
+                                                    "  timeout_ms: 80\n"                                         // 15
+                                                    "  voxel: 0.1\n");                                           // 16
+  const auto r = run_rig("config check " + file);
+  EXPECT_EQ(r.code, 2);
+  auto errors = located(r.err, file);
+  std::sort(errors.begin(), errors.end());
+  EXPECT_EQ(errors, (std::vector<std::string>{"14 fusion.crop_box.x_max", "15 fusion.timeout_ms", "16 fusion.voxel",
+                                              "8 lidars[0].extrinsics.pitch_deg", "9 lidars[1].extrinsics"}))
+      << r.err;
+  EXPECT_NE(r.err.find("fusion is enabled: give this LIDAR's pose in base_link"), std::string::npos) << r.err;
+
+  const std::string good = write("fusion_ok.yaml", with(kBase, {{7, "    extrinsics: {x: 1.4, z: 1.9}"}}) +
+                                                       "    extrinsics: {x: -0.5, z: 1.8, yaw_deg: 180}\n"
+                                                       "fusion: {enable: true, voxel_leaf: 0.1}\n");
+  const auto ok = run_rig("config check " + good);
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  EXPECT_NE(ok.out.find("fusion: 2 lidars -> /sensors/lidar/fused/points in base_link"), std::string::npos) << ok.out;
+}
+
 }  // namespace
 // The summary `rig config check` prints names what the rig will run secured.
 TEST_F(ConfigCheck, SummaryNamesTheSecuredCommandTopic) {

@@ -101,7 +101,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   n.allow_keys({"name", "model", "host", "port", "position_port", "imu_port", "receive_buffer_bytes", "source",
                 "interface", "sensor_address", "ring_retire_ms", "calibration",
                 "metadata", "returns", "min_range", "max_range", "cut_angle", "fov", "azimuth", "time_source", "hour_source", "clock_correction",
-                "frame_id", "realtime_priority", "qos", "mock", "record"});
+                "frame_id", "extrinsics", "realtime_priority", "qos", "mock", "record"});
   l.name = n.get_string("name");
   for (char c : l.name)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
@@ -171,6 +171,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
       "clock_correction", {{"auto", Correction::kAuto}, {"always", Correction::kAlways}, {"never", Correction::kNever}},
       Correction::kAuto);
   l.frame_id = n.get_string("frame_id", "lidar_" + l.name);
+  if (auto e = n.child("extrinsics")) l.extrinsics = parse_extrinsics(*e);
   l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
   if (auto m = n.child("mock")) l.mock = parse_mock(*m);

@@ -189,6 +189,7 @@ struct LidarDriver::Impl {
   std::atomic<bool> stop_flag{false};
   std::vector<timesync::SweepObserver*> sweep_observers;  // set before start(), read by the thread
   std::vector<timesync::SweepSample> sweep_buffer;
+  std::vector<ScanObserver*> scan_observers;  // set before start(), called by the thread
   // Per topic: device-clock stamps never go backwards when CLOCK_REALTIME steps back (held, then
   // slewed out; timesync/README.md "Realtime steps"). Host-time stamps are the clock as it is.
   timesync::MonotonicStamps scan_monotonic;
@@ -379,6 +380,7 @@ struct LidarDriver::Impl {
     dds::SampleStamps st{scan.stamp, scan.first_rx_ns, scan.last_rx_ns, ready,        publish,
                     written,    scan.packets,     scan.dropped,     pc.row_step,  scan.missing_packets};
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
+    for (auto* o : scan_observers) o->observe_scan(scan, written);
     std::lock_guard lock(mutex);
     if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
     stamp_monotonic = scan_monotonic.status();
@@ -443,6 +445,10 @@ LidarDriver::~LidarDriver() { stop(); }
 
 void LidarDriver::add_sweep_observer(timesync::SweepObserver* o) {
   if (o != nullptr) impl_->sweep_observers.push_back(o);
+}
+
+void LidarDriver::add_scan_observer(ScanObserver* o) {
+  if (o != nullptr) impl_->scan_observers.push_back(o);
 }
 
 void LidarDriver::start() {

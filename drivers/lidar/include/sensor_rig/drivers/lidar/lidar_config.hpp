@@ -2,10 +2,12 @@
 // A LIDAR node's configuration (the `lidars:` items of a rig config) as a plain struct with
 // defaults, and its parser: unknown keys, wrong types and bad values are reported at file:line.
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "sensor_rig/common/config_node.hpp"
 #include "sensor_rig/dds/qos.hpp"
+#include "sensor_rig/drivers/lidar/extrinsics.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 #include "sensor_rig/timesync/stamper.hpp"
 
@@ -72,6 +74,7 @@ struct LidarConfig {
   timesync::HourSource hour_source = timesync::HourSource::kGprmc;   // sensor time: gprmc (host as fallback) | host
   timesync::Correction clock_correction = timesync::Correction::kAuto;  // through the clock mapper: auto | always | never
   std::string frame_id;                // default lidar_<name>
+  std::optional<Extrinsics> extrinsics;  // the frame in base_link; the fused cloud needs it
   int realtime_priority = 0;           // SCHED_FIFO priority of the driver thread; 0 = normal scheduling
   // Keep-last 2: a scan whose repair (lost fragment, slow ack) outlasts one scan period is still
   // in the writer's history when the next scan is written; depth 1 drops it.

@@ -9,6 +9,7 @@
 
 #include "sensor_rig/dds/driver_status.hpp"
 #include "sensor_rig/drivers/lidar/lidar_config.hpp"
+#include "sensor_rig/drivers/lidar/scan_observer.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/timesync/sweep_phase.hpp"
@@ -26,6 +27,8 @@ class LidarDriver {
   // Each scan's sweep samples (sweep_samples.hpp) go to `o` from the driver thread, before the
   // scan is written (cameras triggered by this sweep: rig/ wires them). Before start(); not owned.
   void add_sweep_observer(timesync::SweepObserver* o);
+  // Each published scan goes to `o` after its write (scan_observer.hpp). Before start(); not owned.
+  void add_scan_observer(ScanObserver* o);
   void start();
   void stop();
   [[nodiscard]] dds::DriverStatus status() const;

@@ -1,0 +1,36 @@
+#pragma once
+// The fused cloud's configuration (the rig config's `fusion:` section) as a plain struct with
+// defaults, and its parser. Every LIDAR of the rig takes part (at most 255); each needs `extrinsics:`.
+#include <array>
+#include <string>
+
+#include "sensor_rig/common/config_node.hpp"
+#include "sensor_rig/dds/qos.hpp"
+#include "sensor_rig/drivers/lidar/lidar_config.hpp"
+
+namespace sensor_rig::drivers {
+
+inline constexpr const char* kFusedTopic = "/sensors/lidar/fused/points";
+
+// An axis-aligned box in base_link; points inside it are removed (the ego vehicle: roof rack,
+// body, mirrors seen by the LIDARs).
+struct CropBoxConfig {
+  bool enabled = false;
+  std::array<double, 3> min{0, 0, 0};  // x, y, z, metres
+  std::array<double, 3> max{0, 0, 0};
+};
+
+struct FusionConfig {
+  bool enabled = false;
+  std::string frame_id = "base_link";
+  CropBoxConfig crop_box;
+  double voxel_leaf_m = 0.0;  // 0 = no voxel filter
+  int timeout_ms = 150;       // a sweep waits at most this long (after its first scan) for the rest
+  int max_spread_ms = 100;    // the scans of one sweep lie within this (one rotation)
+  dds::QosSpec qos = lidar_qos();
+};
+
+// Parses the `fusion:` map (the rig config checks that every LIDAR has extrinsics).
+FusionConfig parse_fusion_config(const config::Node& n);
+
+}  // namespace sensor_rig::drivers

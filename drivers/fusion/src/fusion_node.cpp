@@ -1,0 +1,304 @@
+#include "sensor_rig/drivers/fusion/fusion_node.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dds/publish_stats.hpp"
+#include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/drivers/fusion/scan_filter.hpp"
+#include "sensor_rig/drivers/fusion/sweep_matcher.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+// A scan as handed over by its LIDAR node: what the fused stamps need, and a copy of the points.
+struct InputScan {
+  std::uint32_t source = 0;
+  Nanos stamp = 0;
+  Nanos first_rx_ns = 0;
+  Nanos written_ns = 0;  // the input on the wire
+  Nanos arrival_ns = 0;  // handed to this node
+  std::uint32_t packets = 0, dropped = 0, missing_packets = 0;
+  std::vector<lidar::PointXYZIRT> points;
+};
+
+// One source's part of the open sweep, filtered on arrival (the sweep's last scan is the only one
+// filtered after the sweep is complete).
+struct SweepPart {
+  bool present = false;
+  InputScan meta;  // points moved out (recycled)
+  std::vector<FusedPoint> points;
+};
+
+SweepMatcherConfig matcher_config(const FusionConfig& c, std::size_t sources) {
+  return {static_cast<std::uint32_t>(sources), static_cast<Nanos>(c.max_spread_ms) * 1'000'000,
+          static_cast<Nanos>(c.timeout_ms) * 1'000'000};
+}
+
+// Scans waiting for the node's thread beyond this many per LIDAR are dropped (oldest first).
+constexpr std::size_t kMaxQueuedPerSource = 3;
+
+}  // namespace
+
+struct FusionNode::Impl {
+  struct Input final : ScanObserver {
+    Impl* node = nullptr;
+    std::uint32_t source = 0;
+    void observe_scan(const lidar::Scan& scan, Nanos written_ns) override { node->enqueue(source, scan, written_ns); }
+  };
+
+  FusionConfig cfg;
+  std::vector<std::string> names;
+  std::vector<Input> inputs;
+  std::vector<ScanFilter> filters;  // thread only
+  SweepMatcher matcher;             // thread only
+  std::vector<SweepPart> parts;     // thread only
+  std::vector<FusedPoint> fused;    // the published buffer, reused
+  std::vector<msg::PointField> fields = msg::point_fields(kFusedPointFields);
+  dds::Topic<msg::PointCloud2> topic;
+  dds::Writer<msg::PointCloud2> writer;
+  dds::StampsWriter& stamps;
+  std::thread thread;
+
+  mutable std::mutex mutex;  // guards everything below
+  std::condition_variable wake;
+  bool stop_flag = false;
+  std::deque<InputScan> queue;
+  std::vector<std::vector<lidar::PointXYZIRT>> spare;  // recycled point buffers: no page faults per scan
+  std::uint64_t dropped_backlog = 0;
+  std::uint64_t seq = 0;
+  dds::PublishStats published;
+  SweepCounters sweep_counters;
+  std::vector<ScanFilterCounters> filter_counters;
+  std::size_t last_points = 0;
+  std::size_t last_sources = 0;
+  std::string last_error;
+
+  Impl(const FusionConfig& c, const std::vector<LidarConfig>& lidars, const dds::Participant& p, dds::StampsWriter& s)
+      : cfg(c), inputs(lidars.size()), matcher(matcher_config(c, lidars.size())), parts(lidars.size()),
+        topic(p, kFusedTopic, c.qos), writer(p, topic, c.qos), stamps(s), filter_counters(lidars.size()) {
+    for (std::size_t i = 0; i < lidars.size(); ++i) {
+      const auto& l = lidars[i];
+      if (!l.extrinsics) throw std::invalid_argument("fusion: lidar " + l.name + " has no extrinsics");
+      names.push_back(l.name);
+      inputs[i].node = this;
+      inputs[i].source = static_cast<std::uint32_t>(i);
+      filters.emplace_back(to_transform(*l.extrinsics), c.crop_box, c.voxel_leaf_m, static_cast<std::uint16_t>(i));
+    }
+  }
+
+  void enqueue(std::uint32_t source, const lidar::Scan& scan, Nanos written_ns) {
+    InputScan in{source, scan.stamp, scan.first_rx_ns, written_ns, vehicle_now_ns(),
+                 scan.packets, scan.dropped, scan.missing_packets, {}};
+    {
+      std::lock_guard lock(mutex);
+      if (!spare.empty()) {
+        in.points = std::move(spare.back());
+        spare.pop_back();
+      }
+    }
+    in.points.assign(scan.points.begin(), scan.points.end());  // outside the lock: the other LIDARs' copies run too
+    std::lock_guard lock(mutex);
+    if (queue.size() >= kMaxQueuedPerSource * inputs.size()) {  // the thread is stuck: keep the newest
+      spare.push_back(std::move(queue.front().points));
+      queue.pop_front();
+      ++dropped_backlog;
+    }
+    queue.push_back(std::move(in));
+    wake.notify_one();
+  }
+
+  void recycle(std::vector<lidar::PointXYZIRT>&& points) {
+    std::lock_guard lock(mutex);
+    spare.push_back(std::move(points));
+  }
+
+  void handle(InputScan& in) {
+    const auto step = matcher.push(in.source, in.stamp, in.arrival_ns);
+    if (step.emit_open) emit();
+    if (step.store) {
+      auto& part = parts[in.source];
+      filters[in.source].apply(in.points, part.points);
+      part.present = true;
+      recycle(std::move(in.points));
+      part.meta = std::move(in);
+    } else {
+      recycle(std::move(in.points));
+    }
+    if (step.emit_after) emit();
+  }
+
+  // The open sweep's parts as one cloud: stamp = the earliest scan's, each point's t re-based on it.
+  void emit() {
+    Nanos stamp = INT64_MAX, first_rx = INT64_MAX, last_written = 0;
+    std::size_t total = 0, sources = 0;
+    std::uint32_t packets = 0, dropped = 0, missing = 0;
+    for (const auto& p : parts) {
+      if (!p.present) continue;
+      stamp = std::min(stamp, p.meta.stamp);
+      first_rx = std::min(first_rx, p.meta.first_rx_ns);
+      last_written = std::max(last_written, p.meta.written_ns);
+      total += p.points.size();
+      packets += p.meta.packets;
+      dropped += p.meta.dropped;
+      missing += p.meta.missing_packets;
+      ++sources;
+    }
+    if (sources == 0) return;
+    fused.resize(total);
+    auto* out = fused.data();
+    for (auto& p : parts) {
+      if (!p.present) continue;
+      const auto offset = static_cast<std::uint64_t>(p.meta.stamp - stamp);
+      for (const auto& q : p.points) {
+        *out = q;
+        out->t = static_cast<std::uint32_t>(std::min<std::uint64_t>(q.t + offset, UINT32_MAX));
+        ++out;
+      }
+      p.present = false;
+    }
+    write(stamp, first_rx, last_written, packets, dropped, missing, sources);
+  }
+
+  void write(Nanos stamp, Nanos first_rx, Nanos last_input, std::uint32_t packets, std::uint32_t dropped,
+             std::uint32_t missing, std::size_t sources) {
+    const Nanos ready = vehicle_now_ns();
+    msg::PointCloud2 pc{};
+    pc.header.stamp = msg::to_time(stamp);
+    pc.header.frame_id = const_cast<char*>(cfg.frame_id.c_str());
+    pc.height = 1;
+    pc.width = static_cast<std::uint32_t>(fused.size());
+    pc.fields._buffer = fields.data();
+    pc.fields._length = pc.fields._maximum = static_cast<std::uint32_t>(fields.size());
+    pc.point_step = sizeof(FusedPoint);
+    pc.row_step = pc.point_step * pc.width;
+    pc.data._buffer = reinterpret_cast<std::uint8_t*>(fused.data());
+    pc.data._length = pc.data._maximum = pc.row_step;
+    pc.is_dense = true;
+    const Nanos publish = vehicle_now_ns();
+    const auto rc = writer.write(pc, publish);
+    const Nanos written = vehicle_now_ns();
+    const std::uint64_t n = seq++;
+    // "first/last packet" of the fused cloud: the inputs' first packet, the last input on the wire.
+    const dds::SampleStamps st{stamp, first_rx, last_input, ready, publish, written, packets, dropped, pc.row_step, missing};
+    stamps.write(kFusedTopic, pc.header.stamp, pc.header.frame_id, n, st);
+    std::lock_guard lock(mutex);
+    if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
+    last_points = fused.size();
+    last_sources = sources;
+  }
+
+  void publish_counters() {
+    std::lock_guard lock(mutex);
+    sweep_counters = matcher.counters();
+    for (std::size_t i = 0; i < filters.size(); ++i) filter_counters[i] = filters[i].counters();
+  }
+
+  void run() {
+    std::deque<InputScan> batch;
+    for (;;) {
+      {
+        std::unique_lock lock(mutex);
+        const Nanos deadline = matcher.deadline();
+        const auto wait = std::chrono::nanoseconds(deadline < 0 ? 50'000'000 : std::max<Nanos>(0, deadline - vehicle_now_ns()));
+        wake.wait_for(lock, wait, [this] { return stop_flag || !queue.empty(); });
+        if (stop_flag || shutdown_requested()) return;
+        batch.swap(queue);
+      }
+      for (auto& in : batch) handle(in);
+      batch.clear();
+      if (matcher.poll(vehicle_now_ns())) emit();
+      publish_counters();
+    }
+  }
+};
+
+FusionNode::FusionNode(const FusionConfig& cfg, const std::vector<LidarConfig>& lidars, const dds::Participant& participant,
+                       dds::StampsWriter& stamps)
+    : impl_(std::make_unique<Impl>(cfg, lidars, participant, stamps)) {}
+
+FusionNode::~FusionNode() { stop(); }
+
+ScanObserver* FusionNode::input(std::size_t index) { return index < impl_->inputs.size() ? &impl_->inputs[index] : nullptr; }
+
+void FusionNode::start() {
+  impl_->thread = std::thread([this] { impl_->run(); });
+  std::string from;
+  for (const auto& n : impl_->names) from += (from.empty() ? "" : ", ") + n;
+  log::info("fusion", "lidars " + from + " -> " + kFusedTopic + " in " + impl_->cfg.frame_id);
+}
+
+void FusionNode::stop() {
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->stop_flag = true;
+  }
+  impl_->wake.notify_one();
+  if (!impl_->thread.joinable()) return;
+  impl_->thread.join();
+  const auto& c = impl_->sweep_counters;
+  log::info("fusion", "sweeps=" + std::to_string(c.sweeps) + " complete=" + std::to_string(c.complete) +
+                          " partial_timeout=" + std::to_string(c.partial_timeout) +
+                          " partial_next_sweep=" + std::to_string(c.partial_next_sweep) +
+                          " late_scans=" + std::to_string(c.late_scans));
+}
+
+dds::DriverStatus FusionNode::status() const {
+  const auto& m = *impl_;
+  std::lock_guard lock(m.mutex);
+  dds::DriverStatus s;
+  s.name = "fusion";
+  s.hardware_id = m.cfg.frame_id;
+  const auto& c = m.sweep_counters;
+  const Nanos age = m.published.last_ns() == 0 ? -1 : vehicle_now_ns() - m.published.last_ns();
+  if (m.published.samples() == 0) {
+    s.level = dds::Level::kWarn;
+    s.message = "waiting for scans";
+  } else if (age > 1'000'000'000) {
+    s.level = dds::Level::kError;
+    s.message = "no sweep for " + std::to_string(age / 1'000'000) + " ms";
+  } else if (!m.last_error.empty()) {
+    s.level = dds::Level::kWarn;
+    s.message = m.last_error;
+  } else if (m.last_sources < m.names.size()) {
+    s.level = dds::Level::kWarn;
+    s.message = "last sweep partial: " + std::to_string(m.last_sources) + " of " + std::to_string(m.names.size()) + " lidars";
+  } else {
+    s.message = "running";
+  }
+  s.add("topic", kFusedTopic);
+  s.add("frame_id", m.cfg.frame_id);
+  s.add_number("sweeps", m.published.samples());
+  s.add("sweep_rate_hz", std::to_string(m.published.rate_hz()));
+  s.add_number("complete_sweeps", c.complete);
+  s.add_number("partial_timeout", c.partial_timeout);
+  s.add_number("partial_next_sweep", c.partial_next_sweep);
+  s.add_number("late_scans", c.late_scans);
+  s.add_number("dropped_backlog", m.dropped_backlog);
+  s.add_number("points_last_sweep", m.last_points);
+  s.add_number("lidars_last_sweep", m.last_sources);
+  std::uint64_t cropped = 0, voxel_removed = 0, overflow = 0;
+  for (const auto& f : m.filter_counters) {
+    cropped += f.cropped;
+    voxel_removed += f.voxel_removed;
+    overflow += f.voxel_overflow;
+  }
+  s.add_number("points_cropped", cropped);
+  s.add_number("points_voxel_merged", voxel_removed);
+  s.add_number("voxel_overflow", overflow);
+  for (std::size_t i = 0; i < m.names.size(); ++i) {
+    s.add("source_" + std::to_string(i), m.names[i]);
+    if (i < c.missing.size()) s.add_number("missing_" + m.names[i], c.missing[i]);
+  }
+  s.add_number("write_errors", m.published.write_errors());
+  return s;
+}
+
+}  // namespace sensor_rig::drivers

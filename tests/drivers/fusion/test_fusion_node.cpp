@@ -1,0 +1,168 @@
+// The fusion node through DDS in one process: scans handed over as the LIDAR nodes do
+// (ScanObserver) come out as one PointCloud2 on rt/sensors/lidar/fused/points in base_link, with
+// the fused layout, source ids and times re-based on the earliest scan, its stamps on
+// rt/rig/stamps (last input on the wire -> fused on the wire); a dead LIDAR's sweep goes out as
+// a subset after the timeout, reported in the node's status.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/dds/stamps_writer.hpp"
+#include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/drivers/fusion/fused_point.hpp"
+#include "sensor_rig/drivers/fusion/fusion_node.hpp"
+#include "status_value.hpp"
+#include "wait.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+using test::status_value;
+using test::wait_for;
+
+struct FusedSeen {
+  Nanos stamp = 0;
+  std::string frame;
+  std::vector<std::string> fields;
+  std::uint32_t point_step = 0;
+  std::vector<FusedPoint> points;
+};
+
+struct StampsSeen {
+  Nanos acquisition = 0, last_rx = 0, written = 0;
+  std::uint64_t seq = 0;
+};
+
+LidarConfig lidar(const std::string& name, Extrinsics e) {
+  LidarConfig c;
+  c.name = name;
+  c.extrinsics = e;
+  return c;
+}
+
+lidar::Scan scan(Nanos stamp, float x, std::size_t n) {
+  lidar::Scan s;
+  s.stamp = stamp;
+  s.first_rx_ns = stamp + 1000;
+  s.packets = 10;
+  for (std::size_t i = 0; i < n; ++i)
+    s.points.push_back({x, static_cast<float>(i), 0.0F, 1.0F, static_cast<std::uint32_t>(1000 * i), 0, 1, 0});
+  return s;
+}
+
+class FusionNodeDds : public ::testing::Test {
+ protected:
+  FusionNodeDds() : stamps_writer_(pub_), fused_topic_(sub_, kFusedTopic, cfg().qos), fused_(sub_, fused_topic_, cfg().qos),
+                    stamps_topic_(sub_, dds::kStampsTopic, dds::stamps_qos()), stamps_(sub_, stamps_topic_, dds::stamps_qos()) {}
+
+  static FusionConfig cfg() {
+    FusionConfig c;
+    c.enabled = true;
+    c.max_spread_ms = 100;
+    c.timeout_ms = 300;
+    return c;
+  }
+
+  void drain() {
+    fused_.take([this](const msg::PointCloud2& m, const auto&) {
+      FusedSeen f;
+      f.stamp = msg::from_time(m.header.stamp);
+      f.frame = m.header.frame_id;
+      for (std::uint32_t i = 0; i < m.fields._length; ++i) f.fields.emplace_back(m.fields._buffer[i].name);
+      f.point_step = m.point_step;
+      f.points.resize(m.width);
+      if (m.data._length == m.width * sizeof(FusedPoint)) std::memcpy(f.points.data(), m.data._buffer, m.data._length);
+      seen_.push_back(std::move(f));
+    });
+    stamps_.take([this](const msg::SourceStamps& s, const auto&) {
+      if (std::string(s.topic) == kFusedTopic) stamped_.push_back({s.acquisition_ns, s.last_rx_ns, s.written_ns, s.seq});
+    });
+  }
+  bool wait_clouds(std::size_t n) {
+    return wait_for([&] { drain(); return seen_.size() >= n && stamped_.size() >= n; }, 5000);
+  }
+
+  dds::Participant pub_, sub_;
+  dds::StampsWriter stamps_writer_;
+  dds::Topic<msg::PointCloud2> fused_topic_;
+  dds::Reader<msg::PointCloud2> fused_;
+  dds::Topic<msg::SourceStamps> stamps_topic_;
+  dds::Reader<msg::SourceStamps> stamps_;
+  std::vector<FusedSeen> seen_;
+  std::vector<StampsSeen> stamped_;
+};
+
+TEST_F(FusionNodeDds, ThreeLidarsBecomeOneCloudInBaseLink) {
+  const std::vector<LidarConfig> lidars{lidar("front", {.x = 1.0, .z = 2.0}), lidar("left", {.y = 1.0, .yaw_deg = 90}),
+                                        lidar("right", {.y = -1.0, .yaw_deg = -90})};
+  FusionNode node(cfg(), lidars, pub_, stamps_writer_);
+  node.start();
+  ASSERT_TRUE(fused_.wait_for_writers(1, 5000));
+  const Nanos t0 = vehicle_now_ns();
+  // Phases 0, 30, 60 ms; each scan handed over "after its write".
+  node.input(1)->observe_scan(scan(t0 + 30'000'000, 5, 3), t0 + 130'000'000);
+  node.input(0)->observe_scan(scan(t0, 10, 2), t0 + 100'000'000);
+  node.input(2)->observe_scan(scan(t0 + 60'000'000, 7, 4), t0 + 160'000'000);
+  ASSERT_TRUE(wait_clouds(1));
+  const auto& f = seen_[0];
+  EXPECT_EQ(f.frame, "base_link");
+  EXPECT_EQ(f.stamp, t0);  // the earliest scan's
+  EXPECT_EQ(f.point_step, 24u);
+  EXPECT_EQ(f.fields, (std::vector<std::string>{"x", "y", "z", "intensity", "t", "source"}));
+  ASSERT_EQ(f.points.size(), 9u);
+  std::size_t per_source[3] = {0, 0, 0};
+  for (const auto& p : f.points) {
+    ASSERT_LT(p.source, 3);
+    const std::uint32_t i = p.t % 1'000'000 / 1000;  // the point's index in its scan
+    ++per_source[p.source];
+    if (p.source == 0) {  // front: (10, i, 0) + (1, 0, 2)
+      EXPECT_NEAR(static_cast<double>(p.x), 11, 1e-5);
+      EXPECT_NEAR(static_cast<double>(p.z), 2, 1e-5);
+      EXPECT_EQ(p.t, 1000 * i);
+    } else if (p.source == 1) {  // left, yawed 90: (5, i, 0) -> (-i, 5 + 1, 0)
+      EXPECT_NEAR(static_cast<double>(p.y), 6, 1e-5);
+      EXPECT_NEAR(static_cast<double>(p.x), -static_cast<double>(i), 1e-5);
+      EXPECT_EQ(p.t, 30'000'000 + 1000 * i);  // re-based on the fused stamp
+    } else {  // right, yawed -90: (7, i, 0) -> (i, -7 - 1, 0)
+      EXPECT_NEAR(static_cast<double>(p.y), -8, 1e-5);
+      EXPECT_EQ(p.t, 60'000'000 + 1000 * i);
+    }
+  }
+  EXPECT_EQ(per_source[0], 2u);
+  EXPECT_EQ(per_source[1], 3u);
+  EXPECT_EQ(per_source[2], 4u);
+  ASSERT_EQ(stamped_.size(), 1u);
+  EXPECT_EQ(stamped_[0].acquisition, t0);
+  EXPECT_EQ(stamped_[0].last_rx, t0 + 160'000'000);  // the last input on the wire
+  EXPECT_GT(stamped_[0].written, 0);
+  EXPECT_TRUE(wait_for([&] { return status_value(node.status(), "complete_sweeps") == "1"; }, 2000));
+  EXPECT_EQ(status_value(node.status(), "source_2"), "right");
+}
+
+TEST_F(FusionNodeDds, DeadLidarSweepGoesOutAsSubsetAfterTimeout) {
+  const std::vector<LidarConfig> lidars{lidar("front", {}), lidar("rear", {.yaw_deg = 180})};
+  FusionNode node(cfg(), lidars, pub_, stamps_writer_);
+  node.start();
+  ASSERT_TRUE(fused_.wait_for_writers(1, 5000));
+  const Nanos t0 = vehicle_now_ns();
+  const Nanos handed = vehicle_now_ns();
+  node.input(0)->observe_scan(scan(t0, 3, 5), handed);
+  ASSERT_TRUE(wait_clouds(1));
+  const Nanos waited = vehicle_now_ns() - handed;
+  EXPECT_GE(waited, 290'000'000);  // the timeout (300 ms) after the sweep opened
+  EXPECT_EQ(seen_[0].points.size(), 5u);
+  EXPECT_EQ(seen_[0].points[0].source, 0);
+  EXPECT_TRUE(wait_for([&] { return status_value(node.status(), "partial_timeout") == "1"; }, 2000));
+  const auto st = node.status();
+  EXPECT_EQ(status_value(st, "missing_rear"), "1");
+  EXPECT_EQ(status_value(st, "missing_front"), "0");
+  EXPECT_EQ(status_value(st, "lidars_last_sweep"), "1");
+  EXPECT_EQ(st.level, dds::Level::kWarn);
+  EXPECT_NE(st.message.find("partial"), std::string::npos) << st.message;
+}
+
+}  // namespace
+}  // namespace sensor_rig::drivers
