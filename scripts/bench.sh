@@ -12,6 +12,8 @@ for b in "$build"/bench_*; do
 done
 echo "== scan latency, three LIDARs (30 s)"
 scripts/bench_scan_latency.sh "$build" 30
+echo "== dds stage (write called -> monitor receive) per topic, three LIDARs + cameras, udp then shm (30 s each)"
+scripts/bench_rig_transport.sh "$build" 30
 echo "== seven cameras 1920x1200 beside the LIDARs, in-process fakes then GigE fakes (60 s each; scripts/bench_cameras.sh)"
 scripts/bench_cameras.sh "$build" 60 aravis-inprocess
 scripts/bench_cameras.sh "$build" 60 gige
