@@ -3,20 +3,22 @@
 # cameras or drive-by-wire): last input scan on the wire -> fused cloud on the wire (the monitor's
 # to_wire of /sensors/lidar/fused/points: its stamps' last_rx is the last input scan's written time),
 # p50/p99/max, and the CPU of the `rig up` process (drivers + fusion; the mock sensors are other
-# processes), side by side in one run: fusion off, on, on with a 0.2 m voxel filter.
-# Usage: scripts/bench_fusion.sh BUILD_DIR [SECONDS]
+# processes), side by side in one run: fusion off; on (the mock rig's SCHED_FIFO 19 thread); on with
+# a normal-priority thread; on with a 0.2 m voxel filter.
+# Usage: scripts/bench_fusion.sh BUILD_DIR [SECONDS]   (DDS domain $RIG_BENCH_DOMAIN, default 42; ports +10000)
 set -euo pipefail
 build=${1:-build-release}
 secs=${2:-20}
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 here=$(cd "$(dirname "$0")/.." && pwd)
+domain=${RIG_BENCH_DOMAIN:-42}
 
 # rig:, lidars: and fusion: of the mock rig, with fusion's enable and voxel_leaf as given.
-make_config() {  # NAME ENABLE LEAF
-  python3 - "$here/config/mock_rig.yaml" "$out/$1.yaml" "$2" "$3" "$here/config" <<'PY'
+make_config() {  # NAME ENABLE LEAF PRIORITY
+  python3 - "$here/config/mock_rig.yaml" "$out/$1.yaml" "$2" "$3" "$here/config" "$4" "$domain" <<'PY'
 import re, sys
-src, dst, enable, leaf, confdir = sys.argv[1:]
+src, dst, enable, leaf, confdir, prio, domain = sys.argv[1:]
 keep, section = [], None
 for line in open(src):
     m = re.match(r"^([a-z_]+):", line)
@@ -25,7 +27,11 @@ for line in open(src):
     if section in ("rig", "lidars", "fusion"):
         line = re.sub(r"^  enable: \w+", "  enable: " + enable, line)
         line = re.sub(r"^  voxel_leaf: [0-9.]+", "  voxel_leaf: " + leaf, line)
+        line = re.sub(r"^  realtime_priority: [0-9]+", "  realtime_priority: " + prio, line)
         line = line.replace("profile: cyclonedds/", "profile: " + confdir + "/cyclonedds/")
+        # Clear of another rig on this machine: its own DDS domain and sensor ports.
+        line = re.sub(r"^    domain: \d+", "    domain: " + domain, line)
+        line = re.sub(r"^(    (?:port|position_port|imu_port): )(\d+)", lambda m: m.group(1) + str(int(m.group(2)) + 10000), line)
         keep.append(line)
 open(dst, "w").write("".join(keep))
 PY
@@ -39,24 +45,25 @@ run() {  # NAME
   sleep 3
   local t0 c0
   t0=$(date +%s.%N); c0=$(cpu_ticks "$pid")
-  "$build/rig" monitor --duration "$secs" --json --summary "$out/$1.json" >/dev/null
+  "$build/rig" monitor --domain "$domain" --duration "$secs" --json --summary "$out/$1.json" >/dev/null
   local c1 t1
   c1=$(cpu_ticks "$pid"); t1=$(date +%s.%N)
   wait "$pid" || true
   python3 -c "import sys; print(f'{(int(sys.argv[2]) - int(sys.argv[1])) / $(getconf CLK_TCK) / ($t1 - $t0) * 100:.1f}')" "$c0" "$c1" >"$out/$1.cpu"
 }
 
-make_config off false 0
-make_config on true 0
-make_config voxel true 0.2
+make_config off false 0 19
+make_config on true 0 19
+make_config normal true 0 0
+make_config voxel true 0.2 19
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-for n in off on voxel; do run "$n"; done
+for n in off on normal voxel; do run "$n"; done
 echo "load average after:  $(cut -d' ' -f1-3 /proc/loadavg)"
 python3 - "$out" <<'PY'
 import json, sys, os
 out = sys.argv[1]
 print(f"{'run':6} {'rig up CPU %':>12} | {'fused sweeps':>12} {'lost':>5} {'points/sweep':>14} | {'to_wire p50':>11} {'p99':>7} {'max':>7} ms | {'dds p50':>8}")
-for n in ("off", "on", "voxel"):
+for n in ("off", "on", "normal", "voxel"):
     cpu = open(os.path.join(out, n + ".cpu")).read().strip()
     rows = [r for r in json.load(open(os.path.join(out, n + ".json"))) if r.get("topic") == "/sensors/lidar/fused/points"]
     if not rows:

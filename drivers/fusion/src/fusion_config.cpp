@@ -24,7 +24,7 @@ CropBoxConfig parse_crop_box(const config::Node& n) {
 FusionConfig parse_fusion_config(const config::Node& n) {
   FusionConfig f;
   if (!n.expect_map()) return f;
-  n.allow_keys({"enable", "frame_id", "crop_box", "voxel_leaf", "timeout_ms", "max_spread_ms", "qos"});
+  n.allow_keys({"enable", "frame_id", "crop_box", "voxel_leaf", "timeout_ms", "max_spread_ms", "realtime_priority", "qos"});
   f.enabled = n.get_bool("enable", true);
   f.frame_id = n.get_string("frame_id", "base_link");
   if (f.frame_id.empty()) n.fail("frame_id", "must not be empty");
@@ -37,6 +37,7 @@ FusionConfig parse_fusion_config(const config::Node& n) {
   if (f.timeout_ms <= f.max_spread_ms)
     n.fail("timeout_ms", "must be greater than max_spread_ms (" + std::to_string(f.max_spread_ms) +
                              "): a sweep's last scan arrives up to max_spread after its first");
+  f.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) f.qos = dds::QosSpec::from_config(*q, f.qos);
   return f;
 }

@@ -1,9 +1,13 @@
 #include "sensor_rig/drivers/fusion/fusion_node.hpp"
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <cstring>
 #include <deque>
 #include <mutex>
 #include <thread>
@@ -29,12 +33,12 @@ struct InputScan {
   std::vector<lidar::PointXYZIRT> points;
 };
 
-// One source's part of the open sweep, filtered on arrival (the sweep's last scan is the only one
-// filtered after the sweep is complete).
+// One source's part of the open sweep: filtered on arrival straight into the published buffer
+// (the sweep's last scan is the only one filtered after the sweep is complete).
 struct SweepPart {
   bool present = false;
   InputScan meta;  // points moved out (recycled)
-  std::vector<FusedPoint> points;
+  std::size_t begin = 0, end = 0;  // its points in the fused buffer
 };
 
 SweepMatcherConfig matcher_config(const FusionConfig& c, std::size_t sources) {
@@ -60,7 +64,7 @@ struct FusionNode::Impl {
   std::vector<ScanFilter> filters;  // thread only
   SweepMatcher matcher;             // thread only
   std::vector<SweepPart> parts;     // thread only
-  std::vector<FusedPoint> fused;    // the published buffer, reused
+  std::vector<FusedPoint> fused;    // the open sweep's points = the published buffer, reused
   std::vector<msg::PointField> fields = msg::point_fields(kFusedPointFields);
   dds::Topic<msg::PointCloud2> topic;
   dds::Writer<msg::PointCloud2> writer;
@@ -125,7 +129,9 @@ struct FusionNode::Impl {
     if (step.emit_open) emit();
     if (step.store) {
       auto& part = parts[in.source];
-      filters[in.source].apply(in.points, part.points);
+      part.begin = fused.size();
+      filters[in.source].apply(in.points, fused);
+      part.end = fused.size();
       part.present = true;
       recycle(std::move(in.points));
       part.meta = std::move(in);
@@ -138,33 +144,29 @@ struct FusionNode::Impl {
   // The open sweep's parts as one cloud: stamp = the earliest scan's, each point's t re-based on it.
   void emit() {
     Nanos stamp = INT64_MAX, first_rx = INT64_MAX, last_written = 0;
-    std::size_t total = 0, sources = 0;
+    std::size_t sources = 0;
     std::uint32_t packets = 0, dropped = 0, missing = 0;
     for (const auto& p : parts) {
       if (!p.present) continue;
       stamp = std::min(stamp, p.meta.stamp);
       first_rx = std::min(first_rx, p.meta.first_rx_ns);
       last_written = std::max(last_written, p.meta.written_ns);
-      total += p.points.size();
       packets += p.meta.packets;
       dropped += p.meta.dropped;
       missing += p.meta.missing_packets;
       ++sources;
     }
     if (sources == 0) return;
-    fused.resize(total);
-    auto* out = fused.data();
     for (auto& p : parts) {
       if (!p.present) continue;
       const auto offset = static_cast<std::uint64_t>(p.meta.stamp - stamp);
-      for (const auto& q : p.points) {
-        *out = q;
-        out->t = static_cast<std::uint32_t>(std::min<std::uint64_t>(q.t + offset, UINT32_MAX));
-        ++out;
-      }
+      if (offset != 0)
+        for (std::size_t k = p.begin; k < p.end; ++k)
+          fused[k].t = static_cast<std::uint32_t>(std::min<std::uint64_t>(fused[k].t + offset, UINT32_MAX));
       p.present = false;
     }
     write(stamp, first_rx, last_written, packets, dropped, missing, sources);
+    fused.clear();  // capacity kept: the next sweep fills it again
   }
 
   void write(Nanos stamp, Nanos first_rx, Nanos last_input, std::uint32_t packets, std::uint32_t dropped,
@@ -230,6 +232,13 @@ ScanObserver* FusionNode::input(std::size_t index) { return index < impl_->input
 
 void FusionNode::start() {
   impl_->thread = std::thread([this] { impl_->run(); });
+  if (const int prio = impl_->cfg.realtime_priority; prio > 0) {
+    sched_param sp{};
+    sp.sched_priority = prio;
+    if (const int rc = pthread_setschedparam(impl_->thread.native_handle(), SCHED_FIFO, &sp); rc != 0)
+      log::warn("fusion", "SCHED_FIFO " + std::to_string(prio) + " refused (" + std::strerror(rc) +
+                              "), running with normal priority");
+  }
   std::string from;
   for (const auto& n : impl_->names) from += (from.empty() ? "" : ", ") + n;
   log::info("fusion", "lidars " + from + " -> " + kFusedTopic + " in " + impl_->cfg.frame_id);

@@ -82,12 +82,13 @@ struct ScanFilter::Impl {
     }
   }
 
+  // Appended with push_back: a resize would zero the new points first (megabytes per sweep).
   void emit_kept(std::span<const lidar::PointXYZIRT> in, std::vector<FusedPoint>& out) const {
-    out.resize(kept.size());
-    for (std::size_t k = 0; k < kept.size(); ++k) {
-      const auto i = static_cast<std::size_t>(kept[k]);
+    out.reserve(out.size() + kept.size());
+    for (const auto k : kept) {
+      const auto i = static_cast<std::size_t>(k);
       const auto& p = (*cloud)[i];
-      out[k] = {p.x, p.y, p.z, p.intensity, in[i].t, source, 0};
+      out.push_back({p.x, p.y, p.z, p.intensity, in[i].t, source, 0});
     }
   }
 
@@ -112,11 +113,10 @@ struct ScanFilter::Impl {
     voxel.setInputCloud(voxel_in);
     voxel.filter(voxel_out);
     counters.voxel_removed += kept.size() - voxel_out.size();
-    out.resize(voxel_out.size());
-    for (std::size_t k = 0; k < voxel_out.size(); ++k) {
-      const auto& v = voxel_out[k];
+    out.reserve(out.size() + voxel_out.size());
+    for (const auto& v : voxel_out) {
       const auto t = std::lround(static_cast<double>(v.curvature));
-      out[k] = {v.x, v.y, v.z, v.intensity, static_cast<std::uint32_t>(t < 0 ? 0 : t), source, 0};
+      out.push_back({v.x, v.y, v.z, v.intensity, static_cast<std::uint32_t>(t < 0 ? 0 : t), source, 0});
     }
   }
 };

@@ -30,8 +30,9 @@ class ScanFilter {
   ScanFilter(ScanFilter&&) noexcept;
   ScanFilter& operator=(ScanFilter&&) noexcept;
 
-  // `out` (replaced): the points in base_link with this filter's source id and t as in the scan
-  // (ns after the scan's stamp; a voxel's t is the mean of its points', its intensity too).
+  // Appends to `out` the points in base_link with this filter's source id and t as in the scan (ns
+  // after the scan's stamp; a voxel's t is the mean of its points', its intensity too). Appending:
+  // a sweep's scans land in the published buffer as they come, never copied again.
   void apply(std::span<const lidar::PointXYZIRT> in, std::vector<FusedPoint>& out);
   [[nodiscard]] const ScanFilterCounters& counters() const noexcept;
 
