@@ -1,18 +1,15 @@
 #include "sensor_rig/drivers/fusion/fusion_node.hpp"
 
-#include <pthread.h>
-#include <sched.h>
-
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
-#include <cstring>
 #include <deque>
 #include <mutex>
 #include <thread>
 
 #include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/realtime_thread.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/types.hpp"
@@ -232,13 +229,7 @@ ScanObserver* FusionNode::input(std::size_t index) { return index < impl_->input
 
 void FusionNode::start() {
   impl_->thread = std::thread([this] { impl_->run(); });
-  if (const int prio = impl_->cfg.realtime_priority; prio > 0) {
-    sched_param sp{};
-    sp.sched_priority = prio;
-    if (const int rc = pthread_setschedparam(impl_->thread.native_handle(), SCHED_FIFO, &sp); rc != 0)
-      log::warn("fusion", "SCHED_FIFO " + std::to_string(prio) + " refused (" + std::strerror(rc) +
-                              "), running with normal priority");
-  }
+  make_realtime(impl_->thread, impl_->cfg.realtime_priority, "fusion");
   std::string from;
   for (const auto& n : impl_->names) from += (from.empty() ? "" : ", ") + n;
   log::info("fusion", "lidars " + from + " -> " + kFusedTopic + " in " + impl_->cfg.frame_id);

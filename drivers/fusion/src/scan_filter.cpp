@@ -17,9 +17,10 @@ namespace {
 
 Eigen::Affine3f affine(const RigidTransform& t) {
   Eigen::Affine3f a = Eigen::Affine3f::Identity();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) a.matrix()(r, c) = static_cast<float>(t.rotation[static_cast<std::size_t>(3 * r + c)]);
-    a.matrix()(r, 3) = static_cast<float>(t.translation[static_cast<std::size_t>(r)]);
+  for (std::size_t r = 0; r < 3; ++r) {
+    const auto row = static_cast<Eigen::Index>(r);
+    for (std::size_t c = 0; c < 3; ++c) a.matrix()(row, static_cast<Eigen::Index>(c)) = static_cast<float>(t.rotation[3 * r + c]);
+    a.matrix()(row, 3) = static_cast<float>(t.translation[r]);
   }
   return a;
 }

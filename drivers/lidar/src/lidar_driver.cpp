@@ -1,14 +1,13 @@
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 
 #include <arpa/inet.h>
-#include <pthread.h>
-#include <sched.h>
 
 #include <cmath>
 #include <cstring>
 #include <limits>
 
 #include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/realtime_thread.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/lidar/ouster/imu_packet.hpp"
 #include "sensor_rig/lidar/pcap_recorder.hpp"
@@ -453,14 +452,7 @@ void LidarDriver::add_scan_observer(ScanObserver* o) {
 
 void LidarDriver::start() {
   impl_->thread = std::thread([this] { impl_->run(); });
-  if (const int prio = impl_->cfg.realtime_priority; prio > 0) {
-    // A driver thread that wakes late adds its delay to every scan: run it real-time when allowed.
-    sched_param sp{};
-    sp.sched_priority = prio;
-    if (const int rc = pthread_setschedparam(impl_->thread.native_handle(), SCHED_FIFO, &sp); rc != 0)
-      log::warn("lidar", impl_->cfg.name + ": SCHED_FIFO " + std::to_string(prio) + " refused (" + std::strerror(rc) +
-                             "), running with normal priority");
-  }
+  make_realtime(impl_->thread, impl_->cfg.realtime_priority, "lidar " + impl_->cfg.name);
   const auto& c = impl_->cfg;
   const std::string from = impl_->ring ? "packet ring on " + c.interface + " port " + std::to_string(impl_->data_port())
                                        : "udp " + c.host + ":" + std::to_string(impl_->data_port());
