@@ -1,5 +1,6 @@
 #include "rig_cameras.hpp"
 
+#include <algorithm>
 #include <map>
 #include <set>
 #include <sstream>
@@ -20,14 +21,32 @@ std::vector<drivers::CameraConfig> parse_cameras(const config::Node& root) {
       item.fail("device", "device '" + c.source.device + "' used by two cameras");
     out.push_back(std::move(c));
   }
-  // A software trigger group ticks at one rate: its members must agree on it.
-  std::map<std::string, double> group_rate;
-  for (std::size_t i = 0; i < out.size(); ++i) {
+  // A software trigger group ticks at one rate, or is fired by one LIDAR crossing: its members
+  // must agree on both (the first member sets them).
+  std::map<std::string, std::size_t> group_first;
+  const auto items = root.items("cameras");
+  for (std::size_t i = 0; i < out.size() && i < items.size(); ++i) {
     const auto& c = out[i];
     if (c.trigger_group.empty()) continue;
-    auto [it, fresh] = group_rate.emplace(c.trigger_group, c.source.frame_rate);
-    if (!fresh && it->second != c.source.frame_rate)
-      root.items("cameras")[i].fail("frame_rate", "trigger group '" + c.trigger_group + "' members need the same frame_rate");
+    auto [it, fresh] = group_first.emplace(c.trigger_group, i);
+    if (fresh) continue;
+    const auto& first = out[it->second];
+    const std::string group = "trigger group '" + c.trigger_group + "'";
+    if (first.source.frame_rate != c.source.frame_rate) items[i].fail("frame_rate", group + " members need the same frame_rate");
+    const auto& a = first.lidar_trigger;
+    const auto& b = c.lidar_trigger;
+    const char* key = a.lidar != b.lidar ? (b.enabled() ? "lidar" : "group")
+                      : a.azimuth_deg != b.azimuth_deg ? "azimuth_deg"
+                      : a.latency_us != b.latency_us   ? "latency_us"
+                                                       : nullptr;
+    if (key == nullptr) continue;
+    std::ostringstream how;
+    if (a.enabled())
+      how << "lidar " << a.lidar << " at azimuth_deg " << a.azimuth_deg << ", latency_us " << a.latency_us;
+    else
+      how << "its own tick (no lidar)";
+    if (auto t = items[i].child("trigger"))
+      t->fail(key, group + ": one trigger fires all its members, and camera '" + first.name + "' is triggered by " + how.str());
   }
   return out;
 }
@@ -69,7 +88,7 @@ struct CameraRig::Impl {
   };
   std::vector<drivers::CameraConfig> cameras;
   std::map<std::string, std::unique_ptr<drivers::TriggerGroup>> groups;
-  std::vector<std::unique_ptr<drivers::LidarTrigger>> lidar_triggers;  // one per LIDAR-triggered camera
+  std::vector<std::unique_ptr<drivers::LidarTrigger>> lidar_triggers;  // one per LIDAR-triggered camera or group
   std::vector<int> lidar_trigger_priority;
   std::vector<std::unique_ptr<drivers::CameraDriver>> drivers;
   std::vector<Fake> fakes;
@@ -79,12 +98,23 @@ CameraRig::CameraRig(const std::vector<drivers::CameraConfig>& cameras, const dd
                      dds::StampsWriter& stamps)
     : impl_(std::make_unique<Impl>()) {
   impl_->cameras = resolve_camera_mocks(cameras);
+  std::map<std::string, std::size_t> lidar_trigger_of_group;
   for (const auto& c : impl_->cameras) {
     drivers::TriggerSource* group = nullptr;
     if (c.lidar_trigger.enabled()) {
-      impl_->lidar_triggers.push_back(std::make_unique<drivers::LidarTrigger>(c.name, c.lidar_trigger));
-      impl_->lidar_trigger_priority.push_back(c.realtime_priority);
-      group = impl_->lidar_triggers.back().get();
+      // One LidarTrigger per camera, or per trigger group (a stereo pair fired by one crossing).
+      const auto known = lidar_trigger_of_group.find(c.trigger_group);
+      std::size_t index = known != lidar_trigger_of_group.end() ? known->second : impl_->lidar_triggers.size();
+      if (c.trigger_group.empty() || known == lidar_trigger_of_group.end()) {
+        index = impl_->lidar_triggers.size();
+        const std::string name = c.trigger_group.empty() ? c.name : c.trigger_group;
+        impl_->lidar_triggers.push_back(std::make_unique<drivers::LidarTrigger>(name, c.lidar_trigger));
+        impl_->lidar_trigger_priority.push_back(c.realtime_priority);
+        if (!c.trigger_group.empty()) lidar_trigger_of_group.emplace(c.trigger_group, index);
+      }
+      auto& priority = impl_->lidar_trigger_priority[index];
+      priority = std::max(priority, c.realtime_priority);
+      group = impl_->lidar_triggers[index].get();
     } else if (c.source.trigger == camera::TriggerMode::kSoftware) {
       const std::string key = c.trigger_group.empty() ? "camera:" + c.name : c.trigger_group;
       auto& g = impl_->groups[key];

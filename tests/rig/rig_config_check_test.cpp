@@ -198,6 +198,40 @@ TEST_F(ConfigCheck, FusionMistakesAtTheirLines) {
   EXPECT_NE(ok.out.find("fusion: 2 lidars -> /sensors/lidar/fused/points in base_link"), std::string::npos) << ok.out;
 }
 
+// A trigger group fired by a LIDAR crossing (issue 12: the stereo pair): one trigger fires all
+// members, so they must name the same LIDAR, azimuth and latency; each conflict at its key.
+TEST_F(ConfigCheck, TriggerGroupOnALidarMembersAgree) {
+  const std::string cameras =
+      "cameras:\n"                                                       // 11
+      "  - name: stereo_left\n"                                          // 12
+      "    device: sl\n"                                                 // 13
+      "    trigger: {group: stereo, lidar: front, azimuth_deg: 0}\n"     // 14
+      "  - name: stereo_right\n"                                         // 15
+      "    device: sr\n";                                                // 16
+  const auto right = [&](const std::string& trigger) { return with(kBase, {}) + cameras + "    trigger: " + trigger + "\n"; };
+  const auto ok = run_rig("config check " + write("group_ok.yaml", right("{group: stereo, lidar: front, azimuth_deg: 0}")));
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  EXPECT_NE(ok.out.find("camera stereo_right: aravis sr BayerRG8 1920x1200 @ 10 Hz, trigger software (group stereo) (lidar front sweep at 0"),
+            std::string::npos) << ok.out;
+  const std::pair<const char*, const char*> cases[] = {
+      {"{group: stereo, lidar: front, azimuth_deg: 10}", "17 cameras[1].trigger.azimuth_deg"},
+      {"{group: stereo, lidar: rear, azimuth_deg: 0}", "17 cameras[1].trigger.lidar"},
+      {"{group: stereo, lidar: front, azimuth_deg: 0, latency_us: 100}", "17 cameras[1].trigger.latency_us"},
+      {"{mode: software, group: stereo}", "17 cameras[1].trigger.group"},
+  };
+  for (const auto& [trigger, where] : cases) {
+    SCOPED_TRACE(trigger);
+    const std::string file = write("group_bad.yaml", right(trigger));
+    const auto r = run_rig("config check " + file);
+    EXPECT_EQ(r.code, 2) << r.err;
+    const auto errors = located(r.err, file);
+    ASSERT_EQ(errors.size(), 1u) << r.err;
+    EXPECT_EQ(errors[0], where) << r.err;
+    EXPECT_NE(r.err.find("trigger group 'stereo': one trigger fires all its members, and camera 'stereo_left' is triggered by lidar front at azimuth_deg 0"),
+              std::string::npos) << r.err;
+  }
+}
+
 }  // namespace
 // The summary `rig config check` prints names what the rig will run secured.
 TEST_F(ConfigCheck, SummaryNamesTheSecuredCommandTopic) {

@@ -142,8 +142,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
       if (lt.azimuth_deg >= 360.0) t->fail("azimuth_deg", "must be in [0, 360)");
       lt.latency_us = t->get_double("latency_us", 0.0, 100'000.0, 0.0);
       if (s.trigger != camera::TriggerMode::kSoftware) t->fail("mode", "a LIDAR trigger needs mode: software");
-      // One trigger per camera: a group's tick and a sweep crossing cannot both fire it.
-      if (!c.trigger_group.empty()) t->fail("group", "a LIDAR-triggered camera is in no trigger group");
+      // With group: the whole group is fired by that crossing (rig checks its members agree).
     } else {
       for (const char* k : {"azimuth_deg", "latency_us"})
         if (t->has(k)) t->fail(k, "only with lidar: (a LIDAR-triggered camera)");

@@ -33,6 +33,7 @@ struct CameraDriver::Impl {
   dds::Writer<msg::CameraInfo> info_writer;
   dds::StampsWriter& stamps;
   TriggerSource* trigger;
+  std::size_t trigger_member = 0;  // this camera's index in its trigger's members
   FrameClock clock;
   std::vector<double> d;  // CameraInfo.d storage
   std::unique_ptr<ImageOutputs> outputs;  // image_color / compressed on their own thread; null: none
@@ -90,7 +91,7 @@ struct CameraDriver::Impl {
   void publish(camera::Frame& f) {
     const Nanos ready = vehicle_now_ns();
     const auto& m = f.meta();
-    const Nanos tick = trigger != nullptr ? trigger->tick_before(m.first_rx_ns) : 0;
+    const Nanos tick = trigger != nullptr ? trigger->tick_before(m.first_rx_ns, trigger_member) : 0;
     const auto st = clock.stamp(m, tick);
     msg::Image img{};
     img.header.stamp = msg::to_time(st.vehicle_ns);
@@ -224,7 +225,7 @@ CameraDriver::CameraDriver(const CameraConfig& cfg, const dds::Participant& part
 CameraDriver::CameraDriver(const CameraConfig& cfg, std::unique_ptr<camera::FrameSource> source,
                            const dds::Participant& participant, dds::StampsWriter& stamps, TriggerSource* trigger)
     : impl_(std::make_unique<Impl>(cfg, std::move(source), participant, stamps, trigger)) {
-  if (trigger != nullptr) trigger->add([src = impl_->src.get()] { return src->trigger(); });
+  if (trigger != nullptr) impl_->trigger_member = trigger->add([src = impl_->src.get()] { return src->trigger(); });
 }
 
 CameraDriver::~CameraDriver() { stop(); }
@@ -254,7 +255,7 @@ void CameraDriver::stop() {
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
     if (k == "frames" || k == "incomplete" || k == "reopens" || k == "stamp_source" || k == "sync" || k == "triggers" ||
-        k.rfind("phase_", 0) == 0)
+        k.rfind("phase_", 0) == 0 || k.rfind("trigger_spread_", 0) == 0)
       line.append(" ").append(k).append("=").append(v);
   log::info("camera", line);
 }
@@ -317,7 +318,7 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("stamp_device_backward", impl_->monotonic.device_backward);
   if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
   if (impl_->outputs) impl_->outputs->add_status(s);
-  if (impl_->trigger != nullptr) impl_->trigger->add_status(s);
+  if (impl_->trigger != nullptr) impl_->trigger->add_status(s, impl_->trigger_member);
   return s;
 }
 

@@ -12,7 +12,6 @@
 #include <optional>
 
 #include "sensor_rig/common/log.hpp"
-#include "sensor_rig/common/percentile.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -21,7 +20,6 @@ constexpr Nanos kApproachNs = 2'000'000;   // wake this early, predict again wit
 constexpr Nanos kSpinNs = 200'000;         // the last stretch is a busy wait (sleep overshoots)
 constexpr Nanos kMaxSleepNs = 20'000'000;  // re-predict (and check stop) at least this often
 constexpr Nanos kLateNs = 1'000'000;
-constexpr std::size_t kErrorHistory = 1024;
 
 void sleep_until_realtime(Nanos t) {
   const timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
@@ -38,27 +36,30 @@ std::string ms(Nanos ns) {
 
 }  // namespace
 
-LidarTrigger::LidarTrigger(std::string camera, LidarTriggerConfig cfg, timesync::SweepPhaseConfig phase)
-    : camera_(std::move(camera)),
+LidarTrigger::LidarTrigger(std::string name, LidarTriggerConfig cfg, timesync::SweepPhaseConfig phase)
+    : name_(std::move(name)),
       cfg_(std::move(cfg)),
       latency_ns_(static_cast<Nanos>(std::llround(cfg_.latency_us * 1000.0))),
       phase_(phase) {}
 
 LidarTrigger::~LidarTrigger() { stop(); }
 
-void LidarTrigger::add(std::function<bool()> trigger) { members_.push_back(std::move(trigger)); }
+std::size_t LidarTrigger::add(std::function<bool()> trigger) {
+  members_.push_back(Member{std::move(trigger), {}, {}, 0});
+  return members_.size() - 1;
+}
 
 void LidarTrigger::start(int realtime_priority) {
   if (thread_.joinable()) return;
   stop_.store(false);
   started_ns_.store(vehicle_now_ns());
   thread_ = std::thread([this] { run(); });
-  (void)pthread_setname_np(thread_.native_handle(), ("trg:" + camera_).substr(0, 15).c_str());
+  (void)pthread_setname_np(thread_.native_handle(), ("trg:" + name_).substr(0, 15).c_str());
   if (realtime_priority > 0) {
     sched_param sp{};
     sp.sched_priority = realtime_priority;
     if (const int rc = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &sp); rc != 0)
-      log::warn("camera", camera_ + ": trigger thread SCHED_FIFO refused (" + std::strerror(rc) + ")");
+      log::warn("camera", name_ + ": trigger thread SCHED_FIFO refused (" + std::strerror(rc) + ")");
   }
 }
 
@@ -67,9 +68,9 @@ void LidarTrigger::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-Nanos LidarTrigger::tick_before(Nanos t) const {
+Nanos LidarTrigger::tick_before(Nanos t, std::size_t member) const {
   std::lock_guard lock(mutex_);
-  return recent_exposures_.before(t);
+  return member < members_.size() ? members_[member].exposures.before(t) : 0;
 }
 
 void LidarTrigger::observe_sweep(std::span<const timesync::SweepSample> samples) noexcept {
@@ -85,18 +86,11 @@ void LidarTrigger::settle(Nanos newest) noexcept {
   // The interpolation needs samples past the crossing: ~crossing_halfwidth of a turn (+ margin).
   const Nanos cover = period > 0 ? period / 16 + 1'000'000 : 10'000'000;
   while (!pending_.empty()) {
-    const Pending p = pending_.front();
+    const Pending& p = pending_.front();
     if (newest < p.target + cover) break;
     if (const auto actual = phase_.crossing_near(cfg_.azimuth_deg, p.target)) {
-      const Nanos err = std::abs(p.exposure - *actual);
-      if (errors_.size() < kErrorHistory) {
-        errors_.push_back(err);
-      } else {
-        errors_[errors_next_] = err;
-        errors_next_ = (errors_next_ + 1) % kErrorHistory;
-      }
-      figures_.error_max_ns = std::max(figures_.error_max_ns, err);
-      ++figures_.measured;
+      for (std::size_t i = 0; i < members_.size() && i < p.exposures.size(); ++i)
+        if (p.exposures[i] != 0) members_[i].phase_error.add(std::abs(p.exposures[i] - *actual));
     } else if (newest < p.target + (period > 0 ? period : 100'000'000) + cover) {
       break;  // the samples may still come with the next scan (the crossing sat at its cut)
     } else {
@@ -122,17 +116,31 @@ bool LidarTrigger::wait_until(Nanos aim) {
 }
 
 void LidarTrigger::fire(Nanos target, Nanos aim) {
-  const Nanos fired = vehicle_now_ns();
-  std::uint64_t refused = 0;
-  for (auto& m : members_)
-    if (!m()) ++refused;
-  const Nanos exposure = fired + latency_ns_;
+  // Back to back: each member's exposure starts at its own trigger call (+ latency), so a group's
+  // stamps differ by the calls before it (its spread, measured).
+  Pending p{target, std::vector<Nanos>(members_.size(), 0)};
+  Nanos first = 0, last = 0;
+  for (std::size_t i = 0; i < members_.size(); ++i) {
+    const Nanos called = vehicle_now_ns();
+    if (i == 0) first = called;
+    if (!members_[i].trigger()) continue;
+    p.exposures[i] = called + latency_ns_;
+    last = called;
+  }
   std::lock_guard lock(mutex_);
   ++figures_.triggers;
-  figures_.refused += refused;
-  if (fired - aim > kLateNs) ++figures_.late;
-  recent_exposures_.add(exposure);
-  if (refused < members_.size()) pending_.push_back({target, exposure});
+  if (first - aim > kLateNs) ++figures_.late;
+  bool any = false;
+  for (std::size_t i = 0; i < members_.size(); ++i) {
+    if (p.exposures[i] == 0) {
+      ++members_[i].refused;
+      continue;
+    }
+    members_[i].exposures.add(p.exposures[i]);
+    any = true;
+  }
+  if (members_.size() > 1 && last != 0) spread_.add(last - first);
+  if (any) pending_.push_back(std::move(p));
   if (pending_.size() > 64) {  // the LIDAR's samples stopped coming: never measured
     pending_.pop_front();
     ++figures_.unmeasured;
@@ -170,21 +178,27 @@ void LidarTrigger::run() {
   }
 }
 
-LidarTriggerFigures LidarTrigger::figures() const {
+LidarTriggerFigures LidarTrigger::figures(std::size_t member) const {
   std::lock_guard lock(mutex_);
   LidarTriggerFigures f = figures_;
   f.sweep = phase_.status(vehicle_now_ns());
-  if (!errors_.empty()) {
-    std::vector<double> sorted(errors_.begin(), errors_.end());
-    std::sort(sorted.begin(), sorted.end());
-    f.error_p50_ns = static_cast<Nanos>(nearest_rank_percentile(sorted, 0.5));
-    f.error_p99_ns = static_cast<Nanos>(nearest_rank_percentile(sorted, 0.99));
+  f.members = members_.size();
+  if (member < members_.size()) {
+    const auto& m = members_[member];
+    f.refused = m.refused;
+    f.measured = m.phase_error.count();
+    f.error_p50_ns = m.phase_error.percentile(0.5);
+    f.error_p99_ns = m.phase_error.percentile(0.99);
+    f.error_max_ns = m.phase_error.max();
   }
+  f.spread_p50_ns = spread_.percentile(0.5);
+  f.spread_p99_ns = spread_.percentile(0.99);
+  f.spread_max_ns = spread_.max();
   return f;
 }
 
-void LidarTrigger::add_status(dds::DriverStatus& s) const {
-  const auto f = figures();
+void LidarTrigger::add_status(dds::DriverStatus& s, std::size_t member) const {
+  const auto f = figures(member);
   s.add("trigger_lidar", cfg_.lidar);
   s.add("trigger_azimuth_deg", std::to_string(cfg_.azimuth_deg));
   s.add("trigger_latency_us", std::to_string(cfg_.latency_us));
@@ -199,6 +213,13 @@ void LidarTrigger::add_status(dds::DriverStatus& s) const {
   s.add("phase_error_p50_ms", ms(f.error_p50_ns));
   s.add("phase_error_p99_ms", ms(f.error_p99_ns));
   s.add("phase_error_max_ms", ms(f.error_max_ns));
+  if (f.members > 1) {  // a group (stereo pair): one tick, each member's call in turn
+    s.add("trigger_group", name_);
+    s.add_number("trigger_members", f.members);
+    s.add("trigger_spread_p50_ms", ms(f.spread_p50_ns));
+    s.add("trigger_spread_p99_ms", ms(f.spread_p99_ns));
+    s.add("trigger_spread_max_ms", ms(f.spread_max_ns));
+  }
   // No prediction after a start-up grace: the camera is not triggered (a real one sends nothing).
   if (!f.predicting && vehicle_now_ns() - started_ns_.load() > 2'000'000'000 && s.level == dds::Level::kOk) {
     s.level = dds::Level::kWarn;

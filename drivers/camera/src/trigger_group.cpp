@@ -2,13 +2,37 @@
 
 #include <time.h>
 
+#include <algorithm>
+
+#include "sensor_rig/common/percentile.hpp"
+
 namespace sensor_rig::drivers {
+
+void ErrorHistory::add(Nanos e) {
+  if (ring_.size() < kKeep) {
+    ring_.push_back(e);
+  } else {
+    ring_[next_] = e;
+    next_ = (next_ + 1) % kKeep;
+  }
+  ++count_;
+  max_ = std::max(max_, e);
+}
+
+Nanos ErrorHistory::percentile(double q) const {
+  std::vector<double> sorted(ring_.begin(), ring_.end());
+  std::sort(sorted.begin(), sorted.end());
+  return static_cast<Nanos>(nearest_rank_percentile(sorted, q));
+}
 
 TriggerGroup::TriggerGroup(std::string name, double rate_hz) : name_(std::move(name)), rate_hz_(rate_hz) {}
 
 TriggerGroup::~TriggerGroup() { stop(); }
 
-void TriggerGroup::add(std::function<bool()> trigger) { members_.push_back(std::move(trigger)); }
+std::size_t TriggerGroup::add(std::function<bool()> trigger) {
+  members_.push_back(std::move(trigger));
+  return members_.size() - 1;
+}
 
 void TriggerGroup::start() {
   if (thread_.joinable()) return;
@@ -21,7 +45,7 @@ void TriggerGroup::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-Nanos TriggerGroup::tick_before(Nanos t) const {
+Nanos TriggerGroup::tick_before(Nanos t, std::size_t /*member*/) const {
   std::lock_guard lock(mutex_);
   return recent_.before(t);
 }

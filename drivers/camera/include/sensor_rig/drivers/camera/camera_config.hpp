@@ -57,7 +57,8 @@ struct CameraConfig {
   camera::CameraInfo info;          // loaded from `calibration` (or uncalibrated of the size)
   std::string frame_id;             // default camera_<name>
   std::string trigger_group;        // software trigger: cameras of a group share one tick
-  LidarTriggerConfig lidar_trigger; // software trigger at a LIDAR's sweep crossing (rig checks the name)
+  LidarTriggerConfig lidar_trigger; // software trigger at a LIDAR's sweep crossing (rig checks the name);
+                                    // with a group: the same for every member, one trigger fires them all
   int realtime_priority = 0;
   int watchdog_ms = 0;              // no frame for this long: reported and reopened; 0 = auto
   dds::QosSpec qos = camera_qos();

@@ -4,6 +4,7 @@
 // exposed carry the same stamp.
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -36,17 +37,36 @@ class RecentTicks {
   std::vector<Nanos> ticks_;
 };
 
+// |error| (or any spread) of the last 1024 events and the largest ever: the trigger figures'
+// p50/p99/max. Not synchronized: the owner guards it.
+class ErrorHistory {
+ public:
+  void add(Nanos e);
+  [[nodiscard]] std::uint64_t count() const noexcept { return count_; }
+  [[nodiscard]] Nanos max() const noexcept { return max_; }
+  [[nodiscard]] Nanos percentile(double q) const;  // nearest rank over the kept ones; 0 when none
+
+ private:
+  static constexpr std::size_t kKeep = 1024;
+  std::vector<Nanos> ring_;
+  std::size_t next_ = 0;
+  std::uint64_t count_ = 0;
+  Nanos max_ = 0;
+};
+
 // What fires a software-triggered camera: a periodic group tick (TriggerGroup) or the sweep of a
-// LIDAR (LidarTrigger). The camera node registers its trigger and stamps each frame with the
-// exposure start of the latest trigger before the frame arrived.
+// LIDAR (LidarTrigger), for one camera or a group (a stereo pair). The camera node registers its
+// trigger, gets its member index, and stamps each frame with the exposure start of its latest
+// trigger before the frame arrived.
 class TriggerSource {
  public:
   virtual ~TriggerSource() = default;
-  virtual void add(std::function<bool()> trigger) = 0;  // before start()
-  // Vehicle time of the exposure start of the latest trigger at or before `t` (0: none yet).
-  [[nodiscard]] virtual Nanos tick_before(Nanos t) const = 0;
-  // The trigger's own figures in the camera's /diagnostics status.
-  virtual void add_status(dds::DriverStatus& /*s*/) const {}
+  // Before start(); returns the member index for the calls below (0, 1, ... in order of adding).
+  virtual std::size_t add(std::function<bool()> trigger) = 0;
+  // Vehicle time of the exposure start of `member`'s latest trigger at or before `t` (0: none yet).
+  [[nodiscard]] virtual Nanos tick_before(Nanos t, std::size_t member) const = 0;
+  // The trigger's own figures (for `member`) in that camera's /diagnostics status.
+  virtual void add_status(dds::DriverStatus& /*s*/, std::size_t /*member*/) const {}
 };
 
 class TriggerGroup : public TriggerSource {
@@ -56,11 +76,11 @@ class TriggerGroup : public TriggerSource {
   TriggerGroup(const TriggerGroup&) = delete;
   TriggerGroup& operator=(const TriggerGroup&) = delete;
 
-  void add(std::function<bool()> trigger) override;  // before start()
+  std::size_t add(std::function<bool()> trigger) override;  // before start()
   void start();
   void stop();
-  // Vehicle time of the latest tick at or before `t` (0: none yet).
-  [[nodiscard]] Nanos tick_before(Nanos t) const override;
+  // Vehicle time of the latest tick at or before `t` (0: none yet): one for all members.
+  [[nodiscard]] Nanos tick_before(Nanos t, std::size_t member) const override;
   [[nodiscard]] std::uint64_t ticks() const noexcept { return ticks_.load(); }
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
 
