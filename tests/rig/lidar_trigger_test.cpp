@@ -10,10 +10,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <set>
 #include <thread>
 
 #include "rig_process.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 #include "sensor_rig/drivers/camera/lidar_trigger.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
@@ -60,18 +62,25 @@ class SyntheticLidar {
   std::thread thread_;
 };
 
-TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
+// The synthetic VLP-32C's driver config (its clock is the host's).
+LidarConfig front_lidar() {
   LidarConfig l;
   l.name = unique("trig_front");
   l.model = "VLP-32C";
   l.port = test::free_udp_port();
-  l.time_source = timesync::TimeSource::kSensor;  // the synthetic sensor's clock is the host's
+  l.time_source = timesync::TimeSource::kSensor;
   l.hour_source = timesync::HourSource::kHost;
   l.min_range_m = 0.5;
   l.frame_id = "lidar_" + l.name;
+  return l;
+}
 
-  CameraConfig c;
-  c.name = unique("trig_cam");
+// A camera triggered by `lidar` at `azimuth_deg`, on a GigE fake at 127.0.0.<host> (which gates
+// its stream on the software trigger: one frame per trigger) — started into `fake` — or an
+// in-process Aravis fake where no loopback address can be added. Returns whether it is GigE.
+bool triggered_camera(CameraConfig& c, const std::string& name, const std::string& lidar, double azimuth_deg, int host,
+                      ChildProcess& fake) {
+  c.name = unique(name);
   c.frame_id = "camera_" + c.name;
   c.source.format = camera::PixelFormat::kBayerRG8;
   c.source.width = 320;
@@ -79,22 +88,28 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
   c.source.frame_rate = 20;
   c.source.trigger = camera::TriggerMode::kSoftware;
   c.info = camera::uncalibrated(320, 240);
-  c.lidar_trigger.lidar = l.name;
-  c.lidar_trigger.azimuth_deg = 45.0;  // a front-left camera
+  c.lidar_trigger.lidar = lidar;
+  c.lidar_trigger.azimuth_deg = azimuth_deg;
   c.lidar_trigger.latency_us = 100.0;
-  // The GigE fake gates its stream on the software trigger (one frame per trigger).
-  const std::string address = "127.0.0." + std::to_string(140 + ::getpid() % 20);
+  const std::string address = "127.0.0." + std::to_string(host);
   std::string why;
   const bool gige = camera::mock::ensure_loopback_address(address, why);
   c.source.device = gige ? address : c.name;
   c.mock.kind = gige ? CameraMockConfig::Kind::kGige : CameraMockConfig::Kind::kAravisInProcess;
   if (!gige) std::fprintf(stderr, "no GigE fake (%s): in-process Aravis fake, frames not gated\n", why.c_str());
-  ChildProcess fake;
   if (gige) {
     camera::mock::GigeFakeOptions fo;
     fo.address = address;
     fake = camera::mock::start_gige_fake(fo);
   }
+  return gige;
+}
+
+TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
+  const LidarConfig l = front_lidar();
+  CameraConfig c;
+  ChildProcess fake;
+  const bool gige = triggered_camera(c, "trig_cam", l.name, 45.0, 140 + ::getpid() % 20, fake);  // a front-left camera
 
   dds::Participant p;
   dds::StampsWriter stamps(p);
@@ -153,6 +168,86 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
   camera.stop();
   lidar.stop();
   if (gige) fake.stop(500);
+}
+
+// The stereo pair on the front LIDAR (issue 12): one LidarTrigger fires both cameras at each
+// crossing of azimuth 0; with GigE fakes each trigger is one exposure. The frames of both cameras,
+// read over DDS, pair up with stamps within 1 ms; each camera's phase error is measured.
+TEST(LidarTriggeredCamera, StereoPairIsFiredTogetherStampsWithin1msPhaseMeasuredPerCamera) {
+  const LidarConfig l = front_lidar();
+  CameraConfig cams[2];
+  ChildProcess fakes[2];
+  bool gige = true;
+  for (int i = 0; i < 2; ++i) {
+    gige = triggered_camera(cams[i], i == 0 ? "trig_left" : "trig_right", l.name, 0.0, 160 + 2 * (::getpid() % 20) + i, fakes[i]) && gige;
+    cams[i].trigger_group = "stereo";
+  }
+  dds::Participant p;
+  dds::StampsWriter stamps(p);
+  LidarDriver lidar(l, p, stamps);
+  LidarTrigger trigger("stereo", cams[0].lidar_trigger);
+  std::vector<std::unique_ptr<CameraDriver>> drivers;
+  std::vector<std::unique_ptr<dds::Topic<msg::Image>>> topics;
+  std::vector<std::unique_ptr<dds::Reader<msg::Image>>> readers;
+  for (const auto& c : cams) {
+    topics.push_back(std::make_unique<dds::Topic<msg::Image>>(p, "/sensors/camera/" + c.name + "/image_raw", c.qos));
+    readers.push_back(std::make_unique<dds::Reader<msg::Image>>(p, *topics.back(), c.qos));
+    drivers.push_back(std::make_unique<CameraDriver>(c, p, stamps, &trigger));
+  }
+  lidar.add_sweep_observer(&trigger);
+  lidar.start();
+  for (auto& d : drivers) d->start();
+  trigger.start();
+  std::set<Nanos> seen[2];
+  {
+    SyntheticLidar sensor(l.model, l.port, 4.0);
+    const auto take = [&] {
+      for (std::size_t i = 0; i < 2; ++i)
+        readers[i]->take([&](const msg::Image& m, const dds_sample_info_t&) { seen[i].insert(msg::from_time(m.header.stamp)); });
+      return trigger.figures(1).measured >= 12 && seen[0].size() >= 10 && seen[1].size() >= 10;
+    };
+    const bool ok = wait_for(take, 8000, 20);
+    const auto f = trigger.figures(1);
+    ASSERT_TRUE(ok) << "triggers " << f.triggers << " measured " << f.measured << " frames " << seen[0].size() << "/"
+                    << seen[1].size() << " sweep " << timesync::to_string(f.sweep.state);
+  }
+  trigger.stop();
+  // Every left frame has its right frame within 1 ms (the two trigger calls of one tick).
+  int paired = 0;
+  Nanos worst = 0;
+  for (const Nanos t : seen[0]) {
+    const auto it = seen[1].lower_bound(t);  // the right camera is fired after the left
+    if (it == seen[1].end() || *it - t >= 1'000'000) continue;
+    ++paired;
+    worst = std::max(worst, *it - t);
+  }
+  // One frame per trigger (GigE; the in-process fake repeats stamps at its own rate): nearly every
+  // left frame pairs (a loaded host may stretch a tick's second call past 1 ms: measured, p99).
+  if (gige) {
+    EXPECT_GE(4 * paired, 3 * static_cast<int>(seen[0].size())) << "left " << seen[0].size() << " right " << seen[1].size();
+  }
+  EXPECT_GE(paired, 8);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto f = trigger.figures(i);
+    const auto st = drivers[i]->status();
+    EXPECT_GE(f.measured, 10u) << i;
+    EXPECT_LT(f.error_p50_ns, 5'000'000) << i << " p99 " << f.error_p99_ns;  // loose: loaded host
+    EXPECT_EQ(f.refused, 0u) << i;
+    EXPECT_EQ(test::status_value(st, "trigger_group"), "stereo");
+    EXPECT_EQ(test::status_value(st, "phase_measured"), std::to_string(f.measured));
+    EXPECT_EQ(test::status_value(st, "stamp_source"), "trigger_tick");
+  }
+  const auto f = trigger.figures();
+  EXPECT_LT(f.spread_p50_ns, 1'000'000);
+  std::fprintf(stderr, "stereo: paired %d, stamp difference max %.3f ms; trigger spread p50 %.3f p99 %.3f ms; phase p50 %.3f/%.3f p99 %.3f/%.3f ms\n",
+               paired, static_cast<double>(worst) * 1e-6, static_cast<double>(f.spread_p50_ns) * 1e-6,
+               static_cast<double>(f.spread_p99_ns) * 1e-6, static_cast<double>(trigger.figures(0).error_p50_ns) * 1e-6,
+               static_cast<double>(trigger.figures(1).error_p50_ns) * 1e-6, static_cast<double>(trigger.figures(0).error_p99_ns) * 1e-6,
+               static_cast<double>(trigger.figures(1).error_p99_ns) * 1e-6);
+  for (auto& d : drivers) d->stop();
+  lidar.stop();
+  for (auto& fake : fakes)
+    if (fake.pid() > 0) fake.stop(500);
 }
 
 }  // namespace
