@@ -40,11 +40,21 @@ function(rig_test name)
   # One precompiled GoogleTest/GoogleMock header for every test executable: parsing them was ~1.8 s
   # of the ~6.7 s a test file takes at -O3 (measured on test_clock_mapper.cpp), times ~120 test files
   # in two CI builds. Where a test's flags ever differ, GCC ignores the PCH and reads the headers.
+  # GCC 12 at -O2 with the PCH reports std::string copies in tests as out of bounds (-Warray-bounds
+  # on char_traits' memcpy: the false-positive family of GCC bugs 105329/105651, seen on
+  # sync_sets_test.cpp, not without the PCH); tests only, the libraries keep the warning, and the
+  # ASan/UBSan stage checks the tests' bounds at run time.
+  set(_gcc12_test_flags "")
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
+    set(_gcc12_test_flags -Wno-array-bounds -Wno-stringop-overflow -Wno-stringop-overread)
+  endif()
   if(NOT TARGET rig_test_pch)
     add_library(rig_test_pch OBJECT ${CMAKE_SOURCE_DIR}/tests/support/test_pch.cpp)
     target_link_libraries(rig_test_pch PRIVATE GTest::gtest GTest::gmock rig_warnings)
+    target_compile_options(rig_test_pch PRIVATE ${_gcc12_test_flags})
     target_precompile_headers(rig_test_pch PRIVATE <gtest/gtest.h> <gmock/gmock.h>)
   endif()
+  target_compile_options(${name} PRIVATE ${_gcc12_test_flags})
   target_precompile_headers(${name} REUSE_FROM rig_test_pch)
   target_include_directories(${name} PRIVATE ${CMAKE_SOURCE_DIR}/tests/support)
   if(NOT A_LABEL)
