@@ -19,7 +19,7 @@ rows = json.load(open(sys.argv[1]))
 print(f"{'topic':30} {'scans':>6} {'lost':>5} | {'process p50':>11} {'p99':>7} | {'write p50':>9} {'p99':>7} | "
       f"{'to_wire p50':>11} {'p99':>7} {'max':>7} | {'dds p50':>8} {'p99':>7}")
 for r in rows:
-    l = r["latency_ms"]
+    l = r.get("latency_ms", {})
     if "to_wire" not in l:
         continue  # topics without per-sample source stamps (drive-by-wire): not a scan path
     g = lambda s, k: l.get(s, {}).get(k, float('nan'))

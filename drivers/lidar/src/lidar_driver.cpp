@@ -346,17 +346,23 @@ struct LidarDriver::Impl {
     if (!published.count_write(rc)) last_error = "dds write (fix): " + rc.message();
   }
 
-  // Before the write: a triggered camera learns the sweep's phase as early as possible.
-  void notify_sweep(const lidar::Scan& scan) {
+  // After the write and the scan observers: the samples and the cameras' phase fits took ~0.12 ms
+  // per scan before the write (front LIDAR's `process` p50 0.02 -> 0.15 ms, measured side by side),
+  // while a triggered camera's next crossing is milliseconds away and already predicted.
+  // `sweep_stamp` is the scan's stamp before the per-topic monotonic filter: triggers aim at the clock.
+  void notify_sweep(const lidar::Scan& scan, Nanos sweep_stamp) {
     if (sweep_observers.empty()) return;
     sweep_samples(scan, sweep_buffer);
+    if (const Nanos shift = sweep_stamp - scan.stamp; shift != 0) {
+      for (auto& sample : sweep_buffer) sample.t_ns += shift;
+    }
     for (auto* o : sweep_observers) o->observe_sweep(sweep_buffer);
     std::lock_guard lock(mutex);
     sweep_samples_sent += sweep_buffer.size();
   }
 
   void publish(lidar::Scan& scan) {
-    notify_sweep(scan);  // the sweep in vehicle time as it is: triggers aim at the clock
+    const Nanos sweep_stamp = scan.stamp;
     if (cfg.time_source == timesync::TimeSource::kSensor) scan.stamp = scan_monotonic.apply(scan.stamp);
     const Nanos ready = vehicle_now_ns();
     msg::PointCloud2 pc{};
@@ -380,6 +386,7 @@ struct LidarDriver::Impl {
                     written,    scan.packets,     scan.dropped,     pc.row_step,  scan.missing_packets};
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
     for (auto* o : scan_observers) o->observe_scan(scan, written);
+    notify_sweep(scan, sweep_stamp);
     std::lock_guard lock(mutex);
     if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
     stamp_monotonic = scan_monotonic.status();
