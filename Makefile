@@ -67,11 +67,13 @@ bench: setup
 	cmake --build build-release -j$(JOBS)
 	scripts/bench.sh build-release
 
-# libFuzzer harnesses for the packet decoders and the DBC parser (clang).
+# libFuzzer harnesses for the packet decoders and the DBC parser (clang), one at a time.
+# FUZZ_SECONDS=S bounds each by time (default 30 s), FUZZ_RUNS=N by inputs (libFuzzer -runs; then no
+# time bound unless FUZZ_SECONDS is given too); FUZZ_ONLY=REGEX picks harnesses (fuzz_<name>).
 fuzz: setup
 	CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_FUZZ=ON -DRIG_TESTS=OFF -DRIG_BENCH=OFF
 	cmake --build build-fuzz -j$(JOBS)
-	scripts/fuzz.sh build-fuzz $(or $(FUZZ_SECONDS),30)
+	scripts/fuzz.sh build-fuzz $(or $(FUZZ_SECONDS),$(if $(FUZZ_RUNS),0,30)) $(or $(FUZZ_RUNS),0) $(or $(FUZZ_ONLY),.)
 
 # clang-tidy (.clang-tidy) over BUILD's compile_commands.json: each finding once, then a count.
 # Not part of `make test`. TIDY_ONLY=lidar/ narrows it to paths matching that regex.

@@ -22,6 +22,14 @@ if(RIG_SANITIZE)
     -Wno-array-bounds -Wno-restrict -Wno-maybe-uninitialized)
 endif()
 
+# libFuzzer builds: the libraries under test carry the fuzzer's coverage and the sanitizers, not
+# only the harness file; otherwise libFuzzer sees no branch of a decoder (it stalls at the harness's
+# own ~20 edges) and ASan misses the decoders' out-of-bounds accesses.
+if(RIG_FUZZ)
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
 # rig_library(NAME SOURCES... DEPS ...): a static library with the area's public include dir.
 function(rig_library name)
   cmake_parse_arguments(A "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
