@@ -17,12 +17,14 @@
 #include "sensor_rig/lidar/ring_source.hpp"
 #include "sensor_rig/lidar/udp_sender.hpp"
 #include "sensor_rig/lidar/udp_source.hpp"
-#include "veth_namespaces.hpp"
+#include "network_namespaces.hpp"
 
 namespace sensor_rig::lidar {
 namespace {
 
 using Bytes = std::vector<std::byte>;
+using sensor_rig::test::NetworkNamespaces;
+using sensor_rig::test::VethPair;
 
 Bytes payload(std::size_t size, unsigned tag) {
   Bytes p(size);
@@ -162,26 +164,26 @@ const std::vector<std::size_t> kSizes{64, 1206, 1472, 1473, 2960, 8192, 24896, 3
 std::size_t fragments_of(std::size_t payload_bytes) { return (payload_bytes + 8 + 1479) / 1480; }
 
 TEST(RingSource, VethNamespacesFragmentsReassembled) {
-  test::VethNamespaces net;
+  VethPair net;
   if (!net.error().empty()) GTEST_SKIP() << net.error();
   constexpr std::uint16_t kPort = 7502, kOtherPort = 7503;
   std::optional<RingSource> ring;
   std::optional<UdpSource> taker;
   std::optional<UdpSender> tx;
   std::string why;
-  test::VethNamespaces::in_namespace(net.ns_a(), [&] {
+  NetworkNamespaces::run_in(net.ns_a(), [&] {
     RingSourceConfig c;
     c.interface = net.if_a();
     c.port = kPort;
     in_addr b{};
-    ::inet_pton(AF_INET, test::VethNamespaces::kAddrB, &b);
+    ::inet_pton(AF_INET, VethPair::kAddrB, &b);
     c.sensor_host = ntohl(b.s_addr);
     ring = ring_or_skip(c, why);
     taker.emplace(UdpSourceConfig{{"0.0.0.0", kPort}, 1 << 20, 64, false});
   });
   if (!ring) GTEST_SKIP() << why;
-  test::VethNamespaces::in_namespace(net.ns_b(), [&] {
-    const std::vector<Endpoint> dst{{test::VethNamespaces::kAddrA, kPort}, {test::VethNamespaces::kAddrA, kOtherPort}};
+  NetworkNamespaces::run_in(net.ns_b(), [&] {
+    const std::vector<Endpoint> dst{{VethPair::kAddrA, kPort}, {VethPair::kAddrA, kOtherPort}};
     tx.emplace(dst);
   });
   const Nanos before = vehicle_now_ns();
@@ -232,21 +234,21 @@ TEST(RingSource, VethNamespacesFragmentsReassembled) {
 // The interface going down (a NIC unplugged, a link reset) is an error the caller sees once, not a
 // hang or a busy loop; when it comes back the same socket receives again.
 TEST(RingSource, InterfaceDownIsReportedAndRecovers) {
-  test::VethNamespaces net;
+  VethPair net;
   if (!net.error().empty()) GTEST_SKIP() << net.error();
   constexpr std::uint16_t kPort = 2368;
   std::optional<RingSource> ring;
   std::optional<UdpSender> tx;
   std::string why;
-  test::VethNamespaces::in_namespace(net.ns_a(), [&] {
+  NetworkNamespaces::run_in(net.ns_a(), [&] {
     RingSourceConfig c;
     c.interface = net.if_a();
     c.port = kPort;
     ring = ring_or_skip(c, why);
   });
   if (!ring) GTEST_SKIP() << why;
-  test::VethNamespaces::in_namespace(net.ns_b(), [&] {
-    const std::vector<Endpoint> dst{{test::VethNamespaces::kAddrA, kPort}};
+  NetworkNamespaces::run_in(net.ns_b(), [&] {
+    const std::vector<Endpoint> dst{{VethPair::kAddrA, kPort}};
     tx.emplace(dst);
   });
   const auto p = payload(1206, 1);
