@@ -167,6 +167,12 @@ void AravisSource::configure() {
   if (const char* v = arv_camera_get_vendor_name(cam, nullptr)) details_.vendor = v;
   if (const char* v = arv_camera_get_model_name(cam, nullptr)) details_.model = v;
   if (const char* v = arv_camera_get_device_serial_number(cam, nullptr)) details_.serial = v;
+  // 0. stopped: a device its last controller left acquiring (our own handle released after
+  // mark_lost(), a crashed process) keeps its stream going to that controller's old port, and
+  // many cameras lock format and ROI while acquiring (camera/README.md "Reopening a live camera").
+  // Refused (a device that is not acquiring, no AcquisitionStop): the steps below say what fails.
+  arv_camera_stop_acquisition(cam, &err);
+  if (err != nullptr) take_error(err);
   // 1. pixel format (the device must offer it), 2. ROI.
   arv_camera_set_pixel_format_from_string(cam, info(cfg_.format).genicam, &err);
   check(std::string("PixelFormat ") + info(cfg_.format).genicam);

@@ -1,6 +1,7 @@
 #pragma once
 // GigE Vision (and any Aravis device) as a FrameSource. Open by device id, serial, IP or MAC;
-// features applied in a defined order (pixel format, ROI, frame rate, exposure with
+// acquisition stopped first (a live device its last controller left acquiring), then features
+// applied in a defined order (pixel format, ROI, frame rate, exposure with
 // ExposureTime/ExposureTimeAbs tolerance, gain, named features, trigger), GigE packet size and
 // delay, the packet socket disabled (it receives nothing from the fake as root, SPEC §8) and a
 // fixed socket buffer. Aravis streams into buffers of a bounded pool: the pool memory is the
