@@ -9,6 +9,8 @@
 
 #include "sensor_rig/lidar/ouster/packet.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
+#include "pixel_reader.hpp"
+#include "profile_table.hpp"
 #include "xyz_lut.hpp"
 
 namespace sensor_rig::lidar::ouster {
@@ -53,6 +55,56 @@ ScanAssemblerOptions scan_options(const DecoderConfig& c) {
   return {.first_reserve = full, .max_reserve = full, .emit_partial_scans = c.emit_partial_scans};
 }
 
+// Writes a column's points: every pixel is written, and only a range inside [lo_mm, lo_mm + span_mm]
+// advances the count (no per-point branch: no-return pixels are frequent and scattered).
+struct ColumnWriter {
+  PointXYZIRT* out;  // room for two points per pixel
+  std::size_t n;
+  std::uint64_t lo_mm;
+  std::uint64_t span_mm;
+  std::uint32_t t;
+
+  void add(const LutEntry& l, std::uint64_t r, std::uint64_t i, std::uint16_t rg, std::uint8_t type) noexcept {
+    const float f = static_cast<float>(static_cast<std::uint32_t>(r));  // fields are < 32 bits
+    out[n] = PointXYZIRT{l.dx * f + l.ox, l.dy * f + l.oy, l.dz * f + l.oz,
+                         static_cast<float>(static_cast<std::uint32_t>(i)), t, rg, type, 0};
+    n += (r - lo_mm <= span_mm) ? 1 : 0;
+  }
+};
+
+// The single-return column loop with profile P's pixel layout as constants (from the profile
+// table at compile time: constant offsets, shifts, masks and stride). `w` by value and returned:
+// a writer the points' byte stores might alias would be reloaded per point.
+template <Profile P, Field Intensity>
+ColumnWriter decode_single(const std::uint8_t* px, const LutEntry* l, const std::uint16_t* ring, std::size_t h,
+                           ColumnWriter w) noexcept {
+  constexpr const ProfileSpec& spec = kProfileTable[static_cast<std::size_t>(P)];
+  constexpr PixelReader range(spec.fields[static_cast<std::size_t>(Field::kRange)]);
+  constexpr PixelReader inten(spec.fields[static_cast<std::size_t>(Intensity)]);
+  for (std::size_t r = 0; r < h; ++r, px += spec.pixel_bytes)
+    w.add(l[r], range.read(px), inten.read(px), ring[r], kReturnStrongest);
+  return w;
+}
+
+using SingleColumnFn = ColumnWriter (*)(const std::uint8_t*, const LutEntry*, const std::uint16_t*, std::size_t,
+                                        ColumnWriter);
+
+template <Profile P>
+SingleColumnFn single_column_for(bool signal) {
+  return signal ? &decode_single<P, Field::kSignal> : &decode_single<P, Field::kReflectivity>;
+}
+
+// nullptr for the dual-return profiles (decode_dual reads them through the runtime readers).
+SingleColumnFn single_column_for(Profile p, bool signal) {
+  switch (p) {
+    case Profile::kLegacy: return single_column_for<Profile::kLegacy>(signal);
+    case Profile::kRng19Rfl8Sig16Nir16: return single_column_for<Profile::kRng19Rfl8Sig16Nir16>(signal);
+    case Profile::kRng15Rfl8Nir8: return single_column_for<Profile::kRng15Rfl8Nir8>(signal);
+    case Profile::kRng15Rfl8Win8: return single_column_for<Profile::kRng15Rfl8Win8>(signal);
+    default: return nullptr;
+  }
+}
+
 }  // namespace
 
 struct DecoderImpl {
@@ -60,10 +112,12 @@ struct DecoderImpl {
   PacketLayout layout;
   XyzLut lut;
   std::vector<std::uint16_t> ring;  // per beam
-  FieldReader range, range2, inten, inten2;
+  PixelReader range, range2, inten, inten2;
   bool dual = false;
-  std::uint32_t min_mm = 0;
-  std::uint32_t max_mm = 0;
+  SingleColumnFn single_column = nullptr;  // the single-return profiles' column loop
+  std::uint64_t lo_mm = 1;    // a point's range r (mm) is kept when r - lo_mm <= span_mm (unsigned):
+  std::uint64_t span_mm = 0;  // lo_mm >= 1 drops range 0 (no return)
+  std::vector<PointXYZIRT> column_points;  // one column's points (both returns) before they join the scan
   std::uint32_t window_first = 0;  // first column of a frame that carries data
   std::uint32_t window_last = 0;   // last one
   Nanos span_ns = 0;
@@ -97,13 +151,24 @@ struct DecoderImpl {
     const auto& m = cfg.metadata;
     const auto& spec = profile_spec(m.profile);
     dual = spec.returns == 2;
-    range = FieldReader::from(spec.field(Field::kRange));
-    range2 = FieldReader::from(spec.field(Field::kRange2));
+    if (layout.col_header_size < PixelReader::kMinBytesBefore) throw std::logic_error("ouster: column header too short");
+    const auto reader = [&](Field f) { return PixelReader(spec.field(f)); };
+    range = reader(Field::kRange);
+    range2 = reader(Field::kRange2);
     const bool use_signal = cfg.intensity == IntensitySource::kSignal && spec.has(Field::kSignal);
-    inten = FieldReader::from(spec.field(use_signal ? Field::kSignal : Field::kReflectivity));
-    inten2 = FieldReader::from(spec.field(use_signal ? Field::kSignal2 : Field::kReflectivity2));
-    min_mm = to_mm(cfg.min_range_m, true);
-    max_mm = std::isinf(cfg.max_range_m) ? std::numeric_limits<std::uint32_t>::max() : to_mm(cfg.max_range_m, false);
+    inten = reader(use_signal ? Field::kSignal : Field::kReflectivity);
+    inten2 = reader(use_signal ? Field::kSignal2 : Field::kReflectivity2);
+    if (!dual) {
+      single_column = single_column_for(m.profile, use_signal);
+      if (single_column == nullptr) throw std::logic_error("ouster: no column loop for profile " + std::string(spec.name));
+    }
+    const std::uint64_t min_mm = std::max<std::uint64_t>(1, to_mm(cfg.min_range_m, true));
+    const std::uint64_t max_mm =
+        std::isinf(cfg.max_range_m) ? std::numeric_limits<std::uint32_t>::max() : to_mm(cfg.max_range_m, false);
+    // An empty interval (both limits rounded inside one millimetre) keeps nothing: no field reaches 2^32.
+    lo_mm = max_mm >= min_mm ? min_mm : std::uint64_t{1} << 32;
+    span_mm = max_mm >= min_mm ? max_mm - min_mm : 0;
+    column_points.resize(layout.pixels_per_column * 2);
     const bool wraps = m.column_window_first > m.column_window_last;
     window_first = wraps ? 0U : static_cast<std::uint32_t>(m.column_window_first);
     window_last = static_cast<std::uint32_t>(wraps ? m.columns_per_frame - 1 : m.column_window_last);
@@ -121,15 +186,7 @@ struct DecoderImpl {
     for (std::size_t r = 0; r < order.size(); ++r) ring[order[r]] = static_cast<std::uint16_t>(r);
   }
 
-  inline void emit(const LutEntry& l, std::uint64_t r, std::uint64_t i, std::uint32_t t, std::uint16_t rg,
-                   std::uint8_t type) {
-    if (r == 0 || r < min_mm || r > max_mm) return;
-    const float f = static_cast<float>(r);
-    scans.scan().points.push_back(
-        PointXYZIRT{l.dx * f + l.ox, l.dy * f + l.oy, l.dz * f + l.oz, static_cast<float>(i), t, rg, type, 0});
-  }
-
-  void decode_dual(const std::uint8_t* px, const LutEntry& l, std::uint32_t t, std::uint16_t rg) {
+  void decode_dual(const std::uint8_t* px, const LutEntry& l, std::uint16_t rg, ColumnWriter& w) const {
     const std::uint64_t r1 = range.read(px);
     const std::uint64_t r2 = range2.read(px);
     if (r1 == 0 && r2 == 0) return;
@@ -145,28 +202,34 @@ struct DecoderImpl {
     };
     switch (cfg.returns) {
       case ReturnSelection::kStrongest:
-        if (strongest == 1) emit(l, r1, i1, t, rg, type(1)); else emit(l, r2, i2, t, rg, type(2));
+        if (strongest == 1) w.add(l, r1, i1, rg, type(1)); else w.add(l, r2, i2, rg, type(2));
         break;
       case ReturnSelection::kLast:
-        if (farthest == 1) emit(l, r1, i1, t, rg, type(1)); else emit(l, r2, i2, t, rg, type(2));
+        if (farthest == 1) w.add(l, r1, i1, rg, type(1)); else w.add(l, r2, i2, rg, type(2));
         break;
       case ReturnSelection::kDual:
-        emit(l, r1, i1, t, rg, type(1));
-        emit(l, r2, i2, t, rg, type(2));
+        w.add(l, r1, i1, rg, type(1));
+        w.add(l, r2, i2, rg, type(2));
         break;
     }
   }
 
+  // One column into the column buffer (the profile's compiled loop, or decode_dual), then onto the
+  // scan in one copy.
   void decode_column(const std::uint8_t* col, std::uint16_t mid, std::uint32_t t) {
     const LutEntry* l = lut.column(mid);
     const std::uint8_t* px = col + layout.col_header_size;
     const std::size_t h = layout.pixels_per_column;
-    if (!dual) {
-      for (std::size_t r = 0; r < h; ++r, px += layout.pixel_size)
-        emit(l[r], range.read(px), inten.read(px), t, ring[r], kReturnStrongest);
-      return;
+    const std::size_t stride = layout.pixel_size;
+    const std::uint16_t* rg = ring.data();
+    ColumnWriter w{column_points.data(), 0, lo_mm, span_mm, t};
+    if (single_column != nullptr) {
+      w = single_column(px, l, rg, h, w);
+    } else {
+      for (std::size_t r = 0; r < h; ++r, px += stride) decode_dual(px, l[r], rg[r], w);
     }
-    for (std::size_t r = 0; r < h; ++r, px += layout.pixel_size) decode_dual(px, l[r], t, ring[r]);
+    auto& points = scans.scan().points;
+    points.insert(points.end(), column_points.begin(), column_points.begin() + static_cast<std::ptrdiff_t>(w.n));
   }
 
   PacketStatus check(std::span<const std::byte> bytes) const noexcept { return check_packet(bytes, layout); }

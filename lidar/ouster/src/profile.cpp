@@ -5,33 +5,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "profile_table.hpp"
+
 namespace sensor_rig::lidar::ouster {
 namespace {
-
-constexpr FieldSpec bits(std::uint16_t bit, std::uint8_t width, std::uint8_t up = 0) { return {bit, width, up}; }
-constexpr FieldSpec kNone{};
-
-// Order of every table: range, flags, reflectivity, signal, near_ir, range2, flags2,
-// reflectivity2, signal2, window (the Field enum).
-constexpr ProfileSpec kProfiles[] = {
-    {Profile::kLegacy, "LEGACY", 12, 1,
-     {bits(0, 20), bits(28, 4), bits(32, 8), bits(48, 16), bits(64, 16), kNone, kNone, kNone, kNone, kNone}},
-    {Profile::kRng19Rfl8Sig16Nir16, "RNG19_RFL8_SIG16_NIR16", 12, 1,
-     {bits(0, 19), bits(19, 5), bits(32, 8), bits(48, 16), bits(64, 16), kNone, kNone, kNone, kNone, bits(88, 8)}},
-    {Profile::kRng19Rfl8Sig16Nir16Dual, "RNG19_RFL8_SIG16_NIR16_DUAL", 16, 2,
-     {bits(0, 19), bits(19, 5), bits(24, 8), bits(64, 16), bits(96, 16), bits(32, 19), bits(51, 5), bits(56, 8), bits(80, 16), bits(120, 8)}},
-    {Profile::kRng15Rfl8Nir8, "RNG15_RFL8_NIR8", 4, 1,
-     {bits(0, 15, 3), bits(15, 1), bits(16, 8), kNone, bits(24, 8, 4), kNone, kNone, kNone, kNone, kNone}},
-    {Profile::kRng15Rfl8Win8, "RNG15_RFL8_WIN8", 4, 1,
-     {bits(0, 15, 3), bits(15, 1), bits(16, 8), kNone, kNone, kNone, kNone, kNone, kNone, bits(24, 8)}},
-    {Profile::kFiveWordPixel, "FIVE_WORD_PIXEL", 20, 2,
-     {bits(0, 19), bits(19, 5), bits(24, 8), bits(64, 16), bits(96, 16), bits(32, 19), bits(51, 5), bits(56, 8), bits(80, 16), kNone}},
-    {Profile::kFusaRng15Rfl8Nir8Dual, "FUSA_RNG15_RFL8_NIR8_DUAL", 8, 2,
-     {bits(0, 15, 3), bits(15, 1), bits(16, 8), kNone, bits(24, 8, 4), bits(32, 15, 3), bits(47, 1), bits(48, 8), kNone, bits(56, 8)}},
-    {Profile::kRng15Rfl8Nir8Dual, "RNG15_RFL8_NIR8_DUAL", 8, 2,
-     {bits(0, 15, 3), bits(15, 1), bits(16, 8), kNone, bits(24, 8, 4), bits(32, 15, 3), bits(47, 1), bits(48, 8), kNone, bits(56, 8)}},
-};
-static_assert(std::size(kProfiles) == kProfileCount);
 
 // packet_type, frame_id, init_id, prod_sn, alert_flags, countdown_thermal_shutdown,
 // countdown_shot_limiting, thermal_shutdown, shot_limiting
@@ -43,7 +20,7 @@ constexpr HeaderSpec kFusaHeader{bits(0, 8),   bits(32, 32), bits(8, 24),  bits(
 
 // Every table entry must fit its pixel: checked once at compile time.
 constexpr bool tables_fit() {
-  for (const auto& p : kProfiles) {
+  for (const auto& p : kProfileTable) {
     for (const auto& f : p.fields) {
       if (f.width > 32 || f.bit_offset + f.width > p.pixel_bytes * 8) return false;
     }
@@ -56,20 +33,20 @@ static_assert(tables_fit());
 
 const ProfileSpec& profile_spec(Profile p) noexcept {
   const auto i = static_cast<std::size_t>(p);
-  return kProfiles[i < kProfileCount ? i : 0];
+  return kProfileTable[i < kProfileCount ? i : 0];
 }
 
-std::span<const ProfileSpec> all_profiles() noexcept { return kProfiles; }
+std::span<const ProfileSpec> all_profiles() noexcept { return kProfileTable; }
 
 std::optional<Profile> profile_from_name(std::string_view name) noexcept {
-  for (const auto& p : kProfiles)
+  for (const auto& p : kProfileTable)
     if (p.name == name) return p.profile;
   return std::nullopt;
 }
 
 std::string profile_names() {
   std::string s;
-  for (const auto& p : kProfiles) s += (s.empty() ? "" : ", ") + std::string(p.name);
+  for (const auto& p : kProfileTable) s += (s.empty() ? "" : ", ") + std::string(p.name);
   return s;
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <random>
@@ -275,6 +276,37 @@ TEST(OusterDecoder, InvalidColumnsAndRangeFilter) {
     const double d = std::sqrt(static_cast<double>(p.x * p.x + p.y * p.y + p.z * p.z));
     EXPECT_GT(d, 3.9);
   }
+}
+
+// The limits keep both ends (to the millimetre), range 0 is never a point, and limits that round
+// to an empty millimetre interval keep nothing (the hot loop's single unsigned compare).
+TEST(OusterDecoder, RangeLimitsAreInclusiveAndRangeZeroIsNoReturn) {
+  const Profile prof = Profile::kRng19Rfl8Sig16Nir16;
+  const std::uint32_t ranges[] = {0, 3999, 4000, 4001, 4999, 5000, 5001, 1};
+  std::vector<Column> cols(16);
+  for (std::size_t c = 0; c < 16; ++c) {
+    cols[c].measurement_id = static_cast<std::uint16_t>(c);
+    cols[c].timestamp_ns = kT0 + c * 1000;
+    for (std::size_t r = 0; r < kPixels; ++r) {
+      cols[c].pixels.push_back(pixel_at(c, r));
+      cols[c].pixels.back().first.range_mm = ranges[(c + r) % std::size(ranges)];
+    }
+  }
+  const auto pkt = encode_packet(prof, kPixels, 9, cols);
+  const auto points_with = [&](double min_m, double max_m) {
+    auto cfg = config_for(prof);
+    cfg.min_range_m = min_m;
+    cfg.max_range_m = max_m;
+    cfg.emit_partial_scans = true;
+    Decoder dec(cfg);
+    EXPECT_FALSE(dec.push(PacketView{as_bytes(pkt), 0, 7502}, 5));
+    const auto s = dec.flush();
+    return s ? s->points.size() : std::size_t{0};
+  };
+  const std::size_t per_value = 16 * kPixels / std::size(ranges);  // each value on 32 pixels
+  EXPECT_EQ(points_with(0.0, std::numeric_limits<double>::infinity()), 7 * per_value);
+  EXPECT_EQ(points_with(4.0, 5.0), 4 * per_value);  // 4000, 4001, 4999, 5000
+  EXPECT_EQ(points_with(4.0001, 4.0009), 0U);       // [4001, 4000] mm: empty
 }
 
 TEST(OusterDecoder, BadPacketsAreCountedDrops) {
