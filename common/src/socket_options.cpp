@@ -1,5 +1,8 @@
 #include "sensor_rig/common/socket_options.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+
 #include <cerrno>
 #include <cstring>
 #include <ctime>
@@ -20,6 +23,12 @@ bool try_socket_option(int fd, int level, int opt, int value) noexcept {
 ReceiveControl read_receive_control(const msghdr& h) noexcept {
   ReceiveControl rc;
   for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(const_cast<msghdr*>(&h), c)) {
+    if (c->cmsg_level == IPPROTO_IP && c->cmsg_type == IP_PKTINFO && c->cmsg_len >= CMSG_LEN(sizeof(in_pktinfo))) {
+      in_pktinfo info{};
+      std::memcpy(&info, CMSG_DATA(c), sizeof info);
+      rc.dst_addr = ntohl(info.ipi_addr.s_addr);
+      continue;
+    }
     if (c->cmsg_level != SOL_SOCKET) continue;
     if (c->cmsg_type == SCM_TIMESTAMPNS && c->cmsg_len >= CMSG_LEN(sizeof(timespec))) {
       timespec ts{};

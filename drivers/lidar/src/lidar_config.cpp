@@ -33,7 +33,7 @@ LidarMockConfig parse_mock(const config::Node& n) {
 LidarRecordConfig parse_record(const config::Node& n) {
   LidarRecordConfig r;
   if (!n.expect_map()) return r;
-  n.allow_keys({"directory", "max_file_mb", "max_file_s", "max_files"});
+  n.allow_keys({"directory", "max_file_mb", "max_file_s", "max_files", "queue_mb"});
   r.directory = n.get_path("directory");
   if (r.directory.empty()) n.fail("directory", "must name a directory");
   if (std::filesystem::exists(r.directory) && !std::filesystem::is_directory(r.directory))
@@ -41,6 +41,7 @@ LidarRecordConfig parse_record(const config::Node& n) {
   r.max_file_mb = n.get_double("max_file_mb", 1.0, 1024.0 * 1024.0, 256.0);
   r.max_file_s = n.get_double("max_file_s", 0.0, 86400.0, 60.0);
   r.max_files = static_cast<int>(n.get_int("max_files", 1, 100000, 10));
+  r.queue_mb = n.get_double("queue_mb", 1.0, 4096.0, 16.0);
   return r;
 }
 

@@ -10,7 +10,7 @@
 #include "sensor_rig/common/realtime_thread.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/lidar/ouster/imu_packet.hpp"
-#include "sensor_rig/lidar/pcap_recorder.hpp"
+#include "sensor_rig/lidar/recorder_thread.hpp"
 #include "sensor_rig/lidar/ring_source.hpp"
 #include "sensor_rig/lidar/udp_source.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
@@ -39,7 +39,7 @@ timesync::StamperConfig lidar_stamper_config(const LidarConfig& c, Nanos packet_
   return stamper_config(c.time_source, c.hour_source, c.clock_correction, packet_span_ns);
 }
 
-std::unique_ptr<lidar::PcapRecorder> make_recorder(const LidarConfig& c) {
+std::unique_ptr<lidar::RecorderThread> make_recorder(const LidarConfig& c) {
   if (c.record.directory.empty()) return nullptr;
   lidar::PcapRecorderConfig r;
   r.directory = c.record.directory;
@@ -47,12 +47,18 @@ std::unique_ptr<lidar::PcapRecorder> make_recorder(const LidarConfig& c) {
   r.max_file_bytes = static_cast<std::uint64_t>(c.record.max_file_mb * 1024.0 * 1024.0);
   r.max_file_ns = static_cast<Nanos>(c.record.max_file_s * 1e9);
   r.max_files = static_cast<std::size_t>(c.record.max_files);
-  return std::make_unique<lidar::PcapRecorder>(r);
+  const auto queue_bytes = static_cast<std::size_t>(c.record.queue_mb * 1024.0 * 1024.0);
+  return std::make_unique<lidar::RecorderThread>(std::make_unique<lidar::PcapRecorder>(r), queue_bytes);
 }
 
 std::uint32_t ipv4_of(const std::string& host) {
   in_addr a{};
   return ::inet_pton(AF_INET, host.c_str(), &a) == 1 ? ntohl(a.s_addr) : 0;
+}
+
+bool model_vendor_is(const LidarConfig& c, std::string_view vendor) {
+  const auto* m = lidar::find_model(c.model);
+  return m != nullptr && m->vendor == vendor;
 }
 
 // The data port's source as the config asks: a UDP socket, or the packet ring on an interface.
@@ -63,11 +69,18 @@ std::unique_ptr<lidar::UdpSource> make_udp_source(const LidarConfig& c) {
       lidar::UdpSourceConfig{{c.host, static_cast<std::uint16_t>(c.port)}, c.receive_buffer_bytes, 64, false});
 }
 
+// Velodyne position packets and Ouster IMU packets; Hesai's GPS port is not read.
+bool has_second_port(const LidarConfig& c) {
+  return c.position_port != 0 && (model_vendor_is(c, "velodyne") || model_vendor_is(c, "ouster"));
+}
+
+// The ring takes both of the sensor's ports (one filter, one ring, demultiplexed by port).
 std::unique_ptr<lidar::RingSource> make_ring_source(const LidarConfig& c) {
   if (c.source != LidarSource::kPacket) return nullptr;
   lidar::RingSourceConfig r;
   r.interface = c.interface;
   r.port = static_cast<std::uint16_t>(c.port);
+  r.second_port = has_second_port(c) ? static_cast<std::uint16_t>(c.position_port) : 0;
   r.sensor_host = c.sensor_address.empty() ? 0 : ipv4_of(c.sensor_address);
   r.retire_timeout_ms = c.ring_retire_ms;
   try {
@@ -75,11 +88,6 @@ std::unique_ptr<lidar::RingSource> make_ring_source(const LidarConfig& c) {
   } catch (const std::exception& e) {  // unknown interface, no CAP_NET_RAW: say which LIDAR
     throw std::runtime_error("lidar " + c.name + ": " + e.what());
   }
-}
-
-bool model_vendor_is(const LidarConfig& c, std::string_view vendor) {
-  const auto* m = lidar::find_model(c.model);
-  return m != nullptr && m->vendor == vendor;
 }
 
 // Side topics (IMU 100 Hz, GPS fix ~1 Hz): reliable, keep-last 10, volatile.
@@ -145,6 +153,7 @@ void add_ring_counters(dds::DriverStatus& s, const lidar::RingSourceStats& r) {
   s.add_number("ring_drops", r.ring_drops);
   s.add_number("ring_freeze_q", r.ring_freeze_q);
   s.add_number("ring_filtered", r.filtered);
+  s.add_number("ring_second_port_packets", r.second_port_packets);
   s.add_number("reassembled", r.reassembly.reassembled);
   s.add_number("reassembly_duplicates", r.reassembly.duplicates);
   s.add_number("reassembly_dropped", r.reassembly.dropped_total());
@@ -163,7 +172,7 @@ struct LidarDriver::Impl {
   bool ouster = false;                 // the second port carries IMU packets
   std::unique_ptr<lidar::UdpSource> udp;    // source: udp
   std::unique_ptr<lidar::RingSource> ring;  // source: packet
-  std::unique_ptr<lidar::UdpSource> position;  // second port: Velodyne position / Ouster IMU packets
+  std::unique_ptr<lidar::UdpSource> position;  // second port with source: udp (Velodyne position / Ouster IMU)
   // 64 kB slots: the largest UDP payload (an OS-128 packet is ~25 kB; Velodyne 1206 B).
   lidar::SlotArena arena{64, 65536};
   lidar::SlotArena position_arena{16, 1024};  // position (512 B) / IMU (48 B) packets
@@ -182,8 +191,8 @@ struct LidarDriver::Impl {
   std::unique_ptr<dds::Topic<msg::NavSatFix>> fix_topic;
   std::unique_ptr<dds::Writer<msg::NavSatFix>> fix_writer;
   std::vector<msg::PointField> fields;
-  std::unique_ptr<lidar::PcapRecorder> recorder;  // `record:`: raw packets of both ports, as received
-  std::uint32_t host_ip = 0;
+  // `record:`: raw packets of both ports, as received; queued here, written on its own thread.
+  std::unique_ptr<lidar::RecorderThread> recorder;
   std::thread thread;
   std::atomic<bool> stop_flag{false};
   std::vector<timesync::SweepObserver*> sweep_observers;  // set before start(), read by the thread
@@ -218,9 +227,6 @@ struct LidarDriver::Impl {
   std::uint64_t incomplete_scans = 0;  // published scans with missing packets
   std::string last_error;
   lidar::DecoderCounters decoder_stats;
-  lidar::PcapRecorderStats record_stats;
-  std::string record_error;
-  std::string record_file;
   lidar::UdpSourceStats udp_stats;
   lidar::RingSourceStats ring_stats;
   timesync::StamperStatus sync;
@@ -244,9 +250,11 @@ struct LidarDriver::Impl {
         imu_frame_id(c.frame_id + "_imu"),
         gps_frame_id(c.frame_id + "_gps") {
     ouster = model_vendor_is(c, "ouster");
-    if (c.position_port != 0 && (velodyne || ouster)) {
-      position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
-          {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 16, false});
+    if (has_second_port(c)) {
+      if (!ring) {
+        position = std::make_unique<lidar::UdpSource>(lidar::UdpSourceConfig{
+            {c.host, static_cast<std::uint16_t>(c.position_port)}, 1 << 20, 16, false});
+      }
       if (ouster) {
         imu_topic = std::make_unique<dds::Topic<msg::Imu>>(p, imu_topic_name, side_qos());
         imu_writer = std::make_unique<dds::Writer<msg::Imu>>(p, *imu_topic, side_qos());
@@ -257,14 +265,14 @@ struct LidarDriver::Impl {
     }
     fields = msg::point_fields(lidar::kPointFields);
     recorder = make_recorder(c);
-    host_ip = ipv4_of(c.host);
   }
 
-  // The datagram as received, before anything judges it (bad packets are what a recording is for).
-  void record(const lidar::PacketSlot& slot, int port) noexcept {
+  // The datagram as received, before anything judges it (bad packets are what a recording is for):
+  // the ring's captured headers, or a socket's source and destination addresses.
+  void record(const lidar::PacketSlot& slot) noexcept {
     if (!recorder) return;
-    const lidar::UdpAddressing a{slot.src_addr, slot.src_port, host_ip, static_cast<std::uint16_t>(port)};
-    recorder->write(slot.bytes(), slot.rx_ns, a);
+    const lidar::UdpAddressing a{slot.src_addr, slot.src_port, slot.dst_addr, slot.dst_port};
+    recorder->push(slot.bytes(), slot.rx_ns, lidar::DatagramHeaders{a, slot.captured_headers()});
   }
 
   // Vehicle time of the packet's first firing (timesync/ decides how; see its README).
@@ -275,19 +283,25 @@ struct LidarDriver::Impl {
     return stamper.stamp(p);
   }
 
-  void handle_second_port() {
+  // One datagram of the second port, from its socket or from the ring.
+  void handle_second_port(const lidar::PacketSlot& slot) {
+    if (ouster) {
+      handle_imu(slot.bytes(), slot.rx_ns);
+    } else {
+      handle_position(slot.bytes());
+    }
+  }
+
+  // The second port's socket (source: udp): everything queued (an idle data port wakes this loop
+  // only every 50 ms: 5 IMU packets).
+  void drain_second_port_socket() {
     if (!position) return;
-    // Everything queued (an idle data port wakes this loop only every 50 ms: 5 IMU packets).
     for (;;) {
       const auto r = position->receive(position_arena.slots(), 0);
       for (std::size_t i = 0; i < r.count; ++i) {
         const auto& slot = position_arena.slots()[i];
-        record(slot, cfg.position_port);
-        if (ouster) {
-          handle_imu(slot.bytes(), slot.rx_ns);
-        } else {
-          handle_position(slot.bytes());
-        }
+        record(slot);
+        handle_second_port(slot);
       }
       if (r.count < position_arena.slots().size()) break;
     }
@@ -415,7 +429,11 @@ struct LidarDriver::Impl {
       }
       for (std::size_t i = 0; i < r.count; ++i) {
         const auto& s = slots[i];
-        record(s, cfg.port);
+        record(s);
+        if (ring && s.dst_port != ring->port()) {  // the ring's second port
+          handle_second_port(s);
+          continue;
+        }
         const auto packet = lidar::view(s, static_cast<std::uint16_t>(cfg.port));
         if (!decoder->is_data_packet(packet)) continue;
         if (auto scan = decoder->push(packet, packet_stamp(s.bytes(), s.rx_ns))) {
@@ -424,18 +442,13 @@ struct LidarDriver::Impl {
           decoder->recycle(std::move(scan->points));
         }
       }
-      handle_second_port();
+      drain_second_port_socket();
       std::lock_guard lock(mutex);
       decoder_stats = decoder->counters();
       if (ring) {
         ring_stats = ring->stats();
       } else {
         udp_stats = udp->stats();
-      }
-      if (recorder) {
-        record_stats = recorder->stats();
-        record_error = recorder->last_error();
-        record_file = recorder->current_file();
       }
       sync = stamper.hour_status(vehicle_now_ns());
       absolute_sync = stamper.absolute_status(vehicle_now_ns());
@@ -470,13 +483,13 @@ void LidarDriver::stop() {
   impl_->stop_flag.store(true);
   if (!impl_->thread.joinable()) return;
   impl_->thread.join();
-  if (impl_->recorder) impl_->recorder->close();
+  if (impl_->recorder) impl_->recorder->close();  // writes what is still queued
   // One summary line per driver: what arrived, what was published, what was dropped and why.
   const auto st = status();
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
     if (k == "scans" || k == "packets" || k.rfind("dropped", 0) == 0 || k == "packets_dropped" || k == "kernel_drops" || k == "missing_packets" || k == "time_jumps" ||
-        k == "record_packets" || k == "record_errors" || k == "imu_samples" || k == "fixes" ||
+        k == "record_packets" || k == "record_errors" || k == "record_dropped" || k == "record_queue_dropped" || k == "imu_samples" || k == "fixes" ||
         k == "stamp_source" || k == "sync" || k == "ring_drops" || k == "reassembly_dropped")
       line.append(" ").append(k).append("=").append(v);
   log::info("lidar", line);
@@ -491,6 +504,7 @@ dds::DriverStatus LidarDriver::status() const {
   s.name = "lidar/" + c.name;
   s.hardware_id = c.model + "@" + (c.source == LidarSource::kPacket ? c.interface : c.host) + ":" + std::to_string(c.port);
   const Nanos age = impl_->published.last_ns() == 0 ? -1 : vehicle_now_ns() - impl_->published.last_ns();
+  const lidar::RecorderStatus rec = impl_->recorder ? impl_->recorder->status() : lidar::RecorderStatus{};
   if (impl_->published.samples() == 0) {
     s.level = dds::Level::kWarn;
     s.message = "waiting for packets";
@@ -500,9 +514,12 @@ dds::DriverStatus LidarDriver::status() const {
   } else if (!impl_->last_error.empty()) {
     s.level = dds::Level::kWarn;
     s.message = impl_->last_error;
-  } else if (impl_->record_stats.errors > 0) {
+  } else if (rec.sink.stats.errors > 0) {
     s.level = dds::Level::kWarn;
-    s.message = impl_->record_error;
+    s.message = rec.sink.last_error;
+  } else if (rec.queue_dropped > 0) {
+    s.level = dds::Level::kWarn;
+    s.message = "record: " + std::to_string(rec.queue_dropped) + " packets dropped, the writer fell behind (disk too slow?)";
   } else if (impl_->last_missing > 0) {
     s.level = dds::Level::kWarn;
     s.message = "last scan incomplete: " + std::to_string(impl_->last_missing) + " packets missing";
@@ -538,15 +555,16 @@ dds::DriverStatus LidarDriver::status() const {
     s.add_number("sweep_samples", impl_->sweep_samples_sent);
   }
   if (impl_->recorder) {
-    const auto& r = impl_->record_stats;
-    s.add("record_file", impl_->record_file);
+    const auto& r = rec.sink.stats;
+    s.add("record_file", rec.sink.current_file);
     s.add_number("record_packets", r.packets);
     s.add_number("record_bytes", r.bytes);
-    s.add_number("record_dropped", r.dropped);
+    s.add_number("record_dropped", rec.dropped());
+    s.add_number("record_queue_dropped", rec.queue_dropped);
     s.add_number("record_errors", r.errors);
     s.add_number("record_files_opened", r.files_opened);
     s.add_number("record_files_deleted", r.files_deleted);
-    if (!impl_->record_error.empty()) s.add("record_last_error", impl_->record_error);
+    if (!rec.sink.last_error.empty()) s.add("record_last_error", rec.sink.last_error);
   }
   s.add("time_source", timesync::to_string(c.time_source));
   if (c.time_source == timesync::TimeSource::kSensor) {
@@ -554,7 +572,7 @@ dds::DriverStatus LidarDriver::status() const {
     s.add_number("stamp_correction_ns", impl_->stamp_monotonic.correction_ns);
     s.add_number("stamp_device_backward", impl_->stamp_monotonic.device_backward);
   }
-  if (impl_->ouster && impl_->position) {
+  if (impl_->imu_writer) {
     s.add("imu_topic", impl_->imu_topic_name);
     s.add_number("imu_samples", impl_->imu_samples);
     s.add_number("imu_dropped_wrong_size", impl_->imu_dropped_size);

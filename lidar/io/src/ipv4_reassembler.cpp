@@ -4,6 +4,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "sensor_rig/lidar/udp_frame.hpp"
+
 namespace sensor_rig::lidar {
 namespace {
 
@@ -187,9 +189,10 @@ ReassemblyResult Ipv4Reassembler::push(std::span<const std::byte> packet, Nanos 
   put16(hdr + 4, e->id);
   put16(hdr + 6, 0);  // no fragment bits
   hdr[9] = static_cast<std::byte>(e->proto);
-  put16(hdr + 10, 0);  // checksum not recomputed: nothing downstream reads it
+  put16(hdr + 10, 0);
   put32(hdr + 12, e->src);
   put32(hdr + 16, e->dst);
+  put16(hdr + 10, ipv4_header_checksum({hdr, kOutHeader}));  // a recording keeps this header
   e->state = State::kFree;
   ++counters_.reassembled;
   return {ReassemblyStatus::kComplete, std::span<const std::byte>(e->buffer.data(), total), rx_ns};

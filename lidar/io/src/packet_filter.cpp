@@ -61,6 +61,7 @@ std::vector<sock_filter> build_sensor_filter(const SensorFilter& f) {
   a.jump(BPF_JMP | BPF_JSET | BPF_K, kFragmentBits, accept, -1);
   a.op(BPF_LDX | BPF_B | BPF_MSH, 0);                                 // X = IPv4 header length
   a.op(BPF_LD | BPF_H | BPF_IND, 2);                                  // UDP destination port
+  if (f.second_port != 0 && f.second_port != f.dst_port) a.jump(BPF_JMP | BPF_JEQ | BPF_K, f.second_port, accept, -1);
   a.jump(BPF_JMP | BPF_JEQ | BPF_K, f.dst_port, accept, reject);
   a.place(accept);
   a.op(BPF_RET | BPF_K, kFilterAcceptBytes);

@@ -17,6 +17,8 @@
 #include <utility>
 #include <vector>
 
+#include "sensor_rig/lidar/udp_frame.hpp"
+
 namespace sensor_rig::lidar {
 namespace {
 
@@ -31,12 +33,21 @@ void put_be(std::byte* p, std::uint64_t v, int n) noexcept {
   for (int i = 0; i < n; ++i) p[i] = static_cast<std::byte>((v >> (8 * (n - 1 - i))) & 0xFF);
 }
 
-std::uint16_t ipv4_checksum(const std::byte* h) noexcept {
-  std::uint32_t sum = 0;
-  for (int i = 0; i < 20; i += 2)
-    sum += (static_cast<std::uint32_t>(h[i]) << 8) | static_cast<std::uint32_t>(h[i + 1]);
-  while ((sum >> 16) != 0) sum = (sum & 0xFFFF) + (sum >> 16);
-  return static_cast<std::uint16_t>(~sum & 0xFFFF);
+// The record header (ts as s + ns, captured and original length) and the placeholder Ethernet
+// header after it; returns where the IPv4 header goes.
+std::byte* put_record_and_ethernet(std::byte* p, Nanos ts_ns, std::size_t caplen, std::size_t len) noexcept {
+  const Nanos t = std::max<Nanos>(ts_ns, 0);
+  put_le(p, static_cast<std::uint64_t>(t / 1'000'000'000), 4);
+  put_le(p + 4, static_cast<std::uint64_t>(t % 1'000'000'000), 4);
+  put_le(p + 8, caplen, 4);
+  put_le(p + 12, len, 4);
+  std::byte* e = p + kPcapRecordHeaderSize;
+  // Ethernet II: locally administered MACs (neither source keeps the link header), type IPv4.
+  const std::array<std::uint8_t, 6> dst_mac{0x02, 0, 0, 0, 0, 0x02}, src_mac{0x02, 0, 0, 0, 0, 0x01};
+  std::memcpy(e, dst_mac.data(), 6);
+  std::memcpy(e + 6, src_mac.data(), 6);
+  put_be(e + 12, 0x0800, 2);
+  return e + 14;
 }
 
 std::string utc_stamp(Nanos ns) {
@@ -78,21 +89,9 @@ void encode_pcap_file_header(std::span<std::byte, kPcapFileHeaderSize> out) noex
 
 void encode_pcap_record(Nanos ts_ns, const UdpAddressing& a, std::size_t payload_size,
                         std::span<std::byte, kPcapRecordHeaderSize + kUdpFrameHeaderSize> out) noexcept {
-  std::byte* p = out.data();
-  const auto len = static_cast<std::uint32_t>(kUdpFrameHeaderSize + payload_size);
-  const Nanos t = std::max<Nanos>(ts_ns, 0);
-  put_le(p, static_cast<std::uint64_t>(t / 1'000'000'000), 4);
-  put_le(p + 4, static_cast<std::uint64_t>(t % 1'000'000'000), 4);
-  put_le(p + 8, len, 4);
-  put_le(p + 12, len, 4);
-  std::byte* e = p + kPcapRecordHeaderSize;
-  std::memset(e, 0, kUdpFrameHeaderSize);
-  // Ethernet II: locally administered MACs (the socket does not see them), type IPv4.
-  const std::array<std::uint8_t, 6> dst_mac{0x02, 0, 0, 0, 0, 0x02}, src_mac{0x02, 0, 0, 0, 0, 0x01};
-  std::memcpy(e, dst_mac.data(), 6);
-  std::memcpy(e + 6, src_mac.data(), 6);
-  put_be(e + 12, 0x0800, 2);
-  std::byte* ip = e + 14;
+  const std::size_t len = kUdpFrameHeaderSize + payload_size;
+  std::memset(out.data(), 0, out.size());
+  std::byte* ip = put_record_and_ethernet(out.data(), ts_ns, len, len);
   ip[0] = std::byte{0x45};
   put_be(ip + 2, 20 + 8 + payload_size, 2);
   put_be(ip + 6, 0x4000, 2);  // don't fragment: one datagram, reassembled by the kernel
@@ -100,12 +99,24 @@ void encode_pcap_record(Nanos ts_ns, const UdpAddressing& a, std::size_t payload
   ip[9] = std::byte{17};  // UDP
   put_be(ip + 12, a.src_ip, 4);
   put_be(ip + 16, a.dst_ip, 4);
-  put_be(ip + 10, ipv4_checksum(ip), 2);
+  put_be(ip + 10, ipv4_header_checksum({ip, 20}), 2);
   std::byte* udp = ip + 20;
   put_be(udp, a.src_port, 2);
   put_be(udp + 2, a.dst_port, 2);
   put_be(udp + 4, std::min<std::size_t>(8 + payload_size, 65535), 2);
   // UDP checksum 0: "not computed" (allowed for IPv4).
+}
+
+std::size_t encode_pcap_captured_record(Nanos ts_ns, std::span<const std::byte> captured, std::size_t payload_size,
+                                        std::span<std::byte, kMaxRecordHead> out) noexcept {
+  if (captured.size() < 20 + 8 || captured.size() > kMaxCapturedHeaders) return 0;
+  const std::size_t caplen = 14 + captured.size() + payload_size;
+  const std::size_t ip_total =
+      (std::to_integer<std::size_t>(captured[2]) << 8) | std::to_integer<std::size_t>(captured[3]);
+  const std::size_t len = std::max(caplen, 14 + ip_total);
+  std::byte* ip = put_record_and_ethernet(out.data(), ts_ns, caplen, len);
+  std::memcpy(ip, captured.data(), captured.size());
+  return kPcapRecordHeaderSize + 14 + captured.size();
 }
 
 PcapRecorder::PcapRecorder(PcapRecorderConfig cfg) : cfg_(std::move(cfg)) {
@@ -189,7 +200,7 @@ bool PcapRecorder::open_next(Nanos rx_ns) noexcept {
   return true;
 }
 
-bool PcapRecorder::write(std::span<const std::byte> payload, Nanos rx_ns, const UdpAddressing& a) noexcept {
+bool PcapRecorder::write(std::span<const std::byte> payload, Nanos rx_ns, const DatagramHeaders& h) noexcept {
   if (payload.size() > kMaxRecordedPayload) {
     ++stats_.dropped;
     return false;
@@ -200,7 +211,18 @@ bool PcapRecorder::write(std::span<const std::byte> payload, Nanos rx_ns, const 
       return false;
     }
   }
-  const std::uint64_t record = kPcapRecordHeaderSize + kUdpFrameHeaderSize + payload.size();
+  std::array<std::byte, kMaxRecordHead> head{};
+  std::size_t head_size = kPcapRecordHeaderSize + kUdpFrameHeaderSize;
+  if (h.captured.empty()) {
+    encode_pcap_record(rx_ns, h.addressing, payload.size(), std::span(head).first<kPcapRecordHeaderSize + kUdpFrameHeaderSize>());
+  } else {
+    head_size = encode_pcap_captured_record(rx_ns, h.captured, payload.size(), head);
+  }
+  const std::uint64_t record = head_size + payload.size();
+  if (head_size == 0 || record - kPcapRecordHeaderSize > kSnapLen) {  // headers no IPv4 datagram has
+    ++stats_.dropped;
+    return false;
+  }
   if (fd_ && (file_bytes_ + record > cfg_.max_file_bytes ||
               (cfg_.max_file_ns > 0 && rx_ns - file_start_ns_ >= cfg_.max_file_ns))) {
     close();
@@ -209,9 +231,7 @@ bool PcapRecorder::write(std::span<const std::byte> payload, Nanos rx_ns, const 
     ++stats_.dropped;
     return false;
   }
-  std::array<std::byte, kPcapRecordHeaderSize + kUdpFrameHeaderSize> head{};
-  encode_pcap_record(rx_ns, a, payload.size(), head);
-  std::array<iovec, 2> iov{iovec{head.data(), head.size()},
+  std::array<iovec, 2> iov{iovec{head.data(), head_size},
                            iovec{const_cast<std::byte*>(payload.data()), payload.size()}};
   const ssize_t n = ::writev(fd_.get(), iov.data(), static_cast<int>(iov.size()));
   if (n != static_cast<ssize_t>(record)) {

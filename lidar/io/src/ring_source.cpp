@@ -49,6 +49,8 @@ RingSource::RingSource(const RingSourceConfig& config) : config_(config), reasse
   if (config.retire_timeout_ms < 1 || config.retire_timeout_ms > 1000)
     throw std::invalid_argument("packet source: retire_timeout_ms must be in 1..1000");
   if (config.port == 0) throw std::invalid_argument("packet source: port must be non-zero");
+  if (config.second_port == config.port)
+    throw std::invalid_argument("packet source: the second port must differ from the data port");
   const unsigned ifindex = ::if_nametoindex(config.interface.c_str());
   if (config.interface.empty() || ifindex == 0)
     throw std::runtime_error("packet source: network interface '" + config.interface + "' not found");
@@ -57,7 +59,7 @@ RingSource::RingSource(const RingSourceConfig& config) : config_(config), reasse
   fd_ = UniqueFd(::socket(AF_PACKET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
   if (!fd_) fail("socket(AF_PACKET) (needs CAP_NET_RAW)");
   set_socket_option(fd_.get(), SOL_PACKET, PACKET_VERSION, TPACKET_V3, "PACKET_VERSION TPACKET_V3");
-  const auto program = build_sensor_filter({config.port, config.sensor_host});
+  const auto program = build_sensor_filter({config.port, config.sensor_host, config.second_port});
   sock_fprog prog{static_cast<unsigned short>(program.size()), const_cast<sock_filter*>(program.data())};
   if (::setsockopt(fd_.get(), SOL_SOCKET, SO_ATTACH_FILTER, &prog, sizeof prog) != 0) fail("setsockopt SO_ATTACH_FILTER");
   // Our own sends (a mock on the same host) would otherwise come twice on loopback.
@@ -168,7 +170,8 @@ bool RingSource::deliver(const std::byte* frame, PacketSlot& slot) noexcept {
   if (r.status != ReassemblyStatus::kNotFragment && r.status != ReassemblyStatus::kComplete) return false;
   const UdpFrame f = parse_udp_frame(kLinktypeIpv4, r.datagram);
   // Non-first fragments of any datagram of the sensor pass the kernel filter: the port decides here.
-  if (f.status != FrameStatus::kOk || f.dst_port != config_.port ||
+  const bool second = config_.second_port != 0 && f.dst_port == config_.second_port;
+  if (f.status != FrameStatus::kOk || (f.dst_port != config_.port && !second) ||
       (config_.sensor_host != 0 && f.src_ip != config_.sensor_host)) {
     ++stats_.filtered;
     return false;
@@ -179,8 +182,14 @@ bool RingSource::deliver(const std::byte* frame, PacketSlot& slot) noexcept {
   slot.rx_ns = r.rx_ns;
   slot.src_addr = f.src_ip;
   slot.src_port = f.src_port;
+  slot.dst_addr = f.dst_ip;
+  slot.dst_port = f.dst_port;
+  const auto headers = static_cast<std::size_t>(f.payload.data() - r.datagram.data());  // IPv4 (+ options) + UDP
+  slot.ip_udp_header_size = static_cast<std::uint8_t>(std::min(headers, slot.ip_udp_header.size()));
+  std::memcpy(slot.ip_udp_header.data(), r.datagram.data(), slot.ip_udp_header_size);
   if (slot.truncated) ++stats_.truncated;
   ++stats_.packets;
+  if (second) ++stats_.second_port_packets;
   stats_.bytes += slot.size;
   return true;
 }

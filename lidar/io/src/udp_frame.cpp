@@ -115,4 +115,11 @@ UdpFrame parse_udp_frame(int linktype, std::span<const std::byte> frame) noexcep
   }
 }
 
+std::uint16_t ipv4_header_checksum(std::span<const std::byte> header) noexcept {
+  std::uint32_t sum = 0;
+  for (std::size_t i = 0; i + 1 < header.size(); i += 2) sum += be16(header, i);
+  while ((sum >> 16) != 0) sum = (sum & 0xFFFF) + (sum >> 16);
+  return static_cast<std::uint16_t>(~sum & 0xFFFF);
+}
+
 }  // namespace sensor_rig::lidar

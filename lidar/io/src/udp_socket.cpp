@@ -77,6 +77,10 @@ UdpSocketBuilder& UdpSocketBuilder::drop_counter(bool on) {
   drops_ = on;
   return *this;
 }
+UdpSocketBuilder& UdpSocketBuilder::destination_address(bool on) {
+  pktinfo_ = on;
+  return *this;
+}
 UdpSocketBuilder& UdpSocketBuilder::nonblocking(bool on) {
   nonblocking_ = on;
   return *this;
@@ -106,6 +110,7 @@ UniqueFd UdpSocketBuilder::build() const {
   }
   if (timestamps_) set_socket_option(fd.get(), SOL_SOCKET, SO_TIMESTAMPNS, 1, "SO_TIMESTAMPNS");
   if (drops_) set_socket_option(fd.get(), SOL_SOCKET, SO_RXQ_OVFL, 1, "SO_RXQ_OVFL");
+  if (pktinfo_) set_socket_option(fd.get(), IPPROTO_IP, IP_PKTINFO, 1, "IP_PKTINFO");
   if (bind_) {
     const sockaddr_in addr = resolve(*bind_);
     if (::bind(fd.get(), reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
@@ -127,6 +132,13 @@ std::uint16_t local_port(int fd) noexcept {
   socklen_t len = sizeof addr;
   if (::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) return 0;
   return ntohs(addr.sin_port);
+}
+
+std::uint32_t local_address(int fd) noexcept {
+  sockaddr_in addr{};
+  socklen_t len = sizeof addr;
+  if (::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) return 0;
+  return ntohl(addr.sin_addr.s_addr);
 }
 
 }  // namespace sensor_rig::lidar

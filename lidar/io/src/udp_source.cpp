@@ -12,7 +12,6 @@
 
 namespace sensor_rig::lidar {
 
-static_assert(sizeof(sockaddr_in) <= 64);
 
 SlotArena::SlotArena(std::size_t count, std::size_t slot_bytes)
     : storage_(count * slot_bytes), slots_(count) {
@@ -41,10 +40,12 @@ UdpSource::UdpSource(const UdpSourceConfig& config) : max_batch_(config.max_batc
             .receive_buffer(config.receive_buffer_bytes)
             .kernel_timestamps()
             .drop_counter()
+            .destination_address()
             .nonblocking()
             .bind_to(config.bind)
             .build();
   port_ = local_port(fd_.get());
+  local_addr_ = local_address(fd_.get());
   rcvbuf_ = effective_receive_buffer(fd_.get());
   msgs_.resize(max_batch_);
   iovs_.resize(max_batch_);
@@ -101,6 +102,9 @@ RecvResult UdpSource::receive(std::span<PacketSlot> out, int timeout_ms) noexcep
     const ReceiveControl control = read_receive_control(h);
     slot.rx_ns = control.kernel_rx_ns;
     if (control.rxq_dropped) stats_.kernel_drops = *control.rxq_dropped;
+    slot.dst_addr = control.dst_addr.value_or(local_addr_);
+    slot.dst_port = port_;
+    slot.ip_udp_header_size = 0;
     if (slot.rx_ns == 0) {
       if (fallback_ns == 0) fallback_ns = vehicle_now_ns();
       slot.rx_ns = fallback_ns;

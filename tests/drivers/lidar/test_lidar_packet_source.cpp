@@ -1,18 +1,28 @@
 // The LIDAR node with `source: packet`: the config keys (errors at file:line:col), an unknown
 // interface refused at start naming the LIDAR, and a synthetic VLP-16 sent over loopback read
-// through the AF_PACKET ring into published scans, with the ring's counters in the status.
+// through the AF_PACKET ring into published scans, with the ring's counters in the status; its
+// recording keeps the IPv4/UDP headers the ring captured.
 #include <gtest/gtest.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <vector>
 
 #include "rig_process.hpp"
 #include "sensor_rig/common/config_node.hpp"
+#include "sensor_rig/common/unique_fd.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/lidar/lidar_config.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
+#include "sensor_rig/lidar/pcap_reader.hpp"
+#include "sensor_rig/lidar/udp_frame.hpp"
 #include "sensor_rig/lidar/udp_sender.hpp"
 #include "status_value.hpp"
 #include "wait.hpp"
@@ -185,6 +195,94 @@ TEST(LidarPacketSource, RingOnLoopbackPublishesScans) {
   EXPECT_EQ(test::status_value(st, "ring_filtered"), "0");
   EXPECT_NE(st.hardware_id.find("@lo:"), std::string::npos) << st.hardware_id;
   driver->stop();
+}
+
+
+// The IPv4 header bytes of every record of a pcap file the recorder wrote (Ethernet frames).
+std::vector<std::vector<std::byte>> recorded_ipv4_headers(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  const std::vector<char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto le32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (int i = 3; i >= 0; --i) v = (v << 8) | static_cast<unsigned char>(b[at + static_cast<std::size_t>(i)]);
+    return v;
+  };
+  std::vector<std::vector<std::byte>> out;
+  for (std::size_t at = 24; at + 16 + 14 + 20 <= b.size(); at += 16 + le32(at + 8)) {
+    const auto* ip = reinterpret_cast<const std::byte*>(b.data() + at + 16 + 14);
+    out.emplace_back(ip, ip + 20);
+  }
+  return out;
+}
+
+// The ring sees each datagram's own headers, and the recording keeps them: sent to 127.0.0.2 (not
+// the configured host) with a DSCP mark from a known port, every record says so (before, the
+// recorder rebuilt them from the config: destination 127.0.0.1, TOS 0).
+TEST(LidarPacketSource, RecordingKeepsTheCapturedHeaders) {
+  test::TempDir dir;
+  auto c = vlp16_on("lo", "ringrec");
+  c.record.directory = (dir.path / "rec").string();
+  dds::Participant p;
+  dds::StampsWriter stamps(p);
+  std::unique_ptr<LidarDriver> driver;
+  try {
+    driver = std::make_unique<LidarDriver>(c, p, stamps);
+  } catch (const std::runtime_error& e) {
+    GTEST_SKIP() << "AF_PACKET ring not permitted here: " << e.what();
+  }
+  driver->start();
+  UniqueFd tx(::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
+  ASSERT_TRUE(tx);
+  const int tos = 0x28;  // DSCP AF11
+  ASSERT_EQ(::setsockopt(tx.get(), IPPROTO_IP, IP_TOS, &tos, sizeof tos), 0);
+  sockaddr_in from{};
+  from.sin_family = AF_INET;
+  from.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(tx.get(), reinterpret_cast<const sockaddr*>(&from), sizeof from), 0);
+  socklen_t len = sizeof from;
+  ASSERT_EQ(::getsockname(tx.get(), reinterpret_cast<sockaddr*>(&from), &len), 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(c.port));
+  to.sin_addr.s_addr = htonl(0x7F000002);
+
+  lidar::mock::SyntheticOptions o;
+  o.model = "VLP-16";
+  auto s = lidar::mock::make_synthetic_sensor(o, lidar::mock::Scene::standard());
+  constexpr std::size_t kSent = 20;
+  for (std::size_t n = 0; n < kSent;) {
+    const auto pkt = s->next();
+    if (pkt.position) continue;
+    ASSERT_EQ(::sendto(tx.get(), pkt.bytes.data(), pkt.bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to),
+              static_cast<ssize_t>(pkt.bytes.size()));
+    ++n;
+  }
+  ASSERT_TRUE(test::wait_for([&] { return test::status_value(driver->status(), "record_packets") == std::to_string(kSent); },
+                             5000))
+      << test::status_value(driver->status(), "record_packets");
+  driver->stop();
+
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(c.record.directory)) files.push_back(e.path());
+  ASSERT_EQ(files.size(), 1u);
+  lidar::PcapReader r(files[0].string());
+  std::size_t records = 0;
+  while (auto rec = r.next()) {
+    ++records;
+    EXPECT_EQ(rec->dst_ip, 0x7F000002u) << "the datagram's destination, not the configured host";
+    EXPECT_EQ(rec->src_ip, 0x7F000001u);
+    EXPECT_EQ(rec->src_port, ntohs(from.sin_port));
+    EXPECT_EQ(rec->packet.dst_port, c.port);
+    EXPECT_EQ(rec->packet.data.size(), 1206u);
+  }
+  EXPECT_EQ(r.error(), "");
+  EXPECT_EQ(records, kSent);
+  const auto headers = recorded_ipv4_headers(files[0]);
+  ASSERT_EQ(headers.size(), kSent);
+  for (const auto& h : headers) {
+    EXPECT_EQ(std::to_integer<int>(h[1]), tos) << "the sender's TOS byte, as on the wire";
+    EXPECT_EQ(lidar::ipv4_header_checksum(h), 0) << "a valid header checksum";
+  }
 }
 
 }  // namespace

@@ -104,6 +104,7 @@ TEST(LidarRecord, RecordingIsWhatArrivedAndDecodesToThePublishedScans) {
   c.record.directory = (dir.path / "rec").string();
   c.record.max_file_mb = 1;  // ~800 packets a file: the recording rotates
   c.record.max_files = 100;
+  c.host = "0.0.0.0";  // the recorded destination is the datagram's (IP_PKTINFO), not the bind address
   RecordingNode node(c);
   ASSERT_TRUE(node.start());
   const auto sent = vlp16(25.5);  // 2.5 s worth of packets, sent in ~0.1 s
@@ -125,6 +126,7 @@ TEST(LidarRecord, RecordingIsWhatArrivedAndDecodesToThePublishedScans) {
       prev[pos ? 1 : 0] = rec->packet.rx_ns;
       EXPECT_TRUE(pos || rec->packet.dst_port == c.port);
       EXPECT_EQ(rec->dst_ip, 0x7F000001u);
+      EXPECT_EQ(rec->src_ip, 0x7F000001u);
       recorded.push_back({{rec->packet.data.begin(), rec->packet.data.end()}, pos});
     }
     EXPECT_EQ(r.error(), "") << f;

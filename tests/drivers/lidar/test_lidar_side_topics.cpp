@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <vector>
 
@@ -43,7 +44,8 @@ struct ImuSeen {
   double ax, ay, az, wx, wy, wz, orientation_cov0;
 };
 
-TEST(LidarSideTopics, OusterImuPacketsBecomeImuInSiUnits) {
+// With `source: packet` the ring on `lo` takes the IMU port too (no socket on it): the same result.
+void ouster_imu_packets_become_imu(LidarSource source) {
   test::TempDir dir;
   lidar::mock::NominalOuster n;
   const auto meta = dir.write("os.json", lidar::mock::metadata_json(lidar::mock::nominal_ouster_metadata(n)));
@@ -55,8 +57,18 @@ TEST(LidarSideTopics, OusterImuPacketsBecomeImuInSiUnits) {
   c.position_port = test::free_udp_port();  // imu_port in the config
   c.time_source = timesync::TimeSource::kSensor;
   c.frame_id = "lidar_" + c.name;
+  if (source == LidarSource::kPacket) {
+    c.source = source;
+    c.interface = "lo";
+  }
 
-  test::LidarNodeReader<msg::Imu> node(c, "imu", 100);
+  std::unique_ptr<test::LidarNodeReader<msg::Imu>> made;
+  try {
+    made = std::make_unique<test::LidarNodeReader<msg::Imu>>(c, "imu", 100);
+  } catch (const std::runtime_error& e) {
+    GTEST_SKIP() << "AF_PACKET ring not permitted here: " << e.what();
+  }
+  auto& node = *made;
   ASSERT_TRUE(node.start());
   auto& reader = node.reader;
   auto& driver = node.driver;
@@ -128,8 +140,15 @@ TEST(LidarSideTopics, OusterImuPacketsBecomeImuInSiUnits) {
   EXPECT_EQ(test::status_value(st, "imu_samples"), "5");
   EXPECT_EQ(test::status_value(st, "imu_dropped_wrong_size"), "2");
   EXPECT_EQ(test::status_value(st, "imu_topic"), "/sensors/lidar/" + c.name + "/imu");
+  if (source == LidarSource::kPacket) {
+    EXPECT_EQ(test::status_value(st, "ring_second_port_packets"), "8");
+  }
   driver.stop();
 }
+
+TEST(LidarSideTopics, OusterImuPacketsBecomeImuInSiUnits) { ouster_imu_packets_become_imu(LidarSource::kUdp); }
+
+TEST(LidarSideTopics, OusterImuThroughThePacketRing) { ouster_imu_packets_become_imu(LidarSource::kPacket); }
 
 std::vector<std::byte> position_bytes(const std::string& sentence, vel::PpsState pps = vel::PpsState::kLocked) {
   std::vector<std::byte> b(lidar::velodyne::kPositionPacketSize);

@@ -32,6 +32,21 @@ TEST(PacketFilter, UdpToTheSensorPortOnly) {
   EXPECT_EQ(run_classic_bpf(build_sensor_filter(f), udp_to(7502)), kFilterAcceptBytes);
 }
 
+// One ring per sensor for both ports: the second (IMU / position) port passes too, nothing else.
+TEST(PacketFilter, SecondPortPassesToo) {
+  const SensorFilter f{7502, 0, 7503};
+  EXPECT_TRUE(passes(f, udp_to(7502)));
+  EXPECT_TRUE(passes(f, udp_to(7503)));
+  EXPECT_FALSE(passes(f, udp_to(7504)));
+  EXPECT_FALSE(passes(f, udp_to(2368)));
+  Ip opts;
+  opts.header_bytes = 32;
+  EXPECT_TRUE(passes(f, udp_to(7503, opts)));
+  const Ip ip;
+  EXPECT_TRUE(passes({7502, ip.src, 7503}, udp_to(7503)));
+  EXPECT_FALSE(passes({7502, ip.src + 1, 7503}, udp_to(7503))) << "another sender";
+}
+
 TEST(PacketFilter, PortIsFoundBehindHeaderOptions) {
   Ip opts;
   opts.header_bytes = 32;

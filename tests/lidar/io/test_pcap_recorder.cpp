@@ -1,7 +1,9 @@
 // Rotating pcap recorder: what it writes is a capture libpcap reads back (payloads, ns record
-// times, addresses) that decodes to the same scans; rotation by size and by time with a bounded
-// file count; errors (unwritable directory, disk full via RLIMIT_FSIZE in a child) are counted, the
-// caller never stops, and every file left behind ends at a whole record.
+// times, addresses, or the captured IPv4/UDP headers as they came) that decodes to the same scans;
+// rotation by size and by time with a bounded file count; errors (unwritable directory, disk full
+// via RLIMIT_FSIZE in a child) are counted, the caller never stops, and every file left behind ends
+// at a whole record. The writer thread: its queue keeps order across the ring's end, close() writes
+// the whole tail, and a blocked writer makes pushes fail fast and counted, never wait.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -9,14 +11,23 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <condition_variable>
 #include <filesystem>
+#include <future>
+#include <mutex>
+#include <thread>
 #include <fstream>
+#include <iterator>
 #include <vector>
 
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/pcap_reader.hpp"
 #include "sensor_rig/lidar/pcap_recorder.hpp"
+#include "sensor_rig/lidar/record_queue.hpp"
+#include "sensor_rig/lidar/recorder_thread.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
+#include "sensor_rig/lidar/udp_frame.hpp"
 
 namespace sensor_rig::lidar {
 namespace {
@@ -125,6 +136,50 @@ TEST(PcapRecorder, RoundTripIsTheSameCaptureAndTheSameScans) {
   const auto a = scans_of(stream), b = scans_of(read_all(files));
   ASSERT_GE(a.size(), 2u);
   EXPECT_EQ(a, b);
+}
+
+// The packet ring's datagrams keep their own IPv4/UDP headers (options, TTL, ID, TOS, checksum):
+// copied into the record as they came; a payload cut short keeps the headers' original length.
+TEST(PcapRecorder, CapturedHeadersAreKeptAsTheyCame) {
+  TempDir d;
+  const auto stream = vlp16_stream(2);
+  // IPv4 with 4 bytes of options (IHL 6): TOS 0x28, ID 0x1234, TTL 3, 10.0.0.5:2368 -> 10.0.0.9:2368.
+  std::vector<std::byte> h(24 + 8);
+  const std::size_t total = h.size() + stream[0].bytes.size();
+  const std::vector<int> ip{0x46, 0x28, static_cast<int>(total >> 8), static_cast<int>(total & 0xff), 0x12, 0x34, 0x40, 0,
+                            3, 17, 0, 0, 10, 0, 0, 5, 10, 0, 0, 9, 0x94, 0x04, 0, 0};
+  for (std::size_t i = 0; i < ip.size(); ++i) h[i] = static_cast<std::byte>(ip[i]);
+  const std::size_t udp_len = 8 + stream[0].bytes.size();
+  const std::vector<int> udp{0x09, 0x40, 0x09, 0x40, static_cast<int>(udp_len >> 8), static_cast<int>(udp_len & 0xff), 0xab, 0xcd};
+  for (std::size_t i = 0; i < udp.size(); ++i) h[24 + i] = static_cast<std::byte>(udp[i]);
+  const auto sum = ipv4_header_checksum(std::span(h).first(24));
+  h[10] = static_cast<std::byte>(sum >> 8);
+  h[11] = static_cast<std::byte>(sum & 0xff);
+  PcapRecorderConfig c;
+  c.directory = d.path.string();
+  PcapRecorder rec(c);
+  ASSERT_TRUE(rec.write(stream[0].bytes, stream[0].rx_ns, DatagramHeaders{kAddr, h}));
+  const auto cut = std::span(stream[0].bytes).first(100);  // a slot too small for the datagram
+  ASSERT_TRUE(rec.write(cut, stream[0].rx_ns + 1, DatagramHeaders{kAddr, h}));
+  EXPECT_FALSE(rec.write(stream[0].bytes, 0, DatagramHeaders{kAddr, std::span(h).first(20)})) << "no UDP header";
+  EXPECT_EQ(rec.stats().dropped, 1u);
+  rec.close();
+  const auto files = pcaps(d.path);
+  ASSERT_EQ(files.size(), 1u);
+  std::ifstream in(files[0], std::ios::binary);
+  const std::vector<char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_EQ(b.size(), 24 + 2 * (16 + 14 + h.size()) + stream[0].bytes.size() + cut.size());
+  EXPECT_TRUE(std::equal(h.begin(), h.end(), reinterpret_cast<const std::byte*>(b.data() + 24 + 16 + 14)));
+  PcapReader r(files[0].string());
+  auto x = r.next();
+  ASSERT_TRUE(x);
+  EXPECT_EQ(x->src_ip, 0x0A000005u);
+  EXPECT_EQ(x->dst_ip, 0x0A000009u);
+  EXPECT_EQ(x->packet.dst_port, 2368);
+  EXPECT_EQ(x->packet.rx_ns, stream[0].rx_ns);
+  EXPECT_TRUE(std::equal(x->packet.data.begin(), x->packet.data.end(), stream[0].bytes.begin(), stream[0].bytes.end()));
+  EXPECT_FALSE(r.next()) << "the cut record is a truncated capture, not a datagram";
+  EXPECT_EQ(r.stats().truncated, 1u);
 }
 
 TEST(PcapRecorder, RotatesBySizeAndTimeAndKeepsMaxFiles) {
@@ -240,6 +295,122 @@ TEST(PcapRecorder, DiskFullIsCountedAndTheFileStaysReadable) {
   const auto back = read_all(files, &errors);
   for (const auto& e : errors) EXPECT_EQ(e, "") << "a file ends in a partial record";
   EXPECT_EQ(back.size(), v[1]);
+}
+
+
+// Records of varied sizes through a small queue, many times round its end: each comes out whole,
+// in order, with its time and headers; a record larger than the free room is refused and counted.
+TEST(RecordQueue, KeepsOrderAcrossTheRingsEnd) {
+  RecordQueue q(2 * (kMaxRecordedPayload + 200));
+  const std::vector<std::byte> hdr(28, std::byte{0x45});
+  std::uint64_t pushed = 0, popped = 0;
+  auto payload = [](std::uint64_t id) {
+    std::vector<std::byte> p(1 + (id * 7919) % 30000);
+    for (std::size_t i = 0; i < p.size(); ++i) p[i] = static_cast<std::byte>((id + i) & 0xff);
+    return p;
+  };
+  for (int round = 0; round < 200; ++round) {
+    for (int k = 0; k < 8; ++k) {
+      const auto p = payload(pushed);
+      const DatagramHeaders h{UdpAddressing{1, 2, 3, static_cast<std::uint16_t>(pushed)}, std::span(hdr).first(pushed % 2 == 0 ? 28 : 0)};
+      if (q.push(p, static_cast<Nanos>(pushed), h)) ++pushed;
+    }
+    q.drain([&](std::span<const std::byte> p, Nanos rx, const DatagramHeaders& h) {
+      EXPECT_EQ(rx, static_cast<Nanos>(popped));
+      EXPECT_EQ(h.addressing.dst_port, static_cast<std::uint16_t>(popped));
+      EXPECT_EQ(h.captured.size(), popped % 2 == 0 ? 28u : 0u);
+      const auto want = payload(popped);
+      EXPECT_TRUE(std::equal(p.begin(), p.end(), want.begin(), want.end())) << popped;
+      ++popped;
+    });
+  }
+  EXPECT_EQ(popped, pushed);
+  EXPECT_GT(pushed, 400u);
+  EXPECT_GT(q.dropped(), 0u) << "eight records of up to 30 kB do not always fit";
+  EXPECT_THROW(RecordQueue(100000), std::invalid_argument);
+}
+
+// No lost tail: the writer would not wake for 10 s, yet close() writes every queued packet.
+TEST(RecorderThread, CloseWritesEveryQueuedPacket) {
+  TempDir d;
+  const auto stream = vlp16_stream(3 * 760);
+  PcapRecorderConfig c;
+  c.directory = d.path.string();
+  RecorderThread rec(std::make_unique<PcapRecorder>(c), 16 << 20, 10'000'000'000);
+  for (const auto& p : stream) ASSERT_TRUE(rec.push(p.bytes, p.rx_ns, DatagramHeaders{kAddr, {}}));
+  rec.close();
+  const auto st = rec.status();
+  EXPECT_EQ(st.sink.stats.packets, stream.size());
+  EXPECT_EQ(st.dropped(), 0u);
+  const auto back = read_all(pcaps(d.path));
+  ASSERT_EQ(back.size(), stream.size());
+  for (std::size_t i = 0; i < back.size(); ++i) {
+    ASSERT_EQ(back[i].bytes, stream[i].bytes) << i;
+    ASSERT_EQ(back[i].rx_ns, stream[i].rx_ns) << i;
+  }
+}
+
+// A sink stuck in its first write (a stalled disk) until released; remembers what it was given.
+class StalledSink final : public RecordSink {
+ public:
+  bool write(std::span<const std::byte>, Nanos rx_ns, const DatagramHeaders&) noexcept override {
+    std::unique_lock lock(mutex_);
+    cv_.wait(lock, [this] { return released_; });
+    got_.push_back(rx_ns);
+    return true;
+  }
+  void close() noexcept override {}
+  [[nodiscard]] RecordSinkStatus status() const override {
+    std::lock_guard lock(mutex_);
+    RecordSinkStatus s;
+    s.stats.packets = got_.size();
+    return s;
+  }
+  void release() {
+    std::lock_guard lock(mutex_);
+    released_ = true;
+    cv_.notify_all();
+  }
+  std::vector<Nanos> got() const {
+    std::lock_guard lock(mutex_);
+    return got_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  bool released_ = false;
+  std::vector<Nanos> got_;
+};
+
+// The writer blocked: the receive thread's pushes fill the queue, then fail at once and are
+// counted; none waits. Released, the writer writes exactly the accepted packets, in order.
+TEST(RecorderThread, StalledWriterDropsAndCountsWithoutBlockingTheReceiveThread) {
+  auto sink = std::make_unique<StalledSink>();
+  StalledSink* stalled = sink.get();
+  constexpr std::size_t kQueue = 256 << 10;
+  RecorderThread rec(std::move(sink), kQueue, 1'000'000);
+  const std::vector<std::byte> packet(1206, std::byte{0x11});
+  constexpr std::size_t kPushed = 2000;
+  auto receive_thread = std::async(std::launch::async, [&] {
+    std::vector<Nanos> accepted;
+    for (std::size_t i = 0; i < kPushed; ++i) {
+      if (rec.push(packet, static_cast<Nanos>(i), DatagramHeaders{kAddr, {}})) accepted.push_back(static_cast<Nanos>(i));
+      if (i == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the writer takes #0 and stalls
+    }
+    return accepted;
+  });
+  ASSERT_EQ(receive_thread.wait_for(std::chrono::seconds(5)), std::future_status::ready)
+      << "a push waited for the stalled writer";
+  const auto accepted = receive_thread.get();
+  EXPECT_GT(accepted.size(), 100u);                   // ~200 records of 1.3 kB fit in 256 KiB
+  EXPECT_LT(accepted.size(), kPushed / 2);
+  EXPECT_EQ(rec.status().queue_dropped, kPushed - accepted.size());
+  EXPECT_EQ(rec.status().dropped(), kPushed - accepted.size());
+  stalled->release();
+  rec.close();
+  EXPECT_EQ(stalled->got(), accepted);
+  EXPECT_EQ(rec.status().sink.stats.packets, accepted.size());
 }
 
 }  // namespace

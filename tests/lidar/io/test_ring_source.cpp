@@ -15,6 +15,7 @@
 
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/lidar/ring_source.hpp"
+#include "sensor_rig/lidar/udp_frame.hpp"
 #include "sensor_rig/lidar/udp_sender.hpp"
 #include "sensor_rig/lidar/udp_source.hpp"
 #include "network_namespaces.hpp"
@@ -36,6 +37,8 @@ struct Received {
   Bytes bytes;
   Nanos rx_ns;
   std::uint32_t src;
+  std::uint16_t dst_port = 0;
+  Bytes headers;  // the captured IPv4 + UDP headers
 };
 
 // Receives until `want` datagrams came or nothing came for `idle_limit` x 100 ms (slow hosts: a
@@ -53,7 +56,8 @@ std::vector<Received> receive_all(RingSource& src, std::size_t want, int idle_li
     idle = 0;
     for (std::size_t i = 0; i < r.count; ++i) {
       const auto& s = arena.slots()[i];
-      got.push_back({Bytes(s.bytes().begin(), s.bytes().end()), s.rx_ns, s.src_addr});
+      got.push_back({Bytes(s.bytes().begin(), s.bytes().end()), s.rx_ns, s.src_addr, s.dst_port,
+                     Bytes(s.captured_headers().begin(), s.captured_headers().end())});
     }
   }
   return got;
@@ -230,6 +234,62 @@ TEST(RingSource, VethNamespacesFragmentsReassembled) {
   EXPECT_EQ(st.truncated, 0u);
 }
 
+// One ring for both of a sensor's ports across the veth pair: fragmented data datagrams to 7502
+// and 48-byte IMU packets to 7503 come out in the order sent, each with its port and its own
+// IPv4/UDP headers (a reassembled one's with a valid checksum and no fragment bits); a third port
+// never enters the ring.
+TEST(RingSource, VethNamespacesSecondPortThroughTheSameRing) {
+  VethPair net;
+  if (!net.error().empty()) GTEST_SKIP() << net.error();
+  constexpr std::uint16_t kPort = 7502, kImuPort = 7503, kOtherPort = 7504;
+  std::optional<RingSource> ring;
+  std::optional<UdpSender> tx;
+  std::string why;
+  NetworkNamespaces::run_in(net.ns_a(), [&] {
+    RingSourceConfig c;
+    c.interface = net.if_a();
+    c.port = kPort;
+    c.second_port = kImuPort;
+    ring = ring_or_skip(c, why);
+  });
+  if (!ring) GTEST_SKIP() << why;
+  NetworkNamespaces::run_in(net.ns_b(), [&] {
+    const std::vector<Endpoint> dst{{VethPair::kAddrA, kPort},
+                                    {VethPair::kAddrA, kImuPort},
+                                    {VethPair::kAddrA, kOtherPort}};
+    tx.emplace(dst);
+  });
+  std::vector<std::pair<std::uint16_t, Bytes>> sent;
+  for (unsigned k = 0; k < 30; ++k) {
+    const bool imu = k % 3 != 0;
+    sent.emplace_back(imu ? kImuPort : kPort, payload(imu ? 48 : 6464, k));
+    ASSERT_EQ(tx->send(sent.back().second, imu ? 1 : 0).sent, 1u);
+    ASSERT_EQ(tx->send(payload(48, 99), 2).sent, 1u);
+  }
+  const auto got = receive_all(*ring, sent.size());
+  ASSERT_EQ(got.size(), sent.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(got[i].dst_port, sent[i].first);
+    EXPECT_TRUE(got[i].bytes == sent[i].second);
+    const Bytes& h = got[i].headers;
+    ASSERT_EQ(h.size(), 28u);
+    EXPECT_EQ(std::to_integer<int>(h[0]), 0x45);
+    EXPECT_EQ((std::to_integer<int>(h[6]) & 0x3f) | std::to_integer<int>(h[7]), 0) << "no fragment bits";
+    EXPECT_EQ(std::to_integer<std::size_t>(h[2]) << 8 | std::to_integer<std::size_t>(h[3]), 28 + sent[i].second.size());
+    EXPECT_EQ(ipv4_header_checksum(std::span(h).first(20)), 0) << "a valid checksum";
+    EXPECT_EQ(std::to_integer<int>(h[16]), 10);  // destination 10.213.0.1, as sent
+    EXPECT_EQ(std::to_integer<int>(h[19]), 1);
+    EXPECT_EQ(std::to_integer<int>(h[22]) << 8 | std::to_integer<int>(h[23]), sent[i].first);
+  }
+  (void)receive_all(*ring, 1, 3);
+  ring->refresh_kernel_stats();
+  EXPECT_EQ(ring->stats().second_port_packets, 20u);
+  EXPECT_EQ(ring->stats().reassembly.reassembled, 10u);
+  EXPECT_EQ(ring->stats().filtered, 0u) << "the third port's datagrams stop at the kernel filter";
+  EXPECT_EQ(ring->stats().ring_packets, 10u * 5 + 20u);
+  EXPECT_EQ(ring->stats().ring_drops, 0u);
+}
 
 // The interface going down (a NIC unplugged, a link reset) is an error the caller sees once, not a
 // hang or a busy loop; when it comes back the same socket receives again.

@@ -1,7 +1,8 @@
 #pragma once
 // Socket options and receive control data, one way for every socket of the rig (LIDAR UDP,
 // CAN): setup errors throw std::system_error naming the option; kernel receive timestamps
-// (SO_TIMESTAMPNS) and the receive-queue drop counter (SO_RXQ_OVFL) come out of one parser.
+// (SO_TIMESTAMPNS), the receive-queue drop counter (SO_RXQ_OVFL) and the datagram's destination
+// address (IP_PKTINFO) come out of one parser.
 #include <sys/socket.h>
 
 #include <cstdint>
@@ -19,6 +20,7 @@ bool try_socket_option(int fd, int level, int opt, int value) noexcept;
 struct ReceiveControl {
   Nanos kernel_rx_ns = 0;                    // SCM_TIMESTAMPNS (CLOCK_REALTIME); 0 when absent
   std::optional<std::uint32_t> rxq_dropped;  // SO_RXQ_OVFL: the socket's drop count so far
+  std::optional<std::uint32_t> dst_addr;     // IP_PKTINFO: the IPv4 header's destination, host byte order
 };
 
 // Control messages of one received datagram (recvmsg / recvmmsg's msg_hdr).

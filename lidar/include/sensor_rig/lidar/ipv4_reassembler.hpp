@@ -49,7 +49,8 @@ enum class ReassemblyStatus : std::uint8_t {
 
 struct ReassemblyResult {
   ReassemblyStatus status = ReassemblyStatus::kDropped;
-  // kComplete: a 20-byte IPv4 header (no options, no fragment bits, no checksum) + the payload;
+  // kComplete: the first fragment's IPv4 header (options dropped, no fragment bits, length and
+  // checksum recomputed) + the payload;
   // valid until the next push()/expire().
   std::span<const std::byte> datagram;
   Nanos rx_ns = 0;  // kComplete: the receive time of the fragment that completed it (as the kernel)

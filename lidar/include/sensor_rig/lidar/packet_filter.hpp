@@ -4,7 +4,7 @@
 // uses, so the program is tested without a socket. Pure: no I/O.
 //
 // The program runs on a SOCK_DGRAM packet socket bound to ETH_P_IP: offsets start at the IPv4
-// header. It accepts IPv4 UDP to the sensor's port, and every IPv4 UDP fragment (later fragments
+// header. It accepts IPv4 UDP to the sensor's port (or its second port), and every IPv4 UDP fragment (later fragments
 // carry no UDP header, so the port cannot be seen: the reassembler and the port check after it
 // decide; the datagrams of other ports are then counted as filtered, not lost as timeouts).
 // With src_host set, only packets from the sensor's address pass: give it, so other hosts'
@@ -20,7 +20,8 @@ namespace sensor_rig::lidar {
 
 struct SensorFilter {
   std::uint16_t dst_port = 0;
-  std::uint32_t src_host = 0;  // the sensor's IPv4 address, host byte order; 0 = any sender
+  std::uint32_t src_host = 0;     // the sensor's IPv4 address, host byte order; 0 = any sender
+  std::uint16_t second_port = 0;  // the sensor's other port (IMU / position packets); 0 = none
 };
 
 // Bytes the program keeps of an accepted packet (more than any IPv4 datagram).

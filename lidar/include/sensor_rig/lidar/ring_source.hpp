@@ -5,8 +5,9 @@
 // receive stamp is the kernel's (tpacket3_hdr tp_sec/tp_nsec, CLOCK_REALTIME); fragments are
 // reassembled here (ipv4_reassembler.hpp); the ring's drops come from PACKET_STATISTICS.
 // Same receive() contract as UdpSource, so the LIDAR driver uses either. One socket, one ring and
-// one filter per sensor: sensors on one interface do not share a ring (a slow consumer or a
-// flooding sensor only fills its own ring, and each ring's drops are that sensor's drops).
+// one filter per sensor, for both of its ports: sensors on one interface do not share a ring (a slow
+// consumer or a flooding sensor only fills its own ring, and each ring's drops are that sensor's
+// drops); one sensor's data and IMU/position packets come through its ring in arrival order.
 // Construction throws; receive() never throws and never allocates.
 #include <cstddef>
 #include <cstdint>
@@ -23,6 +24,9 @@ namespace sensor_rig::lidar {
 struct RingSourceConfig {
   std::string interface;           // e.g. "eth1"; must exist when the source is built
   std::uint16_t port = 2368;       // the sensor's destination UDP port
+  // Its second port (Ouster IMU, Velodyne position packets), 0 = none: the same filter and ring
+  // take both; a slot's dst_port says which port a datagram came to.
+  std::uint16_t second_port = 0;
   std::uint32_t sensor_host = 0;   // the sensor's IPv4 address (host byte order); 0 = any sender
   // Many small blocks: a block is handed over when full or after retire_timeout_ms, so at low rates
   // each block holds only that long's packets and block_count x retire_timeout_ms (here 512 ms) is
@@ -40,6 +44,7 @@ struct RingSourceStats {
   std::uint64_t bytes = 0;        // UDP payload bytes delivered
   std::uint64_t truncated = 0;    // larger than the caller's slot, or cut short in the ring
   std::uint64_t filtered = 0;     // passed the kernel filter, not the sensor's (port after reassembly, bad UDP)
+  std::uint64_t second_port_packets = 0;  // of `packets`: to the second port
   std::uint64_t blocks = 0;       // ring blocks consumed
   std::uint64_t timeouts = 0;
   std::uint64_t errors = 0;

@@ -33,4 +33,8 @@ struct UdpFrame {
 UdpFrame parse_udp_frame(int linktype, std::span<const std::byte> frame) noexcept;
 bool linktype_supported(int linktype) noexcept;
 
+// The IPv4 header checksum of `header` (its whole length, options included; the checksum field
+// must hold 0 when computing the value to store there).
+std::uint16_t ipv4_header_checksum(std::span<const std::byte> header) noexcept;
+
 }  // namespace sensor_rig::lidar

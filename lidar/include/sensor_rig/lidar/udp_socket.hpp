@@ -34,6 +34,7 @@ class UdpSocketBuilder {
   UdpSocketBuilder& send_buffer(int bytes);
   UdpSocketBuilder& kernel_timestamps(bool on = true);  // SO_TIMESTAMPNS: CLOCK_REALTIME ns
   UdpSocketBuilder& drop_counter(bool on = true);       // SO_RXQ_OVFL: cumulative kernel drops
+  UdpSocketBuilder& destination_address(bool on = true);  // IP_PKTINFO: each datagram's destination
   UdpSocketBuilder& nonblocking(bool on = true);
   UdpSocketBuilder& bind_to(Endpoint ep);
 
@@ -46,6 +47,7 @@ class UdpSocketBuilder {
   int sndbuf_ = 0;
   bool timestamps_ = false;
   bool drops_ = false;
+  bool pktinfo_ = false;
   bool nonblocking_ = false;
   std::optional<Endpoint> bind_;
 };
@@ -54,5 +56,7 @@ class UdpSocketBuilder {
 int effective_receive_buffer(int fd) noexcept;
 // Local port of a bound socket, 0 on error.
 std::uint16_t local_port(int fd) noexcept;
+// Local IPv4 address of a bound socket (host byte order; 0 for a wildcard bind or on error).
+std::uint32_t local_address(int fd) noexcept;
 
 }  // namespace sensor_rig::lidar

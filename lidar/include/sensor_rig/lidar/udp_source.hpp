@@ -5,6 +5,7 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -25,8 +26,11 @@ struct UdpSourceConfig {
   bool reuse_address = true;
 };
 
+// The largest IPv4 header (with options) and the UDP header after it.
+inline constexpr std::size_t kMaxIpUdpHeaderSize = 60 + 8;
+
 // One received datagram. `buffer` is storage owned by the caller (see SlotArena); the source
-// fills size, rx_ns and the sender's address.
+// fills size, rx_ns and both ends' addresses.
 struct PacketSlot {
   std::span<std::byte> buffer;
   std::size_t size = 0;       // bytes stored (a truncated datagram fills the whole buffer)
@@ -34,8 +38,18 @@ struct PacketSlot {
   bool truncated = false;     // the datagram was larger than the buffer
   std::uint32_t src_addr = 0; // IPv4, host byte order
   std::uint16_t src_port = 0;
+  std::uint32_t dst_addr = 0; // the datagram's destination (IP_PKTINFO / the captured header)
+  std::uint16_t dst_port = 0;
+  // The IPv4 + UDP headers as captured (packet ring only: a UDP socket's kernel strips them);
+  // a reassembled datagram's are its first fragment's, fragment bits cleared, length and checksum
+  // recomputed. A recording keeps them, so it shows what was on the wire.
+  std::array<std::byte, kMaxIpUdpHeaderSize> ip_udp_header{};
+  std::uint8_t ip_udp_header_size = 0;  // 0 = not captured
 
   [[nodiscard]] std::span<const std::byte> bytes() const noexcept { return buffer.first(size); }
+  [[nodiscard]] std::span<const std::byte> captured_headers() const noexcept {
+    return std::span<const std::byte>(ip_udp_header).first(ip_udp_header_size);
+  }
 };
 
 // Fixed storage for `count` slots of `slot_bytes` each, allocated once.
@@ -94,10 +108,12 @@ class UdpSource {
   [[nodiscard]] int fd() const noexcept { return fd_.get(); }
 
  private:
-  static constexpr std::size_t kControlBytes = 64;
+  // SCM_TIMESTAMPNS (32), SO_RXQ_OVFL (24) and IP_PKTINFO (32) control messages.
+  static constexpr std::size_t kControlBytes = 128;
 
   UniqueFd fd_;
   std::uint16_t port_ = 0;
+  std::uint32_t local_addr_ = 0;  // the bound address; a wildcard bind relies on IP_PKTINFO
   int rcvbuf_ = 0;
   std::size_t max_batch_ = 0;
   UdpSourceStats stats_;

@@ -31,6 +31,10 @@ struct LidarRecordConfig {
   double max_file_mb = 256;            // rotate before a file passes this size (MiB)
   double max_file_s = 60;              // rotate when a file spans this long; 0 = size only
   int max_files = 10;                  // keep at most this many files of this LIDAR (oldest deleted)
+  // Packets waiting for the writer thread (MiB): how long a disk may stall before packets are
+  // dropped from the recording (counted; capture goes on): 16 MiB is ~7 s of a VLP-32C, ~0.5 s of
+  // an OS-1-128 at 1024x20.
+  double queue_mb = 16;
 };
 
 // Where the data port's datagrams are read: a UDP socket (the kernel's IP stack reassembles and
