@@ -73,21 +73,23 @@ struct ColumnWriter {
 };
 
 // The single-return column loop with profile P's pixel layout as constants (from the profile
-// table at compile time: constant offsets, shifts, masks and stride). `w` by value and returned:
-// a writer the points' byte stores might alias would be reloaded per point.
+// table at compile time: constant offsets, shifts, masks and stride). Returns the point count.
+// Works on a local copy of the writer: one the points' byte stores might alias would be reloaded
+// per point (and a writer passed or returned by value stalls on store forwarding per column).
 template <Profile P, Field Intensity>
-ColumnWriter decode_single(const std::uint8_t* px, const LutEntry* l, const std::uint16_t* ring, std::size_t h,
-                           ColumnWriter w) noexcept {
+std::size_t decode_single(const std::uint8_t* px, const LutEntry* l, const std::uint16_t* ring, std::size_t h,
+                          const ColumnWriter& start) noexcept {
+  ColumnWriter w = start;
   constexpr const ProfileSpec& spec = kProfileTable[static_cast<std::size_t>(P)];
   constexpr PixelReader range(spec.fields[static_cast<std::size_t>(Field::kRange)]);
   constexpr PixelReader inten(spec.fields[static_cast<std::size_t>(Intensity)]);
   for (std::size_t r = 0; r < h; ++r, px += spec.pixel_bytes)
     w.add(l[r], range.read(px), inten.read(px), ring[r], kReturnStrongest);
-  return w;
+  return w.n;
 }
 
-using SingleColumnFn = ColumnWriter (*)(const std::uint8_t*, const LutEntry*, const std::uint16_t*, std::size_t,
-                                        ColumnWriter);
+using SingleColumnFn = std::size_t (*)(const std::uint8_t*, const LutEntry*, const std::uint16_t*, std::size_t,
+                                       const ColumnWriter&);
 
 template <Profile P>
 SingleColumnFn single_column_for(bool signal) {
@@ -215,18 +217,17 @@ struct DecoderImpl {
   }
 
   // One column into the column buffer (the profile's compiled loop, or decode_dual), then onto the
-  // scan in one copy.
+  // scan in one copy (a buffer of a whole packet, one copy per packet, measured slower: it leaves L1).
   void decode_column(const std::uint8_t* col, std::uint16_t mid, std::uint32_t t) {
     const LutEntry* l = lut.column(mid);
     const std::uint8_t* px = col + layout.col_header_size;
     const std::size_t h = layout.pixels_per_column;
-    const std::size_t stride = layout.pixel_size;
     const std::uint16_t* rg = ring.data();
     ColumnWriter w{column_points.data(), 0, lo_mm, span_mm, t};
     if (single_column != nullptr) {
-      w = single_column(px, l, rg, h, w);
+      w.n = single_column(px, l, rg, h, w);
     } else {
-      for (std::size_t r = 0; r < h; ++r, px += stride) decode_dual(px, l[r], rg[r], w);
+      for (std::size_t r = 0; r < h; ++r, px += layout.pixel_size) decode_dual(px, l[r], rg[r], w);
     }
     auto& points = scans.scan().points;
     points.insert(points.end(), column_points.begin(), column_points.begin() + static_cast<std::ptrdiff_t>(w.n));
