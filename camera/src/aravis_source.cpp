@@ -241,8 +241,7 @@ void AravisSource::configure() {
       check("software trigger");
       break;
     case TriggerMode::kLine:
-      arv_camera_set_trigger(cam, cfg_.trigger_line.c_str(), &err);
-      check("trigger source " + cfg_.trigger_line);
+      set_line_trigger();
       break;
   }
   // GigE transport: packet size (or negotiated), inter-packet delay, no packet socket.
@@ -264,9 +263,39 @@ void AravisSource::configure() {
   }
 }
 
+// FrameStart on the configured line and edge (arv_camera_set_trigger: every other trigger off,
+// AcquisitionFrameRateEnable off, RisingEdge where offered). The line must be one the device lists.
+void AravisSource::set_line_trigger() {
+  ArvCamera* cam = st_->camera;
+  const std::string& line = cfg_.trigger_line;
+  const std::string& edge = cfg_.trigger_activation;
+  const std::string what = "aravis " + cfg_.device + ": line trigger ";
+  if (arv_camera_is_enumeration_entry_available(cam, "TriggerSource", line.c_str(), nullptr) == FALSE) {
+    guint n = 0;
+    const char** offered = arv_camera_dup_available_enumerations_as_strings(cam, "TriggerSource", &n, nullptr);
+    std::string names;
+    for (guint i = 0; i < n; ++i) names += (i > 0 ? ", " : "") + std::string(offered[i]);
+    g_free(static_cast<gpointer>(offered));
+    if (names.empty()) names = "no TriggerSource";
+    throw CameraError(what + "TriggerSource " + line + ": not offered (" + names + ")");
+  }
+  GError* err = nullptr;
+  arv_camera_set_trigger(cam, line.c_str(), &err);
+  if (err != nullptr) throw CameraError(what + line + ": " + take_error(err));
+  // A device without TriggerActivation fires on its one edge: only another edge is an error.
+  if (edge == "RisingEdge" && arv_camera_is_feature_available(cam, "TriggerActivation", nullptr) == FALSE) return;
+  arv_camera_set_string(cam, "TriggerActivation", edge.c_str(), &err);
+  if (err != nullptr) throw CameraError(what + "TriggerActivation " + edge + ": " + take_error(err));
+}
+
 std::string AravisSource::read_ptp_status(std::string& error) {
   const Nanos t0 = monotonic_now_ns();
-  std::string status = feature_text(st_->device, ptp_status_feature_.c_str(), error);
+  if (!ptp_latch_feature_.empty()) {  // SFNC: the status is the latched data set's
+    GError* err = nullptr;
+    arv_device_execute_command(st_->device, ptp_latch_feature_.c_str(), &err);
+    if (err != nullptr) error = ptp_latch_feature_ + ": " + take_error(err);
+  }
+  std::string status = error.empty() ? feature_text(st_->device, ptp_status_feature_.c_str(), error) : std::string();
   const auto us = static_cast<std::int64_t>((monotonic_now_ns() - t0) / 1000);
   std::lock_guard pl(ptp_mutex_);
   ++ptp_.polls;
@@ -274,7 +303,8 @@ std::string AravisSource::read_ptp_status(std::string& error) {
   return status;
 }
 
-void AravisSource::ptp_reset(const std::string& status) {
+// Disable and enable; "" or what failed. The caller counts it with the status read after it.
+std::string AravisSource::ptp_reset(const std::string& status) {
   ArvDevice* dev = st_->device;
   std::string name;
   {
@@ -284,9 +314,17 @@ void AravisSource::ptp_reset(const std::string& status) {
   GError* err = nullptr;
   arv_device_set_boolean_feature_value(dev, name.c_str(), FALSE, &err);
   if (err == nullptr) arv_device_set_boolean_feature_value(dev, name.c_str(), TRUE, &err);
+  return err == nullptr ? std::string() : "reset of " + name + " (status " + status + "): " + take_error(err);
+}
+
+// One update of what ptp() reports: a reset is counted with the status read after it.
+void AravisSource::publish_ptp(const std::string& status, bool reset, const std::string& error) {
   std::lock_guard pl(ptp_mutex_);
-  ++ptp_.resets;
-  if (err != nullptr) ptp_.error = "reset of " + name + " (status " + status + "): " + take_error(err);
+  if (reset) ++ptp_.resets;
+  if (!error.empty()) ptp_.error = error;
+  ptp_.status = status;
+  ptp_.locked = ptp_locked(status);
+  ptp_locked_.store(ptp_.locked);
 }
 
 void AravisSource::setup_ptp() {
@@ -302,6 +340,8 @@ void AravisSource::setup_ptp() {
   ptp_status_feature_ = name == "PtpEnable" ? "PtpStatus" : "GevIEEE1588Status";
   if (arv_device_is_feature_available(dev, ptp_status_feature_.c_str(), nullptr) == FALSE)
     throw CameraError("aravis " + cfg_.device + ": ptp enabled but the device has " + name + " and no " + ptp_status_feature_);
+  ptp_latch_feature_ = name == "PtpEnable" ? "PtpDataSetLatch" : "GevIEEE1588DataSetLatch";
+  if (arv_device_is_feature_available(dev, ptp_latch_feature_.c_str(), nullptr) == FALSE) ptp_latch_feature_.clear();
   GError* err = nullptr;
   arv_device_set_boolean_feature_value(dev, name.c_str(), TRUE, &err);
   if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": " + name + "=true: " + take_error(err));
@@ -314,15 +354,14 @@ void AravisSource::setup_ptp() {
   std::string status = read_ptp_status(error);
   if (!error.empty()) throw CameraError("aravis " + cfg_.device + ": " + error);
   // Not running (yet): disable and enable once, as a faulty clock servo needs.
-  if (status == "Faulty" || status == "Disabled" || status == "Initializing") {
-    ptp_reset(status);
+  const bool reset = status == "Faulty" || status == "Disabled" || status == "Initializing";
+  std::string reset_error;
+  if (reset) {
+    reset_error = ptp_reset(status);
     status = read_ptp_status(error);
     if (!error.empty()) throw CameraError("aravis " + cfg_.device + ": " + error);
   }
-  std::lock_guard pl(ptp_mutex_);
-  ptp_.status = status;
-  ptp_.locked = ptp_locked(status);
-  ptp_locked_.store(ptp_.locked);
+  publish_ptp(status, reset, reset_error);
 }
 
 void AravisSource::poll_ptp() {
@@ -330,18 +369,14 @@ void AravisSource::poll_ptp() {
   std::string error;
   std::string status = read_ptp_status(error);
   // Faulty/Disabled: reset. Initializing is what a reset leads to: wait for it.
-  if (error.empty() && (status == "Faulty" || status == "Disabled")) {
-    ptp_reset(status);
+  const bool reset = error.empty() && (status == "Faulty" || status == "Disabled");
+  if (reset) {
+    const std::string reset_error = ptp_reset(status);
     status = read_ptp_status(error);
+    if (error.empty()) error = reset_error;
   }
-  std::lock_guard pl(ptp_mutex_);
-  if (!error.empty()) {
-    ptp_.error = error;
-    status = "unknown";
-  }
-  ptp_.status = status;
-  ptp_.locked = ptp_locked(status);
-  ptp_locked_.store(ptp_.locked);
+  if (!error.empty() && status.empty()) status = "unknown";  // the read failed
+  publish_ptp(status, reset, error);
 }
 
 void AravisSource::stop_ptp_thread() noexcept {
@@ -453,6 +488,7 @@ std::string AravisSource::feature(const std::string& name) const {
 }
 
 bool AravisSource::trigger() {
+  if (cfg_.trigger != TriggerMode::kSoftware) return false;  // free run or a line: nothing to send
   std::lock_guard lock(mutex_);
   std::lock_guard gl(gc_mutex_);
   if (st_->camera == nullptr || control_lost_.load()) return false;

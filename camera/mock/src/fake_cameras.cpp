@@ -123,26 +123,39 @@ std::string device_genicam_xml(const std::string& device) {
 }
 
 namespace {
+// A 32-bit register of the fake's memory (big endian, never cached) as a GenICam IntReg.
+std::string test_register(const std::string& name, const std::string& address, const std::string& access) {
+  return "  <IntReg Name=\"" + name + "\" NameSpace=\"Custom\">\n    <Address>" + address +
+         "</Address>\n    <Length>4</Length>\n    <AccessMode>" + access +
+         "</AccessMode>\n    <pPort>Device</pPort>\n    <Cachable>NoCache</Cachable>\n"
+         "    <Sign>Unsigned</Sign>\n    <Endianess>BigEndian</Endianess>\n  </IntReg>\n";
+}
+
+// @ENABLE@ / @STATUS@ / @LATCH@: PtpEnable / PtpStatus / PtpDataSetLatch or the GevIEEE1588 names
+// (the latch writes 1 to PtpLatchTestRegister, for a test to see it was run). The enable
+// writes its register through a converter: true keeps a fault a test put in bits 8..31 (a servo
+// still faulty after enable), false clears the register (what the reset's disable repairs).
 constexpr const char* kPtpNodes = R"(
-  <Boolean Name="PtpEnable" NameSpace="Standard">
-    <pValue>PtpTestRegister</pValue>
+  <Boolean Name="@ENABLE@" NameSpace="Standard">
+    <pValue>PtpEnableValue</pValue>
     <OnValue>1</OnValue>
     <OffValue>0</OffValue>
   </Boolean>
-  <IntReg Name="PtpTestRegister" NameSpace="Custom">
-    <Address>0x8000</Address>
-    <Length>4</Length>
-    <AccessMode>RW</AccessMode>
-    <pPort>Device</pPort>
-    <Cachable>NoCache</Cachable>
-    <Sign>Unsigned</Sign>
-    <Endianess>BigEndian</Endianess>
-  </IntReg>
+  <IntConverter Name="PtpEnableValue" NameSpace="Custom">
+    <pVariable Name="R">PtpTestRegister</pVariable>
+    <FormulaTo>FROM ? ((R &gt;&gt; 8) &lt;&lt; 8) + 1 : 0</FormulaTo>
+    <FormulaFrom>TO &amp; 1</FormulaFrom>
+    <pValue>PtpTestRegister</pValue>
+  </IntConverter>
+  <Command Name="@LATCH@" NameSpace="Standard">
+    <pValue>PtpLatchTestRegister</pValue>
+    <CommandValue>1</CommandValue>
+  </Command>
   <IntSwissKnife Name="PtpStatusValue" NameSpace="Custom">
     <pVariable Name="R">PtpTestRegister</pVariable>
     <Formula>R = 0 ? 2 : (R = 1 ? 5 : (R = 2 ? 3 : 1))</Formula>
   </IntSwissKnife>
-  <Enumeration Name="PtpStatus" NameSpace="Standard">
+  <Enumeration Name="@STATUS@" NameSpace="Standard">
     <EnumEntry Name="Initializing" NameSpace="Standard"><Value>0</Value></EnumEntry>
     <EnumEntry Name="Faulty" NameSpace="Standard"><Value>1</Value></EnumEntry>
     <EnumEntry Name="Disabled" NameSpace="Standard"><Value>2</Value></EnumEntry>
@@ -153,22 +166,34 @@ constexpr const char* kPtpNodes = R"(
   </Enumeration>
 )";
 
-}  // namespace
-
-std::string write_ptp_fake_genicam(const std::string& address) {
+// The fake's own GenICam XML, read from a default fake started on `address` for the moment.
+std::string fake_genicam_xml(const std::string& address) {
   GigeFakeOptions o;
   o.address = address;
-  std::string xml;
-  {
-    auto plain = start_gige_fake(o);
-    xml = device_genicam_xml(o.address);
-    plain.stop(500);
-  }
-  const auto end = xml.rfind("</RegisterDescription>");
-  if (end == std::string::npos) throw std::runtime_error("the fake's GenICam data is not a RegisterDescription");
-  if (xml.find("\"PtpEnable\"") != std::string::npos) throw std::runtime_error("the fake has PTP features of its own now");
-  xml.insert(end, kPtpNodes);
-  char path[] = "/tmp/rig_ptp_fake_XXXXXX.xml";
+  auto plain = start_gige_fake(o);
+  std::string xml = device_genicam_xml(o.address);
+  plain.stop(500);
+  if (xml.rfind("</RegisterDescription>") == std::string::npos)
+    throw std::runtime_error("the fake's GenICam data is not a RegisterDescription");
+  return xml;
+}
+
+// Inserts `nodes` before the closing tag of the top element.
+void add_nodes(std::string& xml, const std::string& nodes) { xml.insert(xml.rfind("</RegisterDescription>"), nodes); }
+
+// Adds an EnumEntry to the Enumeration `name` (before its pValue); throws when it has it already.
+void add_enum_entry(std::string& xml, const std::string& name, const std::string& entry, int value) {
+  const auto at = xml.find("<Enumeration Name=\"" + name + "\"");
+  const auto pvalue = at == std::string::npos ? at : xml.find("<pValue>", at);
+  if (pvalue == std::string::npos) throw std::runtime_error("the fake has no Enumeration " + name);
+  if (xml.find("<EnumEntry Name=\"" + entry + "\"", at) < pvalue)
+    throw std::runtime_error("the fake's " + name + " has " + entry + " of its own now");
+  xml.insert(pvalue, "<EnumEntry Name=\"" + entry + "\" NameSpace=\"Standard\"><Value>" + std::to_string(value) +
+                         "</Value></EnumEntry>\n    ");
+}
+
+std::string write_temporary_genicam(const std::string& xml) {
+  char path[] = "/tmp/rig_fake_genicam_XXXXXX.xml";
   const int fd = ::mkstemps(path, 4);
   if (fd < 0) throw std::runtime_error(std::string("mkstemps: ") + std::strerror(errno));
   ::close(fd);
@@ -176,6 +201,34 @@ std::string write_ptp_fake_genicam(const std::string& address) {
   out << xml;
   if (!out.flush()) throw std::runtime_error(std::string("cannot write ") + path);
   return path;
+}
+
+}  // namespace
+
+std::string write_ptp_fake_genicam(const std::string& address, bool gev_ieee1588) {
+  std::string xml = fake_genicam_xml(address);
+  const std::string enable = gev_ieee1588 ? "GevIEEE1588" : "PtpEnable";
+  if (xml.find('"' + enable + '"') != std::string::npos)
+    throw std::runtime_error("the fake has " + enable + " of its own now");
+  std::string nodes = kPtpNodes;
+  const auto put = [&nodes](const std::string& mark, const std::string& name) {
+    nodes.replace(nodes.find(mark), mark.size(), name);
+  };
+  put("@ENABLE@", enable);
+  put("@STATUS@", gev_ieee1588 ? "GevIEEE1588Status" : "PtpStatus");
+  put("@LATCH@", gev_ieee1588 ? "GevIEEE1588DataSetLatch" : "PtpDataSetLatch");
+  nodes += test_register("PtpTestRegister", "0x8000", "RW") + test_register("PtpLatchTestRegister", "0x8004", "RW");
+  add_nodes(xml, nodes);
+  return write_temporary_genicam(xml);
+}
+
+std::string write_line_trigger_fake_genicam(const std::string& address) {
+  std::string xml = fake_genicam_xml(address);
+  add_enum_entry(xml, "TriggerSource", "Line1", 2);
+  add_enum_entry(xml, "TriggerActivation", "FallingEdge", 1);
+  // A readable view of the fake's write-only TriggerSoftware register.
+  add_nodes(xml, test_register("TriggerSoftwareTestRegister", "0x30c", "RO"));
+  return write_temporary_genicam(xml);
 }
 
 bool gvcp_port_bound(const std::string& address) {

@@ -74,6 +74,21 @@ camera::PtpConfig parse_ptp(const config::Node& n, const std::string& backend) {
   return p;
 }
 
+// trigger: {mode: line, line: Line<N> (Line1), activation: RisingEdge|FallingEdge|AnyEdge|LevelHigh|LevelLow}
+void parse_line_trigger(const config::Node& t, camera::SourceConfig& s) {
+  s.trigger_line = t.get_string("line", "Line1");
+  s.trigger_activation =
+      t.get_choice("activation", {"RisingEdge", "FallingEdge", "AnyEdge", "LevelHigh", "LevelLow"}, "RisingEdge");
+  const auto& line = s.trigger_line;
+  const auto digit = [](char ch) { return std::isdigit(static_cast<unsigned char>(ch)) != 0; };
+  const bool line_n = line.size() > 4 && line.rfind("Line", 0) == 0 && std::all_of(line.begin() + 4, line.end(), digit);
+  if (t.has("line") && !line_n)
+    t.fail("line", "'" + line + "' is not an I/O line: Line<N> as the camera's TriggerSource names it (Line0, Line1, ...)");
+  if (s.trigger != camera::TriggerMode::kLine)
+    for (const char* k : {"line", "activation"})
+      if (t.has(k)) t.fail(k, "only with mode: line (a hardware trigger line)");
+}
+
 }  // namespace
 
 CameraConfig parse_camera_config(const config::Node& n) {
@@ -122,7 +137,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
     }
   }
   if (auto t = n.child("trigger")) {
-    t->allow_keys({"mode", "line", "group", "lidar", "azimuth_deg", "latency_us"});
+    t->allow_keys({"mode", "line", "activation", "group", "lidar", "azimuth_deg", "latency_us"});
     auto& lt = c.lidar_trigger;
     lt.lidar = t->get_string("lidar", "");
     // A LIDAR trigger is a software trigger: mode may be left out, any other mode is a mistake.
@@ -130,7 +145,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
     s.trigger = mode == "software" ? camera::TriggerMode::kSoftware
                 : mode == "line"   ? camera::TriggerMode::kLine
                                    : camera::TriggerMode::kFreeRun;
-    s.trigger_line = t->get_string("line", "Line1");
+    parse_line_trigger(*t, s);
     c.trigger_group = t->get_string("group", "");
     if (s.trigger != camera::TriggerMode::kFreeRun && s.backend != "aravis")
       t->fail("mode", "trigger modes need the aravis backend (V4L2 cameras free-run)");

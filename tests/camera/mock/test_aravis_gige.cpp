@@ -175,6 +175,64 @@ TEST_F(GigeFake, KilledFakeIsReportedWithin1sAndFramesResumeAfterRestart) {
   again.stop(500);
 }
 
+// Hardware line trigger against the fake with Line1 and FallingEdge added to its GenICam (its
+// own has Line0 and RisingEdge only). The fake sends frames in free run and on TriggerSoftware
+// only: on a line it sends none, so what is checked is the features set, that nothing arrives and
+// no TriggerSoftware reaches the device — and, TriggerMode set Off, that the stream was there.
+TEST_F(GigeFake, LineTriggerSetsLineAndEdgeAndSendsNoSoftwareTrigger) {
+  const std::string xml = mock::write_line_trigger_fake_genicam(address(1));
+  mock::GigeFakeOptions o;
+  o.address = address(0);
+  o.genicam = xml;
+  auto fake = mock::start_gige_fake(o);
+  std::remove(xml.c_str());
+  auto c = cfg(o.address);
+  c.trigger = TriggerMode::kLine;
+  c.trigger_line = "Line1";
+  c.trigger_activation = "FallingEdge";
+  AravisSource src(c);
+  src.open();
+  EXPECT_EQ(src.feature("TriggerSelector"), "FrameStart");
+  EXPECT_EQ(src.feature("TriggerMode"), "On");
+  EXPECT_EQ(src.feature("TriggerSource"), "Line1");
+  EXPECT_EQ(src.feature("TriggerActivation"), "FallingEdge");
+  EXPECT_FALSE(src.trigger());  // a line-triggered camera is never software-triggered
+  EXPECT_EQ(src.feature("TriggerSoftwareTestRegister"), "0");
+  const Nanos quiet_until = monotonic_now_ns() + 500'000'000;  // 10 periods at 20 Hz
+  while (monotonic_now_ns() < quiet_until) EXPECT_NE(src.next(50).status, CaptureStatus::kFrame);
+  EXPECT_EQ(src.stats().completed + src.stats().incomplete, 0u);
+  src.set_feature("TriggerMode", "Off");
+  EXPECT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+  src.close();
+  fake.stop(500);
+}
+
+TEST_F(GigeFake, LineTriggerOnALineOrEdgeTheCameraLacksIsAnErrorAtOpen) {
+  mock::GigeFakeOptions o;
+  o.address = address(0);
+  auto fake = mock::start_gige_fake(o);
+  const auto open_error = [&o](const std::string& line, const std::string& edge) -> std::string {
+    auto c = cfg(o.address);
+    c.trigger = TriggerMode::kLine;
+    c.trigger_line = line;
+    c.trigger_activation = edge;
+    AravisSource src(c);
+    try {
+      src.open();
+    } catch (const CameraError& e) {
+      EXPECT_FALSE(src.is_open());
+      return e.what();
+    }
+    return "opened";
+  };
+  EXPECT_NE(open_error("Line1", "RisingEdge").find("TriggerSource Line1: not offered (Line0, Software)"), std::string::npos)
+      << open_error("Line1", "RisingEdge");
+  EXPECT_NE(open_error("Line0", "FallingEdge").find("TriggerActivation FallingEdge"), std::string::npos)
+      << open_error("Line0", "FallingEdge");
+  EXPECT_EQ(open_error("Line0", "RisingEdge"), "opened");
+  fake.stop(500);
+}
+
 // The watchdog's reopen of a live camera (marked lost: the old handles go on another thread, the
 // device is left acquiring with its stream channel reset to port 0). The fake sends to the stream
 // destination it reads when it sees control taken with acquisition on, and reads it again only
@@ -254,7 +312,7 @@ class GigePtpFake : public GigeFake {
     GigeFake::SetUp();
     if (IsSkipped()) return;
     mock::GigeFakeOptions o;
-    xml_path_ = mock::write_ptp_fake_genicam(address(1));
+    xml_path_ = mock::write_ptp_fake_genicam(address(1), gev_ieee1588());
     o.address = address(0);
     o.genicam = xml_path_;
     fake_ = mock::start_gige_fake(o);
@@ -263,6 +321,7 @@ class GigePtpFake : public GigeFake {
     fake_.stop(500);
     if (!xml_path_.empty()) std::remove(xml_path_.c_str());
   }
+  [[nodiscard]] virtual bool gev_ieee1588() const { return false; }
   static SourceConfig ptp_cfg(bool tai) {
     auto c = cfg(address(0));
     c.ptp.enable = true;
@@ -351,6 +410,32 @@ TEST_F(GigePtpFake, FaultyStatusIsResetAndUnlockedFramesKeepDeviceTicks) {
   src.close();
 }
 
+// A servo still Faulty after the enable at open (bits 8..31 of the fake's register survive an
+// enable, not a disable): disabled and enabled once, as camera_aravis2 does, then Slave. The status
+// is read after PtpDataSetLatch.
+TEST_F(GigePtpFake, FaultyAfterTheEnableAtOpenIsResetOnceAndLocks) {
+  {
+    AravisSource before(cfg(address(0)));  // no PTP: just puts the fault in
+    before.open();
+    before.set_feature("PtpTestRegister", "256");
+    before.close();
+  }
+  AravisSource src(ptp_cfg(false));
+  src.open();
+  const auto p = src.ptp();
+  EXPECT_EQ(p.resets, 1u) << p.error;
+  EXPECT_EQ(p.status, "Slave");
+  EXPECT_TRUE(p.locked);
+  EXPECT_EQ(p.error, "");
+  EXPECT_EQ(src.feature("PtpTestRegister"), "1");
+  EXPECT_EQ(src.feature("PtpLatchTestRegister"), "1");
+  auto cap = next_frame(src);
+  ASSERT_EQ(cap.status, CaptureStatus::kFrame) << cap.error;
+  expect_vehicle_stamp(cap.frame);
+  cap.frame.reset();
+  src.close();
+}
+
 TEST_F(GigePtpFake, PtpOffInTheConfigKeepsDeviceTicksAndLeavesPtpDisabled) {
   AravisSource src(cfg(address(0)));
   src.open();
@@ -361,6 +446,37 @@ TEST_F(GigePtpFake, PtpOffInTheConfigKeepsDeviceTicksAndLeavesPtpDisabled) {
   ASSERT_EQ(cap.status, CaptureStatus::kFrame) << cap.error;
   EXPECT_EQ(cap.frame.meta().domain, TimeDomain::kDeviceTicks);
   cap.frame.reset();
+  src.close();
+}
+
+// Older cameras: GevIEEE1588 / GevIEEE1588Status (/ GevIEEE1588DataSetLatch), the same fake
+// registers under those names.
+class GigeGevIeee1588Fake : public GigePtpFake {
+ protected:
+  [[nodiscard]] bool gev_ieee1588() const override { return true; }
+};
+
+TEST_F(GigeGevIeee1588Fake, EnablesGevIEEE1588AndResetsAFaultyStatus) {
+  AravisSource src(ptp_cfg(true));
+  src.open();
+  EXPECT_EQ(src.feature("GevIEEE1588"), "true");
+  EXPECT_EQ(src.feature("PtpLatchTestRegister"), "1");
+  auto p = src.ptp();
+  EXPECT_EQ(p.enable_feature, "GevIEEE1588");
+  EXPECT_EQ(p.status, "Slave");
+  EXPECT_TRUE(p.locked);
+  auto cap = next_frame(src);
+  ASSERT_EQ(cap.status, CaptureStatus::kFrame) << cap.error;
+  EXPECT_EQ(cap.frame.meta().domain, TimeDomain::kVehicle);
+  cap.frame.reset();
+  // Faulty while running: the status thread disables and enables GevIEEE1588.
+  src.set_feature("PtpTestRegister", "7");
+  const Nanos deadline = monotonic_now_ns() + 2'000'000'000;
+  while (src.ptp().resets == 0 && monotonic_now_ns() < deadline) ::usleep(20'000);
+  p = src.ptp();
+  EXPECT_EQ(p.resets, 1u) << p.error;
+  EXPECT_EQ(p.status, "Slave");
+  EXPECT_EQ(src.feature("PtpTestRegister"), "1");
   src.close();
 }
 

@@ -78,6 +78,8 @@ TEST(AravisInProcess, TriggerModesReachTheDevice) {
     src.open();
     EXPECT_EQ(src.feature("TriggerMode"), "On");
     EXPECT_EQ(src.feature("TriggerSource"), "Line0");
+    EXPECT_EQ(src.feature("TriggerActivation"), "RisingEdge");
+    EXPECT_FALSE(src.trigger());  // a line-triggered camera is never sent TriggerSoftware
   }
   auto bad = fake("BADLINE", TriggerMode::kLine);
   bad.trigger_line = "Line7";

@@ -118,6 +118,30 @@ TEST(CameraConfig, BadOutputsAreReportedAtTheirKeys) {
   EXPECT_NE(p.problems.find("image_color: needs an 8-bit Bayer"), std::string::npos) << p.problems;
 }
 
+TEST(CameraConfig, LineTriggerKeysDefaultsAndErrors) {
+  auto p = parse("name: c\ndevice: 127.0.0.3\ntrigger: {mode: line}\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_EQ(p.cfg.source.trigger, camera::TriggerMode::kLine);
+  EXPECT_EQ(p.cfg.source.trigger_line, "Line1");
+  EXPECT_EQ(p.cfg.source.trigger_activation, "RisingEdge");
+  p = parse("name: c\ndevice: 127.0.0.3\ntrigger: {mode: line, line: Line0, activation: FallingEdge}\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_EQ(p.cfg.source.trigger_line, "Line0");
+  EXPECT_EQ(p.cfg.source.trigger_activation, "FallingEdge");
+  p = parse("name: c\ndevice: 127.0.0.3\ntrigger:\n  mode: line\n  line: Input1\n  activation: Falling\n");
+  for (const char* needle : {"cams.yaml:5:", "line: 'Input1' is not an I/O line", "cams.yaml:6:", "activation"})
+    EXPECT_NE(p.problems.find(needle), std::string::npos) << needle << "\n" << p.problems;
+  for (const char* bad : {"Line", "Line1a", "line1"}) {
+    p = parse(std::string("name: c\ndevice: 127.0.0.3\ntrigger: {mode: line, line: ") + bad + "}\n");
+    EXPECT_NE(p.problems.find("is not an I/O line"), std::string::npos) << bad << "\n" << p.problems;
+  }
+  p = parse("name: c\ndevice: 127.0.0.3\ntrigger:\n  mode: software\n  line: Line2\n  activation: LevelHigh\n");
+  for (const char* needle : {"cams.yaml:5:", "line: only with mode: line", "cams.yaml:6:", "activation: only with mode: line"})
+    EXPECT_NE(p.problems.find(needle), std::string::npos) << needle << "\n" << p.problems;
+  p = parse("name: c\ndevice: 127.0.0.3\ntrigger: {mode: line, group: stereo}\n");
+  EXPECT_NE(p.problems.find("group: a trigger group needs mode: software"), std::string::npos) << p.problems;
+}
+
 TEST(CameraConfig, PtpKeysDefaultsAndErrors) {
   auto p = parse("name: c\ndevice: 127.0.0.3\n");
   EXPECT_FALSE(p.cfg.source.ptp.enable);

@@ -7,9 +7,11 @@
 // fixed socket buffer. Aravis streams into buffers of a bounded pool: the pool memory is the
 // published Image.data (no copy). Incomplete frames are counted and never returned. Device loss
 // ("control-lost" from the heartbeat thread) turns next() into kDisconnected.
+// Line trigger: FrameStart on TriggerSource trigger_line (one the device offers, else an error
+// listing those it does) at TriggerActivation trigger_activation; trigger() sends nothing.
 // PTP (cfg.ptp.enable): after the named features PtpEnable (else GevIEEE1588) is set, the status
-// (PtpStatus / GevIEEE1588Status) read; Faulty, Disabled or Initializing at open is reset (disable,
-// enable). A thread of its own re-reads the status every status_poll_ms (a GVCP round trip: never
+// (PtpStatus / GevIEEE1588Status, after PtpDataSetLatch / GevIEEE1588DataSetLatch where the device
+// has it) read; Faulty, Disabled or Initializing at open is reset (disable, enable). A thread of its own re-reads the status every status_poll_ms (a GVCP round trip: never
 // on the capture thread) and resets Faulty/Disabled; while Master/Slave, next() gives
 // TimeDomain::kVehicle stamps (TAI -> UTC), otherwise device ticks. A device without the features
 // is an error at open.
@@ -64,11 +66,13 @@ class AravisSource final : public FrameSource {
  private:
   struct State;
   void configure();
+  void set_line_trigger();
   void start_stream();
   void fold_stats() noexcept;
   void setup_ptp();                    // under mutex_ + gc_mutex_, at open
   void poll_ptp();                     // under gc_mutex_
-  void ptp_reset(const std::string& status);
+  std::string ptp_reset(const std::string& status);
+  void publish_ptp(const std::string& status, bool reset, const std::string& error);
   std::string read_ptp_status(std::string& error);
   void stop_ptp_thread() noexcept;
 
@@ -90,6 +94,7 @@ class AravisSource final : public FrameSource {
   mutable std::mutex ptp_mutex_;
   PtpState ptp_;
   std::string ptp_status_feature_;
+  std::string ptp_latch_feature_;  // PtpDataSetLatch / GevIEEE1588DataSetLatch where offered, run before each read
   std::atomic<bool> ptp_locked_{false};
   std::thread ptp_thread_;
   std::condition_variable ptp_cv_;

@@ -43,7 +43,8 @@ struct SourceConfig {
   double gain_db = -1.0;           // < 0: leave as the device has it
   std::vector<std::pair<std::string, std::string>> features;  // any GenICam feature: name -> value
   TriggerMode trigger = TriggerMode::kFreeRun;
-  std::string trigger_line = "Line1";  // hardware trigger source
+  std::string trigger_line = "Line1";  // kLine: TriggerSource (an I/O line, Line<N>)
+  std::string trigger_activation = "RisingEdge";  // kLine: TriggerActivation (SFNC entry name)
   int packet_size = 0;                 // GigE: 0 = negotiate
   std::int64_t packet_delay_ns = 0;    // GigE inter-packet delay
   int socket_buffer_bytes = 8 << 20;   // GigE stream socket (fixed; >= 4 MB, SPEC §8)
@@ -98,7 +99,7 @@ class FrameSource {
   virtual Capture next(int timeout_ms) = 0;
   // The caller's watchdog gave up on the device: close() must not wait for it to answer.
   virtual void mark_lost() noexcept {}
-  // Software trigger (TriggerMode::kSoftware); false when not open or refused.
+  // Software trigger (TriggerMode::kSoftware); false when not open, refused or in another mode.
   virtual bool trigger() { return false; }
   [[nodiscard]] virtual SourceStats stats() const = 0;
   // PTP state; enabled == false when the source has no PTP (V4L2, or not configured).

@@ -42,10 +42,19 @@ ChildProcess start_gige_fake(const GigeFakeOptions& o, std::chrono::milliseconds
 std::string device_genicam_xml(const std::string& device);
 // A GenICam file for `arv-fake-gv-camera -g`: the fake's own XML (from a default fake started
 // on `address` for the moment) plus PTP features on a free register of its memory: PtpEnable
-// (Boolean, register PtpTestRegister at 0x8000) and PtpStatus (Enumeration computed from that
-// register: 0 Disabled, 1 Slave, 2 Listening, any other value Faulty). Returns the path of a new
-// temporary file (the caller removes it); throws std::runtime_error / CameraError.
-std::string write_ptp_fake_genicam(const std::string& address);
+// (Boolean on register PtpTestRegister at 0x8000: true sets bit 0 and keeps bits 8..31, false
+// clears it) and PtpStatus (Enumeration computed from that register: 0 Disabled, 1 Slave,
+// 2 Listening, any other value Faulty — so 0x100 before the enable is a servo faulty after it
+// until disabled and enabled again), PtpDataSetLatch (Command: 1 into PtpLatchTestRegister at
+// 0x8004). `gev_ieee1588`: the older names GevIEEE1588, GevIEEE1588Status and
+// GevIEEE1588DataSetLatch instead. Returns the path of a new temporary file (the caller removes it);
+// throws std::runtime_error / CameraError.
+std::string write_ptp_fake_genicam(const std::string& address, bool gev_ieee1588 = false);
+// The fake's own XML plus TriggerSource entry Line1 (the fake has only Line0 and Software; in a
+// line mode it sends no frame at all), TriggerActivation entry FallingEdge, and
+// TriggerSoftwareTestRegister: a readable view of its write-only TriggerSoftware register (0x30c,
+// set by a TriggerSoftware command and cleared only when the fake fires on it in software mode).
+std::string write_line_trigger_fake_genicam(const std::string& address);
 // True when something listens on UDP <address>:3956 (from /proc/net/udp).
 bool gvcp_port_bound(const std::string& address);
 
