@@ -333,13 +333,18 @@ class GigePtpFake : public GigeFake {
   ChildProcess fake_;
 };
 
-// The fake's realtime stamp, converted, against the receive time: the transfer of a 640x480 frame
-// on loopback (ms; generous for a loaded host), never after it.
+// The fake's fill time to our receipt of a 640x480 frame on loopback: a few ms, 190-240 ms seen
+// under load average 24 (2 runs of 15 failed at 150 ms). Far below the 37 s a wrong timescale
+// makes, or device ticks.
+constexpr Nanos kTransferBudgetNs = 500'000'000;
+
+// The fake's realtime stamp, converted, against the receive time: never after it, at most the
+// transfer budget before it.
 void expect_vehicle_stamp(const Frame& f) {
   const auto& m = f.meta();
   EXPECT_EQ(m.domain, TimeDomain::kVehicle);
   EXPECT_LE(m.device_ns, m.complete_ns + 1'000'000);
-  EXPECT_GT(m.device_ns, m.complete_ns - 150'000'000) << "stamp " << (m.complete_ns - m.device_ns) / 1000000 << " ms before receipt";
+  EXPECT_GT(m.device_ns, m.complete_ns - kTransferBudgetNs) << "stamp " << (m.complete_ns - m.device_ns) / 1000000 << " ms before receipt";
 }
 
 TEST_F(GigePtpFake, EnablesPtpAndStampsInUtcFromTaiOrUtc) {
@@ -363,7 +368,7 @@ TEST_F(GigePtpFake, EnablesPtpAndStampsInUtcFromTaiOrUtc) {
         EXPECT_EQ(m.domain, TimeDomain::kVehicle);
         m.device_ns += 37'000'000'000;
         EXPECT_LE(m.device_ns, m.complete_ns + 1'000'000);
-        EXPECT_GT(m.device_ns, m.complete_ns - 150'000'000);
+        EXPECT_GT(m.device_ns, m.complete_ns - kTransferBudgetNs);
       } else {
         expect_vehicle_stamp(cap.frame);
       }
