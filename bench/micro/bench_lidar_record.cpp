@@ -2,8 +2,8 @@
 // thread pays per datagram, in wall time (a blocking writev counts), into rotating pcap files on
 // the root disk (/var/tmp). Sizes: a Velodyne packet (1206 B) and an OS-1-128 1024x20 datagram
 // (24896 B).
-// - PcapWriteOnReceiveThread: PcapRecorder::write (one writev per packet), as before.
-// - QueuePushToWriterThread: RecorderThread::push (a copy into the queue); the writer thread
+// - BM_PcapWriteOnReceiveThread: PcapRecorder::write (one writev per packet), as before.
+// - BM_QueuePushToWriterThread: RecorderThread::push (a copy into the queue); the writer thread
 //   writes meanwhile. Whenever half the queue may be full the timing pauses until the writer caught
 //   up, so the figure is a receive thread whose writer keeps up (no drops: counter `queue_dropped`).
 #include <benchmark/benchmark.h>
@@ -50,7 +50,7 @@ lidar::PcapRecorderConfig config(const TempDir& d) {
 
 const lidar::DatagramHeaders kHeaders{lidar::UdpAddressing{0x0A000005, 2368, 0x0A000001, 2368}, {}};
 
-void PcapWriteOnReceiveThread(benchmark::State& state) {
+void BM_PcapWriteOnReceiveThread(benchmark::State& state) {
   TempDir d;
   lidar::PcapRecorder rec(config(d));
   const std::vector<std::byte> packet(static_cast<std::size_t>(state.range(0)), std::byte{0x5a});
@@ -60,7 +60,7 @@ void PcapWriteOnReceiveThread(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 
-void QueuePushToWriterThread(benchmark::State& state) {
+void BM_QueuePushToWriterThread(benchmark::State& state) {
   TempDir d;
   constexpr std::size_t kQueueBytes = 16 << 20;
   lidar::RecorderThread rec(std::make_unique<lidar::PcapRecorder>(config(d)), kQueueBytes, 1'000'000);
@@ -84,6 +84,6 @@ void QueuePushToWriterThread(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(PcapWriteOnReceiveThread)->Arg(1206)->Arg(24896)->UseRealTime()->Unit(benchmark::kMicrosecond);
-BENCHMARK(QueuePushToWriterThread)->Arg(1206)->Arg(24896)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PcapWriteOnReceiveThread)->Arg(1206)->Arg(24896)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_QueuePushToWriterThread)->Arg(1206)->Arg(24896)->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK_MAIN();
