@@ -80,11 +80,11 @@ template <Profile P, Field Intensity>
 std::size_t decode_single(const std::uint8_t* px, const LutEntry* l, const std::uint16_t* ring, std::size_t h,
                           const ColumnWriter& start) noexcept {
   ColumnWriter w = start;
-  constexpr const ProfileSpec& spec = kProfileTable[static_cast<std::size_t>(P)];
-  constexpr PixelReader range(spec.fields[static_cast<std::size_t>(Field::kRange)]);
-  constexpr PixelReader inten(spec.fields[static_cast<std::size_t>(Intensity)]);
-  for (std::size_t r = 0; r < h; ++r, px += spec.pixel_bytes)
-    w.add(l[r], range.read(px), inten.read(px), ring[r], kReturnStrongest);
+  constexpr const ProfileSpec& kSpec = kProfileTable[static_cast<std::size_t>(P)];
+  constexpr PixelReader kRange(kSpec.fields[static_cast<std::size_t>(Field::kRange)]);
+  constexpr PixelReader kIntensity(kSpec.fields[static_cast<std::size_t>(Intensity)]);
+  for (std::size_t r = 0; r < h; ++r, px += kSpec.pixel_bytes)
+    w.add(l[r], kRange.read(px), kIntensity.read(px), ring[r], kReturnStrongest);
   return w.n;
 }
 
