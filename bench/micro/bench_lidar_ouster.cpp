@@ -5,12 +5,18 @@
 //  - decode/OS-2-128/<profile>/synthetic: the shared OS-2-128 metadata (FW 2.3.0) with synthetic
 //    packets (random ranges, ~5 % no return) for the single- and dual-return profiles.
 // Data from $RIG_TEST_DATA/lidar/ouster (default ../shared/data); absent files skip with a message.
+// RIG_BENCH_OUSTER_EXPORT=DIR also writes, per stream, the packets (u32 little-endian length +
+// bytes), the metadata and the first scan's x y z (float), for the ouster-sdk peer benchmark
+// (scripts/bench_ouster_peer.sh) to time and check the same packets.
 #include <benchmark/benchmark.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -32,6 +38,7 @@ using bench::data_dir;
 using bench::read_text;
 
 struct Stream {
+  std::string meta_json;
   os::SensorMetadata meta;
   std::vector<std::vector<std::byte>> packets;
   std::string error;
@@ -46,7 +53,8 @@ std::shared_ptr<Stream> load_ouster_capture() {
     s->error = "capture not found under " + dir;
     return s;
   }
-  s->meta = os::parse_metadata(read_text(meta), meta);
+  s->meta_json = read_text(meta);
+  s->meta = os::parse_metadata(s->meta_json, meta);
   PcapReader r(pcap);
   while (auto rec = r.next())
     if (rec->packet.dst_port == s->meta.udp_port_lidar)
@@ -63,7 +71,8 @@ std::shared_ptr<Stream> synthetic_os2(const std::string& profile) {
   }
   auto j = nlohmann::json::parse(read_text(meta));
   j["data_format"]["udp_profile_lidar"] = profile;
-  s->meta = os::parse_metadata(j.dump(), meta);
+  s->meta_json = j.dump();
+  s->meta = os::parse_metadata(s->meta_json, meta);
   const auto prof = s->meta.profile;
   std::mt19937 rng(42);
   std::uniform_int_distribution<std::uint32_t> dist(0, 60000);
@@ -104,6 +113,36 @@ void run(benchmark::State& state, const Stream& s, os::ReturnSelection sel, bool
   if (dec.stats().time_jumps != 0 || dec.stats().dropped() != 0) state.SkipWithError("time jumps or drops");
 }
 
+template <class T>
+void write_bytes(std::ofstream& f, const T* data, std::size_t n) {
+  f.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(n * sizeof(T)));
+}
+
+// The stream's packets and metadata, and the x y z of the first scan our decoder emits from them.
+void export_stream(const std::string& dir, const std::string& name, const Stream& s) {
+  if (!s.error.empty() || s.packets.empty()) return;
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/" + name + ".json", std::ios::binary) << s.meta_json;
+  std::ofstream packets(dir + "/" + name + ".packets", std::ios::binary);
+  os::DecoderConfig cfg;
+  cfg.metadata = s.meta;
+  os::Decoder dec(cfg);
+  std::optional<Scan> first;
+  for (const auto& p : s.packets) {
+    const auto n = static_cast<std::uint32_t>(p.size());
+    write_bytes(packets, &n, 1);
+    write_bytes(packets, p.data(), p.size());
+    const auto stamp = static_cast<Nanos>(dec.first_column_time(p).value_or(0));
+    auto scan = dec.push(PacketView{p, stamp, s.meta.udp_port_lidar}, stamp);
+    if (scan && !first) first = std::move(scan);
+  }
+  std::vector<float> xyz;
+  if (first)
+    for (const auto& pt : first->points) xyz.insert(xyz.end(), {pt.x, pt.y, pt.z});
+  std::ofstream out(dir + "/" + name + ".ours.xyz", std::ios::binary);
+  write_bytes(out, xyz.data(), xyz.size());
+}
+
 }  // namespace
 
 void sensor_rig::bench::register_benchmarks() {
@@ -122,5 +161,9 @@ void sensor_rig::bench::register_benchmarks() {
   benchmark::RegisterBenchmark("decode/OS-2-128/RNG19_RFL8_SIG16_NIR16_DUAL/synthetic/dual/recycled_buffers",
                                [dual](benchmark::State& st) { run(st, *dual, os::ReturnSelection::kDual, true); })
       ->Unit(benchmark::kMicrosecond);
+  if (const char* dir = std::getenv("RIG_BENCH_OUSTER_EXPORT"); dir != nullptr && *dir != '\0') {
+    export_stream(dir, "OS-1-32-G_LEGACY_capture", *capture);
+    export_stream(dir, "OS-2-128_RNG19_RFL8_SIG16_NIR16_synthetic", *single);
+  }
 }
 
