@@ -12,6 +12,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "rig_process.hpp"
@@ -127,6 +128,17 @@ LidarConfig vlp16_on(const std::string& interface, const std::string& name) {
   return c;
 }
 
+// The driver on the packet ring, or null with the reason when AF_PACKET is not permitted here.
+std::unique_ptr<LidarDriver> ring_driver(const LidarConfig& c, dds::Participant& p, dds::StampsWriter& stamps,
+                                         std::string& why) {
+  try {
+    return std::make_unique<LidarDriver>(c, p, stamps);
+  } catch (const std::runtime_error& e) {
+    why = std::string("AF_PACKET ring not permitted here: ") + e.what();
+    return nullptr;
+  }
+}
+
 TEST(LidarPacketSource, UnknownInterfaceIsAClearErrorAtStart) {
   dds::Participant p;
   dds::StampsWriter stamps(p);
@@ -150,12 +162,9 @@ TEST(LidarPacketSource, RingOnLoopbackPublishesScans) {
   q.depth = 50;
   dds::Topic<msg::PointCloud2> topic(sub, "/sensors/lidar/" + c.name + "/points", q);
   dds::Reader<msg::PointCloud2> reader(sub, topic, q);
-  std::unique_ptr<LidarDriver> driver;
-  try {
-    driver = std::make_unique<LidarDriver>(c, p, stamps);
-  } catch (const std::runtime_error& e) {
-    GTEST_SKIP() << "AF_PACKET ring not permitted here: " << e.what();
-  }
+  std::string why;
+  const auto driver = ring_driver(c, p, stamps, why);
+  if (!driver) GTEST_SKIP() << why;
   driver->start();
   ASSERT_TRUE(reader.wait_for_writers(1, 5000));
 
@@ -224,12 +233,9 @@ TEST(LidarPacketSource, RecordingKeepsTheCapturedHeaders) {
   c.record.directory = (dir.path / "rec").string();
   dds::Participant p;
   dds::StampsWriter stamps(p);
-  std::unique_ptr<LidarDriver> driver;
-  try {
-    driver = std::make_unique<LidarDriver>(c, p, stamps);
-  } catch (const std::runtime_error& e) {
-    GTEST_SKIP() << "AF_PACKET ring not permitted here: " << e.what();
-  }
+  std::string why;
+  const auto driver = ring_driver(c, p, stamps, why);
+  if (!driver) GTEST_SKIP() << why;
   driver->start();
   UniqueFd tx(::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0));
   ASSERT_TRUE(tx);

@@ -11,6 +11,7 @@
 #include <cstdlib>
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
@@ -167,29 +168,39 @@ const std::vector<std::size_t> kSizes{64, 1206, 1472, 1473, 2960, 8192, 24896, 3
 
 std::size_t fragments_of(std::size_t payload_bytes) { return (payload_bytes + 8 + 1479) / 1480; }
 
+// A ring on the veth end in namespace A (`c` with its interface set here) and a sender in B to
+// `ports` on A's address; no sender, and `why`, when the ring is not permitted.
+struct VethRing {
+  std::optional<RingSource> ring;
+  std::optional<UdpSender> tx;
+  std::string why;
+};
+VethRing ring_across(const VethPair& net, RingSourceConfig c, const std::vector<std::uint16_t>& ports) {
+  VethRing v;
+  c.interface = net.if_a();
+  NetworkNamespaces::run_in(net.ns_a(), [&] { v.ring = ring_or_skip(c, v.why); });
+  if (!v.ring) return v;
+  NetworkNamespaces::run_in(net.ns_b(), [&] {
+    std::vector<Endpoint> dst;
+    for (const auto port : ports) dst.push_back({VethPair::kAddrA, port});
+    v.tx.emplace(dst);
+  });
+  return v;
+}
+
 TEST(RingSource, VethNamespacesFragmentsReassembled) {
   VethPair net;
   if (!net.error().empty()) GTEST_SKIP() << net.error();
   constexpr std::uint16_t kPort = 7502, kOtherPort = 7503;
-  std::optional<RingSource> ring;
-  std::optional<UdpSource> taker;
-  std::optional<UdpSender> tx;
-  std::string why;
-  NetworkNamespaces::run_in(net.ns_a(), [&] {
-    RingSourceConfig c;
-    c.interface = net.if_a();
-    c.port = kPort;
-    in_addr b{};
-    ::inet_pton(AF_INET, VethPair::kAddrB, &b);
-    c.sensor_host = ntohl(b.s_addr);
-    ring = ring_or_skip(c, why);
-    taker.emplace(UdpSourceConfig{{"0.0.0.0", kPort}, 1 << 20, 64, false});
-  });
+  RingSourceConfig c;
+  c.port = kPort;
+  in_addr b{};
+  ::inet_pton(AF_INET, VethPair::kAddrB, &b);
+  c.sensor_host = ntohl(b.s_addr);
+  auto [ring, tx, why] = ring_across(net, c, {kPort, kOtherPort});
   if (!ring) GTEST_SKIP() << why;
-  NetworkNamespaces::run_in(net.ns_b(), [&] {
-    const std::vector<Endpoint> dst{{VethPair::kAddrA, kPort}, {VethPair::kAddrA, kOtherPort}};
-    tx.emplace(dst);
-  });
+  std::optional<UdpSource> taker;
+  NetworkNamespaces::run_in(net.ns_a(), [&] { taker.emplace(UdpSourceConfig{{"0.0.0.0", kPort}, 1 << 20, 64, false}); });
   const Nanos before = vehicle_now_ns();
   std::vector<Bytes> sent;
   std::size_t frames = 0, other_fragmented = 0, fragmented = 0;
@@ -242,23 +253,11 @@ TEST(RingSource, VethNamespacesSecondPortThroughTheSameRing) {
   VethPair net;
   if (!net.error().empty()) GTEST_SKIP() << net.error();
   constexpr std::uint16_t kPort = 7502, kImuPort = 7503, kOtherPort = 7504;
-  std::optional<RingSource> ring;
-  std::optional<UdpSender> tx;
-  std::string why;
-  NetworkNamespaces::run_in(net.ns_a(), [&] {
-    RingSourceConfig c;
-    c.interface = net.if_a();
-    c.port = kPort;
-    c.second_port = kImuPort;
-    ring = ring_or_skip(c, why);
-  });
+  RingSourceConfig c;
+  c.port = kPort;
+  c.second_port = kImuPort;
+  auto [ring, tx, why] = ring_across(net, c, {kPort, kImuPort, kOtherPort});
   if (!ring) GTEST_SKIP() << why;
-  NetworkNamespaces::run_in(net.ns_b(), [&] {
-    const std::vector<Endpoint> dst{{VethPair::kAddrA, kPort},
-                                    {VethPair::kAddrA, kImuPort},
-                                    {VethPair::kAddrA, kOtherPort}};
-    tx.emplace(dst);
-  });
   std::vector<std::pair<std::uint16_t, Bytes>> sent;
   for (unsigned k = 0; k < 30; ++k) {
     const bool imu = k % 3 != 0;
@@ -297,20 +296,10 @@ TEST(RingSource, InterfaceDownIsReportedAndRecovers) {
   VethPair net;
   if (!net.error().empty()) GTEST_SKIP() << net.error();
   constexpr std::uint16_t kPort = 2368;
-  std::optional<RingSource> ring;
-  std::optional<UdpSender> tx;
-  std::string why;
-  NetworkNamespaces::run_in(net.ns_a(), [&] {
-    RingSourceConfig c;
-    c.interface = net.if_a();
-    c.port = kPort;
-    ring = ring_or_skip(c, why);
-  });
+  RingSourceConfig c;
+  c.port = kPort;
+  auto [ring, tx, why] = ring_across(net, c, {kPort});
   if (!ring) GTEST_SKIP() << why;
-  NetworkNamespaces::run_in(net.ns_b(), [&] {
-    const std::vector<Endpoint> dst{{VethPair::kAddrA, kPort}};
-    tx.emplace(dst);
-  });
   const auto p = payload(1206, 1);
   ASSERT_EQ(tx->send(p).sent, 1u);
   ASSERT_EQ(receive_all(*ring, 1).size(), 1u);
