@@ -116,6 +116,18 @@ TEST(LidarConfig, FovAndAzimuthErrors) {
   }
 }
 
+// record.queue_mb: how far the recording's writer may fall behind (MiB, 1..4096, default 16).
+TEST(LidarConfig, RecordQueueSize) {
+  const auto ok = parse(kHead + "record: {directory: rec, queue_mb: 64}\n");
+  ASSERT_TRUE(ok.problems.empty()) << ok.problems.front().str();
+  EXPECT_DOUBLE_EQ(ok.config.record.queue_mb, 64.0);
+  EXPECT_DOUBLE_EQ(parse(kHead + "record: {directory: rec}\n").config.record.queue_mb, 16.0);
+  const auto bad = parse(kHead + "record: {directory: rec, queue_mb: 0.5}\n");
+  ASSERT_EQ(bad.problems.size(), 1u);
+  EXPECT_EQ(bad.problems.front().line, 4) << bad.problems.front().str();
+  EXPECT_NE(bad.problems.front().key.find("queue_mb"), std::string::npos) << bad.problems.front().str();
+}
+
 LidarConfig vlp16_on(const std::string& interface, const std::string& name) {
   LidarConfig c;
   c.name = name + "_" + std::to_string(::getpid());
