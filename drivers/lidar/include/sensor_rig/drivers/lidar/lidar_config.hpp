@@ -39,7 +39,7 @@ struct LidarRecordConfig {
 
 // Where the data port's datagrams are read: a UDP socket (the kernel's IP stack reassembles and
 // queues), or an AF_PACKET TPACKET_V3 ring on one interface (lidar/ring_source.hpp: kernel-filtered,
-// block-batched, reassembled here, ring drops counted). The second port always uses a UDP socket.
+// block-batched, reassembled here, ring drops counted). With packet the ring also takes the second port.
 enum class LidarSource { kUdp, kPacket };
 
 inline dds::QosSpec lidar_qos() {
