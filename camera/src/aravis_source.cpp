@@ -450,6 +450,10 @@ void AravisSource::close() noexcept {
   ptp_locked_.store(false);
   std::lock_guard lock(mutex_);
   if (st_->camera == nullptr) return;
+  // The device's heartbeat thread outlives this close by seconds on the release thread below: a
+  // CCP read of a restarted camera that nobody controls yet is "control-lost", which must reach
+  // neither the next connection's flag nor a destroyed source (camera/README.md "Reopening").
+  g_signal_handlers_disconnect_matched(st_->device, G_SIGNAL_MATCH_DATA, 0, 0, nullptr, nullptr, &control_lost_);
   const bool lost = control_lost_.load();
   if (!lost) arv_camera_stop_acquisition(st_->camera, nullptr);
   fold_stats();
