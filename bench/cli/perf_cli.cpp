@@ -15,7 +15,7 @@ namespace {
 namespace perf = sensor_rig::bench::perf;
 
 struct RunArgs {
-  std::string size = "0B", transport = "udp", message = "fixed", profile;
+  std::string size = "0B", transport = "udp", message = "fixed", reader = "copy", profile;
   perf::RunSpec spec;
   double fault_kill = -1;
 };
@@ -26,6 +26,7 @@ void add_node(CLI::App& perf_app, cli::Context& ctx) {
   auto a = std::make_shared<perf::NodeArgs>();
   auto role = std::make_shared<std::string>();
   auto msg = std::make_shared<std::string>("fixed");
+  auto reader = std::make_shared<std::string>("copy");
   auto topics = std::make_shared<std::vector<int>>();
   sub->add_option("--role", *role)->required()->check(CLI::IsMember({"pub", "sub"}));
   sub->add_option("--index", a->index)->required();
@@ -36,6 +37,7 @@ void add_node(CLI::App& perf_app, cli::Context& ctx) {
   sub->add_option("--profile", a->profile)->required();
   sub->add_option("--size", a->size)->required();
   sub->add_option("--message", *msg);
+  sub->add_option("--reader", *reader);
   sub->add_option("--rate", a->rate_hz)->required();
   sub->add_option("--count", a->count)->required();
   sub->add_option("--depth", a->depth);
@@ -43,9 +45,10 @@ void add_node(CLI::App& perf_app, cli::Context& ctx) {
   sub->add_option("--csv", a->csv)->required();
   sub->add_option("--stats", a->stats);
   sub->add_flag("!--no-loan", a->loan, "copy instead of loaning samples");
-  sub->callback([a, role, msg, topics, &ctx] {
+  sub->callback([a, role, msg, reader, topics, &ctx] {
     a->role = *role == "pub" ? perf::Role::kPublisher : perf::Role::kSubscriber;
     a->message = perf::parse_message(*msg);
+    a->reader = perf::parse_reader_mode(*reader);
     a->topics = *topics;
     ctx.exit_code = perf::run_node(*a);
   });
@@ -65,6 +68,10 @@ void add_run(CLI::App& perf_app, cli::Context& ctx) {
                   "fixed (fixed-size struct per size, loanable) | seq (header + sequence<octet>) | "
                   "pointcloud2 (sensor_msgs/PointCloud2 as the LIDAR driver publishes it)")
       ->capture_default_str();
+  sub->add_option("--reader", r->reader,
+                  "pointcloud2 subscribers: copy (deserialize, as a ROS 2 node) | view (read the serialized "
+                  "sample in place, in the iceoryx chunk over shm)")
+      ->capture_default_str();
   sub->add_option("--depth", r->spec.depth, "keep-last depth")->capture_default_str();
   sub->add_option("--domain", r->spec.domain, "DDS domain id (default: from the runner's pid)");
   sub->add_option("--rt-priority", r->spec.rt_priority, "nodes run SCHED_FIFO at this priority (0: normal scheduling)");
@@ -75,6 +82,7 @@ void add_run(CLI::App& perf_app, cli::Context& ctx) {
     r->spec.size = perf::parse_size(r->size);
     r->spec.transport = perf::parse_transport(r->transport);
     r->spec.message = perf::parse_message(r->message);
+    r->spec.reader = perf::parse_reader_mode(r->reader);
     perf::RunOptions opt;
     opt.profile = r->profile;
     opt.fault_kill_subscriber_s = r->fault_kill;

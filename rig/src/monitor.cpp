@@ -20,7 +20,9 @@
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dds/discovery.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
+#include "sensor_rig/common/log.hpp"
 #include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/dds/view_reader.hpp"
 #include "sensor_rig/dds/waitset.hpp"
 
 namespace sensor_rig::rig {
@@ -45,7 +47,8 @@ nlohmann::json percentiles_json(const Percentiles& p, bool with_n) {
   return j;
 }
 
-// Header stamp, payload size and a few words about the last sample, per message type.
+// Header stamp, payload size and a few words about the last sample, per message type (clouds and
+// images only with the hidden `--reader copy`: by default they are read as views, below).
 template <class T>
 struct Inspect;
 template <class T>
@@ -123,21 +126,68 @@ class TypedReader final : public TopicReader {
   dds::Reader<T> reader_;
 };
 
+// Clouds and images: the monitor needs the header, the size and a few words, never the data, so
+// it reads the serialized sample in place (over shm: in the iceoryx chunk) instead of copying
+// megabytes per sample. The `dds` stage ends once the view is parsed: the sample is usable.
+// Malformed samples are dropped, counted in the stats and warned about.
+template <class T, class View>
+class ViewReader final : public TopicReader {
+ public:
+  ViewReader(const dds::Participant& p, const std::string& ros_name, const dds::QosSpec& q, dds::WaitSet& ws)
+      : topic_(p, ros_name, q), reader_(p, topic_, q) {
+    ws.attach_reader(reader_.handle(), 0);
+  }
+  void poll(TopicStats& stats) override {
+    dds::take_views(reader_.handle(), view_, counts_, [&](const View& v, const dds_sample_info_t& info) {
+      const Nanos stamp = static_cast<Nanos>(v.header.sec) * 1'000'000'000 + static_cast<Nanos>(v.header.nanosec);
+      stats.on_data(stamp, v.data.size(), Arrival{vehicle_now_ns(), static_cast<Nanos>(info.source_timestamp)});
+      stats.info = describe(v);
+    });
+    if (counts_.malformed > stats.malformed) {
+      log::warn("monitor", topic_.ros_name() + ": " + std::to_string(counts_.malformed - stats.malformed) +
+                               " malformed sample(s) dropped (" + dds::to_string(counts_.last_error) + ")");
+      stats.malformed = counts_.malformed;
+    }
+  }
+
+ private:
+  static std::string describe(const dds::PointCloud2View& v) {
+    return std::to_string(static_cast<std::uint64_t>(v.width) * v.height) + " points";
+  }
+  static std::string describe(const dds::ImageView& v) {
+    return std::to_string(v.width) + "x" + std::to_string(v.height) + " " + std::string(v.encoding);
+  }
+
+  dds::Topic<T> topic_;
+  dds::Reader<T> reader_;
+  View view_;
+  dds::ViewCounts counts_;
+};
+
 using ReaderFactory = std::function<std::unique_ptr<TopicReader>(const dds::Participant&, const std::string&,
                                                                   const dds::QosSpec&, dds::WaitSet&)>;
-template <class T>
+template <class Reader>
 ReaderFactory factory() {
   return [](const dds::Participant& p, const std::string& n, const dds::QosSpec& q, dds::WaitSet& ws) {
-    return std::make_unique<TypedReader<T>>(p, n, q, ws);
+    return std::make_unique<Reader>(p, n, q, ws);
   };
 }
 const std::map<std::string, ReaderFactory, std::less<>>& known_types() {
   static const std::map<std::string, ReaderFactory, std::less<>> kTypes = {
-      {"sensor_msgs::msg::dds_::PointCloud2_", factory<msg::PointCloud2>()},
-      {"sensor_msgs::msg::dds_::Image_", factory<msg::Image>()},
-      {"sensor_rig_msgs::msg::dds_::DbwCommand_", factory<msg::DbwCommand>()},
-      {"sensor_rig_msgs::msg::dds_::DbwStatus_", factory<msg::DbwStatus>()},
-      {"sensor_rig_msgs::msg::dds_::VehicleState_", factory<msg::VehicleState>()},
+      {"sensor_msgs::msg::dds_::PointCloud2_", factory<ViewReader<msg::PointCloud2, dds::PointCloud2View>>()},
+      {"sensor_msgs::msg::dds_::Image_", factory<ViewReader<msg::Image, dds::ImageView>>()},
+      {"sensor_rig_msgs::msg::dds_::DbwCommand_", factory<TypedReader<msg::DbwCommand>>()},
+      {"sensor_rig_msgs::msg::dds_::DbwStatus_", factory<TypedReader<msg::DbwStatus>>()},
+      {"sensor_rig_msgs::msg::dds_::VehicleState_", factory<TypedReader<msg::VehicleState>>()},
+  };
+  return kTypes;
+}
+// `--reader copy` (hidden; before/after measurements side by side): clouds and images deserialized
+// by dds_take, as the monitor read them before the views.
+const std::map<std::string, ReaderFactory, std::less<>>& copying_types() {
+  static const std::map<std::string, ReaderFactory, std::less<>> kTypes = {
+      {"sensor_msgs::msg::dds_::PointCloud2_", factory<TypedReader<msg::PointCloud2>>()},
+      {"sensor_msgs::msg::dds_::Image_", factory<TypedReader<msg::Image>>()},
   };
   return kTypes;
 }
@@ -281,7 +331,9 @@ class Monitor {
       }
       const auto it = known_types().find(pub.type);
       if (it == known_types().end()) continue;
-      readers_.emplace(ros, it->second(participant_, ros, reader_qos(pub.reliability), waitset_));
+      const auto copying = opt_.copy_clouds ? copying_types().find(pub.type) : copying_types().end();
+      const ReaderFactory& make = copying != copying_types().end() ? copying->second : it->second;
+      readers_.emplace(ros, make(participant_, ros, reader_qos(pub.reliability), waitset_));
       // Samples published before the new reader matches are not ours to count.
       topic(ros).counting_since = vehicle_now_ns() + kMatchDelayNs;
     }
@@ -294,6 +346,7 @@ class Monitor {
                        {"received", st.received}, {"lost", st.lost},
                        {"source_drops", st.source_drops}, {"missing_packets", st.missing_packets},
                        {"size_bytes", st.last_size}};
+      if (st.malformed > 0) j["malformed"] = st.malformed;
       nlohmann::json lat = nlohmann::json::object();
       for (std::size_t i = 0; i < kStageCount; ++i) {
         const auto p = st.run_stages[i].take();
@@ -347,11 +400,12 @@ class Monitor {
     nlohmann::json lat = nlohmann::json::object();
     for (std::size_t i = 0; i < kStageCount; ++i)
       if (p[i].n > 0) lat[kStageNames[i]] = percentiles_json(p[i], false);
-    const nlohmann::json j{{"topic", name},       {"rate_hz", std::round(hz * 100) / 100},
-                           {"size_bytes", st.last_size}, {"received", st.received},
-                           {"lost", st.lost},     {"source_drops", st.source_drops},
-                           {"missing_packets", st.missing_packets},
-                           {"info", st.info},     {"latency_ms", lat}};
+    nlohmann::json j{{"topic", name},       {"rate_hz", std::round(hz * 100) / 100},
+                     {"size_bytes", st.last_size}, {"received", st.received},
+                     {"lost", st.lost},     {"source_drops", st.source_drops},
+                     {"missing_packets", st.missing_packets},
+                     {"info", st.info},     {"latency_ms", lat}};
+    if (st.malformed > 0) j["malformed"] = st.malformed;
     std::printf("%s\n", j.dump().c_str());
   }
 

@@ -23,6 +23,7 @@ struct Arrival {
 struct TopicStats {
   std::string name;
   std::uint64_t received = 0, lost = 0, source_drops = 0, missing_packets = 0, received_window = 0;
+  std::uint64_t malformed = 0;  // clouds and images whose serialized bytes did not parse: dropped
   std::size_t last_size = 0;
   std::string info;  // what the last sample says, in a few words (points, speed, state...)
   std::array<LatencyWindow, kStageCount> stages;

@@ -140,7 +140,11 @@ void add_monitor(CLI::App& app, cli::Context& ctx) {
   cmd->add_option("--security", *security_dir,
                   "DDS Security: a `rig security init` directory, to read the protected /vehicle/dbw/cmd");
   cmd->add_option("--identity", *identity, "DDS Security identity in that directory")->capture_default_str();
-  cmd->callback([&ctx, opt, profile, domain, transport, security_dir, identity] {
+  // Hidden: `copy` reads clouds and images as before the views (dds/README.md), for side-by-side runs.
+  auto reader = std::make_shared<std::string>("view");
+  cmd->add_option("--reader", *reader)->check(CLI::IsMember({"view", "copy"}))->group("");
+  cmd->callback([&ctx, opt, profile, domain, transport, security_dir, identity, reader] {
+    opt->copy_clouds = *reader == "copy";
     if (!security_dir->empty()) {
       try {
         opt->security = dds::security_files(*security_dir, *identity);

@@ -69,6 +69,12 @@ TEST(PerfSpec, ValidationRejectsBadRuns) {
   s.rate_hz = 10;
   s.duration_s = 60;
   EXPECT_EQ(s.count(), 600u);
+  s.reader = parse_reader_mode("view");  // reads PointCloud2 only
+  EXPECT_THROW(s.validate(), cli::UsageError);
+  s.message = Message::kPointCloud2;
+  EXPECT_NO_THROW(s.validate());
+  EXPECT_EQ(s.label(), "T1 N=4 0B 10Hz udp pointcloud2 view");
+  EXPECT_THROW(parse_reader_mode("borrow"), cli::UsageError);
 }
 
 TEST(PerfStats, PercentilesAndJain) {

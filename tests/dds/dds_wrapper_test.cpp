@@ -7,6 +7,7 @@
 
 #include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/dds/view_reader.hpp"
 
 namespace sensor_rig::dds {
 namespace {
@@ -88,6 +89,60 @@ TEST(DdsRoundTrip, PointCloudInProcessKeepsBytesAndSourceTimestamp) {
     EXPECT_EQ(std::memcmp(s.data._buffer, bytes.data(), bytes.size()), 0);
   });
   EXPECT_EQ(got, 1);
+}
+
+// The view reader: two clouds (one with 100 kB, fragmented) read in place from the received
+// serdata; the first view stays valid while the second is taken (each holds its own sample).
+TEST(DdsRoundTrip, PointCloudViewsReadTheSerializedSampleInPlace) {
+  Participant p;
+  QosSpec q;
+  q.depth = 4;
+  Topic<msg::PointCloud2> topic(p, "/test/wrapper/view_points", q);
+  Reader<msg::PointCloud2> reader(p, topic, q);
+  Writer<msg::PointCloud2> writer(p, topic, q);
+  ASSERT_TRUE(writer.wait_for_readers(1, 5000));
+
+  std::vector<std::uint8_t> bytes(100000);
+  for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 13);
+  const std::vector<msg::PointField> fields = {{const_cast<char*>("x"), 0, 7, 1}, {const_cast<char*>("ring"), 16, 4, 1}};
+  msg::PointCloud2 pc{};
+  pc.header.frame_id = const_cast<char*>("lidar_front");
+  pc.width = 1000;
+  pc.height = 1;
+  pc.fields._buffer = const_cast<msg::PointField*>(fields.data());
+  pc.fields._length = pc.fields._maximum = 2;
+  pc.point_step = 100;
+  pc.row_step = 100000;
+  pc.is_dense = true;
+  pc.data._buffer = bytes.data();
+  pc.data._length = pc.data._maximum = static_cast<uint32_t>(bytes.size());
+  for (int i = 0; i < 2; ++i) {
+    pc.header.stamp = msg::to_time(1'000 + i);
+    ASSERT_TRUE(writer.write(pc, vehicle_now_ns()).ok());
+  }
+
+  ViewCounts counts;
+  SerializedSample first_sample, second_sample;
+  PointCloud2View first, second;
+  ASSERT_TRUE(wait_until([&] { return take_view(reader.handle(), first_sample, first, counts); }, 5000));
+  ASSERT_TRUE(wait_until([&] { return take_view(reader.handle(), second_sample, second, counts); }, 5000));
+  EXPECT_EQ(first.header.nanosec, 1'000u);
+  EXPECT_EQ(second.header.nanosec, 1'001u);
+  for (const PointCloud2View* v : {&first, &second}) {
+    EXPECT_EQ(v->header.frame_id, "lidar_front");
+    ASSERT_EQ(v->fields.size(), 2u);
+    EXPECT_EQ(v->fields[1].name, "ring");
+    EXPECT_EQ(v->fields[1].offset, 16u);
+    EXPECT_EQ(v->width, 1000u);
+    EXPECT_TRUE(v->is_dense);
+    ASSERT_EQ(v->data.size(), bytes.size());
+    EXPECT_EQ(std::memcmp(v->data.data(), bytes.data(), bytes.size()), 0);
+  }
+  EXPECT_FALSE(first_sample.in_shared_memory());  // no RouDi here: the network path
+  EXPECT_EQ(counts.in_serdata, 2u);
+  EXPECT_EQ(counts.malformed, 0u);
+  EXPECT_FALSE(take_view(reader.handle(), second_sample, second, counts));  // none left: the sample is released
+  EXPECT_FALSE(second_sample.body().has_value());
 }
 
 }  // namespace

@@ -82,6 +82,9 @@ json data_paths(const RunInput& in, json& procs) {
   std::string how;
   if (in.spec.transport != Transport::kShm) how = "serialised and sent over loopback UDP";
   else if (in.spec.message == Message::kFixed) how = "loaned iceoryx chunks: written in place, read in place (zero copy)";
+  else if (in.spec.reader == ReaderMode::kView)
+    how = "Cyclone 0.10 cannot loan a type with sequences/strings: the writer serialises each sample into an "
+          "iceoryx chunk and every reader reads it there as a view (one copy, the writer's)";
   else how = "Cyclone 0.10 cannot loan a type with sequences/strings: the writer serialises each sample into an "
              "iceoryx chunk and every reader deserialises it (no loan, one copy per side)";
   return {{"expected_path", how}, {"nodes_reporting", reporting}, {"nodes", in.nodes.size()},
@@ -261,6 +264,7 @@ json analyse(const RunInput& in) {
   j["size_label"] = size_label(spec.size);
   j["duration_s"] = spec.duration_s;
   j["message"] = to_string(spec.message);
+  if (spec.message == Message::kPointCloud2) j["reader"] = to_string(spec.reader);
   j["depth"] = spec.depth;
   j["rt_priority"] = spec.rt_priority;
   j["domain"] = in.domain;

@@ -1,10 +1,14 @@
 #pragma once
 // The perf message types registered with the DDS wrapper, and uniform header access.
 // PointCloud2 is the LIDAR driver's message: its id travels in header.frame_id ("perf/<pub>/<seq>").
+#include <charconv>
 #include <cinttypes>
 #include <cstdio>
+#include <string_view>
+#include <system_error>
 #include <type_traits>
 
+#include "sensor_rig/dds/cdr_view.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig_perf.h"
 
@@ -50,6 +54,25 @@ inline PerfStamp read_stamp(const T& s) {
   } else {
     return {s.header.publisher, s.header.seq, msg::from_time(s.header.stamp)};
   }
+}
+// A PointCloud2 read in place (--reader view): the same "perf/<pub>/<seq>" in header.frame_id.
+inline PerfStamp read_stamp(const dds::PointCloud2View& v) {
+  PerfStamp st{kBadId, kBadId, static_cast<Nanos>(v.header.sec) * 1'000'000'000 + static_cast<Nanos>(v.header.nanosec)};
+  auto number = [](std::string_view text, std::uint32_t& out) {
+    const auto r = std::from_chars(text.data(), text.data() + text.size(), out);
+    return r.ec == std::errc{} && r.ptr == text.data() + text.size();
+  };
+  std::string_view id = v.header.frame_id;
+  if (!id.starts_with("perf/")) return st;
+  id.remove_prefix(5);
+  const auto slash = id.find('/');
+  std::uint32_t pub = 0, seq = 0;
+  if (slash == std::string_view::npos || !number(id.substr(0, slash), pub) || !number(id.substr(slash + 1), seq)) {
+    return st;
+  }
+  st.publisher = pub;
+  st.seq = seq;
+  return st;
 }
 // PointCloud2: header.frame_id must point at kCloudFrameIdSize writable bytes.
 template <class T>

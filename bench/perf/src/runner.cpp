@@ -47,7 +47,7 @@ std::vector<std::string> node_argv(const std::string& exe, const RunSpec& spec, 
   return {exe, "perf", "node", "--role", n.role == Role::kPublisher ? "pub" : "sub", "--index", std::to_string(n.index),
           "--topics", topics, "--matches", std::to_string(n.expected_matches), "--run-id", run_id,
           "--domain", std::to_string(domain), "--profile", profile, "--size", std::to_string(spec.size),
-          "--message", to_string(spec.message), "--rate", rate, "--count", std::to_string(spec.count()),
+          "--message", to_string(spec.message), "--reader", to_string(spec.reader), "--rate", rate, "--count", std::to_string(spec.count()),
           "--depth", std::to_string(spec.depth), "--rt-priority", std::to_string(spec.rt_priority), "--csv", csv,
           "--stats", stats};
 }

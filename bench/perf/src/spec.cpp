@@ -75,6 +75,14 @@ std::string to_string(Message m) {
   return "?";
 }
 
+ReaderMode parse_reader_mode(const std::string& text) {
+  if (text == "copy") return ReaderMode::kCopy;
+  if (text == "view") return ReaderMode::kView;
+  throw cli::UsageError("unknown reader mode '" + text + "' (copy, view)");
+}
+
+std::string to_string(ReaderMode r) { return r == ReaderMode::kView ? "view" : "copy"; }
+
 std::uint32_t RunSpec::count() const {
   return static_cast<std::uint32_t>(std::llround(rate_hz * duration_s));
 }
@@ -83,7 +91,8 @@ std::string RunSpec::label() const {
   char buf[128];
   std::snprintf(buf, sizeof buf, "T%d N=%d %s %gHz %s", topology, nodes, size_label(size).c_str(), rate_hz,
                 to_string(transport).c_str());
-  return message == Message::kFixed ? std::string(buf) : std::string(buf) + " " + to_string(message);
+  std::string label = message == Message::kFixed ? std::string(buf) : std::string(buf) + " " + to_string(message);
+  return reader == ReaderMode::kView ? label + " view" : label;
 }
 
 void RunSpec::validate() const {
@@ -97,6 +106,9 @@ void RunSpec::validate() const {
   if (domain > 232) throw cli::UsageError("--domain must be 0..232");
   if (depth < 1 || depth > 1000) throw cli::UsageError("--depth must be 1..1000");
   if (rt_priority < 0 || rt_priority > 99) throw cli::UsageError("--rt-priority must be 0..99");
+  if (reader == ReaderMode::kView && message != Message::kPointCloud2) {
+    throw cli::UsageError("--reader view reads PointCloud2 only (--message pointcloud2)");
+  }
   if (out.empty()) throw cli::UsageError("--out DIR is required");
 }
 

@@ -23,6 +23,7 @@ struct NodeArgs {
   std::string profile;       // Cyclone XML file
   std::uint32_t size = 0;
   Message message = Message::kFixed;
+  ReaderMode reader = ReaderMode::kCopy;  // subscribers of pointcloud2: copy or view
   double rate_hz = 10.0;
   std::uint32_t count = 0;
   int depth = 10;

@@ -13,6 +13,9 @@ enum class Transport { kUdp, kUdpTuned, kShm };
 // sensor_msgs/PointCloud2 the LIDAR driver publishes (24-byte points, S bytes of data).
 enum class Message { kFixed, kSeq, kPointCloud2 };
 enum class Role { kPublisher, kSubscriber };
+// How pointcloud2 subscribers read: copy (dds_take deserializes data into a fresh buffer, as a ROS 2
+// node does) or view (the serialized sample read in place: dds/view_reader.hpp).
+enum class ReaderMode { kCopy, kView };
 
 // The size classes of the paper (binary multiples): 0B 16B 64kB 512kB 1MB 2MB.
 std::uint32_t parse_size(const std::string& text);  // "64kB" -> 65536; only the classes above
@@ -22,6 +25,8 @@ Transport parse_transport(const std::string& text);
 std::string to_string(Transport t);
 Message parse_message(const std::string& text);
 std::string to_string(Message m);
+ReaderMode parse_reader_mode(const std::string& text);
+std::string to_string(ReaderMode r);
 
 struct RunSpec {
   int topology = 2;           // 1, 2 or 3
@@ -31,13 +36,14 @@ struct RunSpec {
   double duration_s = 60.0;
   Transport transport = Transport::kUdp;
   Message message = Message::kFixed;
+  ReaderMode reader = ReaderMode::kCopy;  // view: pointcloud2 only
   int domain = -1;            // -1: derived from the runner's pid
   int depth = 10;             // keep-last depth (ROS 2 default QoS: reliable, keep-last 10, volatile)
   int rt_priority = 0;        // > 0: nodes run SCHED_FIFO at this priority
   std::string out;            // output directory
 
   [[nodiscard]] std::uint32_t count() const;  // messages per publisher: rate x duration, rounded
-  [[nodiscard]] std::string label() const;    // "T2 N=32 1MB 10Hz shm" (+ " pointcloud2"/" seq")
+  [[nodiscard]] std::string label() const;    // "T2 N=32 1MB 10Hz shm" (+ " pointcloud2"/" seq", + " view")
   void validate() const;                      // throws cli::UsageError
 };
 
