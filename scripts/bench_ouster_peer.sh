@@ -11,6 +11,7 @@
 # Usage: scripts/bench_ouster_peer.sh BUILD_DIR OUSTER_SDK_DIR [ROUNDS] [SECONDS] [BEFORE_BENCH]
 #   BUILD_DIR: a configured Release build of this project (bench_lidar_ouster is built in it);
 #   BEFORE_BENCH: optionally another bench_lidar_ouster binary (e.g. of an older commit) to add.
+#   The peer is built in $OUSTER_PEER_BUILD (default BUILD_DIR/ouster-peer; ~20 min the first time).
 set -euo pipefail
 build=${1:?usage: $0 BUILD_DIR OUSTER_SDK_DIR [ROUNDS] [SECONDS] [BEFORE_BENCH]}
 sdk=${2:?usage: $0 BUILD_DIR OUSTER_SDK_DIR [ROUNDS] [SECONDS] [BEFORE_BENCH]}
@@ -24,7 +25,7 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
 cmake --build "$build" --target bench_lidar_ouster -j2 >/dev/null
-peer_build="$build/ouster-peer"
+peer_build=${OUSTER_PEER_BUILD:-$build/ouster-peer}
 cmake -S "$here/bench/peers/ouster" -B "$peer_build" -DOUSTER_SDK_DIR="$(cd "$sdk" && pwd)" \
   -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$peer_build" -j2 >/dev/null

@@ -60,6 +60,9 @@ std::vector<core::LidarPacket> read_packets(const std::string& path) {
     if (at + n > bytes.size()) throw std::runtime_error(path + ": truncated packet");
     core::LidarPacket p(static_cast<int>(n));
     std::memcpy(p.buf.data(), bytes.data() + at, n);
+    // A receive time, as a packet source sets it: the batcher counts a frame complete only when
+    // every packet slot has a non-zero one.
+    p.host_timestamp = 1 + out.size();
     out.push_back(std::move(p));
     at += n;
   }
