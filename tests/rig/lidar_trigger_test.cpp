@@ -7,9 +7,11 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <set>
 #include <thread>
 
@@ -105,6 +107,20 @@ bool triggered_camera(CameraConfig& c, const std::string& name, const std::strin
   return gige;
 }
 
+// The GigE fake reports each frame's exposure start (its clock, mapped once the mapping locks,
+// ~1 s): the phase figure is then the camera's own exposure, which the fake starts on its 25 Hz
+// grid (Aravis 0.8's fake polls for the trigger until the next 40 ms boundary of its clock), so
+// trigger -> exposure is 0-40 ms where a real camera's is its datasheet's microseconds.
+void expect_fake_exposures(const LidarTriggerFigures& f, const dds::DriverStatus& st) {
+  EXPECT_TRUE(f.from_device);
+  EXPECT_EQ(test::status_value(st, "phase_from"), "device_exposure");
+  EXPECT_GE(f.to_exposure.count, 3u);
+  // A frame more than half a turn after its call (a preempted fake, a reopen) is not the trigger's.
+  EXPECT_LE(f.exposure_unmatched, f.to_exposure.count / 4 + 1);
+  EXPECT_GT(f.to_exposure.p50_ns, -1'000'000);  // not before the call (within the mapping's error)
+  EXPECT_LT(f.to_exposure.p50_ns, 45'000'000);  // within the fake's 40 ms grid (+ its poll)
+}
+
 TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
   const LidarConfig l = front_lidar();
   CameraConfig c;
@@ -122,7 +138,7 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
   trigger.start();
   {
     SyntheticLidar sensor(l.model, l.port, 4.0);
-    const bool measured = wait_for([&] { return trigger.figures().measured >= 15; }, 8000, 20);
+    const bool measured = wait_for([&] { return trigger.figures().call_error.count >= 15; }, 8000, 20);
     const auto f = trigger.figures();
     const auto cs = camera.status();
     ASSERT_TRUE(measured) << "triggers " << f.triggers << " measured " << f.measured << " unmeasured " << f.unmeasured
@@ -131,8 +147,8 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
     EXPECT_EQ(f.sweep.state, timesync::SweepState::kLocked);
     EXPECT_NEAR(std::abs(f.sweep.rate_hz), 10.0, 0.1);  // 600 rpm (a Velodyne turns clockwise: negative)
     // Loose bounds for a loaded 2-core host; the p99 goal is the benchmark's (scripts/bench_lidar_trigger.sh).
-    EXPECT_LT(f.error_p50_ns, 5'000'000) << "p50 " << f.error_p50_ns << " p99 " << f.error_p99_ns;
-    EXPECT_LT(f.error_max_ns, 60'000'000);  // never a whole turn off (100 ms)
+    EXPECT_LT(f.call_error.p50_ns, 5'000'000) << "p50 " << f.call_error.p50_ns << " p99 " << f.call_error.p99_ns;
+    EXPECT_LT(f.call_error.max_ns, 60'000'000);  // never a whole turn off (100 ms)
     EXPECT_GE(f.triggers, f.measured);
     EXPECT_LE(f.unmeasured, f.triggers / 4 + 1);
     EXPECT_EQ(f.refused, 0u);
@@ -144,6 +160,7 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
       const auto frames = [&] { return std::strtoull(test::status_value(camera.status(), "frames").c_str(), nullptr, 10); };
       EXPECT_TRUE(wait_for([&] { return frames() >= f.measured / 2; }, 3000)) << "frames " << frames();
       EXPECT_EQ(test::status_value(camera.status(), "stamp_source"), "trigger_tick");
+      expect_fake_exposures(trigger.figures(), camera.status());
     }
     // One trigger per turn (10 Hz), never two for one crossing: count over a second.
     const auto t0 = trigger.figures().triggers;
@@ -170,9 +187,10 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
   if (gige) fake.stop(500);
 }
 
-// The stereo pair on the front LIDAR (issue 12): one LidarTrigger fires both cameras at each
+// The stereo pair on the front LIDAR (issue 12): one LidarTrigger fires both cameras at once at each
 // crossing of azimuth 0; with GigE fakes each trigger is one exposure. The frames of both cameras,
-// read over DDS, pair up with stamps within 1 ms; each camera's phase error is measured.
+// read over DDS, pair up with stamps within 1 ms; each camera's phase error is measured, from the
+// exposure start its frames report.
 TEST(LidarTriggeredCamera, StereoPairIsFiredTogetherStampsWithin1msPhaseMeasuredPerCamera) {
   const LidarConfig l = front_lidar();
   CameraConfig cams[2];
@@ -204,7 +222,7 @@ TEST(LidarTriggeredCamera, StereoPairIsFiredTogetherStampsWithin1msPhaseMeasured
     const auto take = [&] {
       for (std::size_t i = 0; i < 2; ++i)
         readers[i]->take([&](const msg::Image& m, const dds_sample_info_t&) { seen[i].insert(msg::from_time(m.header.stamp)); });
-      return trigger.figures(1).measured >= 12 && seen[0].size() >= 10 && seen[1].size() >= 10;
+      return trigger.figures(1).call_error.count >= 12 && seen[0].size() >= 10 && seen[1].size() >= 10;
     };
     const bool ok = wait_for(take, 8000, 20);
     const auto f = trigger.figures(1);
@@ -212,38 +230,50 @@ TEST(LidarTriggeredCamera, StereoPairIsFiredTogetherStampsWithin1msPhaseMeasured
                     << seen[1].size() << " sweep " << timesync::to_string(f.sweep.state);
   }
   trigger.stop();
-  // Every left frame has its right frame within 1 ms (the two trigger calls of one tick).
+  // Every left frame has its right frame within 1 ms (the two trigger calls of one tick, released
+  // together: either may come first).
   int paired = 0;
   Nanos worst = 0;
   for (const Nanos t : seen[0]) {
-    const auto it = seen[1].lower_bound(t);  // the right camera is fired after the left
-    if (it == seen[1].end() || *it - t >= 1'000'000) continue;
+    Nanos nearest = 1'000'000;
+    const auto it = seen[1].lower_bound(t);
+    if (it != seen[1].end()) nearest = std::min(nearest, *it - t);
+    if (it != seen[1].begin()) nearest = std::min(nearest, t - *std::prev(it));
+    if (nearest >= 1'000'000) continue;
     ++paired;
-    worst = std::max(worst, *it - t);
+    worst = std::max(worst, nearest);
   }
-  // One frame per trigger (GigE; the in-process fake repeats stamps at its own rate): nearly every
-  // left frame pairs (a loaded host may stretch a tick's second call past 1 ms: measured, p99).
+  // One frame per trigger (GigE; the in-process fake repeats stamps at its own rate): 5 of 6 left
+  // frames pair — no call waits for the other camera's acknowledgement any more, only a preempted
+  // firing thread on a loaded host stretches one (was: 3 of 4, the second call after the first's
+  // GVCP round trip).
   if (gige) {
-    EXPECT_GE(4 * paired, 3 * static_cast<int>(seen[0].size())) << "left " << seen[0].size() << " right " << seen[1].size();
+    EXPECT_GE(6 * paired, 5 * static_cast<int>(seen[0].size())) << "left " << seen[0].size() << " right " << seen[1].size();
   }
   EXPECT_GE(paired, 8);
   for (std::size_t i = 0; i < 2; ++i) {
     const auto f = trigger.figures(i);
     const auto st = drivers[i]->status();
-    EXPECT_GE(f.measured, 10u) << i;
-    EXPECT_LT(f.error_p50_ns, 5'000'000) << i << " p99 " << f.error_p99_ns;  // loose: loaded host
+    EXPECT_GE(f.call_error.count, 10u) << i;
+    EXPECT_LT(f.call_error.p50_ns, 5'000'000) << i << " p99 " << f.call_error.p99_ns;  // loose: loaded host
     EXPECT_EQ(f.refused, 0u) << i;
     EXPECT_EQ(test::status_value(st, "trigger_group"), "stereo");
     EXPECT_EQ(test::status_value(st, "phase_measured"), std::to_string(f.measured));
     EXPECT_EQ(test::status_value(st, "stamp_source"), "trigger_tick");
+    if (gige) expect_fake_exposures(f, st);
   }
   const auto f = trigger.figures();
   EXPECT_LT(f.spread_p50_ns, 1'000'000);
-  std::fprintf(stderr, "stereo: paired %d, stamp difference max %.3f ms; trigger spread p50 %.3f p99 %.3f ms; phase p50 %.3f/%.3f p99 %.3f/%.3f ms\n",
-               paired, static_cast<double>(worst) * 1e-6, static_cast<double>(f.spread_p50_ns) * 1e-6,
-               static_cast<double>(f.spread_p99_ns) * 1e-6, static_cast<double>(trigger.figures(0).error_p50_ns) * 1e-6,
-               static_cast<double>(trigger.figures(1).error_p50_ns) * 1e-6, static_cast<double>(trigger.figures(0).error_p99_ns) * 1e-6,
-               static_cast<double>(trigger.figures(1).error_p99_ns) * 1e-6);
+  const auto ms = [](Nanos ns) { return static_cast<double>(ns) * 1e-6; };
+  const auto left = trigger.figures(0);
+  const auto right = trigger.figures(1);
+  std::fprintf(stderr,
+               "stereo: paired %d of %zu, stamp difference max %.3f ms; trigger spread p50 %.3f p99 %.3f ms; call error "
+               "p50 %.3f/%.3f p99 %.3f/%.3f ms; phase (%s) p50 %.3f/%.3f p99 %.3f/%.3f ms\n",
+               paired, seen[0].size(), ms(worst), ms(f.spread_p50_ns), ms(f.spread_p99_ns), ms(left.call_error.p50_ns),
+               ms(right.call_error.p50_ns), ms(left.call_error.p99_ns), ms(right.call_error.p99_ns),
+               left.from_device ? "device exposure" : "trigger call", ms(left.error_p50_ns), ms(right.error_p50_ns),
+               ms(left.error_p99_ns), ms(right.error_p99_ns));
   for (auto& d : drivers) d->stop();
   lidar.stop();
   for (auto& fake : fakes)

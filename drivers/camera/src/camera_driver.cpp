@@ -93,6 +93,9 @@ struct CameraDriver::Impl {
     const auto& m = f.meta();
     const Nanos tick = trigger != nullptr ? trigger->tick_before(m.first_rx_ns, trigger_member) : 0;
     const auto st = clock.stamp(m, tick);
+    // The camera's own exposure start of a triggered frame: the trigger's phase figure includes
+    // the camera's trigger -> exposure delay where the device reports it.
+    if (tick > 0 && st.device_exposure_ns > 0) trigger->exposed(trigger_member, tick, st.device_exposure_ns);
     msg::Image img{};
     img.header.stamp = msg::to_time(st.vehicle_ns);
     img.header.frame_id = const_cast<char*>(cfg.frame_id.c_str());
@@ -255,7 +258,8 @@ void CameraDriver::stop() {
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
     if (k == "frames" || k == "incomplete" || k == "reopens" || k == "stamp_source" || k == "sync" || k == "triggers" ||
-        k.rfind("phase_", 0) == 0 || k.rfind("trigger_spread_", 0) == 0)
+        k.rfind("phase_", 0) == 0 || k.rfind("trigger_spread_", 0) == 0 || k.rfind("trigger_call_", 0) == 0 ||
+        k.rfind("trigger_to_exposure_", 0) == 0)
       line.append(" ").append(k).append("=").append(v);
   log::info("camera", line);
 }

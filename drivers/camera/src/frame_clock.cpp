@@ -35,20 +35,23 @@ FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept
 
 FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
   switch (m.domain) {
-    case camera::TimeDomain::kMonotonic:
+    case camera::TimeDomain::kMonotonic: {
       // The offset of the two clocks sampled together at this frame's dequeue: a clock step
       // (NTP/PTP slew or jump) shows in the next frame, not never.
-      return {m.device_ns + (m.complete_ns - m.complete_mono_ns), StampSource::kMonotonic};
+      const Nanos t = m.device_ns + (m.complete_ns - m.complete_mono_ns);
+      return {t, StampSource::kMonotonic, t};
+    }
     case camera::TimeDomain::kVehicle:
-      return {m.device_ns, StampSource::kVehicle};
+      return {m.device_ns, StampSource::kVehicle, m.device_ns};
     case camera::TimeDomain::kDeviceTicks:
       break;
   }
   mapper_.observe(m.device_ns, m.first_rx_ns);
-  if (tick_ns > 0 && tick_ns <= m.first_rx_ns) return {tick_ns, StampSource::kTriggerTick};
   const auto r = mapper_.map(m.device_ns);
-  if (r.valid) return {r.vehicle_ns, StampSource::kDeviceMapped};
-  return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback};
+  const Nanos device = r.valid ? r.vehicle_ns : 0;
+  if (tick_ns > 0 && tick_ns <= m.first_rx_ns) return {tick_ns, StampSource::kTriggerTick, device};
+  if (r.valid) return {r.vehicle_ns, StampSource::kDeviceMapped, device};
+  return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0};
 }
 
 }  // namespace sensor_rig::drivers

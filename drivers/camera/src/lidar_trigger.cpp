@@ -16,22 +16,51 @@
 namespace sensor_rig::drivers {
 namespace {
 
-constexpr Nanos kApproachNs = 2'000'000;   // wake this early, predict again with fresher samples
+constexpr Nanos kApproachNs = 2'000'000;   // arm this early, with the freshest prediction
 constexpr Nanos kSpinNs = 200'000;         // the last stretch is a busy wait (sleep overshoots)
 constexpr Nanos kMaxSleepNs = 20'000'000;  // re-predict (and check stop) at least this often
 constexpr Nanos kLateNs = 1'000'000;
+constexpr std::size_t kKeepTicks = 32;     // ~3 s at 10 Hz: the frames of a tick come within it
 
-void sleep_until_realtime(Nanos t) {
+void sleep_until(clockid_t clock, Nanos t) {
   const timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
-  // Absolute CLOCK_REALTIME: the aim is vehicle time, and a step of the clock moves the wake-up with it.
-  while (::clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  while (::clock_nanosleep(clock, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
   }
+}
+
+// Absolute CLOCK_REALTIME: the aim is vehicle time, and a step of the clock moves the wake-up with it.
+void sleep_until_realtime(Nanos t) { sleep_until(CLOCK_REALTIME, t); }
+
+// The firing threads wait on CLOCK_MONOTONIC: an armed shot is at most kApproachNs away, and a
+// realtime step in between must not hold a member back while another fires.
+void spin_until_monotonic(Nanos t) {
+  if (t - monotonic_now_ns() > kSpinNs) sleep_until(CLOCK_MONOTONIC, t - kSpinNs);
+  while (monotonic_now_ns() < t) {
+  }
+}
+
+void set_fifo(std::thread& t, int priority, const std::string& who) {
+  if (priority <= 0) return;
+  sched_param sp{};
+  sp.sched_priority = priority;
+  if (const int rc = pthread_setschedparam(t.native_handle(), SCHED_FIFO, &sp); rc != 0)
+    log::warn("camera", who + ": trigger thread SCHED_FIFO refused (" + std::strerror(rc) + ")");
 }
 
 std::string ms(Nanos ns) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3f", static_cast<double>(ns) * 1e-6);
   return buf;
+}
+
+ErrorFigure figure_of(const ErrorHistory& h) {
+  return {h.count(), h.percentile(0.5), h.percentile(0.99), h.max()};
+}
+
+void add_figure(dds::DriverStatus& s, const std::string& prefix, const ErrorFigure& f) {
+  s.add(prefix + "_p50_ms", ms(f.p50_ns));
+  s.add(prefix + "_p99_ms", ms(f.p99_ns));
+  s.add(prefix + "_max_ms", ms(f.max_ns));
 }
 
 }  // namespace
@@ -45,27 +74,42 @@ LidarTrigger::LidarTrigger(std::string name, LidarTriggerConfig cfg, timesync::S
 LidarTrigger::~LidarTrigger() { stop(); }
 
 std::size_t LidarTrigger::add(std::function<bool()> trigger) {
-  members_.push_back(Member{std::move(trigger), {}, {}, 0});
+  Member m;
+  m.trigger = std::move(trigger);
+  members_.push_back(std::move(m));
   return members_.size() - 1;
 }
 
 void LidarTrigger::start(int realtime_priority) {
   if (thread_.joinable()) return;
   stop_.store(false);
+  {
+    std::lock_guard lock(shot_mutex_);
+    shot_.closing = false;
+    shot_.called.assign(members_.size(), 0);
+    shot_.accepted.assign(members_.size(), 0);
+  }
   started_ns_.store(vehicle_now_ns());
+  for (std::size_t i = 0; i < members_.size(); ++i) {
+    members_[i].thread = std::thread([this, i] { run_member(i); });
+    (void)pthread_setname_np(members_[i].thread.native_handle(), ("trg" + std::to_string(i) + ":" + name_).substr(0, 15).c_str());
+    set_fifo(members_[i].thread, realtime_priority, name_);
+  }
   thread_ = std::thread([this] { run(); });
   (void)pthread_setname_np(thread_.native_handle(), ("trg:" + name_).substr(0, 15).c_str());
-  if (realtime_priority > 0) {
-    sched_param sp{};
-    sp.sched_priority = realtime_priority;
-    if (const int rc = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &sp); rc != 0)
-      log::warn("camera", name_ + ": trigger thread SCHED_FIFO refused (" + std::strerror(rc) + ")");
-  }
+  set_fifo(thread_, realtime_priority, name_);
 }
 
 void LidarTrigger::stop() {
   stop_.store(true);
-  if (thread_.joinable()) thread_.join();
+  if (thread_.joinable()) thread_.join();  // it waits for its armed shot's calls
+  {
+    std::lock_guard lock(shot_mutex_);
+    shot_.closing = true;
+  }
+  shot_cv_.notify_all();
+  for (auto& m : members_)
+    if (m.thread.joinable()) m.thread.join();
 }
 
 Nanos LidarTrigger::tick_before(Nanos t, std::size_t member) const {
@@ -81,69 +125,115 @@ void LidarTrigger::observe_sweep(std::span<const timesync::SweepSample> samples)
   settle(newest_sample_ns_);
 }
 
+void LidarTrigger::add_device_error(const Tick& t, std::size_t member) noexcept {
+  if (t.crossing != 0 && t.device[member] != 0) members_[member].device_error.add(std::abs(t.device[member] - t.crossing));
+}
+
+void LidarTrigger::exposed(std::size_t member, Nanos tick, Nanos device_exposure_ns) {
+  if (tick == 0 || device_exposure_ns == 0) return;
+  std::lock_guard lock(mutex_);
+  if (member >= members_.size()) return;
+  const auto it = std::find_if(ticks_.rbegin(), ticks_.rend(), [&](const Tick& t) { return t.exposures[member] == tick; });
+  if (it == ticks_.rend() || it->device[member] != 0) return;  // gone, or its frame already told
+  // Another tick's frame (the camera sent one without our trigger, or dropped ours): more than
+  // half a turn between call and exposure cannot be this trigger's.
+  const Nanos delay = device_exposure_ns - (tick - latency_ns_);
+  const Nanos period = phase_.period_ns();
+  if (std::abs(delay) > (period > 0 ? period / 2 : 50'000'000)) {
+    ++members_[member].unmatched;
+    return;
+  }
+  it->device[member] = device_exposure_ns;
+  members_[member].to_exposure.add(delay);
+  add_device_error(*it, member);
+}
+
 void LidarTrigger::settle(Nanos newest) noexcept {
   const Nanos period = phase_.period_ns();
   // The interpolation needs samples past the crossing: ~crossing_halfwidth of a turn (+ margin).
   const Nanos cover = period > 0 ? period / 16 + 1'000'000 : 10'000'000;
-  while (!pending_.empty()) {
-    const Pending& p = pending_.front();
-    if (newest < p.target + cover) break;
-    if (const auto actual = phase_.crossing_near(cfg_.azimuth_deg, p.target)) {
-      for (std::size_t i = 0; i < members_.size() && i < p.exposures.size(); ++i)
-        if (p.exposures[i] != 0) members_[i].phase_error.add(std::abs(p.exposures[i] - *actual));
-    } else if (newest < p.target + (period > 0 ? period : 100'000'000) + cover) {
+  for (Tick& t : ticks_) {
+    if (t.settled) continue;
+    if (newest < t.target + cover) break;
+    if (const auto actual = phase_.crossing_near(cfg_.azimuth_deg, t.target)) {
+      t.crossing = *actual;
+      for (std::size_t i = 0; i < members_.size(); ++i) {
+        if (t.exposures[i] == 0) continue;
+        members_[i].call_error.add(std::abs(t.exposures[i] - t.crossing));
+        add_device_error(t, i);
+      }
+    } else if (newest < t.target + (period > 0 ? period : 100'000'000) + cover) {
       break;  // the samples may still come with the next scan (the crossing sat at its cut)
     } else {
       ++figures_.unmeasured;  // a gap in the LIDAR's packets around it, or a re-acquired phase
     }
-    pending_.pop_front();
+    t.settled = true;
   }
 }
 
-bool LidarTrigger::wait_until(Nanos aim) {
+void LidarTrigger::run_member(std::size_t i) {
+  std::uint64_t seen = 0;
   for (;;) {
-    if (stop_.load()) return false;
-    const Nanos now = vehicle_now_ns();
-    if (now >= aim) return true;
-    if (aim - now > kSpinNs) {
-      sleep_until_realtime(std::min(aim - kSpinNs, now + kMaxSleepNs));
-    } else {
-      while (vehicle_now_ns() < aim) {
-      }
-      return true;
+    Nanos aim = 0;
+    {
+      std::unique_lock lock(shot_mutex_);
+      shot_cv_.wait(lock, [&] { return shot_.generation != seen || shot_.closing; });
+      if (shot_.generation == seen) return;  // closing with nothing armed
+      seen = shot_.generation;
+      aim = shot_.aim_mono;
     }
+    // Armed: fired even when stop() came meanwhile, so that no member fires alone.
+    spin_until_monotonic(aim);
+    const Nanos called = vehicle_now_ns();
+    const bool accepted = members_[i].trigger();
+    {
+      std::lock_guard lock(shot_mutex_);
+      shot_.called[i] = called;
+      shot_.accepted[i] = accepted ? 1 : 0;
+      ++shot_.done;
+    }
+    shot_cv_.notify_all();
   }
 }
 
 void LidarTrigger::fire(Nanos target, Nanos aim) {
-  // Back to back: each member's exposure starts at its own trigger call (+ latency), so a group's
-  // stamps differ by the calls before it (its spread, measured).
-  Pending p{target, std::vector<Nanos>(members_.size(), 0)};
-  Nanos first = 0, last = 0;
-  for (std::size_t i = 0; i < members_.size(); ++i) {
-    const Nanos called = vehicle_now_ns();
-    if (i == 0) first = called;
-    if (!members_[i].trigger()) continue;
-    p.exposures[i] = called + latency_ns_;
-    last = called;
+  // Every member's firing thread calls its camera's trigger at the same instant: a group's stamps
+  // (each its own call + latency) differ by the threads' wake-ups, not by a camera's round trip.
+  Tick t{target, std::vector<Nanos>(members_.size(), 0), std::vector<Nanos>(members_.size(), 0), 0, false};
+  Nanos first = 0;  // the earliest call (late wake-up), and the accepted calls' span (the spread)
+  Nanos lo = 0, hi = 0;
+  std::size_t accepted = 0;
+  {
+    std::unique_lock lock(shot_mutex_);
+    shot_.aim_mono = monotonic_now_ns() + (aim - vehicle_now_ns());
+    shot_.done = 0;
+    ++shot_.generation;
+    shot_cv_.notify_all();
+    shot_cv_.wait(lock, [&] { return shot_.done == members_.size(); });
+    for (std::size_t i = 0; i < members_.size(); ++i) {
+      const Nanos called = shot_.called[i];
+      first = i == 0 ? called : std::min(first, called);
+      if (shot_.accepted[i] == 0) continue;
+      t.exposures[i] = called + latency_ns_;
+      lo = accepted == 0 ? called : std::min(lo, called);
+      hi = std::max(hi, called);
+      ++accepted;
+    }
   }
   std::lock_guard lock(mutex_);
   ++figures_.triggers;
   if (first - aim > kLateNs) ++figures_.late;
-  bool any = false;
   for (std::size_t i = 0; i < members_.size(); ++i) {
-    if (p.exposures[i] == 0) {
+    if (t.exposures[i] == 0)
       ++members_[i].refused;
-      continue;
-    }
-    members_[i].exposures.add(p.exposures[i]);
-    any = true;
+    else
+      members_[i].exposures.add(t.exposures[i]);
   }
-  if (members_.size() > 1 && last != 0) spread_.add(last - first);
-  if (any) pending_.push_back(std::move(p));
-  if (pending_.size() > 64) {  // the LIDAR's samples stopped coming: never measured
-    pending_.pop_front();
-    ++figures_.unmeasured;
+  if (accepted > 1) spread_.add(hi - lo);
+  if (accepted > 0) ticks_.push_back(std::move(t));
+  while (ticks_.size() > kKeepTicks) {  // the LIDAR's samples stopped coming: never measured
+    if (!ticks_.front().settled) ++figures_.unmeasured;
+    ticks_.pop_front();
   }
 }
 
@@ -172,7 +262,6 @@ void LidarTrigger::run() {
       sleep_until_realtime(std::min(aim - kApproachNs, now + kMaxSleepNs));
       continue;
     }
-    if (!wait_until(aim)) break;
     fire(*target, aim);
     last_target = *target;
   }
@@ -186,10 +275,15 @@ LidarTriggerFigures LidarTrigger::figures(std::size_t member) const {
   if (member < members_.size()) {
     const auto& m = members_[member];
     f.refused = m.refused;
-    f.measured = m.phase_error.count();
-    f.error_p50_ns = m.phase_error.percentile(0.5);
-    f.error_p99_ns = m.phase_error.percentile(0.99);
-    f.error_max_ns = m.phase_error.max();
+    f.call_error = figure_of(m.call_error);
+    f.to_exposure = figure_of(m.to_exposure);
+    f.exposure_unmatched = m.unmatched;
+    f.from_device = m.device_error.count() > 0;
+    const ErrorFigure phase = f.from_device ? figure_of(m.device_error) : f.call_error;
+    f.measured = phase.count;
+    f.error_p50_ns = phase.p50_ns;
+    f.error_p99_ns = phase.p99_ns;
+    f.error_max_ns = phase.max_ns;
   }
   f.spread_p50_ns = spread_.percentile(0.5);
   f.spread_p99_ns = spread_.percentile(0.99);
@@ -208,12 +302,17 @@ void LidarTrigger::add_status(dds::DriverStatus& s, std::size_t member) const {
   s.add_number("triggers_refused", f.refused);
   s.add_number("triggers_late", f.late);
   s.add_number("trigger_prediction_lost", f.prediction_lost);
+  // The phase figure's exposure start: the camera's own report, or the trigger call + latency.
+  s.add("phase_from", f.from_device ? "device_exposure" : "trigger_call");
   s.add_number("phase_measured", f.measured);
   s.add_number("phase_unmeasured", f.unmeasured);
   s.add("phase_error_p50_ms", ms(f.error_p50_ns));
   s.add("phase_error_p99_ms", ms(f.error_p99_ns));
   s.add("phase_error_max_ms", ms(f.error_max_ns));
-  if (f.members > 1) {  // a group (stereo pair): one tick, each member's call in turn
+  add_figure(s, "trigger_call_error", f.call_error);
+  if (f.to_exposure.count > 0) add_figure(s, "trigger_to_exposure", f.to_exposure);
+  s.add_number("exposure_unmatched", f.exposure_unmatched);
+  if (f.members > 1) {  // a group (stereo pair): one tick, every member's call at once
     s.add("trigger_group", name_);
     s.add_number("trigger_members", f.members);
     s.add("trigger_spread_p50_ms", ms(f.spread_p50_ns));

@@ -149,9 +149,24 @@ TEST(LidarTrigger, FiresAtTheSweepCrossingOncePerTurnAndStopsWithTheLidar) {
   EXPECT_EQ(st.level, dds::Level::kWarn);  // the LIDAR stopped, past the 2 s start-up grace: not triggered
 }
 
-// A stereo pair on one LIDAR trigger: each crossing fires both cameras back to back, once; each
-// camera's frames carry its own trigger call (+ latency), and the two stamps agree within 1 ms;
-// the phase error is measured per camera, the spread between the two calls per tick.
+// Runs `trigger` against a simulated 600 rpm sweep until member `watch` has `measured` triggers
+// measured (or ~6 s), then lets the sweep run on until every tick fired is measured; false when
+// it never got there.
+bool run_until_measured(LidarTrigger& trigger, std::size_t watch, std::uint64_t measured) {
+  const Sweep sweep{vehicle_now_ns(), -10.0, 200.0};
+  SimulatedLidar lidar(sweep, trigger);
+  trigger.start();
+  for (int i = 0; i < 600 && trigger.figures(watch).measured < measured; ++i) ::usleep(10'000);
+  trigger.stop();
+  ::usleep(250'000);  // the LIDAR's next scans cover the last crossings fired: every tick settled
+  lidar.stop();
+  return trigger.figures(watch).measured >= measured;
+}
+
+// A stereo pair on one LIDAR trigger: each crossing fires both cameras at once, once; the left
+// camera's trigger takes 20 ms (a slow GVCP acknowledgement) and the right one's call does not
+// wait for it. Each camera's frames carry its own trigger call (+ latency); the phase error is
+// measured per camera, the spread between the calls per tick.
 TEST(LidarTrigger, AGroupIsFiredTogetherAtEachCrossingWithItsOwnPhaseFigures) {
   LidarTriggerConfig cfg{"front", 0.0, 50.0};
   LidarTrigger trigger("stereo", cfg);
@@ -159,19 +174,14 @@ TEST(LidarTrigger, AGroupIsFiredTogetherAtEachCrossingWithItsOwnPhaseFigures) {
   std::vector<Nanos> fired[2];
   for (std::size_t i = 0; i < 2; ++i)
     EXPECT_EQ(trigger.add([&m, &fired, i] {
-      std::lock_guard lock(m);
-      fired[i].push_back(vehicle_now_ns());
+      {
+        std::lock_guard lock(m);
+        fired[i].push_back(vehicle_now_ns());
+      }
+      if (i == 0) ::usleep(20'000);  // the left camera acknowledges late
       return true;
     }), i);
-  const Sweep sweep{vehicle_now_ns(), -10.0, 200.0};
-  SimulatedLidar lidar(sweep, trigger);
-  trigger.start();
-  ASSERT_TRUE([&] {
-    for (int i = 0; i < 300 && trigger.figures(1).measured < 9; ++i) ::usleep(10'000);
-    return trigger.figures(1).measured >= 9;
-  }()) << "sweep " << timesync::to_string(trigger.figures().sweep.state);
-  trigger.stop();
-  lidar.stop();
+  ASSERT_TRUE(run_until_measured(trigger, 1, 9)) << "sweep " << timesync::to_string(trigger.figures().sweep.state);
   const auto left = trigger.figures(0);
   const auto right = trigger.figures(1);
   std::lock_guard lock(m);
@@ -180,26 +190,32 @@ TEST(LidarTrigger, AGroupIsFiredTogetherAtEachCrossingWithItsOwnPhaseFigures) {
   EXPECT_EQ(left.triggers, fired[0].size());
   constexpr Nanos kLatency = 50'000;
   // The last ticks (the trigger keeps 16): a frame arriving 5 ms after tick k is stamped with its
-  // camera's own call (+ latency) — the left's before its call returned, the right's after the
-  // left's — and the two stamps agree within 1 ms.
+  // camera's own call (+ latency); back to back, the right call would follow the left's 20 ms.
+  std::size_t together = 0;
   for (std::size_t k = fired[0].size() - 8; k < fired[0].size(); ++k) {
-    const Nanos frame_arrives = fired[1][k] + 5'000'000;
-    const Nanos stamp_left = trigger.tick_before(frame_arrives, 0) - kLatency;
-    const Nanos stamp_right = trigger.tick_before(frame_arrives, 1) - kLatency;
-    EXPECT_GT(stamp_left, fired[1][k - 1]) << k;
-    EXPECT_LE(stamp_left, fired[0][k]) << k;
-    EXPECT_GE(stamp_right, fired[0][k]) << k;
-    EXPECT_LE(stamp_right, fired[1][k]) << k;
-    EXPECT_LT(stamp_right - stamp_left, 1'000'000) << k;
+    const Nanos frame_arrives = std::max(fired[0][k], fired[1][k]) + 30'000'000;
+    for (std::size_t i = 0; i < 2; ++i) {
+      const Nanos stamp = trigger.tick_before(frame_arrives, i) - kLatency;
+      EXPECT_LE(stamp, fired[i][k]) << k << " camera " << i;  // its own call, just before the call ran
+      EXPECT_GT(stamp, fired[i][k - 1]) << k << " camera " << i;
+    }
+    const Nanos stamp_left = trigger.tick_before(frame_arrives, 0);
+    const Nanos stamp_right = trigger.tick_before(frame_arrives, 1);
+    if (std::abs(stamp_right - stamp_left) < 10'000'000) ++together;
   }
+  // Released together: the calls of nearly every tick within 10 ms (typically µs: a firing thread
+  // preempted on a loaded 2-core host is what stretches one); back to back none would be (the
+  // right call >= 20 ms after the left). The mock rig's spread figures are camera/README.md's.
+  EXPECT_GE(together, 6u);
   // Both cameras measured against the same crossings, each with its own error (loose: loaded host).
   EXPECT_GE(left.measured, 8u);
   EXPECT_GE(right.measured, 8u);
   EXPECT_LT(left.error_p50_ns, 5'000'000);
   EXPECT_LT(right.error_p50_ns, 5'000'000);
+  EXPECT_FALSE(right.from_device);  // no frames reported: the trigger call + latency
+  EXPECT_EQ(right.measured, right.call_error.count);
   EXPECT_EQ(left.members, 2u);
-  EXPECT_GT(left.spread_max_ns, 0);  // the second call follows the first
-  EXPECT_LT(left.spread_p50_ns, 1'000'000);
+  EXPECT_LT(left.spread_p50_ns, 10'000'000);
   EXPECT_EQ(left.spread_max_ns, right.spread_max_ns);  // the group's figure
   dds::DriverStatus st;
   trigger.add_status(st, 1);
@@ -207,7 +223,78 @@ TEST(LidarTrigger, AGroupIsFiredTogetherAtEachCrossingWithItsOwnPhaseFigures) {
   EXPECT_EQ(values["trigger_group"], "stereo");
   EXPECT_EQ(values["trigger_members"], "2");
   EXPECT_EQ(values["phase_measured"], std::to_string(right.measured));
+  EXPECT_EQ(values["phase_from"], "trigger_call");
   EXPECT_EQ(values.count("trigger_spread_p99_ms"), 1u);
+  EXPECT_EQ(values.count("trigger_call_error_p99_ms"), 1u);
+}
+
+// A member whose camera refuses is counted, and the tick still fires the other; none fires alone.
+TEST(LidarTrigger, ARefusingMemberIsCountedAndTheOtherStillFires) {
+  LidarTrigger trigger("stereo", LidarTriggerConfig{"front", 0.0, 0.0});
+  std::atomic<std::uint64_t> calls[2] = {0, 0};
+  std::atomic<std::uint64_t> refusals{0};
+  trigger.add([&] { return ++calls[0] > 0; });
+  trigger.add([&] {
+    if (++calls[1] % 2 == 0) return true;
+    ++refusals;
+    return false;
+  });
+  ASSERT_TRUE(run_until_measured(trigger, 0, 6));
+  const auto left = trigger.figures(0);
+  const auto right = trigger.figures(1);
+  EXPECT_EQ(calls[0].load(), calls[1].load());
+  EXPECT_EQ(left.triggers, calls[0].load());
+  EXPECT_EQ(left.refused, 0u);
+  EXPECT_EQ(right.refused, refusals.load());
+  EXPECT_GE(right.refused, 3u);
+  EXPECT_LT(right.call_error.count, left.call_error.count);  // only its accepted triggers measured
+}
+
+// The exposure start the camera reports (its frames' device time, mapped) goes into the phase
+// figure: a camera exposing 2 ms after each trigger call has ~2 ms of phase error, and its own
+// delay is reported; a frame that cannot be the trigger's (more than half a turn away) is not used
+// and counted.
+TEST(LidarTrigger, TheCamerasReportedExposureStartIsInThePhaseFigure) {
+  LidarTrigger trigger("cam", LidarTriggerConfig{"front", 0.0, 100.0});
+  std::mutex m;
+  std::vector<Nanos> called;
+  trigger.add([&] {
+    std::lock_guard lock(m);
+    called.push_back(vehicle_now_ns());
+    return true;
+  });
+  ASSERT_TRUE(run_until_measured(trigger, 0, 8));
+  const auto before = trigger.figures(0);
+  EXPECT_FALSE(before.from_device);
+  EXPECT_EQ(before.to_exposure.count, 0u);
+  constexpr Nanos kLatency = 100'000;
+  constexpr Nanos kDelay = 2'000'000;  // trigger call -> exposure start, by the camera's clock
+  std::vector<Nanos> ticks;  // the last 7 ticks' stamps (each call + latency)
+  {
+    std::lock_guard lock(m);
+    for (std::size_t k = called.size() - 7; k < called.size(); ++k)
+      ticks.push_back(trigger.tick_before(called[k] + 1'000'000, 0));
+  }
+  for (std::size_t k = 1; k < ticks.size(); ++k) trigger.exposed(0, ticks[k], ticks[k] - kLatency + kDelay);
+  trigger.exposed(0, ticks.back(), ticks.back() + 1'000'000);  // told twice: the first one counts
+  trigger.exposed(0, ticks.back() + 1, ticks.back());          // no such tick: ignored
+  trigger.exposed(0, ticks[0], ticks[0] + 60'000'000);  // 60 ms after its call at 10 Hz: another frame
+  const auto f = trigger.figures(0);
+  EXPECT_TRUE(f.from_device);
+  EXPECT_EQ(f.measured, 6u);
+  EXPECT_EQ(f.to_exposure.count, 6u);
+  EXPECT_EQ(f.to_exposure.p50_ns, kDelay);
+  EXPECT_EQ(f.to_exposure.max_ns, kDelay);
+  EXPECT_EQ(f.call_error.count, before.call_error.count);
+  // |call - crossing + 2 ms - latency|: the 2 ms show unless the call itself was ~2 ms early.
+  EXPECT_GT(f.error_max_ns, 1'000'000);
+  dds::DriverStatus st;
+  trigger.add_status(st, 0);
+  std::map<std::string, std::string> values(st.values.begin(), st.values.end());
+  EXPECT_EQ(values["phase_from"], "device_exposure");
+  EXPECT_EQ(values["phase_measured"], "6");
+  EXPECT_EQ(values["trigger_to_exposure_p50_ms"], "2.000");
+  EXPECT_EQ(values["exposure_unmatched"], "1");
 }
 
 }  // namespace

@@ -2,12 +2,16 @@
 // A camera (or a trigger group: a stereo pair) software-triggered when a LIDAR's sweep crosses the
 // azimuth it looks at. The LIDAR driver feeds its sweep samples (timesync::SweepObserver, from its
 // thread); a thread here asks timesync::SweepPhase for the next crossing, sleeps until just before
-// it (minus the camera's trigger latency) and fires every member back to back. Afterwards, when
-// the LIDAR's samples cover the crossing, the actual crossing is interpolated from them and each
-// member's |exposure start - crossing| is kept (p50/p99/max in that camera's /diagnostics), with
-// the members' spread (first to last trigger call). No prediction (LIDAR stopped, not locked
-// yet): no trigger, reported.
+// it (minus the camera's trigger latency) and arms the shot: each member has a firing thread of its
+// own that waits for the same instant and calls its camera's trigger, so one camera's GVCP round
+// trip never delays another's (a group fires all its members or none). Afterwards, when the
+// LIDAR's samples cover the crossing, the actual crossing is interpolated from them and each
+// member's phase error is kept: |exposure start − crossing|, the exposure start as the camera
+// reports it where its frames say (exposed(): device time mapped or PTP), else its trigger call +
+// latency (p50/p99/max in that camera's /diagnostics), with the members' spread (first to last
+// trigger call). No prediction (LIDAR stopped, not locked yet): no trigger, reported.
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -23,6 +27,14 @@
 
 namespace sensor_rig::drivers {
 
+// p50/p99/max of an ErrorHistory, in ns.
+struct ErrorFigure {
+  std::uint64_t count = 0;
+  Nanos p50_ns = 0;
+  Nanos p99_ns = 0;
+  Nanos max_ns = 0;
+};
+
 // The trigger's figures as one member (camera) sees them: the sweep and the counts of the ticks
 // are the group's, `refused`, `measured` and the phase error are the member's own.
 struct LidarTriggerFigures {
@@ -31,13 +43,19 @@ struct LidarTriggerFigures {
   std::uint64_t refused = 0;         // this camera refused the trigger (closed, lost)
   std::uint64_t late = 0;            // fired more than 1 ms after the aimed time (woke late)
   std::uint64_t prediction_lost = 0; // times the prediction went away (LIDAR stopped / lost lock)
-  std::uint64_t measured = 0;        // this camera's triggers whose actual crossing was interpolated
+  std::uint64_t measured = 0;        // this camera's triggers in the phase figure below
   std::uint64_t unmeasured = 0;      // the LIDAR's samples never covered the crossing (gap, stop)
   bool predicting = false;           // a prediction is available now
-  // |exposure start - actual crossing| over the last 1024 measured triggers, and the max ever.
+  // |exposure start - actual crossing| over the last 1024 measured triggers, and the max ever. The
+  // exposure start is the camera's own (exposed()) once its frames report one, else the trigger
+  // call + latency (`from_device` says which).
+  bool from_device = false;
   Nanos error_p50_ns = 0;
   Nanos error_p99_ns = 0;
   Nanos error_max_ns = 0;
+  ErrorFigure call_error;            // |trigger call + latency - crossing|: the host's own part
+  ErrorFigure to_exposure;           // the camera's exposure start - its trigger call (its own delay)
+  std::uint64_t exposure_unmatched = 0;  // reported exposures more than half a turn from their call
   // More than one member: first to last member's trigger call per tick (their stamps differ by it).
   std::size_t members = 0;
   Nanos spread_p50_ns = 0;
@@ -47,7 +65,7 @@ struct LidarTriggerFigures {
 
 class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
  public:
-  // `name`: the camera's or the trigger group's, for the thread and messages. Throws
+  // `name`: the camera's or the trigger group's, for the threads and messages. Throws
   // std::invalid_argument for a bad phase config.
   LidarTrigger(std::string name, LidarTriggerConfig cfg, timesync::SweepPhaseConfig phase = {});
   ~LidarTrigger() override;
@@ -55,12 +73,13 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   LidarTrigger& operator=(const LidarTrigger&) = delete;
 
   std::size_t add(std::function<bool()> trigger) override;  // before start()
-  // realtime_priority > 0: SCHED_FIFO for the trigger thread when permitted (a late wake-up is
-  // phase error).
+  // realtime_priority > 0: SCHED_FIFO for the trigger and firing threads when permitted (a late
+  // wake-up is phase error).
   void start(int realtime_priority = 0);
-  void stop();
+  void stop();  // an armed shot is fired by every member first (at most ~2 ms away)
   // Each member's frames carry its own exposure start (its trigger call + latency).
   [[nodiscard]] Nanos tick_before(Nanos t, std::size_t member) const override;
+  void exposed(std::size_t member, Nanos tick, Nanos device_exposure_ns) override;
   void observe_sweep(std::span<const timesync::SweepSample> samples) noexcept override;
   void add_status(dds::DriverStatus& s, std::size_t member) const override;
   [[nodiscard]] LidarTriggerFigures figures(std::size_t member = 0) const;
@@ -69,20 +88,38 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
 
  private:
   struct Member {
-    std::function<bool()> trigger;  // set before start(), called by the trigger thread only
+    std::function<bool()> trigger;  // set before start(), called by its firing thread only
+    std::thread thread;             // its firing thread
     // Under mutex_:
     RecentTicks exposures;          // its frame stamps
-    ErrorHistory phase_error;       // |exposure start - actual crossing|
+    ErrorHistory device_error;      // |exposure start the camera reported - actual crossing|
+    ErrorHistory call_error;        // |trigger call + latency - actual crossing|
+    ErrorHistory to_exposure;       // reported exposure start - trigger call
     std::uint64_t refused = 0;
+    std::uint64_t unmatched = 0;
   };
-  struct Pending {
+  // The shot every firing thread takes: armed by the trigger thread, fired by all members at once.
+  struct Shot {
+    std::uint64_t generation = 0;   // shots armed so far
+    Nanos aim_mono = 0;             // CLOCK_MONOTONIC instant of the calls
+    std::vector<Nanos> called;      // per member: vehicle time of its trigger call
+    std::vector<char> accepted;     // per member: the camera took the trigger
+    std::size_t done = 0;           // members finished with this generation
+    bool closing = false;           // stop(): firing threads end once nothing is armed
+  };
+  // A fired tick, until its crossing is measured and its frames have reported their exposure.
+  struct Tick {
     Nanos target;                   // predicted crossing
     std::vector<Nanos> exposures;   // per member: fired + latency; 0 = refused
+    std::vector<Nanos> device;      // per member: exposure start the camera reported; 0 = none
+    Nanos crossing = 0;             // actual crossing (0: not measured)
+    bool settled = false;           // the samples covered it (measured or given up)
   };
   void run();
+  void run_member(std::size_t i);
   void fire(Nanos target, Nanos aim);
-  void settle(Nanos newest) noexcept;  // pending triggers whose crossing the samples now cover
-  bool wait_until(Nanos vehicle_ns);    // false when stopped
+  void settle(Nanos newest) noexcept;  // ticks whose crossing the samples now cover
+  void add_device_error(const Tick& t, std::size_t member) noexcept;
 
   std::string name_;
   LidarTriggerConfig cfg_;
@@ -92,10 +129,14 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   std::atomic<bool> stop_{false};
   std::atomic<Nanos> started_ns_{0};
 
+  std::mutex shot_mutex_;  // shot_: the trigger thread and the firing threads
+  std::condition_variable shot_cv_;
+  Shot shot_;
+
   mutable std::mutex mutex_;  // everything below: the LIDAR thread, the trigger thread, status()
   timesync::SweepPhase phase_;
   Nanos newest_sample_ns_ = 0;
-  std::deque<Pending> pending_;
+  std::deque<Tick> ticks_;
   ErrorHistory spread_;           // first to last member's trigger call per tick
   LidarTriggerFigures figures_;   // the group's counts (the members' own are in members_)
 };

@@ -65,6 +65,10 @@ class TriggerSource {
   virtual std::size_t add(std::function<bool()> trigger) = 0;
   // Vehicle time of the exposure start of `member`'s latest trigger at or before `t` (0: none yet).
   [[nodiscard]] virtual Nanos tick_before(Nanos t, std::size_t member) const = 0;
+  // The frame of `member`'s trigger `tick` (as tick_before gave it) was exposed at
+  // `device_exposure_ns`, vehicle time, by the camera's own clock (mapped or PTP): the trigger's
+  // figures can then include the camera's own trigger -> exposure delay.
+  virtual void exposed(std::size_t /*member*/, Nanos /*tick*/, Nanos /*device_exposure_ns*/) {}
   // The trigger's own figures (for `member`) in that camera's /diagnostics status.
   virtual void add_status(dds::DriverStatus& /*s*/, std::size_t /*member*/) const {}
 };
