@@ -36,14 +36,19 @@ for f in "$build"/fuzz_*; do
   echo "== $name (${bounds[*]}, seeds $seeds, new inputs in $work, log $log)"
   start=$(date +%s)
   rc=0
-  "$f" "${bounds[@]}" -print_final_stats=1 -artifact_prefix="$artifacts" "$work" "$seeds" >"$log" 2>&1 || rc=$?
+  # CPU seconds beside wall time: on a shared host a niced fuzzer's exec/s says more about the load.
+  timer=()
+  [[ -x /usr/bin/time ]] && timer=(/usr/bin/time -o "$log.cpu" -f '%U %S')
+  rm -f "$log.cpu"
+  "${timer[@]}" "$f" "${bounds[@]}" -print_final_stats=1 -artifact_prefix="$artifacts" "$work" "$seeds" >"$log" 2>&1 || rc=$?
   wall=$(($(date +%s) - start))
   stat() { sed -n "s/^stat::$1: *//p" "$log" | tail -1; }
   # The last status line (#N DONE/pulse/NEW ... cov: C ft: F ...) has the final coverage.
   cov=$(grep -Eo 'cov: [0-9]+ ft: [0-9]+' "$log" | tail -1 | tr -d ':' || true)
   crashes=$(($(find "$artifacts" -type f | wc -l) - found_before))
   added=$(($(find "$work" -type f | wc -l) - before))
-  line="$name: runs $(stat number_of_executed_units) in ${wall}s, $(stat average_exec_per_sec) exec/s,"
+  cpu=$(awk 'END { printf "%.0f", $1 + $2 }' "$log.cpu" 2>/dev/null || echo '?')
+  line="$name: runs $(stat number_of_executed_units) in ${wall}s (CPU ${cpu}s), $(stat average_exec_per_sec) exec/s,"
   line+=" ${cov:-cov ?}, new corpus entries $added, crashes/leaks/timeouts $crashes,"
   line+=" peak RSS $(stat peak_rss_mb) MB, exit $rc"
   echo "$line"
