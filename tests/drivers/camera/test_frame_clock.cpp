@@ -45,6 +45,17 @@ TEST(FrameClock, DriftingDeviceTicksMapToVehicleTime) {
   const auto st = clock.status(last);
   EXPECT_EQ(st.state, timesync::SyncState::kLocked);
   EXPECT_NEAR(st.drift_ppm, kDriftPpm, 10.0);
+  // A software-triggered frame is stamped with its tick, and still carries the exposure start the
+  // device reported, mapped (what the LIDAR trigger's phase figure uses).
+  const Nanos exposure_start = t0 + 300 * 100'000'000LL;
+  camera::FrameMeta m;
+  m.domain = camera::TimeDomain::kDeviceTicks;
+  m.device_ns = kDeviceOffset + static_cast<Nanos>(static_cast<double>(exposure_start - t0) * (1.0 + kDriftPpm * 1e-6));
+  m.first_rx_ns = exposure_start + kExposure + 200'000;
+  const auto s = clock.stamp(m, exposure_start - 3'000'000);
+  EXPECT_EQ(s.source, StampSource::kTriggerTick);
+  EXPECT_EQ(s.vehicle_ns, exposure_start - 3'000'000);
+  EXPECT_NEAR(static_cast<double>(s.device_exposure_ns), static_cast<double>(exposure_start), 1e6);
 }
 
 TEST(FrameClock, MonotonicFramesUseTheOffsetSampledWithThem) {
