@@ -1,6 +1,8 @@
 #include "rig_config.hpp"
 
+#include <algorithm>
 #include <filesystem>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -22,6 +24,48 @@ void check_fusion(const config::Node& n, const std::vector<config::Node>& lidar_
       lidar_items[i].fail("extrinsics", "fusion is enabled: give this LIDAR's pose in " + cfg.fusion.frame_id +
                                             " as extrinsics: {x, y, z, roll_deg, pitch_deg, yaw_deg}");
 }
+
+// rig.dds.shm: {subscribers, mempools: [{size, count}]} (roudi_pools.hpp). iceoryx refuses pools
+// out of ascending order and chunk sizes that are not multiples of 8, at RouDi's start: here at the key.
+std::optional<config::Node> parse_shm(const config::Node& dds_node, RigConfig& cfg) {
+  auto shm = dds_node.child("shm");
+  if (!shm) return shm;
+  shm->allow_keys({"subscribers", "mempools"});
+  if (cfg.dds.transport != dds::Transport::kShm) dds_node.fail("shm", "only used with transport: shm");
+  cfg.shm_subscribers = static_cast<int>(shm->get_int("subscribers", 0, 64, cfg.shm_subscribers));
+  const auto pools = shm->items("mempools");
+  if (!pools.empty() && !cfg.roudi_config.empty())
+    shm->fail("mempools", "give mempools or roudi_config (a whole RouDi file), not both");
+  if (pools.size() > static_cast<std::size_t>(kMaxMempools))
+    shm->fail("mempools", "at most " + std::to_string(kMaxMempools) + " pools (iceoryx)");
+  std::uint64_t last = 0;
+  for (const auto& p : pools) {
+    p.allow_keys({"size", "count"});
+    const Mempool m{static_cast<std::uint64_t>(p.get_int("size", 64, std::int64_t{1} << 32)),
+                    static_cast<std::uint64_t>(p.get_int("count", 1, 1'000'000))};
+    if (m.size % 8 != 0) p.fail("size", "must be a multiple of 8 (iceoryx aligns chunks to 8 bytes)");
+    if (m.size <= last)
+      p.fail("size", "pool sizes must ascend (iceoryx refuses them otherwise): " + std::to_string(m.size) + " after " +
+                         std::to_string(last));
+    last = std::max(last, m.size);
+    cfg.shm_mempools.push_back(m);
+  }
+  return shm;
+}
+
+// Explicit mempools must hold the rig's largest samples (else every such write fails at run time).
+void check_shm_fits(const config::Node& shm, const RigConfig& cfg) {
+  if (cfg.shm_mempools.empty()) return;
+  std::uint64_t largest = 0;
+  for (const auto& p : cfg.shm_mempools) largest = std::max(largest, p.size);
+  for (const auto& t : shm_topic_loads(cfg, 0)) {
+    if (t.max_sample_bytes + kChunkOverhead <= largest) continue;
+    shm.fail("mempools", t.topic + " needs chunks of " + std::to_string(t.max_sample_bytes + kChunkOverhead) +
+                             " B (a sample of up to " + std::to_string(t.max_sample_bytes) + " B); the largest pool is " +
+                             std::to_string(largest) + " B");
+    return;
+  }
+}
 }  // namespace
 
 RigConfig load_rig_config(const std::string& path) {
@@ -32,12 +76,13 @@ RigConfig load_rig_config(const std::string& path) {
   cfg.file = path;
   if (!root.expect_map()) problems->throw_if_any();
   root.allow_keys({"rig", "lidars", "cameras", "dbw", "sync_sets", "fusion"});
+  std::optional<config::Node> shm;
   if (auto rig = root.child("rig", true)) {
     rig->allow_keys({"name", "dds", "diagnostics_period_ms"});
     cfg.name = rig->get_string("name", "rig");
     cfg.diagnostics_period_ms = static_cast<int>(rig->get_int("diagnostics_period_ms", 100, 60000, 1000));
     if (auto d = rig->child("dds")) {
-      d->allow_keys({"domain", "profile", "transport", "roudi_config"});
+      d->allow_keys({"domain", "profile", "transport", "roudi_config", "shm"});
       cfg.dds.domain_id = static_cast<dds_domainid_t>(d->get_int("domain", 0, 232, 0));
       cfg.dds.profile = d->get_path("profile", "");
       if (!cfg.dds.profile.empty() && !std::filesystem::exists(cfg.dds.profile))
@@ -48,6 +93,7 @@ RigConfig load_rig_config(const std::string& path) {
         d->fail("roudi_config", "file not found: " + cfg.roudi_config);
       if (!cfg.roudi_config.empty() && cfg.dds.transport != dds::Transport::kShm)
         d->fail("roudi_config", "only used with transport: shm");
+      shm = parse_shm(*d, cfg);
     }
   }
   std::set<std::string> names;
@@ -76,8 +122,22 @@ RigConfig load_rig_config(const std::string& path) {
   if (auto d = root.child("dbw")) cfg.dbw = drivers::parse_dbw_config(*d);
   if (auto f = root.child("fusion")) check_fusion(*f, root.items("lidars"), cfg);
   cfg.sync_sets = parse_sync_sets(root, stamped_topics(cfg.lidars, cfg.cameras, cfg.dbw));
+  if (shm) check_shm_fits(*shm, cfg);
   problems->throw_if_any();
   return cfg;
+}
+
+std::string describe_shm(const RigConfig& cfg) {
+  if (!cfg.roudi_config.empty()) return "  shm: RouDi mempools from " + cfg.roudi_config + "\n";
+  const auto pools = rig_mempools(cfg);
+  std::ostringstream o;
+  o << "  shm: RouDi mempools "
+    << (cfg.shm_mempools.empty() ? "sized for " + std::to_string(cfg.shm_subscribers) + " subscribers per topic"
+                                 : std::string("from rig.dds.shm.mempools"))
+    << ":";
+  for (const auto& p : pools) o << " " << p.size << " B x " << p.count;
+  o << " (" << (mempools_bytes(pools) + 512 * 1024) / (1024 * 1024) << " MB of /dev/shm)\n";
+  return o.str();
 }
 
 std::string describe(const RigConfig& cfg) {
@@ -85,6 +145,7 @@ std::string describe(const RigConfig& cfg) {
   o << "rig '" << cfg.name << "' (" << cfg.file << "), DDS domain " << cfg.dds.domain_id << ", profile "
     << (cfg.dds.profile.empty() ? std::string("default") : cfg.dds.profile) << ", transport "
     << dds::to_string(cfg.dds.transport) << "\n";
+  if (cfg.dds.transport == dds::Transport::kShm) o << describe_shm(cfg);
   for (const auto& l : cfg.lidars) {
     o << "  lidar " << l.name << ": " << l.model
       << (l.source == drivers::LidarSource::kPacket ? " packet " + l.interface + " port " : " udp " + l.host + ":") << l.port

@@ -15,7 +15,7 @@ namespace sensor_rig::rig {
 class RigTransport {
  public:
   // udp: nothing to start. shm: starts or joins RouDi; throws std::runtime_error saying why not.
-  // RouDi's log goes to `log_dir`/roudi.log.
+  // RouDi's log and configuration go to `log_dir` (roudi.log, roudi.toml).
   RigTransport(const RigConfig& cfg, const std::string& log_dir);
   ~RigTransport() { stop(); }
   RigTransport(const RigTransport&) = delete;
@@ -28,8 +28,9 @@ class RigTransport {
   std::unique_ptr<dds::RouDi> roudi_;
 };
 
-// The RouDi configuration a rig uses: rig.dds.roudi_config, else config/iceoryx/rig-roudi.toml.
-std::string rig_roudi_config(const RigConfig& cfg);
+// The RouDi configuration a rig uses: rig.dds.roudi_config, else `runtime_dir`/roudi.toml written
+// from rig_mempools(cfg) (roudi_pools.hpp). Throws when it cannot be written.
+std::string rig_roudi_config(const RigConfig& cfg, const std::string& runtime_dir);
 
 // The parent `rig up` for shm (see above). Returns the rig's exit code, or 1 when RouDi could not
 // start or died while the rig ran (the rig is then stopped).

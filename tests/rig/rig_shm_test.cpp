@@ -246,5 +246,32 @@ TEST(ShmRigConfig, TransportWordIsValidated) {
   }
 }
 
+// rig.dds.shm: the mempools rig up would use, sized from the config (config check prints them),
+// and explicit ones validated where they are written: out of order, too small for a VLP-16's cloud.
+TEST(ShmRigConfig, MempoolsAreSizedFromTheConfigOrValidatedAtTheirKey) {
+  test::TempDir dir;
+  const std::string lidar = "lidars:\n  - {name: front, model: VLP-16, port: 2399, position_port: 0}\n";
+  const auto sized = dir.write("sized.yaml", "rig:\n  dds: {transport: shm, shm: {subscribers: 2}}\n" + lidar);
+  auto [rc, out] = test::run(rig_bin() + " config check " + sized + " 2>&1");
+  EXPECT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("shm: RouDi mempools sized for 2 subscribers per topic: 1024 B x 2048 16384 B x 512 786432 B x "),
+            std::string::npos)
+      << out;
+  const auto unordered = dir.write("unordered.yaml",
+                                   "rig:\n  dds:\n    transport: shm\n    shm:\n      mempools:\n"
+                                   "        - {size: 2097152, count: 4}\n        - {size: 1024, count: 4}\n" + lidar);
+  std::tie(rc, out) = test::run(rig_bin() + " config check " + unordered + " 2>&1");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find(unordered + ":7:18: "), std::string::npos) << out;
+  EXPECT_NE(out.find("pool sizes must ascend (iceoryx refuses them otherwise): 1024 after 2097152"), std::string::npos)
+      << out;
+  const auto small = dir.write("small.yaml", "rig:\n  dds:\n    transport: shm\n    shm:\n      mempools: "
+                                             "[{size: 1024, count: 64}, {size: 65536, count: 8}]\n" + lidar);
+  std::tie(rc, out) = test::run(rig_bin() + " config check " + small + " 2>&1");
+  EXPECT_EQ(rc, 2) << out;
+  EXPECT_NE(out.find(small + ":5:17: "), std::string::npos) << out;
+  EXPECT_NE(out.find("/sensors/lidar/front/points needs chunks of 721280 B"), std::string::npos) << out;
+}
+
 }  // namespace
 }  // namespace sensor_rig
