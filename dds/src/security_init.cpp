@@ -25,6 +25,29 @@ void write_text(const std::string& path, const std::string& text) {
   out << text;
   if (!out.flush()) throw std::runtime_error("cannot write '" + path + "'");
 }
+
+// The signers of a directory: identity CA and permissions CA, each with its key.
+struct Authorities {
+  x509::Cert id_ca;
+  x509::Key id_ca_key;
+  x509::Cert perm_ca;
+  x509::Key perm_ca_key;
+};
+
+// DIR/<name>/: key and certificate (signed by the identity CA), grants (signed by the permissions CA).
+void write_identity(const fs::path& dir, const std::string& name, Role role, const std::string& organization,
+                    KeyType key_type, int days, const Authorities& ca, std::vector<std::string>& written) {
+  const auto out = [&](const fs::path& p) { return written.emplace_back(p.string()); };
+  const fs::path d = dir / name;
+  fs::create_directories(d);
+  const auto key = x509::make_key(key_type);
+  const auto cert = x509::make_cert(name, organization, key.get(), ca.id_ca.get(), ca.id_ca_key.get(), days, false);
+  x509::write_cert(out(d / "cert.pem"), cert.get());
+  x509::write_key(out(d / "key.pem"), key.get());
+  const std::string perms = permissions_xml(name, identity_subject(name, organization), role, days);
+  write_text(out(d / "permissions.xml"), perms);
+  x509::write_smime(out(d / "permissions.p7s"), perms, ca.perm_ca.get(), ca.perm_ca_key.get());
+}
 }  // namespace
 
 std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
@@ -52,32 +75,57 @@ std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
 
   // Two CAs: who a node is (identity) and what it may do (permissions) are signed separately, so
   // the permissions key can stay with whoever decides grants.
-  const auto id_ca_key = x509::make_key(o.key_type);
-  const auto id_ca = x509::make_cert("sensor-rig identity CA", o.organization, id_ca_key.get(), nullptr, nullptr,
-                                     o.days, true);
-  const auto perm_ca_key = x509::make_key(o.key_type);
-  const auto perm_ca = x509::make_cert("sensor-rig permissions CA", o.organization, perm_ca_key.get(), nullptr,
-                                       nullptr, o.days, true);
-  x509::write_cert(out(dir / "identity_ca.pem"), id_ca.get());
-  x509::write_key(out(dir / "private/identity_ca_key.pem"), id_ca_key.get());
-  x509::write_cert(out(dir / "permissions_ca.pem"), perm_ca.get());
-  x509::write_key(out(dir / "private/permissions_ca_key.pem"), perm_ca_key.get());
+  Authorities ca;
+  ca.id_ca_key = x509::make_key(o.key_type);
+  ca.id_ca = x509::make_cert("sensor-rig identity CA", o.organization, ca.id_ca_key.get(), nullptr, nullptr, o.days,
+                             true);
+  ca.perm_ca_key = x509::make_key(o.key_type);
+  ca.perm_ca = x509::make_cert("sensor-rig permissions CA", o.organization, ca.perm_ca_key.get(), nullptr, nullptr,
+                               o.days, true);
+  x509::write_cert(out(dir / "identity_ca.pem"), ca.id_ca.get());
+  x509::write_key(out(dir / "private/identity_ca_key.pem"), ca.id_ca_key.get());
+  x509::write_cert(out(dir / "permissions_ca.pem"), ca.perm_ca.get());
+  x509::write_key(out(dir / "private/permissions_ca_key.pem"), ca.perm_ca_key.get());
 
   const std::string governance = governance_xml(o.allow_unauthenticated, o.command_protection);
   write_text(out(dir / "governance.xml"), governance);
-  x509::write_smime(out(dir / "governance.p7s"), governance, perm_ca.get(), perm_ca_key.get());
+  x509::write_smime(out(dir / "governance.p7s"), governance, ca.perm_ca.get(), ca.perm_ca_key.get());
 
-  for (const auto& [name, role] : ids) {
-    const fs::path d = dir / name;
-    fs::create_directories(d);
-    const auto key = x509::make_key(o.key_type);
-    const auto cert = x509::make_cert(name, o.organization, key.get(), id_ca.get(), id_ca_key.get(), o.days, false);
-    x509::write_cert(out(d / "cert.pem"), cert.get());
-    x509::write_key(out(d / "key.pem"), key.get());
-    const std::string perms = permissions_xml(name, identity_subject(name, o.organization), role, o.days);
-    write_text(out(d / "permissions.xml"), perms);
-    x509::write_smime(out(d / "permissions.p7s"), perms, perm_ca.get(), perm_ca_key.get());
+  for (const auto& [name, role] : ids) write_identity(dir, name, role, o.organization, o.key_type, o.days, ca, written);
+  return written;
+}
+
+std::vector<std::string> add_identity(const AddIdentityOptions& o) {
+  if (o.dir.empty()) throw std::runtime_error("security add-identity: no directory given");
+  if (o.days < 1 || o.days > 36500) throw std::runtime_error("security add-identity: --days must be 1..36500");
+  check_name(o.name);
+  const fs::path dir(o.dir);
+  std::string missing;
+  for (const char* f : {"identity_ca.pem", "permissions_ca.pem", "private/identity_ca_key.pem",
+                        "private/permissions_ca_key.pem"}) {
+    if (!fs::is_regular_file(dir / f)) missing += std::string(missing.empty() ? "" : ", ") + f;
   }
+  if (!missing.empty()) {
+    throw std::runtime_error("security add-identity: '" + o.dir + "' holds no complete CA (missing " + missing +
+                             "); `rig security init DIR` makes one");
+  }
+  if (fs::exists(dir / o.name)) {
+    throw std::runtime_error("security add-identity: identity '" + o.name + "' already exists in '" + o.dir +
+                             "' (it may be deployed: choose another name, or remove " + (dir / o.name).string() +
+                             " first)");
+  }
+  Authorities ca{x509::read_cert((dir / "identity_ca.pem").string()),
+                 x509::read_key((dir / "private/identity_ca_key.pem").string()),
+                 x509::read_cert((dir / "permissions_ca.pem").string()),
+                 x509::read_key((dir / "private/permissions_ca_key.pem").string())};
+  if (X509_check_private_key(ca.id_ca.get(), ca.id_ca_key.get()) != 1 ||
+      X509_check_private_key(ca.perm_ca.get(), ca.perm_ca_key.get()) != 1) {
+    throw std::runtime_error("security add-identity: the keys in '" + (dir / "private").string() +
+                             "' are not those of identity_ca.pem / permissions_ca.pem");
+  }
+  std::vector<std::string> written;
+  write_identity(dir, o.name, o.role, x509::organization_of(ca.id_ca.get()), x509::key_type_of(ca.id_ca_key.get()),
+                 o.days, ca, written);
   return written;
 }
 

@@ -92,6 +92,36 @@ Cert make_cert(const std::string& common_name, const std::string& organization, 
   return c;
 }
 
+Cert read_cert(const std::string& path) {
+  Bio b(BIO_new_file(path.c_str(), "r"));
+  if (!b) fail("cannot read '" + path + "'");
+  Cert c(PEM_read_bio_X509(b.get(), nullptr, nullptr, nullptr));
+  if (!c) fail("'" + path + "' is not a PEM certificate");
+  return c;
+}
+
+Key read_key(const std::string& path) {
+  Bio b(BIO_new_file(path.c_str(), "r"));
+  if (!b) fail("cannot read '" + path + "'");
+  Key k(PEM_read_bio_PrivateKey(b.get(), nullptr, nullptr, nullptr));
+  if (!k) fail("'" + path + "' is not an unencrypted PEM private key");
+  return k;
+}
+
+KeyType key_type_of(EVP_PKEY* key) { return EVP_PKEY_is_a(key, "RSA") != 0 ? KeyType::kRsa2048 : KeyType::kEcP256; }
+
+std::string organization_of(X509* cert) {
+  X509_NAME* name = X509_get_subject_name(cert);
+  const int i = X509_NAME_get_index_by_NID(name, NID_organizationName, -1);
+  if (i < 0) return {};
+  unsigned char* utf8 = nullptr;
+  const int n = ASN1_STRING_to_UTF8(&utf8, X509_NAME_ENTRY_get_data(X509_NAME_get_entry(name, i)));
+  if (n < 0) return {};
+  std::string o(reinterpret_cast<const char*>(utf8), static_cast<std::size_t>(n));
+  OPENSSL_free(utf8);
+  return o;
+}
+
 void write_cert(const std::string& path, X509* cert) {
   Bio b = open_file(path, 0644);
   ok(PEM_write_bio_X509(b.get(), cert), "PEM_write_bio_X509");

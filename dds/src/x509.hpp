@@ -26,6 +26,13 @@ Key make_key(KeyType t);
 Cert make_cert(const std::string& common_name, const std::string& organization, EVP_PKEY* key, X509* issuer,
                EVP_PKEY* issuer_key, int days, bool ca);
 
+// PEM files written by write_cert / write_key (or openssl); throw naming the file.
+Cert read_cert(const std::string& path);
+Key read_key(const std::string& path);
+KeyType key_type_of(EVP_PKEY* key);
+// The O= of a certificate's subject ("" when it has none).
+std::string organization_of(X509* cert);
+
 // PEM files; the key file is created 0600.
 void write_cert(const std::string& path, X509* cert);
 void write_key(const std::string& path, EVP_PKEY* key);

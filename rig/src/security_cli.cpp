@@ -1,14 +1,45 @@
 // `rig security init DIR`: the CAs, identities, governance and permissions of DDS Security for the
-// drive-by-wire command topic (what they allow: dds/README.md "DDS Security").
+// drive-by-wire command topic (what they allow: dds/README.md "DDS Security"); `rig security
+// add-identity DIR NAME`: one more identity signed by that directory's existing CAs.
 #include <cstdio>
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "rig_commands.hpp"
 #include "sensor_rig/dds/security_init.hpp"
 
 namespace sensor_rig::rig {
+
+namespace {
+void register_add_identity(CLI::App& sec, cli::Context& ctx) {
+  auto o = std::make_shared<dds::AddIdentityOptions>();
+  auto permit_command = std::make_shared<bool>(false);
+  auto* add = sec.add_subcommand("add-identity",
+                                 "add identity NAME to DIR, signed by its existing CAs (DIR/private): identities "
+                                 "already deployed stay valid; read-only unless --permit-command");
+  add->add_option("DIR", o->dir, "a directory `rig security init` made")->required();
+  add->add_option("NAME", o->name, "the new identity (DIR/NAME/: key, certificate, signed permissions)")->required();
+  add->add_flag("--permit-command", *permit_command, "may publish /vehicle/dbw/cmd (a command source)");
+  add->add_option("--days", o->days, "validity of its certificate and grant")->check(CLI::Range(1, 36500))
+      ->capture_default_str();
+  add->callback([o, permit_command, &ctx] {
+    o->role = *permit_command ? dds::Role::kCommander : dds::Role::kReader;
+    std::vector<std::string> files;
+    try {
+      files = dds::add_identity(*o);
+    } catch (const std::runtime_error& e) {
+      throw cli::UsageError(e.what());
+    }
+    for (const auto& f : files) std::printf("%s\n", f.c_str());
+    std::fprintf(stderr, "security add-identity: '%s' (%s) in %s\n", o->name.c_str(),
+                 *permit_command ? "may publish commands" : "read-only", o->dir.c_str());
+    ctx.exit_code = cli::kOk;
+  });
+}
+}  // namespace
 
 void register_security_cli(CLI::App& app, cli::Context& ctx) {
   auto& sec = *app.add_subcommand("security", "DDS Security for /vehicle/dbw/cmd: keys and signed rules")
@@ -54,6 +85,7 @@ void register_security_cli(CLI::App& app, cli::Context& ctx) {
     std::fprintf(stderr, "security init: %zu files in %s (keep private/ off the car)\n", files.size(), o->dir.c_str());
     ctx.exit_code = cli::kOk;
   });
+  register_add_identity(sec, ctx);
 }
 
 }  // namespace sensor_rig::rig

@@ -198,6 +198,63 @@ TEST(SecurityInit, RefusesBadNames) {
   EXPECT_FALSE(fs::exists(d.path / "sec" / "identity_ca.pem")) << "files written before the names were checked";
 }
 
+// `rig security add-identity`: signed by the CAs already there (identities deployed before stay
+// valid, their files untouched); the grant follows --permit-command; no CA, a name already there
+// and a bad name are refused before anything is written.
+TEST(SecurityAddIdentity, SignedByTheExistingCasAndNothingElseChanges) {
+  Dir d;
+  dds::SecurityInitOptions o;
+  o.dir = (d.path / "sec").string();
+  o.organization = "e-class";
+  dds::init_security_dir(o);
+  const fs::path s = o.dir;
+  const std::string before = read(s / "identity_ca.pem") + read(s / "dbw_command/cert.pem") +
+                             read(s / "dbw_command/permissions.p7s") + read(s / "governance.p7s");
+
+  dds::AddIdentityOptions a;
+  a.dir = o.dir;
+  a.name = "planner";
+  a.role = dds::Role::kCommander;
+  EXPECT_EQ(dds::add_identity(a).size(), 4U);
+  a.name = "logger";
+  a.role = dds::Role::kReader;
+  EXPECT_EQ(dds::add_identity(a).size(), 4U);
+  EXPECT_EQ(read(s / "identity_ca.pem") + read(s / "dbw_command/cert.pem") + read(s / "dbw_command/permissions.p7s") +
+                read(s / "governance.p7s"),
+            before);
+  for (const std::string id : {"planner", "logger"}) {
+    SCOPED_TRACE(id);
+    EXPECT_TRUE(cert_verifies(s / id / "cert.pem", s / "identity_ca.pem"));
+    EXPECT_EQ(subject_rfc2253(s / id / "cert.pem"), "CN=" + id + ",O=e-class");  // the CA's organization
+    const auto perms = smime_content(read(s / id / "permissions.p7s"), s / "permissions_ca.pem");
+    ASSERT_TRUE(perms.has_value()) << "permissions do not verify with the permissions CA";
+    EXPECT_EQ(between(*perms, "<subject_name>", "</subject_name>"), subject_rfc2253(s / id / "cert.pem"));
+    const std::string publish = between(*perms, "<publish>", "</publish>");
+    EXPECT_EQ(publish.find("rt/vehicle/dbw/cmd") != std::string::npos, id == "planner") << publish;
+    EXPECT_EQ(fs::status(s / id / "key.pem").permissions() & (fs::perms::group_all | fs::perms::others_all),
+              fs::perms::none);
+  }
+
+  const auto error_of = [](const dds::AddIdentityOptions& opts) {
+    try {
+      dds::add_identity(opts);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of(a).find("identity 'logger' already exists"), std::string::npos) << error_of(a);
+  a.name = "a/b";
+  EXPECT_NE(error_of(a).find("identity name 'a/b'"), std::string::npos) << error_of(a);
+  a.name = "teleop";
+  a.dir = (d.path / "no_ca").string();
+  EXPECT_NE(error_of(a).find("holds no complete CA (missing identity_ca.pem"), std::string::npos) << error_of(a);
+  fs::remove(s / "private/permissions_ca_key.pem");  // the CA keys stay off the car
+  a.dir = o.dir;
+  EXPECT_NE(error_of(a).find("(missing private/permissions_ca_key.pem)"), std::string::npos) << error_of(a);
+  EXPECT_FALSE(fs::exists(s / "teleop")) << "files written for a refused identity";
+}
+
 std::string dbw_problems(const std::string& yaml, sensor_rig::drivers::DbwConfig* out = nullptr) {
   auto problems = std::make_shared<config::Problems>();
   const auto node = config::Node::load_string(yaml, "rig.yaml", problems);

@@ -4,10 +4,13 @@
 //  1. a sender without credentials (an ordinary participant) with --enable,
 //  2. a sender with a valid identity (`reader`) carrying forged write permissions (signed by a
 //     permissions CA of its own: Cyclone accepts them locally, the bridge must refuse them),
-//  3. `reader` with its real permissions (Cyclone refuses its writer: exit 1 naming the grant);
+//  3. `reader` with its real permissions, and `logger`, added later by `rig security add-identity`
+//     without --permit-command (Cyclone refuses their writers: exit 1 naming the grant);
 // none engages or is counted by the bridge, and the bus holds no enabled request; then
-//  4. the permitted `dbw_command` engages: enabled requests on the bus, and the bridge counted at
-//     most what that sender sent (nothing from 1 and 2, which each sent more).
+//  4. the permitted `dbw_command` engages: enabled requests on the bus; then
+//  5. `planner`, added later with --permit-command (signed by the same CA, every other identity
+//     unchanged), drives too: the bridge counts its commands; in all it counted at most what these
+//     two sent (nothing from 1 and 2, which each sent more).
 // And credentials Cyclone refuses (a grant changed after signing, another identity's certificate,
 // no plugins) end `rig dbw send` with the reason instead of an ordinary participant.
 // The test's own participant is an ordinary one: the bridge's status stays readable without
@@ -79,6 +82,18 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
             0)
       << rig.output("init_rogue");
   forge(sec, rig.path("rogue"), rig.path("forged"));
+  // Identities added after the bridge's were made: one command source, one without the grant.
+  ASSERT_EQ(rig.wait_exit(rig.start("add_planner", {"security", "add-identity", sec, "planner", "--permit-command"}),
+                          10000),
+            0)
+      << rig.output("add_planner");
+  ASSERT_EQ(rig.wait_exit(rig.start("add_logger", {"security", "add-identity", sec, "logger"}), 10000), 0)
+      << rig.output("add_logger");
+  EXPECT_EQ(rig.wait_exit(rig.start("add_again", {"security", "add-identity", sec, "logger"}), 10000), 2);
+  EXPECT_NE(rig.output("add_again").find("identity 'logger' already exists"), std::string::npos)
+      << rig.output("add_again");
+  EXPECT_EQ(rig.wait_exit(rig.start("add_no_ca", {"security", "add-identity", rig.path("no_ca"), "x"}), 10000), 2);
+  EXPECT_NE(rig.output("add_no_ca").find("holds no complete CA"), std::string::npos) << rig.output("add_no_ca");
 
   dds::Participant participant(sensor_rig::drivers::domain_config(rig.domain()));  // no credentials
   dds::Topic<msg::DbwStatus> status_topic(participant, sensor_rig::drivers::kStatusTopic);
@@ -115,9 +130,13 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
   const pid_t plain = send("plain", {});
   const pid_t forged = send("forged", {"--security", rig.path("forged"), "--identity", "reader"});
   const pid_t reader = send("reader", {"--security", sec, "--identity", "reader"});
+  const pid_t logger = send("logger", {"--security", sec, "--identity", "logger"});
   EXPECT_EQ(rig.wait_exit(reader, 10000), 1) << rig.output("reader");
   EXPECT_NE(rig.output("reader").find("identity 'reader' may not publish /vehicle/dbw/cmd"), std::string::npos)
       << rig.output("reader");
+  EXPECT_EQ(rig.wait_exit(logger, 10000), 1) << rig.output("logger");
+  EXPECT_NE(rig.output("logger").find("identity 'logger' may not publish /vehicle/dbw/cmd"), std::string::npos)
+      << rig.output("logger");
   EXPECT_EQ(rig.wait_exit(plain, 10000), 0) << rig.output("plain");
   EXPECT_EQ(rig.wait_exit(forged, 10000), 0) << rig.output("forged");
   EXPECT_NE(rig.output("plain").find("dbw send: 300 commands"), std::string::npos) << rig.output("plain");
@@ -134,13 +153,22 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
   poll(300);
   EXPECT_TRUE(engaged) << "the permitted source did not engage\n" << rig.output("bridge");
   EXPECT_GT(counted, 0U);
+  EXPECT_GT(enabled_requests(rig.bus_log(), permitted_start), 10) << "no enabled request on the bus";
+
+  // 5. The command source added later drives too.
+  const unsigned long long before_added = counted;
+  const Nanos added_start = vehicle_now_ns();
+  const pid_t added = send("planner", {"--security", sec, "--identity", "planner"});
+  EXPECT_EQ(rig.wait_exit(added, 10000), 0) << rig.output("planner");
+  poll(300);
+  EXPECT_GT(counted, before_added + 10) << "the bridge took no commands from the added identity\n" << rig.output("bridge");
+  EXPECT_GT(enabled_requests(rig.bus_log(), added_start), 10) << "no enabled request from the added identity";
   EXPECT_EQ(rig.stop(bridge), 0) << rig.output("bridge");
   EXPECT_EQ(rig.stop(mock), 0);
   const long long taken = json_number(rig.output("bridge"), "commands");
-  // The permitted sender's 300, less what a late match lost; anything above came from 1 or 2.
+  // The permitted senders' 2 x 300, less what late matches lost; anything above came from 1 or 2.
   EXPECT_GT(taken, 0) << rig.output("bridge");
-  EXPECT_LE(taken, 300) << "the bridge counted commands beyond the permitted sender's 300";
-  EXPECT_GT(enabled_requests(rig.bus_log(), permitted_start), 10) << "no enabled request on the bus";
+  EXPECT_LE(taken, 600) << "the bridge counted commands beyond the permitted senders' 600";
 }
 
 }  // namespace

@@ -41,4 +41,18 @@ std::string permissions_xml(const std::string& identity, const std::string& subj
 // The subject of an identity's certificate, as the grant names it (RFC 2253: "CN=x,O=y").
 std::string identity_subject(const std::string& identity, const std::string& organization);
 
+// `rig security add-identity DIR NAME`: one more identity in an initialised directory, signed by
+// its existing CAs (DIR/private/*_ca_key.pem), so every identity already deployed stays valid.
+// Its key type and organization follow the identity CA's; its own permissions are signed by the
+// permissions CA (grants are per identity: no other file changes).
+struct AddIdentityOptions {
+  std::string dir;
+  std::string name;
+  Role role = Role::kReader;  // kCommander: may publish /vehicle/dbw/cmd
+  int days = 3650;
+};
+// Returns the files written. Throws std::runtime_error: no CA in DIR (or its keys missing or not
+// its keys), a bad name, an identity of that name already there, OpenSSL failures.
+std::vector<std::string> add_identity(const AddIdentityOptions& o);
+
 }  // namespace sensor_rig::dds
