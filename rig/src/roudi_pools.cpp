@@ -1,6 +1,7 @@
 #include "roudi_pools.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <regex>
@@ -35,7 +36,7 @@ std::uint64_t max_scan_points(const LidarConfig& l) {
   const bool synthetic = l.mock.kind == LidarMockConfig::Kind::kSynthetic && l.mock.rpm > 0;
   const double slower = synthetic ? std::max(1.0, 600.0 / l.mock.rpm) : 1.0;
   const auto at_rpm = [&](int typical) {
-    return static_cast<std::uint64_t>(static_cast<double>(typical) * slower + 0.5) * returns;
+    return static_cast<std::uint64_t>(std::ceil(static_cast<double>(typical) * slower)) * returns;
   };
   if (const auto m = lidar::velodyne::model_from_name(l.model)) return at_rpm(lidar::velodyne::model_info(*m).typical_points_per_scan);
   if (const auto m = lidar::hesai::model_from_name(l.model)) return at_rpm(lidar::hesai::model_info(*m).typical_points_per_scan);
@@ -62,7 +63,8 @@ ShmTopicLoad load_of(std::string topic, std::uint64_t sample_bytes, const dds::Q
 }
 
 std::uint64_t chunks_for(const ShmTopicLoad& t) {
-  const auto held = static_cast<std::uint64_t>(t.writers * (1 + t.pub_history) + t.readers * (t.depth + 1));
+  const auto count = [](int n) { return static_cast<std::uint64_t>(n); };
+  const std::uint64_t held = count(t.writers) * count(1 + t.pub_history) + count(t.readers) * count(t.depth + 1);
   return (held * 3 + 1) / 2 + 2;
 }
 
@@ -110,6 +112,7 @@ std::vector<Mempool> size_mempools(const std::vector<ShmTopicLoad>& loads) {
     by_size[std::max(size, kMediumPool)] += chunks_for(t);
   }
   std::vector<Mempool> pools;
+  pools.reserve(by_size.size());
   for (const auto& [size, count] : by_size) pools.push_back({size, count});
   return pools;
 }
