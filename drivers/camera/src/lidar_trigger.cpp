@@ -83,15 +83,17 @@ std::size_t LidarTrigger::add(std::function<bool()> trigger) {
 void LidarTrigger::start(int realtime_priority) {
   if (thread_.joinable()) return;
   stop_.store(false);
+  std::uint64_t generation = 0;  // a restarted trigger's firing threads skip the shots before
   {
     std::lock_guard lock(shot_mutex_);
     shot_.closing = false;
     shot_.called.assign(members_.size(), 0);
     shot_.accepted.assign(members_.size(), 0);
+    generation = shot_.generation;
   }
   started_ns_.store(vehicle_now_ns());
   for (std::size_t i = 0; i < members_.size(); ++i) {
-    members_[i].thread = std::thread([this, i] { run_member(i); });
+    members_[i].thread = std::thread([this, i, generation] { run_member(i, generation); });
     (void)pthread_setname_np(members_[i].thread.native_handle(), ("trg" + std::to_string(i) + ":" + name_).substr(0, 15).c_str());
     set_fifo(members_[i].thread, realtime_priority, name_);
   }
@@ -171,8 +173,7 @@ void LidarTrigger::settle(Nanos newest) noexcept {
   }
 }
 
-void LidarTrigger::run_member(std::size_t i) {
-  std::uint64_t seen = 0;
+void LidarTrigger::run_member(std::size_t i, std::uint64_t seen) {
   for (;;) {
     Nanos aim = 0;
     {

@@ -116,7 +116,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
     bool settled = false;           // the samples covered it (measured or given up)
   };
   void run();
-  void run_member(std::size_t i);
+  void run_member(std::size_t i, std::uint64_t seen);  // seen: the shots armed before it started
   void fire(Nanos target, Nanos aim);
   void settle(Nanos newest) noexcept;  // ticks whose crossing the samples now cover
   void add_device_error(const Tick& t, std::size_t member) noexcept;
