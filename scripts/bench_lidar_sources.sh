@@ -28,7 +28,10 @@ rx=rigbRx_$tag
 out=$(mktemp -d)
 # name model port extra-args: a Velodyne VLP-32C (dual returns), an Ouster OS-1-128 at 1024x20
 # (~25 kB datagrams: 17 fragments each), a Hesai Pandar40P.
+# LIDARS=heavy: two OS-1-128 at 1024x20 and the Pandar40P instead (~70 MB/s: the issue's
+# "2 x OS-128-class + 1 x Pandar40P-class" example; the first Ouster sends to port 2368).
 sensors=("vlp32c VLP-32C 2368 --return dual" "os128 OS 7502 --beams 128 --lidar-mode 1024x20" "pandar40p Pandar40P 2370")
+[ "${LIDARS:-}" = heavy ] && sensors=("os128a OS 2368 --beams 128 --lidar-mode 1024x20" "os128b OS 7502 --beams 128 --lidar-mode 1024x20" "pandar40p Pandar40P 2370")
 cleanup() {
   for p in $(jobs -p); do kill "$p" 2>/dev/null || true; done
   wait 2>/dev/null || true
@@ -70,11 +73,12 @@ for src in "${sources[@]}"; do
   done
   for p in "${pids[@]}"; do wait "$p" || true; done
   wait "$bench"
-  python3 - "$src" "$out" <<'PY'
+  port_names=$(for s in "${sensors[@]}"; do read -r n _ p _ <<<"$s"; printf '%s:%s ' "$p" "$n"; done)
+  python3 - "$src" "$out" $port_names <<'PY'
 import json, sys
 src, out = sys.argv[1], sys.argv[2]
 rows = [json.loads(l) for l in open(f"{out}/recv_{src}.json") if l.strip()]
-names = {2368: "vlp32c", 7502: "os128", 2370: "pandar40p"}
+names = {int(a.split(":")[0]): a.split(":")[1] for a in sys.argv[3:]}
 for r in rows:
     if r.get("summary"):
         print(f"{src:6} all       process_cpu {r['process_cpu_pct']:5.2f} % of a core  host system {r['host_system_pct']:5.2f} %"
