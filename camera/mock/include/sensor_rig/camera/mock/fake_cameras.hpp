@@ -15,8 +15,15 @@
 namespace sensor_rig::camera::mock {
 
 inline constexpr const char* kFakePrefix = "fake:";
+// rig-fake-gige-camera's software-trigger grid (Aravis's default is 25 Hz: a triggered frame was
+// exposed up to 40 ms after its trigger): a pending trigger fires at the next 250 us step.
+inline constexpr double kTriggerGridHz = 4000;
+// GigE fake that exposes on the trigger (camera/mock/tools/rig_fake_gige_camera.cpp), built beside `rig`.
+inline constexpr const char* kTriggerFollowingFake = "rig-fake-gige-camera";
 
-// Opens "fake:<serial>" in process, anything else through the network.
+// Opens "fake:<serial>" in process, anything else through the network. Aravis 0.8.26's in-process
+// fake ignores TriggerSoftware (arvfakestream.c: a frame at every step of its trigger grid in
+// trigger mode), so its grid is left at 25 Hz: a finer one would only stream faster.
 AravisDeviceOpener inprocess_fake_opener();
 
 // True when `address` is on an interface (or was added to `lo` now: root / CAP_NET_ADMIN).
@@ -30,7 +37,7 @@ struct GigeFakeOptions {
   std::string serial;                  // default: derived from the address
   int lost_packets_per_thousand = 0;   // arv-fake-gv-camera -r: GVSP packet loss
   std::string genicam;                 // -g: a GenICam XML file instead of the built-in one
-  std::string program = "arv-fake-gv-camera-0.8";
+  std::string program = "arv-fake-gv-camera-0.8";  // or a path to kTriggerFollowingFake (same options)
 };
 
 // argv of the fake process.

@@ -1,0 +1,108 @@
+// rig-fake-gige-camera: the Aravis GigE fake (ArvGvFakeCamera, the same device as
+// arv-fake-gv-camera-0.8 over the real GVCP/GVSP path, same -i/-s/-g/-r options) that exposes a
+// software-triggered frame right after the trigger instead of on its own 40 ms grid.
+//
+// Why: Aravis 0.8.26's fake fires a pending software trigger only at the next multiple of
+// 1/trigger_frequency of CLOCK_REALTIME (arvfakecamera.c get_sleep_time_for_next_frame, default
+// 25 Hz), so a LIDAR-triggered camera's exposure lands 0-40 ms after the trigger call. A finer grid
+// alone makes its stream thread spin: arvgvfakecamera.c _thread polls with the remaining time
+// truncated to whole ms, i.e. g_poll(..., 0) in a loop for the last ms before every grid point.
+// So this process also provides g_poll (it interposes the one libaravis calls; same behaviour as
+// GLib's: poll(2)) and, for the fake's zero-timeout polls in software trigger mode, blocks until a
+// control packet (the TriggerSoftware write) arrives, or sleeps to the grid point when a trigger is
+// pending: exposure follows the trigger within ~one grid step (1/kTriggerGridHz), no spinning.
+#include <arv.h>
+#include <poll.h>
+#include <pthread.h>
+#include <sys/prctl.h>
+#include <time.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "sensor_rig/camera/mock/fake_cameras.hpp"
+
+namespace {
+
+std::atomic<ArvFakeCamera*> g_camera{nullptr};  // set once the fake runs; read by g_poll
+volatile std::sig_atomic_t g_stop = 0;
+double g_grid_hz = sensor_rig::camera::mock::kTriggerGridHz;
+constexpr int kIdleWaitMs = 100;  // the fake's own longest poll
+
+void on_signal(int) { g_stop = 1; }
+
+bool trigger_pending(ArvFakeCamera* cam) {
+  guint32 value = 0;
+  return arv_fake_camera_read_register(cam, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, &value) && value != 0;
+}
+
+// Until the fake's next grid point (it fires a pending trigger there).
+timespec until_next_grid_point() {
+  const auto period_us = static_cast<gint64>(1e6 / g_grid_hz);
+  const gint64 left_us = period_us - g_get_real_time() % period_us;
+  return {0, static_cast<long>(left_us * 1000)};
+}
+
+int usage(const char* self, int status) {
+  std::fprintf(status == 0 ? stdout : stderr,
+               "usage: %s -i ADDRESS [-s SERIAL] [-g GENICAM.xml] [-r LOST_PER_THOUSAND] [--trigger-hz HZ]\n"
+               "Aravis GigE fake camera (as arv-fake-gv-camera-0.8) whose software-triggered frames are exposed\n"
+               "within ~1/HZ of the trigger (default %.0f Hz) without a busy loop. Stops on SIGINT/SIGTERM.\n",
+               self, sensor_rig::camera::mock::kTriggerGridHz);
+  return status;
+}
+
+}  // namespace
+
+// libaravis's fake stream thread calls g_poll through the PLT: this definition is the one it gets.
+extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
+  static_assert(sizeof(GPollFD) == sizeof(pollfd));
+  auto* pfds = reinterpret_cast<pollfd*>(fds);
+  ArvFakeCamera* cam = g_camera.load(std::memory_order_acquire);
+  if (timeout != 0 || cam == nullptr || !arv_fake_camera_is_in_software_trigger_mode(cam)) return ::poll(pfds, nfds, timeout);
+  if (!trigger_pending(cam)) return ::poll(pfds, nfds, kIdleWaitMs);  // woken by the trigger's packet
+  const timespec wait = until_next_grid_point();
+  return ::ppoll(pfds, nfds, &wait, nullptr);
+}
+
+int main(int argc, char** argv) {
+  std::string address, serial, genicam;
+  double lost_per_thousand = 0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (a == "-h" || a == "--help") return usage(argv[0], 0);
+    if (!has_value) return usage(argv[0], 2);
+    const char* v = argv[++i];
+    if (a == "-i" || a == "--interface") address = v;
+    else if (a == "-s" || a == "--serial") serial = v;
+    else if (a == "-g" || a == "--genicam") genicam = v;
+    else if (a == "-r" || a == "--gvsp-lost-ratio") lost_per_thousand = std::atof(v);
+    else if (a == "--trigger-hz") g_grid_hz = std::atof(v);
+    else return usage(argv[0], 2);
+  }
+  if (address.empty() || !(g_grid_hz >= 1 && g_grid_hz <= 1e6) || lost_per_thousand < 0) return usage(argv[0], 2);
+  // The default 50 us timer slack would be a fifth of a 250 us grid step (inherited by the fake's thread).
+  ::prctl(PR_SET_TIMERSLACK, 1UL);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  ArvGvFakeCamera* gv = arv_gv_fake_camera_new_full(address.c_str(), serial.empty() ? nullptr : serial.c_str(),
+                                                    genicam.empty() ? nullptr : genicam.c_str());
+  if (gv == nullptr || !arv_gv_fake_camera_is_running(gv)) {
+    std::fprintf(stderr, "rig-fake-gige-camera: failed to start on %s\n", address.c_str());
+    if (gv != nullptr) g_object_unref(gv);
+    return 1;
+  }
+  g_object_set(gv, "gvsp-lost-ratio", lost_per_thousand / 1000.0, nullptr);
+  ArvFakeCamera* cam = arv_gv_fake_camera_get_fake_camera(gv);
+  arv_fake_camera_set_trigger_frequency(cam, g_grid_hz);
+  g_camera.store(cam, std::memory_order_release);
+  while (g_stop == 0) g_usleep(100'000);
+  g_camera.store(nullptr, std::memory_order_release);
+  g_object_unref(gv);
+  return 0;
+}
