@@ -47,7 +47,8 @@ inline int az_step(int a, int b) noexcept {
 
 ScanAssemblerOptions scan_options(const DecoderConfig& cfg) {
   const std::size_t dual = cfg.returns == ReturnSelection::kDual ? 2 : 1;
-  return {.first_reserve = static_cast<std::size_t>(model_info(cfg.model).typical_points_per_scan) * dual,
+  const std::size_t typical = static_cast<std::size_t>(model_info(cfg.model).typical_points_per_scan) * dual;
+  return {.first_reserve = cfg.first_scan_reserve_points != 0 ? cfg.first_scan_reserve_points : typical,
           .emit_partial_scans = cfg.emit_partial_scans};
 }
 

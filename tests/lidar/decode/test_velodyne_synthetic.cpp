@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <vector>
 
@@ -179,6 +180,32 @@ TEST(VelodyneScans, CutAtWrapSkipsThePartialFirstScan) {
   const auto tail = dec.flush();
   ASSERT_TRUE(tail.has_value());
   EXPECT_EQ(tail->packets, 38U);
+}
+
+// The first scan's buffer holds the model's typical scan unless the config asks for less (the
+// fuzz harness: a decoder per input); a smaller buffer grows to the same points.
+TEST(VelodyneScans, FirstScanReserveFromTheConfig) {
+  PacketBuilder b;
+  b.azimuths(0, 40).all(1000, 9);
+  const auto bytes = b.bytes();
+  const auto first_scan = [&bytes](std::size_t reserve) {
+    auto cfg = vlp16_no_offsets();
+    cfg.emit_partial_scans = true;
+    cfg.first_scan_reserve_points = reserve;
+    Decoder dec(cfg);
+    (void)dec.push(PacketView{bytes, 0, velodyne::kDataPort}, 1'000'000'000);
+    auto s = dec.flush();
+    EXPECT_TRUE(s.has_value());
+    return s ? std::move(s->points) : std::vector<PointXYZIRT>{};
+  };
+  const auto typical = first_scan(0);
+  const auto small = first_scan(64);
+  const auto typical_points = static_cast<std::size_t>(velodyne::model_info(Model::kVLP16).typical_points_per_scan);
+  EXPECT_GE(typical.capacity(), typical_points);
+  EXPECT_LT(small.capacity(), typical_points);
+  ASSERT_EQ(small.size(), 12U * 32U);
+  ASSERT_EQ(small.size(), typical.size());
+  EXPECT_EQ(std::memcmp(small.data(), typical.data(), small.size() * sizeof(PointXYZIRT)), 0);
 }
 
 TEST(VelodyneScans, CutAngleMidPacket) {

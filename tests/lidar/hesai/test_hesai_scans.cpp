@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <random>
 
@@ -86,6 +87,33 @@ TEST(HesaiScans, PartialScansOnRequest) {
   ASSERT_EQ(scans.size(), 3U);
   EXPECT_LT(scans[0].points.size(), 1800U * 40U);
   EXPECT_EQ(scans[1].points.size(), 1800U * 40U);
+}
+
+// Both scan buffers (current and lookahead) hold the model's typical scan unless the config asks
+// for less (the fuzz harness: a decoder per input); a smaller buffer grows to the same points.
+TEST(HesaiScans, FirstScanReserveFromTheConfig) {
+  PacketSpec spec;
+  spec.azimuth0 = 4000;
+  spec.unit = [](int, int c) -> RawUnit { return {2500, static_cast<std::uint8_t>(c)}; };
+  const auto pkt = build_packet(spec);
+  const auto first_scan = [&pkt](std::size_t reserve) {
+    DecoderConfig cfg;
+    cfg.emit_partial_scans = true;
+    cfg.first_scan_reserve_points = reserve;
+    Decoder d(cfg);
+    (void)d.push(PacketView{pkt, kT0, kDataPort}, kT0);
+    auto s = d.flush();
+    EXPECT_TRUE(s.has_value());
+    return s ? std::move(s->points) : std::vector<PointXYZIRT>{};
+  };
+  const auto typical = first_scan(0);
+  const auto small = first_scan(64);
+  const auto typical_points = static_cast<std::size_t>(model_info(Model::kPandar40P).typical_points_per_scan);
+  EXPECT_GE(typical.capacity(), typical_points);
+  EXPECT_LT(small.capacity(), typical_points);
+  ASSERT_EQ(small.size(), 10U * 40U);
+  ASSERT_EQ(small.size(), typical.size());
+  EXPECT_EQ(std::memcmp(small.data(), typical.data(), small.size() * sizeof(PointXYZIRT)), 0);
 }
 
 TEST(HesaiScans, XT32DualRotation) {

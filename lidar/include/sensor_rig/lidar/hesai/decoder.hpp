@@ -54,6 +54,10 @@ struct DecoderConfig {
   // The sensor's own FOV setting (it sends only this clockwise arc); start == end: the whole turn.
   double fov_start_deg = 0.0;
   double fov_end_deg = 0.0;
+  // Points reserved for the first scan buffers; 0: the model's typical scan (twice with kDual).
+  // Later scans reserve the last scan's size. A small value costs only reallocations as a scan
+  // grows (the fuzz harnesses: a decoder per input, no multi-MB reserve each).
+  std::size_t first_scan_reserve_points = 0;
 };
 
 inline constexpr std::size_t kStatusCount = kPacketStatusCount;
