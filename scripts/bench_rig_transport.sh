@@ -5,6 +5,8 @@
 # per topic the `dds` stage (DDS source timestamp -> monitor receive) p50/p99/max from a monitor
 # that uses the same transport.
 # Usage: scripts/bench_rig_transport.sh BUILD_DIR [SECONDS] [TRANSPORTS...]
+# Environment: LIDARS_ONLY=1 runs the three LIDARs alone (no cameras, dbw, fusion, sync sets);
+# DDS_RT=N sets rig.dds.realtime_priority N and runs the monitor with --rt-priority N.
 set -euo pipefail
 build=${1:-build-release}
 secs=${2:-30}
@@ -28,10 +30,25 @@ for t in "${transports[@]}"; do
   sed -e "s/^    domain: 0$/    domain: $domain/" -e "s|^    profile: cyclonedds/loopback.xml.*|&\n    transport: $t|" \
     "$root/config/mock_rig.yaml" >"$conf"
   grep -q "transport: $t" "$conf" || { echo "could not set the transport in $conf" >&2; exit 1; }
+  if [ -n "${LIDARS_ONLY:-}" ] || [ -n "${DDS_RT:-}" ]; then
+    python3 - "$conf" "${LIDARS_ONLY:-}" "${DDS_RT:-}" <<'PY'
+import sys, yaml
+path, lidars_only, rt = sys.argv[1], sys.argv[2], sys.argv[3]
+c = yaml.safe_load(open(path))
+if lidars_only:
+    for k in ("cameras", "dbw", "sync_sets", "fusion"):
+        c.pop(k, None)
+if rt:
+    c["rig"]["dds"]["realtime_priority"] = int(rt)
+yaml.safe_dump(c, open(path, "w"), sort_keys=False)
+PY
+  fi
+  mon_rt=()
+  [ -n "${DDS_RT:-}" ] && mon_rt=(--rt-priority "$DDS_RT")
   "$build/rig" up "$conf" --duration $((secs + 14)) 2>"$out/up_$t.log" &
   rig_pid=$!
   sleep 8  # RouDi, fakes, streams, DDS matched
-  "$build/rig" monitor --domain "$domain" --transport "$t" --duration "$secs" --json --summary "$out/summary_$t.json" \
+  "$build/rig" monitor --domain "$domain" --transport "$t" "${mon_rt[@]}" --duration "$secs" --json --summary "$out/summary_$t.json" \
     >/dev/null 2>"$out/monitor_$t.log" &
   mon_pid=$!
   python3 - "$rig_pid" "$mon_pid" "$secs" "$out/cpu_$t.json" <<'PY'

@@ -9,6 +9,7 @@
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/dds/participant.hpp"
 #include "sensor_rig/dds/roudi.hpp"
+#include "sensor_rig/dds/thread_scheduling.hpp"
 #include "sensor_rig/dds/topic.hpp"
 #include "security_qos.hpp"
 
@@ -32,15 +33,33 @@ constexpr const char* kShmFragment =
     "<CycloneDDS><Domain Id=\"any\"><SharedMemory><Enable>true</Enable><LogLevel>warn</LogLevel></SharedMemory>"
     "</Domain></CycloneDDS>";
 
-// What dds_create_domain gets: the profile's XML, plus the shared-memory fragment.
-std::string domain_config(const std::string& profile, Transport t) {
+void append(std::string& list, const std::string& item) {
+  if (!item.empty()) list += (list.empty() ? "" : ",") + item;
+}
+
+// The realtime fragment for cfg, with a warning (once per process and priority) when refused.
+std::string realtime_fragment(const DomainConfig& cfg) {
+  std::string refused;
+  std::string xml = realtime_threads_fragment(cfg.realtime_priority, &refused);
+  static std::once_flag warned;
+  if (!refused.empty())
+    std::call_once(warned, [&] {
+      log::warn("dds", "SCHED_FIFO " + std::to_string(cfg.realtime_priority) + " for Cyclone's threads refused (" +
+                           refused + "), running them with normal priority");
+    });
+  return xml;
+}
+
+// What dds_create_domain gets: the profile's XML, plus the shared-memory and realtime fragments.
+std::string domain_config(const std::string& profile, const DomainConfig& cfg) {
   std::string xml;
   if (!profile.empty()) {
     xml = read_file(profile);
   } else if (const char* uri = std::getenv("CYCLONEDDS_URI"); uri != nullptr) {
     xml = uri;
   }
-  if (t == Transport::kShm) xml += std::string(xml.empty() ? "" : ",") + kShmFragment;
+  if (cfg.transport == Transport::kShm) append(xml, kShmFragment);
+  append(xml, realtime_fragment(cfg));
   return xml;
 }
 }  // namespace
@@ -76,7 +95,8 @@ std::string cyclone_uri(const DomainConfig& cfg) {
   } else if (const char* env = std::getenv("CYCLONEDDS_URI"); env != nullptr) {
     uri = env;
   }
-  if (cfg.transport == Transport::kShm) uri += std::string(uri.empty() ? "" : ",") + kShmFragment;
+  if (cfg.transport == Transport::kShm) append(uri, kShmFragment);
+  append(uri, realtime_fragment(cfg));
   return uri;
 }
 
@@ -89,11 +109,11 @@ Participant::Participant(const DomainConfig& cfg, const SecurityConfig& security
                                " (`rig up` starts one for a config with transport shm)");
     }
   }
-  if (!profile_.empty() || cfg.transport == Transport::kShm) {
+  if (!profile_.empty() || cfg.transport == Transport::kShm || cfg.realtime_priority > 0) {
     std::lock_guard lock(g_domains_mutex);
     domain_ = g_domains[cfg.domain_id].lock();
     if (!domain_) {
-      const std::string xml = domain_config(profile_, cfg.transport);
+      const std::string xml = domain_config(profile_, cfg);
       domain_ = std::make_shared<DomainHandle>();
       domain_->profile = profile_;
       domain_->transport = cfg.transport;

@@ -31,6 +31,7 @@ struct MonitorOptions {
   dds::DomainConfig dds;
   // DDS Security (`--security DIR --identity reader`): to see /vehicle/dbw/cmd when it is protected.
   dds::SecurityConfig security;
+  int realtime_priority = 0;        // --rt-priority: SCHED_FIFO for its thread (set by the CLI) and DDS threads
   bool copy_clouds = false;         // hidden --reader copy: deserialize clouds/images (default: views)
   std::function<bool()> keep_going;  // optional: checked every loop; false ends the monitor
 };

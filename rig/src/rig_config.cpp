@@ -82,12 +82,14 @@ RigConfig load_rig_config(const std::string& path) {
     cfg.name = rig->get_string("name", "rig");
     cfg.diagnostics_period_ms = static_cast<int>(rig->get_int("diagnostics_period_ms", 100, 60000, 1000));
     if (auto d = rig->child("dds")) {
-      d->allow_keys({"domain", "profile", "transport", "roudi_config", "shm"});
+      d->allow_keys({"domain", "profile", "transport", "roudi_config", "shm", "realtime_priority"});
       cfg.dds.domain_id = static_cast<dds_domainid_t>(d->get_int("domain", 0, 232, 0));
       cfg.dds.profile = d->get_path("profile", "");
       if (!cfg.dds.profile.empty() && !std::filesystem::exists(cfg.dds.profile))
         d->fail("profile", "file not found: " + cfg.dds.profile);
       cfg.dds.transport = d->get_enum("transport", {{"udp", dds::Transport::kUdp}, {"shm", dds::Transport::kShm}}, dds::Transport::kUdp);
+      // SCHED_FIFO for Cyclone's receive/delivery/event threads (dds/thread_scheduling.hpp); 0 = normal.
+      cfg.dds.realtime_priority = static_cast<int>(d->get_int("realtime_priority", 0, 99, 0));
       cfg.roudi_config = d->get_path("roudi_config", "");
       if (!cfg.roudi_config.empty() && !std::filesystem::exists(cfg.roudi_config))
         d->fail("roudi_config", "file not found: " + cfg.roudi_config);
@@ -144,7 +146,9 @@ std::string describe(const RigConfig& cfg) {
   std::ostringstream o;
   o << "rig '" << cfg.name << "' (" << cfg.file << "), DDS domain " << cfg.dds.domain_id << ", profile "
     << (cfg.dds.profile.empty() ? std::string("default") : cfg.dds.profile) << ", transport "
-    << dds::to_string(cfg.dds.transport) << "\n";
+    << dds::to_string(cfg.dds.transport)
+    << (cfg.dds.realtime_priority > 0 ? ", Cyclone threads SCHED_FIFO " + std::to_string(cfg.dds.realtime_priority) : "")
+    << "\n";
   if (cfg.dds.transport == dds::Transport::kShm) o << describe_shm(cfg);
   for (const auto& l : cfg.lidars) {
     o << "  lidar " << l.name << ": " << l.model

@@ -15,6 +15,7 @@
 #include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/common/thread_priority.hpp"
 #include "sensor_rig/dds/roudi.hpp"
 #include "sensor_rig/dds/security.hpp"
 
@@ -48,6 +49,15 @@ void add_up(CLI::App& app, cli::Context& ctx) {
   });
 }
 
+// The monitor's thread under SCHED_FIFO, before its participant: the threads that starts inherit the
+// policy (iceoryx's listener over shm cannot be named in Cyclone's <Threads>).
+void monitor_thread_realtime(int priority) {
+  if (priority <= 0) return;
+  if (const auto r = try_realtime_priority(priority); !r)
+    log::warn("monitor", "SCHED_FIFO " + std::to_string(priority) + " refused (" + r.why_not +
+                             "), running with normal priority");
+}
+
 // Over shared memory the monitor runs as a process of its own: stopping RouDi SIGTERMs every
 // process registered with it, and this one must outlive `rig up` to report its exit.
 int run_demo_monitor_process(const RigConfig& cfg, ChildProcess& rig, const MonitorOptions& mo) {
@@ -56,6 +66,7 @@ int run_demo_monitor_process(const RigConfig& cfg, ChildProcess& rig, const Moni
                                 "--transport", "shm", "--duration", std::to_string(mo.duration_s)};
   if (!cfg.dds.profile.empty()) argv.insert(argv.end(), {"--dds-profile", cfg.dds.profile});
   if (mo.json) argv.emplace_back("--json");
+  if (cfg.dds.realtime_priority > 0) argv.insert(argv.end(), {"--rt-priority", std::to_string(cfg.dds.realtime_priority)});
   for (const auto& [flag, file] : {std::pair{"--record", mo.record_file}, std::pair{"--plot", mo.plot_file},
                                    std::pair{"--summary", mo.summary_file}})
     if (!file.empty()) argv.insert(argv.end(), {flag, file});
@@ -90,6 +101,8 @@ void add_demo(CLI::App& app, cli::Context& ctx) {
       return;
     }
     mo->dds = cfg.dds;
+    mo->realtime_priority = cfg.dds.realtime_priority;
+    monitor_thread_realtime(mo->realtime_priority);
     mo->keep_going = [&rig] { return rig.running(); };
     ctx.exit_code = run_monitor(*mo);
     mo->keep_going = nullptr;  // it refers to this call's `rig`
@@ -130,6 +143,9 @@ void add_monitor(CLI::App& app, cli::Context& ctx) {
   cmd->add_option("--transport", *transport, "udp, or shm: iceoryx shared memory (a RouDi must run, as `rig up` starts)")
       ->transform(CLI::CheckedTransformer(std::map<std::string, dds::Transport>{{"udp", dds::Transport::kUdp},
                                                                                 {"shm", dds::Transport::kShm}}));
+  cmd->add_option("--rt-priority", opt->realtime_priority,
+                  "SCHED_FIFO priority for the monitor and its DDS threads (0: normal scheduling)")
+      ->check(CLI::Range(0, 99));
   cmd->add_option("--summary", opt->summary_file, "At the end, write whole-run percentiles per topic/stage (JSON)");
   cmd->add_option("--record", opt->record_file, "Write one CSV row per sample: its stage times, missing packets");
   cmd->add_option("--plot", opt->plot_file, "At the end, write the latency plot of the run (SVG)");
@@ -155,6 +171,8 @@ void add_monitor(CLI::App& app, cli::Context& ctx) {
     opt->dds.domain_id = static_cast<dds_domainid_t>(*domain);
     opt->dds.profile = *profile;
     opt->dds.transport = *transport;
+    opt->dds.realtime_priority = opt->realtime_priority;
+    monitor_thread_realtime(opt->realtime_priority);
     ctx.exit_code = run_monitor(*opt);
   });
 }

@@ -96,6 +96,8 @@ TEST_F(ConfigCheck, EachMistakeExitsTwoAtItsLine) {
        {{9, "    model: OS-LEGACY"}, {10, "    port: 7502\n    imu_port: 2368\n    mock: {kind: synthetic, rpm: 600}"}},
        "11 lidars[1].imu_port",
        "used twice"},
+      {"Cyclone thread priority out of range", {{2, "  name: check\n  dds:\n    realtime_priority: 120"}},
+       "4 rig.dds.realtime_priority", ""},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.what);

@@ -19,6 +19,9 @@ struct DomainConfig {
   // ($RIG_SOURCE_DIR or the source tree's config/cyclonedds/loopback.xml).
   std::string profile;
   Transport transport = Transport::kUdp;  // shm: the profile plus <SharedMemory><Enable>true
+  // > 0: Cyclone's receive, user-delivery and timed-event threads run SCHED_FIFO at this priority
+  // (thread_scheduling.hpp); refused (no root / CAP_SYS_NICE / RLIMIT_RTPRIO): a warning, normal threads.
+  int realtime_priority = 0;
 };
 
 // Resolves the profile the way Participant does (for logs and diagnostics).
