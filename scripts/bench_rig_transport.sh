@@ -6,7 +6,8 @@
 # that uses the same transport.
 # Usage: scripts/bench_rig_transport.sh BUILD_DIR [SECONDS] [TRANSPORTS...]
 # Environment: LIDARS_ONLY=1 runs the three LIDARs alone (no cameras, dbw, fusion, sync sets);
-# DDS_RT=N sets rig.dds.realtime_priority N and runs the monitor with --rt-priority N.
+# DDS_RT=N sets rig.dds.realtime_priority N (0: off, for before/after runs); the monitor runs with
+# --rt-priority at the config's rig.dds.realtime_priority.
 set -euo pipefail
 build=${1:-build-release}
 secs=${2:-30}
@@ -43,8 +44,8 @@ if rt:
 yaml.safe_dump(c, open(path, "w"), sort_keys=False)
 PY
   fi
-  mon_rt=()
-  [ -n "${DDS_RT:-}" ] && mon_rt=(--rt-priority "$DDS_RT")
+  # The monitor as a tuned subscriber of that rig: its thread and DDS threads at the rig's priority.
+  mon_rt=(--rt-priority "$(python3 -c 'import sys, yaml; print(yaml.safe_load(open(sys.argv[1]))["rig"]["dds"].get("realtime_priority", 0))' "$conf")")
   "$build/rig" up "$conf" --duration $((secs + 14)) 2>"$out/up_$t.log" &
   rig_pid=$!
   sleep 8  # RouDi, fakes, streams, DDS matched
