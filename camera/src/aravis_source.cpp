@@ -527,6 +527,9 @@ Capture AravisSource::next(int timeout_ms) {
       static_cast<std::uint32_t>(arv_buffer_get_image_width(b)) != cfg_.width ||
       static_cast<std::uint32_t>(arv_buffer_get_image_height(b)) != cfg_.height) {
     ++incomplete_;
+    if (status == ARV_BUFFER_STATUS_TIMEOUT) ++incomplete_timeout_;
+    else if (status == ARV_BUFFER_STATUS_MISSING_PACKETS) ++incomplete_missing_;
+    else ++incomplete_other_;
     c.status = CaptureStatus::kIncomplete;
     c.error = "frame " + std::to_string(arv_buffer_get_frame_id(b)) + " status " + std::to_string(static_cast<int>(status));
     arv_stream_push_buffer(stream, b);
@@ -539,6 +542,7 @@ Capture AravisSource::next(int timeout_ms) {
   const std::size_t want = frame_bytes(cfg_.format, cfg_.width, cfg_.height);
   if (data != mem.data() || size < want) {  // not our memory or short: never publish it
     ++incomplete_;
+    ++incomplete_other_;
     c.status = CaptureStatus::kIncomplete;
     c.error = "buffer of " + std::to_string(size) + " bytes, expected " + std::to_string(want);
     arv_stream_push_buffer(stream, b);
@@ -586,6 +590,9 @@ SourceStats AravisSource::stats() const {
   }
   s.completed = completed_;
   s.incomplete = incomplete_;
+  s.incomplete_timeout = incomplete_timeout_;
+  s.incomplete_missing_packets = incomplete_missing_;
+  s.incomplete_other = incomplete_other_;
   s.timeouts = timeouts_;
   s.disconnects = disconnects_;
   return s;

@@ -183,6 +183,7 @@ Capture V4l2Source::next(int timeout_ms) {
   const Nanos mono = monotonic_now_ns();
   if (b.index >= buffers_.size() || (b.flags & V4L2_BUF_FLAG_ERROR) != 0 || b.bytesused < image_bytes_) {
     ++stats_.incomplete;
+    ++stats_.incomplete_other;
     c.status = CaptureStatus::kIncomplete;
     c.error = "short or damaged buffer: " + std::to_string(b.bytesused) + " of " + std::to_string(image_bytes_) + " bytes";
     requeue(b.index);

@@ -289,6 +289,10 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("frames", impl_->published.samples());
   s.add("frame_rate_hz", std::to_string(impl_->published.rate_hz()));
   s.add_number("incomplete", st.incomplete);
+  // Where incomplete frames went, by the stream's buffer status (rig monitor: drops by stage).
+  s.add_number("incomplete_timeout", st.incomplete_timeout);
+  s.add_number("incomplete_missing_packets", st.incomplete_missing_packets);
+  s.add_number("incomplete_other", st.incomplete_other);
   s.add_number("timeouts", st.timeouts);
   s.add_number("underruns", st.underruns);
   s.add_number("missing_packets", st.missing_packets);

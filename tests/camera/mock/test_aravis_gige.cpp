@@ -158,6 +158,9 @@ TEST_F(GigeFake, LostPacketsGiveIncompleteFramesThatAreNeverReturned) {
   EXPECT_GE(st.incomplete, 3u) << "completed " << st.completed;
   EXPECT_EQ(st.completed, static_cast<std::uint64_t>(frames));  // only whole frames came out
   EXPECT_GT(st.missing_packets + st.resent_packets, 0u);
+  // Each incomplete frame counted by why: packets missing (or the frame's packets stopped coming).
+  EXPECT_EQ(st.incomplete_missing_packets + st.incomplete_timeout + st.incomplete_other, st.incomplete);
+  EXPECT_GE(st.incomplete_missing_packets + st.incomplete_timeout, 3u) << "other " << st.incomplete_other;
   src.close();
   fake.stop(500);
 }

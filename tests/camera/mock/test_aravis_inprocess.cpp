@@ -56,6 +56,28 @@ TEST(AravisInProcess, FreeRunFramesLandInPoolMemoryWithDeviceStamps) {
   EXPECT_FALSE(src.is_open());
 }
 
+// Frames held past the pool (every buffer out of the stream): the frames the device sends meanwhile
+// are Aravis underruns, counted in stats() (the pool is the stream's buffers: one counter for both).
+// The in-process fake numbers only the frames it filled, so its ids show no gap.
+TEST(AravisInProcess, FramesWhileThePoolIsExhaustedAreCountedUnderruns) {
+  auto cfg = fake("UNDER1");
+  cfg.buffers = 2;
+  AravisSource src(cfg, mock::inprocess_fake_opener());
+  src.open();
+  auto a = next_frame(src);
+  auto b = next_frame(src);
+  ASSERT_EQ(a.status, CaptureStatus::kFrame) << a.error;
+  ASSERT_EQ(b.status, CaptureStatus::kFrame) << b.error;
+  const Nanos until = monotonic_now_ns() + 400'000'000;  // ~8 frames at 20 Hz
+  while (monotonic_now_ns() < until) EXPECT_NE(src.next(50).status, CaptureStatus::kFrame);
+  EXPECT_GE(src.stats().underruns, 2u);
+  a.frame.reset();
+  b.frame.reset();
+  auto c = next_frame(src);
+  ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;  // the pool back: frames again
+  src.close();
+}
+
 // Aravis' fake camera takes the trigger registers but does not gate frames on them (it runs at
 // its trigger frequency): what can be checked against it is what the device was told.
 TEST(AravisInProcess, TriggerModesReachTheDevice) {

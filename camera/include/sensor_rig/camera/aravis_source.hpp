@@ -88,6 +88,9 @@ class AravisSource final : public FrameSource {
   std::atomic<std::uint64_t> timeouts_{0};  // written by the capture thread, read by status()
   std::atomic<std::uint64_t> disconnects_{0};
   std::atomic<std::uint64_t> incomplete_{0};
+  std::atomic<std::uint64_t> incomplete_timeout_{0};  // by the buffer's status: where the frame went
+  std::atomic<std::uint64_t> incomplete_missing_{0};
+  std::atomic<std::uint64_t> incomplete_other_{0};
   std::atomic<std::uint64_t> completed_{0};
   AravisDetails details_;
   // PTP: the state (under ptp_mutex_), the lock flag next() reads, the status thread.

@@ -82,7 +82,10 @@ struct Capture {
 
 struct SourceStats {
   std::uint64_t completed = 0;   // frames returned
-  std::uint64_t incomplete = 0;  // damaged frames dropped (failures, short buffers)
+  std::uint64_t incomplete = 0;  // damaged frames dropped (failures, short buffers): the sum of
+  std::uint64_t incomplete_timeout = 0;          //   the frame's packets stopped coming (frame retention)
+  std::uint64_t incomplete_missing_packets = 0;  //   packets lost and not resent in time
+  std::uint64_t incomplete_other = 0;            //   any other status, a wrong size or foreign memory
   std::uint64_t timeouts = 0;
   std::uint64_t underruns = 0;   // no free buffer when a frame started
   std::uint64_t missing_packets = 0;
