@@ -6,6 +6,8 @@
 # `rig up` (capture threads cam:<name>, Aravis threads), of each GigE fake process, of the whole
 # process tree (LIDAR mocks, dbw, fakes) and of the monitor, as % of one core.
 # Usage: scripts/bench_cameras.sh BUILD_DIR [SECONDS] [gige|aravis-inprocess] [WIDTH HEIGHT]
+# RIG_DOMAIN=N: DDS domain of the run (default 0); another rig on the same domain would mix its
+# camera topics into this run's counts.
 set -euo pipefail
 build=${1:-build-release}
 secs=${2:-60}
@@ -23,11 +25,13 @@ cleanup() {
   rm -rf "$out"
 }
 trap cleanup EXIT
-python3 - "$root/config/mock_rig.yaml" "$conf" "$kind" "$width" "$height" <<'PY'
-import sys
-src, dst, kind, w, h = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5]
+domain=${RIG_DOMAIN:-0}
+python3 - "$root/config/mock_rig.yaml" "$conf" "$kind" "$width" "$height" "$domain" <<'PY'
+import re, sys
+src, dst, kind, w, h, domain = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6]
 text = open(src).read()
 head = text[: text.index("\ncameras:")]
+head = re.sub(r"(?m)^(\s+domain:) \d+", rf"\1 {domain}", head, count=1)
 names = ["front_narrow", "corner_front_left", "corner_front_right", "corner_rear_left", "corner_rear_right",
          "stereo_left", "stereo_right"]
 cams = ["", "cameras:"]
@@ -44,7 +48,7 @@ topics=()
 for n in front_narrow corner_front_left corner_front_right corner_rear_left corner_rear_right stereo_left stereo_right; do
   topics+=("/sensors/camera/$n/image_raw")
 done
-"$build/rig" monitor "${topics[@]}" --duration "$secs" --json --summary "$out/summary.json" >/dev/null &
+"$build/rig" monitor "${topics[@]}" --domain "$domain" --duration "$secs" --json --summary "$out/summary.json" >/dev/null &
 mon_pid=$!
 # CPU sampling over the monitor's window (after its 1 s warm-up).
 python3 - "$rig_pid" "$mon_pid" "$secs" "$out/cpu.json" <<'PY'
@@ -117,6 +121,18 @@ for r in rows:
     print(f"{r['topic']:42} {r['received']:5d} {int(10 * r.get('duration_s', secs)):6d} {r['lost']:5d} {r.get('source_drops', 0):5d} | "
           f"{g('to_wire','p50'):11.3f} {g('to_wire','p99'):7.3f} {g('to_wire','max'):7.3f} | {g('dds','p50'):7.3f} {g('dds','p99'):7.3f}")
 print(f"total received {tot_recv}, lost {tot_lost}")
+# Where the frames that did not arrive went (rig monitor's drops by stage: the camera node's
+# counters from /diagnostics, then the monitor's own accounting).
+stages = [k for r in rows for k in r.get("drops_by_stage", {})]
+stages = list(dict.fromkeys(stages))
+if stages:
+    print("drops by stage: " + " ".join(stages))
+    totals = {k: 0 for k in stages}
+    for r in rows:
+        d = r.get("drops_by_stage", {})
+        for k in stages: totals[k] += d.get(k, 0)
+        print(f"  {r['topic']:42} " + " ".join(f"{d.get(k, 0)}" for k in stages))
+    print("  total: " + ", ".join(f"{k} {v}" for k, v in totals.items()))
 th = cpu["threads"]
 cam = {k: v for k, v in th.items() if k.startswith("cam:")}
 print("CPU % of one core, rig up threads:", ", ".join(f"{k} {v:.1f}" for k, v in sorted(th.items(), key=lambda kv: -kv[1]) if v >= 0.5))

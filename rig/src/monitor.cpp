@@ -21,6 +21,7 @@
 #include "sensor_rig/dds/discovery.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/common/log.hpp"
+#include "sensor_rig/dds/reader_status.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/dds/view_reader.hpp"
 #include "sensor_rig/dds/waitset.hpp"
@@ -143,6 +144,7 @@ class ViewReader final : public TopicReader {
       stats.on_data(stamp, v.data.size(), Arrival{vehicle_now_ns(), static_cast<Nanos>(info.source_timestamp)});
       stats.info = describe(v);
     });
+    stats.reader_lost = dds::reader_samples_lost(reader_.handle());
     if (counts_.malformed > stats.malformed) {
       log::warn("monitor", topic_.ros_name() + ": " + std::to_string(counts_.malformed - stats.malformed) +
                                " malformed sample(s) dropped (" + dds::to_string(counts_.last_error) + ")");
@@ -290,7 +292,10 @@ class Monitor {
         [&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
           for (std::uint32_t i = 0; i < a.status._length; ++i) {
             const auto& st = a.status._buffer[i];
-            if (st.name != nullptr && std::string_view(st.name).rfind("camera/", 0) == 0) take_trigger_status(st);
+            if (st.name != nullptr && std::string_view(st.name).rfind("camera/", 0) == 0) {
+              take_trigger_status(st);
+              take_camera_drops(st);
+            }
             if (st.name == nullptr || std::string_view(st.name).rfind("rig/sets/", 0) != 0) continue;
             std::string set_topic = "/";  // appended, not "/" + name: GCC 12 -O3 false -Wrestrict
             set_topic += st.name;
@@ -305,6 +310,18 @@ class Monitor {
           }
         },
         16);
+  }
+
+  // A camera's drops by stage (its node's counters), on its image_raw topic if this monitor reads it.
+  void take_camera_drops(const msg::DiagnosticStatus& st) {
+    std::map<std::string, std::string, std::less<>> values;
+    for (std::uint32_t k = 0; k < st.values._length; ++k) {
+      const auto& kv = st.values._buffer[k];
+      if (kv.key != nullptr && kv.value != nullptr) values.emplace(kv.key, kv.value);
+    }
+    const auto topic_it = values.find("topic");
+    if (topic_it == values.end()) return;
+    if (auto it = stats_.find(topic_it->second); it != stats_.end()) it->second.camera.on_status(values);
   }
 
   // A LIDAR-triggered camera's phase error (camera/<name> with trigger_lidar).
@@ -347,6 +364,7 @@ class Monitor {
                        {"source_drops", st.source_drops}, {"missing_packets", st.missing_packets},
                        {"size_bytes", st.last_size}};
       if (st.malformed > 0) j["malformed"] = st.malformed;
+      j["drops_by_stage"] = drops_json(st);
       nlohmann::json lat = nlohmann::json::object();
       for (std::size_t i = 0; i < kStageCount; ++i) {
         const auto p = st.run_stages[i].take();
@@ -387,6 +405,7 @@ class Monitor {
     }
     report_sets(window_s, table);
     report_triggers(table);
+    if (!opt_.json) report_camera_drops(table);
     if (!opt_.json) {
       if (stats_.empty()) table << "(waiting for publishers...)\n";
       if (!tty) table << "\n";
@@ -406,6 +425,7 @@ class Monitor {
                      {"missing_packets", st.missing_packets},
                      {"info", st.info},     {"latency_ms", lat}};
     if (st.malformed > 0) j["malformed"] = st.malformed;
+    j["drops_by_stage"] = drops_json(st);
     std::printf("%s\n", j.dump().c_str());
   }
 
@@ -444,6 +464,30 @@ class Monitor {
               << (p.n > 0 ? fmt("%.2f/%.2f/%.2f", p.p50, p.p99, p.max) : std::string("-")) << "\n";
       }
       st.received_window = 0;
+    }
+  }
+
+  static nlohmann::json drops_json(const TopicStats& st) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& [stage, n] : drops_by_stage(st)) j[std::string(stage)] = n;
+    return j;
+  }
+
+  // Cameras, below the triggers: where each frame that did not arrive went, stage by stage.
+  void report_camera_drops(std::ostringstream& table) const {
+    bool header = false;
+    for (const auto& [name, st] : stats_) {
+      if (!st.camera.seen) continue;
+      const auto drops = drops_by_stage(st);
+      if (!header) {
+        table << fmt("%-30s", "camera drops by stage");
+        for (const auto& [stage, n] : drops) table << " " << stage;
+        table << "\n";
+        header = true;
+      }
+      table << fmt("%-30s", name.c_str());
+      for (const auto& [stage, n] : drops) table << fmt(" %*llu", static_cast<int>(stage.size()), static_cast<unsigned long long>(n));
+      table << "\n";
     }
   }
 

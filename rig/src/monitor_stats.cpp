@@ -7,6 +7,7 @@
 namespace sensor_rig::rig {
 
 void TopicStats::on_data(Nanos stamp, std::size_t size, const Arrival& a) {
+  if (!data_seen) first_data(a.publish_ns);
   ++received;
   ++received_window;
   last_size = size;
@@ -15,6 +16,10 @@ void TopicStats::on_data(Nanos stamp, std::size_t size, const Arrival& a) {
     SampleRecord r = std::move(it->second);
     unmatched_stamps.erase(it);  // before joined(): it is no longer undecided
     joined(std::move(r), a);
+  } else if (auto lost_it = declared_lost.find(stamp); lost_it != declared_lost.end()) {
+    declared_lost.erase(lost_it);  // slower than the loss timeout, yet delivered
+    --lost;
+    ++late;
   } else {
     unmatched_data.emplace(stamp, a);
   }
@@ -45,6 +50,27 @@ void TopicStats::on_stamps(const msg::SourceStamps& s, Nanos now) {
     r.received_ns = now;  // "seen at", for the loss timeout
     unmatched_stamps.insert_or_assign(stamp, std::move(r));
   }
+}
+
+// The first sample this reader got: what was written before it was written before the writer
+// matched this reader (start-up), whether still waiting or already declared lost.
+void TopicStats::first_data(Nanos publish_ns) {
+  data_seen = true;
+  for (auto it = unmatched_stamps.begin(); it != unmatched_stamps.end();) {
+    if (it->second.publish_ns >= publish_ns) {
+      ++it;
+      continue;
+    }
+    ++before_match;
+    it = unmatched_stamps.erase(it);
+  }
+  std::erase_if(declared_lost, [&](const auto& kv) {
+    if (kv.second.publish_ns >= publish_ns) return false;
+    --lost;
+    ++before_match;
+    return true;
+  });
+  release(false);  // rows held behind the removed ones
 }
 
 void TopicStats::joined(SampleRecord r, const Arrival& a) {
@@ -85,6 +111,7 @@ void TopicStats::expire(Nanos now, Nanos loss_timeout_ns) {
   for (auto it = unmatched_stamps.begin(); it != unmatched_stamps.end();) {
     if (now - it->second.received_ns > loss_timeout_ns) {
       ++lost;
+      declared_lost.emplace(it->first, Declared{now, it->second.publish_ns});
       SampleRecord r = std::move(it->second);
       r.received_ns = 0;
       it = unmatched_stamps.erase(it);
@@ -93,8 +120,43 @@ void TopicStats::expire(Nanos now, Nanos loss_timeout_ns) {
       ++it;
     }
   }
-  for (auto it = unmatched_data.begin(); it != unmatched_data.end();)
-    it = now - it->second.receive_ns > loss_timeout_ns ? unmatched_data.erase(it) : std::next(it);
+  for (auto it = unmatched_data.begin(); it != unmatched_data.end();) {
+    if (now - it->second.receive_ns <= loss_timeout_ns) {
+      ++it;
+      continue;
+    }
+    if (has_stamps && it->second.publish_ns >= counting_since) ++unstamped;  // its stamps were lost
+    it = unmatched_data.erase(it);
+  }
+  // A sample later than 5 loss timeouts is not coming: forget it (bounded memory).
+  std::erase_if(declared_lost, [&](const auto& kv) { return now - kv.second.at > 5 * loss_timeout_ns; });
+}
+
+void CameraDrops::on_status(const std::map<std::string, std::string, std::less<>>& values) {
+  for (std::size_t i = 0; i < kKeys.size(); ++i) {
+    const auto it = values.find(kKeys[i]);
+    if (it != values.end()) last[i] = std::strtoull(it->second.c_str(), nullptr, 10);
+  }
+  if (!seen) first = last;
+  seen = true;
+}
+
+std::vector<std::pair<std::string_view, std::uint64_t>> drops_by_stage(const TopicStats& st) {
+  static constexpr std::array<std::string_view, CameraDrops::kKeys.size()> kCameraStages = {
+      "aravis_underrun", "aravis_timeout", "aravis_missing_packets", "aravis_other", "worker_queue", "dds_write"};
+  std::vector<std::pair<std::string_view, std::uint64_t>> out;
+  std::uint64_t explained = 0;
+  if (st.camera.seen) {
+    for (std::size_t i = 0; i < kCameraStages.size(); ++i) out.emplace_back(kCameraStages[i], st.camera.since_start(i));
+    explained += st.camera.write_errors();  // its stamps were published: the monitor counts it lost
+  }
+  explained += st.reader_lost;
+  out.emplace_back("reader_lost", st.reader_lost);
+  out.emplace_back("lost_unexplained", st.lost > explained ? st.lost - explained : 0);
+  out.emplace_back("late", st.late);
+  out.emplace_back("before_match", st.before_match);
+  out.emplace_back("unstamped", st.unstamped);
+  return out;
 }
 
 void SetStats::on_set(const msg::SyncSet& m) {

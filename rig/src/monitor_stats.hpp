@@ -7,6 +7,8 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "sample_record.hpp"
 #include "sensor_rig/common/latency_window.hpp"
@@ -19,17 +21,47 @@ struct Arrival {
   Nanos publish_ns = 0;  // DDS source timestamp
 };
 
+// Where a camera's frames went before the monitor (rig/README.md "Where a lost frame went"): its
+// node's /diagnostics counters (camera/<name>), counted from the first status this monitor saw.
+struct CameraDrops {
+  // Aravis: no free pool buffer when a frame began (our pool is the stream's buffers); incomplete
+  // frames by buffer status; the image_color/compressed worker's queue; failed image_raw writes
+  // (a reliable writer blocked past max_blocking_ms by a reader that did not acknowledge).
+  static constexpr std::array<std::string_view, 6> kKeys = {
+      "underruns", "incomplete_timeout", "incomplete_missing_packets", "incomplete_other", "worker_dropped",
+      "write_errors"};
+  std::array<std::uint64_t, kKeys.size()> first{}, last{};
+  bool seen = false;
+  // One status's values (key, value); other keys are ignored.
+  void on_status(const std::map<std::string, std::string, std::less<>>& values);
+  // Since the first status (a restarted node's counters start again from 0).
+  [[nodiscard]] std::uint64_t since_start(std::size_t i) const { return last[i] >= first[i] ? last[i] - first[i] : last[i]; }
+  [[nodiscard]] std::uint64_t write_errors() const { return since_start(kKeys.size() - 1); }
+};
+
 // One topic: data samples and their source stamps, joined by header stamp (either may come first).
 struct TopicStats {
   std::string name;
   std::uint64_t received = 0, lost = 0, source_drops = 0, missing_packets = 0, received_window = 0;
   std::uint64_t malformed = 0;  // clouds and images whose serialized bytes did not parse: dropped
+  // Loss accounting: data that came after its stamps were declared lost (no longer lost), data
+  // whose stamps never came (not counted as lost), and what the reader's DDS said it lost.
+  std::uint64_t late = 0, unstamped = 0, reader_lost = 0;
+  // Stamped samples written before the first one this reader received: a reliable writer delivers
+  // in order, so they were written before it matched this reader (start-up), never lost.
+  std::uint64_t before_match = 0;
+  bool data_seen = false;
+  CameraDrops camera;  // camera image_raw topics: the node's drops by stage
   std::size_t last_size = 0;
   std::string info;  // what the last sample says, in a few words (points, speed, state...)
   std::array<LatencyWindow, kStageCount> stages;
   std::array<LatencyWindow, kStageCount> run_stages;  // whole run, for --summary
   std::map<Nanos, Arrival> unmatched_data;
   std::map<Nanos, SampleRecord> unmatched_stamps;  // received_ns holds "seen at" until matched
+  struct Declared {
+    Nanos at = 0, publish_ns = 0;
+  };
+  std::map<Nanos, Declared> declared_lost;  // by stamp: data still coming is late, not lost
   std::map<std::uint64_t, SampleRecord> decided_by_seq;  // by seq, until the samples before are decided
   bool has_stamps = false;
   // Stamps published before this monitor subscribed to the data topic cannot be matched: ignored.
@@ -47,10 +79,16 @@ struct TopicStats {
 
  private:
   void joined(SampleRecord r, const Arrival& a);
+  void first_data(Nanos publish_ns);
   void decided(SampleRecord r);
   void release(bool all);
   void add(std::size_t stage, double value);
 };
+
+// A topic's drops by stage, in pipeline order (name, count): a camera's node counters where its
+// /diagnostics were seen, then the monitor's own: `lost_unexplained` is the lost samples that
+// neither a failed write nor the reader's DDS status accounts for.
+std::vector<std::pair<std::string_view, std::uint64_t>> drops_by_stage(const TopicStats& st);
 
 // One synchronized set (/rig/sets/<name>): rate and spread from its samples, incomplete sets from
 // the rig's /diagnostics (rig/sets/<name>: an incomplete set is never published).

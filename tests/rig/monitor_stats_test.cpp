@@ -84,6 +84,84 @@ TEST(MonitorStats, LostSampleHoldsLaterRowsSoSeqStaysInOrder) {
   EXPECT_EQ(t.rows[1].publish_ns, stamp_of(1) + 103 * kMs);  // the stamps it had are kept
 }
 
+// The loss timeout is the monitor's guess: a sample that still comes after it was late, not lost
+// (the old accounting kept it lost and dropped the data as unmatched).
+TEST(MonitorStats, DataAfterTheLossTimeoutIsLateNotLost) {
+  Recorded t;
+  t.st.on_stamps(stamps(0), stamp_of(0));
+  t.st.expire(stamp_of(0) + 2001 * kMs, 2000 * kMs);
+  EXPECT_EQ(t.st.lost, 1u);
+  t.st.on_data(stamp_of(0), 1000, {stamp_of(0) + 2500 * kMs, stamp_of(0) + 103 * kMs});
+  EXPECT_EQ(t.st.lost, 0u);
+  EXPECT_EQ(t.st.late, 1u);
+  EXPECT_EQ(t.st.received, 1u);
+  t.st.on_data(stamp_of(0), 1000, arrival(0));  // once only
+  EXPECT_EQ(t.st.late, 1u);
+}
+
+// A reliable writer delivers in order: samples written before the first one the reader got were
+// written before it matched the reader (start-up under load), not lost — waiting or declared so.
+TEST(MonitorStats, SamplesWrittenBeforeTheFirstReceivedAreBeforeMatchNotLost) {
+  Recorded t;
+  t.st.on_stamps(stamps(0), stamp_of(0));
+  t.st.on_stamps(stamps(1), stamp_of(1));
+  t.st.expire(stamp_of(0) + 2001 * kMs, 2000 * kMs);  // 0 declared lost, 1 still waiting
+  EXPECT_EQ(t.st.lost, 1u);
+  t.st.on_stamps(stamps(2), stamp_of(2));
+  t.st.on_data(stamp_of(2), 1000, arrival(2));  // the first sample that reached the reader
+  EXPECT_EQ(t.st.lost, 0u);
+  EXPECT_EQ(t.st.before_match, 2u);
+  t.st.on_stamps(stamps(3), stamp_of(3));  // after it: lost as before
+  t.st.expire(stamp_of(3) + 5000 * kMs, 2000 * kMs);
+  EXPECT_EQ(t.st.lost, 1u);
+  EXPECT_EQ(t.st.before_match, 2u);
+}
+
+// Data whose stamps never came (the stamps reader fell behind) is counted, not silently dropped.
+TEST(MonitorStats, DataWithoutStampsIsCountedUnstamped) {
+  Recorded t;
+  t.st.on_stamps(stamps(0), stamp_of(0));
+  t.st.on_data(stamp_of(0), 1000, arrival(0));
+  t.st.on_data(stamp_of(1), 1000, arrival(1));  // its stamps are never seen
+  t.st.expire(arrival(1).receive_ns + 1000 * kMs, 2000 * kMs);
+  EXPECT_EQ(t.st.unstamped, 0u);  // not yet
+  t.st.expire(arrival(1).receive_ns + 2001 * kMs, 2000 * kMs);
+  EXPECT_EQ(t.st.unstamped, 1u);
+  EXPECT_EQ(t.st.lost, 0u);
+}
+
+// A camera node's drop counters from /diagnostics, counted from the first status the monitor saw.
+TEST(CameraDrops, CountsEachStageFromTheFirstStatus) {
+  CameraDrops d;
+  d.on_status({{"underruns", "3"}, {"incomplete_timeout", "1"}, {"write_errors", "2"}, {"frames", "100"}});
+  d.on_status({{"underruns", "5"}, {"incomplete_timeout", "1"}, {"incomplete_missing_packets", "4"},
+               {"incomplete_other", "1"}, {"worker_dropped", "7"}, {"write_errors", "3"}});
+  EXPECT_EQ(d.since_start(0), 2u);  // underruns
+  EXPECT_EQ(d.since_start(1), 0u);  // timeouts
+  EXPECT_EQ(d.since_start(2), 4u);  // missing packets
+  EXPECT_EQ(d.since_start(3), 1u);
+  EXPECT_EQ(d.since_start(4), 7u);
+  EXPECT_EQ(d.write_errors(), 1u);
+  d.on_status({{"underruns", "1"}, {"write_errors", "0"}});  // the node restarted
+  EXPECT_EQ(d.since_start(0), 1u);
+  EXPECT_EQ(d.write_errors(), 0u);
+}
+
+// Lost samples a failed write or the reader's DDS status explains are not "unexplained".
+TEST(CameraDrops, LostSamplesAreAttributedToWriterAndReaderFirst) {
+  TopicStats st;
+  st.lost = 4;
+  st.reader_lost = 1;
+  st.camera.on_status({{"write_errors", "10"}});
+  st.camera.on_status({{"write_errors", "12"}, {"underruns", "0"}});
+  std::map<std::string_view, std::uint64_t> by;
+  for (const auto& [k, v] : drops_by_stage(st)) by[k] = v;
+  EXPECT_EQ(by["dds_write"], 2u);
+  EXPECT_EQ(by["reader_lost"], 1u);
+  EXPECT_EQ(by["lost_unexplained"], 1u);
+  EXPECT_EQ(by.count("aravis_underrun"), 1u);
+}
+
 TEST(MonitorStats, StampsBeforeSubscribingAreNotCountedNorRecorded) {
   Recorded t;
   t.st.counting_since = stamp_of(2);
@@ -96,13 +174,15 @@ TEST(MonitorStats, StampsBeforeSubscribingAreNotCountedNorRecorded) {
 
 TEST(MonitorStats, ReleaseAllAtTheEndKeepsUndecidedOut) {
   Recorded t;
-  t.st.on_stamps(stamps(0), stamp_of(0));  // never arrives, never expires
-  t.st.on_stamps(stamps(1), stamp_of(1));
-  t.st.on_data(stamp_of(1), 1000, arrival(1));
-  EXPECT_TRUE(t.rows.empty());
+  t.st.on_data(stamp_of(0), 1000, arrival(0));  // the reader is matched
+  t.st.on_stamps(stamps(0), stamp_of(0));
+  t.st.on_stamps(stamps(1), stamp_of(1));  // never arrives, never expires
+  t.st.on_stamps(stamps(2), stamp_of(2));
+  t.st.on_data(stamp_of(2), 1000, arrival(2));
+  EXPECT_EQ(t.rows.size(), 1u);
   t.st.release_all();
-  ASSERT_EQ(t.rows.size(), 1u);
-  EXPECT_EQ(t.rows[0].seq, 1u);
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[1].seq, 2u);
 }
 
 TEST(SampleRecord, StageLatenciesNeedBothStamps) {
