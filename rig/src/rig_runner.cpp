@@ -109,11 +109,8 @@ SyntheticMetadataDir::~SyntheticMetadataDir() {
 }
 
 std::string SyntheticMetadataDir::write(const LidarConfig& l) const {
-  lidar::mock::SyntheticOptions o;
-  o.model = l.model;
-  o.rpm = l.mock.rpm;
-  o.ouster_udp_port = static_cast<std::uint16_t>(l.port);
-  const std::string json = lidar::mock::metadata_json(lidar::mock::synthetic_ouster_metadata(o));  // validated on load
+  const std::string json =
+      lidar::mock::metadata_json(lidar::mock::synthetic_ouster_metadata(drivers::synthetic_mock_options(l)));  // validated on load
   const auto file = path_ / (l.name + "_synthetic_metadata.json");
   std::ofstream out(file, std::ios::binary | std::ios::trunc);
   out << json;

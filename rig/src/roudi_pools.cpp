@@ -19,7 +19,8 @@ namespace {
 
 constexpr std::uint64_t kPointStep = 24;        // PointCloud2 layout of the rig (README)
 constexpr std::uint64_t kMessageOverhead = 1024;  // CDR header, stamp, frame_id, fields / encoding
-// Without metadata an Ouster is sized as the largest frame it can send (OS 128 x 2048).
+// An Ouster whose frame is unknown (no metadata, not synthetic) is sized as the largest frame it
+// can send (OS 128 x 2048).
 constexpr std::uint64_t kOusterMaxPoints = 128ULL * 2048ULL;
 
 std::string read_file(const std::string& path) {
@@ -41,10 +42,16 @@ std::uint64_t max_scan_points(const LidarConfig& l) {
   if (const auto m = lidar::velodyne::model_from_name(l.model)) return at_rpm(lidar::velodyne::model_info(*m).typical_points_per_scan);
   if (const auto m = lidar::hesai::model_from_name(l.model)) return at_rpm(lidar::hesai::model_info(*m).typical_points_per_scan);
   if (lidar::mock::is_ouster_model(l.model)) {
-    if (l.metadata.empty()) return kOusterMaxPoints * returns;
     try {
-      const auto md = lidar::ouster::parse_metadata(read_file(l.metadata), l.metadata);
-      return static_cast<std::uint64_t>(md.columns_per_frame) * static_cast<std::uint64_t>(md.pixels_per_column) * returns;
+      // Without metadata a synthetic Ouster renders the nominal sensor of its mock options (rig up
+      // writes that metadata for the driver): 32 x 1024 at 600 rpm, not 128 x 2048 (436 MB of shm).
+      const bool nominal = l.metadata.empty() && l.mock.kind == LidarMockConfig::Kind::kSynthetic;
+      if (l.metadata.empty() && !nominal) return kOusterMaxPoints * returns;
+      const auto md = nominal ? lidar::mock::synthetic_ouster_metadata(drivers::synthetic_mock_options(l))
+                              : lidar::ouster::parse_metadata(read_file(l.metadata), l.metadata);
+      // A single-return profile gives one echo whatever is selected.
+      const std::uint64_t echoes = std::min<std::uint64_t>(returns, lidar::ouster::profile_spec(md.profile).returns);
+      return static_cast<std::uint64_t>(md.columns_per_frame) * static_cast<std::uint64_t>(md.pixels_per_column) * echoes;
     } catch (const std::exception&) {
       return kOusterMaxPoints * returns;  // the config check reports the file itself
     }

@@ -104,5 +104,27 @@ TEST(RoudiPools, TomlRoundTripsAndARunningRoudiIsChecked) {
   EXPECT_EQ(roudi_config_file_of(-1), "");
 }
 
+// A synthetic Ouster without metadata is sized from the nominal sensor its mock renders (32 beams,
+// 1024 columns at 600 or 1200 rpm, one echo), not as the largest Ouster frame (128 x 2048): the
+// mock rig asked for 436 MB of /dev/shm. Without metadata and not synthetic the maximum stays.
+TEST(RoudiPools, SyntheticOusterWithoutMetadataIsSizedAsItsMockSends) {
+  RigConfig cfg;
+  cfg.dds.transport = dds::Transport::kShm;
+  LidarConfig l;
+  l.name = "roof";
+  l.model = "OS";
+  l.returns = lidar::ReturnSelection::kDual;  // the nominal profile has one echo
+  l.mock.kind = LidarMockConfig::Kind::kSynthetic;
+  l.mock.rpm = 1200;
+  cfg.lidars.push_back(l);
+  l.name = "replayed";
+  l.mock.kind = LidarMockConfig::Kind::kReplay;
+  cfg.lidars.push_back(l);
+  const auto loads = shm_topic_loads(cfg, 1);
+  ASSERT_EQ(loads.size(), 2U);
+  EXPECT_EQ(loads[0].max_sample_bytes, 1024ULL * 32 * 24 + 1024);
+  EXPECT_EQ(loads[1].max_sample_bytes, 2048ULL * 128 * 2 * 24 + 1024);
+}
+
 }  // namespace
 }  // namespace sensor_rig::rig

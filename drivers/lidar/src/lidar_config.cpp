@@ -187,14 +187,18 @@ LidarConfig parse_lidar_config(const config::Node& n) {
     if (!lidar::mock::is_synthetic_model(l.model)) {
       n.fail("mock", "no synthetic sensor for model " + l.model + " (synthetic: " + lidar::mock::synthetic_model_names() + ")");
     } else {
-      lidar::mock::SyntheticOptions o;  // the options `rig up` starts the mock with
-      o.model = l.model;
-      o.rpm = l.mock.rpm;
-      o.ouster_udp_port = static_cast<std::uint16_t>(l.port);
-      if (const auto e = lidar::mock::synthetic_options_error(o); !e.empty()) n.fail("mock", e);
+      if (const auto e = lidar::mock::synthetic_options_error(synthetic_mock_options(l)); !e.empty()) n.fail("mock", e);
     }
   }
   return l;
+}
+
+lidar::mock::SyntheticOptions synthetic_mock_options(const LidarConfig& c) {
+  lidar::mock::SyntheticOptions o;
+  o.model = c.model;
+  o.rpm = c.mock.rpm;
+  o.ouster_udp_port = static_cast<std::uint16_t>(c.port);
+  return o;
 }
 
 lidar::DecoderOptions decoder_options(const LidarConfig& c) {

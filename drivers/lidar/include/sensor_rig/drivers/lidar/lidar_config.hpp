@@ -8,6 +8,7 @@
 #include "sensor_rig/common/config_node.hpp"
 #include "sensor_rig/dds/qos.hpp"
 #include "sensor_rig/drivers/lidar/extrinsics.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 #include "sensor_rig/timesync/stamper.hpp"
 
@@ -92,5 +93,8 @@ LidarConfig parse_lidar_config(const config::Node& n);
 // The decoder options a LIDAR's config asks for, its calibration and metadata files read; throws
 // std::runtime_error when one cannot be read. The driver and `rig config check` build from this.
 lidar::DecoderOptions decoder_options(const LidarConfig& c);
+// The options `rig up` starts a LIDAR's synthetic mock with (model, rpm, port; nominal otherwise):
+// what the config check validates, the synthetic Ouster metadata and the RouDi pools follow from.
+lidar::mock::SyntheticOptions synthetic_mock_options(const LidarConfig& c);
 
 }  // namespace sensor_rig::drivers
