@@ -7,7 +7,8 @@
 # process tree (LIDAR mocks, dbw, fakes) and of the monitor, as % of one core.
 # Usage: scripts/bench_cameras.sh BUILD_DIR [SECONDS] [gige|aravis-inprocess] [WIDTH HEIGHT]
 # RIG_DOMAIN=N: DDS domain of the run (default 0); another rig on the same domain would mix its
-# camera topics into this run's counts.
+# camera topics into this run's counts. CAMERA_QOS='{depth: 2}': each camera's qos (default: the
+# node's, keep-last 2 since issue 10's loss runs).
 set -euo pipefail
 build=${1:-build-release}
 secs=${2:-60}
@@ -26,9 +27,9 @@ cleanup() {
 }
 trap cleanup EXIT
 domain=${RIG_DOMAIN:-0}
-python3 - "$root/config/mock_rig.yaml" "$conf" "$kind" "$width" "$height" "$domain" <<'PY'
+python3 - "$root/config/mock_rig.yaml" "$conf" "$kind" "$width" "$height" "$domain" "${CAMERA_QOS:-}" <<'PY'
 import re, sys
-src, dst, kind, w, h, domain = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6]
+src, dst, kind, w, h, domain, qos = sys.argv[1:8]
 text = open(src).read()
 head = text[: text.index("\ncameras:")]
 head = re.sub(r"(?m)^(\s+domain:) \d+", rf"\1 {domain}", head, count=1)
@@ -39,6 +40,8 @@ for i, n in enumerate(names):
     device = f"127.0.0.{2 + i}" if kind == "gige" else n
     cams += [f"  - name: {n}", "    backend: aravis", f"    device: {device}", "    pixel_format: BayerRG8",
              f"    width: {w}", f"    height: {h}", "    frame_rate: 10", f"    mock: {{kind: {kind}}}"]
+    if qos:
+        cams.append(f"    qos: {qos}")
 open(dst, "w").write(head + "\n".join(cams) + "\n")
 PY
 "$build/rig" up "$conf" --duration $((secs + 12)) 2>"$out/up.log" &

@@ -152,7 +152,7 @@ std::vector<std::pair<std::string_view, std::uint64_t>> drops_by_stage(const Top
   }
   explained += st.reader_lost;
   out.emplace_back("reader_lost", st.reader_lost);
-  out.emplace_back("lost_unexplained", st.lost > explained ? st.lost - explained : 0);
+  out.emplace_back("lost_in_dds", st.lost > explained ? st.lost - explained : 0);
   out.emplace_back("late", st.late);
   out.emplace_back("before_match", st.before_match);
   out.emplace_back("unstamped", st.unstamped);

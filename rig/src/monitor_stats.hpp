@@ -86,8 +86,10 @@ struct TopicStats {
 };
 
 // A topic's drops by stage, in pipeline order (name, count): a camera's node counters where its
-// /diagnostics were seen, then the monitor's own: `lost_unexplained` is the lost samples that
-// neither a failed write nor the reader's DDS status accounts for.
+// /diagnostics were seen, then the monitor's own. `lost_in_dds`: written, never delivered, and
+// neither a failed write nor the reader's DDS status accounts for it — the writer's keep-last
+// history dropped it before a repair finished (Cyclone 0.10 counts this nowhere an application can
+// read), or the monitor's keep-last reader overwrote it.
 std::vector<std::pair<std::string_view, std::uint64_t>> drops_by_stage(const TopicStats& st);
 
 // One synchronized set (/rig/sets/<name>): rate and spread from its samples, incomplete sets from

@@ -147,18 +147,18 @@ TEST(CameraDrops, CountsEachStageFromTheFirstStatus) {
   EXPECT_EQ(d.write_errors(), 0u);
 }
 
-// Lost samples a failed write or the reader's DDS status explains are not "unexplained".
+// Lost samples a failed write or the reader's DDS status explains are not lost_in_dds.
 TEST(CameraDrops, LostSamplesAreAttributedToWriterAndReaderFirst) {
   TopicStats st;
-  st.lost = 4;
   st.reader_lost = 1;
+  st.lost = 4;
   st.camera.on_status({{"write_errors", "10"}});
   st.camera.on_status({{"write_errors", "12"}, {"underruns", "0"}});
   std::map<std::string_view, std::uint64_t> by;
   for (const auto& [k, v] : drops_by_stage(st)) by[k] = v;
   EXPECT_EQ(by["dds_write"], 2u);
   EXPECT_EQ(by["reader_lost"], 1u);
-  EXPECT_EQ(by["lost_unexplained"], 1u);
+  EXPECT_EQ(by["lost_in_dds"], 1u);
   EXPECT_EQ(by.count("aravis_underrun"), 1u);
 }
 

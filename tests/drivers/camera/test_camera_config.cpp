@@ -53,6 +53,10 @@ mock: {kind: gige, lost_packets_per_thousand: 2}
   EXPECT_EQ(c.info.width, 1920u);
   EXPECT_GE(c.source.socket_buffer_bytes, 4 << 20);
   EXPECT_LT(c.watchdog(), 1000);
+  // Issue 10: a frame must stay in the writer's history while a reader's repair of it runs (a
+  // keep-last 1 writer dropped it at the next frame, 100 ms later, on a loaded host).
+  EXPECT_EQ(c.qos.reliability, dds::QosSpec::Reliability::kReliable);
+  EXPECT_GE(c.qos.depth, 3);
 }
 
 TEST(CameraConfig, BadValuesAreReportedAllAtOnceWithLines) {

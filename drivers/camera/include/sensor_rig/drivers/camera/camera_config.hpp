@@ -20,11 +20,16 @@ struct CameraMockConfig {
 };
 const char* to_string(CameraMockConfig::Kind k) noexcept;
 
-// Keep-last 1: an image is 2-7 MB; only the newest matters, and a slow subscriber must not make
-// the capture thread block (max_blocking_ms) for long. Reliable so default ROS subscribers match.
+// Keep-last 3: Cyclone keeps an unacknowledged sample only while it is in the keep-last history,
+// so a frame whose repair to a reader (fragments dropped by a full socket buffer on a loaded host)
+// is still running when the next frame is written was lost at depth 1 — never delivered, counted
+// nowhere (issue 10: 2-3 frames a minute of seven 1920x1200 cameras at load 9-15; depth 3: none).
+// Three frames give a repair 300 ms; more would only hold more memory (an image is 2-7 MB per
+// slot). A slow subscriber must not make the capture thread block (max_blocking_ms) for long.
+// Reliable so default ROS subscribers match.
 inline dds::QosSpec camera_qos() {
   dds::QosSpec q;
-  q.depth = 1;
+  q.depth = 3;
   q.max_blocking_ms = 50;
   return q;
 }
