@@ -4,6 +4,9 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <utility>
+
+#include <unistd.h>
 
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -79,6 +82,20 @@ std::vector<drivers::CameraConfig> resolve_camera_mocks(std::vector<drivers::Cam
   return cameras;
 }
 
+namespace {
+// rig-fake-gige-camera beside this executable (exposes on the trigger), else Aravis's own fake
+// (exposes on its 40 ms grid: the phase then reads 0-40 ms).
+std::string trigger_following_fake() {
+  const std::string self = self_executable();
+  const std::string beside = self.substr(0, self.rfind('/') + 1) + camera::mock::kTriggerFollowingFake;
+  if (::access(beside.c_str(), X_OK) == 0) return beside;
+  static bool warned = false;
+  if (!std::exchange(warned, true))
+    log::warn("rig", beside + " not found: GigE mocks run arv-fake-gv-camera-0.8 (triggered frames on its 40 ms grid)");
+  return camera::mock::GigeFakeOptions{}.program;
+}
+}  // namespace
+
 struct CameraRig::Impl {
   struct Fake {
     camera::mock::GigeFakeOptions options;
@@ -139,10 +156,11 @@ void CameraRig::start() {
     Impl::Fake f;
     f.options.address = c.source.device;
     f.options.lost_packets_per_thousand = c.mock.lost_packets_per_thousand;
+    f.options.program = trigger_following_fake();
     f.camera = c.name;
     try {
       f.process = camera::mock::start_gige_fake(f.options);
-      log::info("rig", "mock for camera " + c.name + ": arv-fake-gv-camera on " + c.source.device + ", pid " +
+      log::info("rig", "mock for camera " + c.name + ": " + f.options.program + " on " + c.source.device + ", pid " +
                            std::to_string(f.process.pid()));
     } catch (const std::exception& e) {
       log::error("rig", "camera " + c.name + ": " + e.what());

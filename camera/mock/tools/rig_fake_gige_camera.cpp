@@ -11,6 +11,8 @@
 // GLib's: poll(2)) and, for the fake's zero-timeout polls in software trigger mode, blocks until a
 // control packet (the TriggerSoftware write) arrives, or sleeps to the grid point when a trigger is
 // pending: exposure follows the trigger within ~one grid step (1/kTriggerGridHz), no spinning.
+// Free-running, those polls sleep to the next frame instead of spinning its last ms (as the stock
+// fake does).
 #include <arv.h>
 #include <poll.h>
 #include <pthread.h>
@@ -40,9 +42,13 @@ bool trigger_pending(ArvFakeCamera* cam) {
   return arv_fake_camera_read_register(cam, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, &value) && value != 0;
 }
 
-// Until the fake's next grid point (it fires a pending trigger there).
-timespec until_next_grid_point() {
-  const auto period_us = static_cast<gint64>(1e6 / g_grid_hz);
+// Until the fake's next grid point: where it fires a pending trigger, or sends a free-running
+// frame (the fake's loop polls only before its next point, so this never sleeps past it).
+timespec until_next_grid_point(ArvFakeCamera* cam, bool triggered) {
+  guint32 frame_period_us = 0;
+  if (!triggered) arv_fake_camera_read_register(cam, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US, &frame_period_us);
+  const gint64 period_us = triggered ? static_cast<gint64>(1e6 / g_grid_hz) : frame_period_us;
+  if (period_us <= 0) return {0, 0};
   const gint64 left_us = period_us - g_get_real_time() % period_us;
   return {0, static_cast<long>(left_us * 1000)};
 }
@@ -63,9 +69,10 @@ extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
   static_assert(sizeof(GPollFD) == sizeof(pollfd));
   auto* pfds = reinterpret_cast<pollfd*>(fds);
   ArvFakeCamera* cam = g_camera.load(std::memory_order_acquire);
-  if (timeout != 0 || cam == nullptr || !arv_fake_camera_is_in_software_trigger_mode(cam)) return ::poll(pfds, nfds, timeout);
-  if (!trigger_pending(cam)) return ::poll(pfds, nfds, kIdleWaitMs);  // woken by the trigger's packet
-  const timespec wait = until_next_grid_point();
+  if (timeout != 0 || cam == nullptr) return ::poll(pfds, nfds, timeout);
+  const bool triggered = arv_fake_camera_is_in_software_trigger_mode(cam);
+  if (triggered && !trigger_pending(cam)) return ::poll(pfds, nfds, kIdleWaitMs);  // woken by the trigger's packet
+  const timespec wait = until_next_grid_point(cam, triggered);
   return ::ppoll(pfds, nfds, &wait, nullptr);
 }
 
@@ -83,7 +90,10 @@ int main(int argc, char** argv) {
     else if (a == "-g" || a == "--genicam") genicam = v;
     else if (a == "-r" || a == "--gvsp-lost-ratio") lost_per_thousand = std::atof(v);
     else if (a == "--trigger-hz") g_grid_hz = std::atof(v);
-    else return usage(argv[0], 2);
+    else {
+      std::fprintf(stderr, "rig-fake-gige-camera: unknown option %s\n", a.c_str());
+      return usage(argv[0], 2);
+    }
   }
   if (address.empty() || !(g_grid_hz >= 1 && g_grid_hz <= 1e6) || lost_per_thousand < 0) return usage(argv[0], 2);
   // The default 50 us timer slack would be a fifth of a 250 us grid step (inherited by the fake's thread).
