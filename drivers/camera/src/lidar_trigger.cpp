@@ -1,7 +1,6 @@
 #include "sensor_rig/drivers/camera/lidar_trigger.hpp"
 
 #include <pthread.h>
-#include <sched.h>
 #include <time.h>
 
 #include <algorithm>
@@ -12,6 +11,7 @@
 #include <optional>
 
 #include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/thread_priority.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -41,10 +41,8 @@ void spin_until_monotonic(Nanos t) {
 
 void set_fifo(std::thread& t, int priority, const std::string& who) {
   if (priority <= 0) return;
-  sched_param sp{};
-  sp.sched_priority = priority;
-  if (const int rc = pthread_setschedparam(t.native_handle(), SCHED_FIFO, &sp); rc != 0)
-    log::warn("camera", who + ": trigger thread SCHED_FIFO refused (" + std::strerror(rc) + ")");
+  if (const auto r = try_realtime_priority(t.native_handle(), priority); !r)
+    log::warn("camera", who + ": trigger thread SCHED_FIFO " + std::to_string(priority) + " refused (" + r.why_not + ")");
 }
 
 std::string ms(Nanos ns) {
