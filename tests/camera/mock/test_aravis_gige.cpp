@@ -39,6 +39,11 @@ class GigeFake : public ::testing::Test {
     c.frame_rate = 20;
     return c;
   }
+  static SourceConfig triggered_cfg(const std::string& addr) {
+    SourceConfig c = cfg(addr);
+    c.trigger = TriggerMode::kSoftware;
+    return c;
+  }
 };
 
 // Incomplete frames (the packet-loss test) are skipped: they are counted, never returned as frames.
@@ -73,9 +78,7 @@ TEST_F(GigeFake, SoftwareTriggerModeGivesOneFramePerTriggerAndNoneWithout) {
   mock::GigeFakeOptions o;
   o.address = address(0);
   auto fake = mock::start_gige_fake(o);
-  auto c = cfg(o.address);
-  c.trigger = TriggerMode::kSoftware;
-  AravisSource src(c);
+  AravisSource src(triggered_cfg(o.address));
   src.open();
   ASSERT_TRUE(src.is_open());
   EXPECT_EQ(src.feature("TriggerMode"), "On");
@@ -117,9 +120,7 @@ TEST_F(GigeFake, TriggerFollowingFakeExposesWithinAMillisecondOfTheTrigger) {
   o.address = address(0);
   o.program = RIG_FAKE_GIGE_CAMERA;
   auto fake = mock::start_gige_fake(o);
-  auto c = cfg(o.address);
-  c.trigger = TriggerMode::kSoftware;
-  AravisSource src(c);
+  AravisSource src(triggered_cfg(o.address));
   src.open();
   ASSERT_TRUE(src.is_open());
   std::vector<Nanos> delays;
