@@ -13,6 +13,12 @@
 // pending: exposure follows the trigger within ~one grid step (1/kTriggerGridHz), no spinning.
 // Free-running, those polls sleep to the next frame instead of spinning its last ms (as the stock
 // fake does).
+// Timing as a real camera's: the stock fake stamps a frame (g_get_real_time, the leader's timestamp)
+// and sends it after its slow pattern generator, never waiting for the exposure, while a real
+// camera's leader leaves after exposure + readout, which is what the rig's clock mapping assumes
+// (first packet = exposure start + exposure time). So the fill callback here waits until stamp +
+// ExposureTime, then copies a precomputed ramp (memcpy, shifted per frame): the leader leaves at
+// exposure end.
 #include <arv.h>
 #include <poll.h>
 #include <pthread.h>
@@ -20,11 +26,13 @@
 #include <time.h>
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 
@@ -36,6 +44,36 @@ double g_grid_hz = sensor_rig::camera::mock::kTriggerGridHz;
 constexpr int kIdleWaitMs = 100;  // the fake's own longest poll
 
 void on_signal(int) { g_stop = 1; }
+
+// A diagonal ramp (as the stock fake's, but computed once): a frame is a copy from a per-frame offset.
+struct Pattern {
+  static constexpr std::size_t kShifts = 256;
+  std::vector<guint8> ramp;
+  void fill(ArvBuffer* buffer, std::size_t payload) {
+    if (ramp.size() < payload + kShifts) {
+      ramp.resize(payload + kShifts);
+      for (std::size_t i = 0; i < ramp.size(); ++i) ramp[i] = static_cast<guint8>(i % 251);
+    }
+    // The fake sends its buffer's data (payload bytes, allocated for it); get_data's size is unset here.
+    auto* data = static_cast<guint8*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
+    std::memcpy(data, ramp.data() + arv_buffer_get_frame_id(buffer) % kShifts, payload);
+  }
+};
+
+struct FillContext {
+  ArvFakeCamera* camera = nullptr;
+  Pattern pattern;
+};
+
+// Runs in arv_fake_camera_fill_buffer after the frame's stamp is set, before the leader is sent.
+void expose_then_fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 /*gain*/, ArvPixelFormat /*format*/) {
+  auto* ctx = static_cast<FillContext*>(data);
+  const guint64 exposure_end_ns = arv_buffer_get_timestamp(buffer) + guint64{exposure_time_us} * 1000;
+  const timespec until{static_cast<time_t>(exposure_end_ns / 1'000'000'000), static_cast<long>(exposure_end_ns % 1'000'000'000)};
+  while (::clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &until, nullptr) == EINTR) {
+  }
+  ctx->pattern.fill(buffer, arv_fake_camera_get_payload(ctx->camera));
+}
 
 bool trigger_pending(ArvFakeCamera* cam) {
   guint32 value = 0;
@@ -110,6 +148,8 @@ int main(int argc, char** argv) {
   g_object_set(gv, "gvsp-lost-ratio", lost_per_thousand / 1000.0, nullptr);
   ArvFakeCamera* cam = arv_gv_fake_camera_get_fake_camera(gv);
   arv_fake_camera_set_trigger_frequency(cam, g_grid_hz);
+  FillContext fill{cam, {}};
+  arv_fake_camera_set_fill_pattern(cam, expose_then_fill, &fill);
   g_camera.store(cam, std::memory_order_release);
   while (g_stop == 0) g_usleep(100'000);
   g_camera.store(nullptr, std::memory_order_release);
