@@ -491,27 +491,14 @@ class Monitor {
     }
   }
 
-  static nlohmann::json trigger_json(const std::string& name, const TriggerStats& t) {
-    return nlohmann::json{{"trigger", name},         {"lidar", t.lidar},
-                          {"sweep", t.sweep},        {"triggers", t.triggers},
-                          {"measured", t.measured},  {"unmeasured", t.unmeasured},
-                          {"phase_error_ms", {{"p50", t.p50_ms}, {"p99", t.p99_ms}, {"max", t.max_ms}}}};
-  }
-
-  // LIDAR-triggered cameras, below the sets: |exposure start - sweep crossing| as the node measures it.
+  // LIDAR-triggered cameras, below the sets: |exposure start - sweep crossing| as the node measures
+  // it, where that exposure start comes from, and its host / camera parts.
   void report_triggers(std::ostringstream& table) {
     if (triggers_.empty()) return;
-    if (!opt_.json)
-      table << fmt("%-30s %-10s %-10s %8s %8s | %s\n", "triggered camera", "lidar", "sweep", "triggers", "unmeas",
-                   "phase error ms p50/p99/max");
+    if (!opt_.json) table << trigger_table_header();
     for (const auto& [name, t] : triggers_) {
-      if (opt_.json) {
-        std::printf("%s\n", trigger_json(name, t).dump().c_str());
-      } else {
-        table << fmt("%-30s %-10s %-10s %8llu %8llu | %.3f/%.3f/%.3f\n", name.c_str(), t.lidar.c_str(), t.sweep.c_str(),
-                     static_cast<unsigned long long>(t.triggers), static_cast<unsigned long long>(t.unmeasured),
-                     t.p50_ms, t.p99_ms, t.max_ms);
-      }
+      if (opt_.json) std::printf("%s\n", trigger_json(name, t).dump().c_str());
+      else table << trigger_table_row(name, t);
     }
   }
 

@@ -1,5 +1,6 @@
 #include "monitor_stats.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 
 #include <algorithm>
@@ -194,6 +195,20 @@ bool TriggerStats::on_value(std::string_view key, std::string_view value) {
     sweep = v;
     return true;
   }
+  if (key == "phase_from") {
+    phase_from = v;
+    return true;
+  }
+  const auto part = [&](std::string_view prefix, Part& out) {
+    const auto rest = key.substr(prefix.size());
+    double* field = rest == "_p50_ms" ? &out.p50_ms : rest == "_p99_ms" ? &out.p99_ms : rest == "_max_ms" ? &out.max_ms : nullptr;
+    if (field == nullptr || !number(*field)) return false;
+    out.seen = true;
+    return true;
+  };
+  if (key.starts_with("trigger_call_error_")) return part("trigger_call_error", call_error);
+  if (key.starts_with("trigger_to_exposure_")) return part("trigger_to_exposure", to_exposure);
+  if (key == "exposure_unmatched") return count(exposure_unmatched);
   if (key == "triggers") return count(triggers);
   if (key == "phase_measured") return count(measured);
   if (key == "phase_unmeasured") return count(unmeasured);
@@ -201,6 +216,64 @@ bool TriggerStats::on_value(std::string_view key, std::string_view value) {
   if (key == "phase_error_p99_ms") return number(p99_ms);
   if (key == "phase_error_max_ms") return number(max_ms);
   return false;
+}
+
+namespace {
+
+// "p50/p99" of a part, "-" where the node did not publish it.
+std::string p50_p99(const TriggerStats::Part& p) {
+  if (!p.seen) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3f/%.3f", p.p50_ms, p.p99_ms);
+  return buf;
+}
+
+// The table's short name for phase_from; an unknown value is shown as it came.
+std::string_view phase_from_short(std::string_view from) {
+  if (from == "device_exposure") return "device";
+  if (from == "trigger_call") return "call";
+  return from.empty() ? "-" : from;
+}
+
+nlohmann::json part_json(const TriggerStats::Part& p) {
+  return nlohmann::json{{"p50", p.p50_ms}, {"p99", p.p99_ms}, {"max", p.max_ms}};
+}
+
+}  // namespace
+
+std::string trigger_table_header() {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%-24s %-8s %-10s %8s %6s %-6s | %-17s %-11s %-11s %7s\n", "triggered camera (ms)",
+                "lidar", "sweep", "triggers", "unmeas", "from", "phase p50/p99/max", "host p50/99", "cam p50/99",
+                "unmatch");
+  return buf;
+}
+
+std::string trigger_table_row(const std::string& status_name, const TriggerStats& t) {
+  char phase[96];
+  std::snprintf(phase, sizeof phase, "%.3f/%.3f/%.3f", t.p50_ms, t.p99_ms, t.max_ms);
+  const std::string from(phase_from_short(t.phase_from));
+  char buf[512];
+  std::snprintf(buf, sizeof buf, "%-24s %-8s %-10s %8llu %6llu %-6s | %-17s %-11s %-11s %7llu\n", status_name.c_str(),
+                t.lidar.c_str(), t.sweep.c_str(), static_cast<unsigned long long>(t.triggers),
+                static_cast<unsigned long long>(t.unmeasured), from.c_str(), phase, p50_p99(t.call_error).c_str(),
+                p50_p99(t.to_exposure).c_str(), static_cast<unsigned long long>(t.exposure_unmatched));
+  return buf;
+}
+
+nlohmann::json trigger_json(const std::string& status_name, const TriggerStats& t) {
+  nlohmann::json j{{"trigger", status_name},
+                   {"lidar", t.lidar},
+                   {"sweep", t.sweep},
+                   {"triggers", t.triggers},
+                   {"measured", t.measured},
+                   {"unmeasured", t.unmeasured},
+                   {"phase_from", t.phase_from},
+                   {"phase_error_ms", {{"p50", t.p50_ms}, {"p99", t.p99_ms}, {"max", t.max_ms}}},
+                   {"exposure_unmatched", t.exposure_unmatched}};
+  if (t.call_error.seen) j["trigger_call_error_ms"] = part_json(t.call_error);
+  if (t.to_exposure.seen) j["trigger_to_exposure_ms"] = part_json(t.to_exposure);
+  return j;
 }
 
 }  // namespace sensor_rig::rig

@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "sample_record.hpp"
 #include "sensor_rig/common/latency_window.hpp"
 #include "sensor_rig/dds/types.hpp"
@@ -106,11 +108,28 @@ struct SetStats {
 // A LIDAR-triggered camera (its /diagnostics status camera/<name> with trigger_lidar): the phase
 // error of its triggers as the camera node measures it (drivers/camera/lidar_trigger.hpp).
 struct TriggerStats {
+  // One part of the phase error, p50/p99/max in ms; `seen`: the node published it (it publishes
+  // trigger_to_exposure only once the camera has reported an exposure start).
+  struct Part {
+    double p50_ms = 0, p99_ms = 0, max_ms = 0;
+    bool seen = false;
+  };
   std::string lidar, sweep;
-  std::uint64_t triggers = 0, measured = 0, unmeasured = 0;
+  // Where the phase figure's exposure start comes from: device_exposure (the camera's own report)
+  // or trigger_call (the host's trigger call + the configured latency); empty from an older node.
+  std::string phase_from;
+  std::uint64_t triggers = 0, measured = 0, unmeasured = 0, exposure_unmatched = 0;
   double p50_ms = 0, p99_ms = 0, max_ms = 0;
+  Part call_error;   // the host's part: trigger call - sweep crossing
+  Part to_exposure;  // the camera's part: exposure start - trigger call
   // One key/value of the status; false when the key is not a trigger key (or the value is not a number).
   bool on_value(std::string_view key, std::string_view value);
 };
+
+// `rig monitor`'s triggered-camera section: header and one row (<= 120 columns with the mock
+// rig's names and figures under 10 ms), and the same figures for --json and --summary.
+std::string trigger_table_header();
+std::string trigger_table_row(const std::string& status_name, const TriggerStats& t);
+nlohmann::json trigger_json(const std::string& status_name, const TriggerStats& t);
 
 }  // namespace sensor_rig::rig

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -317,6 +318,71 @@ TEST(TriggerStats, ReadsTheCameraTriggerKeys) {
   EXPECT_DOUBLE_EQ(t.p50_ms, 0.034);
   EXPECT_DOUBLE_EQ(t.p99_ms, 0.506);
   EXPECT_DOUBLE_EQ(t.max_ms, 6.814);
+}
+
+// A camera reporting its exposure start: where the phase comes from and its host / camera split,
+// parsed from the status and shown in the table and the --json/--summary object.
+TEST(TriggerStats, ReadsAndShowsWhereThePhaseComesFromAndItsSplit) {
+  TriggerStats t;
+  for (const auto& [k, v] : std::map<std::string, std::string>{{"trigger_lidar", "front"},
+                                                               {"trigger_sweep", "locked"},
+                                                               {"triggers", "600"},
+                                                               {"phase_unmeasured", "3"},
+                                                               {"phase_from", "device_exposure"},
+                                                               {"phase_error_p50_ms", "0.412"},
+                                                               {"phase_error_p99_ms", "0.900"},
+                                                               {"phase_error_max_ms", "1.250"},
+                                                               {"trigger_call_error_p50_ms", "0.021"},
+                                                               {"trigger_call_error_p99_ms", "0.187"},
+                                                               {"trigger_call_error_max_ms", "0.500"},
+                                                               {"trigger_to_exposure_p50_ms", "0.390"},
+                                                               {"trigger_to_exposure_p99_ms", "0.811"},
+                                                               {"trigger_to_exposure_max_ms", "1.100"},
+                                                               {"exposure_unmatched", "7"}})
+    EXPECT_TRUE(t.on_value(k, v)) << k;
+  EXPECT_FALSE(t.on_value("trigger_call_error_p90_ms", "1"));     // not a published figure
+  EXPECT_FALSE(t.on_value("trigger_to_exposure_p50_ms", "n/a"));  // not a number: the figure kept
+  EXPECT_EQ(t.phase_from, "device_exposure");
+  EXPECT_EQ(t.exposure_unmatched, 7u);
+  EXPECT_DOUBLE_EQ(t.call_error.p50_ms, 0.021);
+  EXPECT_DOUBLE_EQ(t.call_error.p99_ms, 0.187);
+  EXPECT_DOUBLE_EQ(t.to_exposure.p50_ms, 0.390);
+  EXPECT_DOUBLE_EQ(t.to_exposure.max_ms, 1.100);
+
+  const std::string name = "camera/corner_front_left";  // the mock rig's longest triggered camera
+  const std::string header = trigger_table_header(), row = trigger_table_row(name, t);
+  EXPECT_LE(header.size(), 121u) << header;  // 120 columns and the newline
+  EXPECT_LE(row.size(), 121u) << row;
+  for (const char* column : {"from", "host p50/99", "cam p50/99", "unmatch"})
+    EXPECT_NE(header.find(column), std::string::npos) << column << " in " << header;
+  for (const char* cell : {"camera/corner_front_left", " device ", "0.412/0.900/1.250", "0.021/0.187", "0.390/0.811"})
+    EXPECT_NE(row.find(cell), std::string::npos) << cell << " in " << row;
+  EXPECT_LT(row.find("0.021/0.187"), row.find("0.390/0.811"));  // host, then camera, as the header
+  EXPECT_EQ(row.substr(row.size() - 3), " 7\n");
+
+  const auto j = trigger_json(name, t);
+  EXPECT_EQ(j.at("phase_from"), "device_exposure");
+  EXPECT_DOUBLE_EQ(j.at("trigger_call_error_ms").at("p99").get<double>(), 0.187);
+  EXPECT_DOUBLE_EQ(j.at("trigger_to_exposure_ms").at("p50").get<double>(), 0.390);
+  EXPECT_EQ(j.at("exposure_unmatched"), 7u);
+  EXPECT_DOUBLE_EQ(j.at("phase_error_ms").at("p99").get<double>(), 0.900);
+}
+
+// A camera that never reported an exposure start (no trigger_to_exposure keys): the phase is the
+// trigger call's, the camera's part shown as "-" and absent from the JSON, never a made-up 0.
+TEST(TriggerStats, ShowsNoCameraPartWhenTheNodeHasNone) {
+  TriggerStats t;
+  EXPECT_TRUE(t.on_value("trigger_lidar", "front"));
+  EXPECT_TRUE(t.on_value("phase_from", "trigger_call"));
+  EXPECT_TRUE(t.on_value("trigger_call_error_p50_ms", "0.030"));
+  EXPECT_TRUE(t.on_value("trigger_call_error_p99_ms", "0.250"));
+  const std::string row = trigger_table_row("camera/stereo_left", t);
+  EXPECT_NE(row.find(" call "), std::string::npos) << row;
+  EXPECT_NE(row.find(" 0.030/0.250 - "), std::string::npos) << row;
+  const auto j = trigger_json("camera/stereo_left", t);
+  EXPECT_EQ(j.at("phase_from"), "trigger_call");
+  EXPECT_TRUE(j.contains("trigger_call_error_ms"));
+  EXPECT_FALSE(j.contains("trigger_to_exposure_ms"));
 }
 
 }  // namespace
