@@ -320,26 +320,31 @@ TEST(TriggerStats, ReadsTheCameraTriggerKeys) {
   EXPECT_DOUBLE_EQ(t.max_ms, 6.814);
 }
 
+// A trigger status as the camera node publishes it: every key is a trigger key the monitor reads.
+TriggerStats read_trigger_status(const std::map<std::string, std::string>& values) {
+  TriggerStats t;
+  for (const auto& [k, v] : values) EXPECT_TRUE(t.on_value(k, v)) << k;
+  return t;
+}
+
 // A camera reporting its exposure start: where the phase comes from and its host / camera split,
 // parsed from the status and shown in the table and the --json/--summary object.
 TEST(TriggerStats, ReadsAndShowsWhereThePhaseComesFromAndItsSplit) {
-  TriggerStats t;
-  for (const auto& [k, v] : std::map<std::string, std::string>{{"trigger_lidar", "front"},
-                                                               {"trigger_sweep", "locked"},
-                                                               {"triggers", "600"},
-                                                               {"phase_unmeasured", "3"},
-                                                               {"phase_from", "device_exposure"},
-                                                               {"phase_error_p50_ms", "0.412"},
-                                                               {"phase_error_p99_ms", "0.900"},
-                                                               {"phase_error_max_ms", "1.250"},
-                                                               {"trigger_call_error_p50_ms", "0.021"},
-                                                               {"trigger_call_error_p99_ms", "0.187"},
-                                                               {"trigger_call_error_max_ms", "0.500"},
-                                                               {"trigger_to_exposure_p50_ms", "0.390"},
-                                                               {"trigger_to_exposure_p99_ms", "0.811"},
-                                                               {"trigger_to_exposure_max_ms", "1.100"},
-                                                               {"exposure_unmatched", "7"}})
-    EXPECT_TRUE(t.on_value(k, v)) << k;
+  TriggerStats t = read_trigger_status({{"trigger_lidar", "front"},
+                                        {"trigger_sweep", "locked"},
+                                        {"triggers", "600"},
+                                        {"phase_unmeasured", "3"},
+                                        {"phase_from", "device_exposure"},
+                                        {"phase_error_p50_ms", "0.412"},
+                                        {"phase_error_p99_ms", "0.900"},
+                                        {"phase_error_max_ms", "1.250"},
+                                        {"trigger_call_error_p50_ms", "0.021"},
+                                        {"trigger_call_error_p99_ms", "0.187"},
+                                        {"trigger_call_error_max_ms", "0.500"},
+                                        {"trigger_to_exposure_p50_ms", "0.390"},
+                                        {"trigger_to_exposure_p99_ms", "0.811"},
+                                        {"trigger_to_exposure_max_ms", "1.100"},
+                                        {"exposure_unmatched", "7"}});
   EXPECT_FALSE(t.on_value("trigger_call_error_p90_ms", "1"));     // not a published figure
   EXPECT_FALSE(t.on_value("trigger_to_exposure_p50_ms", "n/a"));  // not a number: the figure kept
   EXPECT_EQ(t.phase_from, "device_exposure");
@@ -371,11 +376,10 @@ TEST(TriggerStats, ReadsAndShowsWhereThePhaseComesFromAndItsSplit) {
 // A camera that never reported an exposure start (no trigger_to_exposure keys): the phase is the
 // trigger call's, the camera's part shown as "-" and absent from the JSON, never a made-up 0.
 TEST(TriggerStats, ShowsNoCameraPartWhenTheNodeHasNone) {
-  TriggerStats t;
-  EXPECT_TRUE(t.on_value("trigger_lidar", "front"));
-  EXPECT_TRUE(t.on_value("phase_from", "trigger_call"));
-  EXPECT_TRUE(t.on_value("trigger_call_error_p50_ms", "0.030"));
-  EXPECT_TRUE(t.on_value("trigger_call_error_p99_ms", "0.250"));
+  const TriggerStats t = read_trigger_status({{"trigger_lidar", "front"},
+                                              {"phase_from", "trigger_call"},
+                                              {"trigger_call_error_p50_ms", "0.030"},
+                                              {"trigger_call_error_p99_ms", "0.250"}});
   const std::string row = trigger_table_row("camera/stereo_left", t);
   EXPECT_NE(row.find(" call "), std::string::npos) << row;
   EXPECT_NE(row.find(" 0.030/0.250 - "), std::string::npos) << row;
