@@ -206,6 +206,17 @@ void AravisSource::configure() {
       throw CameraError("aravis " + cfg_.device + ": exposure " + std::to_string(cfg_.exposure_us) + " us: " +
                         (tried.empty() ? "no ExposureTime/ExposureTimeAbs feature" : tried));
   }
+  // What the device has (rounded, or its own when not set): the frame clock's exposure -> leader delay.
+  for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {
+    if (arv_device_is_feature_available(dev, name, nullptr) == FALSE) continue;
+    const double us = arv_device_get_float_feature_value(dev, name, &err);
+    if (err != nullptr) {
+      take_error(err);
+      continue;
+    }
+    details_.exposure_us = us;
+    break;
+  }
   // 5. gain.
   if (cfg_.gain_db >= 0) {
     arv_camera_set_gain(cam, cfg_.gain_db, &err);

@@ -139,7 +139,10 @@ struct CameraDriver::Impl {
   bool try_open() {
     try {
       src->open();
-      clock.reset();  // a reopened device may restart its tick counter
+      // A reopened device may restart its tick counter. Exposure: the config's, else the
+      // device's own (a triggered camera's mapped exposure is off by what is assumed here).
+      const double exposure_us = cfg.source.exposure_us > 0 ? cfg.source.exposure_us : src->exposure_us();
+      clock.reset(static_cast<Nanos>(exposure_us * 1000.0));
       std::lock_guard lock(mutex);
       open = true;
       state = "streaming";

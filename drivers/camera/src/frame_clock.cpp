@@ -27,6 +27,11 @@ const char* to_string(StampSource s) noexcept {
 
 FrameClock::FrameClock(Nanos exposure_ns) : mapper_(mapper_config(exposure_ns)), exposure_ns_(exposure_ns) {}
 
+void FrameClock::reset(Nanos exposure_ns) {
+  mapper_ = timesync::ClockMapper(mapper_config(exposure_ns));
+  exposure_ns_ = exposure_ns;
+}
+
 FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
   FrameStamp s = device_stamp(m, tick_ns);
   if (s.source != StampSource::kTriggerTick) s.vehicle_ns = monotonic_.apply(s.vehicle_ns);

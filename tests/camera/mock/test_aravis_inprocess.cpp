@@ -56,6 +56,20 @@ TEST(AravisInProcess, FreeRunFramesLandInPoolMemoryWithDeviceStamps) {
   EXPECT_FALSE(src.is_open());
 }
 
+// The exposure the device has since open, read back: the config's, or the device's own when the
+// config leaves it (the frame clock's exposure -> first packet delay; the fake's default is 10 ms).
+TEST(AravisInProcess, ExposureTimeIsReadBackSetOrLeftAsTheDeviceHasIt) {
+  AravisSource set(fake("EXPO1"), mock::inprocess_fake_opener());
+  set.open();
+  EXPECT_NEAR(set.exposure_us(), 2000.0, 1.0);
+  auto c = fake("EXPO2");
+  c.exposure_us = 0;
+  AravisSource left(c, mock::inprocess_fake_opener());
+  left.open();
+  EXPECT_TRUE(left.details().exposure_feature.empty());
+  EXPECT_NEAR(left.exposure_us(), 10000.0, 1.0);
+}
+
 // Frames held past the pool (every buffer out of the stream): the frames the device sends meanwhile
 // are Aravis underruns, counted in stats() (the pool is the stream's buffers: one counter for both).
 // The in-process fake numbers only the frames it filled, so its ids show no gap.

@@ -82,6 +82,17 @@ TEST(FrameClock, SoftwareTriggeredFramesCarryTheirTick) {
   EXPECT_NE(clock.stamp(m, 2'100'000'000).source, StampSource::kTriggerTick);  // a tick after arrival: not its tick
 }
 
+// Reset at (re)open with the exposure the device has: a first frame maps to its first packet minus
+// that exposure (the clock's model: the leader leaves at exposure end).
+TEST(FrameClock, ResetTakesTheDevicesExposureTime) {
+  FrameClock clock;
+  clock.reset(10'000'000);
+  camera::FrameMeta m;
+  m.device_ns = 42;
+  m.first_rx_ns = 2'000'000'000;
+  EXPECT_EQ(clock.stamp(m).vehicle_ns, 1'990'000'000);
+}
+
 // A V4L2 camera (CLOCK_MONOTONIC exposure stamps) while the host's CLOCK_REALTIME is stepped back
 // 1 s and later forward 1 s (injected through the frame's realtime/monotonic pair): the published
 // stamps never go backwards, the step back is counted and slewed out (0.9x rate), the step forward

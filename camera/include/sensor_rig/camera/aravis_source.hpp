@@ -38,6 +38,7 @@ struct AravisDetails {     // what the device reported after configuration (diag
   std::string model;
   std::string serial;
   std::string exposure_feature;  // ExposureTime | ExposureTimeAbs | "" (not set)
+  double exposure_us = 0.0;      // read back after configuration (set or the device's own); 0: no feature
   int packet_size = 0;
   double frame_rate = 0.0;
 };
@@ -62,6 +63,7 @@ class AravisSource final : public FrameSource {
   // Sets a GenICam feature now ("name=value" as in SourceConfig::features); throws CameraError.
   void set_feature(const std::string& name, const std::string& value);
   [[nodiscard]] PtpState ptp() const override;
+  [[nodiscard]] double exposure_us() const override { return details().exposure_us; }
 
  private:
   struct State;

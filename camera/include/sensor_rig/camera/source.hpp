@@ -107,6 +107,8 @@ class FrameSource {
   [[nodiscard]] virtual SourceStats stats() const = 0;
   // PTP state; enabled == false when the source has no PTP (V4L2, or not configured).
   [[nodiscard]] virtual PtpState ptp() const { return {}; }
+  // The exposure time the device has since open (its ExposureTime read back), us; 0: unknown.
+  [[nodiscard]] virtual double exposure_us() const { return 0.0; }
   [[nodiscard]] virtual std::string describe() const = 0;  // "aravis 127.0.0.2 BayerRG8 1920x1200@10"
 };
 

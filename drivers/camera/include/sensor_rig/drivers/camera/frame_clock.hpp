@@ -37,7 +37,8 @@ class FrameClock {
   [[nodiscard]] const timesync::MonotonicStampsStatus& monotonic() const noexcept { return monotonic_.status(); }
   // CLOCK_REALTIME was stepped (the caller's RealtimeStepDetector): a step back is absorbed.
   void realtime_step(Nanos step_ns) noexcept { monotonic_.realtime_step(step_ns); }
-  void reset() noexcept { mapper_.reset(); }
+  // A (re)opened device: its tick counter may have restarted, its exposure time changed.
+  void reset(Nanos exposure_ns);
 
  private:
   FrameStamp device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept;
