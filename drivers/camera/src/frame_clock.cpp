@@ -3,6 +3,9 @@
 namespace sensor_rig::drivers {
 namespace {
 
+// How far before its trigger tick a mapped exposure start may fall (the mapping's error).
+constexpr Nanos kMappedExposureSlackNs = 5'000'000;
+
 timesync::ClockMapperConfig mapper_config(Nanos exposure_ns) {
   timesync::ClockMapperConfig c;
   c.fixed_delay_ns = exposure_ns;
@@ -21,6 +24,7 @@ const char* to_string(StampSource s) noexcept {
     case StampSource::kMonotonic: return "monotonic";
     case StampSource::kVehicle: return "device_vehicle";
     case StampSource::kTriggerTick: return "trigger_tick";
+    case StampSource::kTriggerExposure: return "trigger_exposure";
   }
   return "?";
 }
@@ -54,7 +58,15 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
   mapper_.observe(m.device_ns, m.first_rx_ns);
   const auto r = mapper_.map(m.device_ns);
   const Nanos device = r.valid ? r.vehicle_ns : 0;
-  if (tick_ns > 0 && tick_ns <= m.first_rx_ns) return {tick_ns, StampSource::kTriggerTick, device};
+  if (tick_ns > 0 && tick_ns <= m.first_rx_ns) {
+    // The tick is when the exposure was asked for; a locked device clock mapping says when it happened.
+    // A mapped exposure after the frame arrived, or long before its trigger, is the mapping's
+    // error, not the camera's: the tick then.
+    const bool plausible = r.valid && r.state == timesync::SyncState::kLocked && r.vehicle_ns <= m.first_rx_ns &&
+                           r.vehicle_ns >= tick_ns - kMappedExposureSlackNs;
+    if (plausible) return {r.vehicle_ns, StampSource::kTriggerExposure, device};
+    return {tick_ns, StampSource::kTriggerTick, device};
+  }
   if (r.valid) return {r.vehicle_ns, StampSource::kDeviceMapped, device};
   return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0};
 }

@@ -45,17 +45,23 @@ TEST(FrameClock, DriftingDeviceTicksMapToVehicleTime) {
   const auto st = clock.status(last);
   EXPECT_EQ(st.state, timesync::SyncState::kLocked);
   EXPECT_NEAR(st.drift_ppm, kDriftPpm, 10.0);
-  // A software-triggered frame is stamped with its tick, and still carries the exposure start the
-  // device reported, mapped (what the LIDAR trigger's phase figure uses).
+  // Once mapped, a software-triggered frame is stamped with the exposure start the device reported
+  // (not its tick, 3 ms before), and carries it (what the LIDAR trigger's phase figure uses).
   const Nanos exposure_start = t0 + 300 * 100'000'000LL;
   camera::FrameMeta m;
   m.domain = camera::TimeDomain::kDeviceTicks;
   m.device_ns = kDeviceOffset + static_cast<Nanos>(static_cast<double>(exposure_start - t0) * (1.0 + kDriftPpm * 1e-6));
   m.first_rx_ns = exposure_start + kExposure + 200'000;
   const auto s = clock.stamp(m, exposure_start - 3'000'000);
-  EXPECT_EQ(s.source, StampSource::kTriggerTick);
-  EXPECT_EQ(s.vehicle_ns, exposure_start - 3'000'000);
+  EXPECT_EQ(s.source, StampSource::kTriggerExposure);
+  EXPECT_NEAR(static_cast<double>(s.vehicle_ns), static_cast<double>(exposure_start), 1e6);
   EXPECT_NEAR(static_cast<double>(s.device_exposure_ns), static_cast<double>(exposure_start), 1e6);
+  EXPECT_STREQ(to_string(s.source), "trigger_exposure");
+  // A mapped exposure 20 ms before its trigger is not this trigger's (a stale tick, a bad mapping): the tick.
+  m.first_rx_ns = exposure_start + 30'000'000;  // a late frame, so that tick precedes its arrival
+  const auto early = clock.stamp(m, exposure_start + 20'000'000);
+  EXPECT_EQ(early.source, StampSource::kTriggerTick);
+  EXPECT_EQ(early.vehicle_ns, exposure_start + 20'000'000);
 }
 
 TEST(FrameClock, MonotonicFramesUseTheOffsetSampledWithThem) {
@@ -71,6 +77,7 @@ TEST(FrameClock, MonotonicFramesUseTheOffsetSampledWithThem) {
   EXPECT_EQ(clock.stamp(m).source, StampSource::kMonotonic);
 }
 
+// Before the device clock is mapped: the trigger tick (call + latency).
 TEST(FrameClock, SoftwareTriggeredFramesCarryTheirTick) {
   FrameClock clock;
   camera::FrameMeta m;

@@ -4,7 +4,8 @@
 // - device ticks (GigE): timesync's robust estimator, fed (device time, leader-packet arrival)
 //   every frame; mapped device time, never the arrival time alone (host fallback until locked);
 // - CLOCK_MONOTONIC (V4L2): plus the realtime-monotonic offset sampled at this frame;
-// - software trigger: the vehicle time of the trigger tick that exposed it (shared by a group).
+// - software trigger: the exposure start the device reported, once its ticks are mapped (PTP
+//   time as it is); until then the vehicle time of the trigger tick that exposed it.
 // Device-clock stamps never go backwards when CLOCK_REALTIME is stepped back (timesync's
 // MonotonicStamps: held, then slewed out); trigger ticks are the clock's readings as they are.
 #include <cstdint>
@@ -15,7 +16,9 @@
 
 namespace sensor_rig::drivers {
 
-enum class StampSource : std::uint8_t { kDeviceMapped, kHostFallback, kMonotonic, kVehicle, kTriggerTick };
+// kTriggerTick: a triggered frame before its device clock is mapped (trigger call + latency);
+// kTriggerExposure: after, the exposure start it reported, mapped.
+enum class StampSource : std::uint8_t { kDeviceMapped, kHostFallback, kMonotonic, kVehicle, kTriggerTick, kTriggerExposure };
 const char* to_string(StampSource s) noexcept;
 
 struct FrameStamp {
