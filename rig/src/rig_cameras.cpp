@@ -157,6 +157,9 @@ void CameraRig::start() {
     f.options.address = c.source.device;
     f.options.lost_packets_per_thousand = c.mock.lost_packets_per_thousand;
     f.options.program = trigger_following_fake();
+    // The mock stands for camera hardware: its threads at the camera's priority, so a busy host
+    // delays the rig's threads (measured) and not the "camera" (kTriggerFollowingFake only).
+    if (f.options.program != camera::mock::GigeFakeOptions{}.program) f.options.realtime_priority = c.realtime_priority;
     f.camera = c.name;
     try {
       f.process = camera::mock::start_gige_fake(f.options);

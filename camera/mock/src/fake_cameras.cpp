@@ -109,6 +109,7 @@ std::vector<std::string> gige_fake_command(const GigeFakeOptions& o) {
   std::vector<std::string> argv{find_program(o.program), "-i", o.address, "-s", serial};
   if (o.lost_packets_per_thousand > 0) argv.insert(argv.end(), {"-r", std::to_string(o.lost_packets_per_thousand)});
   if (!o.genicam.empty()) argv.insert(argv.end(), {"-g", o.genicam});
+  if (o.realtime_priority > 0) argv.insert(argv.end(), {"--realtime-priority", std::to_string(o.realtime_priority)});
   return argv;
 }
 

@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/thread_priority.hpp"
 
 namespace {
 
@@ -94,8 +95,10 @@ timespec until_next_grid_point(ArvFakeCamera* cam, bool triggered) {
 int usage(const char* self, int status) {
   std::fprintf(status == 0 ? stdout : stderr,
                "usage: %s -i ADDRESS [-s SERIAL] [-g GENICAM.xml] [-r LOST_PER_THOUSAND] [--trigger-hz HZ]\n"
+               "          [--realtime-priority N]\n"
                "Aravis GigE fake camera (as arv-fake-gv-camera-0.8) whose software-triggered frames are exposed\n"
-               "within ~1/HZ of the trigger (default %.0f Hz) without a busy loop. Stops on SIGINT/SIGTERM.\n",
+               "within ~1/HZ of the trigger (default %.0f Hz) without a busy loop. --realtime-priority: every\n"
+               "thread SCHED_FIFO N where permitted (a warning if not). Stops on SIGINT/SIGTERM.\n",
                self, sensor_rig::camera::mock::kTriggerGridHz);
   return status;
 }
@@ -117,6 +120,7 @@ extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
 int main(int argc, char** argv) {
   std::string address, serial, genicam;
   double lost_per_thousand = 0;
+  int realtime_priority = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
@@ -128,12 +132,21 @@ int main(int argc, char** argv) {
     else if (a == "-g" || a == "--genicam") genicam = v;
     else if (a == "-r" || a == "--gvsp-lost-ratio") lost_per_thousand = std::atof(v);
     else if (a == "--trigger-hz") g_grid_hz = std::atof(v);
+    else if (a == "--realtime-priority") realtime_priority = std::atoi(v);
     else {
       std::fprintf(stderr, "rig-fake-gige-camera: unknown option %s\n", a.c_str());
       return usage(argv[0], 2);
     }
   }
-  if (address.empty() || !(g_grid_hz >= 1 && g_grid_hz <= 1e6) || lost_per_thousand < 0) return usage(argv[0], 2);
+  if (address.empty() || !(g_grid_hz >= 1 && g_grid_hz <= 1e6) || lost_per_thousand < 0 || realtime_priority < 0 ||
+      realtime_priority > 99)
+    return usage(argv[0], 2);
+  // Before the fake starts its threads: they inherit the policy. A hardware camera's trigger ->
+  // exposure does not depend on the host's load; a mock at normal priority on a busy host would.
+  if (realtime_priority > 0)
+    if (const auto r = sensor_rig::try_realtime_priority(realtime_priority); !r)
+      std::fprintf(stderr, "rig-fake-gige-camera: --realtime-priority %d not applied (%s): normal threads\n",
+                   realtime_priority, r.why_not.c_str());
   // The default 50 us timer slack would be a fifth of a 250 us grid step (inherited by the fake's thread).
   ::prctl(PR_SET_TIMERSLACK, 1UL);
   std::signal(SIGINT, on_signal);

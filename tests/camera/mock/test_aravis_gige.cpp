@@ -2,17 +2,22 @@
 // addresses. Packet socket disabled + fixed socket buffer; lost packets -> incomplete frames
 // counted, never returned; the fake killed mid-stream -> reported within 1 s; restarted -> resumes.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <string>
+#include <thread>
 #include <vector>
 
 #include "sensor_rig/camera/aravis_source.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/thread_priority.hpp"
 #include "glib_log_counter.hpp"
 #include "next_frame.hpp"
 #include "open_at_once.hpp"
@@ -142,6 +147,36 @@ TEST_F(GigeFake, TriggerFollowingFakeExposesWithinAMillisecondOfTheTriggerAndSen
   EXPECT_GE(delays.front(), -1'000) << "exposed before its trigger (the fake's clock is in us)";
   EXPECT_LE(delays[delays.size() / 2], 1'000'000) << "median trigger -> exposure " << delays[delays.size() / 2] << " ns";
   src.close();
+  fake.stop(500);
+}
+
+// The mock stands for camera hardware: with realtime_priority every thread of the fake runs
+// SCHED_FIFO (set before the fake starts its threads), so host load is not the "camera's" delay.
+TEST_F(GigeFake, TriggerFollowingFakeRunsEveryThreadAtTheAskedRealtimePriority) {
+  bool permitted = false;
+  std::string why;
+  std::thread([&] {
+    const auto r = try_realtime_priority(7);
+    permitted = r.applied;
+    why = r.why_not;
+  }).join();
+  if (!permitted) GTEST_SKIP() << "SCHED_FIFO not permitted here: " << why;
+  mock::GigeFakeOptions o;
+  o.address = address(0);
+  o.program = RIG_FAKE_GIGE_CAMERA;
+  o.realtime_priority = 7;
+  const auto argv = mock::gige_fake_command(o);
+  ASSERT_NE(std::find(argv.begin(), argv.end(), "--realtime-priority"), argv.end());
+  auto fake = mock::start_gige_fake(o);
+  int threads = 0, fifo_7 = 0;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/" + std::to_string(fake.pid()) + "/task")) {
+    const pid_t tid = std::stoi(task.path().filename().string());
+    sched_param p{};
+    ++threads;
+    if (::sched_getscheduler(tid) == SCHED_FIFO && ::sched_getparam(tid, &p) == 0 && p.sched_priority == 7) ++fifo_7;
+  }
+  EXPECT_GE(threads, 2) << "the fake's GVCP/stream thread";
+  EXPECT_EQ(fifo_7, threads);
   fake.stop(500);
 }
 

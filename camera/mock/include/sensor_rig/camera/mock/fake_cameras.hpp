@@ -38,6 +38,9 @@ struct GigeFakeOptions {
   int lost_packets_per_thousand = 0;   // arv-fake-gv-camera -r: GVSP packet loss
   std::string genicam;                 // -g: a GenICam XML file instead of the built-in one
   std::string program = "arv-fake-gv-camera-0.8";  // or a path to kTriggerFollowingFake (same options)
+  // kTriggerFollowingFake only: its threads SCHED_FIFO at this priority (0 = normal), so the mock's
+  // trigger -> exposure is the camera's, as in hardware, not the host's scheduling of the mock.
+  int realtime_priority = 0;
 };
 
 // argv of the fake process.
