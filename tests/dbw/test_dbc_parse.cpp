@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -216,6 +217,21 @@ TEST(DbcParse, DecimalsOf) {
   EXPECT_EQ(dbc::decimals_of("1E-005"), 5);
   EXPECT_EQ(dbc::decimals_of("2.5e-2"), 3);
   EXPECT_EQ(dbc::decimals_of("1e3"), 0);
+  // A 10-digit exponent (fuzz_dbc's find) saturates instead of overflowing int (UBSan in CI).
+  EXPECT_EQ(dbc::decimals_of("1e4000000000"), 0);
+  EXPECT_GE(dbc::decimals_of("1e-4000000000"), 100'000);
+}
+
+// fuzz_dbc's finds: numbers beyond int64 where an integer is expected saturate (casting such a
+// double is undefined behaviour: UBSan stops the sanitizer build there) instead of wrapping.
+TEST(DbcParse, HugeIntegersSaturate) {
+  std::string text(kSample);
+  const std::string table = "VAL_TABLE_ OnOff 1 \"On\" 0 \"Off\" ;";
+  ASSERT_NE(text.find(table), std::string::npos);
+  text.replace(text.find(table), table.size(), "VAL_TABLE_ OnOff 1e23 \"On\" -3e114 \"Off\" ;");
+  const auto db = dbc::parse(text, "huge.dbc");
+  EXPECT_EQ(db.value_tables.at("OnOff").at(std::numeric_limits<std::int64_t>::max()), "On");
+  EXPECT_EQ(db.value_tables.at("OnOff").at(std::numeric_limits<std::int64_t>::min()), "Off");
 }
 
 TEST(DbcParse, LoadFilesRejectsClashingIds) {

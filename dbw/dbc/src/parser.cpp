@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <unordered_map>
 #include <utility>
@@ -17,6 +20,15 @@ namespace {
 constexpr std::uint32_t kExtendedFlag = 0x80000000U;
 constexpr std::uint32_t kMaxExtendedId = 0x1FFFFFFFU;
 constexpr std::uint32_t kMaxStandardId = 0x7FFU;
+
+// An integer written as a huge number (1e23: fuzz_dbc's find) saturates: casting a double outside
+// int64's range is undefined behaviour, and no raw CAN value or enum key is that large.
+std::int64_t saturating_int64(double v) noexcept {
+  if (std::isnan(v)) return 0;
+  if (v >= 9.2e18) return std::numeric_limits<std::int64_t>::max();
+  if (v <= -9.2e18) return std::numeric_limits<std::int64_t>::min();
+  return static_cast<std::int64_t>(v);
+}
 
 using detail::Cursor;
 
@@ -271,7 +283,7 @@ class Parser {
     const bool is_float = t.find_first_of(".eE") != std::string_view::npos ||
                           (it != db_.attribute_definitions.end() && it->second.kind == AttributeKind::kFloating);
     if (is_float) return to_double(t);
-    return static_cast<std::int64_t>(to_double(t));
+    return saturating_int64(to_double(t));
   }
 
   void attribute_default() {
@@ -313,7 +325,7 @@ class Parser {
   std::map<std::int64_t, std::string> value_list() {
     std::map<std::int64_t, std::string> out;
     while (!c_.accept(';')) {
-      const auto v = static_cast<std::int64_t>(c_.number("value"));
+      const auto v = saturating_int64(c_.number("value"));
       out[v] = c_.quoted("value description");
     }
     return out;
@@ -429,7 +441,10 @@ int decimals_of(std::string_view t) noexcept {
       neg = ex[0] == '-';
       ex.remove_prefix(1);
     }
-    for (char c : ex) exponent = exponent * 10 + (c - '0');
+    // Saturates: a 10-digit exponent (found by fuzz_dbc) overflowed int; beyond ~400 a double
+    // is 0 or inf anyway, and a factor that small or large is refused where it is used.
+    for (char c : ex)
+      if (exponent < 100'000) exponent = exponent * 10 + (c - '0');
     if (neg) exponent = -exponent;
     t = t.substr(0, e);
   }

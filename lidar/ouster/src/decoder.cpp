@@ -296,7 +296,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     const double col_ns = m.column_period_ns();
     const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
     const double reorder_ns = 16.0 * static_cast<double>(cpp) * col_ns;  // a reordering window of 16 packets
-    if (ahead == 1 && dt <= 0 && static_cast<double>(-dt) <= reorder_ns) {  // duplicate or late
+    if (ahead == 1 && dt <= 0 && -static_cast<double>(dt) <= reorder_ns) {  // (negated as double: dt may be INT64_MIN)  // duplicate or late
       scans.reject(PacketStatus::kOutOfOrder);
       last = PacketStatus::kOutOfOrder;
       return out;
