@@ -2,6 +2,7 @@
 #include "sensor_rig/lidar/ouster/decoder.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -344,11 +345,18 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     cur.scan.stamp = stamp;
     cur.started = true;
   }
-  const Nanos t_packet = stamp - cur.scan.stamp;
+  // Saturating: a corrupt timestamp (fuzz_ouster's find) made these sums overflow int64 (UB).
+  const auto saturate = [](bool overflowed, Nanos v, Nanos sign) {
+    return overflowed ? (sign >= 0 ? std::numeric_limits<Nanos>::max() : std::numeric_limits<Nanos>::min()) : v;
+  };
+  Nanos t_packet = 0;
+  t_packet = saturate(__builtin_sub_overflow(stamp, cur.scan.stamp, &t_packet), t_packet, stamp);
   for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
     if (col_ok[c] == 0) continue;
     const auto dt = static_cast<Nanos>(cols[c].timestamp_ns - first_ts);  // wraps for a column before the first
-    decode_column(p + layout.column_offset(c), cols[c].measurement_id, clamp_u32(t_packet + dt));
+    Nanos t = 0;
+    t = saturate(__builtin_add_overflow(t_packet, dt, &t), t, dt);
+    decode_column(p + layout.column_offset(c), cols[c].measurement_id, clamp_u32(t));
   }
   // The frame's last packet ends the scan now instead of with the next frame's first packet.
   const long last_col = base + static_cast<long>(layout.columns_per_packet) - 1;
