@@ -129,7 +129,7 @@ TEST(SeveralHosts, SensorsAndDriveByWireAcrossTheVehicleNetwork) {
   {  // Right: DDS on the vehicle network.
     auto rig = rig_up(net.pu_vehicle_if());
     auto commands = command_source(net);
-    const auto t = monitor_in(net.planning(), net.planning_if(), "4");
+    const auto t = monitor_in(net.planning(), net.planning_if(), "7");
     const auto j = last_of(t, scans);
     ASSERT_FALSE(j.is_null()) << "the planning PC did not discover " << scans;
     // 10 Hz scans, ~3 s after discovery; the stamps topic came along (the sensor stage).
@@ -177,7 +177,7 @@ TEST(SeveralHosts, DriveByWireOnVcanInThePu) {
       net.pu(), {rig_bin(), "mock", "paravan", "--transport", "socketcan:" + can, "--config", protocol}));
   auto rig = rig_in(net.pu(), net.pu_vehicle_if(), {"up", cfg, "--duration", "20"});
   auto commands = command_source(net);
-  expect_drive_by_wire_across(monitor_in(net.planning(), net.planning_if(), "4"));
+  expect_drive_by_wire_across(monitor_in(net.planning(), net.planning_if(), "7"));
   commands.stop();
   EXPECT_EQ(rig.stop(), 0);
   ecu.stop();
