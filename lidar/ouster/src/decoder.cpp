@@ -350,12 +350,14 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     return overflowed ? (sign >= 0 ? std::numeric_limits<Nanos>::max() : std::numeric_limits<Nanos>::min()) : v;
   };
   Nanos t_packet = 0;
-  t_packet = saturate(__builtin_sub_overflow(stamp, cur.scan.stamp, &t_packet), t_packet, stamp);
+  const bool packet_overflow = __builtin_sub_overflow(stamp, cur.scan.stamp, &t_packet);
+  t_packet = saturate(packet_overflow, t_packet, stamp);
   for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
     if (col_ok[c] == 0) continue;
     const auto dt = static_cast<Nanos>(cols[c].timestamp_ns - first_ts);  // wraps for a column before the first
     Nanos t = 0;
-    t = saturate(__builtin_add_overflow(t_packet, dt, &t), t, dt);
+    const bool overflow = __builtin_add_overflow(t_packet, dt, &t);  // sequenced before t is read
+    t = saturate(overflow, t, dt);
     decode_column(p + layout.column_offset(c), cols[c].measurement_id, clamp_u32(t));
   }
   // The frame's last packet ends the scan now instead of with the next frame's first packet.
