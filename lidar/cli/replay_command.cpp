@@ -3,9 +3,7 @@
 // --rate, optionally looping, with injected network faults. Position packets (port 8308 in a
 // capture; GPRMC + PPS from the synthetic sensor) go to --position-port on the same host when
 // given, else they are skipped. Ends with one summary line on stderr (and --json on stdout).
-#include <sched.h>
 
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <cstdio>
@@ -19,6 +17,7 @@
 #include "sensor_rig/lidar/decoder_files.hpp"
 #include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/thread_priority.hpp"
 #include "sensor_rig/lidar/mock/replay.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
@@ -58,11 +57,8 @@ struct ReplayCliOptions {
 // for an HDL-32E), and the kernel's RT throttling bounds it anyway. Best effort.
 void apply_rt_priority(int priority) {
   if (priority <= 0) return;
-  sched_param sp{};
-  sp.sched_priority = priority;
-  if (::sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
-    log::debug("replay", std::string("SCHED_FIFO not available (") + std::strerror(errno) + "), normal scheduling");
-  }
+  if (const auto r = try_realtime_priority(priority); !r)
+    log::debug("replay", "SCHED_FIFO not available (" + r.why_not + "), normal scheduling");
 }
 
 mock::SyntheticOptions synthetic_options(const ReplayCliOptions& o, std::uint16_t port, Nanos start_ns) {

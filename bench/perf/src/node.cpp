@@ -22,6 +22,7 @@
 #include "sensor_rig/bench/perf/records.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/common/thread_priority.hpp"
 #include "sensor_rig/dds/shared_memory.hpp"
 #include "sensor_rig/dds/view_reader.hpp"
 #include "sensor_rig/dds/waitset.hpp"
@@ -304,11 +305,8 @@ int run_subscriber(const NodeArgs& a, const dds::Participant& p) {
 template <class T>
 int run_typed(const NodeArgs& a) {
   if (a.rt_priority > 0) {  // before the participant: Cyclone's threads inherit the policy
-    sched_param sp{};
-    sp.sched_priority = a.rt_priority;
-    if (::sched_setscheduler(0, SCHED_FIFO, &sp) != 0) {
-      log::warn("perf", std::string("SCHED_FIFO not available: ") + std::strerror(errno));
-    }
+    if (const auto r = try_realtime_priority(a.rt_priority); !r)
+      log::warn("perf", "SCHED_FIFO not available: " + r.why_not);
   }
   dds::Participant p(dds::DomainConfig{static_cast<dds_domainid_t>(a.domain), a.profile});
   return a.role == Role::kPublisher ? run_publisher<T>(a, p) : run_subscriber<T>(a, p);

@@ -1,13 +1,13 @@
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 
 #include <pthread.h>
-#include <sched.h>
 
 #include <cstring>
 #include <mutex>
 #include <thread>
 
 #include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/realtime_thread.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/types.hpp"
@@ -243,12 +243,7 @@ void CameraDriver::start() {
   if (impl_->outputs) impl_->outputs->start();
   impl_->thread = std::thread([this] { impl_->run(); });
   (void)pthread_setname_np(impl_->thread.native_handle(), ("cam:" + impl_->cfg.name).substr(0, 15).c_str());
-  if (const int prio = impl_->cfg.realtime_priority; prio > 0) {
-    sched_param sp{};
-    sp.sched_priority = prio;
-    if (const int rc = pthread_setschedparam(impl_->thread.native_handle(), SCHED_FIFO, &sp); rc != 0)
-      log::warn("camera", impl_->cfg.name + ": SCHED_FIFO " + std::to_string(prio) + " refused (" + std::strerror(rc) + ")");
-  }
+  make_realtime(impl_->thread, impl_->cfg.realtime_priority, "camera " + impl_->cfg.name);
   log::info("camera", impl_->cfg.name + ": " + impl_->src->describe() + " -> " + impl_->image_topic_name);
 }
 
