@@ -6,6 +6,9 @@
 # the committed seeds in tests/fuzz/corpus/<name> are read only. After each harness one line:
 # inputs run, wall time, exec/s, coverage (cov/ft), new corpus entries, crash artifacts, peak RSS;
 # the log of each run is BUILD_DIR/fuzz_logs/<name>.log. Exit 1 when any harness found something.
+# Runs add up: each appends its inputs to BUILD_DIR/fuzz_logs/<name>.history, and the line gives the
+# total over the runs that kept BUILD_DIR/corpus/<name> (a slow harness reaches 10 M over several
+# sittings). A run stopped with SIGINT to the fuzzer (libFuzzer exit 72) counts what it ran.
 set -euo pipefail
 build=${1:-build-fuzz}
 secs=${2:-30}
@@ -51,9 +54,14 @@ for f in "$build"/fuzz_*; do
   line="$name: runs $(stat number_of_executed_units) in ${wall}s (CPU ${cpu}s), $(stat average_exec_per_sec) exec/s,"
   line+=" ${cov:-cov ?}, new corpus entries $added, crashes/leaks/timeouts $crashes,"
   line+=" peak RSS $(stat peak_rss_mb) MB, exit $rc"
+  [[ $rc == 72 ]] && line+=" (interrupted)"
+  history=$build/fuzz_logs/${name#fuzz_}.history
+  echo "$(date -u +%FT%TZ) runs=$(stat number_of_executed_units) wall=${wall}s exit=$rc crashes=$crashes" >>"$history"
+  total=$(sed -n 's/.* runs=\([0-9]*\) .*/\1/p' "$history" | awk '{ s += $1 } END { print s + 0 }')
+  line+="; $total inputs over $(wc -l <"$history") run(s) with this corpus"
   echo "$line"
   summary+=("$line")
-  if [[ $rc != 0 || $crashes != 0 ]]; then
+  if [[ ($rc != 0 && $rc != 72) || $crashes != 0 ]]; then
     failed=1
     grep -E '^(==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' "$log" || tail -20 "$log"
   fi
