@@ -32,7 +32,10 @@ for f in "$build"/fuzz_*; do
   log=$build/fuzz_logs/${name#fuzz_}.log
   mkdir -p "$work" "$seeds" "$artifacts"
   before=$(find "$work" -type f | wc -l)
-  found_before=$(find "$artifacts" -type f | wc -l)
+  # Slow units (libFuzzer's slow-unit-*, over 10 s) are counted apart: a fuzzer that was stopped
+  # (SIGSTOP while something is measured) or starved writes them too; replay one alone to tell.
+  found_before=$(find "$artifacts" -type f ! -name 'slow-unit-*' | wc -l)
+  slow_before=$(find "$artifacts" -type f -name 'slow-unit-*' | wc -l)
   bounds=()
   [[ $secs != 0 ]] && bounds+=(-max_total_time="$secs")
   [[ $runs != 0 ]] && bounds+=(-runs="$runs")
@@ -48,11 +51,12 @@ for f in "$build"/fuzz_*; do
   stat() { sed -n "s/^stat::$1: *//p" "$log" | tail -1; }
   # The last status line (#N DONE/pulse/NEW ... cov: C ft: F ...) has the final coverage.
   cov=$(grep -Eo 'cov: [0-9]+ ft: [0-9]+' "$log" | tail -1 | tr -d ':' || true)
-  crashes=$(($(find "$artifacts" -type f | wc -l) - found_before))
+  crashes=$(($(find "$artifacts" -type f ! -name 'slow-unit-*' | wc -l) - found_before))
+  slow=$(($(find "$artifacts" -type f -name 'slow-unit-*' | wc -l) - slow_before))
   added=$(($(find "$work" -type f | wc -l) - before))
   cpu=$(awk 'END { printf "%.0f", $1 + $2 }' "$log.cpu" 2>/dev/null || echo '?')
   line="$name: runs $(stat number_of_executed_units) in ${wall}s (CPU ${cpu}s), $(stat average_exec_per_sec) exec/s,"
-  line+=" ${cov:-cov ?}, new corpus entries $added, crashes/leaks/timeouts $crashes,"
+  line+=" ${cov:-cov ?}, new corpus entries $added, crashes/leaks/timeouts $crashes, slow units $slow,"
   line+=" peak RSS $(stat peak_rss_mb) MB, exit $rc"
   [[ $rc == 72 ]] && line+=" (interrupted)"
   history=$build/fuzz_logs/${name#fuzz_}.history
