@@ -2,8 +2,8 @@
 #include "sensor_rig/lidar/ouster/decoder.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -297,7 +297,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     const double col_ns = m.column_period_ns();
     const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
     const double reorder_ns = 16.0 * static_cast<double>(cpp) * col_ns;  // a reordering window of 16 packets
-    if (ahead == 1 && dt <= 0 && -static_cast<double>(dt) <= reorder_ns) {  // (negated as double: dt may be INT64_MIN)  // duplicate or late
+    // Duplicate or late. Negated as a double: dt may be INT64_MIN.
+    if (ahead == 1 && dt <= 0 && -static_cast<double>(dt) <= reorder_ns) {
       scans.reject(PacketStatus::kOutOfOrder);
       last = PacketStatus::kOutOfOrder;
       return out;
