@@ -1,9 +1,9 @@
 # Common compile settings for every sensor-rig target.
 add_library(rig_warnings INTERFACE)
 target_compile_options(rig_warnings INTERFACE
-  -Wall -Wextra -Wpedantic -Werror -Wshadow -Wconversion -Wno-sign-conversion
-  -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Woverloaded-virtual
-  -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough)
+  -Wall -Wextra -Wpedantic -Werror -Wshadow -Wconversion -Wno-sign-conversion -Wcast-align
+  -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough
+  $<$<COMPILE_LANGUAGE:CXX>:-Wnon-virtual-dtor -Wold-style-cast -Woverloaded-virtual>)
 
 # GCC 12 at -O3 reports std::string concatenation and assignment as overlapping memcpy
 # (-Wrestrict false positives: GCC bugs 105329, 105651; fixed in GCC 13). The warning stays an

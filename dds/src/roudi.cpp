@@ -98,6 +98,12 @@ RouDi::RouDi(const std::string& config_file, const std::string& log_file, bool a
   if (const int n = remove_roudi_leftovers(); n > 0)
     log::warn("dds", "removed " + std::to_string(n) + " files a previous RouDi left (/dev/shm, /tmp)");
   const Nanos start = monotonic_now_ns();
+  // Readiness is read from the log, so a stale one must go first; only a regular file is removed
+  // (a log path of /dev/null, removed as root, would take the device with it).
+  std::error_code ec;
+  const auto st = std::filesystem::symlink_status(log_file, ec);
+  if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+    throw std::runtime_error("the RouDi log " + log_file + " is not a regular file (readiness is read from it)");
   std::filesystem::remove(log_file);
   std::vector<std::string> argv{kRoudiBin, "-l", "info", "-m", "on"};
   if (!config_file.empty()) argv.insert(argv.end(), {"-c", config_file});

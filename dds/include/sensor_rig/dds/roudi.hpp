@@ -27,7 +27,8 @@ class RouDi {
  public:
   // Starts iox-roudi with `config_file` (empty: iceoryx's built-in pools), logging to `log_file`,
   // and waits until it is ready. When one already answers: uses it (external() true), or throws
-  // when `allow_external` is false. Throws std::runtime_error with the reason otherwise.
+  // when `allow_external` is false. Throws std::runtime_error with the reason otherwise, also when
+  // `log_file` exists and is not a regular file (it is replaced: readiness is read from it).
   RouDi(const std::string& config_file, const std::string& log_file, bool allow_external = true);
   ~RouDi();  // stops the RouDi it started and removes its leftovers
   RouDi(const RouDi&) = delete;

@@ -2,12 +2,14 @@
 // Typed topics, writers and readers over idlc-generated C types.
 // Register a type once with RIG_DDS_TYPE(c_type, descriptor) (see sensor_rig/dds/types.hpp).
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dds/entity.hpp"
 #include "sensor_rig/dds/participant.hpp"
+#include "sensor_rig/dds/payload_sertype.h"
 #include "sensor_rig/dds/qos.hpp"
 
 namespace sensor_rig::dds {
@@ -21,6 +23,16 @@ struct TypeSupport;  // specialised per message type: static const dds_topic_des
     static const dds_topic_descriptor_t* descriptor() { return &(Descriptor); } \
   }
 
+// A type whose last variable-size member is a large sequence<uint8> `Member` followed only by 1-byte
+// members (PointCloud2.data, Image.data): its topics size shared-memory chunks without serializing
+// each sample twice (payload_sertype.h).
+#define RIG_DDS_TYPE_WITH_PAYLOAD(CType, Descriptor, Member)                     \
+  template <>                                                                    \
+  struct sensor_rig::dds::TypeSupport<CType> {                                   \
+    static const dds_topic_descriptor_t* descriptor() { return &(Descriptor); } \
+    static constexpr std::size_t payload_offset = offsetof(CType, Member);       \
+  }
+
 // ROS topic "/a/b" -> DDS topic "rt/a/b" (rmw_cyclonedds convention).
 std::string ros_to_dds_topic(const std::string& ros_name);
 std::string dds_to_ros_topic(const std::string& dds_name);
@@ -31,9 +43,15 @@ class Topic {
   Topic(const Participant& p, const std::string& ros_name, const QosSpec& qos = {})
       : ros_name_(ros_name) {
     auto q = make_qos(qos);
-    topic_ = Entity(check(dds_create_topic(p.handle(), TypeSupport<T>::descriptor(),
-                                           ros_to_dds_topic(ros_name).c_str(), q.get(), nullptr),
-                          "dds_create_topic"));
+    const std::string name = ros_to_dds_topic(ros_name);
+    if constexpr (requires { TypeSupport<T>::payload_offset; }) {
+      topic_ = Entity(check(rig_create_payload_topic(p.handle(), TypeSupport<T>::descriptor(), name.c_str(), q.get(),
+                                                     TypeSupport<T>::payload_offset),
+                            "dds_create_topic"));
+    } else {
+      topic_ = Entity(check(dds_create_topic(p.handle(), TypeSupport<T>::descriptor(), name.c_str(), q.get(), nullptr),
+                            "dds_create_topic"));
+    }
   }
   [[nodiscard]] dds_entity_t handle() const noexcept { return topic_.handle(); }
   [[nodiscard]] const std::string& ros_name() const noexcept { return ros_name_; }

@@ -30,9 +30,9 @@ using DbwStatus = sensor_rig_msgs_msg_dds__DbwStatus_;
 using VehicleState = sensor_rig_msgs_msg_dds__VehicleState_;
 }  // namespace sensor_rig::msg
 
-RIG_DDS_TYPE(sensor_rig::msg::PointCloud2, sensor_msgs_msg_dds__PointCloud2__desc);
-RIG_DDS_TYPE(sensor_rig::msg::Image, sensor_msgs_msg_dds__Image__desc);
-RIG_DDS_TYPE(sensor_rig::msg::CompressedImage, sensor_msgs_msg_dds__CompressedImage__desc);
+RIG_DDS_TYPE_WITH_PAYLOAD(sensor_rig::msg::PointCloud2, sensor_msgs_msg_dds__PointCloud2__desc, data);
+RIG_DDS_TYPE_WITH_PAYLOAD(sensor_rig::msg::Image, sensor_msgs_msg_dds__Image__desc, data);
+RIG_DDS_TYPE_WITH_PAYLOAD(sensor_rig::msg::CompressedImage, sensor_msgs_msg_dds__CompressedImage__desc, data);
 RIG_DDS_TYPE(sensor_rig::msg::CameraInfo, sensor_msgs_msg_dds__CameraInfo__desc);
 RIG_DDS_TYPE(sensor_rig::msg::Imu, sensor_msgs_msg_dds__Imu__desc);
 RIG_DDS_TYPE(sensor_rig::msg::NavSatFix, sensor_msgs_msg_dds__NavSatFix__desc);
