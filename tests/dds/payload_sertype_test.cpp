@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -122,6 +123,27 @@ TEST(PayloadSertype, TheEnvironmentSwitchGivesCyclonesSertype) {
                                             &ours, &cyclone);
   ::unsetenv("RIG_DDS_DEFAULT_SERTYPE");
   EXPECT_EQ(rc, DDS_RETCODE_UNSUPPORTED);
+}
+
+// One type, one payload offset: a second registration of the type with another offset (a caller's
+// mistake) gets Cyclone's own sertype rather than a size computed at the wrong place.
+TEST(PayloadSertype, AConflictingOffsetForTheSameTypeFallsBackToCyclonesSertype) {
+  Participant p;
+  SampleMaker m;
+  const auto pc = m.cloud();
+  std::size_t ours = 0, cyclone = 0;
+  EXPECT_EQ(rig_payload_sizes_for_test(p.handle(), TypeSupport<msg::PointCloud2>::descriptor(), "rt/test/payload/a",
+                                       TypeSupport<msg::PointCloud2>::payload_offset, &pc, &ours, &cyclone),
+            DDS_RETCODE_OK);
+  EXPECT_EQ(rig_payload_sizes_for_test(p.handle(), TypeSupport<msg::PointCloud2>::descriptor(), "rt/test/payload/b",
+                                       offsetof(msg::PointCloud2, fields), &pc, &ours, &cyclone),
+            DDS_RETCODE_UNSUPPORTED);
+  // Writing through a topic created that way still works (Cyclone's sertype, Cyclone's size).
+  Entity topic(check(rig_create_payload_topic(p.handle(), TypeSupport<msg::PointCloud2>::descriptor(),
+                                              "rt/test/payload/b", nullptr, offsetof(msg::PointCloud2, fields)),
+                     "rig_create_payload_topic"));
+  Entity writer(check(dds_create_writer(p.handle(), topic.handle(), nullptr, nullptr), "dds_create_writer"));
+  EXPECT_EQ(dds_write(writer.handle(), &pc), DDS_RETCODE_OK);
 }
 
 void expect_same_cloud(const msg::PointCloud2& a, const msg::PointCloud2& b) {
