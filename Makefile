@@ -42,14 +42,15 @@ SAN_OPT = -O2 -g1 -DNDEBUG
 test-asan: setup
 	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_SANITIZE=ON -DRIG_BENCH=OFF \
 	  -DCMAKE_C_FLAGS_RELWITHDEBINFO="$(SAN_OPT)" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$(SAN_OPT)"
-	# Only what this stage runs: the unit executables, the two end-to-end tests and the `rig` they start.
-	cmake --build build-asan -j$(JOBS) --target unit_tests rig lidar_e2e_test dbw_rig_test
+	# Only what this stage runs: the unit executables, the two end-to-end tests and the `rig` they start,
+	# and the payload sertype's test (C code that fills Cyclone's internal structs).
+	cmake --build build-asan -j$(JOBS) --target unit_tests rig lidar_e2e_test dbw_rig_test payload_sertype_test
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -L unit -j$(JOBS)
 	# The runtime end to end under the sanitizers too: every `rig` process it starts is instrumented;
 	# one at a time, as each already runs several instrumented processes on the two cores.
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --output-on-failure -R '^(lidar_e2e_test|dbw_rig_test)$$' -j1
+	  ctest --output-on-failure -R '^(lidar_e2e_test|dbw_rig_test|payload_sertype_test)$$' -j1
 
 # The drive-by-wire bridge's threads under ThreadSanitizer: only the dbw tests that run threads
 # (transports, the node's DDS/CAN/publisher threads in one process), built alone in build-tsan.
