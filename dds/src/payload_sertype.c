@@ -59,7 +59,7 @@ static bool payload_register_locked(const char* type_name, size_t offset) {
   return true;
 }
 
-// The largest C sample copied on the stack (PointCloud2 is 88 bytes on x86-64).
+// The largest C sample copied on the stack (the C structs hold pointers: PointCloud2 is ~100 bytes).
 enum { kMaxSampleBytes = 1024 };
 
 static size_t payload_get_serialized_size(const struct ddsi_sertype* type, const void* sample) {
@@ -69,7 +69,7 @@ static size_t payload_get_serialized_size(const struct ddsi_sertype* type, const
   ddsrt_mutex_unlock(&payload_lock);
   if (offset == SIZE_MAX || st->type.size > kMaxSampleBytes || offset + sizeof(dds_sequence_t) > st->type.size)
     return ddsi_sertype_ops_default.get_serialized_size(type, sample);
-  // A shallow copy whose payload keeps only its last length % 4 bytes (nothing in it is freed or
+  // A shallow copy whose payload keeps only its first length % 4 bytes (nothing in it is freed or
   // kept). Cyclone's size is padded to a multiple of 4; dropping a multiple of 4 bytes from the
   // payload moves every later member by that much and keeps their alignment, so the full size is
   // the shallow copy's plus the bytes dropped.
