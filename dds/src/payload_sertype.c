@@ -40,8 +40,6 @@ struct payload_type {
 static struct payload_type payload_types[kMaxPayloadTypes];
 static uint32_t n_payload_types;
 static ddsrt_mutex_t payload_lock;  // guards payload_types and the serpool hand-over below
-static ddsrt_once_t payload_once = DDSRT_ONCE_INIT;
-static void payload_init(void) { ddsrt_mutex_init(&payload_lock); }
 
 static size_t payload_offset_locked(const char* type_name) {
   for (uint32_t i = 0; i < n_payload_types; i++)
@@ -84,11 +82,12 @@ static size_t payload_get_serialized_size(const struct ddsi_sertype* type, const
 }
 
 static struct ddsi_sertype_ops payload_ops;  // Cyclone's default ops but the size function
-static void payload_ops_init(void) {
+static ddsrt_once_t payload_once = DDSRT_ONCE_INIT;
+static void payload_init(void) {
+  ddsrt_mutex_init(&payload_lock);
   payload_ops = ddsi_sertype_ops_default;
   payload_ops.get_serialized_size = payload_get_serialized_size;
 }
-static ddsrt_once_t payload_ops_once = DDSRT_ONCE_INIT;
 
 // As ddsi_sertype_default_init does for a keyless XCDR1 type, with payload_ops; serpool is set
 // once the sertype is registered (the domain's pool, which outlives every topic).
@@ -139,7 +138,6 @@ static dds_entity_t create_payload_topic(dds_entity_t participant, const dds_top
                                          const struct ddsi_sertype** out) {
   *out = NULL;
   ddsrt_once(&payload_once, payload_init);
-  ddsrt_once(&payload_ops_once, payload_ops_init);
   // Only what this sertype reproduces exactly: keyless, XCDR1-capable, variable size, default data
   // representation. Anything else gets Cyclone's own sertype.
   const bool plain = desc->m_nkeys == 0 && !(desc->m_flagset & DDS_TOPIC_FIXED_SIZE) &&
