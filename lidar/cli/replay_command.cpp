@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/thread_priority.hpp"
+#include "sensor_rig/lidar/mock/phase_lock.hpp"
 #include "sensor_rig/lidar/mock/replay.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
@@ -34,6 +36,7 @@ struct ReplayCliOptions {
   double rate = 1.0;
   bool loop = false;
   double rpm = 600.0;
+  std::optional<double> phase_lock;  // synthetic: rotor angle at every whole second
   ReturnSelection returns = ReturnSelection::kStrongest;
   std::string calibration;     // synthetic Velodyne / Hesai
   std::string metadata;        // synthetic Ouster: render this sensor
@@ -67,6 +70,7 @@ mock::SyntheticOptions synthetic_options(const ReplayCliOptions& o, std::uint16_
   s.rpm = o.rpm;
   s.returns = o.returns;
   s.start_ns = start_ns;
+  s.phase_lock_deg = o.phase_lock;
   try {
     apply_decoder_files(read_decoder_files(o.calibration, o.metadata), s);
   } catch (const DecoderFileError& e) {
@@ -95,7 +99,8 @@ void write_metadata(const ReplayCliOptions& o, std::uint16_t port) {
   if (!out) throw std::runtime_error("cannot write metadata " + o.write_metadata);
 }
 
-std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::uint16_t port, Nanos lead_ns) {
+// A synthetic stream also sets ro.start_monotonic_ns: when its first packet is due.
+std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::uint16_t port, mock::ReplayOptions& ro) {
   if (!o.pcap.empty()) {
     try {
       return std::make_unique<mock::PcapStream>(o.pcap);
@@ -109,9 +114,15 @@ std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::
   } catch (const std::invalid_argument& e) {
     throw cli::UsageError(e.what());
   }
-  // The sensor's clock is the host's (a PTP-synced sensor): its first packet is complete when the
-  // sender sends it, lead_ns from now; the rest follow on the sensor's own timeline.
-  sensor->set_start_ns(vehicle_now_ns() + lead_ns - sensor->first_packet_offset_ns());
+  // The sensor's clock is the host's (a PTP-synced sensor): each packet leaves when the vehicle
+  // time it is complete at comes, the first lead_ns from now at the earliest, later when the rotor
+  // must first reach its phase-locked angle.
+  const Nanos mono_now = monotonic_now_ns();
+  const Nanos vehicle_now = vehicle_now_ns();
+  Nanos start = vehicle_now + ro.lead_ns - sensor->first_packet_offset_ns();
+  if (o.phase_lock) start = mock::phase_locked_start_ns(*sensor, start, *o.phase_lock);
+  sensor->set_start_ns(start);
+  ro.start_monotonic_ns = mono_now + (start + sensor->first_packet_offset_ns() - vehicle_now);
   return std::make_unique<mock::SyntheticStream>(std::move(sensor));
 }
 
@@ -140,6 +151,7 @@ int run_replay_command(const ReplayCliOptions& o) {
   if (o.loop && !o.synthetic.empty()) throw cli::UsageError("--loop applies to --pcap (a synthetic sensor never ends)");
   if (!o.pcap.empty() && !(o.calibration.empty() && o.metadata.empty() && o.write_metadata.empty()))
     throw cli::UsageError("--calibration, --metadata and --write-metadata apply to --synthetic");
+  if (!o.pcap.empty() && o.phase_lock) throw cli::UsageError("--phase-lock applies to --synthetic (a capture keeps its own phase)");
   if (o.to.empty()) {
     if (o.write_metadata.empty()) throw cli::UsageError("--to HOST:PORT is required");
     write_metadata(o, 0);  // only the metadata: nothing to send
@@ -176,7 +188,7 @@ int run_replay_command(const ReplayCliOptions& o) {
   std::vector<Endpoint> dests{data};
   if (o.position_port != 0) dests.push_back(Endpoint{data.host, static_cast<std::uint16_t>(o.position_port)});
   if (!o.write_metadata.empty()) write_metadata(o, data.port);
-  std::unique_ptr<mock::PacketStream> stream = make_stream(o, data.port, ro.lead_ns);
+  std::unique_ptr<mock::PacketStream> stream = make_stream(o, data.port, ro);
   UdpSender sender(dests, o.send_buffer);
 
   log::info("replay", std::string(o.pcap.empty() ? "synthetic " + o.synthetic : o.pcap) + " -> " + o.to +
@@ -210,6 +222,10 @@ void register_replay_command(CLI::App& lidar, cli::Context& ctx) {
   cmd->add_option("--rate", opts->rate, "speed factor (2 = twice as fast as recorded)")->capture_default_str();
   cmd->add_flag("--loop", opts->loop, "restart the capture at its end");
   cmd->add_option("--rpm", opts->rpm, "synthetic: rotation speed")->capture_default_str()->check(CLI::Range(60.0, 1200.0));
+  cmd->add_option("--phase-lock", opts->phase_lock,
+                  "synthetic: the rotor passes DEG (the azimuth; Ouster: measurement id x 360 / W) at every whole "
+                  "second, as a phase-locked sensor does; LIDARs locked alike complete their scans together")
+      ->check(CLI::Range(0.0, 359.999));
   cmd->add_option("--return", "synthetic: strongest, last or dual (default strongest)")
       ->check(CLI::IsMember({"strongest", "last", "dual"}))
       ->each([o = opts.get()](const std::string& w) { o->returns = *parse_return_selection(w); });

@@ -158,7 +158,11 @@ std::string describe(const RigConfig& cfg) {
       << ", returns "
       << lidar::to_string(l.returns) << ", time " << timesync::to_string(l.time_source) << ", qos " << dds::to_string(l.qos) << " -> /sensors/lidar/"
       << l.name << "/points";
-    if (l.mock.kind == LidarMockConfig::Kind::kSynthetic) o << " [mock: synthetic " << l.mock.rpm << " rpm]";
+    if (l.mock.kind == LidarMockConfig::Kind::kSynthetic) {
+      o << " [mock: synthetic " << l.mock.rpm << " rpm";
+      if (l.mock.phase_deg) o << ", phase-locked " << *l.mock.phase_deg << " deg";
+      o << "]";
+    }
     if (l.mock.kind == LidarMockConfig::Kind::kReplay) o << " [mock: replay " << l.mock.pcap << "]";
     o << "\n";
   }

@@ -33,6 +33,7 @@ std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const Li
     if (l.mock.loop) argv.emplace_back("--loop");
   } else {
     argv.insert(argv.end(), {"--synthetic", l.model, "--rpm", std::to_string(l.mock.rpm)});
+    if (l.mock.phase_deg) argv.insert(argv.end(), {"--phase-lock", std::to_string(*l.mock.phase_deg)});
     // The mock renders the sensor the driver decodes: same calibration, same Ouster metadata.
     if (!l.calibration.empty()) argv.insert(argv.end(), {"--calibration", l.calibration});
     if (!l.metadata.empty() && lidar::mock::is_ouster_model(l.model)) argv.insert(argv.end(), {"--metadata", l.metadata});

@@ -13,7 +13,7 @@ namespace sensor_rig::drivers {
 namespace {
 
 LidarMockConfig parse_mock(const config::Node& n) {
-  n.allow_keys({"kind", "pcap", "rate", "loop", "rpm", "drop_rate", "corrupt_rate"});
+  n.allow_keys({"kind", "pcap", "rate", "loop", "rpm", "phase_deg", "drop_rate", "corrupt_rate"});
   LidarMockConfig m;
   const auto kind = n.get_choice("kind", {"none", "synthetic", "replay"}, "none");
   m.kind = kind == "synthetic" ? LidarMockConfig::Kind::kSynthetic
@@ -25,6 +25,10 @@ LidarMockConfig parse_mock(const config::Node& n) {
   m.rate = n.get_double("rate", 0.01, 100.0, 1.0);
   m.loop = n.get_bool("loop", true);
   m.rpm = static_cast<int>(n.get_int("rpm", 300, 1200, 600));
+  if (n.has("phase_deg")) {
+    m.phase_deg = n.get_double("phase_deg", 0.0, 359.999, 0.0);
+    if (m.kind != LidarMockConfig::Kind::kSynthetic) n.fail("phase_deg", "applies to a synthetic mock (a capture keeps its own phase)");
+  }
   m.drop_rate = n.get_double("drop_rate", 0.0, 1.0, 0.0);
   m.corrupt_rate = n.get_double("corrupt_rate", 0.0, 1.0, 0.0);
   return m;
@@ -197,6 +201,7 @@ lidar::mock::SyntheticOptions synthetic_mock_options(const LidarConfig& c) {
   lidar::mock::SyntheticOptions o;
   o.model = c.model;
   o.rpm = c.mock.rpm;
+  o.phase_lock_deg = c.mock.phase_deg;
   o.ouster_udp_port = static_cast<std::uint16_t>(c.port);
   return o;
 }

@@ -74,7 +74,7 @@ ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOpti
   const bool send_position = o.send_position && sender.destinations() > 1;
 
   const Nanos t_begin = monotonic_now_ns();
-  const Nanos start = t_begin + o.lead_ns;
+  const Nanos start = o.start_monotonic_ns > 0 ? o.start_monotonic_ns : t_begin + o.lead_ns;
   const Nanos t_end = o.duration_ns > 0 ? t_begin + o.duration_ns : 0;
 
   auto flush = [&] {

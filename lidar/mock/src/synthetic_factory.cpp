@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "sensor_rig/lidar/hesai/calibration.hpp"
+#include "sensor_rig/lidar/mock/phase_lock.hpp"
 #include "sensor_rig/lidar/mock/synthetic_hesai.hpp"
 #include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
 #include "sensor_rig/lidar/mock/synthetic_velodyne.hpp"
@@ -130,13 +131,20 @@ std::string synthetic_options_error(const SyntheticOptions& o) {
 std::unique_ptr<SyntheticSensor> make_synthetic_sensor(const SyntheticOptions& o, Scene scene) {
   if (!is_synthetic_model(o.model))
     throw std::invalid_argument("unknown synthetic model '" + o.model + "' (supported: " + synthetic_model_names() + ")");
-  if (const auto v = velodyne::model_from_name(o.model)) return make_velodyne(o, *v, std::move(scene));
-  if (const auto h = hesai::model_from_name(o.model)) return make_hesai(o, *h, std::move(scene));
-  SyntheticOusterConfig c;
-  c.metadata = synthetic_ouster_metadata(o);
-  c.start_ns = o.start_ns;
-  c.imu_period_ns = o.ouster_imu_period_ns;
-  return std::make_unique<SyntheticOuster>(std::move(c), std::move(scene));
+  std::unique_ptr<SyntheticSensor> s;
+  if (const auto v = velodyne::model_from_name(o.model)) {
+    s = make_velodyne(o, *v, std::move(scene));
+  } else if (const auto h = hesai::model_from_name(o.model)) {
+    s = make_hesai(o, *h, std::move(scene));
+  } else {
+    SyntheticOusterConfig c;
+    c.metadata = synthetic_ouster_metadata(o);
+    c.start_ns = o.start_ns;
+    c.imu_period_ns = o.ouster_imu_period_ns;
+    s = std::make_unique<SyntheticOuster>(std::move(c), std::move(scene));
+  }
+  if (o.phase_lock_deg) (void)phase_locked_start_ns(*s, o.start_ns, *o.phase_lock_deg);  // throws if it cannot lock
+  return s;
 }
 
 }  // namespace sensor_rig::lidar::mock

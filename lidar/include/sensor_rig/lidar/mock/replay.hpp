@@ -72,6 +72,9 @@ struct ReplayOptions {
   FaultConfig faults;
   std::size_t batch = 64;         // packets per sendmmsg when behind schedule
   Nanos lead_ns = 2'000'000;      // first packet this long after start()
+  // The first packet is due at this CLOCK_MONOTONIC time instead (0: lead_ns after the call): a
+  // synthetic sensor's timeline is vehicle time, and its packets leave when their time comes.
+  Nanos start_monotonic_ns = 0;
 };
 
 struct ReplayStats {

@@ -3,6 +3,7 @@
 // Used by `rig lidar replay --synthetic MODEL` and by `rig up` (config validation, and the Ouster
 // metadata the driver and its mock share). Pure: no I/O (texts in), no clock reads.
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -19,6 +20,9 @@ struct SyntheticOptions {
   double rpm = 600.0;                 // Ouster: 600 (x10 modes) or 1200 (x20 modes) when no metadata is given
   ReturnSelection returns = ReturnSelection::kStrongest;  // Velodyne, Hesai; Ouster renders one echo
   Nanos start_ns = 0;                 // vehicle time the sensor's timeline starts at
+  // Rotor angle at every whole second (phase_lock.hpp); nullopt: free running from start_ns. The
+  // sender applies it (phase_locked_start_ns); the factory only checks that the sensor can lock.
+  std::optional<double> phase_lock_deg;
   std::string calibration_text;       // Velodyne ROS YAML / VeloView XML, Hesai angle or Firetime CSV
   std::string calibration_name;
   std::string metadata_text;          // Ouster: the sensor's metadata JSON; empty = nominal OS-1
@@ -35,7 +39,7 @@ std::string synthetic_model_names();
 bool is_synthetic_model(std::string_view model) noexcept;
 
 // Throws std::invalid_argument naming the problem (unknown model, rpm the model cannot run at,
-// bad calibration or metadata, metadata profile not of the model).
+// bad calibration or metadata, metadata profile not of the model, a phase lock it cannot hold).
 std::unique_ptr<SyntheticSensor> make_synthetic_sensor(const SyntheticOptions& o, Scene scene);
 
 // Empty when a synthetic sensor of these options can be made, else why not (as the exception of

@@ -80,6 +80,12 @@ class SyntheticOuster final : public SyntheticSensor {
   SyntheticPacket next() override;
   [[nodiscard]] Nanos first_packet_offset_ns() const noexcept override;
   void set_start_ns(Nanos start_ns) noexcept override { config_.start_ns = start_ns; }
+  [[nodiscard]] double rotation_period_ns() const noexcept override {
+    return column_ns_ * config_.metadata.columns_per_frame;
+  }
+  [[nodiscard]] double start_rotor_deg() const noexcept override {
+    return 360.0 * config_.start_column / config_.metadata.columns_per_frame;
+  }
   [[nodiscard]] std::uint64_t packets_emitted() const noexcept { return next_; }
   [[nodiscard]] std::uint64_t imu_packets_emitted() const noexcept { return imu_next_; }
 

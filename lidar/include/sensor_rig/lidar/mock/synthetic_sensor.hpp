@@ -27,6 +27,12 @@ class SyntheticSensor {
   // Moves the whole timeline (before the first next()): a mock sender aligns the sensor's clock
   // with its send schedule so that every packet leaves when its time_ns is reached.
   virtual void set_start_ns(Nanos start_ns) noexcept = 0;
+  // One turn of the rotor (one scan) in ns.
+  [[nodiscard]] virtual double rotation_period_ns() const noexcept = 0;
+  // Where the rotor is at the timeline's start, in degrees past the scan boundary, growing with
+  // time: Velodyne and Hesai the packets' azimuth (the decoders cut at 0 by default), Ouster the
+  // measurement id x 360 / columns per frame (a frame starts at id 0).
+  [[nodiscard]] virtual double start_rotor_deg() const noexcept = 0;
 };
 
 }  // namespace sensor_rig::lidar::mock

@@ -58,6 +58,8 @@ class SyntheticVelodyne final : public SyntheticSensor {
   SyntheticPacket next() override;
   [[nodiscard]] Nanos first_packet_offset_ns() const noexcept override { return 0; }  // first firing or GPS report
   void set_start_ns(Nanos start_ns) noexcept override { config_.start_ns = start_ns; }
+  [[nodiscard]] double rotation_period_ns() const noexcept override { return 360.0 / deg_per_ns_; }
+  [[nodiscard]] double start_rotor_deg() const noexcept override { return config_.start_azimuth_deg; }
   [[nodiscard]] std::uint64_t data_packets_emitted() const noexcept { return next_data_; }
   [[nodiscard]] std::uint64_t position_packets_emitted() const noexcept { return next_position_; }
 

@@ -21,6 +21,9 @@ struct LidarMockConfig {
   double rate = 1.0;         // replay speed factor
   bool loop = true;
   int rpm = 600;             // synthetic: rotation speed
+  // synthetic: phase lock, the rotor angle at every whole second (lidar/mock/phase_lock.hpp); LIDARs
+  // locked alike complete their scans together. nullopt: free running, from whenever it starts.
+  std::optional<double> phase_deg;
   double drop_rate = 0.0;    // fault injection, passed to `rig lidar replay`
   double corrupt_rate = 0.0;
 };
