@@ -6,6 +6,9 @@
 # that uses the same transport.
 # Usage: scripts/bench_rig_transport.sh BUILD_DIR [SECONDS] [TRANSPORTS...]
 # Environment: LIDARS_ONLY=1 runs the three LIDARs alone (no cameras, dbw, fusion, sync sets);
+# PHASE_DEG=N phase-locks every synthetic LIDAR to N degrees (their scans complete together),
+# PHASE_DEG=free lets them run free (each from whenever its mock starts);
+# FUSION_RT=N sets fusion.realtime_priority N (before/after runs);
 # DDS_RT=N sets rig.dds.realtime_priority N (0: off, for before/after runs); the monitor runs with
 # --rt-priority at the config's rig.dds.realtime_priority.
 set -euo pipefail
@@ -31,16 +34,24 @@ for t in "${transports[@]}"; do
   sed -e "s/^    domain: 0$/    domain: $domain/" -e "s|^    profile: cyclonedds/loopback.xml.*|&\n    transport: $t|" \
     "$root/config/mock_rig.yaml" >"$conf"
   grep -q "transport: $t" "$conf" || { echo "could not set the transport in $conf" >&2; exit 1; }
-  if [ -n "${LIDARS_ONLY:-}" ] || [ -n "${DDS_RT:-}" ]; then
-    python3 - "$conf" "${LIDARS_ONLY:-}" "${DDS_RT:-}" <<'PY'
+  if [ -n "${LIDARS_ONLY:-}" ] || [ -n "${DDS_RT:-}" ] || [ -n "${PHASE_DEG:-}" ] || [ -n "${FUSION_RT:-}" ]; then
+    python3 - "$conf" "${LIDARS_ONLY:-}" "${DDS_RT:-}" "${PHASE_DEG:-}" "${FUSION_RT:-}" <<'PY'
 import sys, yaml
-path, lidars_only, rt = sys.argv[1], sys.argv[2], sys.argv[3]
+path, lidars_only, rt, phase, fusion_rt = sys.argv[1:6]
 c = yaml.safe_load(open(path))
 if lidars_only:
     for k in ("cameras", "dbw", "sync_sets", "fusion"):
         c.pop(k, None)
 if rt:
     c["rig"]["dds"]["realtime_priority"] = int(rt)
+if fusion_rt and "fusion" in c:
+    c["fusion"]["realtime_priority"] = int(fusion_rt)
+for lidar in c.get("lidars", []):
+    mock = lidar.get("mock", {})
+    if phase == "free":
+        mock.pop("phase_deg", None)
+    elif phase and mock.get("kind") == "synthetic":
+        mock["phase_deg"] = float(phase)
 yaml.safe_dump(c, open(path, "w"), sort_keys=False)
 PY
   fi
