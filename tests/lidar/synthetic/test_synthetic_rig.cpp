@@ -3,10 +3,12 @@
 // topics at once. Behaviour, not timing: each arrives scan by scan with sensor-clock stamps one
 // revolution apart, the Ouster and Hesai stamps come from the sensor clock through the mapper, the
 // VLP-32C's from its GPRMC/PPS position packets (GPS-synced), and the synthetic Ouster's metadata is
-// written where the driver read it. With the shared captures, a replay-mock HDL-32E shows that a
-// capture's position packets reach the driver too.
+// written where the driver read it. The three are phase-locked: each scan starts where the lock
+// puts it, and its packets left on time. With the shared captures, a replay-mock HDL-32E shows
+// that a capture's position packets reach the driver too.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -28,6 +30,7 @@ using test::rig_bin;
 constexpr int kDomain = 21;
 constexpr const char* kNames[] = {"velodyne", "ouster", "hesai"};
 constexpr const char* kModels[] = {"VLP-32C", "OS-LEGACY", "Pandar40P"};
+constexpr int kPhases[] = {0, 0, 90};
 
 // The HDL-32E capture: its position packets (port 8308 records) carry a valid GPRMC, PPS absent.
 std::string hdl32e_capture() {
@@ -42,7 +45,9 @@ std::string mixed_rig(const std::string& profile, const std::string& capture = "
     y << "  - {name: " << kNames[i] << ", model: " << kModels[i] << ", port: " << test::free_udp_port();
     if (i == 0) y << ", position_port: " << test::free_udp_port();
     if (i == 1) y << ", imu_port: " << test::free_udp_port();
-    y << ", time_source: sensor, qos: {reliability: reliable, depth: 20}, mock: {kind: synthetic, rpm: 600}}\n";
+    // Phase-locked: the VLP-32C and the Ouster end their scans on every 100 ms, the Hesai 25 ms earlier.
+    y << ", time_source: sensor, qos: {reliability: reliable, depth: 20}, mock: {kind: synthetic, rpm: 600, phase_deg: "
+      << kPhases[i] << "}}\n";
   }
   if (!capture.empty())
     y << "  - {name: replayed, model: HDL-32E, port: " << test::free_udp_port()
@@ -147,12 +152,14 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
   // All three at once, as a fusion node would.
   std::vector<std::vector<std::uint32_t>> points(3);
   std::vector<std::vector<Nanos>> stamps(3);
+  std::vector<std::vector<Nanos>> written(3);  // DDS source timestamps
   std::map<std::string, std::map<std::string, std::string>> status;  // last diagnostics per driver
   for (const Nanos end = monotonic_now_ns() + 3'000'000'000; monotonic_now_ns() < end;) {
     for (std::size_t i = 0; i < 3; ++i) {
-      readers[i]->take([&](const msg::PointCloud2& pc, const dds_sample_info_t&) {
+      readers[i]->take([&](const msg::PointCloud2& pc, const dds_sample_info_t& info) {
         points[i].push_back(pc.width);
         stamps[i].push_back(msg::from_time(pc.header.stamp));
+        written[i].push_back(static_cast<Nanos>(info.source_timestamp));
       });
     }
     imus.take([&](const msg::Imu& m, const dds_sample_info_t&) {
@@ -193,6 +200,20 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
     // Stamps are the sensor's: one revolution (100 ms) apart on average.
     const double mean_dt = static_cast<double>(stamps[i].back() - stamps[i].front()) / double(stamps[i].size() - 1);
     EXPECT_NEAR(mean_dt, 100e6, 10e6);
+    // The phase lock through the whole path: a scan starts where the rotor crosses 0°, phase/360 of
+    // a turn before each whole second (the Pandar40P's first point up to 0.9 ms earlier, its cut
+    // is per point; the mapped sensor clocks within 0.5 ms), and its packets left on time: the
+    // scan is written about one turn after its first firing.
+    const double crossing = 100.0 - kPhases[i] / 360.0 * 100.0;  // ms into each 100 ms
+    for (std::size_t k = 0; k < stamps[i].size(); ++k) {
+      double at = static_cast<double>(stamps[i][k] % 100'000'000) * 1e-6 - crossing;
+      at -= 100.0 * std::floor(at / 100.0 + 0.5);
+      EXPECT_GT(at, i == 2 ? -1.5 : -0.5) << "stamp " << stamps[i][k];
+      EXPECT_LT(at, 0.5) << "stamp " << stamps[i][k];
+      const double after_ms = static_cast<double>(written[i][k] - stamps[i][k]) * 1e-6;
+      EXPECT_GT(after_ms, 98.0);
+      EXPECT_LT(after_ms, 130.0);
+    }
     const auto& kv = status["lidar/" + std::string(kNames[i])];
     EXPECT_EQ(kv.at("packets_dropped"), "0");
     if (i == 0) {
