@@ -5,13 +5,15 @@
 // hand and keeps the serialized payload; the CDR fields that identify a scan and prove it whole
 // (header.stamp, height, width, point_step, row_step, data length) are read from it.
 //
-// fastdds_pointcloud_sub --topic rt/... [--domain N] [--qos default|sensor_data] [--count N]
-//                        [--timeout-s S] [--quiet-ms MS]
+// fastdds_pointcloud_sub --topic rt/... [--topic rt/... ...] [--domain N] [--qos default|sensor_data]
+//                        [--count N] [--timeout-s S] [--quiet-ms MS]
+// Several --topic: one participant (one socket, as one ROS 2 node) with a reader each; --count per
+// topic; one JSON line per topic.
 // With FASTRTPS_DEFAULT_PROFILES_FILE set, the participant is that profile's default one (U: its
-// UDP receive buffer, 0 = the OS default). Prints `matched` when a writer matched, then one JSON
-// line at the end:
-// {"udp_receive_buffer":U,"received":R,"whole":W,"broken":B,"lost_reported":L,"max_delay_ms":D,"stamps":[ns,...]}
-// Exit 0 with N whole scans, 1 otherwise (fewer, or broken ones), 2 bad usage.
+// UDP receive buffer, 0 = the OS default). Prints `matched` when a writer matched, then per topic one
+// JSON line at the end:
+// {"topic":T,"udp_receive_buffer":U,"received":R,"whole":W,"broken":B,"lost_reported":L,"max_delay_ms":D,"stamps":[ns,...]}
+// Exit 0 with N whole scans on every topic, 1 otherwise (fewer, or broken ones), 2 bad usage.
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -30,6 +32,7 @@
 #include <cstdio>
 #include <cstring>
 #include <iostream>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -146,7 +149,7 @@ class PointCloud2Type : public fdds::TopicDataType {
 };
 
 struct Options {
-  std::string topic;
+  std::vector<std::string> topics;  // --topic, repeatable: one participant reading them all, as one node
   int domain = 0;
   bool sensor_data = false;
   int count = 0;
@@ -160,7 +163,7 @@ std::optional<Options> parse(int argc, char** argv) {
   for (std::size_t i = 0; i + 1 < args.size(); i += 2) {
     const std::string& k = args[i];
     const std::string& v = args[i + 1];
-    if (k == "--topic") o.topic = v;
+    if (k == "--topic") o.topics.push_back(v);
     else if (k == "--domain") o.domain = std::stoi(v);
     else if (k == "--qos" && (v == "default" || v == "sensor_data")) o.sensor_data = v == "sensor_data";
     else if (k == "--count") o.count = std::stoi(v);
@@ -168,7 +171,7 @@ std::optional<Options> parse(int argc, char** argv) {
     else if (k == "--quiet-ms") o.quiet_ms = std::stoi(v);
     else return std::nullopt;
   }
-  if (args.size() % 2 != 0 || o.topic.empty() || o.count <= 0) return std::nullopt;
+  if (args.size() % 2 != 0 || o.topics.empty() || o.count <= 0) return std::nullopt;
   return o;
 }
 
@@ -201,10 +204,10 @@ class Listener : public fdds::DataReaderListener {
     const std::lock_guard<std::mutex> lock(mutex_);
     return !stamps_.empty() && std::chrono::steady_clock::now() - last_ > ms;
   }
-  std::string json(std::uint32_t udp_receive_buffer) {
+  std::string json(const std::string& topic, std::uint32_t udp_receive_buffer) {
     const std::lock_guard<std::mutex> lock(mutex_);
     std::ostringstream o;
-    o << R"({"udp_receive_buffer":)" << udp_receive_buffer << R"(,"received":)" << stamps_.size() << R"(,"whole":)" << whole_ << R"(,"broken":)" << broken_
+    o << R"({"topic":")" << topic << R"(","udp_receive_buffer":)" << udp_receive_buffer << R"(,"received":)" << stamps_.size() << R"(,"whole":)" << whole_ << R"(,"broken":)" << broken_
       << R"(,"lost_reported":)" << lost_reported_.load() << R"(,"max_delay_ms":)" << static_cast<double>(max_delay_ns_) / 1e6
       << R"(,"stamps":[)";
     for (std::size_t i = 0; i < stamps_.size(); ++i) o << (i ? "," : "") << stamps_[i];
@@ -251,8 +254,8 @@ std::uint32_t udp_receive_buffer(const fdds::DomainParticipant& p) {
 int main(int argc, char** argv) {
   const auto opt = parse(argc, argv);
   if (!opt) {
-    std::cerr << "usage: fastdds_pointcloud_sub --topic rt/... [--domain N] [--qos default|sensor_data] "
-                 "--count N [--timeout-s S] [--quiet-ms MS]\n";
+    std::cerr << "usage: fastdds_pointcloud_sub --topic rt/... [--topic rt/... ...] [--domain N] "
+                 "[--qos default|sensor_data] --count N [--timeout-s S] [--quiet-ms MS]\n";
     return 2;
   }
   auto* factory = fdds::DomainParticipantFactory::get_instance();
@@ -264,24 +267,48 @@ int main(int argc, char** argv) {
   }
   fdds::TypeSupport type(new PointCloud2Type());
   type.register_type(participant);
-  fdds::Topic* topic = participant->create_topic(opt->topic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
   fdds::Subscriber* sub = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-  Listener listener;
-  fdds::DataReader* reader =
-      topic && sub ? sub->create_datareader(topic, reader_qos(*sub, opt->sensor_data), &listener) : nullptr;
-  if (reader == nullptr) {
-    std::cerr << "fastdds_pointcloud_sub: no reader for " << opt->topic << "\n";
+  if (sub == nullptr) {
+    std::cerr << "fastdds_pointcloud_sub: no subscriber\n";
     return 1;
   }
+  struct Read {
+    fdds::Topic* topic = nullptr;
+    std::unique_ptr<Listener> listener = std::make_unique<Listener>();
+    fdds::DataReader* reader = nullptr;
+  };
+  std::vector<Read> reads(opt->topics.size());
+  for (std::size_t i = 0; i < reads.size(); ++i) {
+    Read& r = reads[i];
+    r.topic = participant->create_topic(opt->topics[i], type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+    if (r.topic != nullptr) r.reader = sub->create_datareader(r.topic, reader_qos(*sub, opt->sensor_data), r.listener.get());
+    if (r.reader == nullptr) {
+      std::cerr << "fastdds_pointcloud_sub: no reader for " << opt->topics[i] << "\n";
+      return 1;
+    }
+  }
+  // Until every topic has its scans, the time is up, or every topic has gone quiet.
+  const auto done = [&] {
+    bool all_whole = true, all_quiet = true;
+    for (auto& r : reads) {
+      all_whole = all_whole && r.listener->whole() >= opt->count;
+      all_quiet = all_quiet && r.listener->quiet_for(std::chrono::milliseconds(opt->quiet_ms));
+    }
+    return all_whole || all_quiet;
+  };
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(opt->timeout_s);
-  while (listener.whole() < opt->count && std::chrono::steady_clock::now() < deadline &&
-         !listener.quiet_for(std::chrono::milliseconds(opt->quiet_ms)))
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  sub->delete_datareader(reader);
+  while (!done() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  bool ok = true;
+  std::string summary;
+  for (std::size_t i = 0; i < reads.size(); ++i) {
+    sub->delete_datareader(reads[i].reader);
+    participant->delete_topic(reads[i].topic);
+    const std::string line = reads[i].listener->json(opt->topics[i], udp_receive_buffer(*participant));
+    ok = ok && line.find("\"broken\":0,") != std::string::npos && reads[i].listener->whole() >= opt->count;
+    summary += line + "\n";
+  }
   participant->delete_subscriber(sub);
-  participant->delete_topic(topic);
-  const std::string summary = listener.json(udp_receive_buffer(*participant));
   factory->delete_participant(participant);
-  std::cout << summary << std::endl;
-  return summary.find("\"broken\":0,") != std::string::npos && listener.whole() >= opt->count ? 0 : 1;
+  std::cout << summary << std::flush;
+  return ok ? 0 : 1;
 }
