@@ -152,6 +152,7 @@ int run_replay_command(const ReplayCliOptions& o) {
   if (!o.pcap.empty() && !(o.calibration.empty() && o.metadata.empty() && o.write_metadata.empty()))
     throw cli::UsageError("--calibration, --metadata and --write-metadata apply to --synthetic");
   if (!o.pcap.empty() && o.phase_lock) throw cli::UsageError("--phase-lock applies to --synthetic (a capture keeps its own phase)");
+  if (o.phase_lock && o.rate != 1.0) throw cli::UsageError("--phase-lock needs --rate 1 (the lock is to real seconds)");
   if (o.to.empty()) {
     if (o.write_metadata.empty()) throw cli::UsageError("--to HOST:PORT is required");
     write_metadata(o, 0);  // only the metadata: nothing to send

@@ -116,6 +116,22 @@ TEST(SyntheticRig, WriteMetadataAloneWritesWhatTheParserReads) {
   EXPECT_EQ(rc2, 2) << out2;
 }
 
+// `--phase-lock` where no lock can hold is a usage error that says why, before anything is sent.
+TEST(SyntheticRig, ReplayRefusesAPhaseLockThatCannotHold) {
+  const std::string to = " --to 127.0.0.1:" + std::to_string(test::free_udp_port()) + " --duration 1";
+  const auto expect_usage = [](const std::string& args, const std::string& why) {
+    const auto [rc, out] = test::run(rig_bin() + " lidar replay " + args + " 2>&1");
+    EXPECT_EQ(rc, 2) << args << ": " << out;
+    EXPECT_NE(out.find(why), std::string::npos) << args << ": " << out;
+  };
+  expect_usage("--pcap " + (test::source_dir() / "README.md").string() + " --phase-lock 10" + to, "applies to --synthetic");
+  expect_usage("--synthetic VLP-16 --rate 2 --phase-lock 10" + to, "--rate 1");
+  expect_usage("--synthetic VLP-16 --rpm 700 --phase-lock 10" + to, "whole number of turns per second");
+  expect_usage("--synthetic VLP-16 --phase-lock 360" + to, "--phase-lock");
+  const auto [rc, out] = test::run(rig_bin() + " lidar replay --synthetic Pandar40P --phase-lock 90" + to + " 2>&1");
+  EXPECT_EQ(rc, 0) << out;
+}
+
 TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
   test::TempDir dir;
   const std::string profile = test::source_dir().string() + "/config/cyclonedds/loopback.xml";
