@@ -150,7 +150,9 @@ void add_ddsperf(CLI::App& perf_app, cli::Context& ctx) {
 }  // namespace
 
 void register_cli(CLI::App& app, cli::Context& ctx) {
-  auto* perf_app = app.add_subcommand("perf", "The DDS latency/loss evaluation of Kouril et al. (SPEC §9)");
+  auto* perf_app = app.add_subcommand("perf",
+                                      "The DDS latency/loss evaluation of Kouril et al., \"Performance Evaluation of "
+                                      "a ROS2 Based Automated Driving System\" (docs/perf.md)");
   perf_app->require_subcommand(1);
   add_run(*perf_app, ctx);
   add_table(*perf_app, ctx, 1);
