@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The floors of the house (README "Architecture"): includes and CMake links only run downward.
+# The floors of the house (docs/architecture.md): includes and CMake links only run downward.
 #   common -> msgs/dds, timesync, lidar, camera, dbw -> drivers -> rig -> bench
 # Checks: (1) every #include "sensor_rig/<floor>/..." of a folder names its own floor or a lower one;
 # (2) only dds/ includes Cyclone (dds/dds.h, dds/ddsrt, dds/ddsi); (3) with a build dir, CMake's
