@@ -70,11 +70,15 @@ std::string describe_cameras(const std::vector<drivers::CameraConfig>& cameras) 
   return o.str();
 }
 
-std::vector<drivers::CameraConfig> resolve_camera_mocks(std::vector<drivers::CameraConfig> cameras) {
+std::vector<drivers::CameraConfig> resolve_camera_mocks(std::vector<drivers::CameraConfig> cameras,
+                                                        std::vector<LoopbackAddress>& addresses) {
   for (auto& c : cameras) {
     if (c.mock.kind != drivers::CameraMockConfig::Kind::kGige) continue;
     std::string why;
-    if (camera::mock::ensure_loopback_address(c.source.device, why)) continue;
+    if (auto lease = LoopbackAddress::take(c.source.device, why)) {
+      addresses.push_back(std::move(*lease));
+      continue;
+    }
     log::warn("rig", "camera " + c.name + ": no GigE fake on " + c.source.device + " (" + why +
                          "): running an in-process Aravis fake instead");
     c.mock.kind = drivers::CameraMockConfig::Kind::kAravisInProcess;
@@ -109,12 +113,13 @@ struct CameraRig::Impl {
   std::vector<int> lidar_trigger_priority;
   std::vector<std::unique_ptr<drivers::CameraDriver>> drivers;
   std::vector<Fake> fakes;
+  std::vector<LoopbackAddress> addresses;  // the GigE fakes' addresses on lo, given back after them
 };
 
 CameraRig::CameraRig(const std::vector<drivers::CameraConfig>& cameras, const dds::Participant& participant,
                      dds::StampsWriter& stamps)
     : impl_(std::make_unique<Impl>()) {
-  impl_->cameras = resolve_camera_mocks(cameras);
+  impl_->cameras = resolve_camera_mocks(cameras, impl_->addresses);
   std::map<std::string, std::size_t> lidar_trigger_of_group;
   for (const auto& c : impl_->cameras) {
     drivers::TriggerSource* group = nullptr;
@@ -204,6 +209,7 @@ void CameraRig::stop() {
   for (auto& f : impl_->fakes)
     if (f.process.pid() > 0) f.process.stop(1000);
   impl_->fakes.clear();
+  impl_->addresses.clear();  // after the fakes that were bound to them
 }
 
 }  // namespace sensor_rig::rig

@@ -8,6 +8,7 @@
 
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/config_node.hpp"
+#include "sensor_rig/common/loopback_address.hpp"
 #include "sensor_rig/dds/driver_status.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
@@ -19,9 +20,11 @@ namespace sensor_rig::rig {
 std::vector<drivers::CameraConfig> parse_cameras(const config::Node& root);
 std::string describe_cameras(const std::vector<drivers::CameraConfig>& cameras);
 
-// GigE mocks need their address on `lo`; where it cannot be added, the camera runs an in-process
+// GigE mocks need their address on `lo`: a lease each, appended to `addresses` (removed from the
+// host when the last lease on it ends). Where one cannot be added, the camera runs an in-process
 // fake instead (logged). Returns the configs as they will run.
-std::vector<drivers::CameraConfig> resolve_camera_mocks(std::vector<drivers::CameraConfig> cameras);
+std::vector<drivers::CameraConfig> resolve_camera_mocks(std::vector<drivers::CameraConfig> cameras,
+                                                        std::vector<LoopbackAddress>& addresses);
 
 class CameraRig {
  public:

@@ -17,6 +17,7 @@
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/loopback_address.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
@@ -125,6 +126,9 @@ bool needs_synthetic_metadata(const LidarConfig& l) {
 }
 
 int run_rig(const RigConfig& config, const RunOptions& opt) {
+  // Addresses that a rig or test which ended without giving them back (SIGKILL, a crash) added to lo.
+  for (const auto& a : LoopbackAddress::sweep())
+    log::info("rig", "removed " + a + " from lo: added by a process that ended without removing it");
   // A synthetic Ouster without configured metadata: its mock's metadata, for both driver and mock.
   RigConfig cfg = config;
   std::optional<SyntheticMetadataDir> metadata_dir;

@@ -12,11 +12,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iterator>
+#include <optional>
 #include <set>
 #include <thread>
 
 #include "rig_process.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/loopback_address.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 #include "sensor_rig/drivers/camera/lidar_trigger.hpp"
@@ -77,11 +79,17 @@ LidarConfig front_lidar() {
   return l;
 }
 
+// A GigE fake and its address on lo: the fake stops (declared last) before the address goes.
+struct GigeMock {
+  std::optional<LoopbackAddress> address;
+  ChildProcess fake;
+};
+
 // A camera triggered by `lidar` at `azimuth_deg`, on a GigE fake at 127.0.0.<host> (which gates
-// its stream on the software trigger: one frame per trigger) — started into `fake` — or an
+// its stream on the software trigger: one frame per trigger) — started into `mock` — or an
 // in-process Aravis fake where no loopback address can be added. Returns whether it is GigE.
 bool triggered_camera(CameraConfig& c, const std::string& name, const std::string& lidar, double azimuth_deg, int host,
-                      ChildProcess& fake) {
+                      GigeMock& mock) {
   c.name = unique(name);
   c.frame_id = "camera_" + c.name;
   c.source.format = camera::PixelFormat::kBayerRG8;
@@ -95,7 +103,8 @@ bool triggered_camera(CameraConfig& c, const std::string& name, const std::strin
   c.lidar_trigger.latency_us = 100.0;
   const std::string address = "127.0.0." + std::to_string(host);
   std::string why;
-  const bool gige = camera::mock::ensure_loopback_address(address, why);
+  mock.address = LoopbackAddress::take(address, why);
+  const bool gige = mock.address.has_value();
   c.source.device = gige ? address : c.name;
   c.mock.kind = gige ? CameraMockConfig::Kind::kGige : CameraMockConfig::Kind::kAravisInProcess;
   if (!gige) std::fprintf(stderr, "no GigE fake (%s): in-process Aravis fake, frames not gated\n", why.c_str());
@@ -103,7 +112,7 @@ bool triggered_camera(CameraConfig& c, const std::string& name, const std::strin
     camera::mock::GigeFakeOptions fo;
     fo.address = address;
     fo.program = RIG_FAKE_GIGE_CAMERA;  // rig up's GigE mock: exposes on the trigger
-    fake = camera::mock::start_gige_fake(fo);
+    mock.fake = camera::mock::start_gige_fake(fo);
   }
   return gige;
 }
@@ -126,8 +135,8 @@ void expect_fake_exposures(const LidarTriggerFigures& f, const dds::DriverStatus
 TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
   const LidarConfig l = front_lidar();
   CameraConfig c;
-  ChildProcess fake;
-  const bool gige = triggered_camera(c, "trig_cam", l.name, 45.0, 140 + ::getpid() % 20, fake);  // a front-left camera
+  GigeMock mock;
+  const bool gige = triggered_camera(c, "trig_cam", l.name, 45.0, 140 + ::getpid() % 20, mock);  // a front-left camera
 
   dds::Participant p;
   dds::StampsWriter stamps(p);
@@ -187,7 +196,7 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
   trigger.stop();
   camera.stop();
   lidar.stop();
-  if (gige) fake.stop(500);
+  if (gige) mock.fake.stop(500);
 }
 
 // The stereo pair on the front LIDAR (issue 12): one LidarTrigger fires both cameras at once at each
@@ -197,7 +206,7 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
 TEST(LidarTriggeredCamera, StereoPairIsFiredTogetherStampsWithin1msPhaseMeasuredPerCamera) {
   const LidarConfig l = front_lidar();
   CameraConfig cams[2];
-  ChildProcess fakes[2];
+  GigeMock fakes[2];
   bool gige = true;
   for (int i = 0; i < 2; ++i) {
     gige = triggered_camera(cams[i], i == 0 ? "trig_left" : "trig_right", l.name, 0.0, 160 + 2 * (::getpid() % 20) + i, fakes[i]) && gige;
@@ -283,8 +292,8 @@ TEST(LidarTriggeredCamera, StereoPairIsFiredTogetherStampsWithin1msPhaseMeasured
                ms(left.error_p99_ns), ms(right.error_p99_ns));
   for (auto& d : drivers) d->stop();
   lidar.stop();
-  for (auto& fake : fakes)
-    if (fake.pid() > 0) fake.stop(500);
+  for (auto& mock : fakes)
+    if (mock.fake.pid() > 0) mock.fake.stop(500);
 }
 
 }  // namespace

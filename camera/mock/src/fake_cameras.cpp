@@ -2,7 +2,6 @@
 
 #include <arpa/inet.h>
 #include <arv.h>
-#include <ifaddrs.h>
 #include <netinet/in.h>
 #include <time.h>
 
@@ -46,43 +45,6 @@ AravisDeviceOpener inprocess_fake_opener() {
     }
     return d;
   };
-}
-
-bool has_address(const std::string& address) {
-  in_addr want{};
-  if (::inet_pton(AF_INET, address.c_str(), &want) != 1) return false;
-  ifaddrs* list = nullptr;
-  if (::getifaddrs(&list) != 0) return false;
-  bool found = false;
-  for (ifaddrs* i = list; i != nullptr && !found; i = i->ifa_next) {
-    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
-    sockaddr_in sin{};
-    std::memcpy(&sin, i->ifa_addr, sizeof sin);
-    found = sin.sin_addr.s_addr == want.s_addr;
-  }
-  ::freeifaddrs(list);
-  return found;
-}
-
-bool ensure_loopback_address(const std::string& address, std::string& why) {
-  in_addr a{};
-  if (::inet_pton(AF_INET, address.c_str(), &a) != 1) {
-    why = "'" + address + "' is not an IPv4 address";
-    return false;
-  }
-  if (has_address(address)) return true;
-  if ((ntohl(a.s_addr) >> 24) != 127) {
-    why = address + " is on no interface (only 127.0.0.0/8 addresses are added to lo)";
-    return false;
-  }
-  ChildProcess ip({"/usr/sbin/ip", "addr", "add", address + "/8", "dev", "lo"});
-  const Nanos deadline = monotonic_now_ns() + 2'000'000'000;
-  while (ip.running() && monotonic_now_ns() < deadline) sleep_ms(10);
-  if (ip.running()) ip.stop(100);
-  if (has_address(address)) return true;
-  why = "cannot add " + address + " to lo (needs root or CAP_NET_ADMIN; `ip addr add` exit " +
-        std::to_string(ip.exit_status()) + ")";
-  return false;
 }
 
 namespace {

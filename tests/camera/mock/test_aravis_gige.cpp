@@ -17,6 +17,7 @@
 
 #include "sensor_rig/camera/aravis_source.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/loopback_address.hpp"
 #include "sensor_rig/common/thread_priority.hpp"
 #include "glib_log_counter.hpp"
 #include "next_frame.hpp"
@@ -32,9 +33,13 @@ class GigeFake : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    for (int k = 0; k < 2; ++k)
-      if (!mock::ensure_loopback_address(address(k), why)) GTEST_SKIP() << why;
+    for (int k = 0; k < 2; ++k) {
+      auto lease = LoopbackAddress::take(address(k), why);
+      if (!lease) GTEST_SKIP() << why;
+      addresses_.push_back(std::move(*lease));
+    }
   }
+  std::vector<LoopbackAddress> addresses_;  // on lo for the test, removed after it (also on failure)
   static SourceConfig cfg(const std::string& addr) {
     SourceConfig c;
     c.device = addr;
@@ -347,8 +352,12 @@ TEST_F(GigeFake, ALiveCameraReopenedAfterMarkLostStreamsAgain) {
 // above says why).
 TEST_F(GigeFake, GigeAndInProcessCamerasOpenedAtOnceStreamWithoutGlibComplaints) {
   std::string why;
-  for (int k = 2; k < 4; ++k)
-    if (!mock::ensure_loopback_address(address(k), why)) GTEST_SKIP() << why;
+  std::vector<LoopbackAddress> more;
+  for (int k = 2; k < 4; ++k) {
+    auto lease = LoopbackAddress::take(address(k), why);
+    if (!lease) GTEST_SKIP() << why;
+    more.push_back(std::move(*lease));
+  }
   const test::GlibLogCounter glib;
   std::vector<ChildProcess> fakes;
   std::vector<std::unique_ptr<AravisSource>> owned;

@@ -9,11 +9,13 @@
 #include <mutex>
 
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/loopback_address.hpp"
 #include "sensor_rig/camera/mock/fake_v4l2_device.hpp"
 #include "sensor_rig/camera/v4l2_source.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 #include "wait.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -62,7 +64,7 @@ TEST(CameraDriver, PublishesRosLayoutImageAndCameraInfoAndSurvivesDeviceLoss) {
   dds::Reader<msg::CameraInfo> infos(p, ct, cfg.qos);
   CameraDriver driver(cfg, std::make_unique<camera::V4l2Source>(cfg.source, dev), p, stamps);
   driver.start();
-  ASSERT_TRUE(images.wait_for_writers(1, 5000));
+  ASSERT_TRUE(images.wait_for_writers(1, test::kDiscoveryMs));
 
   int got = 0;
   Nanos last_stamp = 0;
@@ -183,7 +185,8 @@ TEST(CameraDriver, StereoPairOnOneSoftwareTickStampsWithin1ms) {
 TEST(CameraDriver, PtpLockedCameraStampsDeviceTimeAndReportsTheLock) {
   const std::string addr = "127.0.0." + std::to_string(230 + ::getpid() % 20);
   std::string why;
-  if (!camera::mock::ensure_loopback_address(addr, why)) GTEST_SKIP() << why;
+  const auto lease = LoopbackAddress::take(addr, why);
+  if (!lease) GTEST_SKIP() << why;
   const std::string xml = camera::mock::write_ptp_fake_genicam(addr);
   camera::mock::GigeFakeOptions fo;
   fo.address = addr;
@@ -204,7 +207,7 @@ TEST(CameraDriver, PtpLockedCameraStampsDeviceTimeAndReportsTheLock) {
   dds::Reader<msg::Image> images(p, it, cfg.qos);
   CameraDriver driver(cfg, p, stamps);
   driver.start();
-  ASSERT_TRUE(images.wait_for_writers(1, 5000));
+  ASSERT_TRUE(images.wait_for_writers(1, test::kDiscoveryMs));
   int got = 0;
   ASSERT_TRUE(wait_for([&] {
     images.take([&](const msg::Image& m, const dds_sample_info_t&) {

@@ -3,8 +3,8 @@
 // - In process: "fake:<serial>" devices (arv_fake_device_new) — cheap, many per process, the
 //   real AravisSource and stream code, no network.
 // - GigE: one `arv-fake-gv-camera-0.8 -i <address>` process per loopback address (GVCP port 3956
-//   is per address), the real network path; `ensure_loopback_address` adds 127.0.0.x to `lo`
-//   where permitted.
+//   is per address), the real network path; its 127.0.0.x address is a LoopbackAddress lease
+//   (common/loopback_address.hpp: added to `lo` where permitted, removed when the last holder ends).
 #include <chrono>
 #include <string>
 #include <vector>
@@ -26,11 +26,6 @@ inline constexpr const char* kTriggerFollowingFake = "rig-fake-gige-camera";
 // trigger mode), so its grid is left at 25 Hz: a finer one would only stream faster.
 AravisDeviceOpener inprocess_fake_opener();
 
-// True when `address` is on an interface (or was added to `lo` now: root / CAP_NET_ADMIN).
-// `why` gets the reason when false.
-bool ensure_loopback_address(const std::string& address, std::string& why);
-// True when some interface holds the IPv4 address.
-bool has_address(const std::string& address);
 
 struct GigeFakeOptions {
   std::string address = "127.0.0.2";
