@@ -23,15 +23,22 @@ build: setup $(BUILD)/CMakeCache.txt
 demo: build
 	$(BUILD)/rig demo --config $(CONFIG) --duration $(DURATION)
 
-# Installs, builds from scratch into build/, runs the whole suite; then the unit tests under ASan/UBSan.
+# Installs, builds from scratch into build/, runs the whole suite; then the unit tests under ASan/UBSan
+# and the drive-by-wire threads under TSan. Each stage prints its wall time; the last lines are the
+# table of stages and the tests of all of them ("make test: P passed, F failed").
 # The suite's build is Release (-O3) with tests: the configuration a user types first, so CI builds it.
-test: setup
+STAGES = $(CURDIR)/$(BUILD)/stage_times.tsv
+STAGE  = scripts/stage.sh $(STAGES)
+test:
 	rm -rf $(BUILD)
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS)
-	cmake --build $(BUILD) -j$(JOBS)
-	cd $(BUILD) && ctest --output-on-failure --timeout 300 -j$(JOBS)
+	mkdir -p $(BUILD)
+	$(STAGE) "setup (Debian packages)" -- scripts/setup.sh
+	$(STAGE) "configure (Release)" -- cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS)
+	$(STAGE) "build (Release)" -- cmake --build $(BUILD) -j$(JOBS)
+	cd $(BUILD) && $(CURDIR)/$(STAGE) "suite (Release)" -- ctest --output-on-failure --timeout 300 -j$(JOBS)
 	$(MAKE) test-asan
 	$(MAKE) test-tsan
+	@$(STAGE) --summary
 
 # Optimized (-O2) under the sanitizers: the end-to-end tests run synthetic sensors in real time,
 # and at -O0 three instrumented renderers need more than the two cores (scans arrive seconds late);
@@ -40,27 +47,29 @@ test: setup
 # and monitor.cpp); the code is the same.
 SAN_OPT = -O2 -g1 -DNDEBUG
 test-asan: setup
-	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_SANITIZE=ON -DRIG_BENCH=OFF \
+	mkdir -p $(BUILD)
+	$(STAGE) "configure (ASan/UBSan)" -- cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_SANITIZE=ON -DRIG_BENCH=OFF \
 	  -DCMAKE_C_FLAGS_RELWITHDEBINFO="$(SAN_OPT)" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$(SAN_OPT)"
 	# Only what this stage runs: the unit executables, the two end-to-end tests and the `rig` they start,
 	# and the payload sertype's test (C code that fills Cyclone's internal structs).
-	cmake --build build-asan -j$(JOBS) --target unit_tests rig lidar_e2e_test dbw_rig_test payload_sertype_test
+	$(STAGE) "build (ASan/UBSan)" -- cmake --build build-asan -j$(JOBS) --target unit_tests rig lidar_e2e_test dbw_rig_test payload_sertype_test
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --output-on-failure -L unit -j$(JOBS)
+	  $(CURDIR)/$(STAGE) "unit tests (ASan/UBSan)" -- ctest --output-on-failure -L unit -j$(JOBS)
 	# The runtime end to end under the sanitizers too: every `rig` process it starts is instrumented;
 	# one at a time, as each already runs several instrumented processes on the two cores.
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --output-on-failure -R '^(lidar_e2e_test|dbw_rig_test|payload_sertype_test)$$' -j1
+	  $(CURDIR)/$(STAGE) "end to end (ASan/UBSan)" -- ctest --output-on-failure -R '^(lidar_e2e_test|dbw_rig_test|payload_sertype_test)$$' -j1
 
 # The drive-by-wire bridge's threads under ThreadSanitizer: only the dbw tests that run threads
 # (transports, the node's DDS/CAN/publisher threads in one process), built alone in build-tsan.
 TSAN_FLAGS = -fsanitize=thread -g -O1
 test-tsan: setup
-	cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_BENCH=OFF \
+	mkdir -p $(BUILD)
+	$(STAGE) "configure (TSan)" -- cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_BENCH=OFF \
 	  -DCMAKE_C_FLAGS="$(TSAN_FLAGS)" -DCMAKE_CXX_FLAGS="$(TSAN_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS=-fsanitize=thread
-	cmake --build build-tsan -j$(JOBS) --target test_dbw_transport test_dbw_bridge_core test_dbw_bridge_threads
+	$(STAGE) "build (TSan)" -- cmake --build build-tsan -j$(JOBS) --target test_dbw_transport test_dbw_bridge_core test_dbw_bridge_threads
 	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/tests/support/tsan.supp" \
-	  ctest --output-on-failure -R '^test_dbw_(transport|bridge_core|bridge_threads)$$' -j1
+	  $(CURDIR)/$(STAGE) "dbw threads (TSan)" -- ctest --output-on-failure -R '^test_dbw_(transport|bridge_core|bridge_threads)$$' -j1
 
 # Benchmarks: optimized build, figures go to BENCHMARKS.md (by hand, with machine and command).
 bench: setup

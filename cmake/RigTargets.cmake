@@ -58,13 +58,19 @@ function(rig_test name)
   if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
     set(_gcc12_test_flags -Wno-array-bounds -Wno-stringop-overflow -Wno-stringop-overread)
   endif()
+  set(_rig_test_defaults RIG_DEFAULT_SOURCE_DIR="${CMAKE_SOURCE_DIR}" RIG_DEFAULT_BIN="${CMAKE_BINARY_DIR}/rig"
+      RIG_DEFAULT_TEST_DATA="${RIG_TEST_DATA}")
   if(NOT TARGET rig_test_pch)
     add_library(rig_test_pch OBJECT ${CMAKE_SOURCE_DIR}/tests/support/test_pch.cpp)
     target_link_libraries(rig_test_pch PRIVATE GTest::gtest GTest::gmock rig_warnings)
     target_compile_options(rig_test_pch PRIVATE ${_gcc12_test_flags})
+    target_compile_definitions(rig_test_pch PRIVATE ${_rig_test_defaults})
     target_precompile_headers(rig_test_pch PRIVATE <gtest/gtest.h> <gmock/gmock.h>)
   endif()
   target_compile_options(${name} PRIVATE ${_gcc12_test_flags})
+  # ctest's environment (below) as built-in defaults: an executable run by hand finds the rig and
+  # the sources too. The same definitions on the PCH, whose flags must match.
+  target_compile_definitions(${name} PRIVATE ${_rig_test_defaults})
   target_precompile_headers(${name} REUSE_FROM rig_test_pch)
   target_include_directories(${name} PRIVATE ${CMAKE_SOURCE_DIR}/tests/support)
   if(NOT A_LABEL)
@@ -78,6 +84,13 @@ function(rig_test name)
   set_property(GLOBAL APPEND PROPERTY RIG_TEST_TARGETS_${A_LABEL} ${name})
   set_tests_properties(${name} PROPERTIES LABELS ${A_LABEL} TIMEOUT ${A_TIMEOUT}
     ENVIRONMENT "RIG_TEST_DATA=${RIG_TEST_DATA};RIG_BIN=${CMAKE_BINARY_DIR}/rig;RIG_SOURCE_DIR=${CMAKE_SOURCE_DIR}")
+  rig_test_leaves_host_clean(${name})
+endfunction()
+
+# Every test runs between the host's snapshot and the check that it was left as it was
+# (tests/CMakeLists.txt: host_state_snapshot, host_left_clean; ctest adds both to any selection).
+function(rig_test_leaves_host_clean)
+  set_property(TEST ${ARGN} APPEND PROPERTY FIXTURES_REQUIRED host_state)
 endfunction()
 
 # Where the real captures live; tests skip with a message when absent.

@@ -8,6 +8,7 @@
 #include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/dds/view_reader.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::dds {
 namespace {
@@ -61,7 +62,7 @@ TEST(DdsRoundTrip, PointCloudInProcessKeepsBytesAndSourceTimestamp) {
   Topic<msg::PointCloud2> topic(p, "/test/wrapper/points");
   Reader<msg::PointCloud2> reader(p, topic);
   Writer<msg::PointCloud2> writer(p, topic);
-  ASSERT_TRUE(writer.wait_for_readers(1, 5000));
+  ASSERT_TRUE(writer.wait_for_readers(1, test::kDiscoveryMs));
 
   std::vector<std::uint8_t> bytes(100000);
   for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 7);
@@ -100,7 +101,7 @@ TEST(DdsRoundTrip, PointCloudViewsReadTheSerializedSampleInPlace) {
   Topic<msg::PointCloud2> topic(p, "/test/wrapper/view_points", q);
   Reader<msg::PointCloud2> reader(p, topic, q);
   Writer<msg::PointCloud2> writer(p, topic, q);
-  ASSERT_TRUE(writer.wait_for_readers(1, 5000));
+  ASSERT_TRUE(writer.wait_for_readers(1, test::kDiscoveryMs));
 
   std::vector<std::uint8_t> bytes(100000);
   for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 13);

@@ -10,6 +10,7 @@
 #include "sensor_rig/dds/discovery.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/dds/waitset.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::dds {
 namespace {
@@ -24,7 +25,7 @@ template <class Done>
 std::map<std::string, Publication> take_until(DiscoveryReader& d, WaitSet& ws, const std::string& prefix, Done done) {
   std::map<std::string, Publication> seen;
   std::vector<std::int64_t> tags;
-  const Nanos deadline = monotonic_now_ns() + 5'000'000'000;
+  const Nanos deadline = monotonic_now_ns() + Nanos{test::kDiscoveryMs} * 1'000'000;
   while (!done(seen) && monotonic_now_ns() < deadline) {
     ws.wait(tags, 50'000'000);
     for (auto& p : d.take()) {
@@ -82,7 +83,7 @@ TEST(DdsDiscovery, SeesAnotherParticipantsWritersWithTypeGuidHostAndReliability)
   points_writer.reset();
   std::vector<std::int64_t> tags;
   bool went_away = false, other_went = false;
-  const Nanos deadline = monotonic_now_ns() + 5'000'000'000;
+  const Nanos deadline = monotonic_now_ns() + Nanos{test::kDiscoveryMs} * 1'000'000;
   while (!went_away && monotonic_now_ns() < deadline) {
     ws.wait(tags, 50'000'000);
     for (const auto& p : discovery.take()) {

@@ -19,6 +19,7 @@
 #include "sensor_rig/dds/roudi.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/dds/view_reader.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::dds {
 namespace {
@@ -184,8 +185,8 @@ TEST(PayloadSertype, DefaultSertypeReadersAndWritersInTheSameProcessInteroperate
   Reader<msg::PointCloud2> rig_reader(rig_side, rig_topic, q);
   Entity plain_reader(check(dds_create_reader(plain_side.handle(), plain_topic.handle(), qos.get(), nullptr), "reader"));
   Entity plain_writer(check(dds_create_writer(plain_side.handle(), plain_topic.handle(), qos.get(), nullptr), "writer"));
-  ASSERT_TRUE(rig_writer.wait_for_readers(2, 5000));
-  ASSERT_TRUE(wait_until([&] { return publication_matched(plain_writer.handle()) >= 2; }, 5000));
+  ASSERT_TRUE(rig_writer.wait_for_readers(2, test::kDiscoveryMs));
+  ASSERT_TRUE(wait_until([&] { return publication_matched(plain_writer.handle()) >= 2; }, test::kDiscoveryMs));
 
   SampleMaker m;
   std::vector<msg::PointCloud2> sent;
@@ -247,7 +248,7 @@ std::string shm_round_trip() {
   Writer<msg::PointCloud2> writer(writer_side, wt, q);
   Reader<msg::PointCloud2> reader(reader_side, rt, q);
   Reader<msg::PointCloud2> serialized(reader_side, rt, q);
-  if (!writer.wait_for_readers(2, 5000)) return "readers not matched";
+  if (!writer.wait_for_readers(2, test::kDiscoveryMs)) return "readers not matched";
   SampleMaker m;
   std::vector<msg::PointCloud2> sent;
   for (int i = 0; i < 12; ++i) {

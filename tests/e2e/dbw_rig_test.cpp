@@ -11,6 +11,7 @@
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "rig_process.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig {
 namespace {
@@ -32,7 +33,7 @@ TEST(DbwRig, CommandSourceDrivesTheMockVehicleThroughTheBridge) {
   dds::Reader<msg::VehicleState> state(p, state_topic, q);
   dds::Topic<msg::DbwStatus> status_topic(p, "/vehicle/dbw/status", q);
   dds::Reader<msg::DbwStatus> status(p, status_topic, q);
-  ASSERT_TRUE(state.wait_for_writers(1, 15000)) << "bridge did not come up";
+  ASSERT_TRUE(state.wait_for_writers(1, test::kDiscoveryMs)) << "bridge did not come up";
   // The monitor, a separate process, while the vehicle drives (its 3.5 s lie within the loop's 4 s).
   std::pair<int, std::string> monitor;
   std::thread monitor_thread([&] {

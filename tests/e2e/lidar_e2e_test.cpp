@@ -15,6 +15,7 @@
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "rig_process.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig {
 namespace {
@@ -98,7 +99,7 @@ TEST_P(CaptureReplay, ArrivesScanByScanOverDds) {
   q.depth = 100;
   dds::Topic<msg::PointCloud2> topic(p, "/sensors/lidar/" + unique("e2e") + "/points", q);
   dds::Reader<msg::PointCloud2> reader(p, topic, q);
-  ASSERT_TRUE(reader.wait_for_writers(1, 15000)) << "driver did not come up";
+  ASSERT_TRUE(reader.wait_for_writers(1, test::kDiscoveryMs)) << "driver did not come up";
   // The driver's writer learns of this reader a moment after we saw it (discovery is per side);
   // a volatile scan written before that would never reach us. The first scan is >= 100 ms into
   // the capture anyway; this margin covers slow (sanitizer) builds.
@@ -152,7 +153,7 @@ TEST(LidarEndToEnd, SyntheticMockRigPublishesAllThreeModels) {
   }
   dds::Topic<msg::DiagnosticArray> diag_topic(p, "/diagnostics");
   dds::Reader<msg::DiagnosticArray> diag(p, diag_topic);
-  for (auto& r : readers) ASSERT_TRUE(r->wait_for_writers(1, 15000));
+  for (auto& r : readers) ASSERT_TRUE(r->wait_for_writers(1, test::kDiscoveryMs));
   // All three at once, as a fusion node would: no reader sits unread while another is drained.
   std::vector<Received> all(3);
   for (const Nanos end = monotonic_now_ns() + 2'500'000'000; monotonic_now_ns() < end;) {
@@ -301,7 +302,7 @@ TEST(LidarEndToEnd, DeadDeviceAndBadPacketsAreReportedInDiagnostics) {
   dds::Participant p({17, test::source_dir().string() + "/config/cyclonedds/loopback.xml"});
   dds::Topic<msg::DiagnosticArray> topic(p, "/diagnostics");
   dds::Reader<msg::DiagnosticArray> diag(p, topic);
-  ASSERT_TRUE(diag.wait_for_writers(1, 15000));
+  ASSERT_TRUE(diag.wait_for_writers(1, test::kDiscoveryMs));
 
   // lidar/dead_<pid> in the next diagnostics sample.
   auto next_status = [&]() {

@@ -19,6 +19,7 @@
 #include "sample_record.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/dds/types.hpp"
+#include "wait_bounds.hpp"
 
 extern char** environ;
 
@@ -119,8 +120,8 @@ TEST(MonitorRecord, CsvHoldsEverySampleInSeqOrderWithOrderedStagesAndTheLoss) {
   FakeTopic a(p, prefix + "/a/points", q), b(p, prefix + "/b/points", q);
   dds::StampsWriter stamps(p);
   // The monitor subscribes once it discovers the writers, and counts from 0.5 s after that.
-  ASSERT_TRUE(a.writer.wait_for_readers(1, 4000));
-  ASSERT_TRUE(b.writer.wait_for_readers(1, 4000));
+  ASSERT_TRUE(a.writer.wait_for_readers(1, test::kDiscoveryMs));
+  ASSERT_TRUE(b.writer.wait_for_readers(1, test::kDiscoveryMs));
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
 
   constexpr std::uint64_t kLostSeq = 7;
@@ -131,7 +132,7 @@ TEST(MonitorRecord, CsvHoldsEverySampleInSeqOrderWithOrderedStagesAndTheLoss) {
   }
   // All 30 rows: the lost one after the 0.3 s loss timeout, the ones after it held until then.
   std::string text;
-  const Nanos deadline = monotonic_now_ns() + 4'000'000'000;
+  const Nanos deadline = monotonic_now_ns() + Nanos{test::kDiscoveryMs} * kMs;
   while (monotonic_now_ns() < deadline) {
     text = read_all(csv);
     if (std::count(text.begin(), text.end(), '\n') >= 31) break;
@@ -139,7 +140,7 @@ TEST(MonitorRecord, CsvHoldsEverySampleInSeqOrderWithOrderedStagesAndTheLoss) {
   }
   // Issue 11: the JSON line of topic a counts the packets its samples missed (sum of seq % 3 = 19).
   bool missing_reported = false;
-  const Nanos json_deadline = monotonic_now_ns() + 3'000'000'000;
+  const Nanos json_deadline = monotonic_now_ns() + Nanos{test::kDiscoveryMs} * kMs;
   while (!missing_reported && monotonic_now_ns() < json_deadline) {
     std::istringstream lines(read_all(json_out));
     for (std::string line; std::getline(lines, line);)

@@ -16,6 +16,7 @@
 #include "sensor_rig/dds/roudi.hpp"
 #include "sensor_rig/dds/shared_memory.hpp"
 #include "sensor_rig/dds/types.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig {
 namespace {
@@ -132,7 +133,7 @@ TEST_F(ShmRig, LocalSubscriberGetsCloudsThroughSharedMemoryRemoteOneOverUdp) {
     dds::Topic<msg::PointCloud2> topic(p, "/sensors/lidar/front/points", q);
     dds::Reader<msg::PointCloud2> reader(p, topic, q);
     if (!dds::uses_shared_memory(reader.handle())) return std::string("no iceoryx subscriber");
-    if (!reader.wait_for_writers(1, 8000)) return std::string("no writer");
+    if (!reader.wait_for_writers(1, test::kDiscoveryMs)) return std::string("no writer");
     msg::PointCloud2 scratch{};
     dds::TakeCounts counts;
     std::uint64_t bytes = 0;

@@ -14,6 +14,7 @@
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sync_set_node.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::rig {
 namespace {
@@ -109,7 +110,7 @@ TEST(SyncSetNode, PublishesCompleteSetsFromStampsAndCountsIncompleteOnes) {
   dds::Topic<msg::SyncSet> topic(p, sc.topic(), tq);
   dds::Reader<msg::SyncSet> reader(p, topic, q);
   dds::StampsWriter stamps(p);
-  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  ASSERT_TRUE(reader.wait_for_writers(1, test::kDiscoveryMs));
 
   const Nanos t0 = vehicle_now_ns();
   char frame[] = "f";
@@ -122,7 +123,7 @@ TEST(SyncSetNode, PublishesCompleteSetsFromStampsAndCountsIncompleteOnes) {
   }
   std::map<std::uint64_t, std::uint64_t> got;  // a seq -> b seq
   std::vector<Nanos> spreads;
-  const Nanos deadline = monotonic_now_ns() + 5'000'000'000LL;
+  const Nanos deadline = monotonic_now_ns() + Nanos{test::kDiscoveryMs} * 1'000'000;
   while (got.size() < kSets - 1 && monotonic_now_ns() < deadline) {
     reader.wait(100);
     reader.take([&](const msg::SyncSet& m, const dds_sample_info_t&) {

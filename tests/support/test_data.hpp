@@ -11,17 +11,31 @@ namespace sensor_rig::test {
 
 inline std::filesystem::path source_dir() {
   const char* d = std::getenv("RIG_SOURCE_DIR");
-  return d != nullptr && *d != '\0' ? std::filesystem::path(d) : std::filesystem::path(".");
+  if (d != nullptr && *d != '\0') return d;
+#ifdef RIG_DEFAULT_SOURCE_DIR
+  return RIG_DEFAULT_SOURCE_DIR;  // the checkout this test was built from (cmake/RigTargets.cmake)
+#else
+  return ".";
+#endif
 }
 
 inline std::filesystem::path data_dir() {
   if (const char* d = std::getenv("RIG_TEST_DATA"); d != nullptr && *d != '\0') return d;
+#ifdef RIG_DEFAULT_TEST_DATA
+  return RIG_DEFAULT_TEST_DATA;
+#else
   return source_dir() / "../shared/data";
+#endif
 }
 
 inline std::string rig_bin() {
   const char* b = std::getenv("RIG_BIN");
-  return b != nullptr ? b : "build/rig";
+  if (b != nullptr && *b != '\0') return b;
+#ifdef RIG_DEFAULT_BIN
+  return RIG_DEFAULT_BIN;
+#else
+  return "build/rig";
+#endif
 }
 
 inline bool exists(const std::filesystem::path& p) { return std::filesystem::exists(p); }

@@ -12,6 +12,7 @@
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 #include "wait.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -98,9 +99,9 @@ TEST(CameraOutputs, ColourAndJpegOfAKnownBayerSceneOffTheCaptureThread) {
   dds::Reader<msg::CompressedImage> jpeg(p, jpeg_t, cfg.qos);
   CameraDriver driver(cfg, std::make_unique<BayerSceneSource>(320, 240), p, stamps);
   driver.start();
-  ASSERT_TRUE(color.wait_for_writers(1, 5000));
-  ASSERT_TRUE(jpeg.wait_for_writers(1, 5000));
-  ASSERT_TRUE(raw.wait_for_writers(1, 5000));
+  ASSERT_TRUE(color.wait_for_writers(1, test::kDiscoveryMs));
+  ASSERT_TRUE(jpeg.wait_for_writers(1, test::kDiscoveryMs));
+  ASSERT_TRUE(raw.wait_for_writers(1, test::kDiscoveryMs));
 
   std::map<Nanos, bool> raw_stamps;
   int colours = 0, jpegs = 0;

@@ -18,6 +18,7 @@
 #include "sensor_rig/drivers/dbw/dds_bridge.hpp"
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
+#include "wait_bounds.hpp"
 
 namespace dbw = sensor_rig::dbw;
 namespace dds = sensor_rig::dds;
@@ -143,7 +144,7 @@ TEST(DbwBridgeThreads, FastSourceScheduleAndStopInOneProcess) {
       if (s.ecu_status_ns <= s.written_ns || s.ecu_status_ns - s.written_ns > 100'000'000) ++ecu_out_of_range;
     });
   };
-  ASSERT_TRUE(writer.wait_for_readers(1, 3000));
+  ASSERT_TRUE(writer.wait_for_readers(1, sensor_rig::test::kDiscoveryMs));
   bool engaged = false;
   msg::DbwCommand c{};
   char frame_id[] = "base_link";

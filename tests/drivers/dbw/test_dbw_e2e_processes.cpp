@@ -13,6 +13,7 @@
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
 #include "sensor_rig/dbw/can/candump.hpp"
+#include "wait_bounds.hpp"
 
 namespace dbw = sensor_rig::dbw;
 namespace msg = sensor_rig::msg;
@@ -35,7 +36,7 @@ TEST(DbwProcesses, CommandsThroughBridgeAndMockEcuComeBackAsVehicleState) {
   const pid_t mock = rig.start_mock({"--duration", "6"});
   ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
   const pid_t bridge = rig.start("bridge", {"dbw", "bridge", "--transport", rig.bus(), "--duration", "5"});
-  ASSERT_TRUE(status_reader.wait_for_writers(1, 5000)) << "bridge status writer not discovered";
+  ASSERT_TRUE(status_reader.wait_for_writers(1, sensor_rig::test::kDiscoveryMs)) << "bridge status writer not discovered";
   const pid_t send = rig.start("send", {"dbw", "send", "--enable", "--steer", "0.1", "--throttle", "0.4", "--gear", "4",
                                         "--rate", "100", "--duration", "2"});
 

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "dbw_processes.hpp"
+#include "wait_bounds.hpp"
 #include "dbw_test_data.hpp"
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
@@ -247,7 +248,7 @@ TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFol
   const pid_t mock = rig.start_mock(mock_args);
   ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
   const pid_t bridge = rig.start("bridge", {"dbw", "bridge", mapping, "--transport", rig.bus(), "--duration", "29"});
-  ASSERT_TRUE(src.wait_for_bridge(5000)) << "bridge not discovered";
+  ASSERT_TRUE(src.wait_for_bridge(sensor_rig::test::kDiscoveryMs)) << "bridge not discovered";
   auto at = [t0](double s) { return t0 + static_cast<Nanos>(s * 1e9); };
 
   for (auto& e : eps) {

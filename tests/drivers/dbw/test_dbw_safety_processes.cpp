@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "dbw_processes.hpp"
+#include "wait_bounds.hpp"
 #include "dbw_test_data.hpp"
 #include "sensor_rig/dbw/bridge/protocol.hpp"
 #include "sensor_rig/dbw/can/candump.hpp"
@@ -138,7 +139,7 @@ TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
   ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
   pid_t bridge_a = bridge("bridge_a");
   // A sender's first sample (enable false, then true: the edge) must reach a running bridge.
-  ASSERT_TRUE(st.wait_for_bridge(10000)) << "bridge not discovered";
+  ASSERT_TRUE(st.wait_for_bridge(sensor_rig::test::kDiscoveryMs)) << "bridge not discovered";
 
   // 1. Sender 1 engages and holds enable; sender 2 (seq from 1) disables.
   const pid_t s1 = send("s1", true, 3.0);

@@ -27,6 +27,7 @@
 #include "sensor_rig/dbw/can/candump.hpp"
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
+#include "wait_bounds.hpp"
 
 namespace dbw = sensor_rig::dbw;
 namespace msg = sensor_rig::msg;
@@ -117,7 +118,7 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
   ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
   const pid_t bridge = rig.start("bridge", {"dbw", "bridge", "--domain", dom, "--transport", rig.bus(), "--duration",
                                             "30", "--security", sec});
-  ASSERT_TRUE(status.wait_for_writers(1, 10000)) << "secured bridge's status not readable without credentials\n"
+  ASSERT_TRUE(status.wait_for_writers(1, sensor_rig::test::kDiscoveryMs)) << "secured bridge's status not readable without credentials\n"
                                                  << rig.output("bridge");
   const auto send = [&](const std::string& name, std::vector<std::string> extra) {
     std::vector<std::string> a{"dbw", "send", "--domain", dom, "--enable", "--steer", "0.05", "--throttle", "0.2",

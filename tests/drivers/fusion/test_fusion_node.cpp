@@ -16,6 +16,7 @@
 #include "sensor_rig/drivers/fusion/fusion_node.hpp"
 #include "status_value.hpp"
 #include "wait.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -100,7 +101,7 @@ TEST_F(FusionNodeDds, ThreeLidarsBecomeOneCloudInBaseLink) {
                                         lidar("right", {.y = -1.0, .yaw_deg = -90})};
   FusionNode node(cfg(), lidars, pub_, stamps_writer_);
   node.start();
-  ASSERT_TRUE(fused_.wait_for_writers(1, 5000));
+  ASSERT_TRUE(fused_.wait_for_writers(1, test::kDiscoveryMs));
   const Nanos t0 = vehicle_now_ns();
   // Phases 0, 30, 60 ms; each scan handed over "after its write".
   node.input(1)->observe_scan(scan(t0 + 30'000'000, 5, 3), t0 + 130'000'000);
@@ -146,7 +147,7 @@ TEST_F(FusionNodeDds, DeadLidarSweepGoesOutAsSubsetAfterTimeout) {
   const std::vector<LidarConfig> lidars{lidar("front", {}), lidar("rear", {.yaw_deg = 180})};
   FusionNode node(cfg(), lidars, pub_, stamps_writer_);
   node.start();
-  ASSERT_TRUE(fused_.wait_for_writers(1, 5000));
+  ASSERT_TRUE(fused_.wait_for_writers(1, test::kDiscoveryMs));
   const Nanos t0 = vehicle_now_ns();
   const Nanos handed = vehicle_now_ns();
   node.input(0)->observe_scan(scan(t0, 3, 5), handed);

@@ -6,6 +6,7 @@
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 #include "status_value.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::test {
 
@@ -27,7 +28,7 @@ struct LidarNodeReader {
   // Starts the node and waits for the reader to match its writer.
   [[nodiscard]] bool start() {
     driver.start();
-    return reader.wait_for_writers(1, 5000);
+    return reader.wait_for_writers(1, test::kDiscoveryMs);
   }
   [[nodiscard]] std::string status(const std::string& key) const { return status_value(driver.status(), key); }
 

@@ -27,6 +27,7 @@
 #include "sensor_rig/lidar/udp_sender.hpp"
 #include "status_value.hpp"
 #include "wait.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -178,7 +179,7 @@ TEST(LidarPacketSource, RingOnLoopbackPublishesScans) {
   const auto driver = ring_driver(c, p, stamps, why);
   if (!driver) GTEST_SKIP() << why;
   driver->start();
-  ASSERT_TRUE(reader.wait_for_writers(1, 5000));
+  ASSERT_TRUE(reader.wait_for_writers(1, test::kDiscoveryMs));
 
   lidar::mock::SyntheticOptions o;
   o.model = "VLP-16";

@@ -21,6 +21,7 @@
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "rig_process.hpp"
+#include "wait_bounds.hpp"
 
 namespace sensor_rig {
 namespace {
@@ -163,7 +164,7 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
   std::vector<std::pair<int, double>> fix_seen;  // status, latitude
   dds::Topic<msg::DiagnosticArray> diag_topic(p, "/diagnostics");
   dds::Reader<msg::DiagnosticArray> diag(p, diag_topic);
-  for (auto& r : readers) ASSERT_TRUE(r->wait_for_writers(1, 15000)) << "driver did not come up";
+  for (auto& r : readers) ASSERT_TRUE(r->wait_for_writers(1, test::kDiscoveryMs)) << "driver did not come up";
 
   // All three at once, as a fusion node would.
   std::vector<std::vector<std::uint32_t>> points(3);
