@@ -7,8 +7,8 @@
 #   host_state.sh check FILE BUILD_DIR
 #
 # What is compared: addresses on lo, network interfaces and namespaces, /dev/shm files, the rig's
-# state folder (/run/sensor-rig: the loopback address registry), entries in /tmp, the socket-buffer
-# sysctls, and processes still running from BUILD_DIR or the mocks' and RouDi's programs.
+# state folder (/run/sensor-rig: the loopback address registry), the rig's and its peers' entries in
+# /tmp, the socket-buffer sysctls, and orphaned processes of BUILD_DIR, RouDi or the GigE fakes.
 set -uo pipefail
 mode=${1:-} file=${2:-} build=${3:-}
 if [[ -z "$mode" || -z "$file" || -z "$build" ]]; then
@@ -23,20 +23,23 @@ state() {
   ip netns list 2>/dev/null | awk '{print "netns " $1}'
   for f in /dev/shm/* /dev/shm/.[!.]*; do [[ -e "$f" ]] && echo "shm ${f#/dev/shm/}"; done
   [[ -e /run/sensor-rig ]] && find /run/sensor-rig -mindepth 0 | sed 's/^/state /'
-  # /tmp: what the suite writes outside its temporary folders. The snapshot's own file and the
-  # tool's files are not the suite's.
-  for f in /tmp/* /tmp/.[!.]*; do
-    [[ -e "$f" ]] || continue
-    case "${f#/tmp/}" in .X*-lock|.X11-unix|.ICE-unix|.font-unix|.XIM-unix|.Test-unix|bash_tool_*|bash_jobs*|systemd-private-*) continue ;; esac
-    echo "tmp ${f#/tmp/}"
+  # /tmp: what the rig, its mocks, RouDi and the DDS peers name there (temporary folders of the
+  # tests, GenICam files, iceoryx and Fast DDS locks). Only those names: other programs (a compiler
+  # beside the suite) keep their own files there, which are neither reported nor touched.
+  for f in /tmp/rig* /tmp/iox* /tmp/roudi* /tmp/iceoryx* /tmp/fastrtps* /tmp/fastdds* /tmp/arv* /tmp/sensor-rig*; do
+    [[ -e "$f" ]] && echo "tmp ${f#/tmp/}"
   done
   for s in net.core.rmem_max net.core.wmem_max net.core.rmem_default net.core.wmem_default; do
     echo "sysctl $s=$(sysctl -n "$s" 2>/dev/null)"
   done
+  # Processes a test left: orphans (parent gone, adopted by init) running the build's programs,
+  # RouDi or a GigE fake. A rig someone runs beside the suite has a parent and is not the suite's.
   for p in /proc/[0-9]*; do
     exe=$(readlink "$p/exe" 2>/dev/null) || continue
     case "$exe" in
-      "$build"/*|*/iox-roudi|*/arv-fake-gv-camera*) echo "process ${p#/proc/} $exe" ;;
+      "$build"/*|*/iox-roudi|*/arv-fake-gv-camera*)
+        ppid=$(awk '{print $4}' "$p/stat" 2>/dev/null)
+        [[ "$ppid" == 1 ]] && echo "process ${p#/proc/} $exe" ;;
     esac
   done
 }
