@@ -1,13 +1,18 @@
 #pragma once
 // Network namespaces joined by veth pairs (MTU 1500, no routing), made for one test and always
 // removed: the ring source's two-namespace link and the car's three computers of the several-hosts
-// end-to-end tests. Names are unique per process and instance. Needs CAP_SYS_ADMIN and `ip`;
-// `error()` says why when something could not be set up (the test skips with it).
+// end-to-end tests. A test killed before its destructor ran (ctest's timeout) leaves its
+// namespaces: the next NetworkNamespaces removes those of processes that no longer run. Names are
+// unique per process and instance. Needs CAP_SYS_ADMIN and `ip`; `error()` says why when
+// something could not be set up (the test skips with it).
+#include <dirent.h>
 #include <fcntl.h>
 #include <sched.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdlib>
 #include <exception>
 #include <stdexcept>
@@ -26,6 +31,7 @@ class NetworkNamespaces {
   NetworkNamespaces() {
     static std::atomic<int> counter{0};
     tag_ = std::to_string(::getpid()) + "_" + std::to_string(counter++);
+    remove_orphans();
   }
   ~NetworkNamespaces() {  // deleting a namespace deletes its ends of the veth pairs (and its vcans)
     for (const auto& ns : created_) run("ip netns del " + ns);
@@ -86,6 +92,22 @@ class NetworkNamespaces {
     });
     t.join();
     if (error) std::rethrow_exception(error);
+  }
+
+  // Namespaces of test processes that ended without their destructor (killed at a timeout):
+  // "rig<letter>_<pid>_<n>" whose pid no longer runs. Deleting one deletes its veth ends too.
+  static void remove_orphans() {
+    DIR* dir = ::opendir("/run/netns");
+    if (dir == nullptr) return;
+    std::vector<std::string> orphans;
+    while (const dirent* e = ::readdir(dir)) {
+      const std::string name = e->d_name;
+      if (name.size() < 6 || name.rfind("rig", 0) != 0 || name[4] != '_') continue;
+      const long pid = std::strtol(name.c_str() + 5, nullptr, 10);
+      if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) orphans.push_back(name);
+    }
+    ::closedir(dir);
+    for (const auto& ns : orphans) run("ip netns del " + ns);
   }
 
  private:
