@@ -6,11 +6,14 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -57,6 +60,22 @@ std::vector<std::string> leftovers() {
   if (const char* user = std::getenv("USER"); user != nullptr && *user != '\0') v.push_back(std::string("/dev/shm/") + user);
   return v;
 }
+
+// Each shared-memory participant's iceoryx runtime has a socket and a lock in /tmp, named by
+// Cyclone "iceoryx_rt_<pid>_<time>": removed by the runtime at a normal exit, left by a process
+// killed (SIGKILL, or RouDi's SIGTERM when it stops first). Those of processes that no longer run.
+std::vector<std::string> dead_runtimes_files() {
+  std::vector<std::string> v;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator("/tmp", ec)) {
+    const std::string name = e.path().filename().string();
+    constexpr std::string_view kPrefix = "iceoryx_rt_";
+    if (name.rfind(kPrefix, 0) != 0) continue;
+    const long pid = std::strtol(name.c_str() + kPrefix.size(), nullptr, 10);
+    if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) v.push_back(e.path().string());
+  }
+  return v;
+}
 }  // namespace
 
 RouDiProbe probe_roudi() {
@@ -76,9 +95,10 @@ RouDiProbe probe_roudi() {
 }
 
 int remove_roudi_leftovers() {
-  if (!find_processes("iox-roudi").empty()) return 0;
   int n = 0;
   std::error_code ec;
+  for (const auto& f : dead_runtimes_files()) n += std::filesystem::remove(f, ec) ? 1 : 0;
+  if (!find_processes("iox-roudi").empty()) return n;
   for (const auto& f : leftovers()) n += std::filesystem::remove(f, ec) ? 1 : 0;
   return n;
 }

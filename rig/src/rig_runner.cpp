@@ -1,7 +1,9 @@
 #include "rig_runner.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -98,7 +100,17 @@ SyntheticMetadataDir::SyntheticMetadataDir() {
     std::filesystem::create_directories(path_);
     return;
   }
-  std::string tmpl = (std::filesystem::temp_directory_path() / "rig-up-XXXXXX").string();
+  // Named after this process: a rig killed before its destructor ran leaves its folder, which the
+  // next rig removes (its process no longer runs).
+  const auto tmp = std::filesystem::temp_directory_path();
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(tmp, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("rig-up-", 0) != 0) continue;
+    const long pid = std::strtol(name.c_str() + 7, nullptr, 10);
+    if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) std::filesystem::remove_all(e.path(), ec);
+  }
+  std::string tmpl = (tmp / ("rig-up-" + std::to_string(::getpid()) + "-XXXXXX")).string();
   if (::mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("cannot create a directory for synthetic metadata");
   path_ = tmpl;
   owned_ = true;

@@ -21,7 +21,15 @@ std::string rig_bin() {
 }
 
 std::string fresh_dir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / ("rig_perf_test_" + std::to_string(::getpid())) / name;
+  // One folder for the test process, removed when it ends (a failed test's runs too).
+  static const struct ProcessDir {
+    fs::path path = fs::temp_directory_path() / ("rig_perf_test_" + std::to_string(::getpid()));
+    ~ProcessDir() {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  } process_dir;
+  const auto d = process_dir.path / name;
   fs::remove_all(d);
   fs::create_directories(d);
   return d.string();

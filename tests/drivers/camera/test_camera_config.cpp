@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "sensor_rig/drivers/camera/camera_config.hpp"
+#include "rig_process.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
@@ -78,7 +79,8 @@ colour: red
 }
 
 TEST(CameraConfig, CalibrationOfAnotherSizeIsAnError) {
-  const std::string file = ::testing::TempDir() + "/cam_calib_720p.yaml";
+  const ::sensor_rig::test::TempDir dir;  // removed when the test ends, also when it fails
+  const std::string file = (dir.path / "cam_calib_720p.yaml").string();
   std::ofstream(file) << "image_width: 1280\nimage_height: 720\ncamera_matrix: {rows: 3, cols: 3, data: [900, 0, 640, 0, 900, 360, 0, 0, 1]}\n"
                          "distortion_model: plumb_bob\ndistortion_coefficients: {rows: 1, cols: 5, data: [0, 0, 0, 0, 0]}\n";
   auto p = parse("name: c\ndevice: 127.0.0.3\nwidth: 1920\nheight: 1200\ncalibration: " + file + "\n");

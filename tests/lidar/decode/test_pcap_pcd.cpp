@@ -13,6 +13,7 @@
 #include "sensor_rig/lidar/pcap_reader.hpp"
 #include "sensor_rig/lidar/pcd.hpp"
 #include "sensor_rig/lidar/udp_frame.hpp"
+#include "rig_process.hpp"
 #include "test_support.hpp"
 
 namespace sensor_rig::lidar::test {
@@ -88,9 +89,9 @@ struct PcapFile {
     bytes.insert(bytes.end(), frame.begin(), frame.end());
   }
   std::string write(const std::string& name) const {
-    const auto dir = std::filesystem::temp_directory_path() / ("rig_pcap_test_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
-    auto path = (dir / name).string();
+    // One folder for the process, removed when it ends (a failed test's files too).
+    static const ::sensor_rig::test::TempDir dir;
+    auto path = (dir.path / name).string();
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
                                                static_cast<std::streamsize>(bytes.size()));
     return path;

@@ -55,7 +55,8 @@ class RouDi {
 };
 
 // Files iceoryx 2.0 leaves when RouDi dies without cleaning up (management and payload segments,
-// sockets, locks). Removed only when no iox-roudi process runs; returns how many were there.
+// sockets, locks), removed only when no iox-roudi process runs; and the /tmp socket and lock of
+// every participant's runtime whose process no longer runs (killed). Returns how many were there.
 int remove_roudi_leftovers();
 
 }  // namespace sensor_rig::dds
