@@ -220,7 +220,9 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
     // The phase lock through the whole path: a scan starts where the rotor crosses 0°, phase/360 of
     // a turn before each whole second (the Pandar40P's first point up to 0.9 ms earlier, its cut
     // is per point; the mapped sensor clocks within 0.5 ms), and its packets left on time: the
-    // scan is written about one turn after its first firing.
+    // scan is written after its turn, before the next one ended (a stamp taken at the scan's end,
+    // or a scan held for the next, would break it). How soon after the turn is a latency, measured
+    // in BENCHMARKS.md, not here: beside other tests on two cores a scan came 136-163 ms after.
     const double crossing = 100.0 - kPhases[i] / 360.0 * 100.0;  // ms into each 100 ms
     for (std::size_t k = 0; k < stamps[i].size(); ++k) {
       double at = static_cast<double>(stamps[i][k] % 100'000'000) * 1e-6 - crossing;
@@ -229,7 +231,7 @@ TEST(SyntheticRig, MixedVendorRigPublishesAllThree) {
       EXPECT_LT(at, 0.5) << "stamp " << stamps[i][k];
       const double after_ms = static_cast<double>(written[i][k] - stamps[i][k]) * 1e-6;
       EXPECT_GT(after_ms, 98.0);
-      EXPECT_LT(after_ms, 130.0);
+      EXPECT_LT(after_ms, 200.0);
     }
     const auto& kv = status["lidar/" + std::string(kNames[i])];
     EXPECT_EQ(kv.at("packets_dropped"), "0");
