@@ -56,8 +56,12 @@ test-asan: setup
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  $(CURDIR)/$(STAGE) "unit tests (ASan/UBSan)" -- ctest --output-on-failure -L unit -j$(JOBS)
 	# The runtime end to end under the sanitizers too: every `rig` process it starts is instrumented;
-	# one at a time, as each already runs several instrumented processes on the two cores.
+	# one at a time, as each already runs several instrumented processes on the two cores. Not the
+	# three synthetic LIDARs at real time nor the three-host rig: instrumented on two cores their mocks
+	# send late and a late packet still costs its scan (issue 26), so they lose scans here (2026-11-28,
+	# fresh machine: 12 of 15 received, 2 lost); the Release suite runs both with every scan required.
 	cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  GTEST_FILTER='-LidarEndToEnd.SyntheticMockRigPublishesAllThreeModels:SeveralHosts.*' \
 	  $(CURDIR)/$(STAGE) "end to end (ASan/UBSan)" -- ctest --output-on-failure -R '^(lidar_e2e_test|dbw_rig_test|payload_sertype_test)$$' -j1
 
 # The drive-by-wire bridge's threads under ThreadSanitizer: only the dbw tests that run threads
