@@ -1,0 +1,334 @@
+#include "sensor_rig/common/fault_plan.hpp"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cstdlib>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace sensor_rig::faults {
+namespace {
+
+using DC = DeviceClass;
+
+// The vocabulary. Parameters are NAME=DEFAULT, comma separated; the default duration is what a spec
+// without '+' gets (0 = the fault touches one unit: a packet, a frame).
+constexpr std::array<KindInfo, 33> kKinds{{
+    // LIDAR: what a real sensor and its network do to a packet stream.
+    {"lidar.reorder", DC::kLidar, "n=1,ms=0", 0, "one packet sent n positions (or ms) after its successors"},
+    {"lidar.duplicate_late", DC::kLidar, "n=5", 0, "one packet sent again n packets later"},
+    {"lidar.loss_burst", DC::kLidar, "packets=10,at_cut=0", 0, "packets consecutive packets lost (at_cut=1: straddling a scan cut)"},
+    {"lidar.corrupt", DC::kLidar, "field=byte,offset=-1", 0,
+     "one packet with one field changed: time, azimuth, frame_id, column_status, udp_seq or byte (offset -1 = random)"},
+    {"lidar.second_sensor", DC::kLidar, "", 2, "a second sensor of the same model sends to the same port"},
+    {"lidar.restart", DC::kLidar, "", 1, "the sensor is silent, then comes back with its clock and ids jumped"},
+    {"lidar.stuck_azimuth", DC::kLidar, "", 0.5, "the azimuth field stops moving (encoder fault)"},
+    {"lidar.rpm_change", DC::kLidar, "rpm=300", 2, "the rotor runs at another speed"},
+    {"lidar.blind_sector", DC::kLidar, "from_deg=90,to_deg=180", 2, "no packets from a sector (restricted FOV)"},
+    // Cameras (GigE Vision through Aravis).
+    {"camera.never_answers", DC::kCamera, "", 0, "the camera never answers (whole run)"},
+    {"camera.slow_open", DC::kCamera, "s=3", 0, "the camera answers only s seconds after the first attempt"},
+    {"camera.dies", DC::kCamera, "", 2, "the camera stops streaming and answering, then returns"},
+    {"camera.ptp", DC::kCamera, "state=Master,tai_offset_s=37,step_ms=0", 3,
+     "PTP state (Disabled, Listening, Uncalibrated, Slave, Master, Faulty) with a TAI offset and a clock step"},
+    {"camera.exposure_change", DC::kCamera, "us=8000", 0, "exposure time changed while streaming"},
+    {"camera.auto_exposure", DC::kCamera, "", 3, "auto exposure on: exposure varies frame to frame"},
+    {"camera.chunk_data", DC::kCamera, "", 3, "chunk data (timestamp, frame id) appended to the payload"},
+    {"camera.packet_loss", DC::kCamera, "p=0.01,resend=1", 2, "GVSP packets lost (resend=1: the camera answers resends)"},
+    {"camera.padded_rows", DC::kCamera, "bytes=64", 2, "rows padded to a stride wider than width x bytes per pixel"},
+    // USB cameras (V4L2).
+    {"v4l2.stamp_mode", DC::kV4l2, "mode=eof", 3, "buffer timestamps at end of frame (eof) or start of exposure (soe)"},
+    {"v4l2.sequence_gap", DC::kV4l2, "n=3", 0, "n frames skipped by the device (sequence jumps)"},
+    {"v4l2.disconnect", DC::kV4l2, "", 1, "the device disappears (ENODEV), then returns"},
+    // Drive-by-wire (the mock Paravan ECU's faults, rig mock paravan --fault).
+    {"dbw.loss", DC::kDbw, "p=0.1", 2, "frames lost on the bus, both directions"},
+    {"dbw.bad_crc", DC::kDbw, "", 1, "ECU status frames with a wrong CRC"},
+    {"dbw.stuck_counter", DC::kDbw, "", 1, "ECU status frames with a frozen alive counter"},
+    {"dbw.override", DC::kDbw, "", 1, "the driver takes over (steering torque)"},
+    {"dbw.ecu_fault", DC::kDbw, "", 1, "the ECU reports a fault"},
+    {"dbw.bus_off", DC::kDbw, "", 1, "the bus goes off: nothing passes"},
+    {"dbw.no_status", DC::kDbw, "", 1, "the ECU stops sending status frames"},
+    // The host under the rig.
+    {"host.clock_step", DC::kHost, "ms=-500", 0, "CLOCK_REALTIME stepped by ms as seen by the rig's processes"},
+    {"host.cpu_hog", DC::kHost, "threads=2", 3, "busy threads competing for the cores"},
+    {"host.kill_mock", DC::kHost, "restart_s=1", 0, "a mock device process killed (SIGKILL), restarted restart_s later"},
+    {"host.stall_mock", DC::kHost, "ms=300", 0, "a mock device process stopped (SIGSTOP) for ms"},
+    {"host.network_delay", DC::kHost, "ms=50", 1, "every packet of the mocks held back by ms"},
+}};
+
+std::map<std::string, std::string> default_params(const KindInfo& k) {
+  std::map<std::string, std::string> out;
+  std::string_view rest = k.params;
+  while (!rest.empty()) {
+    const auto comma = rest.find(',');
+    const std::string_view item = rest.substr(0, comma);
+    const auto eq = item.find('=');
+    out.emplace(std::string(item.substr(0, eq)), std::string(item.substr(eq + 1)));
+    rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+  }
+  return out;
+}
+
+double parse_seconds(std::string_view text, std::string_view what, std::string_view spec) {
+  double v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc{} || end != text.data() + text.size() || !std::isfinite(v) || v < 0)
+    throw std::invalid_argument("'" + std::string(spec) + "': " + std::string(what) + " '" + std::string(text) +
+                                "' is not a number of seconds >= 0");
+  return v;
+}
+
+// The next of the markers that end a spec's kind/params part.
+std::size_t next_marker(std::string_view s, std::size_t from) { return s.find_first_of("@+~>", from); }
+
+}  // namespace
+
+std::string_view to_string(DeviceClass c) noexcept {
+  switch (c) {
+    case DC::kLidar: return "lidar";
+    case DC::kCamera: return "camera";
+    case DC::kV4l2: return "v4l2";
+    case DC::kDbw: return "dbw";
+    case DC::kHost: return "host";
+  }
+  return "?";
+}
+
+std::span<const KindInfo> kinds() { return kKinds; }
+
+const KindInfo* find_kind(std::string_view name) noexcept {
+  for (const auto& k : kKinds)
+    if (k.name == name) return &k;
+  return nullptr;
+}
+
+FaultSpec parse_spec(std::string_view spec) {
+  FaultSpec s;
+  const std::size_t head_end = next_marker(spec, 0);
+  const std::string_view head = spec.substr(0, head_end);
+  const std::size_t colon = head.find(':');
+  s.kind = std::string(head.substr(0, colon));
+  const KindInfo* k = find_kind(s.kind);
+  if (k == nullptr) {
+    std::string known;
+    for (const auto& kk : kKinds) known += (known.empty() ? "" : ", ") + std::string(kk.name);
+    throw std::invalid_argument("'" + std::string(spec) + "': unknown fault kind '" + s.kind + "' (known: " + known + ")");
+  }
+  s.params = default_params(*k);
+  s.duration_s = k->default_duration_s;
+  std::string_view rest = colon == std::string_view::npos ? std::string_view{} : head.substr(colon + 1);
+  while (!rest.empty()) {
+    const auto next = rest.find(':');
+    const std::string_view item = rest.substr(0, next);
+    const auto eq = item.find('=');
+    if (eq == std::string_view::npos || eq == 0)
+      throw std::invalid_argument("'" + std::string(spec) + "': parameter '" + std::string(item) + "' is not NAME=VALUE");
+    const std::string name(item.substr(0, eq));
+    if (!s.params.contains(name))
+      throw std::invalid_argument("'" + std::string(spec) + "': " + s.kind + " takes no parameter '" + name +
+                                  "' (it takes: " + (k->params.empty() ? std::string("none") : std::string(k->params)) + ")");
+    s.params[name] = std::string(item.substr(eq + 1));
+    rest = next == std::string_view::npos ? std::string_view{} : rest.substr(next + 1);
+  }
+  std::size_t pos = head_end;
+  while (pos != std::string_view::npos && pos < spec.size()) {
+    const char marker = spec[pos];
+    const std::size_t end = next_marker(spec, pos + 1);
+    const std::string_view value = spec.substr(pos + 1, end == std::string_view::npos ? std::string_view::npos : end - pos - 1);
+    switch (marker) {
+      case '@': s.start_s = parse_seconds(value, "start", spec); break;
+      case '+': s.duration_s = parse_seconds(value, "duration", spec); break;
+      case '~':
+        s.every_s = parse_seconds(value, "period", spec);
+        if (s.every_s <= 0) throw std::invalid_argument("'" + std::string(spec) + "': a period must be > 0 s");
+        break;
+      case '>':
+        if (value.empty()) throw std::invalid_argument("'" + std::string(spec) + "': '>' needs a device name");
+        s.device = std::string(value);
+        break;
+      default: break;
+    }
+    pos = end;
+  }
+  return s;
+}
+
+std::string to_string(const FaultSpec& s) {
+  std::ostringstream o;
+  o << s.kind;
+  for (const auto& [k, v] : s.params) o << ':' << k << '=' << v;
+  o << '@' << s.start_s << '+' << s.duration_s;
+  if (s.every_s > 0) o << '~' << s.every_s;
+  if (!s.device.empty()) o << '>' << s.device;
+  return o.str();
+}
+
+double FaultEvent::number(const std::string& name, double fallback) const {
+  const auto it = params.find(name);
+  if (it == params.end()) return fallback;
+  double v = 0;
+  const auto [end, ec] = std::from_chars(it->second.data(), it->second.data() + it->second.size(), v);
+  if (ec != std::errc{} || end != it->second.data() + it->second.size())
+    throw std::invalid_argument(kind + ": parameter " + name + "='" + it->second + "' is not a number");
+  return v;
+}
+
+std::string FaultEvent::text(const std::string& name, const std::string& fallback) const {
+  const auto it = params.find(name);
+  return it == params.end() ? fallback : it->second;
+}
+
+DeviceClass FaultEvent::device_class() const {
+  const KindInfo* k = find_kind(kind);
+  if (k == nullptr) throw std::invalid_argument("unknown fault kind '" + kind + "'");
+  return k->device_class;
+}
+
+std::vector<FaultEvent> expand(std::span<const FaultSpec> specs, std::span<const Device> devices, double horizon_s) {
+  std::vector<FaultEvent> out;
+  for (const auto& s : specs) {
+    const KindInfo* k = find_kind(s.kind);
+    if (k == nullptr) throw std::invalid_argument("unknown fault kind '" + s.kind + "'");
+    std::vector<std::string> targets;
+    if (k->device_class == DC::kHost && s.device.empty()) {
+      targets.emplace_back();  // the host: no device (kill_mock picks one when it runs)
+    } else {
+      for (const auto& d : devices)
+        if (d.device_class == k->device_class && (s.device.empty() || s.device == d.name)) targets.push_back(d.name);
+      if (targets.empty() && !s.device.empty()) targets.push_back(s.device);  // host faults aimed at one device
+    }
+    for (const auto& dev : targets) {
+      for (double t = s.start_s; t < horizon_s; t += s.every_s) {
+        out.push_back(FaultEvent{0, s.kind, dev, t, s.duration_s, s.params});
+        if (s.every_s <= 0) break;
+      }
+    }
+  }
+  std::stable_sort(out.begin(), out.end(), [](const FaultEvent& a, const FaultEvent& b) { return a.at_s < b.at_s; });
+  for (std::size_t i = 0; i < out.size(); ++i) out[i].id = i + 1;
+  return out;
+}
+
+std::vector<FaultEvent> random_campaign(std::span<const std::string> allowed, std::span<const Device> devices,
+                                        double rate_per_min, double horizon_s, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  // The kinds a device here can take, in the vocabulary's order (a stable plan for a seed).
+  std::vector<const KindInfo*> pool;
+  for (const auto& k : kKinds) {
+    if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), std::string(k.name)) == allowed.end()) continue;
+    const bool have = k.device_class == DC::kHost ||
+                      std::any_of(devices.begin(), devices.end(), [&](const Device& d) { return d.device_class == k.device_class; });
+    if (have) pool.push_back(&k);
+  }
+  if (pool.empty() || horizon_s <= 0 || rate_per_min <= 0) return {};
+  auto device_for = [&](const KindInfo& k) -> std::string {
+    std::vector<const Device*> of_class;
+    for (const auto& d : devices)
+      if (d.device_class == k.device_class) of_class.push_back(&d);
+    if (k.name == "host.kill_mock" || k.name == "host.stall_mock") {  // aimed at one mock device
+      for (const auto& d : devices)
+        if (d.device_class != DC::kHost) of_class.push_back(&d);
+    }
+    if (of_class.empty()) return {};
+    return of_class[std::uniform_int_distribution<std::size_t>(0, of_class.size() - 1)(rng)]->name;
+  };
+  // Leave the first and last seconds quiet: the rig starts and ends without a fault.
+  const double lo = std::min(2.0, horizon_s * 0.1), hi = std::max(lo, horizon_s - std::min(3.0, horizon_s * 0.1));
+  std::vector<FaultEvent> out;
+  // Every kind once, at random times (shuffled order), then Poisson arrivals of random kinds.
+  std::vector<const KindInfo*> order = pool;
+  std::shuffle(order.begin(), order.end(), rng);
+  std::uniform_real_distribution<double> when(lo, hi);
+  for (const KindInfo* k : order) {
+    if (k->name == "camera.never_answers") {  // a whole-run fault: from the start
+      out.push_back(FaultEvent{0, std::string(k->name), device_for(*k), 0.0, 0.0, default_params(*k)});
+      continue;
+    }
+    out.push_back(FaultEvent{0, std::string(k->name), device_for(*k), when(rng), k->default_duration_s, default_params(*k)});
+  }
+  std::exponential_distribution<double> gap(rate_per_min / 60.0);
+  std::vector<const KindInfo*> repeatable;
+  for (const KindInfo* k : pool)
+    if (k->name != "camera.never_answers") repeatable.push_back(k);
+  for (double t = lo + gap(rng); t < hi && !repeatable.empty(); t += gap(rng)) {
+    const KindInfo* k = repeatable[std::uniform_int_distribution<std::size_t>(0, repeatable.size() - 1)(rng)];
+    out.push_back(FaultEvent{0, std::string(k->name), device_for(*k), t, k->default_duration_s, default_params(*k)});
+  }
+  std::stable_sort(out.begin(), out.end(), [](const FaultEvent& a, const FaultEvent& b) { return a.at_s < b.at_s; });
+  for (std::size_t i = 0; i < out.size(); ++i) out[i].id = i + 1;
+  return out;
+}
+
+std::vector<FaultEvent> Plan::for_device(const std::string& device) const {
+  std::vector<FaultEvent> out;
+  for (const auto& e : events)
+    if (e.device == device || (e.device.empty() && find_kind(e.kind) && find_kind(e.kind)->device_class == DC::kHost))
+      out.push_back(e);
+  return out;
+}
+
+void write_plan(const std::string& path, const Plan& plan) {
+  std::ofstream out(path, std::ios::trunc);
+  if (!out) throw std::runtime_error("cannot write fault plan " + path);
+  out << nlohmann::json{{"fault_plan", 1}, {"epoch_mono_ns", plan.epoch_mono_ns}}.dump() << '\n';
+  for (const auto& e : plan.events) {
+    nlohmann::json j{{"id", e.id}, {"kind", e.kind}, {"device", e.device}, {"at_s", e.at_s}, {"duration_s", e.duration_s},
+                     {"params", e.params}};
+    out << j.dump() << '\n';
+  }
+  out.close();
+  if (!out) throw std::runtime_error("cannot write fault plan " + path);
+}
+
+Plan read_plan(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read fault plan " + path);
+  Plan plan;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (line.empty()) continue;
+    const std::string where = path + ":" + std::to_string(n) + ": ";
+    try {
+      const auto j = nlohmann::json::parse(line);
+      if (n == 1) {
+        if (!j.contains("fault_plan")) throw std::runtime_error("not a fault plan (no \"fault_plan\" header)");
+        plan.epoch_mono_ns = j.value("epoch_mono_ns", Nanos{0});
+        continue;
+      }
+      FaultEvent e;
+      e.id = j.at("id").get<std::uint64_t>();
+      e.kind = j.at("kind").get<std::string>();
+      if (find_kind(e.kind) == nullptr) throw std::runtime_error("unknown fault kind '" + e.kind + "'");
+      e.device = j.value("device", std::string{});
+      e.at_s = j.at("at_s").get<double>();
+      e.duration_s = j.value("duration_s", 0.0);
+      if (j.contains("params")) e.params = j.at("params").get<std::map<std::string, std::string>>();
+      plan.events.push_back(std::move(e));
+    } catch (const nlohmann::json::exception& ex) {
+      throw std::runtime_error(where + ex.what());
+    } catch (const std::runtime_error& ex) {
+      throw std::runtime_error(where + ex.what());
+    }
+  }
+  if (n == 0) throw std::runtime_error(path + ": empty fault plan");
+  return plan;
+}
+
+std::string chaos_plan_path() {
+  const char* dir = std::getenv("RIG_CHAOS_DIR");
+  return dir == nullptr || *dir == '\0' ? std::string{} : std::string(dir) + "/plan.jsonl";
+}
+
+std::string chaos_truth_path(const std::string& device) {
+  const char* dir = std::getenv("RIG_CHAOS_DIR");
+  return dir == nullptr || *dir == '\0' ? std::string{} : std::string(dir) + "/truth/" + device + ".jsonl";
+}
+
+}  // namespace sensor_rig::faults

@@ -1,0 +1,159 @@
+#include "sensor_rig/common/truth_record.hpp"
+
+#include <array>
+#include <cinttypes>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+namespace sensor_rig::truth {
+namespace {
+
+constexpr std::array<std::string_view, 7> kFates{"sent", "dropped", "corrupted", "duplicated", "delayed", "not_sent", "truncated"};
+
+// JSON string escaping for the few free-text fields (names, details): quotes, backslashes, controls.
+std::string escaped(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string_view to_string(Fate f) noexcept { return kFates[static_cast<std::size_t>(f)]; }
+
+bool parse_fate(std::string_view s, Fate& out) noexcept {
+  for (std::size_t i = 0; i < kFates.size(); ++i)
+    if (kFates[i] == s) {
+      out = static_cast<Fate>(i);
+      return true;
+    }
+  return false;
+}
+
+Writer::Writer(const std::string& path, const Header& h) : path_(path) {
+  file_ = std::fopen(path.c_str(), "w");
+  if (file_ == nullptr) throw std::runtime_error("cannot create truth record " + path);
+  std::setvbuf(file_, nullptr, _IOFBF, 1 << 16);
+  const std::string line = "{\"truth\":1,\"device\":\"" + escaped(h.device) + "\",\"class\":\"" + escaped(h.device_class) +
+                           "\",\"model\":\"" + escaped(h.model) + "\",\"topic\":\"" + escaped(h.topic) + "\",\"unit\":\"" +
+                           escaped(h.unit) + "\",\"clock\":\"" + escaped(h.clock) + "\"}\n";
+  put(line.data(), static_cast<int>(line.size()));
+  flush();  // the header is there even if the mock dies at once
+}
+
+Writer::~Writer() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+void Writer::put(const char* line, int n) {
+  std::lock_guard lock(mutex_);
+  std::fwrite(line, 1, static_cast<std::size_t>(n), file_);
+  ++lines_;
+}
+
+void Writer::unit(const UnitRecord& r) {
+  char buf[160];
+  const int n = std::snprintf(buf, sizeof buf, "{\"u\":%" PRId64 ",\"acq\":%" PRId64 ",\"dev\":%" PRId64 ",\"parts\":%" PRIu32 "}\n",
+                              r.unit, r.acq_ns, r.dev_ns, r.parts);
+  put(buf, n);
+}
+
+void Writer::part(const PartRecord& r) {
+  char buf[224];
+  int n = std::snprintf(buf, sizeof buf,
+                        "{\"p\":%" PRIu64 ",\"u\":%" PRId64 ",\"acq\":%" PRId64 ",\"dev\":%" PRId64 ",\"tx\":%" PRId64 ",\"fate\":\"%s\"",
+                        r.seq, r.unit, r.acq_ns, r.dev_ns, r.tx_ns, to_string(r.fate).data());
+  n += r.fault != 0 ? std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), ",\"fault\":%" PRIu64 "}\n", r.fault)
+                    : std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), "}\n");
+  put(buf, n);
+}
+
+void Writer::fault(const FaultRecord& r) {
+  char buf[160];
+  const int n = std::snprintf(buf, sizeof buf, "{\"f\":%" PRIu64 ",\"at\":%" PRId64 ",\"until\":%" PRId64 ",\"u\":%" PRId64 ",",
+                              r.id, r.at_ns, r.until_ns, r.unit);
+  const std::string line =
+      std::string(buf, static_cast<std::size_t>(n)) + "\"kind\":\"" + escaped(r.kind) + "\",\"detail\":\"" + escaped(r.detail) + "\"}\n";
+  put(line.data(), static_cast<int>(line.size()));
+}
+
+void Writer::flush() {
+  std::lock_guard lock(mutex_);
+  std::fflush(file_);
+}
+
+std::unique_ptr<Writer> open_if(const std::string& path, const Header& header) {
+  if (path.empty()) return nullptr;
+  return std::make_unique<Writer>(path, header);
+}
+
+Log read(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read truth record " + path);
+  Log log;
+  std::string line;
+  int n = 0;
+  bool have_header = false;
+  while (std::getline(in, line)) {
+    ++n;
+    if (line.empty()) continue;
+    const bool last = in.peek() == std::char_traits<char>::eof();
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(line);
+    } catch (const nlohmann::json::exception& e) {
+      if (last) {  // a writer killed mid-line: that line never happened
+        log.cut_last_line = true;
+        break;
+      }
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": " + e.what());
+    }
+    try {
+      if (!have_header) {
+        if (!j.contains("truth")) throw std::runtime_error("not a truth record (no \"truth\" header)");
+        log.header = Header{j.value("device", ""), j.value("class", ""), j.value("model", ""),
+                            j.value("topic", ""), j.value("unit", ""), j.value("clock", "")};
+        have_header = true;
+      } else if (j.contains("p")) {
+        PartRecord r;
+        r.seq = j.at("p").get<std::uint64_t>();
+        r.unit = j.at("u").get<std::int64_t>();
+        r.acq_ns = j.at("acq").get<Nanos>();
+        r.dev_ns = j.value("dev", Nanos{0});
+        r.tx_ns = j.value("tx", Nanos{0});
+        if (!parse_fate(j.at("fate").get<std::string>(), r.fate)) throw std::runtime_error("unknown fate");
+        r.fault = j.value("fault", std::uint64_t{0});
+        log.parts.push_back(r);
+      } else if (j.contains("u")) {
+        log.units.push_back(UnitRecord{j.at("u").get<std::int64_t>(), j.at("acq").get<Nanos>(), j.value("dev", Nanos{0}),
+                                       j.value("parts", std::uint32_t{0})});
+      } else if (j.contains("f")) {
+        log.faults.push_back(FaultRecord{j.at("f").get<std::uint64_t>(), j.at("kind").get<std::string>(), j.at("at").get<Nanos>(),
+                                         j.value("until", Nanos{0}), j.value("u", std::int64_t{-1}), j.value("detail", "")});
+      } else {
+        throw std::runtime_error("neither a unit, a part nor a fault");
+      }
+    } catch (const nlohmann::json::exception& e) {
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": " + e.what());
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": " + e.what());
+    }
+  }
+  if (!have_header) throw std::runtime_error(path + ": empty truth record");
+  return log;
+}
+
+}  // namespace sensor_rig::truth
