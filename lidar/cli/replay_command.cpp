@@ -3,9 +3,11 @@
 // --rate, optionally looping, with injected network faults. Position packets (port 8308 in a
 // capture; GPRMC + PPS from the synthetic sensor) go to --position-port on the same host when
 // given, else they are skipped. Ends with one summary line on stderr (and --json on stdout).
+// --fault-plan / --fault: the fault vocabulary's events of --device; --truth: what it really did.
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "lidar_commands.hpp"
+#include "replay_faults.hpp"
 #include "sensor_rig/lidar/decoder_files.hpp"
 #include "sensor_rig/lidar/return_selection.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -53,6 +56,10 @@ struct ReplayCliOptions {
   int send_buffer = 4 << 20;
   bool json = false;
   int rt_priority = 10;
+  std::string device = "lidar";
+  std::string truth;
+  std::string fault_plan;
+  std::vector<std::string> fault_specs;
 };
 
 // A mock sensor should keep hardware-like timing on a loaded machine: SCHED_FIFO at a low
@@ -99,31 +106,85 @@ void write_metadata(const ReplayCliOptions& o, std::uint16_t port) {
   if (!out) throw std::runtime_error("cannot write metadata " + o.write_metadata);
 }
 
-// A synthetic stream also sets ro.start_monotonic_ns: when its first packet is due.
-std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::uint16_t port, mock::ReplayOptions& ro) {
+// What "dev" is in the truth record: the clock each vendor's packets carry.
+std::string clock_of(const ReplayCliOptions& o) {
+  if (o.synthetic.empty()) return "none (a capture: units and acquisition unknown)";
+  if (mock::is_ouster_model(o.synthetic)) return "sensor ns, PTP-synced (column timestamps)";
+  if (o.synthetic.rfind("Pandar", 0) == 0) return "sensor UTC ns, us resolution (tail time moved to the first firing)";
+  return "sensor us since the top of the hour, as ns";
+}
+
+// The stream to send, with its faults and truth record when asked for. Sets ro.start_monotonic_ns:
+// when the first packet is due (a synthetic sensor's timeline is vehicle time, and its packets leave
+// when their time comes), and ro.scheduled / ro.observer.
+std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::uint16_t port, mock::ReplayOptions& ro,
+                                                std::unique_ptr<mock::TruthStream>& truth_stream) {
+  const Nanos mono_now = monotonic_now_ns();
+  const Nanos vehicle_now = vehicle_now_ns();
+  const bool faulted = !o.fault_plan.empty() || !o.fault_specs.empty();
+  ReplayFaultInput fin{o.device, o.fault_plan, o.fault_specs, mono_now, 0, vehicle_now - mono_now,
+                       o.duration_s > 0 ? o.duration_s : 86400.0};
+  const truth::Header header{o.device, "lidar", o.synthetic.empty() ? std::string("capture") : o.synthetic,
+                             "/sensors/lidar/" + o.device + "/points", "scan", clock_of(o)};
+  const auto open_truth = [&] {
+    if (!o.truth.empty() && std::filesystem::path(o.truth).has_parent_path())
+      std::filesystem::create_directories(std::filesystem::path(o.truth).parent_path());
+    return truth::open_if(o.truth, header);
+  };
   if (!o.pcap.empty()) {
+    std::unique_ptr<mock::PacketStream> capture;
     try {
-      return std::make_unique<mock::PcapStream>(o.pcap);
+      capture = std::make_unique<mock::PcapStream>(o.pcap);
     } catch (const PcapError& e) {
       throw std::runtime_error(std::string("cannot replay: ") + e.what());
     }
+    if (!faulted && o.truth.empty()) return capture;
+    ro.start_monotonic_ns = mono_now + ro.lead_ns;
+    fin.first_deadline_mono_ns = ro.start_monotonic_ns;
+    ReplayFaults f = replay_faults(fin, std::nullopt);
+    ro.scheduled = std::move(f.network);
+    truth_stream = std::make_unique<mock::TruthStream>(std::move(capture), open_truth(), std::move(f.notes));
+    ro.observer = truth_stream.get();
+    return nullptr;
   }
+  const mock::SyntheticOptions base = synthetic_options(o, port, 0);
   std::unique_ptr<mock::SyntheticSensor> sensor;
   try {
-    sensor = mock::make_synthetic_sensor(synthetic_options(o, port, 0), mock::Scene::standard());
+    sensor = mock::make_synthetic_sensor(base, mock::Scene::standard());
   } catch (const std::invalid_argument& e) {
     throw cli::UsageError(e.what());
   }
   // The sensor's clock is the host's (a PTP-synced sensor): each packet leaves when the vehicle
   // time it is complete at comes, the first lead_ns from now at the earliest, later when the rotor
   // must first reach its phase-locked angle.
-  const Nanos mono_now = monotonic_now_ns();
-  const Nanos vehicle_now = vehicle_now_ns();
   Nanos start = vehicle_now + ro.lead_ns - sensor->first_packet_offset_ns();
   if (o.phase_lock) start = mock::phase_locked_start_ns(*sensor, start, *o.phase_lock);
   sensor->set_start_ns(start);
   ro.start_monotonic_ns = mono_now + (start + sensor->first_packet_offset_ns() - vehicle_now);
-  return std::make_unique<mock::SyntheticStream>(std::move(sensor));
+  if (!faulted && o.truth.empty()) return std::make_unique<mock::SyntheticStream>(std::move(sensor));
+
+  fin.first_deadline_mono_ns = ro.start_monotonic_ns;
+  ReplayFaults f = replay_faults(fin, mock::PacketFields(*sensor));
+  ro.scheduled = std::move(f.network);
+  // The sensor is made again when a fault restarts it or changes its speed: same options.
+  mock::SensorFactory make = [base](const mock::SensorSetup& s) {
+    mock::SyntheticOptions so = base;
+    so.start_ns = s.start_ns;
+    so.rpm = s.rpm;
+    so.start_rotor_deg = s.start_rotor_deg;
+    so.boot = s.boot;
+    so.phase_lock_deg.reset();  // placed by start_ns, not locked again
+    return mock::make_synthetic_sensor(so, mock::Scene::standard());
+  };
+  std::unique_ptr<mock::FaultySensor> faulty;
+  try {
+    faulty = std::make_unique<mock::FaultySensor>(make, mock::SensorSetup{start, o.rpm, 0.0, 0}, std::move(f.sensor));
+  } catch (const std::invalid_argument& e) {
+    throw cli::UsageError(e.what());
+  }
+  truth_stream = std::make_unique<mock::TruthStream>(std::move(faulty), open_truth(), std::move(f.notes));
+  ro.observer = truth_stream.get();
+  return nullptr;
 }
 
 std::string json_line(const mock::ReplayStats& s) {
@@ -189,14 +250,17 @@ int run_replay_command(const ReplayCliOptions& o) {
   std::vector<Endpoint> dests{data};
   if (o.position_port != 0) dests.push_back(Endpoint{data.host, static_cast<std::uint16_t>(o.position_port)});
   if (!o.write_metadata.empty()) write_metadata(o, data.port);
-  std::unique_ptr<mock::PacketStream> stream = make_stream(o, data.port, ro);
+  std::unique_ptr<mock::TruthStream> truth_stream;
+  std::unique_ptr<mock::PacketStream> plain = make_stream(o, data.port, ro, truth_stream);
+  mock::PacketStream& stream = truth_stream ? static_cast<mock::PacketStream&>(*truth_stream) : *plain;
   UdpSender sender(dests, o.send_buffer);
 
   log::info("replay", std::string(o.pcap.empty() ? "synthetic " + o.synthetic : o.pcap) + " -> " + o.to +
                           (o.position_port ? " (position packets -> port " + std::to_string(o.position_port) + ")"
                                            : std::string(" (position packets skipped)")));
   apply_rt_priority(o.rt_priority);
-  const mock::ReplayStats st = mock::run_replay(*stream, sender, ro);
+  const mock::ReplayStats st = mock::run_replay(stream, sender, ro);
+  if (truth_stream) truth_stream->finish();
   std::fprintf(stderr, "%s\n", mock::summary_line(st).c_str());
   if (o.json) std::printf("%s\n", json_line(st).c_str());
   if (!st.stream_error.empty()) {
@@ -261,6 +325,18 @@ void register_replay_command(CLI::App& lidar, cli::Context& ctx) {
   cmd->add_option("--reorder-rate", opts->reorder, "probability a packet is swapped with the next")->group(faults);
   cmd->add_option("--stall-ms", opts->stall_ms, "insert a gap of MS milliseconds ...")->group(faults);
   cmd->add_option("--stall-every", opts->stall_every_s, "... every S seconds of stream time")->group(faults);
+  cmd->add_option("--device", opts->device, "this sensor's name in the rig (fault plans, truth record, topic)")
+      ->capture_default_str()
+      ->group(faults);
+  cmd->add_option("--fault", opts->fault_specs,
+                  "a fault of the vocabulary, KIND[:NAME=VALUE]...[@START_S][+DURATION_S][~EVERY_S] (lidar.*, "
+                  "host.network_delay; times after the replay's start); repeatable")
+      ->group(faults);
+  cmd->add_option("--fault-plan", opts->fault_plan, "the faults of --device in this plan file (rig chaos; times after its epoch)")
+      ->check(CLI::ExistingFile)
+      ->group(faults);
+  cmd->add_option("--truth", opts->truth, "write the truth record (JSON Lines: scans, packets and their fates, faults)")
+      ->group(faults);
   cmd->add_option("--seed", opts->seed, "random seed of the faults")->group(faults)->capture_default_str();
   cmd->add_option("--send-buffer", opts->send_buffer, "socket send buffer in bytes")->capture_default_str();
   cmd->add_option("--rt-priority", opts->rt_priority, "SCHED_FIFO priority for steady timing, 0 = normal scheduling")

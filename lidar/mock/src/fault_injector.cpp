@@ -44,7 +44,8 @@ FaultInjector::FaultInjector(const FaultConfig& config, std::size_t max_packet_b
 
 bool FaultInjector::chance(double p) noexcept { return p > 0.0 && uniform_(rng_) < p; }
 
-std::span<const FaultedPacket> FaultInjector::push(Nanos offset_ns, std::span<const std::byte> bytes, bool position) {
+std::span<const FaultedPacket> FaultInjector::push(Nanos offset_ns, std::span<const std::byte> bytes, bool position,
+                                                   std::int64_t tag) {
   // A stall delays this packet and everything after it.
   if (cfg_.stall_ns > 0 && cfg_.stall_every_ns > 0) {
     while (offset_ns >= next_stall_ns_) {
@@ -80,26 +81,27 @@ std::span<const FaultedPacket> FaultInjector::push(Nanos offset_ns, std::span<co
       std::swap(cur_, held_);
       have_held_ = true;
       held_position_ = position;
+      held_tag_ = tag;
       last_when_ = when;
       if (dup) {
         // The duplicate leaves now; the original follows the next packet.
         ++stats_.duplicated;
         released_.assign(held_.begin(), held_.end());
-        out_[n++] = FaultedPacket{when, released_, position};
+        out_[n++] = FaultedPacket{when, released_, position, tag};
       }
       return {out_, n};
     }
-    out_[n++] = FaultedPacket{when, cur_, position};
+    out_[n++] = FaultedPacket{when, cur_, position, tag};
     if (dup) {
       ++stats_.duplicated;
-      out_[n++] = FaultedPacket{when, cur_, position};
+      out_[n++] = FaultedPacket{when, cur_, position, tag};
     }
   }
   last_when_ = when;
   if (have_held_ && n > 0) {
     std::swap(held_, released_);
     have_held_ = false;
-    out_[n++] = FaultedPacket{when, released_, held_position_};
+    out_[n++] = FaultedPacket{when, released_, held_position_, held_tag_};
   }
   return {out_, n};
 }
@@ -108,7 +110,7 @@ std::span<const FaultedPacket> FaultInjector::flush() {
   if (!have_held_) return {};
   std::swap(held_, released_);
   have_held_ = false;
-  out_[0] = FaultedPacket{last_when_, released_, held_position_};
+  out_[0] = FaultedPacket{last_when_, released_, held_position_, held_tag_};
   return {out_, 1};
 }
 

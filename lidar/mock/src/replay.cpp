@@ -32,6 +32,22 @@ bool sleep_until(Nanos deadline) noexcept {
   }
 }
 
+// What the rate faults did to one packet, from their counters (they keep no per-packet record).
+void report_rate_fates(ReplayObserver& obs, std::int64_t tag, const FaultStats& a, const FaultStats& b) {
+  using truth::Fate;
+  if (b.dropped > a.dropped) obs.fate(tag, Fate::kDropped, 0);
+  if (b.truncated > a.truncated) obs.fate(tag, Fate::kTruncated, 0);
+  if (b.corrupted > a.corrupted) obs.fate(tag, Fate::kCorrupted, 0);
+  if (b.reordered > a.reordered) obs.fate(tag, Fate::kDelayed, 0);
+  if (b.duplicated > a.duplicated) obs.fate(tag, Fate::kDuplicated, 0);
+}
+
+void report_decisions(ReplayObserver* obs, ScheduledFaults& s) {
+  if (obs != nullptr)
+    for (const NetDecision& d : s.decisions()) obs->fate(d.tag, d.fate, d.fault);
+  s.decisions().clear();
+}
+
 }  // namespace
 
 PcapStream::PcapStream(std::string path) : path_(std::move(path)), reader_(std::make_unique<PcapReader>(path_)) {}
@@ -43,7 +59,7 @@ std::optional<StreamPacket> PcapStream::next() {
   // The second port's packets: Velodyne position packets (8308), Ouster IMU packets (48 bytes, no
   // lidar packet of any model is that small).
   const bool second = rec->packet.dst_port == velodyne::kPositionPort || rec->packet.data.size() == ouster::kImuPacketSize;
-  return StreamPacket{rec->packet.rx_ns, rec->packet.data, second};
+  return StreamPacket{rec->packet.rx_ns, rec->packet.data, second, -1, -1.0};
 }
 
 bool PcapStream::rewind() {
@@ -59,17 +75,21 @@ std::string PcapStream::error() const { return reader_->error(); }
 
 std::optional<StreamPacket> SyntheticStream::next() {
   const SyntheticPacket p = sensor_->next();
-  return StreamPacket{p.time_ns, p.bytes, p.position};
+  return StreamPacket{p.time_ns, p.bytes, p.position, -1, p.truth.data ? p.truth.rotor_deg : -1.0};
 }
 
 ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOptions& o) {
   ReplayStats st;
   FaultInjector faults(o.faults);
+  ScheduledFaults scheduled(o.scheduled, o.faults.seed);
+  ReplayObserver* const obs = o.observer;
   const std::size_t batch = std::max<std::size_t>(1, o.batch);
   std::vector<std::vector<std::byte>> bufs(batch);
   for (auto& b : bufs) b.reserve(velodyne::kDataPacketSize);
   std::vector<OutDatagram> pending;
+  std::vector<std::int64_t> pending_tags;
   pending.reserve(batch);
+  pending_tags.reserve(batch);
   const double rate = o.rate > 0 ? o.rate : 1.0;
   const bool send_position = o.send_position && sender.destinations() > 1;
 
@@ -79,14 +99,19 @@ ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOpti
 
   auto flush = [&] {
     if (pending.empty()) return;
+    const Nanos tx = obs != nullptr ? vehicle_now_ns() : 0;
     const SendResult r = sender.send_batch(pending);
+    if (obs != nullptr)
+      for (const std::int64_t tag : pending_tags)
+        if (tag >= 0) obs->sent(tag, tx);
+    pending_tags.clear();
     st.sent += r.sent;
     st.send_errors += pending.size() - r.sent;
     ++st.batches;
     pending.clear();
   };
   bool stop = false;
-  auto emit = [&](const FaultedPacket& fp) {
+  auto emit = [&](const NetPacket& fp) {
     const Nanos deadline = start + fp.offset_ns;
     bool on_time = false;
     if (deadline > monotonic_now_ns() + kSpinNs) {
@@ -108,6 +133,7 @@ ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOpti
     std::vector<std::byte>& buf = bufs[pending.size()];
     buf.assign(fp.bytes.begin(), fp.bytes.end());
     pending.push_back(OutDatagram{buf, fp.position ? std::size_t{1} : std::size_t{0}});
+    pending_tags.push_back(fp.tag);
     (fp.position ? st.sent_position : st.sent_data) += 1;
     if (on_time || pending.size() == batch) flush();
   };
@@ -153,13 +179,26 @@ ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOpti
       ++st.skipped_position;
       continue;
     }
-    for (const FaultedPacket& fp : faults.push(offset, p->bytes, p->position)) {
-      emit(fp);
+    const FaultStats before = faults.stats();
+    const auto out = faults.push(offset, p->bytes, p->position, p->tag);
+    if (obs != nullptr && p->tag >= 0) report_rate_fates(*obs, p->tag, before, faults.stats());
+    for (const FaultedPacket& fp : out) {
+      const bool own = fp.tag == p->tag;  // the rotor angle is this packet's (not a released one's)
+      for (const NetPacket& np : scheduled.push({fp.offset_ns, fp.bytes, fp.position, fp.tag}, own ? p->rotor_deg : -1.0)) {
+        report_decisions(obs, scheduled);
+        emit(np);
+        if (stop) break;
+      }
+      report_decisions(obs, scheduled);
       if (stop) break;
     }
   }
   if (!st.stopped) {
-    for (const FaultedPacket& fp : faults.flush()) emit(fp);
+    for (const FaultedPacket& fp : faults.flush()) {
+      for (const NetPacket& np : scheduled.push({fp.offset_ns, fp.bytes, fp.position, fp.tag})) emit(np);
+      report_decisions(obs, scheduled);
+    }
+    for (const NetPacket& np : scheduled.flush()) emit(np);
   }
   flush();
   st.faults = faults.stats();

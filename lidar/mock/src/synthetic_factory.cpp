@@ -1,6 +1,7 @@
 // Model name -> synthetic sensor (see synthetic_factory.hpp).
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "sensor_rig/lidar/hesai/calibration.hpp"
@@ -26,6 +27,7 @@ std::unique_ptr<SyntheticSensor> make_velodyne(const SyntheticOptions& o, velody
                   : o.returns == ReturnSelection::kLast ? velodyne::ReturnMode::kLast
                                         : velodyne::ReturnMode::kStrongest;
   c.start_ns = o.start_ns;
+  c.start_azimuth_deg = o.start_rotor_deg;
   try {
     if (!o.calibration_text.empty()) c.calibration = velodyne::parse_calibration(o.calibration_text, o.calibration_name);
     return std::make_unique<SyntheticVelodyne>(c, std::move(scene));
@@ -44,6 +46,7 @@ std::unique_ptr<SyntheticSensor> make_hesai(const SyntheticOptions& o, hesai::Mo
                   : o.returns == ReturnSelection::kLast ? hesai::ReturnMode::kLast
                                         : hesai::ReturnMode::kStrongest;
   c.start_ns = o.start_ns;
+  c.start_azimuth_deg = o.start_rotor_deg;
   try {
     if (!o.calibration_text.empty()) {
       if (hesai::is_firetime_csv(o.calibration_text)) {
@@ -140,6 +143,10 @@ std::unique_ptr<SyntheticSensor> make_synthetic_sensor(const SyntheticOptions& o
     SyntheticOusterConfig c;
     c.metadata = synthetic_ouster_metadata(o);
     c.start_ns = o.start_ns;
+    const int w = c.metadata.columns_per_frame, cpp = c.metadata.columns_per_packet;
+    const auto col = static_cast<int>(std::lround(o.start_rotor_deg / 360.0 * w / cpp)) * cpp;
+    c.start_column = ((col % w) + w) % w;
+    if (o.boot != 0 && c.metadata.init_id != 0) c.metadata.init_id = (c.metadata.init_id + o.boot) & 0xFFFFFFU;
     c.imu_period_ns = o.ouster_imu_period_ns;
     s = std::make_unique<SyntheticOuster>(std::move(c), std::move(scene));
   }

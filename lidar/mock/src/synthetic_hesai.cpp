@@ -180,11 +180,41 @@ Nanos SyntheticHesai::complete_time(std::uint64_t packet) const noexcept {
 
 Nanos SyntheticHesai::first_packet_offset_ns() const noexcept { return complete_time(0) - config_.start_ns; }
 
+UnitRule SyntheticHesai::unit_rule() const noexcept {
+  // The decoder's window for cut angle 0: from the block azimuth where the channel with the largest
+  // offset reaches the cut to the one where the smallest has passed it (offsets rounded away from 0).
+  long off_min = 0, off_max = 0;
+  for (std::size_t c = 0; c < channels_.size(); ++c) {
+    const double v = channels_[c].azimuth_offset_deg * 100.0;
+    const long o = static_cast<long>(v < 0 ? std::floor(v) : std::ceil(v));
+    off_min = c == 0 ? o : std::min(off_min, o);
+    off_max = c == 0 ? o : std::max(off_max, o);
+  }
+  const auto norm = [](long v) { return static_cast<int>(((v % hesai::kAzimuthCount) + hesai::kAzimuthCount) % hesai::kAzimuthCount); };
+  return {UnitRule::Kind::kAzimuthWindow, norm(-off_max), norm(-off_min)};
+}
+
 SyntheticPacket SyntheticHesai::next() {
   render_packet(next_, buf_);
   const Nanos done = complete_time(next_);
+  SyntheticPacket out{done, buf_, false, {}};
+  PacketTruth& t = out.truth;
+  t.data = true;
+  t.index = next_;
+  t.acq_ns = first_firing(next_);
+  // The clock as the packet carries it: the tail's µs, back to the first firing (the decoder's packet_time).
+  const Nanos tail = tail_time(next_);
+  t.dev_ns = tail - (tail % 1000 + 1000) % 1000 + (t.acq_ns - tail);
+  t.rotor_deg = azimuth_deg_at(group_time(next_ * static_cast<std::uint64_t>(groups_)));
+  t.groups = static_cast<std::uint8_t>(groups_);
+  for (int g = 0; g < groups_; ++g) {
+    const Nanos tg = group_time(next_ * static_cast<std::uint64_t>(groups_) + static_cast<std::uint64_t>(g));
+    t.group_ns[static_cast<std::size_t>(g)] = tg + min_fire_ns_;
+    t.group_az[static_cast<std::size_t>(g)] =
+        static_cast<std::uint16_t>(std::lround(azimuth_deg_at(tg) * 100.0) % hesai::kAzimuthCount);
+  }
   ++next_;
-  return SyntheticPacket{done, buf_, false};
+  return out;
 }
 
 }  // namespace sensor_rig::lidar::mock

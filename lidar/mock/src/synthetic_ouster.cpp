@@ -194,12 +194,22 @@ SyntheticPacket SyntheticOuster::next() {
       imu_buf_.resize(ouster::kImuPacketSize);
       ouster::encode_imu_packet(s, std::span<std::byte, ouster::kImuPacketSize>(imu_buf_.data(), ouster::kImuPacketSize));
       ++imu_next_;
-      return SyntheticPacket{imu_time, imu_buf_, true};
+      return SyntheticPacket{imu_time, imu_buf_, true, {}};
     }
   }
   render_packet(next_, buf_);
-  ++next_;  // lidar_time: the last column's period ends
-  return SyntheticPacket{lidar_time, buf_, false};
+  SyntheticPacket out{lidar_time, buf_, false, {}};  // lidar_time: the last column's period ends
+  PacketTruth& t = out.truth;
+  const auto width = static_cast<std::uint64_t>(config_.metadata.columns_per_frame);
+  const std::uint64_t first = static_cast<std::uint64_t>(config_.start_column) + next_ * layout_.columns_per_packet;
+  t.data = true;
+  t.index = next_;
+  t.acq_ns = column_time(next_ * layout_.columns_per_packet);
+  t.dev_ns = t.acq_ns;  // a PTP-synced sensor: its column timestamps are vehicle time
+  t.rotor_deg = 360.0 * static_cast<double>(first % width) / static_cast<double>(width);
+  t.frame = static_cast<std::uint32_t>(config_.first_frame_id + first / width) & 0xFFFFU;
+  ++next_;
+  return out;
 }
 
 }  // namespace sensor_rig::lidar::mock

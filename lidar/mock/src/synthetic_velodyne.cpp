@@ -76,15 +76,22 @@ std::uint16_t SyntheticVelodyne::raw_distance(const Laser& l, double azimuth_rad
   return static_cast<std::uint16_t>(counts);
 }
 
+Nanos SyntheticVelodyne::block_time(Nanos t0, std::size_t f) const noexcept {
+  return config_.start_ns + std::llround(static_cast<double>(t0 - config_.start_ns) + static_cast<double>(f) * block_ns_);
+}
+
+std::uint16_t SyntheticVelodyne::azimuth_raw(Nanos t) const noexcept {
+  return static_cast<std::uint16_t>(std::lround(azimuth_deg_at(t) * 100.0) % 36000);
+}
+
 void SyntheticVelodyne::render_data_packet(std::uint64_t index,
                                            std::span<std::byte, velodyne::kDataPacketSize> out) const noexcept {
   velodyne::RawDataPacket p{};
   const Nanos t0 = data_packet_time(index);
   const std::size_t firings = dual_ ? velodyne::kBlocksPerPacket / 2 : velodyne::kBlocksPerPacket;
   for (std::size_t f = 0; f < firings; ++f) {
-    const double t_block = static_cast<double>(t0 - config_.start_ns) + static_cast<double>(f) * block_ns_;
-    const Nanos t_block_ns = config_.start_ns + std::llround(t_block);
-    const auto az_raw = static_cast<std::uint16_t>(std::lround(azimuth_deg_at(t_block_ns) * 100.0) % 36000);
+    const Nanos t_block_ns = block_time(t0, f);
+    const std::uint16_t az_raw = azimuth_raw(t_block_ns);
     velodyne::RawBlock block{};
     block.flag[0] = 0xFF;
     block.flag[1] = 0xEE;
@@ -125,12 +132,24 @@ SyntheticPacket SyntheticVelodyne::next() {
     if (pos_t <= data_t) {
       render_position_packet(pos_t, pos_buf_);
       ++next_position_;
-      return SyntheticPacket{pos_t, pos_buf_, true};
+      return SyntheticPacket{pos_t, pos_buf_, true, {}};
     }
   }
   render_data_packet(next_data_, data_buf_);
+  SyntheticPacket out{data_t, data_buf_, false, {}};
+  PacketTruth& t = out.truth;
+  t.data = true;
+  t.index = next_data_;
+  t.acq_ns = data_t;
+  t.dev_ns = static_cast<Nanos>(sensor_time_us(data_t)) * 1000;
+  t.rotor_deg = azimuth_deg_at(data_t);
+  t.groups = static_cast<std::uint8_t>(dual_ ? velodyne::kBlocksPerPacket / 2 : velodyne::kBlocksPerPacket);
+  for (std::size_t f = 0; f < t.groups; ++f) {
+    t.group_ns[f] = block_time(data_t, f);
+    t.group_az[f] = azimuth_raw(t.group_ns[f]);
+  }
   ++next_data_;
-  return SyntheticPacket{data_t, data_buf_, false};
+  return out;
 }
 
 }  // namespace sensor_rig::lidar::mock

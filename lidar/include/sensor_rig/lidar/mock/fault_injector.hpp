@@ -41,6 +41,7 @@ struct FaultedPacket {
   Nanos offset_ns = 0;               // when to send, relative to the stream start
   std::span<const std::byte> bytes;  // valid until the next push() / flush()
   bool position = false;
+  std::int64_t tag = -1;             // the truth record's part (StreamPacket::tag)
 };
 
 class FaultInjector {
@@ -48,7 +49,8 @@ class FaultInjector {
   explicit FaultInjector(const FaultConfig& config, std::size_t max_packet_bytes = 65536);
 
   // One packet in (offset relative to the stream start); 0..3 packets out, in send order.
-  std::span<const FaultedPacket> push(Nanos offset_ns, std::span<const std::byte> bytes, bool position);
+  std::span<const FaultedPacket> push(Nanos offset_ns, std::span<const std::byte> bytes, bool position,
+                                      std::int64_t tag = -1);
   // Releases a packet still held back for reordering (call at the end of the stream).
   std::span<const FaultedPacket> flush();
 
@@ -67,6 +69,7 @@ class FaultInjector {
   std::vector<std::byte> cur_, held_, released_;
   bool have_held_ = false;
   bool held_position_ = false;
+  std::int64_t held_tag_ = -1;
   FaultedPacket out_[3];
 };
 

@@ -8,9 +8,12 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/common/truth_record.hpp"
 #include "sensor_rig/lidar/mock/fault_injector.hpp"
+#include "sensor_rig/lidar/mock/scheduled_faults.hpp"
 #include "sensor_rig/lidar/mock/synthetic_velodyne.hpp"
 #include "sensor_rig/lidar/udp_sender.hpp"
 
@@ -24,6 +27,18 @@ struct StreamPacket {
   Nanos time_ns = 0;                 // the stream's own time (capture record time, sensor time)
   std::span<const std::byte> bytes;  // valid until the next call to next()
   bool position = false;             // for the second port: Velodyne position (8308), Ouster IMU (48 B)
+  std::int64_t tag = -1;             // the truth record's part (truth_stream.hpp), -1 = none
+  double rotor_deg = -1.0;           // first firing, degrees past the scan cut (< 0: unknown)
+};
+
+// Told what became of each tagged packet (truth_stream.hpp keeps the truth record with it).
+class ReplayObserver {
+ public:
+  virtual ~ReplayObserver() = default;
+  // A fault decided the packet's fate (fault 0: the rate faults, which have no plan id).
+  virtual void fate(std::int64_t tag, truth::Fate fate, std::uint64_t fault) = 0;
+  // Handed to sendmmsg at this CLOCK_REALTIME (the first time, for a duplicated packet).
+  virtual void sent(std::int64_t tag, Nanos tx_ns) = 0;
 };
 
 class PacketStream {
@@ -70,6 +85,8 @@ struct ReplayOptions {
   std::uint64_t max_packets = 0;  // stop after reading this many packets (0 = no limit)
   bool send_position = false;     // position packets to destination 1, else they are skipped
   FaultConfig faults;
+  std::vector<NetFault> scheduled;   // the vocabulary's network faults (times: schedule offsets)
+  ReplayObserver* observer = nullptr;
   std::size_t batch = 64;         // packets per sendmmsg when behind schedule
   Nanos lead_ns = 2'000'000;      // first packet this long after start()
   // The first packet is due at this CLOCK_MONOTONIC time instead (0: lead_ns after the call): a

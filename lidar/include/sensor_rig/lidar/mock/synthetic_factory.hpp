@@ -32,6 +32,11 @@ struct SyntheticOptions {
   std::string ouster_profile;         // nominal OS: UDP profile; empty = RNG19_RFL8_SIG16_NIR16
   std::uint16_t ouster_udp_port = 7502;  // nominal Ouster: udp_port_lidar (imu = +1)
   Nanos ouster_imu_period_ns = 10'000'000;  // Ouster IMU packets (flagged position: the second port); 0 = none
+  // Where the rotor starts (SyntheticSensor::start_rotor_deg; Ouster: rounded to a packet's first
+  // column) and how often the sensor has restarted (Ouster: the init_id it sends changes with it):
+  // the sensor faults (sensor_faults.hpp) start a sensor again mid-run with these.
+  double start_rotor_deg = 0.0;
+  std::uint32_t boot = 0;
 };
 
 // "VLP-16, VLP-32C, HDL-32E, OS-LEGACY, OS, Pandar40P, PandarXT32".

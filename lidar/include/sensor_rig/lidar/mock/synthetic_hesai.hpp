@@ -70,6 +70,7 @@ class SyntheticHesai final : public SyntheticSensor {
   void set_start_ns(Nanos start_ns) noexcept override { config_.start_ns = start_ns; }
   [[nodiscard]] double rotation_period_ns() const noexcept override { return 360.0 / deg_per_ns_; }
   [[nodiscard]] double start_rotor_deg() const noexcept override { return config_.start_azimuth_deg; }
+  [[nodiscard]] UnitRule unit_rule() const noexcept override;
   [[nodiscard]] std::uint64_t packets_emitted() const noexcept { return next_; }
 
  private:

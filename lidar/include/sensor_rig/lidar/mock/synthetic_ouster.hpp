@@ -86,6 +86,7 @@ class SyntheticOuster final : public SyntheticSensor {
   [[nodiscard]] double start_rotor_deg() const noexcept override {
     return 360.0 * config_.start_column / config_.metadata.columns_per_frame;
   }
+  [[nodiscard]] UnitRule unit_rule() const noexcept override { return {UnitRule::Kind::kFrame, 0, 0}; }
   [[nodiscard]] std::uint64_t packets_emitted() const noexcept { return next_; }
   [[nodiscard]] std::uint64_t imu_packets_emitted() const noexcept { return imu_next_; }
 

@@ -60,6 +60,7 @@ class SyntheticVelodyne final : public SyntheticSensor {
   void set_start_ns(Nanos start_ns) noexcept override { config_.start_ns = start_ns; }
   [[nodiscard]] double rotation_period_ns() const noexcept override { return 360.0 / deg_per_ns_; }
   [[nodiscard]] double start_rotor_deg() const noexcept override { return config_.start_azimuth_deg; }
+  [[nodiscard]] UnitRule unit_rule() const noexcept override { return {UnitRule::Kind::kAzimuthCut, 0, 0}; }
   [[nodiscard]] std::uint64_t data_packets_emitted() const noexcept { return next_data_; }
   [[nodiscard]] std::uint64_t position_packets_emitted() const noexcept { return next_position_; }
 
@@ -71,6 +72,9 @@ class SyntheticVelodyne final : public SyntheticSensor {
     double vert_offset, horiz_offset;
   };
 
+  // Block f of the packet whose first firing is t0: its first firing and azimuth field (0.01°).
+  [[nodiscard]] Nanos block_time(Nanos t0, std::size_t f) const noexcept;
+  [[nodiscard]] std::uint16_t azimuth_raw(Nanos t) const noexcept;
   [[nodiscard]] std::uint16_t raw_distance(const Laser& l, double azimuth_rad, std::uint8_t& intensity) const noexcept;
 
   SyntheticConfig config_;

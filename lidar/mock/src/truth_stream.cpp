@@ -1,0 +1,139 @@
+// The mock LIDAR's truth record (see truth_stream.hpp).
+#include "sensor_rig/lidar/mock/truth_stream.hpp"
+
+#include <algorithm>
+
+namespace sensor_rig::lidar::mock {
+namespace {
+
+// Parts in flight at once: a sendmmsg batch, a reordered or duplicated packet's wait; a part still
+// pending when its slot comes round again is written as never sent.
+constexpr std::size_t kRing = 8192;
+
+// Which fate wins when several faults touch one packet: the one that changes most what arrives.
+int severity(truth::Fate f) noexcept {
+  using truth::Fate;
+  switch (f) {
+    case Fate::kSent: return 0;
+    case Fate::kDuplicated: return 1;
+    case Fate::kDelayed: return 2;
+    case Fate::kCorrupted: return 3;
+    case Fate::kTruncated: return 4;
+    case Fate::kDropped: return 5;
+    case Fate::kNotSent: return 6;
+  }
+  return 0;
+}
+
+}  // namespace
+
+TruthStream::TruthStream(std::unique_ptr<FaultySensor> sensor, std::unique_ptr<truth::Writer> writer,
+                         std::vector<FaultNote> faults)
+    : sensor_(std::move(sensor)), writer_(std::move(writer)), faults_(std::move(faults)), noted_(faults_.size(), false),
+      ring_(kRing) {}
+
+TruthStream::TruthStream(std::unique_ptr<PacketStream> capture, std::unique_ptr<truth::Writer> writer,
+                         std::vector<FaultNote> faults)
+    : capture_(std::move(capture)), writer_(std::move(writer)), faults_(std::move(faults)), noted_(faults_.size(), false),
+      ring_(kRing) {}
+
+TruthStream::~TruthStream() { finish(); }
+
+TruthStream::Pending* TruthStream::pending(std::int64_t tag) noexcept {
+  if (tag < 0) return nullptr;
+  Pending& p = ring_[static_cast<std::size_t>(tag) % kRing];
+  return p.live && p.r.seq == static_cast<std::uint64_t>(tag) ? &p : nullptr;
+}
+
+void TruthStream::put(Pending& p) {
+  if (writer_) writer_->part(p.r);
+  p.live = false;
+}
+
+void TruthStream::note_fault(std::uint64_t id, std::int64_t unit) {
+  for (std::size_t i = 0; i < faults_.size(); ++i) {
+    if (faults_[i].id != id || noted_[i]) continue;
+    noted_[i] = true;
+    if (writer_) writer_->fault({id, faults_[i].kind, faults_[i].at_ns, faults_[i].until_ns, unit, faults_[i].detail});
+  }
+}
+
+void TruthStream::write_units() {
+  for (const FaultySensor::Began& b : sensor_->began()) note_fault(b.id, b.unit);
+  sensor_->began().clear();
+  auto& closed = sensor_->units().closed();
+  if (writer_)
+    for (const ClosedUnit& u : closed) writer_->unit({u.unit, u.acq_ns, u.dev_ns, u.parts});
+  closed.clear();
+}
+
+std::optional<StreamPacket> TruthStream::next() {
+  if (capture_) {
+    auto p = capture_->next();
+    if (!p || p->position) return p;
+    Pending& slot = ring_[next_seq_ % kRing];
+    if (slot.live) put(slot);
+    slot.r = truth::PartRecord{next_seq_, -1, 0, 0, 0, truth::Fate::kSent, 0};
+    slot.live = true;
+    p->tag = static_cast<std::int64_t>(next_seq_++);
+    return p;
+  }
+  while (true) {
+    const FaultyPacket fp = sensor_->next();
+    write_units();
+    const SyntheticPacket& p = fp.packet;
+    if (!fp.device || !p.truth.data) return StreamPacket{p.time_ns, p.bytes, p.position, -1, -1.0};
+    Pending& slot = ring_[next_seq_ % kRing];
+    if (slot.live) put(slot);
+    slot.r = truth::PartRecord{next_seq_, fp.units.first, p.truth.acq_ns, p.truth.dev_ns, 0, fp.fate, fp.fault};
+    slot.live = true;
+    const auto tag = static_cast<std::int64_t>(next_seq_++);
+    if (fp.fate == truth::Fate::kNotSent) {  // the sensor did not produce it
+      put(slot);
+      continue;
+    }
+    return StreamPacket{p.time_ns, p.bytes, false, tag, p.truth.rotor_deg};
+  }
+}
+
+bool TruthStream::rewind() { return capture_ ? capture_->rewind() : true; }
+
+std::string TruthStream::error() const { return capture_ ? capture_->error() : std::string{}; }
+
+void TruthStream::fate(std::int64_t tag, truth::Fate f, std::uint64_t fault) {
+  Pending* p = pending(tag);
+  if (p == nullptr) return;
+  if (fault != 0) note_fault(fault, p->r.unit);
+  if (severity(f) > severity(p->r.fate) || (p->r.fault == 0 && fault != 0 && f == p->r.fate)) {
+    p->r.fate = f;
+    p->r.fault = fault != 0 ? fault : p->r.fault;
+  }
+  if (f == truth::Fate::kDropped) put(*p);  // never on the wire: nothing more will happen to it
+}
+
+void TruthStream::sent(std::int64_t tag, Nanos tx_ns) {
+  Pending* p = pending(tag);
+  if (p == nullptr) return;
+  p->r.tx_ns = tx_ns;
+  put(*p);
+}
+
+void TruthStream::finish() {
+  if (finished_) return;
+  finished_ = true;
+  // In sequence order, as they were rendered.
+  std::vector<Pending*> left;
+  for (Pending& p : ring_)
+    if (p.live) left.push_back(&p);
+  std::sort(left.begin(), left.end(), [](const Pending* a, const Pending* b) { return a->r.seq < b->r.seq; });
+  for (Pending* p : left) put(*p);
+  if (sensor_) {
+    sensor_->units().finish();
+    write_units();
+  }
+  for (std::size_t i = 0; i < faults_.size(); ++i)
+    if (!noted_[i]) note_fault(faults_[i].id, -1);
+  if (writer_) writer_->flush();
+}
+
+}  // namespace sensor_rig::lidar::mock
