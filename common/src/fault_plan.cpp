@@ -221,8 +221,11 @@ std::vector<FaultEvent> random_campaign(std::span<const std::string> allowed, st
   std::vector<const KindInfo*> pool;
   for (const auto& k : kKinds) {
     if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), std::string(k.name)) == allowed.end()) continue;
-    const bool have = k.device_class == DC::kHost ||
-                      std::any_of(devices.begin(), devices.end(), [&](const Device& d) { return d.device_class == k.device_class; });
+    const bool process_kind = k.name == "host.kill_mock" || k.name == "host.stall_mock";
+    const bool have = process_kind ? std::any_of(devices.begin(), devices.end(), [](const Device& d) { return d.own_process; })
+                      : k.device_class == DC::kHost
+                          ? true
+                          : std::any_of(devices.begin(), devices.end(), [&](const Device& d) { return d.device_class == k.device_class; });
     if (have) pool.push_back(&k);
   }
   if (pool.empty() || horizon_s <= 0 || rate_per_min <= 0) return {};
@@ -230,9 +233,10 @@ std::vector<FaultEvent> random_campaign(std::span<const std::string> allowed, st
     std::vector<const Device*> of_class;
     for (const auto& d : devices)
       if (d.device_class == k.device_class) of_class.push_back(&d);
-    if (k.name == "host.kill_mock" || k.name == "host.stall_mock") {  // aimed at one mock device
+    if (k.name == "host.kill_mock" || k.name == "host.stall_mock") {  // aimed at one mock process
       for (const auto& d : devices)
-        if (d.device_class != DC::kHost) of_class.push_back(&d);
+        if (d.own_process) of_class.push_back(&d);
+      if (of_class.empty()) return {};
     }
     if (of_class.empty()) return {};
     return of_class[std::uniform_int_distribution<std::size_t>(0, of_class.size() - 1)(rng)]->name;

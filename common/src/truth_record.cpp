@@ -44,7 +44,9 @@ bool parse_fate(std::string_view s, Fate& out) noexcept {
 }
 
 Writer::Writer(const std::string& path, const Header& h) : path_(path) {
-  file_ = std::fopen(path.c_str(), "w");
+  // Appending: a mock killed and restarted (host.kill_mock) continues its device's record after a new
+  // header; the reader keeps the two runs' unit ids apart.
+  file_ = std::fopen(path.c_str(), "a");
   if (file_ == nullptr) throw std::runtime_error("cannot create truth record " + path);
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 16);
   const std::string line = "{\"truth\":1,\"device\":\"" + escaped(h.device) + "\",\"class\":\"" + escaped(h.device_class) +
@@ -107,6 +109,7 @@ Log read(const std::string& path) {
   std::string line;
   int n = 0;
   bool have_header = false;
+  std::int64_t unit_offset = 0;  // per restart of the writer: its unit ids start again
   while (std::getline(in, line)) {
     ++n;
     if (line.empty()) continue;
@@ -122,7 +125,10 @@ Log read(const std::string& path) {
       throw std::runtime_error(path + ":" + std::to_string(n) + ": " + e.what());
     }
     try {
-      if (!have_header) {
+      if (have_header && j.contains("truth")) {
+        unit_offset += std::int64_t{1} << 40;
+        ++log.restarts;
+      } else if (!have_header) {
         if (!j.contains("truth")) throw std::runtime_error("not a truth record (no \"truth\" header)");
         log.header = Header{j.value("device", ""), j.value("class", ""), j.value("model", ""),
                             j.value("topic", ""), j.value("unit", ""), j.value("clock", "")};
@@ -130,19 +136,20 @@ Log read(const std::string& path) {
       } else if (j.contains("p")) {
         PartRecord r;
         r.seq = j.at("p").get<std::uint64_t>();
-        r.unit = j.at("u").get<std::int64_t>();
+        r.unit = j.at("u").get<std::int64_t>() + unit_offset;
         r.acq_ns = j.at("acq").get<Nanos>();
         r.dev_ns = j.value("dev", Nanos{0});
         r.tx_ns = j.value("tx", Nanos{0});
         if (!parse_fate(j.at("fate").get<std::string>(), r.fate)) throw std::runtime_error("unknown fate");
         r.fault = j.value("fault", std::uint64_t{0});
         log.parts.push_back(r);
-      } else if (j.contains("u")) {
-        log.units.push_back(UnitRecord{j.at("u").get<std::int64_t>(), j.at("acq").get<Nanos>(), j.value("dev", Nanos{0}),
-                                       j.value("parts", std::uint32_t{0})});
       } else if (j.contains("f")) {
+        const std::int64_t u = j.value("u", std::int64_t{-1});
         log.faults.push_back(FaultRecord{j.at("f").get<std::uint64_t>(), j.at("kind").get<std::string>(), j.at("at").get<Nanos>(),
-                                         j.value("until", Nanos{0}), j.value("u", std::int64_t{-1}), j.value("detail", "")});
+                                         j.value("until", Nanos{0}), u < 0 ? u : u + unit_offset, j.value("detail", "")});
+      } else if (j.contains("u")) {
+        log.units.push_back(UnitRecord{j.at("u").get<std::int64_t>() + unit_offset, j.at("acq").get<Nanos>(), j.value("dev", Nanos{0}),
+                                       j.value("parts", std::uint32_t{0})});
       } else {
         throw std::runtime_error("neither a unit, a part nor a fault");
       }

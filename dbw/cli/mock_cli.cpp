@@ -1,11 +1,20 @@
 // `rig mock paravan [--transport SPEC] [--config YAML] [--log FILE] [--fault SPEC]... [--duration S]`
+#include <unistd.h>
+
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <thread>
+
+#include "sensor_rig/common/fault_plan.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/common/truth_record.hpp"
 #include "sensor_rig/dbw/bridge/defaults.hpp"
 #include "dbw_commands.hpp"
 #include "sensor_rig/dbw/mock/mock_runner.hpp"
@@ -21,6 +30,65 @@ struct MockOptions {
   double duration = 0.0;
   std::uint64_t seed = 1;
   bool print_state = false;
+  std::string device = "paravan";  // its name in a fault plan (rig chaos)
+};
+
+// The vocabulary's dbw.* kinds as the mock ECU's own faults.
+mock::Fault from_event(const faults::FaultEvent& e, double start_s) {
+  static const std::map<std::string, mock::FaultKind> kKinds{
+      {"dbw.loss", mock::FaultKind::kFrameLoss},         {"dbw.bad_crc", mock::FaultKind::kBadCrc},
+      {"dbw.stuck_counter", mock::FaultKind::kStuckCounter}, {"dbw.override", mock::FaultKind::kDriverOverride},
+      {"dbw.ecu_fault", mock::FaultKind::kEcuFault},     {"dbw.bus_off", mock::FaultKind::kBusOff},
+      {"dbw.no_status", mock::FaultKind::kNoStatus}};
+  mock::Fault f;
+  f.kind = kKinds.at(e.kind);
+  f.value = e.kind == "dbw.loss" ? e.number("p", 0.1) : 1.0;
+  f.start_s = start_s;
+  f.duration_s = e.duration_s;
+  return f;
+}
+
+// Under `rig chaos`: the plan's dbw.* faults of this device, timed from this process's start (the
+// ECU's clock), each recorded in the truth record when it begins. A restarted mock takes only what
+// has not begun yet: the faults before its start were its predecessor's.
+class PlannedFaults {
+ public:
+  PlannedFaults(const std::string& device, std::vector<mock::Fault>& faults) {
+    const std::string plan_path = faults::chaos_plan_path();
+    if (plan_path.empty()) return;
+    const faults::Plan plan = faults::read_plan(plan_path);
+    const double offset_s = static_cast<double>(plan.epoch_mono_ns - monotonic_now_ns()) * 1e-9;
+    for (const auto& e : plan.for_device(device)) {
+      if (e.kind.rfind("dbw.", 0) != 0 || offset_s + e.at_s < 0) continue;
+      faults.push_back(from_event(e, offset_s + e.at_s));
+      events_.push_back(e);
+    }
+    truth_ = std::make_unique<truth::Writer>(faults::chaos_truth_path(device),
+                                             truth::Header{device, "dbw", "mock Paravan ECU", "", "", "CLOCK_MONOTONIC"});
+    epoch_mono_ = plan.epoch_mono_ns;
+    thread_ = std::thread([this] { record(); });
+  }
+  ~PlannedFaults() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  void record() {
+    for (const auto& e : events_) {
+      const Nanos at = epoch_mono_ + static_cast<Nanos>(e.at_s * 1e9);
+      while (!stop_ && monotonic_now_ns() < at) ::usleep(5'000);
+      if (stop_) return;
+      const Nanos veh = vehicle_now_ns();
+      truth_->fault({e.id, e.kind, veh, veh + static_cast<Nanos>(e.duration_s * 1e9), -1, faults::to_string(faults::FaultSpec{e.kind, e.params, e.at_s, e.duration_s, 0, e.device})});
+      truth_->flush();
+    }
+  }
+  std::vector<faults::FaultEvent> events_;
+  std::unique_ptr<truth::Writer> truth_;
+  Nanos epoch_mono_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
 };
 
 int run_mock_paravan(const MockOptions& o) {
@@ -32,6 +100,13 @@ int run_mock_paravan(const MockOptions& o) {
     } catch (const std::invalid_argument& e) {
       throw cli::UsageError(std::string("--fault: ") + e.what());
     }
+  }
+  std::unique_ptr<PlannedFaults> planned;
+  try {
+    planned = std::make_unique<PlannedFaults>(o.device, faults);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: fault plan: %s\n", e.what());
+    return cli::kUsage;
   }
   std::unique_ptr<can::Transport> bus;
   try {
@@ -74,6 +149,7 @@ void register_mock_cli(CLI::App& mock, cli::Context& ctx) {
   p->add_option("--fault", o->faults, "loss=P | bad-crc | stuck-counter | override | ecu-fault | bus-off | no-status, each [@START_S][+DURATION_S]");
   p->add_option("--duration", o->duration, "seconds to run (0 = until Ctrl-C)")->check(CLI::NonNegativeNumber);
   p->add_option("--seed", o->seed, "random seed for frame loss");
+  p->add_option("--device", o->device, "its name in a `rig chaos` fault plan (RIG_CHAOS_DIR)")->capture_default_str();
   p->add_flag("--print-state", o->print_state, "one JSON line per second with the vehicle state");
   p->callback([o, &ctx] { ctx.exit_code = run_mock_paravan(*o); });
 }

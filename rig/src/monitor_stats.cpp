@@ -42,6 +42,7 @@ void TopicStats::on_stamps(const msg::SourceStamps& s, Nanos now) {
   r.missing_packets = s.missing_packets;
   r.dropped = s.dropped;
   r.size_bytes = s.size_bytes;
+  r.packets = s.packets;
   r.ecu_status_ns = s.ecu_status_ns;
   const Nanos stamp = msg::from_time(s.header.stamp);
   if (auto it = unmatched_data.find(stamp); it != unmatched_data.end()) {

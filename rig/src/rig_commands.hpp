@@ -9,6 +9,7 @@ namespace bench { void register_cli(CLI::App& app, cli::Context& ctx); }
 namespace rig {
 void register_cli(CLI::App& app, cli::Context& ctx);
 void register_security_cli(CLI::App& app, cli::Context& ctx);  // security init
+void register_chaos_cli(CLI::App& app, cli::Context& ctx);     // chaos
 }  // namespace rig
 namespace drivers {
 void register_lidar_cli(CLI::App& app, cli::Context& ctx);
@@ -18,6 +19,7 @@ void register_dbw_cli(CLI::App& app, cli::Context& ctx);
 inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
   rig::register_cli(app, ctx);  // up, demo, config, monitor
   rig::register_security_cli(app, ctx);
+  rig::register_chaos_cli(app, ctx);
 #ifdef RIG_HAVE_LIDAR
   lidar::register_cli(app, ctx);    // lidar replay
   drivers::register_lidar_cli(app, ctx);  // lidar decode (source -> timesync -> decoder -> PCD)

@@ -8,9 +8,11 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <mutex>
 #include <optional>
 
 #include "host_time_node.hpp"
+#include "mock_faults.hpp"
 #include "rig_cameras.hpp"
 #include "sync_set_node.hpp"
 #include "sensor_rig/dds/diagnostics.hpp"
@@ -18,6 +20,7 @@
 #include "sensor_rig/drivers/fusion/fusion_node.hpp"
 #include "sensor_rig/drivers/lidar/lidar_driver.hpp"
 #include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/common/fault_plan.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/loopback_address.hpp"
 #include "sensor_rig/common/shutdown.hpp"
@@ -26,6 +29,9 @@
 #include "sensor_rig/dds/stamps_writer.hpp"
 
 namespace sensor_rig::rig {
+
+// The device name the fault vocabulary gives the drive-by-wire mock ECU.
+constexpr const char* kMockEcuDevice = "paravan";
 
 std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const LidarConfig& l) {
   std::vector<std::string> argv;
@@ -47,6 +53,13 @@ std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const Li
   if (l.position_port != 0) argv.insert(argv.end(), {"--position-port", std::to_string(l.position_port)});
   if (l.mock.drop_rate > 0) argv.insert(argv.end(), {"--drop-rate", std::to_string(l.mock.drop_rate)});
   if (l.mock.corrupt_rate > 0) argv.insert(argv.end(), {"--corrupt-rate", std::to_string(l.mock.corrupt_rate)});
+  // Under rig chaos: this LIDAR's faults of the campaign's plan, and its truth record in DIR/truth/.
+  if (const std::string plan = faults::chaos_plan_path(); !plan.empty()) {
+    const std::string truth = faults::chaos_truth_path(l.name);
+    std::error_code ec;  // the mock creates it too; rig chaos has made it already
+    std::filesystem::create_directories(std::filesystem::path(truth).parent_path(), ec);
+    argv.insert(argv.end(), {"--device", l.name, "--truth", truth, "--fault-plan", plan});
+  }
   return argv;
 }
 
@@ -202,7 +215,10 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   HostTimeNode host_time({.pmc = pmc_program()});  // rig/time: PTP state, realtime steps
   host_time.start();
 
-  std::vector<ChildProcess> mocks;
+  // Mock processes (and the dbw nodes): under `rig chaos` the host's faults kill or stop them, and
+  // restart them, from another thread, so every access holds mocks_mutex.
+  std::vector<MockProcess> mocks;
+  std::mutex mocks_mutex;
   const std::string exe = self_executable();
   // The dbw processes take the rig's DDS domain as an argument; the bridge's status tells when it is up.
   const dds::Topic<msg::DbwStatus> dbw_status_topic(participant, drivers::kStatusTopic);
@@ -213,16 +229,26 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     ChildOptions co;
     co.rt_priority = cfg.dbw.realtime_priority;
     co.env = {"CYCLONEDDS_URI=" + dds::cyclone_uri(cfg.dds)};
-    mocks.emplace_back(argv, co);
-    log::info("rig", "dbw: " + argv[1] + " " + argv[2] + ": pid " + std::to_string(mocks.back().pid()));
+    const bool ecu = argv.size() > 2 && argv[1] == "mock";
+    mocks.push_back(MockProcess{ecu ? std::string(kMockEcuDevice) : std::string{}, argv, co, ChildProcess(argv, co)});
+    log::info("rig", "dbw: " + argv[1] + " " + argv[2] + ": pid " + std::to_string(mocks.back().child.pid()));
     // The ECU must listen before the bridge connects, the bridge subscribe before commands flow.
     if (!wait_dbw_ready(argv, cfg.dbw, dbw_status)) log::warn("rig", "dbw: " + argv[1] + " " + argv[2] + " not ready in time");
   }
   for (const auto& l : cfg.lidars) {
     auto argv = lidar_mock_command(exe, l);
     if (argv.empty()) continue;
-    mocks.emplace_back(argv);
-    log::info("rig", "mock for lidar " + l.name + ": pid " + std::to_string(mocks.back().pid()));
+    mocks.push_back(MockProcess{l.name, argv, ChildOptions{}, ChildProcess(argv, ChildOptions{})});
+    log::info("rig", "mock for lidar " + l.name + ": pid " + std::to_string(mocks.back().child.pid()));
+  }
+  std::optional<MockFaults> mock_faults;
+  if (const std::string plan = faults::chaos_plan_path(); !plan.empty()) {
+    try {
+      mock_faults.emplace(faults::read_plan(plan), mocks, mocks_mutex, faults::chaos_truth_path("host_mocks"));
+    } catch (const std::exception& e) {
+      log::error("rig", std::string("chaos: ") + e.what());
+      return 1;
+    }
   }
 
   const Nanos start = monotonic_now_ns();
@@ -236,10 +262,16 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     cameras->supervise(statuses);
     sync_sets.supervise(statuses);
     host_time.supervise(statuses);
-    for (std::size_t i = 0; i < mocks.size(); ++i) {
-      if (!mocks[i].running() && !reported_dead[i]) {
-        reported_dead[i] = true;
-        log::warn("rig", "mock '" + mocks[i].name() + "' exited with status " + std::to_string(mocks[i].exit_status()));
+    {
+      std::lock_guard lock(mocks_mutex);
+      for (std::size_t i = 0; i < mocks.size(); ++i) {
+        ChildProcess& c = mocks[i].child;
+        if (c.running()) {
+          reported_dead[i] = false;  // a restarted mock: its end is news again
+        } else if (!reported_dead[i]) {
+          reported_dead[i] = true;
+          log::warn("rig", "mock '" + c.name() + "' exited with status " + std::to_string(c.exit_status()));
+        }
       }
     }
     diagnostics.publish(statuses);
@@ -247,7 +279,8 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
   }
   log::info("rig", "stopping");
   // Stop in reverse: the command source first, so the bridge sees silence and disengages.
-  for (auto it = mocks.rbegin(); it != mocks.rend(); ++it) it->stop();
+  mock_faults.reset();  // no kill or restart from here on
+  for (auto it = mocks.rbegin(); it != mocks.rend(); ++it) it->child.stop();
   host_time.stop();
   sync_sets.stop();
   cameras->stop();

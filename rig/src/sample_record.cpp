@@ -14,10 +14,11 @@ namespace {
 
 constexpr std::string_view kHeader =
     "topic,seq,acquisition_ns,first_rx_ns,last_rx_ns,publish_ns,written_ns,received_ns,missing_packets,dropped,"
-    "size_bytes,ecu_status_ns";
-constexpr std::size_t kFields = 12;
-// Recordings made before the dbw `ecu` stage: the same columns without the last one.
-constexpr std::string_view kHeaderWithoutEcu = kHeader.substr(0, kHeader.rfind(','));
+    "size_bytes,ecu_status_ns,packets";
+constexpr std::size_t kFields = 13;
+// Older recordings: before the `packets` column (12), and before the dbw `ecu` stage (11).
+constexpr std::string_view kHeaderWithoutPackets = kHeader.substr(0, kHeader.rfind(','));
+constexpr std::string_view kHeaderWithoutEcu = kHeaderWithoutPackets.substr(0, kHeaderWithoutPackets.rfind(','));
 
 double ms_between(Nanos from, Nanos to) { return static_cast<double>(to - from) * 1e-6; }
 
@@ -67,6 +68,8 @@ std::string to_csv_line(const SampleRecord& r) {
     out += std::to_string(v);
   }
   put_time(out, r.ecu_status_ns);
+  out += ',';
+  out += std::to_string(r.packets);
   out += '\n';
   return out;
 }
@@ -74,7 +77,7 @@ std::string to_csv_line(const SampleRecord& r) {
 std::optional<SampleRecord> parse_csv_line(std::string_view line) { return parse_csv_line(line, kFields); }
 
 std::optional<SampleRecord> parse_csv_line(std::string_view line, std::size_t fields) {
-  if (fields != kFields && fields != kFields - 1) return std::nullopt;
+  if (fields < kFields - 2 || fields > kFields) return std::nullopt;
   if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
   std::array<std::string_view, kFields> f;
   std::size_t n = 0;
@@ -93,7 +96,8 @@ std::optional<SampleRecord> parse_csv_line(std::string_view line, std::size_t fi
   for (std::size_t i = 0; i < std::size(times); ++i) ok = ok && parse_number(f[2 + i], *times[i]);
   for (std::size_t i = 8; i < 11; ++i) ok = ok && !f[i].empty();  // counts are always written
   ok = ok && parse_number(f[8], r.missing_packets) && parse_number(f[9], r.dropped) && parse_number(f[10], r.size_bytes);
-  if (fields == kFields) ok = ok && parse_number(f[11], r.ecu_status_ns);
+  if (fields >= kFields - 1) ok = ok && parse_number(f[11], r.ecu_status_ns);
+  if (fields == kFields) ok = ok && parse_number(f[12], r.packets);
   if (!ok) return std::nullopt;
   return r;
 }
@@ -124,7 +128,10 @@ std::vector<SampleRecord> read_records(const std::string& path) {
   std::string line;
   if (!std::getline(in, line)) line.clear();
   if (!line.empty() && line.back() == '\r') line.pop_back();
-  const std::size_t fields = line == kHeader ? kFields : line == kHeaderWithoutEcu ? kFields - 1 : 0;
+  const std::size_t fields = line == kHeader                ? kFields
+                             : line == kHeaderWithoutPackets ? kFields - 1
+                             : line == kHeaderWithoutEcu     ? kFields - 2
+                                                             : 0;
   if (fields == 0)
     throw std::runtime_error(path + ":1: not a `rig monitor --record` file (header: " + std::string(kHeader) + ")");
   std::vector<SampleRecord> out;

@@ -34,6 +34,7 @@ struct SampleRecord {
   std::uint32_t missing_packets = 0;
   std::uint32_t dropped = 0;
   std::uint32_t size_bytes = 0;
+  std::uint32_t packets = 0;  // packets that made the sample (rig chaos holds it against the truth)
 
   [[nodiscard]] bool lost() const { return received_ns == 0; }
 };
@@ -46,7 +47,7 @@ std::array<std::optional<double>, kStageCount> stage_latencies_ms(const SampleRe
 std::string_view record_csv_header();
 std::string to_csv_line(const SampleRecord& r);
 std::optional<SampleRecord> parse_csv_line(std::string_view line);
-// The same for a recording with `fields` columns: 12, or 11 (before the `ecu_status_ns` column).
+// The same for a recording with `fields` columns: 13, 12 (before `packets`) or 11 (before `ecu_status_ns`).
 std::optional<SampleRecord> parse_csv_line(std::string_view line, std::size_t fields);
 
 // A CSV file that only ever holds whole lines: lines are collected and written with one write(2)

@@ -210,9 +210,10 @@ TEST(SampleRecord, CsvLineRoundTripsWithEmptyUnknownTimes) {
   r.missing_packets = 7;
   r.dropped = 1;
   r.size_bytes = 2'304'000;
+  r.packets = 1600;
   const std::string line = to_csv_line(r);
   EXPECT_EQ(line, "/sensors/camera/front_narrow/image_raw,42,1700000000000000000,,,1700000000000000003,"
-                  "1700000000000000004,,7,1,2304000,\n");
+                  "1700000000000000004,,7,1,2304000,,1600\n");
   const auto back = parse_csv_line(line.substr(0, line.size() - 1));
   ASSERT_TRUE(back);
   EXPECT_EQ(back->topic, r.topic);
@@ -221,13 +222,14 @@ TEST(SampleRecord, CsvLineRoundTripsWithEmptyUnknownTimes) {
   EXPECT_EQ(back->written_ns, kT0 + 4);
   EXPECT_TRUE(back->lost());
   EXPECT_EQ(back->size_bytes, 2'304'000u);
-  EXPECT_EQ(std::count(record_csv_header().begin(), record_csv_header().end(), ','), 11);
+  EXPECT_EQ(back->packets, 1600u);
+  EXPECT_EQ(std::count(record_csv_header().begin(), record_csv_header().end(), ','), 12);
   EXPECT_EQ(back->ecu_status_ns, 0);
   EXPECT_FALSE(stage_latencies_ms(*back)[kEcu]) << "no ECU status, no ecu stage";
   // A drive-by-wire command: CAN frames written, then the ECU status 4.5 ms later (last column).
   r.ecu_status_ns = r.written_ns + 4'500'000;
   const std::string dbw = to_csv_line(r);
-  EXPECT_EQ(dbw.substr(dbw.rfind(",2304000,")), ",2304000,1700000000004500004\n");
+  EXPECT_EQ(dbw.substr(dbw.rfind(",2304000,")), ",2304000,1700000000004500004,1600\n");
   const auto dbw_back = parse_csv_line(dbw.substr(0, dbw.size() - 1));
   ASSERT_TRUE(dbw_back);
   EXPECT_EQ(dbw_back->ecu_status_ns, r.ecu_status_ns);
@@ -238,18 +240,23 @@ TEST(SampleRecord, CsvLineRoundTripsWithEmptyUnknownTimes) {
 }
 
 TEST(SampleRecord, BadLinesAreRefused) {
-  for (const char* bad : {"", "/a,1,2", "/a,1,,,,,,,,,,", "/a,1,,,,,,,0,0,0,,9", "/a,x,,,,,,,0,0,0,", "/a,1,,,,,,,0,0,-1,",
-                          ",1,,,,,,,0,0,0,", "/a,1,12abc,,,,,,0,0,0,", "/a,99999999999999999999,,,,,,,0,0,0,",
-                          "/a,1,,,,,,,0,0,0,x", "/a,1,,,,,,,0,0,0"})
+  for (const char* bad : {"", "/a,1,2", "/a,1,,,,,,,,,,,", "/a,1,,,,,,,0,0,0,,9,", "/a,x,,,,,,,0,0,0,,0", "/a,1,,,,,,,0,0,-1,,0",
+                          ",1,,,,,,,0,0,0,,0", "/a,1,12abc,,,,,,0,0,0,,0", "/a,99999999999999999999,,,,,,,0,0,0,,0",
+                          "/a,1,,,,,,,0,0,0,x,0", "/a,1,,,,,,,0,0,0,", "/a,1,,,,,,,0,0,0,,-1", "/a,1,,,,,,,0,0,0,,0,0"})
     EXPECT_FALSE(parse_csv_line(bad)) << bad;
-  EXPECT_TRUE(parse_csv_line("/a,1,,,,,,,0,0,0,"));
-  EXPECT_TRUE(parse_csv_line("/a,1,,,,,,,0,0,0,9"));
+  EXPECT_TRUE(parse_csv_line("/a,1,,,,,,,0,0,0,,0"));
+  EXPECT_TRUE(parse_csv_line("/a,1,,,,,,,0,0,0,9,120"));
 }
 
 // A recording made before the `ecu_status_ns` column (11 columns) still reads: no ECU time.
 TEST(SampleRecord, RecordingWithoutTheEcuColumnReads) {
   test::TempDir dir;
-  const std::string header(record_csv_header().substr(0, record_csv_header().rfind(',')));
+  const std::string with_ecu(record_csv_header().substr(0, record_csv_header().rfind(',')));
+  const auto twelve = read_records(dir.write("twelve.csv", with_ecu + "\n/a,1,,,,5,6,7,0,0,10,11\n"));
+  ASSERT_EQ(twelve.size(), 1u);
+  EXPECT_EQ(twelve[0].ecu_status_ns, 11);
+  EXPECT_EQ(twelve[0].packets, 0u) << "before the packets column: not known";
+  const std::string header(with_ecu.substr(0, with_ecu.rfind(',')));
   const std::string old = dir.write("old.csv", header + "\n/a,1,,,,5,6,7,0,0,10\n/a,2,,,,8,9,,0,0,10\n");
   const auto rows = read_records(old);
   ASSERT_EQ(rows.size(), 2u);
@@ -287,7 +294,7 @@ TEST(SampleRecord, FileHoldsWholeLinesAndReadsBack) {
   EXPECT_EQ(rows[2].seq, 2u);
   const std::string other = dir.write("other.csv", "t,seq\n/t,1\n");
   EXPECT_THROW(read_records(other), std::runtime_error);
-  const std::string broken = dir.write("broken.csv", std::string(record_csv_header()) + "\n/t,1,,,,,,,0,0,0,\n/t,2,oops\n");
+  const std::string broken = dir.write("broken.csv", std::string(record_csv_header()) + "\n/t,1,,,,,,,0,0,0,,0\n/t,2,oops\n");
   try {
     read_records(broken);
     FAIL() << "no error";

@@ -70,6 +70,7 @@ struct FaultEvent {
 struct Device {
   std::string name;
   DeviceClass device_class;
+  bool own_process = false;  // its mock is a process host.kill_mock / host.stall_mock can signal
 };
 
 // Every occurrence of the specs within [0, horizon_s), for the devices given (a spec without a

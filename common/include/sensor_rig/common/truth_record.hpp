@@ -78,7 +78,8 @@ struct FaultRecord {
 
 class Writer {
  public:
-  // Throws std::runtime_error when the file cannot be created.
+  // Appends (a restarted mock continues its device's record after a new header). Throws
+  // std::runtime_error when the file cannot be created.
   Writer(const std::string& path, const Header& header);
   ~Writer();
   Writer(const Writer&) = delete;
@@ -109,6 +110,8 @@ struct Log {
   std::vector<PartRecord> parts;
   std::vector<FaultRecord> faults;
   bool cut_last_line = false;  // the writer was killed mid-line (the line is left out)
+  int restarts = 0;            // headers after the first: the mock was restarted (unit ids of each run
+                               // are offset by 2^40 per restart, so they never collide)
 };
 
 // Throws std::runtime_error naming file:line for anything but a cut last line.

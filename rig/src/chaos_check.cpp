@@ -1,0 +1,444 @@
+#include "chaos_check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+constexpr std::size_t kExamplesPerInvariant = 5;
+constexpr Nanos kSecond = 1'000'000'000;
+
+Nanos seconds_ns(double s) { return static_cast<Nanos>(std::llround(s * 1e9)); }
+double ms(Nanos ns) { return static_cast<double>(ns) * 1e-6; }
+
+// One unit of the truth with what became of its parts.
+struct UnitTruth {
+  truth::UnitRecord rec;
+  std::uint32_t produced = 0;  // parts the device produced (everything but not_sent)
+  std::uint32_t lost = 0;      // dropped on the way
+  std::uint32_t damaged = 0;   // corrupted or truncated
+  Nanos first_intact_acq = 0;  // the earliest part that arrived as rendered (0 = none)
+  const SampleRecord* sample = nullptr;
+};
+
+struct Interval {
+  Nanos begin, end;
+};
+
+bool is_camera(const std::string& cls) { return cls == "camera" || cls == "v4l2"; }
+
+double stamp_bound_ms(const std::string& cls, const Bounds& b) {
+  if (cls == "lidar") return b.lidar_stamp_ms;
+  if (is_camera(cls)) return b.camera_stamp_ms;
+  return b.other_stamp_ms;
+}
+
+double recovery_bound_s(const std::string& cls, const Bounds& b) {
+  if (cls == "lidar") return b.lidar_recovery_s;
+  if (is_camera(cls)) return b.camera_recovery_s;
+  return b.other_recovery_s;
+}
+
+// How long after its start a fault keeps its device from delivering: its duration, a killed mock's
+// restart, a stopped mock's pause.
+double fault_span_s(const faults::FaultEvent& e) {
+  double span = e.duration_s;
+  if (e.kind == "host.kill_mock") span += e.number("restart_s", 1.0);
+  if (e.kind == "host.stall_mock") span += e.number("ms", 300.0) * 1e-3;
+  if (e.kind == "camera.slow_open") span += e.number("s", 3.0);
+  return span;
+}
+
+// The event touches this device: aimed at it, at a device it depends on, or at the whole host.
+bool touches(const faults::FaultEvent& e, const std::string& device, const std::vector<std::string>& depends_on) {
+  if (e.device.empty()) return e.device_class() == faults::DeviceClass::kHost;
+  if (e.device == device) return true;
+  return std::find(depends_on.begin(), depends_on.end(), e.device) != depends_on.end();
+}
+
+class Checker {
+ public:
+  explicit Checker(const Input& in) : in_(in) {}
+
+  Result run() {
+    for (const auto& name : kInvariants) r_.invariants[name] = true;
+    count_faults();
+    std::map<std::string, std::vector<const SampleRecord*>> by_topic;
+    for (const auto& s : in_.samples) by_topic[s.topic].push_back(&s);
+    for (auto& [topic, v] : by_topic)
+      std::sort(v.begin(), v.end(), [](const SampleRecord* a, const SampleRecord* b) { return a->acquisition_ns < b->acquisition_ns; });
+    for (const auto& log : in_.truths) {
+      if (log.header.topic.empty()) continue;
+      check_topic(log, by_topic[log.header.topic]);
+    }
+    return std::move(r_);
+  }
+
+ private:
+  void violation(const std::string& invariant, const std::string& topic, const std::string& what) {
+    r_.invariants[invariant] = false;
+    const auto n = std::count_if(r_.examples.begin(), r_.examples.end(), [&](const Example& e) { return e.invariant == invariant; });
+    if (static_cast<std::size_t>(n) < kExamplesPerInvariant) r_.examples.push_back(Example{invariant, topic, what});
+  }
+
+  Nanos event_begin(const faults::FaultEvent& e) const { return in_.epoch_vehicle_ns + seconds_ns(e.at_s); }
+  Nanos event_end(const faults::FaultEvent& e) const { return in_.epoch_vehicle_ns + seconds_ns(e.at_s + fault_span_s(e)); }
+
+  // Every planned fault whose device writes truth must appear in that record: a campaign that did not
+  // inject what it planned proves nothing.
+  void count_faults() {
+    std::map<std::string, std::set<std::uint64_t>> recorded;  // device -> fault ids
+    for (const auto& log : in_.truths)
+      for (const auto& f : log.faults) {
+        ++r_.faults[f.kind];
+        recorded[log.header.device].insert(f.id);
+      }
+    for (const auto& e : in_.events) {
+      if (in_.window_end_ns > 0 && event_begin(e) >= in_.window_end_ns) continue;  // planned after the end
+      const std::string owner = e.device.empty() ? std::string("host") : e.device;
+      const bool host_kind = e.device_class() == faults::DeviceClass::kHost;
+      const auto it = recorded.find(host_kind ? std::string("host") : owner);
+      if (it == recorded.end() || !it->second.contains(e.id)) {
+        ++r_.faults_not_injected[e.kind];
+        violation("faults_injected", owner, e.kind + " (fault " + std::to_string(e.id) + " at " + fmt_s(e.at_s) +
+                                                " s) is in the plan and in no truth record");
+      }
+    }
+  }
+
+  static std::string fmt_s(double s) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3f", s);
+    return b;
+  }
+  std::string at_s(Nanos t) const { return fmt_s(static_cast<double>(t - in_.epoch_vehicle_ns) * 1e-9); }
+
+  void check_topic(const truth::Log& log, const std::vector<const SampleRecord*>& samples) {
+    const std::string& topic = log.header.topic;
+    TopicResult& t = r_.topics[topic];
+    t.device = log.header.device;
+    t.device_class = log.header.device_class;
+    const auto exp_it = in_.expected.find(topic);
+    const std::vector<std::string> depends = exp_it != in_.expected.end() ? depends_of(exp_it->second) : std::vector<std::string>{};
+
+    // Units in time order, with their parts' fates.
+    std::vector<UnitTruth> units;
+    units.reserve(log.units.size());
+    std::map<std::int64_t, std::size_t> index;
+    for (const auto& u : log.units) {
+      index[u.unit] = units.size();
+      units.push_back(UnitTruth{u});
+    }
+    for (const auto& p : log.parts) {
+      const auto it = index.find(p.unit);
+      if (it == index.end()) continue;
+      UnitTruth& u = units[it->second];
+      if (p.fate == truth::Fate::kNotSent) continue;
+      ++u.produced;
+      if (p.fate == truth::Fate::kDropped) ++u.lost;
+      if (p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated) ++u.damaged;
+      if (truth::delivered_intact(p.fate) && (u.first_intact_acq == 0 || p.acq_ns < u.first_intact_acq)) u.first_intact_acq = p.acq_ns;
+    }
+    // A device that writes no parts (one part per unit is implied): the unit itself was produced.
+    if (log.parts.empty())
+      for (auto& u : units) {
+        u.produced = 1;
+        u.first_intact_acq = u.rec.acq_ns;
+      }
+    std::sort(units.begin(), units.end(), [](const UnitTruth& a, const UnitTruth& b) { return a.rec.acq_ns < b.rec.acq_ns; });
+
+    const Nanos tolerance = match_tolerance(units);
+    const double bound = stamp_bound_ms(t.device_class, in_.bounds);
+    std::vector<double> errors;
+    auto in_window = [&](Nanos acq) { return acq >= in_.window_begin_ns && acq < in_.window_end_ns; };
+
+    // Each published sample to the unit nearest its stamp.
+    for (const SampleRecord* s : samples) {
+      if (!in_window(s->acquisition_ns)) continue;
+      UnitTruth* u = nearest(units, s->acquisition_ns, tolerance);
+      if (u == nullptr) {
+        ++t.unmatched;
+        violation("stamps", topic, "seq " + std::to_string(s->seq) + " stamped at " + at_s(s->acquisition_ns) +
+                                       " s matches no " + log.header.unit + " the device made");
+        continue;
+      }
+      if (u->sample != nullptr) {
+        ++t.published_twice;
+        violation("accounted", topic, log.header.unit + " " + std::to_string(u->rec.unit) + " published twice (seq " +
+                                          std::to_string(u->sample->seq) + " and " + std::to_string(s->seq) + ")");
+        continue;
+      }
+      u->sample = s;
+    }
+
+    std::uint64_t not_published = 0;
+    for (UnitTruth& u : units) {
+      if (!in_window(u.rec.acq_ns) || u.produced == 0) continue;
+      ++t.sent;
+      if (u.sample == nullptr) {
+        ++not_published;
+        continue;
+      }
+      const SampleRecord& s = *u.sample;
+      // The stamp: the unit's first firing, or (its first parts lost) anywhere up to the first part that
+      // arrived: a rig may extrapolate or stamp what it got.
+      const Nanos lo = u.rec.acq_ns, hi = std::max(lo, u.first_intact_acq);
+      const Nanos err = s.acquisition_ns < lo ? lo - s.acquisition_ns : s.acquisition_ns > hi ? s.acquisition_ns - hi : 0;
+      errors.push_back(ms(err));
+      if (ms(err) > bound) {
+        ++t.stamps_outside;
+        violation("stamps", topic, "seq " + std::to_string(s.seq) + ": stamp " + fmt_s(ms(s.acquisition_ns - lo)) +
+                                       " ms from the true acquisition of " + log.header.unit + " " + std::to_string(u.rec.unit) +
+                                       " (bound " + fmt_s(bound) + " ms)");
+      }
+      const std::uint32_t reported = s.missing_packets + s.dropped;
+      if (reported < u.lost) {
+        t.hidden_missing += u.lost - reported;
+        violation("accounted", topic, "seq " + std::to_string(s.seq) + ": " + std::to_string(u.lost) + " packets of " +
+                                          log.header.unit + " " + std::to_string(u.rec.unit) + " lost, " +
+                                          std::to_string(reported) + " counted");
+      }
+      if (s.missing_packets > u.lost + u.damaged) {
+        t.phantom_missing += s.missing_packets - (u.lost + u.damaged);
+        violation("no_phantom_loss", topic, "seq " + std::to_string(s.seq) + ": " + std::to_string(s.missing_packets) +
+                                                " packets counted missing, " + std::to_string(u.lost + u.damaged) +
+                                                " lost or damaged");
+      }
+      const bool incomplete = s.missing_packets > 0 || s.dropped > 0 || u.lost > 0;
+      ++(incomplete ? t.published_incomplete : t.published_complete);
+    }
+    const auto counted = in_.counted_lost.find(topic);
+    t.counted_lost = counted == in_.counted_lost.end() ? 0 : counted->second;
+    if (t.counted_lost > not_published) {
+      violation("no_phantom_loss", topic, "the rig counted " + std::to_string(t.counted_lost) + " " + log.header.unit +
+                                              "s lost, " + std::to_string(not_published) + " were not published");
+      t.counted_lost = not_published;
+    }
+    t.unaccounted = not_published - t.counted_lost;
+    if (t.unaccounted > 0) {
+      std::string first;
+      for (const UnitTruth& u : units)
+        if (in_window(u.rec.acq_ns) && u.produced > 0 && u.sample == nullptr) {
+          first = log.header.unit + " " + std::to_string(u.rec.unit) + " at " + at_s(u.rec.acq_ns) + " s" + faults_of(log, u);
+          break;
+        }
+      violation("accounted", topic, std::to_string(t.unaccounted) + " " + log.header.unit +
+                                        "s neither published nor counted lost; first: " + first);
+    }
+    if (!errors.empty()) {
+      std::sort(errors.begin(), errors.end());
+      t.stamp_error_p99_ms = errors[std::min(errors.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(errors.size())))];
+      t.stamp_error_max_ms = errors.back();
+    }
+    check_isolation(topic, t, samples, exp_it != in_.expected.end() ? exp_it->second.rate_hz : 0.0, depends);
+    check_recovery(topic, t, units, depends);
+    check_monitor(topic, t, units, samples);
+  }
+
+  static std::vector<std::string> depends_of(const TopicExpectation& e) { return e.depends_on; }
+
+  std::string faults_of(const truth::Log& log, const UnitTruth& u) const {
+    std::set<std::string> kinds;
+    for (const auto& f : log.faults)
+      if (f.unit == u.rec.unit || (u.rec.acq_ns >= f.at_ns - kSecond / 10 && u.rec.acq_ns <= f.until_ns + kSecond / 10))
+        kinds.insert(f.kind);
+    std::string out;
+    for (const auto& k : kinds) out += (out.empty() ? " (faults: " : ", ") + k;
+    return out.empty() ? out : out + ")";
+  }
+
+  static Nanos match_tolerance(const std::vector<UnitTruth>& units) {
+    if (units.size() < 2) return kSecond / 20;
+    std::vector<Nanos> gaps;
+    for (std::size_t i = 1; i < units.size(); ++i) gaps.push_back(units[i].rec.acq_ns - units[i - 1].rec.acq_ns);
+    std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+    return std::max<Nanos>(gaps[gaps.size() / 2] / 2, 1'000'000);
+  }
+
+  static UnitTruth* nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance) {
+    auto it = std::lower_bound(units.begin(), units.end(), t, [](const UnitTruth& u, Nanos v) { return u.rec.acq_ns < v; });
+    UnitTruth* best = nullptr;
+    Nanos best_d = tolerance + 1;
+    for (auto c : {it, it == units.begin() ? it : std::prev(it)}) {
+      if (c == units.end()) continue;
+      const Nanos d = std::llabs(c->rec.acq_ns - t);
+      if (d < best_d) {
+        best_d = d;
+        best = &*c;
+      }
+    }
+    return best_d <= tolerance ? best : nullptr;
+  }
+
+  // Intervals of the window in which a fault (its own, a device it depends on, the host's) touched it.
+  std::vector<Interval> unhealthy(const std::string& device, const std::vector<std::string>& depends) const {
+    std::vector<Interval> out;
+    for (const auto& e : in_.events) {
+      if (!touches(e, device, depends)) continue;
+      if (e.kind == "camera.never_answers") {
+        out.push_back({in_.window_begin_ns, in_.window_end_ns});
+        continue;
+      }
+      out.push_back({event_begin(e) - kSecond / 5, event_end(e) + seconds_ns(in_.bounds.settle_s)});
+    }
+    return out;
+  }
+
+  void check_isolation(const std::string& topic, TopicResult& t, const std::vector<const SampleRecord*>& samples,
+                       double rate_hz, const std::vector<std::string>& depends) {
+    if (rate_hz <= 0) return;
+    const auto bad = unhealthy(t.device, depends);
+    auto healthy_at = [&](Nanos x) {
+      return std::none_of(bad.begin(), bad.end(), [&](const Interval& i) { return x >= i.begin && x < i.end; });
+    };
+    // Healthy time, sampled at 10 ms: exact enough for a 5 % share, and simple.
+    constexpr Nanos kStep = 10'000'000;
+    Nanos healthy_ns = 0;
+    for (Nanos x = in_.window_begin_ns; x < in_.window_end_ns; x += kStep)
+      if (healthy_at(x)) healthy_ns += kStep;
+    if (healthy_ns < 2 * kSecond) return;  // too little healthy time to judge
+    std::uint64_t delivered = 0;
+    for (const SampleRecord* s : samples)
+      if (s->acquisition_ns >= in_.window_begin_ns && s->acquisition_ns < in_.window_end_ns && healthy_at(s->acquisition_ns))
+        ++delivered;
+    const double expected = static_cast<double>(healthy_ns) * 1e-9 * rate_hz;
+    t.healthy_rate_share = expected > 0 ? static_cast<double>(delivered) / expected : 1.0;
+    if (t.healthy_rate_share < in_.bounds.isolation_min)
+      violation("isolation", topic, "while no fault touched it: " + std::to_string(delivered) + " published of " +
+                                        fmt_s(expected) + " expected (" + fmt_s(100 * t.healthy_rate_share) + " %)");
+  }
+
+  void check_recovery(const std::string& topic, TopicResult& t, const std::vector<UnitTruth>& units,
+                      const std::vector<std::string>& depends) {
+    const double bound_s = recovery_bound_s(t.device_class, in_.bounds);
+    for (const auto& e : in_.events) {
+      if (!touches(e, t.device, depends) || e.kind == "camera.never_answers") continue;
+      const Nanos end = event_end(e), deadline = end + seconds_ns(bound_s);
+      if (deadline >= in_.window_end_ns || end < in_.window_begin_ns) continue;
+      // Judged only when nothing else touches the device before the deadline.
+      const bool overlapped = std::any_of(in_.events.begin(), in_.events.end(), [&](const faults::FaultEvent& o) {
+        return &o != &e && touches(o, t.device, depends) && event_begin(o) < deadline && event_end(o) > event_begin(e);
+      });
+      if (overlapped) continue;
+      Nanos back = 0;
+      for (const UnitTruth& u : units)
+        if (u.rec.acq_ns >= end && u.sample != nullptr && u.sample->missing_packets == 0 && u.sample->dropped == 0) {
+          back = u.rec.acq_ns;
+          break;
+        }
+      if (back == 0 || back > deadline) {
+        violation("recovery", topic, e.kind + " ended at " + at_s(end) + " s: no complete " +
+                                         (units.empty() ? std::string("unit") : std::string("sample")) + " within " +
+                                         fmt_s(bound_s) + " s");
+        continue;
+      }
+      t.recovery_max_s = std::max(t.recovery_max_s, static_cast<double>(back - end) * 1e-9);
+    }
+  }
+
+  // What the monitor reports (its record: each sample received or lost; and the units the rig told it
+  // it lost) must be what the device made while the monitor watched, exactly.
+  void check_monitor(const std::string& topic, TopicResult& t, const std::vector<UnitTruth>& units,
+                     const std::vector<const SampleRecord*>& samples) {
+    if (const auto m = in_.monitor.find(topic); m != in_.monitor.end()) {
+      t.monitor_received = m->second.received;
+      t.monitor_lost = m->second.lost;
+    }
+    // The monitor's watch within the judged window: from its first sample to its last.
+    Nanos a = in_.window_begin_ns, b = in_.window_end_ns;
+    if (!samples.empty()) {
+      a = std::max(a, samples.front()->acquisition_ns);
+      b = std::min(b, samples.back()->acquisition_ns + 1);
+    }
+    std::uint64_t made = 0, received = 0, lost = 0;
+    for (const UnitTruth& u : units)
+      if (u.produced > 0 && u.rec.acq_ns >= a && u.rec.acq_ns < b) ++made;
+    for (const SampleRecord* s : samples)
+      if (s->acquisition_ns >= a && s->acquisition_ns < b) ++(s->lost() ? lost : received);
+    const std::uint64_t counted = t.counted_lost;
+    t.monitor_expected = made;
+    if (made == 0 && samples.empty()) return;
+    if (samples.empty()) {
+      violation("monitor_agrees", topic, "the monitor saw no sample; the device made " + std::to_string(made));
+      return;
+    }
+    if (received + lost + counted != made)
+      violation("monitor_agrees", topic, "monitor: received " + std::to_string(received) + " + lost " + std::to_string(lost) +
+                                             " + counted lost by the rig " + std::to_string(counted) + " = " +
+                                             std::to_string(received + lost + counted) + "; the device made " +
+                                             std::to_string(made) + " while it watched");
+  }
+
+  const Input& in_;
+  Result r_;
+};
+
+}  // namespace
+
+bool Result::all_held() const {
+  return std::all_of(invariants.begin(), invariants.end(), [](const auto& kv) { return kv.second; });
+}
+
+Result check(const Input& in) { return Checker(in).run(); }
+
+std::string result_json(const Result& r) {
+  nlohmann::json j;
+  j["faults"] = nlohmann::json::object();
+  for (const auto& [k, n] : r.faults) j["faults"][k] = n;
+  j["topics"] = nlohmann::json::object();
+  for (const auto& [topic, t] : r.topics) {
+    j["topics"][topic] = {{"device", t.device},
+                          {"sent", t.sent},
+                          {"published_complete", t.published_complete},
+                          {"published_incomplete", t.published_incomplete},
+                          {"counted_lost", t.counted_lost},
+                          {"unaccounted", t.unaccounted},
+                          {"phantom_missing", t.phantom_missing},
+                          {"hidden_missing", t.hidden_missing},
+                          {"published_twice", t.published_twice},
+                          {"unmatched", t.unmatched},
+                          {"stamp_error_p99_ms", t.stamp_error_p99_ms},
+                          {"stamp_error_max_ms", t.stamp_error_max_ms},
+                          {"healthy_rate_share", t.healthy_rate_share},
+                          {"recovery_max_s", t.recovery_max_s},
+                          {"monitor", {{"received", t.monitor_received}, {"lost", t.monitor_lost}, {"expected", t.monitor_expected}}}};
+  }
+  j["invariants"] = nlohmann::json::object();
+  for (const auto& [k, held] : r.invariants) j["invariants"][k] = held ? "held" : "broken";
+  j["examples"] = nlohmann::json::array();
+  for (const auto& e : r.examples) j["examples"].push_back({{"invariant", e.invariant}, {"topic", e.topic}, {"what", e.what}});
+  if (!r.faults_not_injected.empty()) j["faults_not_injected"] = r.faults_not_injected;
+  return j.dump();
+}
+
+std::string result_text(const Result& r) {
+  std::ostringstream o;
+  o << "faults injected:";
+  for (const auto& [k, n] : r.faults) o << ' ' << k << '=' << n;
+  o << '\n';
+  char line[320];
+  std::snprintf(line, sizeof line, "%-40s %6s %8s %8s %6s %6s %7s %7s %8s %7s\n", "topic", "sent", "complete", "incompl",
+                "lost", "unacc", "phantom", "hidden", "stamp99", "healthy");
+  o << line;
+  for (const auto& [topic, t] : r.topics) {
+    std::snprintf(line, sizeof line, "%-40s %6llu %8llu %8llu %6llu %6llu %7llu %7llu %8.3f %6.1f%%\n", topic.c_str(),
+                  static_cast<unsigned long long>(t.sent), static_cast<unsigned long long>(t.published_complete),
+                  static_cast<unsigned long long>(t.published_incomplete), static_cast<unsigned long long>(t.counted_lost),
+                  static_cast<unsigned long long>(t.unaccounted), static_cast<unsigned long long>(t.phantom_missing),
+                  static_cast<unsigned long long>(t.hidden_missing), t.stamp_error_p99_ms, 100 * t.healthy_rate_share);
+    o << line;
+  }
+  for (const auto& [name, held] : r.invariants) {
+    o << (held ? "held   " : "BROKEN ") << name << '\n';
+    for (const auto& e : r.examples)
+      if (e.invariant == name) o << "         " << e.topic << ": " << e.what << '\n';
+  }
+  return o.str();
+}
+
+}  // namespace sensor_rig::rig::chaos

@@ -1,0 +1,101 @@
+#pragma once
+// The judge of `rig chaos`: the rig's output (every stamped sample as `rig monitor --record` saw it,
+// the monitor's totals, the units the rig itself counted lost) held against the mocks' truth records
+// and the fault plan. Pure: everything comes in as data, so each invariant is tested with planted
+// violations (tests/rig/chaos_check_test.cpp). docs/faults.md "Invariants" explains each one.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "sample_record.hpp"
+#include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/common/fault_plan.hpp"
+#include "sensor_rig/common/truth_record.hpp"
+
+namespace sensor_rig::rig::chaos {
+
+// Stated bounds (docs/faults.md "Bounds" says why each is what it is).
+struct Bounds {
+  double lidar_stamp_ms = 0.1;   // a scan's stamp vs its first firing: the sensors stamp in µs
+  double camera_stamp_ms = 1.0;  // a frame's stamp vs its exposure start: mapped from the camera clock
+  double other_stamp_ms = 5.0;   // drive-by-wire: kernel receive time of a 10 ms status period
+  double lidar_recovery_s = 1.0;   // a LIDAR is back within this after a fault ends
+  double camera_recovery_s = 5.0;  // a camera (reopened by the driver) is back within this
+  double other_recovery_s = 2.0;
+  double isolation_min = 0.95;     // a healthy device keeps this share of its rate
+  double settle_s = 1.0;           // after a fault ends, its device is not yet "healthy" for this long
+};
+
+// What the monitor said at its end, per topic (its last --json line).
+struct MonitorTotals {
+  std::uint64_t received = 0;
+  std::uint64_t lost = 0;
+};
+
+struct TopicExpectation {
+  std::string device;
+  double rate_hz = 0;  // nominal units per second (config), for isolation of a starved device
+  std::vector<std::string> depends_on;  // devices whose faults it rightly suffers (a triggered camera's LIDAR)
+};
+
+struct Input {
+  std::vector<truth::Log> truths;
+  std::vector<faults::FaultEvent> events;  // the plan
+  Nanos epoch_vehicle_ns = 0;              // vehicle time at the plan's t = 0
+  std::vector<SampleRecord> samples;       // the monitor's record: every stamped sample the rig published
+  std::map<std::string, MonitorTotals> monitor;
+  std::map<std::string, std::uint64_t> counted_lost;  // units the rig counted lost in the window, by topic
+  std::map<std::string, TopicExpectation> expected;   // by topic
+  Nanos window_begin_ns = 0;  // units are judged when their acquisition is in [begin, end)
+  Nanos window_end_ns = 0;
+  Bounds bounds;
+};
+
+struct TopicResult {
+  std::string device;
+  std::string device_class;
+  std::uint64_t sent = 0;                  // units the device produced in the window
+  std::uint64_t published_complete = 0;
+  std::uint64_t published_incomplete = 0;  // published, its missing packets counted
+  std::uint64_t counted_lost = 0;          // not published, counted lost by the rig
+  std::uint64_t unaccounted = 0;           // neither published nor counted
+  std::uint64_t phantom_missing = 0;       // packets counted missing that arrived intact
+  std::uint64_t hidden_missing = 0;        // packets lost that the published unit does not count
+  std::uint64_t published_twice = 0;       // a unit published more than once (a split scan)
+  std::uint64_t unmatched = 0;             // published samples that match no unit the device made
+  std::uint64_t stamps_outside = 0;        // stamp error beyond the bound
+  double stamp_error_p99_ms = 0;
+  double stamp_error_max_ms = 0;
+  double healthy_rate_share = 1.0;         // delivered / expected while no fault touched the device
+  double recovery_max_s = 0;
+  std::uint64_t monitor_received = 0, monitor_lost = 0;  // its totals at the end (--json)
+  std::uint64_t monitor_expected = 0;                    // units made while it watched
+};
+
+struct Example {
+  std::string invariant;
+  std::string topic;
+  std::string what;
+};
+
+struct Result {
+  std::map<std::string, TopicResult> topics;
+  std::map<std::string, bool> invariants;  // name -> held
+  std::vector<Example> examples;           // the first few per invariant
+  std::map<std::string, std::uint64_t> faults;             // injected, by kind (from the truth records)
+  std::map<std::string, std::uint64_t> faults_not_injected;  // planned, never recorded by a mock
+  [[nodiscard]] bool all_held() const;
+};
+
+inline constexpr const char* kInvariants[] = {"accounted", "no_phantom_loss", "stamps", "isolation",
+                                              "recovery",  "monitor_agrees",  "faults_injected"};
+
+Result check(const Input& in);
+
+// The last --json line: {"faults":{..},"topics":{..},"invariants":{..}} (SPEC §7), plus examples.
+std::string result_json(const Result& r);
+// Human-readable: one line per invariant (held/broken with the first examples), a table per topic.
+std::string result_text(const Result& r);
+
+}  // namespace sensor_rig::rig::chaos

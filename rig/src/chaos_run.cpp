@@ -1,0 +1,305 @@
+#include "chaos_run.hpp"
+
+#include <signal.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/common/errors.hpp"
+#include "sensor_rig/common/log.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+namespace fs = std::filesystem;
+using faults::DeviceClass;
+
+std::string camera_topic(const std::string& name) { return "/sensors/camera/" + name + "/image_raw"; }
+std::string lidar_topic(const std::string& name) { return "/sensors/lidar/" + name + "/points"; }
+
+bool injected(const std::string& kind) {
+  const auto k = injected_kinds();
+  return std::find(k.begin(), k.end(), kind) != k.end();
+}
+
+// The campaign's folder: --out DIR (kept), else a temporary one removed at the end.
+class CampaignDir {
+ public:
+  explicit CampaignDir(const std::string& out) {
+    if (!out.empty()) {
+      path_ = out;
+      fs::create_directories(path_);
+      for (const char* sub : {"truth", "logs"}) fs::remove_all(path_ / sub);  // a previous campaign's
+    } else {
+      std::string tmpl = (fs::temp_directory_path() / ("rig-chaos-" + std::to_string(::getpid()) + "-XXXXXX")).string();
+      if (::mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("cannot create a campaign directory");
+      path_ = tmpl;
+      owned_ = true;
+    }
+    fs::create_directories(path_ / "truth");
+    fs::create_directories(path_ / "logs");
+  }
+  ~CampaignDir() {
+    std::error_code ec;
+    if (owned_) fs::remove_all(path_, ec);
+  }
+  CampaignDir(const CampaignDir&) = delete;
+  CampaignDir& operator=(const CampaignDir&) = delete;
+  [[nodiscard]] const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+  bool owned_ = false;
+};
+
+// host.cpu_hog: busy threads for the fault's duration, at normal priority (as a runaway process of
+// the PU would be). Recorded in the host's truth record when each begins.
+class HostFaults {
+ public:
+  HostFaults(std::vector<faults::FaultEvent> events, Nanos epoch_mono, Nanos epoch_vehicle, const std::string& truth_path)
+      : events_(std::move(events)), epoch_mono_(epoch_mono), epoch_vehicle_(epoch_vehicle),
+        truth_(truth_path, truth::Header{"host", "host", "", "", "", "CLOCK_REALTIME"}) {}
+  ~HostFaults() { stop(); }
+
+  void start() { thread_ = std::thread([this] { run(); }); }
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+    for (auto& t : hogs_) t.join();
+    hogs_.clear();
+  }
+
+ private:
+  void run() {
+    for (const auto& e : events_) {
+      if (e.kind != "host.cpu_hog") continue;
+      const Nanos at = epoch_mono_ + static_cast<Nanos>(e.at_s * 1e9);
+      while (!stop_ && monotonic_now_ns() < at) ::usleep(5'000);
+      if (stop_) return;
+      const Nanos until = at + static_cast<Nanos>(e.duration_s * 1e9);
+      const int threads = std::max(1, static_cast<int>(e.number("threads", 2)));
+      for (int i = 0; i < threads; ++i)
+        hogs_.emplace_back([this, until] {
+          volatile std::uint64_t x = 0;
+          while (!stop_ && monotonic_now_ns() < until) x = x + 1;
+        });
+      const Nanos veh = epoch_vehicle_ + static_cast<Nanos>(e.at_s * 1e9);
+      truth_.fault({e.id, e.kind, veh, veh + static_cast<Nanos>(e.duration_s * 1e9), -1, "threads=" + std::to_string(threads)});
+      truth_.flush();
+    }
+  }
+
+  std::vector<faults::FaultEvent> events_;
+  Nanos epoch_mono_, epoch_vehicle_;
+  truth::Writer truth_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+  std::vector<std::thread> hogs_;
+};
+
+std::vector<truth::Log> read_truths(const fs::path& dir) {
+  std::vector<truth::Log> out;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".jsonl") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const auto& f : files) {
+    out.push_back(truth::read(f.string()));
+    if (out.back().cut_last_line) log::warn("chaos", f.string() + ": last line cut (its mock was killed mid-write)");
+  }
+  return out;
+}
+
+// The monitor's last --json line per topic: what it says at the end.
+std::map<std::string, MonitorTotals> monitor_totals(const std::vector<std::string>& lines,
+                                                     std::map<std::string, std::uint64_t>& counted_lost) {
+  std::map<std::string, MonitorTotals> out;
+  for (const auto& line : lines) {
+    const auto j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("topic")) continue;
+    const std::string topic = j["topic"].get<std::string>();
+    out[topic] = MonitorTotals{j.value("received", std::uint64_t{0}), j.value("lost", std::uint64_t{0})};
+    // Units the rig itself counted lost (a driver that knows a scan or frame never completed).
+    if (j.contains("counted_lost")) counted_lost[topic] = j["counted_lost"].get<std::uint64_t>();
+  }
+  return out;
+}
+
+std::string seconds_arg(double s) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f", s);
+  return b;
+}
+
+}  // namespace
+
+std::vector<std::string> injected_kinds() {
+  // Updated as the mocks learn each kind; `rig chaos --help` lists them.
+  return {"lidar.reorder",       "lidar.duplicate_late", "lidar.loss_burst", "lidar.corrupt",   "lidar.second_sensor",
+          "lidar.restart",       "lidar.stuck_azimuth",  "lidar.rpm_change", "lidar.blind_sector",
+          "dbw.loss",            "dbw.bad_crc",          "dbw.stuck_counter", "dbw.override",  "dbw.ecu_fault",
+          "dbw.bus_off",         "dbw.no_status",
+          "host.cpu_hog",        "host.kill_mock",       "host.stall_mock"};
+}
+
+std::vector<faults::Device> devices_of(const RigConfig& cfg) {
+  std::vector<faults::Device> d;
+  for (const auto& l : cfg.lidars)
+    if (l.mock.kind != LidarMockConfig::Kind::kNone) d.push_back({l.name, DeviceClass::kLidar, true});
+  for (const auto& c : cfg.cameras)
+    d.push_back({c.name, c.source.backend == "v4l2" ? DeviceClass::kV4l2 : DeviceClass::kCamera, false});
+  if (cfg.dbw.enabled && cfg.dbw.mock_ecu) d.push_back({"paravan", DeviceClass::kDbw, true});
+  return d;
+}
+
+std::map<std::string, TopicExpectation> expectations_of(const RigConfig& cfg) {
+  std::map<std::string, TopicExpectation> out;
+  for (const auto& l : cfg.lidars) out[lidar_topic(l.name)] = {l.name, l.mock.rpm / 60.0, {}};
+  for (const auto& c : cfg.cameras) {
+    TopicExpectation e{c.name, c.source.frame_rate, {}};
+    if (c.lidar_trigger.enabled()) e.depends_on.push_back(c.lidar_trigger.lidar);
+    out[camera_topic(c.name)] = e;
+  }
+  return out;
+}
+
+std::vector<faults::FaultEvent> make_plan(const Options& o, const std::vector<faults::Device>& devices) {
+  std::vector<faults::FaultSpec> timed;
+  std::vector<std::string> kinds;
+  for (const auto& item : o.faults) {
+    // A list may also come as one argument separated by ';' or ','.
+    std::string rest = item;
+    for (char& c : rest)
+      if (c == ';' || c == ',') c = '\n';
+    std::size_t start = 0;
+    while (start <= rest.size()) {
+      const std::size_t nl = rest.find('\n', start);
+      const std::string one = rest.substr(start, nl == std::string::npos ? std::string::npos : nl - start);
+      start = nl == std::string::npos ? rest.size() + 1 : nl + 1;
+      if (one.empty()) continue;
+      const faults::FaultSpec s = faults::parse_spec(one);
+      if (!injected(s.kind)) throw std::invalid_argument("'" + one + "': no mock injects " + s.kind + " yet");
+      if (one.find('@') != std::string::npos || one.find('~') != std::string::npos) timed.push_back(s);
+      else kinds.push_back(s.kind);
+    }
+  }
+  std::vector<faults::FaultEvent> events = faults::expand(timed, devices, o.duration_s);
+  if (timed.empty() || !kinds.empty()) {
+    const std::vector<std::string> pool = kinds.empty() ? injected_kinds() : kinds;
+    auto random = faults::random_campaign(pool, devices, o.rate_per_min, o.duration_s, o.seed);
+    events.insert(events.end(), random.begin(), random.end());
+  }
+  std::stable_sort(events.begin(), events.end(), [](const auto& a, const auto& b) { return a.at_s < b.at_s; });
+  for (std::size_t i = 0; i < events.size(); ++i) events[i].id = i + 1;
+  return events;
+}
+
+int run(const Options& o) {
+  RigConfig cfg;
+  try {
+    cfg = load_rig_config(o.config);
+  } catch (const ConfigError& err) {
+    std::fprintf(stderr, "%s\n", err.what());
+    return 2;
+  }
+  const auto devices = devices_of(cfg);
+  faults::Plan plan;
+  try {
+    plan.events = make_plan(o, devices);
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "error: --faults %s\n", e.what());
+    return 2;
+  }
+  CampaignDir dir(o.out_dir);
+  const std::string exe = self_executable();
+  // t = 0 of the plan: after the warm-up, on the clock every process shares and no step moves.
+  const Nanos mono_now = monotonic_now_ns(), vehicle_now = vehicle_now_ns();
+  plan.epoch_mono_ns = mono_now + static_cast<Nanos>(o.warmup_s * 1e9);
+  const Nanos epoch_vehicle = vehicle_now + static_cast<Nanos>(o.warmup_s * 1e9);
+  faults::write_plan((dir.path() / "plan.jsonl").string(), plan);
+  std::map<std::string, std::uint64_t> planned;
+  for (const auto& e : plan.events) ++planned[e.kind];
+  std::fprintf(stderr, "chaos: %zu faults planned over %.0f s (seed %llu) in %s\n", plan.events.size(), o.duration_s,
+               static_cast<unsigned long long>(o.seed), dir.path().c_str());
+
+  const std::vector<std::string> env{"RIG_CHAOS_DIR=" + dir.path().string(), "RIG_LOG_DIR=" + (dir.path() / "logs").string()};
+  ChildOptions up_opt;
+  up_opt.env = env;
+  up_opt.log_file = (dir.path() / "logs" / "rig_up.log").string();
+  ChildProcess up({exe, "up", o.config, "--duration", seconds_arg(o.warmup_s + o.duration_s + 1.5)}, up_opt);
+  // The monitor watches the whole campaign and records every stamped sample.
+  std::vector<std::string> mon_argv{exe, "monitor", "--json", "--record", (dir.path() / "monitor.csv").string(),
+                                    "--duration", seconds_arg(o.warmup_s + o.duration_s), "--domain",
+                                    std::to_string(cfg.dds.domain_id)};
+  if (!cfg.dds.profile.empty()) mon_argv.insert(mon_argv.end(), {"--dds-profile", cfg.dds.profile});
+  ChildOptions mon_opt;
+  mon_opt.pipe_stdio = true;
+  mon_opt.log_file = (dir.path() / "logs" / "monitor.log").string();
+  ChildProcess monitor(mon_argv, mon_opt);
+  HostFaults host(plan.events, plan.epoch_mono_ns, epoch_vehicle, (dir.path() / "truth" / "host.jsonl").string());
+  host.start();
+
+  std::vector<std::string> monitor_lines;
+  Nanos next_progress = monotonic_now_ns();
+  while (monitor.running()) {
+    for (auto& l : monitor.read_lines()) monitor_lines.push_back(std::move(l));
+    if (shutdown_requested()) break;
+    if (monotonic_now_ns() >= next_progress) {
+      const double t = static_cast<double>(monotonic_now_ns() - plan.epoch_mono_ns) * 1e-9;
+      const auto done = std::count_if(plan.events.begin(), plan.events.end(), [&](const auto& e) { return e.at_s <= t; });
+      std::fprintf(stderr, "chaos: %s%.0f / %.0f s, %ld of %zu faults begun\n", t < 0 ? "warming up, " : "", std::max(0.0, t),
+                   o.duration_s, static_cast<long>(done), plan.events.size());
+      next_progress += 5'000'000'000;
+    }
+    ::usleep(100'000);
+  }
+  for (auto& l : monitor.read_lines()) monitor_lines.push_back(std::move(l));
+  host.stop();
+  if (shutdown_requested()) {
+    std::fprintf(stderr, "chaos: interrupted, no verdict\n");
+    return 1;
+  }
+  up.wait_exit(20'000);
+  if (up.running()) up.stop();
+  if (up.exit_status() != 0) {
+    std::fprintf(stderr, "chaos: rig up ended with status %d (see %s)\n", up.exit_status(), up_opt.log_file.c_str());
+    return 1;
+  }
+  if (monitor.exit_status() != 0) {
+    std::fprintf(stderr, "chaos: rig monitor ended with status %d (see %s)\n", monitor.exit_status(), mon_opt.log_file.c_str());
+    return 1;
+  }
+
+  Input in;
+  try {
+    in.truths = read_truths(dir.path() / "truth");
+    in.samples = read_records((dir.path() / "monitor.csv").string());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "chaos: %s\n", e.what());
+    return 1;
+  }
+  in.events = plan.events;
+  in.epoch_vehicle_ns = epoch_vehicle;
+  in.monitor = monitor_totals(monitor_lines, in.counted_lost);
+  in.expected = expectations_of(cfg);
+  // Judged: units made from 0.5 s into the plan to 2.5 s before its end (the monitor decides a
+  // sample lost 2 s after its stamps; the last ones are still in flight when it stops).
+  in.window_begin_ns = epoch_vehicle + 500'000'000;
+  in.window_end_ns = epoch_vehicle + static_cast<Nanos>((o.duration_s - 2.5) * 1e9);
+  const Result r = check(in);
+  std::fputs(result_text(r).c_str(), stderr);
+  if (!o.out_dir.empty()) std::fprintf(stderr, "chaos: campaign kept in %s\n", o.out_dir.c_str());
+  if (o.json) std::printf("%s\n", result_json(r).c_str());
+  return r.all_held() ? 0 : 1;
+}
+
+}  // namespace sensor_rig::rig::chaos

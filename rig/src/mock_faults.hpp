@@ -1,0 +1,47 @@
+#pragma once
+// The host's faults on mock processes under `rig chaos` (host.kill_mock, host.stall_mock): `rig up`
+// owns its mocks, so it kills (SIGKILL) and restarts, or stops (SIGSTOP) and continues them at the
+// plan's times, and records each in the truth record DIR/truth/host_mocks.jsonl.
+#include <atomic>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/common/fault_plan.hpp"
+#include "sensor_rig/common/truth_record.hpp"
+
+namespace sensor_rig::rig {
+
+struct MockProcess {
+  std::string device;  // the config name of the device it plays ("paravan" for the mock ECU)
+  std::vector<std::string> argv;
+  ChildOptions options;
+  ChildProcess child;
+};
+
+class MockFaults {
+ public:
+  // `mocks` and `mutex` outlive this; every access to `mocks` elsewhere holds `mutex`.
+  MockFaults(const faults::Plan& plan, std::vector<MockProcess>& mocks, std::mutex& mutex, const std::string& truth_path);
+  ~MockFaults();
+  MockFaults(const MockFaults&) = delete;
+  MockFaults& operator=(const MockFaults&) = delete;
+
+ private:
+  void run();
+  bool sleep_until(Nanos mono);  // false when stopping
+  void apply(const faults::FaultEvent& e);
+
+  std::vector<faults::FaultEvent> events_;
+  Nanos epoch_mono_;
+  Nanos epoch_vehicle_;
+  std::vector<MockProcess>& mocks_;
+  std::mutex& mutex_;
+  truth::Writer truth_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace sensor_rig::rig

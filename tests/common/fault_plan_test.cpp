@@ -1,0 +1,137 @@
+// The fault vocabulary (specs, expansion, seeded campaigns, plan files) and truth records (write,
+// read back, a writer killed mid-line, a mock restarted).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <set>
+
+#include "sensor_rig/common/fault_plan.hpp"
+#include "sensor_rig/common/truth_record.hpp"
+#include "rig_process.hpp"
+
+namespace sensor_rig {
+namespace {
+
+TEST(FaultSpec, ParsesParametersTimesAndDevice) {
+  const auto s = faults::parse_spec("lidar.reorder:n=3@12.5+2~10>front");
+  EXPECT_EQ(s.kind, "lidar.reorder");
+  EXPECT_EQ(s.params.at("n"), "3");
+  EXPECT_EQ(s.params.at("ms"), "0") << "defaults are filled in";
+  EXPECT_DOUBLE_EQ(s.start_s, 12.5);
+  EXPECT_DOUBLE_EQ(s.duration_s, 2.0);
+  EXPECT_DOUBLE_EQ(s.every_s, 10.0);
+  EXPECT_EQ(s.device, "front");
+  EXPECT_DOUBLE_EQ(faults::parse_spec("lidar.restart").duration_s, 1.0) << "the kind's default duration";
+  EXPECT_EQ(faults::parse_spec(faults::to_string(s)).params, s.params) << "round trip";
+}
+
+TEST(FaultSpec, BadSpecsNameWhatIsWrong) {
+  auto message = [](const char* spec) {
+    try {
+      faults::parse_spec(spec);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("lidar.reord").find("unknown fault kind 'lidar.reord'"), std::string::npos);
+  EXPECT_NE(message("lidar.reorder:x=1").find("takes no parameter 'x'"), std::string::npos);
+  EXPECT_NE(message("lidar.reorder:n").find("not NAME=VALUE"), std::string::npos);
+  EXPECT_NE(message("lidar.reorder@-1").find("start '-1'"), std::string::npos);
+  EXPECT_NE(message("lidar.reorder@1~0").find("period must be > 0"), std::string::npos);
+  EXPECT_NE(message("lidar.reorder>").find("needs a device"), std::string::npos);
+}
+
+TEST(FaultPlan, ExpandsPerDeviceAndRepeats) {
+  const std::vector<faults::Device> devices{{"front", faults::DeviceClass::kLidar, true},
+                                            {"left", faults::DeviceClass::kLidar, true},
+                                            {"cam", faults::DeviceClass::kCamera, false}};
+  const std::vector<faults::FaultSpec> specs{faults::parse_spec("lidar.loss_burst@1~4"), faults::parse_spec("camera.dies@3>cam")};
+  const auto ev = faults::expand(specs, devices, 10.0);
+  ASSERT_EQ(ev.size(), 2u * 3u + 1u);  // 1, 5, 9 s on both LIDARs, and the camera
+  EXPECT_TRUE(std::is_sorted(ev.begin(), ev.end(), [](const auto& a, const auto& b) { return a.at_s < b.at_s; }));
+  std::set<std::uint64_t> ids;
+  for (const auto& e : ev) ids.insert(e.id);
+  EXPECT_EQ(ids.size(), ev.size()) << "ids are unique";
+}
+
+TEST(FaultPlan, RandomCampaignIsSeededAndHasEveryKind) {
+  const std::vector<faults::Device> devices{{"front", faults::DeviceClass::kLidar, true}, {"cam", faults::DeviceClass::kCamera, false}};
+  const std::vector<std::string> allowed{"lidar.reorder", "lidar.restart", "camera.dies", "host.kill_mock"};
+  const auto a = faults::random_campaign(allowed, devices, 30, 60, 7);
+  const auto b = faults::random_campaign(allowed, devices, 30, 60, 7);
+  const auto c = faults::random_campaign(allowed, devices, 30, 60, 8);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(faults::to_string(faults::FaultSpec{a[i].kind, a[i].params, a[i].at_s, a[i].duration_s, 0, a[i].device}),
+                                                      faults::to_string(faults::FaultSpec{b[i].kind, b[i].params, b[i].at_s, b[i].duration_s, 0, b[i].device}));
+  EXPECT_NE(a.front().at_s, c.front().at_s);
+  std::set<std::string> kinds;
+  for (const auto& e : a) {
+    kinds.insert(e.kind);
+    EXPECT_GE(e.at_s, 0.0);
+    EXPECT_LT(e.at_s, 60.0);
+    if (e.kind == "host.kill_mock") {
+      EXPECT_EQ(e.device, "front") << "only a device with its own process is killed";
+    }
+  }
+  EXPECT_EQ(kinds.size(), allowed.size());
+  EXPECT_GT(a.size(), 20u) << "~30 per minute";
+}
+
+TEST(FaultPlan, FileRoundTripAndBadLines) {
+  test::TempDir dir;
+  faults::Plan plan;
+  plan.epoch_mono_ns = 123456789;
+  plan.events.push_back(faults::FaultEvent{1, "lidar.corrupt", "front", 2.5, 0, {{"field", "time"}, {"offset", "-1"}}});
+  plan.events.push_back(faults::FaultEvent{2, "host.cpu_hog", "", 3, 3, {{"threads", "2"}}});
+  const std::string path = (dir.path / "plan.jsonl").string();
+  faults::write_plan(path, plan);
+  const auto back = faults::read_plan(path);
+  EXPECT_EQ(back.epoch_mono_ns, 123456789);
+  ASSERT_EQ(back.events.size(), 2u);
+  EXPECT_EQ(back.events[0].text("field"), "time");
+  EXPECT_EQ(back.for_device("front").size(), 2u) << "its own and the host's";
+  EXPECT_EQ(back.for_device("left").size(), 1u);
+  const std::string bad = dir.write("bad.jsonl", "{\"fault_plan\":1}\n{\"id\":1,\"kind\":\"lidar.nope\",\"at_s\":1}\n");
+  try {
+    faults::read_plan(bad);
+    FAIL() << "accepted an unknown kind";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.jsonl:2: unknown fault kind"), std::string::npos) << e.what();
+  }
+}
+
+TEST(TruthRecord, WritesReadsAndSurvivesAKilledWriterAndARestart) {
+  test::TempDir dir;
+  const std::string path = (dir.path / "front.jsonl").string();
+  const truth::Header h{"front", "lidar", "VLP-32C", "/sensors/lidar/front/points", "scan", "sensor"};
+  {
+    truth::Writer w(path, h);
+    w.unit({0, 1000, 10, 2});
+    w.part({0, 0, 1000, 10, 1100, truth::Fate::kSent, 0});
+    w.part({1, 0, 1500, 15, 0, truth::Fate::kDropped, 4});
+    w.fault({4, "lidar.loss_burst", 1500, 1500, 0, "packets=1 \"quoted\""});
+  }
+  {
+    truth::Writer w(path, h);  // the mock restarted: same unit id again
+    w.unit({0, 9000, 90, 2});
+  }
+  std::ofstream(path, std::ios::app) << "{\"p\":2,\"u\":0,\"ac";  // killed mid-line
+  const truth::Log log = truth::read(path);
+  EXPECT_EQ(log.header.model, "VLP-32C");
+  ASSERT_EQ(log.units.size(), 2u);
+  EXPECT_NE(log.units[0].unit, log.units[1].unit) << "a restart's unit ids do not collide";
+  EXPECT_EQ(log.restarts, 1);
+  ASSERT_EQ(log.parts.size(), 2u);
+  EXPECT_EQ(log.parts[1].fate, truth::Fate::kDropped);
+  EXPECT_EQ(log.parts[1].fault, 4u);
+  ASSERT_EQ(log.faults.size(), 1u);
+  EXPECT_EQ(log.faults[0].detail, "packets=1 \"quoted\"");
+  EXPECT_TRUE(log.cut_last_line);
+  // A bad line in the middle is an error naming file:line.
+  const std::string bad = dir.write("bad.jsonl", "{\"truth\":1}\n{\"x\":1}\n{\"u\":1,\"acq\":2}\n");
+  EXPECT_THROW(truth::read(bad), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace sensor_rig

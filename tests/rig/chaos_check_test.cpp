@@ -1,0 +1,213 @@
+// The judge of `rig chaos` catches each planted violation, and holds an honest rig: a LIDAR's truth
+// (50 scans of 10 packets, 100 ms apart) against the samples a rig published, one lie at a time.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "chaos_check.hpp"
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+constexpr Nanos kT0 = 1'800'000'000'000'000'000;
+constexpr Nanos kPeriod = 100'000'000;
+constexpr int kScans = 50;
+constexpr std::uint32_t kParts = 10;
+const std::string kTopic = "/sensors/lidar/front/points";
+
+truth::Log lidar_truth() {
+  truth::Log log;
+  log.header = truth::Header{"front", "lidar", "VLP-32C", kTopic, "scan", "sensor"};
+  std::uint64_t seq = 0;
+  for (int u = 0; u < kScans; ++u) {
+    const Nanos acq = kT0 + u * kPeriod;
+    log.units.push_back(truth::UnitRecord{u, acq, acq, kParts});
+    for (std::uint32_t p = 0; p < kParts; ++p)
+      log.parts.push_back(truth::PartRecord{seq++, u, acq + p * (kPeriod / kParts), 0, acq + p * (kPeriod / kParts), truth::Fate::kSent, 0});
+  }
+  return log;
+}
+
+// What an honest rig publishes for that truth: every scan, stamped at its first firing, all received.
+Input honest() {
+  Input in;
+  in.truths.push_back(lidar_truth());
+  for (int u = 0; u < kScans; ++u) {
+    SampleRecord s;
+    s.topic = kTopic;
+    s.seq = static_cast<std::uint64_t>(u);
+    s.acquisition_ns = kT0 + u * kPeriod;
+    s.publish_ns = s.acquisition_ns + kPeriod + 5'000'000;
+    s.received_ns = s.publish_ns + 1'000'000;
+    s.packets = kParts;
+    in.samples.push_back(s);
+  }
+  in.monitor[kTopic] = MonitorTotals{kScans, 0};
+  in.expected[kTopic] = TopicExpectation{"front", 10.0, {}};
+  in.epoch_vehicle_ns = kT0;
+  in.window_begin_ns = kT0;
+  in.window_end_ns = kT0 + kScans * kPeriod;
+  return in;
+}
+
+void drop_part(Input& in, int unit, std::uint32_t part, truth::Fate fate = truth::Fate::kDropped) {
+  in.truths[0].parts[static_cast<std::size_t>(unit) * kParts + part].fate = fate;
+}
+
+TEST(ChaosCheck, AnHonestRigHoldsEveryInvariant) {
+  const Result r = check(honest());
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  const TopicResult& t = r.topics.at(kTopic);
+  EXPECT_EQ(t.sent, 50u);
+  EXPECT_EQ(t.published_complete, 50u);
+  EXPECT_EQ(t.unaccounted, 0u);
+  EXPECT_DOUBLE_EQ(t.stamp_error_p99_ms, 0.0);
+}
+
+TEST(ChaosCheck, AScanNeitherPublishedNorCountedIsUnaccounted) {
+  Input in = honest();
+  in.samples.erase(in.samples.begin() + 7);
+  in.monitor[kTopic] = MonitorTotals{kScans - 1, 0};
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("accounted"));
+  EXPECT_EQ(r.topics.at(kTopic).unaccounted, 1u);
+  EXPECT_FALSE(r.invariants.at("monitor_agrees")) << "the monitor said lost 0 for a scan that never came";
+  // The same scan counted lost by the rig, and by the monitor: accounted.
+  in.counted_lost[kTopic] = 1;
+  in.monitor[kTopic] = MonitorTotals{kScans - 1, 1};
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("monitor_agrees")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).counted_lost, 1u);
+}
+
+TEST(ChaosCheck, ARigThatHidesALossIsCaught) {
+  Input in = honest();
+  drop_part(in, 12, 3);
+  drop_part(in, 12, 4);
+  Result r = check(in);  // published as complete: missing 0
+  EXPECT_FALSE(r.invariants.at("accounted"));
+  EXPECT_EQ(r.topics.at(kTopic).hidden_missing, 2u);
+  in.samples[12].missing_packets = 2;  // counted: incomplete, accounted
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).published_incomplete, 1u);
+  EXPECT_EQ(r.topics.at(kTopic).published_complete, 49u);
+}
+
+TEST(ChaosCheck, MissingPacketsThatArrivedArePhantoms) {
+  Input in = honest();
+  in.samples[20].missing_packets = 700'000;  // a corrupt time byte read as a jump of the packet counter
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss"));
+  EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 700'000u);
+  // Counted missing for a packet that did arrive, but corrupted: not a phantom.
+  in = honest();
+  drop_part(in, 20, 5, truth::Fate::kCorrupted);
+  in.samples[20].missing_packets = 1;
+  EXPECT_TRUE(check(in).invariants.at("no_phantom_loss"));
+  // More units counted lost than were not published.
+  in = honest();
+  in.counted_lost[kTopic] = 3;
+  EXPECT_FALSE(check(in).invariants.at("no_phantom_loss"));
+}
+
+TEST(ChaosCheck, AStampTwoMillisecondsOffIsCaughtAndAFirstPacketLostMovesNothing) {
+  Input in = honest();
+  in.samples[30].acquisition_ns += 2'000'000;
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("stamps"));
+  EXPECT_NEAR(r.topics.at(kTopic).stamp_error_max_ms, 2.0, 1e-9);
+  in.samples[30].acquisition_ns -= 1'950'000;  // 50 µs: within the 0.1 ms bound
+  EXPECT_TRUE(check(in).invariants.at("stamps"));
+  // The scan's first two packets lost: stamping the first packet that arrived (20 ms later) is honest.
+  in = honest();
+  drop_part(in, 30, 0);
+  drop_part(in, 30, 1);
+  in.samples[30].missing_packets = 2;
+  in.samples[30].acquisition_ns += 2 * kPeriod / kParts;
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  // A stamp 37 s off matches no scan at all.
+  in = honest();
+  in.samples[31].acquisition_ns -= 37'000'000'000;
+  in.window_begin_ns -= 40'000'000'000;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("stamps"));
+  EXPECT_EQ(r.topics.at(kTopic).unmatched, 1u);
+  EXPECT_FALSE(r.invariants.at("accounted")) << "scan 31 itself was then never published";
+}
+
+TEST(ChaosCheck, AScanSplitInTwoIsPublishedTwice) {
+  Input in = honest();
+  SampleRecord half = in.samples[40];
+  half.seq = 1000;
+  half.acquisition_ns += 40'000'000;  // the second half of the scan, as its own "scan"
+  in.samples.push_back(half);
+  const Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("accounted"));
+  EXPECT_EQ(r.topics.at(kTopic).published_twice, 1u);
+}
+
+TEST(ChaosCheck, AStarvedHealthyDeviceBreaksIsolation) {
+  Input in = honest();
+  in.expected[kTopic].rate_hz = 10.0;
+  // Only 3 of 50 frames, and no fault touched the device: another device's fault starved it.
+  in.samples.erase(in.samples.begin() + 3, in.samples.end());
+  in.counted_lost[kTopic] = 47;
+  in.monitor[kTopic] = MonitorTotals{3, 47};
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("isolation"));
+  EXPECT_LT(r.topics.at(kTopic).healthy_rate_share, 0.1);
+  // The same loss while a fault of its own was active is not an isolation failure.
+  in.events.push_back(faults::FaultEvent{1, "lidar.restart", "front", 0.0, 5.0, {}});
+  in.truths[0].faults.push_back(truth::FaultRecord{1, "lidar.restart", kT0, kT0 + 5 * 1'000'000'000LL, 0, ""});
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("isolation")) << result_text(r);
+}
+
+TEST(ChaosCheck, RecoveryIsTheFirstCompleteScanAfterTheFault) {
+  Input in = honest();
+  // lidar.stuck_azimuth from 1.0 to 1.5 s; the rig publishes nothing from 1.0 s until 2.8 s.
+  in.events.push_back(faults::FaultEvent{1, "lidar.stuck_azimuth", "front", 1.0, 0.5, {}});
+  in.truths[0].faults.push_back(truth::FaultRecord{1, "lidar.stuck_azimuth", kT0 + kPeriod * 10, kT0 + kPeriod * 15, 10, ""});
+  auto slow = in;
+  slow.samples.erase(slow.samples.begin() + 10, slow.samples.begin() + 28);
+  slow.counted_lost[kTopic] = 18;
+  slow.monitor[kTopic] = MonitorTotals{kScans - 18, 18};
+  Result r = check(slow);
+  EXPECT_FALSE(r.invariants.at("recovery")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  auto fast = in;
+  fast.samples.erase(fast.samples.begin() + 10, fast.samples.begin() + 16);
+  fast.counted_lost[kTopic] = 6;
+  fast.monitor[kTopic] = MonitorTotals{kScans - 6, 6};
+  r = check(fast);
+  EXPECT_TRUE(r.invariants.at("recovery")) << result_text(r);
+  EXPECT_NEAR(r.topics.at(kTopic).recovery_max_s, 0.1, 1e-6);
+}
+
+TEST(ChaosCheck, APlannedFaultNoMockRecordedIsReported) {
+  Input in = honest();
+  in.events.push_back(faults::FaultEvent{7, "lidar.reorder", "front", 2.0, 0.0, {{"n", "1"}, {"ms", "0"}}});
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("faults_injected"));
+  EXPECT_EQ(r.faults_not_injected.at("lidar.reorder"), 1u);
+  in.truths[0].faults.push_back(truth::FaultRecord{7, "lidar.reorder", kT0 + 2 * 1'000'000'000LL, kT0 + 2 * 1'000'000'000LL, 20, "n=1"});
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("faults_injected"));
+  EXPECT_EQ(r.faults.at("lidar.reorder"), 1u);
+}
+
+TEST(ChaosCheck, TheJsonLineHasTheContractsKeys) {
+  const auto j = nlohmann::json::parse(result_json(check(honest())));
+  for (const char* k : {"faults", "topics", "invariants"}) EXPECT_TRUE(j.contains(k)) << k;
+  const auto& t = j["topics"][kTopic];
+  for (const char* k : {"sent", "published_complete", "published_incomplete", "counted_lost", "unaccounted", "phantom_missing",
+                        "stamp_error_p99_ms"})
+    EXPECT_TRUE(t.contains(k)) << k;
+  for (const char* name : kInvariants) EXPECT_EQ(j["invariants"][name], "held") << name;
+}
+
+}  // namespace
+}  // namespace sensor_rig::rig::chaos
