@@ -72,6 +72,9 @@ std::vector<std::string> gige_fake_command(const GigeFakeOptions& o) {
   if (o.lost_packets_per_thousand > 0) argv.insert(argv.end(), {"-r", std::to_string(o.lost_packets_per_thousand)});
   if (!o.genicam.empty()) argv.insert(argv.end(), {"-g", o.genicam});
   if (o.realtime_priority > 0) argv.insert(argv.end(), {"--realtime-priority", std::to_string(o.realtime_priority)});
+  if (!o.chaos.plan.empty()) argv.insert(argv.end(), {"--fault-plan", o.chaos.plan});
+  if (!o.chaos.device.empty()) argv.insert(argv.end(), {"--device", o.chaos.device});
+  if (!o.chaos.truth.empty()) argv.insert(argv.end(), {"--truth", o.chaos.truth});
   return argv;
 }
 
@@ -183,6 +186,57 @@ std::string write_ptp_fake_genicam(const std::string& address, bool gev_ieee1588
   nodes += test_register("PtpTestRegister", "0x8000", "RW") + test_register("PtpLatchTestRegister", "0x8004", "RW");
   add_nodes(xml, nodes);
   return write_temporary_genicam(xml);
+}
+
+namespace {
+constexpr const char* kChaosPtpNodes = R"(
+  <Boolean Name="@ENABLE@" NameSpace="Standard">
+    <pValue>ChaosPtpEnableRegister</pValue>
+    <OnValue>1</OnValue>
+    <OffValue>0</OffValue>
+  </Boolean>
+  <Command Name="@LATCH@" NameSpace="Standard">
+    <pValue>ChaosPtpLatchRegister</pValue>
+    <CommandValue>1</CommandValue>
+  </Command>
+  <Enumeration Name="@STATUS@" NameSpace="Standard">
+    <EnumEntry Name="Initializing" NameSpace="Standard"><Value>0</Value></EnumEntry>
+    <EnumEntry Name="Faulty" NameSpace="Standard"><Value>1</Value></EnumEntry>
+    <EnumEntry Name="Disabled" NameSpace="Standard"><Value>2</Value></EnumEntry>
+    <EnumEntry Name="Listening" NameSpace="Standard"><Value>3</Value></EnumEntry>
+    <EnumEntry Name="Master" NameSpace="Standard"><Value>4</Value></EnumEntry>
+    <EnumEntry Name="Slave" NameSpace="Standard"><Value>5</Value></EnumEntry>
+    <EnumEntry Name="Uncalibrated" NameSpace="Standard"><Value>6</Value></EnumEntry>
+    <pValue>ChaosPtpStatusRegister</pValue>
+  </Enumeration>
+)";
+
+std::string hex(std::uint32_t v) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%x", v);
+  return b;
+}
+}  // namespace
+
+std::string chaos_ptp_genicam_xml(bool gev_ieee1588) {
+  ArvFakeCamera* cam = arv_fake_camera_new("RIGCHAOSXML");
+  if (cam == nullptr) throw std::runtime_error("arv_fake_camera_new failed");
+  std::size_t size = 0;
+  const char* data = arv_fake_camera_get_genicam_xml(cam, &size);
+  std::string xml = data != nullptr ? std::string(data, size) : std::string();
+  g_object_unref(cam);
+  if (xml.rfind("</RegisterDescription>") == std::string::npos)
+    throw std::runtime_error("the fake's GenICam data is not a RegisterDescription");
+  std::string nodes = kChaosPtpNodes;
+  const auto put = [&nodes](const std::string& mark, const std::string& name) { nodes.replace(nodes.find(mark), mark.size(), name); };
+  put("@ENABLE@", gev_ieee1588 ? "GevIEEE1588" : "PtpEnable");
+  put("@STATUS@", gev_ieee1588 ? "GevIEEE1588Status" : "PtpStatus");
+  put("@LATCH@", gev_ieee1588 ? "GevIEEE1588DataSetLatch" : "PtpDataSetLatch");
+  nodes += test_register("ChaosPtpEnableRegister", hex(kChaosPtpEnableRegister), "RW") +
+           test_register("ChaosPtpLatchRegister", hex(kChaosPtpLatchRegister), "RW") +
+           test_register("ChaosPtpStatusRegister", hex(kChaosPtpStatusRegister), "RO");
+  add_nodes(xml, nodes);
+  return xml;
 }
 
 std::string write_line_trigger_fake_genicam(const std::string& address) {

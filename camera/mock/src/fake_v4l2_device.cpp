@@ -21,6 +21,14 @@ void sleep_ns(Nanos ns) {
   ::nanosleep(&ts, nullptr);
 }
 
+// The fake's model of a frame under v4l2.stamp_mode eof: the buffer is stamped (and ready) when its
+// last row is read out, exposure + readout after the exposure started; a rolling shutter reads out
+// over about half a frame period at these rates. Exposure unset (auto): 10 ms.
+constexpr Nanos kDefaultExposureNs = 10'000'000;
+constexpr const char* kClock =
+    "CLOCK_MONOTONIC ns: the V4L2 buffer timestamp (start of exposure; under v4l2.stamp_mode eof the end of "
+    "the frame: exposure start + exposure + half a frame period of readout)";
+
 std::uint32_t bytes_pp(std::uint32_t fourcc_code) {
   const auto f = from_v4l2(fourcc_code);
   return f ? std::max<std::uint32_t>(1, bytes_per_pixel(*f)) : 1;
@@ -28,7 +36,9 @@ std::uint32_t bytes_pp(std::uint32_t fourcc_code) {
 
 }  // namespace
 
-FakeV4l2Device::FakeV4l2Device(FakeV4l2Options o) : opt_(std::move(o)) {
+FakeV4l2Device::FakeV4l2Device(FakeV4l2Options o) : opt_(std::move(o)), schedule_(opt_.chaos.plan, opt_.chaos.device) {
+  if (!opt_.chaos.truth.empty())
+    truth_ = std::make_unique<CameraTruth>(opt_.chaos.truth, opt_.chaos.device, "v4l2", "sensor-rig fake V4L2 device", kClock);
   if (opt_.formats.empty())
     for (const auto code : {fourcc('Y', 'U', 'Y', 'V'), fourcc('G', 'R', 'E', 'Y'), fourcc('R', 'G', 'G', 'B'), fourcc('R', 'G', 'B', '3')})
       for (const auto& [w, h] : {std::pair{640u, 480u}, std::pair{1280u, 720u}, std::pair{1920u, 1200u}})
@@ -65,7 +75,8 @@ FakeV4l2Counters FakeV4l2Device::counters() const {
 int FakeV4l2Device::open(const std::string& path) {
   std::lock_guard lock(mutex_);
   if (path != opt_.path) return -ENOENT;
-  if (disconnected_) return -ENODEV;
+  apply_faults_locked();
+  if (gone()) return -ENODEV;
   if (fd_ >= 0) return -EBUSY;
   fd_ = next_fd_++;
   ++counters_.opens;
@@ -85,7 +96,7 @@ int FakeV4l2Device::close(int fd) {
 void* FakeV4l2Device::mmap(std::size_t length, int fd, off_t offset) {
   std::lock_guard lock(mutex_);
   const auto index = static_cast<std::size_t>(offset / kPage);
-  if (fd != fd_ || disconnected_ || offset % kPage != 0 || index >= buffers_.size() || length > buffers_[index].mem.size())
+  if (fd != fd_ || gone() || offset % kPage != 0 || index >= buffers_.size() || length > buffers_[index].mem.size())
     return nullptr;
   return buffers_[index].mem.data();
 }
@@ -95,7 +106,8 @@ int FakeV4l2Device::munmap(void* /*addr*/, std::size_t /*length*/) { return 0; }
 int FakeV4l2Device::ioctl(int fd, unsigned long request, void* arg) {
   std::lock_guard lock(mutex_);
   if (fd != fd_) return -EBADF;
-  if (disconnected_) return -ENODEV;
+  apply_faults_locked();
+  if (gone()) return -ENODEV;
   return ioctl_locked(request, arg);
 }
 
@@ -211,7 +223,7 @@ int FakeV4l2Device::ioctl_locked(unsigned long request, void* arg) {
       b->bytesused = oldest->bytesused;
       b->sequence = oldest->sequence;
       b->field = V4L2_FIELD_NONE;
-      b->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
+      b->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | oldest->stamp_source;
       b->timestamp.tv_sec = static_cast<time_t>(oldest->stamp_mono / 1'000'000'000);
       b->timestamp.tv_usec = static_cast<suseconds_t>((oldest->stamp_mono % 1'000'000'000) / 1000);
       return 0;
@@ -241,12 +253,24 @@ bool FakeV4l2Device::fill_one(Nanos due) {
     std::memcpy(b.mem.data(), &seq, std::min<std::size_t>(sizeof seq, sizeimage_));
     b.sequence = seq;
     b.stamp_mono = due;
+    b.stamp_source = V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
+    Nanos exposure_start = due;
+    const auto* mode = schedule_.active("v4l2.stamp_mode", schedule_.seconds(due));
+    if (mode != nullptr && mode->text("mode", "eof") == "eof") {
+      // Stamped at the end of the frame: this frame's exposure began exposure + readout earlier.
+      b.stamp_source = V4L2_BUF_FLAG_TSTAMP_SRC_EOF;
+      const Nanos exposure = counters_.exposure_100us > 0 ? Nanos{counters_.exposure_100us} * 100'000 : kDefaultExposureNs;
+      exposure_start = due - exposure - static_cast<Nanos>(0.5e9 / rate_hz_);
+    }
+    if (mode != nullptr) fault_line(*mode, seq, "buffer timestamps: " + mode->text("mode", "eof"));
+    record(seq, exposure_start, due, truth::Fate::kSent, 0);
     b.bytesused = short_every_ != 0 && (seq + 1) % short_every_ == 0 ? sizeimage_ / 2 : sizeimage_;
     b.filled = true;
     ++counters_.frames;
     return true;
   }
-  ++sequence_;
+  // No buffer queued: the frame was exposed and is lost in the driver (the consumer's fault).
+  record(sequence_++, due, due, truth::Fate::kDropped, 0);
   ++counters_.dropped;
   return false;
 }
@@ -258,7 +282,8 @@ int FakeV4l2Device::poll(int fd, int timeout_ms) {
     {
       std::lock_guard lock(mutex_);
       if (fd != fd_) return -EBADF;
-      if (disconnected_) return -ENODEV;
+      apply_faults_locked();
+      if (gone()) return -ENODEV;
       for (const auto& b : buffers_)
         if (b.filled) return 1;
       const Nanos now = monotonic_now_ns();
@@ -267,6 +292,19 @@ int FakeV4l2Device::poll(int fd, int timeout_ms) {
           const Nanos due = next_due_;
           next_due_ += static_cast<Nanos>(1e9 / rate_hz_);
           if (next_due_ < now) next_due_ = now;  // a late consumer does not get a burst
+          if (gap_left_ == 0)
+            for (const auto& e : schedule_.events())
+              if (e.kind == "v4l2.sequence_gap" && schedule_.seconds(due) >= e.at_s && gaps_done_.insert(e.id).second) {
+                gap_left_ = static_cast<std::uint32_t>(std::max(0.0, e.number("n", 3)));
+                gap_fault_ = e.id;
+                fault_line(e, sequence_, "the device skips " + std::to_string(gap_left_) + " frames (sequence jumps)");
+                break;
+              }
+          if (gap_left_ > 0) {  // the device drops this slot's frame itself: its sequence moves on
+            --gap_left_;
+            record(sequence_++, due, due, truth::Fate::kNotSent, gap_fault_);
+            continue;
+          }
           if (fill_one(due)) return 1;
           continue;
         }
@@ -277,6 +315,38 @@ int FakeV4l2Device::poll(int fd, int timeout_ms) {
       wake = std::min(wake, now + 10'000'000);
     }
     sleep_ns(wake - monotonic_now_ns());
+  }
+}
+
+void FakeV4l2Device::record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, truth::Fate fate, std::uint64_t fault) {
+  if (truth_ == nullptr) return;
+  const Nanos to_vehicle = vehicle_now_ns() - monotonic_now_ns();
+  // The buffer's timestamp is a timeval: what the device says is whole microseconds.
+  truth_->frame(seq, acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns(), fate, fault);
+}
+
+void FakeV4l2Device::fault_line(const faults::FaultEvent& e, std::int64_t unit, const std::string& detail) {
+  if (truth_ != nullptr) truth_->fault(e, schedule_.vehicle_ns(e.at_s), schedule_.vehicle_ns(e.at_s + e.duration_s), unit, detail);
+}
+
+void FakeV4l2Device::apply_faults_locked() {
+  if (schedule_.events().empty()) return;
+  const Nanos now = monotonic_now_ns();
+  const auto* e = schedule_.active("v4l2.disconnect", schedule_.seconds(now));
+  if (e != nullptr && !fault_disconnected_) {
+    fault_disconnected_ = true;
+    disconnected_at_ = streaming_ ? now : 0;  // a device not streaming misses no frame
+    disconnect_fault_ = e->id;
+    fault_line(*e, sequence_, "the device is gone (ENODEV), then returns");
+  } else if (e == nullptr && fault_disconnected_) {
+    // It returns. The frames its clock would have had meanwhile were never made: not_sent, and its
+    // sequence counts them (a plugged-back device's own numbering is not modelled).
+    fault_disconnected_ = false;
+    if (disconnected_at_ > 0) {
+      const auto period = static_cast<Nanos>(1e9 / rate_hz_);
+      for (Nanos slot = disconnected_at_; slot < now; slot += period) record(sequence_++, slot, slot, truth::Fate::kNotSent, disconnect_fault_);
+    }
+    streaming_ = false;  // what was streaming is gone with the device
   }
 }
 

@@ -24,6 +24,7 @@
 #include <pthread.h>
 #include <sys/prctl.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
@@ -31,9 +32,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "gige_fake_chaos.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 #include "sensor_rig/common/thread_priority.hpp"
 
@@ -63,13 +68,18 @@ struct Pattern {
 
 struct FillContext {
   ArvFakeCamera* camera = nullptr;
+  sensor_rig::camera::mock::GigeFakeChaos* chaos = nullptr;
   Pattern pattern;
 };
 
 // Runs in arv_fake_camera_fill_buffer after the frame's stamp is set, before the leader is sent.
+// The stamp is the exposure start (the truth's acq); chaos may change the exposure and what the
+// camera reports as its timestamp (PTP).
 void expose_then_fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 /*gain*/, ArvPixelFormat /*format*/) {
   auto* ctx = static_cast<FillContext*>(data);
-  const guint64 exposure_end_ns = arv_buffer_get_timestamp(buffer) + guint64{exposure_time_us} * 1000;
+  const guint64 exposure_start_ns = arv_buffer_get_timestamp(buffer);
+  const guint32 exposure_us = ctx->chaos->on_fill(ctx->camera, buffer, exposure_time_us);
+  const guint64 exposure_end_ns = exposure_start_ns + guint64{exposure_us} * 1000;
   const timespec until{static_cast<time_t>(exposure_end_ns / 1'000'000'000), static_cast<long>(exposure_end_ns % 1'000'000'000)};
   while (::clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &until, nullptr) == EINTR) {
   }
@@ -95,10 +105,13 @@ timespec until_next_grid_point(ArvFakeCamera* cam, bool triggered) {
 int usage(const char* self, int status) {
   std::fprintf(status == 0 ? stdout : stderr,
                "usage: %s -i ADDRESS [-s SERIAL] [-g GENICAM.xml] [-r LOST_PER_THOUSAND] [--trigger-hz HZ]\n"
-               "          [--realtime-priority N]\n"
+               "          [--realtime-priority N] [--fault-plan FILE] [--device NAME] [--truth FILE] [--gev-ieee1588]\n"
                "Aravis GigE fake camera (as arv-fake-gv-camera-0.8) whose software-triggered frames are exposed\n"
                "within ~1/HZ of the trigger (default %.0f Hz) without a busy loop. --realtime-priority: every\n"
-               "thread SCHED_FIFO N where permitted (a warning if not). Stops on SIGINT/SIGTERM.\n",
+               "thread SCHED_FIFO N where permitted (a warning if not). --fault-plan/--device: the camera.* faults of\n"
+               "that camera (default: RIG_CHAOS_DIR's plan when --device is given); --truth: its truth record (default\n"
+               "RIG_CHAOS_DIR/truth/NAME.jsonl); --gev-ieee1588: PTP features by their GevIEEE1588 names. Stops on\n"
+               "SIGINT/SIGTERM.\n",
                self, sensor_rig::camera::mock::kTriggerGridHz);
   return status;
 }
@@ -117,15 +130,81 @@ extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
   return ::ppoll(pfds, nfds, &wait, nullptr);
 }
 
+namespace {
+
+// A GenICam file for the fake's construction (it reads the file then): written, used, removed at once.
+class TemporaryFile {
+ public:
+  explicit TemporaryFile(const std::string& text) {
+    char path[] = "/tmp/rig_fake_genicam_XXXXXX.xml";
+    const int fd = ::mkstemps(path, 4);
+    if (fd < 0) throw std::runtime_error(std::string("mkstemps: ") + std::strerror(errno));
+    ::close(fd);
+    path_ = path;
+    std::ofstream out(path_);
+    out << text;
+    if (!out.flush()) throw std::runtime_error("cannot write " + path_);
+  }
+  ~TemporaryFile() { ::unlink(path_.c_str()); }
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  [[nodiscard]] const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+struct Fake {
+  std::string address, serial, genicam, genicam_xml;  // genicam_xml: the chaos PTP features, else empty
+  FillContext fill;
+  ArvGvFakeCamera* gv = nullptr;
+
+  bool start() {
+    std::unique_ptr<TemporaryFile> xml;
+    if (genicam.empty() && !genicam_xml.empty()) xml = std::make_unique<TemporaryFile>(genicam_xml);
+    const std::string file = xml ? xml->path() : genicam;
+    gv = arv_gv_fake_camera_new_full(address.c_str(), serial.empty() ? nullptr : serial.c_str(), file.empty() ? nullptr : file.c_str());
+    if (gv == nullptr || !arv_gv_fake_camera_is_running(gv)) {
+      if (gv != nullptr) g_object_unref(gv);
+      gv = nullptr;
+      return false;
+    }
+    // Random loss (-r) is applied, and recorded, by the chaos send hook: which packet of which frame.
+    g_object_set(gv, "gvsp-lost-ratio", 0.0, nullptr);
+    ArvFakeCamera* cam = arv_gv_fake_camera_get_fake_camera(gv);
+    arv_fake_camera_set_trigger_frequency(cam, g_grid_hz);
+    fill.camera = cam;
+    fill.chaos->booted(cam);
+    arv_fake_camera_set_fill_pattern(cam, expose_then_fill, &fill);
+    sensor_rig::camera::mock::set_gige_fake_camera(cam);
+    g_camera.store(cam, std::memory_order_release);
+    return true;
+  }
+  void stop() {
+    g_camera.store(nullptr, std::memory_order_release);
+    sensor_rig::camera::mock::set_gige_fake_camera(nullptr);
+    if (gv != nullptr) g_object_unref(gv);  // joins its thread
+    gv = nullptr;
+  }
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  namespace mock = sensor_rig::camera::mock;
   std::string address, serial, genicam;
+  mock::ChaosArgs chaos_args;
+  bool gev_ieee1588 = false;
   double lost_per_thousand = 0;
   int realtime_priority = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    const bool has_value = i + 1 < argc;
     if (a == "-h" || a == "--help") return usage(argv[0], 0);
-    if (!has_value) return usage(argv[0], 2);
+    if (a == "--gev-ieee1588") {
+      gev_ieee1588 = true;
+      continue;
+    }
+    if (i + 1 >= argc) return usage(argv[0], 2);
     const char* v = argv[++i];
     if (a == "-i" || a == "--interface") address = v;
     else if (a == "-s" || a == "--serial") serial = v;
@@ -133,6 +212,9 @@ int main(int argc, char** argv) {
     else if (a == "-r" || a == "--gvsp-lost-ratio") lost_per_thousand = std::atof(v);
     else if (a == "--trigger-hz") g_grid_hz = std::atof(v);
     else if (a == "--realtime-priority") realtime_priority = std::atoi(v);
+    else if (a == "--fault-plan") chaos_args.plan = v;
+    else if (a == "--device") chaos_args.device = v;
+    else if (a == "--truth") chaos_args.truth = v;
     else {
       std::fprintf(stderr, "rig-fake-gige-camera: unknown option %s\n", a.c_str());
       return usage(argv[0], 2);
@@ -141,6 +223,20 @@ int main(int argc, char** argv) {
   if (address.empty() || !(g_grid_hz >= 1 && g_grid_hz <= 1e6) || lost_per_thousand < 0 || realtime_priority < 0 ||
       realtime_priority > 99)
     return usage(argv[0], 2);
+  if (!chaos_args.device.empty()) {  // a campaign's folder names what was not given
+    const auto env = mock::chaos_from_env(chaos_args.device);
+    if (chaos_args.plan.empty()) chaos_args.plan = env.plan;
+    if (chaos_args.truth.empty()) chaos_args.truth = env.truth;
+  }
+  std::unique_ptr<mock::GigeFakeChaos> chaos;
+  Fake fake;
+  try {
+    chaos = std::make_unique<mock::GigeFakeChaos>(mock::GigeFakeChaos::Options{chaos_args, lost_per_thousand});
+    if (chaos->needs_ptp_features()) fake.genicam_xml = mock::chaos_ptp_genicam_xml(gev_ieee1588);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rig-fake-gige-camera: %s\n", e.what());
+    return 2;
+  }
   // Before the fake starts its threads: they inherit the policy. A hardware camera's trigger ->
   // exposure does not depend on the host's load; a mock at normal priority on a busy host would.
   if (realtime_priority > 0)
@@ -151,21 +247,29 @@ int main(int argc, char** argv) {
   ::prctl(PR_SET_TIMERSLACK, 1UL);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  ArvGvFakeCamera* gv = arv_gv_fake_camera_new_full(address.c_str(), serial.empty() ? nullptr : serial.c_str(),
-                                                    genicam.empty() ? nullptr : genicam.c_str());
-  if (gv == nullptr || !arv_gv_fake_camera_is_running(gv)) {
+  fake.address = address;
+  fake.serial = serial;
+  fake.genicam = genicam;
+  fake.fill.chaos = chaos.get();
+  mock::set_gige_fake_chaos(chaos.get());
+  if (!fake.start()) {
     std::fprintf(stderr, "rig-fake-gige-camera: failed to start on %s\n", address.c_str());
-    if (gv != nullptr) g_object_unref(gv);
+    mock::set_gige_fake_chaos(nullptr);
     return 1;
   }
-  g_object_set(gv, "gvsp-lost-ratio", lost_per_thousand / 1000.0, nullptr);
-  ArvFakeCamera* cam = arv_gv_fake_camera_get_fake_camera(gv);
-  arv_fake_camera_set_trigger_frequency(cam, g_grid_hz);
-  FillContext fill{cam, {}};
-  arv_fake_camera_set_fill_pattern(cam, expose_then_fill, &fill);
-  g_camera.store(cam, std::memory_order_release);
-  while (g_stop == 0) g_usleep(100'000);
-  g_camera.store(nullptr, std::memory_order_release);
-  g_object_unref(gv);
+  // Every 10 ms: faults begin and end on time (a dead camera returns as from a power cycle).
+  while (g_stop == 0) {
+    g_usleep(10'000);
+    if (chaos->tick()) {
+      fake.stop();
+      if (!fake.start()) {
+        std::fprintf(stderr, "rig-fake-gige-camera: failed to restart on %s\n", address.c_str());
+        break;
+      }
+    }
+  }
+  fake.stop();
+  mock::set_gige_fake_chaos(nullptr);
+  chaos->finish();
   return 0;
 }

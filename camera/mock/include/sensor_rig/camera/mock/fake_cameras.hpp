@@ -6,10 +6,12 @@
 //   is per address), the real network path; its 127.0.0.x address is a LoopbackAddress lease
 //   (common/loopback_address.hpp: added to `lo` where permitted, removed when the last holder ends).
 #include <chrono>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "sensor_rig/camera/aravis_source.hpp"
+#include "sensor_rig/camera/mock/camera_chaos.hpp"
 #include "sensor_rig/common/child_process.hpp"
 
 namespace sensor_rig::camera::mock {
@@ -36,6 +38,8 @@ struct GigeFakeOptions {
   // kTriggerFollowingFake only: its threads SCHED_FIFO at this priority (0 = normal), so the mock's
   // trigger -> exposure is the camera's, as in hardware, not the host's scheduling of the mock.
   int realtime_priority = 0;
+  // kTriggerFollowingFake only: --fault-plan / --device / --truth (camera_chaos.hpp), each when set.
+  ChaosArgs chaos;
 };
 
 // argv of the fake process.
@@ -55,6 +59,16 @@ std::string device_genicam_xml(const std::string& device);
 // GevIEEE1588DataSetLatch instead. Returns the path of a new temporary file (the caller removes it);
 // throws std::runtime_error / CameraError.
 std::string write_ptp_fake_genicam(const std::string& address, bool gev_ieee1588 = false);
+// The chaos PTP features (rig-fake-gige-camera under a camera.ptp fault): PtpEnable (Boolean on
+// kChaosPtpEnableRegister, what the rig writes), PtpStatus (Enumeration of the SFNC values 0..6,
+// Initializing..Uncalibrated, read from kChaosPtpStatusRegister, which the fake itself keeps as
+// its PTP state machine says), PtpDataSetLatch (Command on kChaosPtpLatchRegister); `gev_ieee1588`:
+// GevIEEE1588, GevIEEE1588Status and GevIEEE1588DataSetLatch instead. Built on the in-process
+// fake's own XML (no network). Returns the XML.
+inline constexpr std::uint32_t kChaosPtpEnableRegister = 0x8000;
+inline constexpr std::uint32_t kChaosPtpLatchRegister = 0x8004;
+inline constexpr std::uint32_t kChaosPtpStatusRegister = 0x8008;
+std::string chaos_ptp_genicam_xml(bool gev_ieee1588 = false);
 // The fake's own XML plus TriggerSource entry Line1 (the fake has only Line0 and Software; in a
 // line mode it sends no frame at all), TriggerActivation entry FallingEdge, and
 // TriggerSoftwareTestRegister: a readable view of its write-only TriggerSoftware register (0x30c,

@@ -4,12 +4,17 @@
 // QBUF/DQBUF, STREAMON/OFF, poll). Frames come at the negotiated rate, stamped with
 // CLOCK_MONOTONIC at exposure start (V4L2_BUF_FLAG_TSTAMP_SRC_SOE). Faults, thread-safe, taking
 // effect at the next frame: stall (no frames), disconnect (ENODEV until reconnect), short buffers.
+// Under a campaign (FakeV4l2Options::chaos) it takes the plan's v4l2.* faults by time and writes its
+// truth record: a unit and a part line per frame slot (unit = the V4L2 sequence), a fault line each.
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
+#include "sensor_rig/camera/mock/camera_chaos.hpp"
 #include "sensor_rig/camera/v4l2_device.hpp"
 #include "sensor_rig/common/clock.hpp"
 
@@ -26,6 +31,7 @@ struct FakeV4l2Options {
   std::vector<FakeV4l2Format> formats;  // empty: YUYV, GREY, RGGB, RGB3 at 640x480, 1280x720, 1920x1200
   double max_rate_hz = 60.0;
   std::uint32_t max_buffers = 8;
+  ChaosArgs chaos;  // v4l2.stamp_mode, v4l2.sequence_gap, v4l2.disconnect of chaos.device; its truth
 };
 
 struct FakeV4l2Counters {
@@ -39,7 +45,7 @@ struct FakeV4l2Counters {
 
 class FakeV4l2Device final : public V4l2Device {
  public:
-  explicit FakeV4l2Device(FakeV4l2Options o = {});
+  explicit FakeV4l2Device(FakeV4l2Options o = {});  // throws std::runtime_error (plan, truth file)
   ~FakeV4l2Device() override = default;
 
   void stall(bool on);
@@ -63,9 +69,16 @@ class FakeV4l2Device final : public V4l2Device {
     std::uint32_t bytesused = 0;
     std::uint32_t sequence = 0;
     Nanos stamp_mono = 0;
+    std::uint32_t stamp_source = 0;  // V4L2_BUF_FLAG_TSTAMP_SRC_SOE or _EOF
   };
   int ioctl_locked(unsigned long request, void* arg);
   bool fill_one(Nanos due);  // with mutex_ held
+  // With mutex_ held: begins and ends the plan's faults at this instant (disconnect, its fault lines).
+  void apply_faults_locked();
+  [[nodiscard]] bool gone() const noexcept { return disconnected_ || fault_disconnected_; }
+  // With mutex_ held: one frame slot's truth (unit = its sequence).
+  void record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, truth::Fate fate, std::uint64_t fault);
+  void fault_line(const faults::FaultEvent& e, std::int64_t unit, const std::string& detail);
 
   FakeV4l2Options opt_;
   mutable std::mutex mutex_;
@@ -84,6 +97,15 @@ class FakeV4l2Device final : public V4l2Device {
   std::vector<Buffer> buffers_;
   std::deque<std::uint32_t> queue_;  // queued buffers in QBUF order (filled FIFO, as drivers do)
   FakeV4l2Counters counters_;
+  // Campaign (empty without one).
+  CameraSchedule schedule_;
+  std::unique_ptr<CameraTruth> truth_;
+  bool fault_disconnected_ = false;
+  Nanos disconnected_at_ = 0;         // CLOCK_MONOTONIC
+  std::uint64_t disconnect_fault_ = 0;
+  std::uint32_t gap_left_ = 0;        // slots a sequence gap still skips
+  std::uint64_t gap_fault_ = 0;
+  std::set<std::uint64_t> gaps_done_;
 };
 
 }  // namespace sensor_rig::camera::mock

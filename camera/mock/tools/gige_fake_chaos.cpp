@@ -1,0 +1,205 @@
+#include "gige_fake_chaos.hpp"
+
+#include <dlfcn.h>
+#include <gio/gio.h>
+
+#include <array>
+#include <cstring>
+
+#include "sensor_rig/camera/mock/fake_cameras.hpp"
+
+namespace sensor_rig::camera::mock {
+namespace {
+
+std::atomic<GigeFakeChaos*> g_chaos{nullptr};
+constexpr guint16 kGvcpPort = 3956;
+// GVSP (standard header): packet type (2), block id (2), packet infos (4, content type in the top byte).
+constexpr std::size_t kGvspHeader = 8;
+constexpr std::uint8_t kLeader = 1, kTrailer = 2;
+constexpr double kSlowOpenLateS = 5;  // the fake starts up to this long after the campaign's epoch
+
+constexpr const char* kClock =
+    "camera timestamp ns: the fake's CLOCK_REALTIME (UTC) at exposure start; with PtpEnable its PTP clock "
+    "(Slave: TAI = UTC + 37 s; camera.ptp events: their state, tai_offset_s and step_ms)";
+
+std::string detail_of(const faults::FaultEvent& e) {
+  if (e.kind == "camera.packet_loss")
+    return "p=" + e.text("p") + (e.number("resend") != 0 ? "; resend asked but not answered (the Aravis fake has no PACKETRESEND)" : "");
+  if (e.kind == "camera.padded_rows" || e.kind == "camera.chunk_data")
+    return "not injected: the Aravis 0.8.26 fake sends neither row padding nor chunk data";
+  if (e.kind == "camera.ptp") return "state=" + e.text("state") + " tai_offset_s=" + e.text("tai_offset_s") + " step_ms=" + e.text("step_ms");
+  if (e.kind == "camera.exposure_change") return "ExposureTimeAbs " + e.text("us") + " us";
+  if (e.kind == "camera.slow_open") return "silent until " + e.text("s") + " s after the first GVCP request";
+  if (e.kind.rfind("v4l2.", 0) == 0) return "not injected: a v4l2 fault on a GigE camera";
+  return {};
+}
+
+}  // namespace
+
+void set_gige_fake_chaos(GigeFakeChaos* chaos) { g_chaos.store(chaos, std::memory_order_release); }
+
+GigeFakeChaos::GigeFakeChaos(const Options& o)
+    : schedule_(o.args.plan, o.args.device), lost_ratio_(o.lost_per_thousand / 1000.0) {
+  if (!o.args.truth.empty())
+    truth_ = std::make_unique<CameraTruth>(o.args.truth, o.args.device, "camera", "rig-fake-gige-camera (Aravis ArvGvFakeCamera)", kClock);
+}
+
+void GigeFakeChaos::booted(ArvFakeCamera* cam) {
+  gvsp_ = nullptr;
+  if (answered_.exchange(0) > 0 || frame_.unit >= 0) units_.reboot();  // frame ids start again at 1
+  frame_ = {};
+  if (cam != nullptr) update_ptp(cam, schedule_.now_s());
+}
+
+std::uint64_t GigeFakeChaos::silenced_by(double t) const {
+  if (const auto* e = schedule_.active("camera.never_answers", t)) return e->id;
+  if (const auto d = dies_.load(std::memory_order_acquire)) return d;
+  if (const auto s = slow_.load(std::memory_order_acquire)) {
+    const Nanos first = slow_first_rx_.load(std::memory_order_acquire);
+    if (first == 0 || monotonic_now_ns() < first + static_cast<Nanos>(slow_after_s_.load() * 1e9)) return s;
+  }
+  return 0;
+}
+
+bool GigeFakeChaos::tick() {
+  const double t = schedule_.now_s();
+  bool reboot = false;
+  for (const auto& e : schedule_.events()) {
+    if (e.at_s > t) continue;
+    if (truth_ != nullptr)  // once per event (the writer keeps the ids)
+      truth_->fault(e, schedule_.vehicle_ns(e.at_s), schedule_.vehicle_ns(e.at_s + e.duration_s), -1, detail_of(e));
+    // A slow open begins once, when its time comes (a fake restarted long after it does not redo it).
+    if (e.kind == "camera.slow_open" && t - e.at_s < kSlowOpenLateS && slow_started_.insert(e.id).second) {
+      // The camera (re)starts slowly: a running one reboots first, and answers s after the first request.
+      slow_first_rx_.store(0);
+      slow_after_s_.store(e.number("s", 3));
+      slow_.store(e.id, std::memory_order_release);
+      reboot = reboot || answered_.load() > 0;
+    }
+  }
+  const auto* dead = schedule_.active("camera.dies", t);
+  if (dead != nullptr) {
+    dies_.store(dead->id, std::memory_order_release);
+  } else if (dies_.exchange(0) != 0) {
+    reboot = true;  // it returns as from a power cycle: fresh registers, no controller, ids from 1
+  }
+  return reboot;
+}
+
+std::uint32_t GigeFakeChaos::on_fill(ArvFakeCamera* cam, ArvBuffer* buffer, std::uint32_t exposure_us) {
+  const double t = schedule_.now_s();
+  const auto id = arv_buffer_get_frame_id(buffer);
+  const auto step = exposure_.step(schedule_, t, id, exposure_us);
+  if (step.write) arv_fake_camera_write_register(cam, ARV_FAKE_CAMERA_REGISTER_EXPOSURE_TIME_US, step.us);
+  const Nanos stamp = static_cast<Nanos>(arv_buffer_get_timestamp(buffer));
+  Nanos dev = stamp;
+  if (needs_ptp_features()) {
+    guint32 enable = 0;
+    arv_fake_camera_read_register(cam, kChaosPtpEnableRegister, &enable);
+    dev = std::max<Nanos>(0, stamp + ptp_at(schedule_, t, (enable & 1) != 0).offset_ns);
+    if (dev != stamp) arv_buffer_set_timestamp(buffer, static_cast<guint64>(dev));
+  }
+  frame_ = Frame{units_.unit(id), stamp, dev, 0, 0, 0, 0, 0};
+  return step.us;
+}
+
+bool GigeFakeChaos::on_send(GSocket* socket, const void* data, std::size_t size) {
+  if (gvsp_ == nullptr && socket != nullptr) {
+    // The stream socket is the one not on the GVCP port (control and discovery acks are).
+    if (GSocketAddress* local = g_socket_get_local_address(socket, nullptr)) {
+      if (g_inet_socket_address_get_port(G_INET_SOCKET_ADDRESS(local)) != kGvcpPort) gvsp_ = socket;
+      g_object_unref(local);
+    }
+  }
+  const double t = schedule_.now_s();
+  const std::uint64_t silent = silenced_by(t);
+  if (socket != gvsp_) return silent == 0;
+  std::uint8_t type = 0;
+  if (size >= kGvspHeader) std::memcpy(&type, static_cast<const std::uint8_t*>(data) + 4, 1);
+  type &= 0x7f;
+  if (type == kLeader) {
+    frame_.tx = vehicle_now_ns();
+    frame_.sent = frame_.lost = frame_.silenced = 0;
+    frame_.fault = 0;
+  }
+  bool send = true;
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  if (silent != 0) {
+    ++frame_.silenced;
+    frame_.fault = silent;
+    send = false;
+  } else if (const auto* loss = schedule_.active("camera.packet_loss", t); loss != nullptr && uniform(rng_) < loss->number("p", 0.01)) {
+    ++frame_.lost;
+    frame_.fault = loss->id;
+    send = false;
+  } else if (lost_ratio_ > 0 && uniform(rng_) < lost_ratio_) {
+    ++frame_.lost;
+    send = false;
+  }
+  if (send) ++frame_.sent;
+  if (type == kTrailer && truth_ != nullptr && frame_.unit >= 0) {
+    const auto fate = frame_.sent == 0 && frame_.silenced > 0    ? truth::Fate::kNotSent
+                      : frame_.lost + frame_.silenced > 0 ? truth::Fate::kDropped
+                                                          : truth::Fate::kSent;
+    truth_->frame(frame_.unit, frame_.acq, frame_.dev, frame_.tx, fate, fate == truth::Fate::kSent ? 0 : frame_.fault);
+  }
+  return send;
+}
+
+bool GigeFakeChaos::on_receive(ArvFakeCamera* cam) {
+  if (slow_.load(std::memory_order_acquire) != 0 && slow_first_rx_.load() == 0) slow_first_rx_.store(monotonic_now_ns());
+  const double t = schedule_.now_s();
+  if (silenced_by(t) != 0) return false;
+  if (cam != nullptr) update_ptp(cam, t);  // a status read sees the state of this instant
+  answered_.fetch_add(1, std::memory_order_relaxed);
+  return true;
+}
+
+void GigeFakeChaos::update_ptp(ArvFakeCamera* cam, double t) {
+  if (!needs_ptp_features()) return;
+  guint32 enable = 0;
+  arv_fake_camera_read_register(cam, kChaosPtpEnableRegister, &enable);
+  arv_fake_camera_write_register(cam, kChaosPtpStatusRegister, static_cast<guint32>(ptp_at(schedule_, t, (enable & 1) != 0).state));
+}
+
+void GigeFakeChaos::finish() {
+  if (truth_ != nullptr) truth_->flush();
+}
+
+}  // namespace sensor_rig::camera::mock
+
+namespace {
+template <typename F>
+F real_function(const char* name) {
+  void* p = ::dlsym(RTLD_NEXT, name);
+  F f = nullptr;
+  static_assert(sizeof f == sizeof p);
+  std::memcpy(&f, &p, sizeof f);
+  return f;
+}
+std::atomic<ArvFakeCamera*> g_receive_camera{nullptr};
+}  // namespace
+
+namespace sensor_rig::camera::mock {
+void set_gige_fake_camera(ArvFakeCamera* cam) { g_receive_camera.store(cam, std::memory_order_release); }
+}  // namespace sensor_rig::camera::mock
+
+// libaravis's fake calls these through the PLT: these definitions are the ones it gets; each hands
+// the datagram to the chaos instance and then, unless it says no, to GLib's own.
+extern "C" gssize g_socket_send_to(GSocket* socket, GSocketAddress* address, const gchar* buffer, gsize size,
+                                   GCancellable* cancellable, GError** error) {
+  static const auto real = real_function<decltype(&g_socket_send_to)>("g_socket_send_to");
+  auto* chaos = sensor_rig::camera::mock::g_chaos.load(std::memory_order_acquire);
+  if (chaos != nullptr && !chaos->on_send(socket, buffer, size)) return static_cast<gssize>(size);  // lost on the way
+  return real(socket, address, buffer, size, cancellable, error);
+}
+
+extern "C" gssize g_socket_receive_message(GSocket* socket, GSocketAddress** address, GInputVector* vectors, gint num_vectors,
+                                           GSocketControlMessage*** messages, gint* num_messages, gint* flags,
+                                           GCancellable* cancellable, GError** error) {
+  static const auto real = real_function<decltype(&g_socket_receive_message)>("g_socket_receive_message");
+  const gssize n = real(socket, address, vectors, num_vectors, messages, num_messages, flags, cancellable, error);
+  auto* chaos = sensor_rig::camera::mock::g_chaos.load(std::memory_order_acquire);
+  if (n > 0 && chaos != nullptr && !chaos->on_receive(g_receive_camera.load(std::memory_order_acquire))) return 0;  // unanswered
+  return n;
+}

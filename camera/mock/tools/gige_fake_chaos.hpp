@@ -1,0 +1,77 @@
+#pragma once
+// rig-fake-gige-camera under a `rig chaos` campaign: the camera.* faults of one camera and its truth
+// record (camera/README.md "Mocks: faults and truth"). The fake's own thread calls on_fill (a frame
+// stamped, before its leader), on_send (every GVCP/GVSP datagram it sends) and on_receive (every
+// datagram it got, before it handles it); the main thread calls tick() every few ms and reboots
+// the fake when it returns true. This process interposes g_socket_send_to and
+// g_socket_receive_message (as it does g_poll) to get those calls: a camera that is dead sends and
+// answers nothing, and which packet of which frame was lost is known, not guessed.
+#include <arv.h>
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <set>
+#include <string>
+
+#include "sensor_rig/camera/mock/camera_chaos.hpp"
+
+namespace sensor_rig::camera::mock {
+
+class GigeFakeChaos {
+ public:
+  struct Options {
+    ChaosArgs args;
+    double lost_per_thousand = 0;  // -r: random GVSP loss, recorded (fate dropped, no fault)
+  };
+  explicit GigeFakeChaos(const Options& o);  // throws std::runtime_error (plan, truth file)
+
+  [[nodiscard]] bool needs_ptp_features() const { return schedule_.has("camera.ptp"); }
+  // The fake (re)started: its registers are fresh, frame ids start again at 1.
+  void booted(ArvFakeCamera* cam);
+  // Main thread: begins and ends faults; true = reboot the fake now (a dead camera returns).
+  bool tick();
+
+  // The fake's thread. on_fill: returns the exposure to wait (us) and sets the reported stamp.
+  std::uint32_t on_fill(ArvFakeCamera* cam, ArvBuffer* buffer, std::uint32_t exposure_us);
+  bool on_send(GSocket* socket, const void* data, std::size_t size);  // false: do not send
+  bool on_receive(ArvFakeCamera* cam);                                // false: ignore the datagram
+  void finish();  // at exit: a camera still dead has its silence recorded
+
+ private:
+  [[nodiscard]] std::uint64_t silenced_by(double t) const;  // the event that keeps it silent, 0 = none
+  void update_ptp(ArvFakeCamera* cam, double t);
+
+  CameraSchedule schedule_;
+  std::unique_ptr<CameraTruth> truth_;
+  double lost_ratio_ = 0;
+  std::mt19937_64 rng_{0x5eed};
+
+  // Main thread -> fake thread.
+  std::atomic<std::uint64_t> dies_{0};          // the camera.dies event it is dead by
+  std::atomic<std::uint64_t> slow_{0};          // the camera.slow_open event it is slow by
+  std::atomic<double> slow_after_s_{0};
+  std::atomic<std::int64_t> slow_first_rx_{0};  // mono ns of the first attempt, 0 = none yet
+  std::atomic<std::uint64_t> answered_{0};      // datagrams the fake handled since it booted
+  std::set<std::uint64_t> slow_started_;        // main thread only
+
+  // Fake thread only.
+  struct Frame {
+    std::int64_t unit = -1;
+    Nanos acq = 0, dev = 0, tx = 0;
+    std::uint32_t sent = 0, lost = 0, silenced = 0;
+    std::uint64_t fault = 0;
+  } frame_;
+  FrameUnits units_;
+  ExposureFaults exposure_;
+  GSocket* gvsp_ = nullptr;
+  GSocket* gvcp_ = nullptr;
+};
+
+// The instance the interposed GLib functions call (null: pass everything through), and the fake
+// camera whose PTP status a received request may read (null while it is rebooted).
+void set_gige_fake_chaos(GigeFakeChaos* chaos);
+void set_gige_fake_camera(ArvFakeCamera* cam);
+
+}  // namespace sensor_rig::camera::mock

@@ -1,0 +1,243 @@
+// rig-fake-gige-camera under a campaign: its truth record against what AravisSource reads over the
+// real GVCP/GVSP path, and each camera.* fault it injects (camera/README.md "Mocks: faults and truth").
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/camera/aravis_source.hpp"
+#include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/loopback_address.hpp"
+#include "chaos_files.hpp"
+#include "next_frame.hpp"
+
+namespace sensor_rig::camera {
+namespace {
+
+constexpr Nanos kS = 1'000'000'000;
+std::string address() { return "127.0.0." + std::to_string(240 + ::getpid() % 10); }
+
+class GigeChaos : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string why;
+    auto lease = LoopbackAddress::take(address(), why);
+    if (!lease) GTEST_SKIP() << why;
+    lease_.push_back(std::move(*lease));
+  }
+  // The fake on this test's address with the plan (none: no faults) and a truth record.
+  ChildProcess start(const std::vector<std::string>& specs) {
+    mock::GigeFakeOptions o;
+    o.address = address();
+    o.program = RIG_FAKE_GIGE_CAMERA;
+    o.chaos.device = "cam";
+    o.chaos.truth = folder_.truth();
+    if (!specs.empty()) o.chaos.plan = folder_.plan("cam", specs);
+    return mock::start_gige_fake(o);
+  }
+  static SourceConfig cfg() {
+    SourceConfig c;
+    c.device = address();
+    c.format = PixelFormat::kBayerRG8;
+    c.width = 320;
+    c.height = 200;
+    c.frame_rate = 20;
+    return c;
+  }
+  test::ChaosFolder folder_;
+  std::vector<LoopbackAddress> lease_;
+};
+
+Capture next_frame(FrameSource& s, int budget_ms = 3000) { return test::next_frame(s, budget_ms, true); }
+
+// Without faults every frame AravisSource returns is a unit of the truth with the same frame id
+// and timestamp, sent; the exposure start (acq) is the stamp the camera reports.
+TEST_F(GigeChaos, FaultFreeTruthIsWhatAravisReads) {
+  auto fake = start({});
+  AravisSource src(cfg());
+  src.open();
+  std::map<std::uint64_t, Nanos> read;  // frame id -> device time
+  for (int i = 0; i < 10; ++i) {
+    auto c = next_frame(src);
+    ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
+    read[c.frame.meta().seq] = c.frame.meta().device_ns;
+  }
+  src.close();
+  fake.stop(1000);
+  const auto log = truth::read(folder_.truth());
+  EXPECT_EQ(log.header.device, "cam");
+  EXPECT_EQ(log.header.device_class, "camera");
+  EXPECT_EQ(log.header.topic, "/sensors/camera/cam/image_raw");
+  EXPECT_EQ(log.header.unit, "frame");
+  std::map<std::uint64_t, truth::UnitRecord> units;
+  for (const auto& u : log.units) units[static_cast<std::uint64_t>(u.unit & 0xffff)] = u;
+  for (const auto& [id, dev] : read) {
+    ASSERT_TRUE(units.count(id)) << "frame " << id << " read but not in the truth";
+    EXPECT_EQ(units[id].dev_ns, dev) << "frame " << id;
+    EXPECT_EQ(units[id].acq_ns, dev) << "frame " << id;  // no PTP: the camera's clock is UTC
+  }
+  EXPECT_EQ(test::count_fate(log, truth::Fate::kSent), log.parts.size());
+  EXPECT_EQ(log.units.size(), log.parts.size());
+}
+
+// A camera that never answers: no open succeeds, and the truth has the fault and no frame.
+TEST_F(GigeChaos, NeverAnswersIsNeverOpened) {
+  auto fake = start({"camera.never_answers@0"});
+  AravisSource src(cfg());
+  EXPECT_THROW(src.open(), CameraError);
+  fake.stop(1000);
+  const auto log = truth::read(folder_.truth());
+  ASSERT_EQ(log.faults.size(), 1u);
+  EXPECT_EQ(log.faults[0].kind, "camera.never_answers");
+  EXPECT_TRUE(log.units.empty());
+}
+
+// Dies for 1.5 s: no frame reaches the host in the window, the frames the fake made then are
+// not_sent with the fault; afterwards it answers again as from a power cycle (frame ids from 1).
+TEST_F(GigeChaos, DiesThenReturns) {
+  auto fake = start({"camera.dies@1.5+1.5"});
+  const Nanos epoch = folder_.epoch();
+  AravisSource src(cfg());
+  src.open();
+  std::uint64_t last_id = 0;
+  while (monotonic_now_ns() < epoch + 29 * kS / 10) {  // frames until it dies at 1.5 s, then nothing
+    auto c = src.next(50);
+    if (c.status != CaptureStatus::kFrame) continue;
+    last_id = c.frame.meta().seq;
+    EXPECT_LT(c.frame.meta().complete_mono_ns, epoch + 16 * kS / 10) << "a frame from a dead camera";
+  }
+  src.close();
+  while (monotonic_now_ns() < epoch + 32 * kS / 10) usleep(10'000);
+  src.open();  // it returned
+  auto c = next_frame(src);
+  ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
+  // As from a power cycle: the fake's ids start again (at 65401: Aravis tests its wrap).
+  EXPECT_LT(c.frame.meta().seq, last_id);
+  src.close();
+  fake.stop(1000);
+  const auto log = truth::read(folder_.truth());
+  ASSERT_EQ(log.faults.size(), 1u);
+  EXPECT_EQ(log.faults[0].kind, "camera.dies");
+  const Nanos from = log.faults[0].at_ns, until = log.faults[0].until_ns;
+  std::size_t dead = 0, after = 0;
+  for (const auto& p : log.parts) {
+    if (p.acq_ns >= from + 60'000'000 && p.acq_ns < until - 60'000'000) {  // clear of the edges
+      EXPECT_EQ(p.fate, truth::Fate::kNotSent) << "unit " << p.unit;
+      EXPECT_EQ(p.fault, log.faults[0].id);
+      ++dead;
+    }
+    if (p.acq_ns > until) after += p.fate == truth::Fate::kSent ? 1 : 0;
+  }
+  EXPECT_GT(dead, 10u);  // 20 Hz for 1.5 s
+  EXPECT_GE(after, 1u);
+}
+
+// PTP Master: the camera reports Master and stamps with its PTP clock, TAI: 37 s after UTC.
+TEST_F(GigeChaos, PtpMasterReportsMasterAndTai) {
+  auto fake = start({"camera.ptp:state=Master@0+60"});
+  auto c = cfg();
+  c.ptp.enable = true;
+  AravisSource src(c);
+  src.open();
+  EXPECT_EQ(src.feature("PtpStatus"), "Master");
+  ASSERT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+  src.close();
+  fake.stop(1000);
+  const auto log = truth::read(folder_.truth());
+  ASSERT_FALSE(log.units.empty());
+  for (const auto& u : log.units) {
+    EXPECT_EQ(u.dev_ns - u.acq_ns, 37 * kS);
+  }
+}
+
+// A cold start over 3 s: Listening with the clock from power-on (1970), Uncalibrated stepped to
+// TAI + 5 ms, then Slave at TAI.
+TEST_F(GigeChaos, PtpColdStartStepsTheClock) {
+  auto fake = start({"camera.ptp:state=cold_start:step_ms=5@0+3"});
+  const Nanos epoch = monotonic_now_ns();
+  auto c = cfg();
+  c.ptp.enable = true;
+  AravisSource src(c);
+  src.open();
+  std::vector<std::string> states;
+  for (double at : {0.8, 1.6, 2.6}) {
+    while (monotonic_now_ns() < epoch + static_cast<Nanos>(at * 1e9)) src.next(50);
+    states.push_back(src.feature("PtpStatus"));
+  }
+  src.close();
+  fake.stop(1000);
+  EXPECT_EQ(states, (std::vector<std::string>{"Listening", "Uncalibrated", "Slave"}));
+  const auto log = truth::read(folder_.truth());
+  bool listening = false, uncalibrated = false, slave = false;
+  for (const auto& u : log.units) {
+    listening = listening || u.dev_ns < 10 * kS;
+    uncalibrated = uncalibrated || u.dev_ns - u.acq_ns == 37 * kS + 5'000'000;
+    slave = slave || u.dev_ns - u.acq_ns == 37 * kS;
+  }
+  EXPECT_TRUE(listening && uncalibrated && slave);
+}
+
+// Exposure changed while streaming: the camera reads back the new value; the fault is recorded.
+TEST_F(GigeChaos, ExposureChangeIsTheCamerasOwn) {
+  auto fake = start({"camera.exposure_change:us=2000@0.8"});
+  auto c = cfg();
+  c.exposure_us = 5000;
+  AravisSource src(c);
+  src.open();
+  EXPECT_EQ(src.feature("ExposureTimeAbs").substr(0, 4), "5000");
+  const Nanos until = monotonic_now_ns() + 1500'000'000;
+  while (monotonic_now_ns() < until) src.next(50);
+  EXPECT_EQ(src.feature("ExposureTimeAbs").substr(0, 4), "2000");
+  src.close();
+  fake.stop(1000);
+  const auto log = truth::read(folder_.truth());
+  ASSERT_EQ(log.faults.size(), 1u);
+  EXPECT_EQ(log.faults[0].kind, "camera.exposure_change");
+}
+
+// Packet loss: the frames that lost a packet are dropped in the truth with the fault, and
+// AravisSource counted incomplete frames.
+TEST_F(GigeChaos, PacketLossIsRecordedPerFrame) {
+  auto fake = start({"camera.packet_loss:p=0.02@0+60"});
+  AravisSource src(cfg());
+  src.open();
+  const Nanos until = monotonic_now_ns() + 1500'000'000;
+  while (monotonic_now_ns() < until) src.next(50);
+  const auto incomplete = src.stats().incomplete;
+  src.close();
+  fake.stop(1000);
+  const auto log = truth::read(folder_.truth());
+  const auto dropped = test::count_fate(log, truth::Fate::kDropped);
+  EXPECT_GT(dropped, 3u);
+  EXPECT_GE(incomplete, 1u);
+  for (const auto& p : log.parts) {
+    if (p.fate == truth::Fate::kDropped) {
+      EXPECT_EQ(p.fault, 1u);
+    }
+  }
+}
+
+// Slow open: nothing answers for 2 s after the first attempt; then an open succeeds.
+TEST_F(GigeChaos, SlowOpenAnswersOnlyAfterItsDelay) {
+  auto fake = start({"camera.slow_open:s=2@0"});
+  AravisSource src(cfg());
+  const Nanos first = monotonic_now_ns();
+  Nanos opened = 0;
+  while (opened == 0 && monotonic_now_ns() < first + 12 * kS) {
+    try {
+      src.open();
+      opened = monotonic_now_ns();
+    } catch (const CameraError&) {
+    }
+  }
+  ASSERT_GT(opened, 0) << "never opened";
+  EXPECT_GE(opened - first, 2 * kS);
+  src.close();
+  fake.stop(1000);
+}
+
+}  // namespace
+}  // namespace sensor_rig::camera
