@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/fault_plan.hpp"
 #include "sensor_rig/common/log.hpp"
 
 namespace sensor_rig::rig {
@@ -169,6 +170,10 @@ void CameraRig::start() {
     if (f.options.program != camera::mock::GigeFakeOptions{}.program && c.realtime_priority > 1)
       f.options.realtime_priority = c.realtime_priority - 1;
     f.camera = c.name;
+    // Under `rig chaos` (RIG_CHAOS_DIR): the camera's faults from the plan, its truth record (only
+    // rig-fake-gige-camera takes them; Aravis's own fake would refuse the options).
+    if (!faults::chaos_plan_path().empty() && f.options.program != camera::mock::GigeFakeOptions{}.program)
+      f.options.chaos = camera::mock::chaos_from_env(c.name);
     try {
       f.process = camera::mock::start_gige_fake(f.options);
       log::info("rig", "mock for camera " + c.name + ": " + f.options.program + " on " + c.source.device + ", pid " +

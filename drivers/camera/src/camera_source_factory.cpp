@@ -2,6 +2,7 @@
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 #include "sensor_rig/camera/mock/fake_v4l2_device.hpp"
 #include "sensor_rig/camera/v4l2_source.hpp"
+#include "sensor_rig/common/fault_plan.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 
 namespace sensor_rig::drivers {
@@ -18,6 +19,8 @@ std::unique_ptr<camera::FrameSource> make_camera_source(const CameraConfig& cfg)
       camera::mock::FakeV4l2Options o;
       o.path = s.device;
       o.formats.push_back({camera::info(s.format).v4l2, s.width, s.height});
+      // Under `rig chaos` (RIG_CHAOS_DIR): its v4l2.* faults and truth record.
+      if (!faults::chaos_plan_path().empty()) o.chaos = camera::mock::chaos_from_env(cfg.name);
       return std::make_unique<camera::V4l2Source>(s, std::make_shared<camera::mock::FakeV4l2Device>(o));
     }
     case K::kGige:
