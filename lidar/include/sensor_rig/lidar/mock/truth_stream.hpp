@@ -37,7 +37,7 @@ class TruthStream final : public PacketStream, public ReplayObserver {
   [[nodiscard]] std::string error() const override;
   void fate(std::int64_t tag, truth::Fate fate, std::uint64_t fault) override;
   void sent(std::int64_t tag, Nanos tx_ns) override;
-  // Writes the parts still pending (never sent: tx 0), the open units and the faults that never
+  // Writes the parts still pending (never sent: tx 0, fate not_sent: the run ended first), the open units and the faults that never
   // acted, then flushes. Called by the destructor if not before.
   void finish();
 
