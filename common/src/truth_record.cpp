@@ -78,8 +78,9 @@ void Writer::part(const PartRecord& r) {
   int n = std::snprintf(buf, sizeof buf,
                         "{\"p\":%" PRIu64 ",\"u\":%" PRId64 ",\"acq\":%" PRId64 ",\"dev\":%" PRId64 ",\"tx\":%" PRId64 ",\"fate\":\"%s\"",
                         r.seq, r.unit, r.acq_ns, r.dev_ns, r.tx_ns, to_string(r.fate).data());
-  n += r.fault != 0 ? std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), ",\"fault\":%" PRIu64 "}\n", r.fault)
-                    : std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), "}\n");
+  if (r.fault != 0) n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), ",\"fault\":%" PRIu64, r.fault);
+  if (r.unit_last > r.unit) n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), ",\"u2\":%" PRId64, r.unit_last);
+  n += std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n), "}\n");
   put(buf, n);
 }
 
@@ -142,6 +143,7 @@ Log read(const std::string& path) {
         r.tx_ns = j.value("tx", Nanos{0});
         if (!parse_fate(j.at("fate").get<std::string>(), r.fate)) throw std::runtime_error("unknown fate");
         r.fault = j.value("fault", std::uint64_t{0});
+        if (j.contains("u2")) r.unit_last = j.at("u2").get<std::int64_t>() + unit_offset;
         log.parts.push_back(r);
       } else if (j.contains("f")) {
         const std::int64_t u = j.value("u", std::int64_t{-1});

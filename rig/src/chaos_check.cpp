@@ -135,14 +135,17 @@ class Checker {
       units.push_back(UnitTruth{u});
     }
     for (const auto& p : log.parts) {
-      const auto it = index.find(p.unit);
-      if (it == index.end()) continue;
-      UnitTruth& u = units[it->second];
       if (p.fate == truth::Fate::kNotSent) continue;
-      ++u.produced;
-      if (p.fate == truth::Fate::kDropped) ++u.lost;
-      if (p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated) ++u.damaged;
-      if (truth::delivered_intact(p.fate) && (u.first_intact_acq == 0 || p.acq_ns < u.first_intact_acq)) u.first_intact_acq = p.acq_ns;
+      // A packet across a scan cut has data in (and is counted by) every unit it touches.
+      for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
+        const auto it = index.find(id);
+        if (it == index.end()) continue;
+        UnitTruth& u = units[it->second];
+        ++u.produced;
+        if (p.fate == truth::Fate::kDropped) ++u.lost;
+        if (p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated) ++u.damaged;
+        if (truth::delivered_intact(p.fate) && (u.first_intact_acq == 0 || p.acq_ns < u.first_intact_acq)) u.first_intact_acq = p.acq_ns;
+      }
     }
     // A device that writes no parts (one part per unit is implied): the unit itself was produced.
     if (log.parts.empty())
@@ -381,7 +384,7 @@ class Checker {
 }  // namespace
 
 bool Result::all_held() const {
-  return std::all_of(invariants.begin(), invariants.end(), [](const auto& kv) { return kv.second; });
+  return campaign_errors.empty() && std::all_of(invariants.begin(), invariants.end(), [](const auto& kv) { return kv.second; });
 }
 
 Result check(const Input& in) { return Checker(in).run(); }
@@ -413,6 +416,7 @@ std::string result_json(const Result& r) {
   j["examples"] = nlohmann::json::array();
   for (const auto& e : r.examples) j["examples"].push_back({{"invariant", e.invariant}, {"topic", e.topic}, {"what", e.what}});
   if (!r.faults_not_injected.empty()) j["faults_not_injected"] = r.faults_not_injected;
+  if (!r.campaign_errors.empty()) j["campaign_errors"] = r.campaign_errors;
   return j.dump();
 }
 
@@ -433,6 +437,7 @@ std::string result_text(const Result& r) {
                   static_cast<unsigned long long>(t.hidden_missing), t.stamp_error_p99_ms, 100 * t.healthy_rate_share);
     o << line;
   }
+  for (const auto& e : r.campaign_errors) o << "ERROR  " << e << '\n';
   for (const auto& [name, held] : r.invariants) {
     o << (held ? "held   " : "BROKEN ") << name << '\n';
     for (const auto& e : r.examples)

@@ -85,6 +85,7 @@ struct Result {
   std::vector<Example> examples;           // the first few per invariant
   std::map<std::string, std::uint64_t> faults;             // injected, by kind (from the truth records)
   std::map<std::string, std::uint64_t> faults_not_injected;  // planned, never recorded by a mock
+  std::vector<std::string> campaign_errors;  // the rig did not stop, a process ended badly: no pass
   [[nodiscard]] bool all_held() const;
 };
 

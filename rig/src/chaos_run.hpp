@@ -32,8 +32,9 @@ std::vector<faults::Device> devices_of(const RigConfig& cfg);
 std::map<std::string, TopicExpectation> expectations_of(const RigConfig& cfg);
 
 // The plan for these options (seeded): timed specs exactly, untimed kinds at random times, or a
-// random campaign of every injected kind. Throws std::invalid_argument for a bad or not injected spec.
-std::vector<faults::FaultEvent> make_plan(const Options& o, const std::vector<faults::Device>& devices);
+// random campaign of every injected kind, fitted to what each device's model can do. Throws
+// std::invalid_argument for a bad or not injected spec.
+std::vector<faults::FaultEvent> make_plan(const Options& o, const std::vector<faults::Device>& devices, const RigConfig& cfg);
 
 // Exit code: 0 every invariant held, 1 one broken or the campaign failed, 2 bad usage / config.
 int run(const Options& o);

@@ -109,7 +109,7 @@ TEST(TruthRecord, WritesReadsAndSurvivesAKilledWriterAndARestart) {
     truth::Writer w(path, h);
     w.unit({0, 1000, 10, 2});
     w.part({0, 0, 1000, 10, 1100, truth::Fate::kSent, 0});
-    w.part({1, 0, 1500, 15, 0, truth::Fate::kDropped, 4});
+    w.part({1, 0, 1500, 15, 0, truth::Fate::kDropped, 4, 1});  // across the cut into unit 1
     w.fault({4, "lidar.loss_burst", 1500, 1500, 0, "packets=1 \"quoted\""});
   }
   {
@@ -125,6 +125,8 @@ TEST(TruthRecord, WritesReadsAndSurvivesAKilledWriterAndARestart) {
   ASSERT_EQ(log.parts.size(), 2u);
   EXPECT_EQ(log.parts[1].fate, truth::Fate::kDropped);
   EXPECT_EQ(log.parts[1].fault, 4u);
+  EXPECT_EQ(log.parts[1].unit_last, 1);
+  EXPECT_EQ(log.parts[0].unit_last, -1);
   ASSERT_EQ(log.faults.size(), 1u);
   EXPECT_EQ(log.faults[0].detail, "packets=1 \"quoted\"");
   EXPECT_TRUE(log.cut_last_line);

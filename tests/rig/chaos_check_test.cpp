@@ -106,6 +106,17 @@ TEST(ChaosCheck, MissingPacketsThatArrivedArePhantoms) {
   drop_part(in, 20, 5, truth::Fate::kCorrupted);
   in.samples[20].missing_packets = 1;
   EXPECT_TRUE(check(in).invariants.at("no_phantom_loss"));
+  // A packet across the cut (its data in scans 20 and 21) lost: both scans rightly count it missing.
+  in = honest();
+  in.truths[0].parts[20 * kParts + kParts - 1].unit_last = 21;
+  drop_part(in, 20, kParts - 1);
+  in.samples[20].missing_packets = 1;
+  in.samples[21].missing_packets = 1;
+  Result straddle = check(in);
+  EXPECT_TRUE(straddle.invariants.at("no_phantom_loss")) << result_text(straddle);
+  EXPECT_TRUE(straddle.invariants.at("accounted")) << result_text(straddle);
+  in.samples[21].missing_packets = 0;  // scan 21 hides it
+  EXPECT_FALSE(check(in).invariants.at("accounted"));
   // More units counted lost than were not published.
   in = honest();
   in.counted_lost[kTopic] = 3;

@@ -85,7 +85,7 @@ std::optional<StreamPacket> TruthStream::next() {
     if (!fp.device || !p.truth.data) return StreamPacket{p.time_ns, p.bytes, p.position, -1, -1.0};
     Pending& slot = ring_[next_seq_ % kRing];
     if (slot.live) put(slot);
-    slot.r = truth::PartRecord{next_seq_, fp.units.first, p.truth.acq_ns, p.truth.dev_ns, 0, fp.fate, fp.fault};
+    slot.r = truth::PartRecord{next_seq_, fp.units.first, p.truth.acq_ns, p.truth.dev_ns, 0, fp.fate, fp.fault, fp.units.last};
     slot.live = true;
     const auto tag = static_cast<std::int64_t>(next_seq_++);
     if (fp.fate == truth::Fate::kNotSent) {  // the sensor did not produce it

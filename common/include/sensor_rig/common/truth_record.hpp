@@ -8,7 +8,8 @@
 //    "unit":"scan","clock":"..."}
 //   {"u":12,"acq":T,"dev":T,"parts":K}                    unit 12: true acquisition (vehicle ns), device
 //                                                         clock reading, parts it was made of
-//   {"p":SEQ,"u":12,"acq":T,"dev":T,"tx":T,"fate":"sent"[,"fault":ID]}   one part and what became of it
+//   {"p":SEQ,"u":12,"acq":T,"dev":T,"tx":T,"fate":"sent"[,"fault":ID][,"u2":13]}   one part and what became
+//                                                         of it (u2: the last unit it has data in, when several)
 //   {"f":ID,"kind":"lidar.reorder","at":T,"until":T,"u":12,"detail":"..."}  one fault occurrence
 //
 // Times are vehicle time (CLOCK_REALTIME ns) except "dev", the device's own clock as it stamps. Writing
@@ -65,6 +66,8 @@ struct PartRecord {
   Nanos tx_ns = 0;   // handed to the socket (vehicle time); 0 when never sent
   Fate fate = Fate::kSent;
   std::uint64_t fault = 0;  // the fault occurrence that decided the fate, 0 = none
+  std::int64_t unit_last = -1;  // a part with data in several units (a packet across a scan cut): the
+                                // last of them ("u2"); -1 = only `unit`
 };
 
 struct FaultRecord {
