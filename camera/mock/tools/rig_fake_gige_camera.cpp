@@ -252,6 +252,7 @@ int main(int argc, char** argv) {
   fake.genicam = genicam;
   fake.fill.chaos = chaos.get();
   mock::set_gige_fake_chaos(chaos.get());
+  chaos->tick();  // faults due at start (slow open, dead) hold before the first request is answered
   if (!fake.start()) {
     std::fprintf(stderr, "rig-fake-gige-camera: failed to start on %s\n", address.c_str());
     mock::set_gige_fake_chaos(nullptr);
