@@ -46,8 +46,11 @@ bool parse_fate(std::string_view s, Fate& out) noexcept {
 Writer::Writer(const std::string& path, const Header& h) : path_(path) {
   // Appending: a mock killed and restarted (host.kill_mock) continues its device's record after a new
   // header; the reader keeps the two runs' unit ids apart.
-  file_ = std::fopen(path.c_str(), "a");
+  file_ = std::fopen(path.c_str(), "a+");
   if (file_ == nullptr) throw std::runtime_error("cannot create truth record " + path);
+  // A predecessor killed mid-line left it unterminated: end it, so that our header is a line of its own.
+  if (std::fseek(file_, -1, SEEK_END) == 0 && std::fgetc(file_) != '\n') std::fputc('\n', file_);
+  std::fseek(file_, 0, SEEK_END);
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 16);
   const std::string line = "{\"truth\":1,\"device\":\"" + escaped(h.device) + "\",\"class\":\"" + escaped(h.device_class) +
                            "\",\"model\":\"" + escaped(h.model) + "\",\"topic\":\"" + escaped(h.topic) + "\",\"unit\":\"" +
@@ -115,15 +118,23 @@ Log read(const std::string& path) {
     ++n;
     if (line.empty()) continue;
     const bool last = in.peek() == std::char_traits<char>::eof();
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(line);
-    } catch (const nlohmann::json::exception& e) {
-      if (last) {  // a writer killed mid-line: that line never happened
+    nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded()) {
+      // A writer killed mid-line: the line never happened. It is the last line, or the mock was
+      // restarted and its new header follows.
+      const bool restart_follows = !last && in.peek() == '{' && [&] {
+        const auto pos = in.tellg();
+        std::string next;
+        std::getline(in, next);
+        in.seekg(pos);
+        return next.rfind("{\"truth\"", 0) == 0;
+      }();
+      if (last || restart_follows) {
         log.cut_last_line = true;
-        break;
+        ++log.cut_lines;
+        continue;
       }
-      throw std::runtime_error(path + ":" + std::to_string(n) + ": " + e.what());
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": not a JSON object: " + line.substr(0, 80));
     }
     try {
       if (have_header && j.contains("truth")) {

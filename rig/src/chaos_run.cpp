@@ -119,18 +119,29 @@ std::vector<truth::Log> read_truths(const fs::path& dir) {
   return out;
 }
 
-// The monitor's last --json line per topic: what it says at the end.
-std::map<std::string, MonitorTotals> monitor_totals(const std::vector<std::string>& lines,
-                                                     std::map<std::string, std::uint64_t>& counted_lost) {
+struct MonitorLine {
+  Nanos mono_ns;  // when we read it (the monitor prints once a second)
+  std::string text;
+};
+
+// The monitor's last --json line per topic (what it says at the end), and the units the rig itself
+// counted lost within the judged window: its cumulative `counted_lost` at the window's end minus at
+// its start (a driver that knows a scan or frame never completed; issue 26's monitor publishes it).
+std::map<std::string, MonitorTotals> monitor_totals(const std::vector<MonitorLine>& lines, Nanos begin_mono, Nanos end_mono,
+                                                    std::map<std::string, std::uint64_t>& counted_lost) {
   std::map<std::string, MonitorTotals> out;
+  std::map<std::string, std::uint64_t> at_begin, at_end;
   for (const auto& line : lines) {
-    const auto j = nlohmann::json::parse(line, nullptr, false);
+    const auto j = nlohmann::json::parse(line.text, nullptr, false);
     if (j.is_discarded() || !j.is_object() || !j.contains("topic")) continue;
     const std::string topic = j["topic"].get<std::string>();
     out[topic] = MonitorTotals{j.value("received", std::uint64_t{0}), j.value("lost", std::uint64_t{0})};
-    // Units the rig itself counted lost (a driver that knows a scan or frame never completed).
-    if (j.contains("counted_lost")) counted_lost[topic] = j["counted_lost"].get<std::uint64_t>();
+    if (!j.contains("counted_lost")) continue;
+    const auto n = j["counted_lost"].get<std::uint64_t>();
+    if (line.mono_ns <= begin_mono) at_begin[topic] = n;
+    if (line.mono_ns <= end_mono) at_end[topic] = n;
   }
+  for (const auto& [topic, n] : at_end) counted_lost[topic] = n - std::min(n, at_begin[topic]);
   return out;
 }
 
@@ -280,10 +291,10 @@ int run(const Options& o) {
   HostFaults host(plan.events, plan.epoch_mono_ns, epoch_vehicle, (dir.path() / "truth" / "host.jsonl").string());
   host.start();
 
-  std::vector<std::string> monitor_lines;
+  std::vector<MonitorLine> monitor_lines;
   Nanos next_progress = monotonic_now_ns();
   while (monitor.running()) {
-    for (auto& l : monitor.read_lines()) monitor_lines.push_back(std::move(l));
+    for (auto& l : monitor.read_lines()) monitor_lines.push_back({monotonic_now_ns(), std::move(l)});
     if (shutdown_requested()) break;
     if (monotonic_now_ns() >= next_progress) {
       const double t = static_cast<double>(monotonic_now_ns() - plan.epoch_mono_ns) * 1e-9;
@@ -294,7 +305,7 @@ int run(const Options& o) {
     }
     ::usleep(100'000);
   }
-  for (auto& l : monitor.read_lines()) monitor_lines.push_back(std::move(l));
+  for (auto& l : monitor.read_lines()) monitor_lines.push_back({monotonic_now_ns(), std::move(l)});
   host.stop();
   if (shutdown_requested()) {
     std::fprintf(stderr, "chaos: interrupted, no verdict\n");
@@ -321,12 +332,14 @@ int run(const Options& o) {
   }
   in.events = plan.events;
   in.epoch_vehicle_ns = epoch_vehicle;
-  in.monitor = monitor_totals(monitor_lines, in.counted_lost);
-  in.expected = expectations_of(cfg);
   // Judged: units made from 0.5 s into the plan to 2.5 s before its end (the monitor decides a
   // sample lost 2 s after its stamps; the last ones are still in flight when it stops).
-  in.window_begin_ns = epoch_vehicle + 500'000'000;
-  in.window_end_ns = epoch_vehicle + static_cast<Nanos>((o.duration_s - 2.5) * 1e9);
+  constexpr Nanos kLead = 500'000'000;
+  const Nanos window_ns = static_cast<Nanos>((o.duration_s - 2.5) * 1e9);
+  in.window_begin_ns = epoch_vehicle + kLead;
+  in.window_end_ns = epoch_vehicle + window_ns;
+  in.monitor = monitor_totals(monitor_lines, plan.epoch_mono_ns + kLead, plan.epoch_mono_ns + window_ns, in.counted_lost);
+  in.expected = expectations_of(cfg);
   Result r = check(in);
   r.campaign_errors = campaign_errors;
   std::fputs(result_text(r).c_str(), stderr);

@@ -112,11 +112,12 @@ TEST(TruthRecord, WritesReadsAndSurvivesAKilledWriterAndARestart) {
     w.part({1, 0, 1500, 15, 0, truth::Fate::kDropped, 4, 1});  // across the cut into unit 1
     w.fault({4, "lidar.loss_burst", 1500, 1500, 0, "packets=1 \"quoted\""});
   }
+  std::ofstream(path, std::ios::app) << "{\"p\":2,\"u\":0,\"ac";  // killed mid-line, then restarted
   {
     truth::Writer w(path, h);  // the mock restarted: same unit id again
     w.unit({0, 9000, 90, 2});
   }
-  std::ofstream(path, std::ios::app) << "{\"p\":2,\"u\":0,\"ac";  // killed mid-line
+  std::ofstream(path, std::ios::app) << "{\"p\":3,\"u\":0,\"ac";  // killed mid-line for good
   const truth::Log log = truth::read(path);
   EXPECT_EQ(log.header.model, "VLP-32C");
   ASSERT_EQ(log.units.size(), 2u);
@@ -130,6 +131,7 @@ TEST(TruthRecord, WritesReadsAndSurvivesAKilledWriterAndARestart) {
   ASSERT_EQ(log.faults.size(), 1u);
   EXPECT_EQ(log.faults[0].detail, "packets=1 \"quoted\"");
   EXPECT_TRUE(log.cut_last_line);
+  EXPECT_EQ(log.cut_lines, 2);
   // A bad line in the middle is an error naming file:line.
   const std::string bad = dir.write("bad.jsonl", "{\"truth\":1}\n{\"x\":1}\n{\"u\":1,\"acq\":2}\n");
   EXPECT_THROW(truth::read(bad), std::runtime_error);

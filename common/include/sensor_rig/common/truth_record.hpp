@@ -113,6 +113,7 @@ struct Log {
   std::vector<PartRecord> parts;
   std::vector<FaultRecord> faults;
   bool cut_last_line = false;  // the writer was killed mid-line (the line is left out)
+  int cut_lines = 0;           // such lines: at the end, or before a restarted writer's header
   int restarts = 0;            // headers after the first: the mock was restarted (unit ids of each run
                                // are offset by 2^40 per restart, so they never collide)
 };
