@@ -101,6 +101,41 @@ TEST(Transport, ListeningBusRelaysBetweenAllPeers) {
   EXPECT_THROW(can::open_transport("unix:" + path), can::TransportError);
 }
 
+// The mock ECU (the bus owner) killed and restarted under `rig chaos` (host.kill_mock): a peer does not
+// die with it, as a node on a real CAN bus would not. It reads bus-off while the owner is gone (sends
+// refused: the bridge disengages), and is back on the bus, frames flowing, once the owner returns.
+TEST(Transport, APeerOutlivesTheBusOwnerAndRejoinsWhenItReturns) {
+  const std::string path = temp_path("canbus_restart");
+  auto bus = can::open_transport("unix-listen:" + path);
+  auto peer = can::open_transport("unix:" + path);
+  can::RxFrame rx;
+  ASSERT_EQ(bus->send(frame(0x10, 1)), can::IoStatus::kOk);
+  ASSERT_EQ(peer->receive(rx, 1000), can::IoStatus::kOk);
+  bus.reset();  // the ECU died
+  EXPECT_EQ(peer->receive(rx, 200), can::IoStatus::kTimeout) << "not kClosed: the bus is still there";
+  EXPECT_EQ(peer->bus_state(), can::BusState::kBusOff);
+  EXPECT_EQ(peer->send(frame(0x11, 1)), can::IoStatus::kBusOff);
+  EXPECT_EQ(peer->stats().bus_off_events.load(), 1U);
+  bus = can::open_transport("unix-listen:" + path);  // restarted
+  const auto t0 = std::chrono::steady_clock::now();
+  while (peer->bus_state() == can::BusState::kBusOff && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(5))
+    (void)peer->receive(rx, 20);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(500)) << "reconnects every 100 ms";
+  ASSERT_EQ(peer->bus_state(), can::BusState::kActive);
+  ASSERT_EQ(peer->send(frame(0x12, 2)), can::IoStatus::kOk);
+  ASSERT_EQ(bus->receive(rx, 1000), can::IoStatus::kOk);
+  EXPECT_EQ(rx.frame.id, 0x12U);
+  ASSERT_EQ(bus->send(frame(0x13, 3)), can::IoStatus::kOk);
+  ASSERT_EQ(peer->receive(rx, 1000), can::IoStatus::kOk);
+  EXPECT_EQ(rx.frame.id, 0x13U);
+  // An inherited descriptor has nothing to reconnect to: its end is the end.
+  int sv[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, sv), 0);
+  auto a = can::open_transport("fd:" + std::to_string(sv[0]));
+  ::close(sv[1]);
+  EXPECT_EQ(a->receive(rx, 200), can::IoStatus::kClosed);
+}
+
 TEST(Transport, ListeningBusSendsAndReceivesFromTwoThreadsWhilePeersComeAndGo) {
   // The bridge sends from two threads while a third receives; peers join and leave meanwhile.
   const std::string path = temp_path("canbus_mt");

@@ -37,7 +37,8 @@ int remaining_ms(Nanos deadline) {
 
 }  // namespace
 
-SeqpacketTransport::SeqpacketTransport(UniqueFd fd, std::string name) : fd_(std::move(fd)), name_(std::move(name)) {
+SeqpacketTransport::SeqpacketTransport(UniqueFd fd, std::string name, std::string reconnect_path)
+    : fd_(std::move(fd)), name_(std::move(name)), reconnect_path_(std::move(reconnect_path)) {
   if (!fd_) throw TransportError("invalid descriptor for " + name_);
   detail::enable_timestamps(fd_.get(), name_, stats_);
 }
@@ -47,15 +48,51 @@ IoStatus SeqpacketTransport::send(const Frame& f) noexcept {
     ++stats_.send_refused;
     return IoStatus::kBusOff;
   }
-  return detail::send_frame(fd_.get(), f, stats_);
+  std::lock_guard lock(fd_mu_);
+  const IoStatus r = detail::send_frame(fd_.get(), f, stats_);
+  // The bus owner went away between our reads: the receiving thread notices and reconnects.
+  return r == IoStatus::kClosed && !reconnect_path_.empty() ? IoStatus::kBusOff : r;
+}
+
+bool SeqpacketTransport::try_reconnect() noexcept {
+  const Nanos now = monotonic_now_ns();
+  if (now < next_attempt_ns_) return false;
+  next_attempt_ns_ = now + 100'000'000;
+  UniqueFd fd(::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0));
+  if (!fd) return false;
+  sockaddr_un a{};
+  a.sun_family = AF_UNIX;
+  std::memcpy(a.sun_path, reconnect_path_.data(), std::min(reconnect_path_.size(), sizeof a.sun_path - 1));
+  if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) return false;
+  detail::enable_timestamps(fd.get(), name_, stats_);
+  {
+    std::lock_guard lock(fd_mu_);
+    fd_ = std::move(fd);
+  }
+  state_ = BusState::kActive;
+  return true;
 }
 
 IoStatus SeqpacketTransport::receive(RxFrame& out, int timeout_ms) noexcept {
   const Nanos deadline = deadline_after(timeout_ms);
   while (true) {
+    if (state_ == BusState::kBusOff && !reconnect_path_.empty() && !try_reconnect()) {
+      // Off the bus: nothing arrives; wait out the timeout in short steps so a reconnect is prompt.
+      const int left = remaining_ms(deadline);
+      if (left == 0) return IoStatus::kTimeout;
+      timespec ts{0, static_cast<long>(std::min(left < 0 ? 10 : left, 10)) * 1'000'000L};
+      ::nanosleep(&ts, nullptr);
+      continue;
+    }
     const IoStatus w = detail::wait_readable(fd_.get(), remaining_ms(deadline));
     if (w != IoStatus::kOk) return w;
-    const IoStatus r = detail::recv_frame(fd_.get(), out, stats_);
+    IoStatus r = detail::recv_frame(fd_.get(), out, stats_);
+    if (r == IoStatus::kClosed && !reconnect_path_.empty()) {
+      state_ = BusState::kBusOff;  // the bridge sees it as a bus-off: disengaged, nothing sent
+      ++stats_.bus_off_events;
+      next_attempt_ns_ = 0;
+      continue;
+    }
     if (r == IoStatus::kTimeout || r == IoStatus::kInvalid) {
       if (remaining_ms(deadline) == 0) return IoStatus::kTimeout;
       continue;
@@ -72,7 +109,7 @@ std::unique_ptr<Transport> SeqpacketTransport::connect(const std::string& path) 
   if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
     throw TransportError(errno_text("connect " + path));
   }
-  return std::make_unique<SeqpacketTransport>(std::move(fd), "unix:" + path);
+  return std::make_unique<SeqpacketTransport>(std::move(fd), "unix:" + path, path);
 }
 
 // ---- bus owner -------------------------------------------------------------------------------

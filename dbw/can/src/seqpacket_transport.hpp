@@ -9,9 +9,13 @@
 namespace sensor_rig::dbw::can {
 
 // One connected SOCK_SEQPACKET end; each record is one kernel can_frame/canfd_frame.
+// Connected to a bus by path (unix:PATH), the end outlives the bus owner: a real CAN bus does not
+// vanish when an ECU dies, so when the owner goes away (the mock ECU killed or restarted) the bus
+// reads as bus-off (sends refused, nothing received) and the end reconnects every 100 ms; back on
+// the bus it is active again. Ends without a path (fd:N, socketpair) report kClosed.
 class SeqpacketTransport final : public Transport {
  public:
-  SeqpacketTransport(UniqueFd fd, std::string name);
+  SeqpacketTransport(UniqueFd fd, std::string name, std::string reconnect_path = {});
   IoStatus send(const Frame& f) noexcept override;
   IoStatus receive(RxFrame& out, int timeout_ms) noexcept override;
   [[nodiscard]] int poll_fd() const noexcept override { return fd_.get(); }
@@ -19,8 +23,12 @@ class SeqpacketTransport final : public Transport {
   static std::unique_ptr<Transport> connect(const std::string& path);
 
  private:
+  bool try_reconnect() noexcept;  // receiving thread only
   UniqueFd fd_;
   std::string name_;
+  std::string reconnect_path_;
+  std::mutex fd_mu_;         // the receiving thread replaces fd_ while others send on it
+  Nanos next_attempt_ns_ = 0;
 };
 
 // The bus: listens on a path; frames from any peer reach the owner (receive) and every other peer;
