@@ -193,12 +193,23 @@ std::vector<std::string> injected_kinds() {
           "host.cpu_hog",        "host.kill_mock",       "host.stall_mock"};
 }
 
+std::string not_all_mocks(const RigConfig& cfg) {
+  for (const auto& l : cfg.lidars)
+    if (l.mock.kind == LidarMockConfig::Kind::kNone) return "lidar '" + l.name + "' is a real device (no mock:)";
+  for (const auto& c : cfg.cameras)
+    if (c.mock.kind == drivers::CameraMockConfig::Kind::kNone) return "camera '" + c.name + "' is a real device (no mock:)";
+  if (cfg.dbw.enabled && !cfg.dbw.mock_ecu) return "dbw drives a real ECU (mock_ecu: false)";
+  return {};
+}
+
 std::vector<faults::Device> devices_of(const RigConfig& cfg) {
   std::vector<faults::Device> d;
   for (const auto& l : cfg.lidars)
     if (l.mock.kind != LidarMockConfig::Kind::kNone) d.push_back({l.name, DeviceClass::kLidar, true});
+  // The in-process Aravis fakes write no truth and take no faults (camera/README.md): not judged.
   for (const auto& c : cfg.cameras)
-    d.push_back({c.name, c.source.backend == "v4l2" ? DeviceClass::kV4l2 : DeviceClass::kCamera, false});
+    if (c.mock.kind == drivers::CameraMockConfig::Kind::kGige || c.mock.kind == drivers::CameraMockConfig::Kind::kV4l2Fake)
+      d.push_back({c.name, c.source.backend == "v4l2" ? DeviceClass::kV4l2 : DeviceClass::kCamera, false});
   if (cfg.dbw.enabled && cfg.dbw.mock_ecu) d.push_back({"paravan", DeviceClass::kDbw, true});
   return d;
 }
@@ -254,7 +265,15 @@ int run(const Options& o) {
     std::fprintf(stderr, "%s\n", err.what());
     return 2;
   }
+  // Faults on a real car's devices are not this command's business: every device must be a mock.
+  if (const std::string why = not_all_mocks(cfg); !why.empty()) {
+    std::fprintf(stderr, "error: rig chaos runs the rig on its mocks: %s\n", why.c_str());
+    return 2;
+  }
   const auto devices = devices_of(cfg);
+  for (const auto& c : cfg.cameras)
+    if (c.mock.kind == drivers::CameraMockConfig::Kind::kAravisInProcess)
+      std::fprintf(stderr, "chaos: camera '%s' (in-process Aravis fake) writes no truth: not judged, no faults\n", c.name.c_str());
   faults::Plan plan;
   try {
     plan.events = make_plan(o, devices, cfg);

@@ -27,6 +27,8 @@ struct Options {
 // prove nothing).
 std::vector<std::string> injected_kinds();
 
+// Why a config cannot run under chaos (a real device in it), or "".
+std::string not_all_mocks(const RigConfig& cfg);
 // The devices of a config as the fault vocabulary sees them, and what the judge expects of each topic.
 std::vector<faults::Device> devices_of(const RigConfig& cfg);
 std::map<std::string, TopicExpectation> expectations_of(const RigConfig& cfg);

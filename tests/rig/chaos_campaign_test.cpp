@@ -49,6 +49,27 @@ std::set<std::string> injected_kinds() {
   return kinds;
 }
 
+// Refused before anything starts (exit 2, the reason said): a real device in the config, a spec that
+// is wrong, a kind no mock injects.
+TEST(ChaosCampaign, BadCampaignsAreRefusedWithTheReason) {
+  if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
+  test::TempDir dir;
+  const std::string real = dir.write("real.yaml",
+                                     "rig: {name: real}\nlidars:\n  - {name: roof, model: VLP-16, port: 2368}\n");
+  auto r = test::run_rig("chaos " + real + " --duration 10");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("lidar 'roof' is a real device"), std::string::npos) << r.err;
+  const std::string mock = (test::source_dir() / "config/mock_rig.yaml").string();
+  for (const auto& [spec, says] : std::vector<std::pair<std::string, std::string>>{
+           {"lidar.reordr", "unknown fault kind 'lidar.reordr'"},
+           {"lidar.reorder:speed=2", "takes no parameter 'speed'"},
+           {"camera.padded_rows", "no mock injects camera.padded_rows"}}) {
+    r = test::run_rig("chaos " + mock + " --duration 10 --faults '" + spec + "'");
+    EXPECT_EQ(r.code, 2) << spec;
+    EXPECT_NE(r.err.find(says), std::string::npos) << spec << ": " << r.err;
+  }
+}
+
 TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
   if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
   const std::set<std::string> kinds = injected_kinds();
