@@ -5,9 +5,13 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
+#include "sensor_rig/dds/security_init.hpp"
+#include "security_checks.hpp"
 #include "security_qos.hpp"
 
 #ifndef RIG_DDS_SECURITY_PLUGIN_DIR
@@ -29,15 +33,23 @@ SecurityConfig security_files(const std::string& dir, const std::string& identit
   c.identity_certificate = (d / identity / "cert.pem").string();
   c.private_key = (d / identity / "key.pem").string();
   c.permissions = (d / identity / "permissions.p7s").string();
+  c.crl = (d / "identity_crl.pem").string();
   std::string missing;
   for (const auto* f : {&c.identity_ca, &c.permissions_ca, &c.governance, &c.identity_certificate, &c.private_key,
-                        &c.permissions}) {
+                        &c.permissions, &c.crl}) {
     if (!fs::is_regular_file(*f)) missing += (missing.empty() ? "" : ", ") + *f;
   }
   if (!missing.empty()) {
     throw std::runtime_error("DDS Security: identity '" + identity + "' in '" + dir + "': missing " + missing +
-                             " (`rig security init DIR` makes a CA, identities and signed permissions)");
+                             " (`rig security init DIR` makes a CA, identities, signed permissions and the "
+                             "revocation list; for a directory made before the list existed, `rig security revoke "
+                             "DIR` without a name writes an empty one)");
   }
+  check_private_key_mode(c.private_key, identity);
+  std::ifstream gov(c.governance, std::ios::binary);
+  std::ostringstream text;
+  text << gov.rdbuf();
+  check_governance(text.str(), c.governance);  // the signed text, as Cyclone will read it
   return c;
 }
 
@@ -86,6 +98,9 @@ void set_security_properties(dds_qos_t* qos, const SecurityConfig& c) {
   dds_qset_prop(qos, "dds.sec.access.permissions_ca", uri(c.permissions_ca).c_str());
   dds_qset_prop(qos, "dds.sec.access.governance", uri(c.governance).c_str());
   dds_qset_prop(qos, "dds.sec.access.permissions", uri(c.permissions).c_str());
+  // Cyclone 0.10.2's own name for it (ORG_ECLIPSE_CYCLONEDDS_SEC_AUTH_CRL): the authentication
+  // plugin checks this participant's certificate and every peer's against it.
+  if (!c.crl.empty()) dds_qset_prop(qos, "org.eclipse.cyclonedds.sec.auth.crl", uri(c.crl).c_str());
 }
 
 }  // namespace sensor_rig::dds

@@ -88,7 +88,8 @@ std::string governance_xml(bool allow_unauthenticated, Protection command_protec
 
 // Grants per role. Only the command topic is access controlled (governance); the other topics are
 // listed so a grant reads as what the node does.
-std::string permissions_xml(const std::string& identity, const std::string& subject, Role role, int days) {
+std::string permissions_xml(const std::string& identity, const std::string& subject, Role role,
+                            std::time_t not_after) {
   const std::time_t now = std::time(nullptr);
   std::string rule;
   switch (role) {
@@ -110,7 +111,7 @@ std::string permissions_xml(const std::string& identity, const std::string& subj
        "xsi:noNamespaceSchemaLocation=\"http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd\">\n"
        "  <permissions>\n    <grant name=\""
     << identity << "\">\n      <subject_name>" << subject << "</subject_name>\n      <validity><not_before>"
-    << utc(now - 86400) << "</not_before><not_after>" << utc(now + static_cast<std::time_t>(days) * 86400)
+    << utc(now - 86400) << "</not_before><not_after>" << utc(not_after)
     << "</not_after></validity>\n      <allow_rule>" << kDomains << rule
     << "</allow_rule>\n      <default>DENY</default>\n    </grant>\n  </permissions>\n</dds>\n";
   return x.str();

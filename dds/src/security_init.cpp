@@ -1,6 +1,7 @@
 // `rig security init DIR`: CAs, identities, governance and permissions (layout: security.hpp).
+#include <algorithm>
+#include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <set>
 #include <stdexcept>
 
@@ -20,11 +21,17 @@ void check_name(const std::string& n) {
   }
 }
 
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::trunc);
-  out << text;
-  if (!out.flush()) throw std::runtime_error("cannot write '" + path + "'");
+void write_text(const std::string& path, const std::string& text) { x509::write_file(path, text, 0644); }
+
+// A folder of ours, 0700 (identities' keys, the CA keys): made if missing, never a symlink (we would
+// write the keys wherever it points).
+void private_dir(const fs::path& d) {
+  if (fs::is_symlink(d)) throw std::runtime_error("'" + d.string() + "' is a symlink; refusing to write keys into it");
+  fs::create_directories(d);
+  fs::permissions(d, fs::perms::owner_all, fs::perm_options::replace);
 }
+
+std::time_t days_from_now(int days) { return std::time(nullptr) + static_cast<std::time_t>(days) * 86400; }
 
 // The signers of a directory: identity CA and permissions CA, each with its key.
 struct Authorities {
@@ -34,17 +41,21 @@ struct Authorities {
   x509::Key perm_ca_key;
 };
 
-// DIR/<name>/: key and certificate (signed by the identity CA), grants (signed by the permissions CA).
+// DIR/<name>/: key and certificate (signed by the identity CA), grants (signed by the permissions CA),
+// valid for `days` but never beyond either CA (a peer would refuse the identity then anyway).
 void write_identity(const fs::path& dir, const std::string& name, Role role, const std::string& organization,
                     KeyType key_type, int days, const Authorities& ca, std::vector<std::string>& written) {
   const auto out = [&](const fs::path& p) { return written.emplace_back(p.string()); };
   const fs::path d = dir / name;
-  fs::create_directories(d);
+  private_dir(d);
+  const std::time_t not_after = std::min({days_from_now(days), x509::not_after_of(ca.id_ca.get()),
+                                          x509::not_after_of(ca.perm_ca.get())});
   const auto key = x509::make_key(key_type);
-  const auto cert = x509::make_cert(name, organization, key.get(), ca.id_ca.get(), ca.id_ca_key.get(), days, false);
+  const auto cert =
+      x509::make_cert(name, organization, key.get(), ca.id_ca.get(), ca.id_ca_key.get(), not_after, false);
   x509::write_cert(out(d / "cert.pem"), cert.get());
   x509::write_key(out(d / "key.pem"), key.get());
-  const std::string perms = permissions_xml(name, identity_subject(name, organization), role, days);
+  const std::string perms = permissions_xml(name, identity_subject(name, organization), role, not_after);
   write_text(out(d / "permissions.xml"), perms);
   x509::write_smime(out(d / "permissions.p7s"), perms, ca.perm_ca.get(), ca.perm_ca_key.get());
 }
@@ -53,6 +64,14 @@ void write_identity(const fs::path& dir, const std::string& name, Role role, con
 std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
   if (o.dir.empty()) throw std::runtime_error("security init: no directory given");
   if (o.days < 1 || o.days > 36500) throw std::runtime_error("security init: --days must be 1..36500");
+  if (o.ca_days < 1 || o.ca_days > 36500) throw std::runtime_error("security init: --ca-days must be 1..36500");
+  if (o.command_protection == Protection::kNone && o.allow_unauthenticated) {
+    throw std::runtime_error(
+        "security init: --cmd-protection none with unauthenticated participants allowed would let any participant "
+        "without credentials drive: Cyclone 0.10.2 matches their writers with a topic that has no submessage "
+        "protection without asking access control. Use sign, encrypt, sign-origin or encrypt-origin, or add "
+        "--no-unauthenticated (then ordinary ROS 2 nodes see none of the secured nodes' topics)");
+  }
   if (o.organization.empty() || o.organization.find_first_of(",=+<>#;\"\\") != std::string::npos)
     throw std::runtime_error("security init: organization '" + o.organization + "' must be plain text");
   std::vector<std::pair<std::string, Role>> ids{{o.bridge, Role::kBridge}};
@@ -68,8 +87,8 @@ std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
     throw std::runtime_error("security init: '" + o.dir +
                              "' already holds a CA (identity_ca.pem); --force replaces everything in it");
   }
-  fs::create_directories(dir / "private");
-  fs::permissions(dir / "private", fs::perms::owner_all, fs::perm_options::replace);
+  if (!fs::exists(dir)) private_dir(dir);  // a folder given to us keeps its mode
+  private_dir(dir / "private");
   std::vector<std::string> written;
   const auto out = [&](const fs::path& p) { return written.emplace_back(p.string()); };
 
@@ -77,15 +96,19 @@ std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
   // the permissions key can stay with whoever decides grants.
   Authorities ca;
   ca.id_ca_key = x509::make_key(o.key_type);
-  ca.id_ca = x509::make_cert("sensor-rig identity CA", o.organization, ca.id_ca_key.get(), nullptr, nullptr, o.days,
-                             true);
+  const std::time_t ca_not_after = days_from_now(o.ca_days);
+  ca.id_ca = x509::make_cert("sensor-rig identity CA", o.organization, ca.id_ca_key.get(), nullptr, nullptr,
+                             ca_not_after, true);
   ca.perm_ca_key = x509::make_key(o.key_type);
   ca.perm_ca = x509::make_cert("sensor-rig permissions CA", o.organization, ca.perm_ca_key.get(), nullptr, nullptr,
-                               o.days, true);
+                               ca_not_after, true);
   x509::write_cert(out(dir / "identity_ca.pem"), ca.id_ca.get());
   x509::write_key(out(dir / "private/identity_ca_key.pem"), ca.id_ca_key.get());
   x509::write_cert(out(dir / "permissions_ca.pem"), ca.perm_ca.get());
   x509::write_key(out(dir / "private/permissions_ca_key.pem"), ca.perm_ca_key.get());
+  // Nobody revoked yet; Cyclone wants the list from the start (CRL check on every certificate).
+  const auto crl = x509::make_crl(ca.id_ca.get(), ca.id_ca_key.get(), {}, ca_not_after);
+  x509::write_crl(out(dir / "identity_crl.pem"), crl.get());
 
   const std::string governance = governance_xml(o.allow_unauthenticated, o.command_protection);
   write_text(out(dir / "governance.xml"), governance);

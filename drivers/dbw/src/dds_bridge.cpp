@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -68,11 +69,13 @@ dds::QosSpec status_qos() {
 class Runner {
  public:
   Runner(const Protocol& p, can::Transport& bus, const DdsBridgeOptions& o)
-      : p_(p), bus_(bus), o_(o), core_(p), participant_(domain_config(o.domain), security_config(o.security_dir, o.identity)),
+      : p_(p), bus_(bus), o_(o), core_(p), security_(security_config(o.security_dir, o.identity)),
+        participant_(domain_config(o.domain), security_),
         cmd_topic_(participant_, kCmdTopic),
         status_topic_(participant_, kStatusTopic, status_qos()), state_topic_(participant_, kStateTopic),
         reader_(participant_, cmd_topic_), status_writer_(participant_, status_topic_, status_qos()),
         state_writer_(participant_, state_topic_), stamps_(participant_), diagnostics_(participant_) {
+    if (security_.enabled()) expiry_ = dds::security_expiry(security_);
     frames_.reserve(16);
   }
 
@@ -386,6 +389,8 @@ class Runner {
     d.add_number("frames_sent", snap.frames_sent);
     d.add_number("frames_received", snap.frames_received);
     d.add_number("outbox_dropped", outbox_.dropped());
+    // Issue 28: a lapsed certificate, grant or CA stops the bridge taking commands; warn 30 days ahead.
+    if (security_.enabled()) dds::report_expiry(d, security_.identity, expiry_, std::time(nullptr));
     diagnostics_.publish({d});
   }
 
@@ -393,6 +398,8 @@ class Runner {
   can::Transport& bus_;
   DdsBridgeOptions o_;
   BridgeCore core_;
+  dds::SecurityConfig security_;
+  dds::SecurityExpiry expiry_;
   dds::Participant participant_;
   dds::Topic<msg::DbwCommand> cmd_topic_;
   dds::Topic<msg::DbwStatus> status_topic_;

@@ -1,6 +1,7 @@
 // `rig dbw send`: a fixed command at a fixed rate on /vehicle/dbw/cmd; ends by simply stopping.
 #include <time.h>
 
+#include <ctime>
 #include <stdexcept>
 #include <string>
 
@@ -32,7 +33,14 @@ dds::Writer<msg::DbwCommand> make_writer(dds::Participant& p, dds::Topic<msg::Db
 }  // namespace
 
 std::uint64_t run_command_source(const CommandSourceOptions& o) {
-  dds::Participant participant(domain_config(o.domain), security_config(o.security_dir, o.identity));
+  const dds::SecurityConfig security = security_config(o.security_dir, o.identity);
+  if (security.enabled()) {  // issue 28: say so before the identity lapses (the bridge reports it in /diagnostics)
+    const auto e = dds::security_expiry(security);
+    if (e.not_after - std::time(nullptr) < static_cast<std::time_t>(dds::kExpiryWarnDays) * 86400)
+      log::warn("dbw", "send: the " + e.what + " of identity '" + o.identity + "' expires within " +
+                           std::to_string(dds::kExpiryWarnDays) + " days");
+  }
+  dds::Participant participant(domain_config(o.domain), security);
   dds::Topic<msg::DbwCommand> topic(participant, kCmdTopic);
   const auto writer = make_writer(participant, topic, o);
   if (!writer.wait_for_readers(1, static_cast<int>(o.wait_for_reader_s * 1000)))

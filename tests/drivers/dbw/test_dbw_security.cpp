@@ -108,7 +108,7 @@ TEST(SecurityInit, CertificatesSignaturesSubjectsAndGrants) {
   o.dir = (d.path / "sec").string();
   o.commanders = {"dbw_command", "teleop"};
   const auto files = dds::init_security_dir(o);
-  EXPECT_EQ(files.size(), 6U + 4U * 4U);
+  EXPECT_EQ(files.size(), 7U + 4U * 4U);  // 2 CAs + keys, governance x2, revocation list
   const fs::path s = o.dir;
   const auto id_ca = s / "identity_ca.pem";
   const auto perm_ca = s / "permissions_ca.pem";

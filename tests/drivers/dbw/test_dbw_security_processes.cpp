@@ -23,8 +23,8 @@
 #include <string>
 
 #include "dbw_processes.hpp"
+#include "dbw_security_processes.hpp"
 #include "dbw_test_data.hpp"
-#include "sensor_rig/dbw/can/candump.hpp"
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
 #include "wait_bounds.hpp"
@@ -38,37 +38,11 @@ using sensor_rig::vehicle_now_ns;
 
 namespace {
 
-// PU steering requests with the enable bit set (paravan_ref: 0x100, byte 1 bit 4), at or after t.
-int enabled_requests(const std::string& bus_log, Nanos t) {
-  std::ifstream in(bus_log);
-  dbw::can::CandumpReader reader(in);
-  dbw::can::LogRecord rec;
-  int n = 0;
-  while (reader.next(rec)) n += rec.frame.id == 0x100 && (rec.frame.data[1] & 0x10) != 0 && rec.stamp >= t ? 1 : 0;
-  return n;
-}
-
 // The number in "key":N of the bridge's JSON summary; -1 when absent.
 long long json_number(const std::string& text, const std::string& key) {
   std::smatch m;
   if (!std::regex_search(text, m, std::regex("\"" + key + "\":([0-9]+)"))) return -1;
   return std::stoll(m[1]);
-}
-
-// A directory whose `reader` has the real identity (certificate and key from `real`) but
-// permissions granting commands, signed by the permissions CA of another init (`rogue`, where
-// `reader` was made a command source).
-void forge(const fs::path& real, const fs::path& rogue, const fs::path& out) {
-  fs::create_directories(out / "reader");
-  const auto copy = [](const fs::path& from, const fs::path& to) {
-    fs::copy_file(from, to, fs::copy_options::overwrite_existing);
-  };
-  copy(real / "identity_ca.pem", out / "identity_ca.pem");
-  copy(real / "reader/cert.pem", out / "reader/cert.pem");
-  copy(real / "reader/key.pem", out / "reader/key.pem");
-  copy(rogue / "permissions_ca.pem", out / "permissions_ca.pem");
-  copy(rogue / "governance.p7s", out / "governance.p7s");
-  copy(rogue / "reader/permissions.p7s", out / "reader/permissions.p7s");
 }
 
 TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
@@ -82,7 +56,7 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
                           10000),
             0)
       << rig.output("init_rogue");
-  forge(sec, rig.path("rogue"), rig.path("forged"));
+  dbw::test::forge(sec, rig.path("rogue"), rig.path("forged"));
   // Identities added after the bridge's were made: one command source, one without the grant.
   ASSERT_EQ(rig.wait_exit(rig.start("add_planner", {"security", "add-identity", sec, "planner", "--permit-command"}),
                           10000),
@@ -145,7 +119,7 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
   poll(300);
   EXPECT_FALSE(engaged) << "a sender without permission engaged the bridge";
   EXPECT_EQ(counted, 0U) << "the bridge took commands from a sender without permission";
-  EXPECT_EQ(enabled_requests(rig.bus_log(), 0), 0) << "an enabled request reached the bus";
+  EXPECT_EQ(dbw::test::enabled_requests(rig.bus_log(), 0), 0) << "an enabled request reached the bus";
 
   // 4. The permitted source drives.
   const Nanos permitted_start = vehicle_now_ns();
@@ -154,7 +128,7 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
   poll(300);
   EXPECT_TRUE(engaged) << "the permitted source did not engage\n" << rig.output("bridge");
   EXPECT_GT(counted, 0U);
-  EXPECT_GT(enabled_requests(rig.bus_log(), permitted_start), 10) << "no enabled request on the bus";
+  EXPECT_GT(dbw::test::enabled_requests(rig.bus_log(), permitted_start), 10) << "no enabled request on the bus";
 
   // 5. The command source added later drives too.
   const unsigned long long before_added = counted;
@@ -163,7 +137,7 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
   EXPECT_EQ(rig.wait_exit(added, 10000), 0) << rig.output("planner");
   poll(300);
   EXPECT_GT(counted, before_added + 10) << "the bridge took no commands from the added identity\n" << rig.output("bridge");
-  EXPECT_GT(enabled_requests(rig.bus_log(), added_start), 10) << "no enabled request from the added identity";
+  EXPECT_GT(dbw::test::enabled_requests(rig.bus_log(), added_start), 10) << "no enabled request from the added identity";
   EXPECT_EQ(rig.stop(bridge), 0) << rig.output("bridge");
   EXPECT_EQ(rig.stop(mock), 0);
   const long long taken = json_number(rig.output("bridge"), "commands");
