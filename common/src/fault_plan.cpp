@@ -54,7 +54,7 @@ constexpr std::array<KindInfo, 33> kKinds{{
     {"dbw.bus_off", DC::kDbw, "", 1, "the bus goes off: nothing passes"},
     {"dbw.no_status", DC::kDbw, "", 1, "the ECU stops sending status frames"},
     // The host under the rig.
-    {"host.clock_step", DC::kHost, "ms=-500", 0, "CLOCK_REALTIME stepped by ms as seen by the rig's processes"},
+    {"host.clock_step", DC::kHost, "ms=-500", 5, "CLOCK_REALTIME stepped by ms under the rig, stepped back when the fault ends"},
     {"host.cpu_hog", DC::kHost, "threads=2", 3, "busy threads competing for the cores"},
     {"host.kill_mock", DC::kHost, "restart_s=1", 0, "a mock device process killed (SIGKILL), restarted restart_s later"},
     {"host.stall_mock", DC::kHost, "ms=300", 0, "a mock device process stopped (SIGSTOP) for ms"},

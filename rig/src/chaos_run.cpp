@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "clock_step.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/errors.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -61,8 +62,9 @@ class CampaignDir {
   bool owned_ = false;
 };
 
-// host.cpu_hog: busy threads for the fault's duration, at normal priority (as a runaway process of
-// the PU would be). Recorded in the host's truth record when each begins.
+// The host's faults that are not a mock's: host.cpu_hog (busy threads at normal priority, as a
+// runaway process of the PU would be) and host.clock_step (CLOCK_REALTIME stepped, and stepped back
+// when the fault ends). Each is recorded in the host's truth record when it begins.
 class HostFaults {
  public:
   HostFaults(std::vector<faults::FaultEvent> events, Nanos epoch_mono, Nanos epoch_vehicle, const std::string& truth_path)
@@ -76,26 +78,53 @@ class HostFaults {
     if (thread_.joinable()) thread_.join();
     for (auto& t : hogs_) t.join();
     hogs_.clear();
+    steps_.clear();  // every step undone, also when stopped early
   }
 
  private:
+  struct Step {
+    Nanos undo_mono;
+    std::unique_ptr<ClockStep> step;
+  };
+
+  Nanos at_mono(double s) const { return epoch_mono_ + static_cast<Nanos>(s * 1e9); }
+
   void run() {
-    for (const auto& e : events_) {
-      if (e.kind != "host.cpu_hog") continue;
-      const Nanos at = epoch_mono_ + static_cast<Nanos>(e.at_s * 1e9);
-      while (!stop_ && monotonic_now_ns() < at) ::usleep(5'000);
-      if (stop_) return;
-      const Nanos until = at + static_cast<Nanos>(e.duration_s * 1e9);
+    std::size_t next = 0;
+    while (!stop_) {
+      const Nanos now = monotonic_now_ns();
+      // Steps whose fault has ended go back first.
+      for (auto it = steps_.begin(); it != steps_.end();)
+        it = it->undo_mono <= now ? steps_.erase(it) : std::next(it);
+      for (; next < events_.size() && at_mono(events_[next].at_s) <= now; ++next) begin(events_[next]);
+      if (next == events_.size() && steps_.empty()) return;
+      ::usleep(2'000);
+    }
+  }
+
+  void begin(const faults::FaultEvent& e) {
+    const Nanos veh = vehicle_now_ns(), span = static_cast<Nanos>(e.duration_s * 1e9);
+    if (e.kind == "host.cpu_hog") {
+      const Nanos until = monotonic_now_ns() + span;
       const int threads = std::max(1, static_cast<int>(e.number("threads", 2)));
       for (int i = 0; i < threads; ++i)
         hogs_.emplace_back([this, until] {
           volatile std::uint64_t x = 0;
           while (!stop_ && monotonic_now_ns() < until) x = x + 1;
         });
-      const Nanos veh = epoch_vehicle_ + static_cast<Nanos>(e.at_s * 1e9);
-      truth_.fault({e.id, e.kind, veh, veh + static_cast<Nanos>(e.duration_s * 1e9), -1, "threads=" + std::to_string(threads)});
-      truth_.flush();
+      truth_.fault({e.id, e.kind, veh, veh + span, -1, "threads=" + std::to_string(threads)});
+    } else if (e.kind == "host.clock_step") {
+      const auto by = static_cast<Nanos>(e.number("ms", -500) * 1e6);
+      try {
+        steps_.push_back({monotonic_now_ns() + span, std::make_unique<ClockStep>(by)});
+        truth_.fault({e.id, e.kind, veh, veh + span, -1, "ms=" + std::to_string(by / 1'000'000) + ", back after the fault"});
+      } catch (const std::exception& ex) {
+        log::warn("chaos", std::string("host.clock_step not injected: ") + ex.what());
+      }
+    } else {
+      return;  // a mock's, or rig up's
     }
+    truth_.flush();
   }
 
   std::vector<faults::FaultEvent> events_;
@@ -104,6 +133,7 @@ class HostFaults {
   std::atomic<bool> stop_{false};
   std::thread thread_;
   std::vector<std::thread> hogs_;
+  std::vector<Step> steps_;
 };
 
 std::vector<truth::Log> read_truths(const fs::path& dir) {
@@ -183,7 +213,7 @@ void fit_to_models(std::vector<faults::FaultEvent>& events, const RigConfig& cfg
 
 std::vector<std::string> injected_kinds() {
   // Updated as the mocks learn each kind; `rig chaos --help` lists them.
-  return {"lidar.reorder",       "lidar.duplicate_late", "lidar.loss_burst", "lidar.corrupt",   "lidar.second_sensor",
+  std::vector<std::string> kinds{"lidar.reorder",       "lidar.duplicate_late", "lidar.loss_burst", "lidar.corrupt",   "lidar.second_sensor",
           "lidar.restart",       "lidar.stuck_azimuth",  "lidar.rpm_change", "lidar.blind_sector",
           "camera.never_answers", "camera.slow_open",   "camera.dies",      "camera.ptp",      "camera.exposure_change",
           "camera.auto_exposure", "camera.packet_loss",
@@ -191,6 +221,9 @@ std::vector<std::string> injected_kinds() {
           "dbw.loss",            "dbw.bad_crc",          "dbw.stuck_counter", "dbw.override",  "dbw.ecu_fault",
           "dbw.bus_off",         "dbw.no_status",
           "host.cpu_hog",        "host.kill_mock",       "host.stall_mock"};
+  // Stepping the clock needs CAP_SYS_TIME: without it the kind is not offered.
+  if (ClockStep::not_permitted().empty()) kinds.push_back("host.clock_step");
+  return kinds;
 }
 
 std::string not_all_mocks(const RigConfig& cfg) {
@@ -281,6 +314,8 @@ int run(const Options& o) {
     std::fprintf(stderr, "error: --faults %s\n", e.what());
     return 2;
   }
+  // A campaign killed while the clock was stepped left its step: undo it before anything else.
+  for (const auto& line : ClockStep::sweep()) log::warn("chaos", line);
   CampaignDir dir(o.out_dir);
   const std::string exe = self_executable();
   // t = 0 of the plan: after the warm-up, on the clock every process shares and no step moves.
