@@ -193,7 +193,9 @@ class Checker {
       const Nanos lo = u.rec.acq_ns, hi = std::max(lo, u.first_intact_acq);
       const Nanos err = s.acquisition_ns < lo ? lo - s.acquisition_ns : s.acquisition_ns > hi ? s.acquisition_ns - hi : 0;
       errors.push_back(ms(err));
-      if (ms(err) > bound) {
+      if (ms(err) > bound && flagged(topic, s.acquisition_ns)) {
+        ++t.stamps_flagged;
+      } else if (ms(err) > bound) {
         ++t.stamps_outside;
         violation("stamps", topic, "seq " + std::to_string(s.seq) + ": stamp " + fmt_s(ms(s.acquisition_ns - lo)) +
                                        " ms from the true acquisition of " + log.header.unit + " " + std::to_string(u.rec.unit) +
@@ -244,6 +246,12 @@ class Checker {
   }
 
   static std::vector<std::string> depends_of(const TopicExpectation& e) { return e.depends_on; }
+
+  bool flagged(const std::string& topic, Nanos t) const {
+    const auto it = in_.unsynchronized.find(topic);
+    if (it == in_.unsynchronized.end()) return false;
+    return std::any_of(it->second.begin(), it->second.end(), [t](const auto& iv) { return t >= iv.first && t < iv.second; });
+  }
 
   std::string faults_of(const truth::Log& log, const UnitTruth& u) const {
     std::set<std::string> kinds;
@@ -407,6 +415,7 @@ std::string result_json(const Result& r) {
                           {"unmatched", t.unmatched},
                           {"stamp_error_p99_ms", t.stamp_error_p99_ms},
                           {"stamp_error_max_ms", t.stamp_error_max_ms},
+                          {"stamps_flagged", t.stamps_flagged},
                           {"healthy_rate_share", t.healthy_rate_share},
                           {"recovery_max_s", t.recovery_max_s},
                           {"monitor", {{"received", t.monitor_received}, {"lost", t.monitor_lost}, {"expected", t.monitor_expected}}}};

@@ -47,6 +47,9 @@ struct Input {
   std::map<std::string, MonitorTotals> monitor;
   std::map<std::string, std::uint64_t> counted_lost;  // units the rig counted lost in the window, by topic
   std::map<std::string, TopicExpectation> expected;   // by topic
+  // Vehicle-time intervals in which the rig flagged a topic's stamps unsynchronized (/diagnostics
+  // stamp_sync): a stamp outside its bound then is the rig's own warning, not a lie.
+  std::map<std::string, std::vector<std::pair<Nanos, Nanos>>> unsynchronized;
   Nanos window_begin_ns = 0;  // units are judged when their acquisition is in [begin, end)
   Nanos window_end_ns = 0;
   Bounds bounds;
@@ -64,7 +67,8 @@ struct TopicResult {
   std::uint64_t hidden_missing = 0;        // packets lost that the published unit does not count
   std::uint64_t published_twice = 0;       // a unit published more than once (a split scan)
   std::uint64_t unmatched = 0;             // published samples that match no unit the device made
-  std::uint64_t stamps_outside = 0;        // stamp error beyond the bound
+  std::uint64_t stamps_outside = 0;        // stamp error beyond the bound, the topic not flagged
+  std::uint64_t stamps_flagged = 0;        // beyond the bound while the rig flagged it unsynchronized
   double stamp_error_p99_ms = 0;
   double stamp_error_max_ms = 0;
   double healthy_rate_share = 1.0;         // delivered / expected while no fault touched the device

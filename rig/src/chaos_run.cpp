@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "chaos_diagnostics.hpp"
 #include "clock_step.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/errors.hpp"
@@ -342,6 +343,7 @@ int run(const Options& o) {
   mon_opt.pipe_stdio = true;
   mon_opt.log_file = (dir.path() / "logs" / "monitor.log").string();
   ChildProcess monitor(mon_argv, mon_opt);
+  DiagnosticsLog diagnostics(cfg.dds);  // when the rig said a topic's stamps were unsynchronized
   HostFaults host(plan.events, plan.epoch_mono_ns, epoch_vehicle, (dir.path() / "truth" / "host.jsonl").string());
   host.start();
 
@@ -394,6 +396,7 @@ int run(const Options& o) {
   in.window_end_ns = epoch_vehicle + window_ns;
   in.monitor = monitor_totals(monitor_lines, plan.epoch_mono_ns + kLead, plan.epoch_mono_ns + window_ns, in.counted_lost);
   in.expected = expectations_of(cfg);
+  in.unsynchronized = diagnostics.unsynchronized();
   Result r = check(in);
   r.campaign_errors = campaign_errors;
   std::fputs(result_text(r).c_str(), stderr);

@@ -129,6 +129,12 @@ TEST(ChaosCheck, AStampTwoMillisecondsOffIsCaughtAndAFirstPacketLostMovesNothing
   Result r = check(in);
   EXPECT_FALSE(r.invariants.at("stamps"));
   EXPECT_NEAR(r.topics.at(kTopic).stamp_error_max_ms, 2.0, 1e-9);
+  // The rig itself flagged the topic unsynchronized then (/diagnostics stamp_sync): its own warning.
+  in.unsynchronized[kTopic] = {{kT0 + 29 * kPeriod, kT0 + 31 * kPeriod}};
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).stamps_flagged, 1u);
+  in.unsynchronized.clear();
   in.samples[30].acquisition_ns -= 1'950'000;  // 50 µs: within the 0.1 ms bound
   EXPECT_TRUE(check(in).invariants.at("stamps"));
   // The scan's first two packets lost: stamping the first packet that arrived (20 ms later) is honest.

@@ -1,0 +1,44 @@
+#pragma once
+// /diagnostics during a `rig chaos` campaign: when the rig itself said a topic's stamps were not to
+// be trusted. A status value `stamp_sync: unsynchronized` flags its topic (the status's `topic` value,
+// or its name: camera/N -> /sensors/camera/N/image_raw, lidar/N -> /sensors/lidar/N/points); the
+// judge does not count a stamp outside its bound against the rig while the topic was flagged.
+#include <atomic>
+#include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/dds/participant.hpp"
+
+namespace sensor_rig::rig::chaos {
+
+using Intervals = std::vector<std::pair<Nanos, Nanos>>;  // vehicle time [begin, end)
+
+// The topic a driver status speaks for ("" = none).
+std::string status_topic(const std::string& status_name, const std::string& topic_value);
+
+class DiagnosticsLog {
+ public:
+  explicit DiagnosticsLog(const dds::DomainConfig& dds);
+  ~DiagnosticsLog();
+  DiagnosticsLog(const DiagnosticsLog&) = delete;
+  DiagnosticsLog& operator=(const DiagnosticsLog&) = delete;
+
+  // Per topic, when it was flagged: each flagged status covers the period before it (the rig
+  // publishes once a period) and half a period after, merged.
+  [[nodiscard]] std::map<std::string, Intervals> unsynchronized() const;
+
+ private:
+  void run();
+  dds::Participant participant_;
+  std::atomic<bool> stop_{false};
+  mutable std::mutex mutex_;
+  std::map<std::string, std::vector<Nanos>> flagged_;  // topic -> stamps of flagged statuses
+  std::thread thread_;
+};
+
+}  // namespace sensor_rig::rig::chaos
