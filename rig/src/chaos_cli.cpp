@@ -31,7 +31,7 @@ void register_chaos_cli(CLI::App& app, cli::Context& ctx) {
   cmd->add_option("--seed", o->seed, "Seed of the random plan: same seed, same campaign")->capture_default_str();
   cmd->add_option("--faults", o->faults,
                   "Fault specs, ';'-separated or repeated: with @START a fault at that time, without a kind placed at random "
-                  "(default: every kind the mocks inject)");
+                  "(default: every kind the mocks inject; 'none': a baseline without faults)");
   cmd->add_option("--rate", o->rate_per_min, "Random faults per minute (on top of one of each kind)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("--json", o->json, "Last line on stdout: {\"faults\":..,\"topics\":..,\"invariants\":..}");
   cmd->add_option("--out", o->out_dir, "Keep the campaign here: plan.jsonl, truth/*.jsonl, monitor.csv, logs/");

@@ -260,6 +260,8 @@ std::map<std::string, TopicExpectation> expectations_of(const RigConfig& cfg) {
 }
 
 std::vector<faults::FaultEvent> make_plan(const Options& o, const std::vector<faults::Device>& devices, const RigConfig& cfg) {
+  // `--faults none`: the baseline, the rig and its truth with nothing injected.
+  if (o.faults.size() == 1 && o.faults.front() == "none") return {};
   std::vector<faults::FaultSpec> timed;
   std::vector<std::string> kinds;
   for (const auto& item : o.faults) {
