@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "chaos_diagnostics.hpp"
-#include "clock_step.hpp"
+#include "chaos_host_faults.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/errors.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -61,80 +61,6 @@ class CampaignDir {
  private:
   fs::path path_;
   bool owned_ = false;
-};
-
-// The host's faults that are not a mock's: host.cpu_hog (busy threads at normal priority, as a
-// runaway process of the PU would be) and host.clock_step (CLOCK_REALTIME stepped, and stepped back
-// when the fault ends). Each is recorded in the host's truth record when it begins.
-class HostFaults {
- public:
-  HostFaults(std::vector<faults::FaultEvent> events, Nanos epoch_mono, Nanos epoch_vehicle, const std::string& truth_path)
-      : events_(std::move(events)), epoch_mono_(epoch_mono), epoch_vehicle_(epoch_vehicle),
-        truth_(truth_path, truth::Header{"host", "host", "", "", "", "CLOCK_REALTIME"}) {}
-  ~HostFaults() { stop(); }
-
-  void start() { thread_ = std::thread([this] { run(); }); }
-  void stop() {
-    stop_ = true;
-    if (thread_.joinable()) thread_.join();
-    for (auto& t : hogs_) t.join();
-    hogs_.clear();
-    steps_.clear();  // every step undone, also when stopped early
-  }
-
- private:
-  struct Step {
-    Nanos undo_mono;
-    std::unique_ptr<ClockStep> step;
-  };
-
-  Nanos at_mono(double s) const { return epoch_mono_ + static_cast<Nanos>(s * 1e9); }
-
-  void run() {
-    std::size_t next = 0;
-    while (!stop_) {
-      const Nanos now = monotonic_now_ns();
-      // Steps whose fault has ended go back first.
-      for (auto it = steps_.begin(); it != steps_.end();)
-        it = it->undo_mono <= now ? steps_.erase(it) : std::next(it);
-      for (; next < events_.size() && at_mono(events_[next].at_s) <= now; ++next) begin(events_[next]);
-      if (next == events_.size() && steps_.empty()) return;
-      ::usleep(2'000);
-    }
-  }
-
-  void begin(const faults::FaultEvent& e) {
-    const Nanos veh = vehicle_now_ns(), span = static_cast<Nanos>(e.duration_s * 1e9);
-    if (e.kind == "host.cpu_hog") {
-      const Nanos until = monotonic_now_ns() + span;
-      const int threads = std::max(1, static_cast<int>(e.number("threads", 2)));
-      for (int i = 0; i < threads; ++i)
-        hogs_.emplace_back([this, until] {
-          volatile std::uint64_t x = 0;
-          while (!stop_ && monotonic_now_ns() < until) x = x + 1;
-        });
-      truth_.fault({e.id, e.kind, veh, veh + span, -1, "threads=" + std::to_string(threads)});
-    } else if (e.kind == "host.clock_step") {
-      const auto by = static_cast<Nanos>(e.number("ms", -500) * 1e6);
-      try {
-        steps_.push_back({monotonic_now_ns() + span, std::make_unique<ClockStep>(by)});
-        truth_.fault({e.id, e.kind, veh, veh + span, -1, "ms=" + std::to_string(by / 1'000'000) + ", back after the fault"});
-      } catch (const std::exception& ex) {
-        log::warn("chaos", std::string("host.clock_step not injected: ") + ex.what());
-      }
-    } else {
-      return;  // a mock's, or rig up's
-    }
-    truth_.flush();
-  }
-
-  std::vector<faults::FaultEvent> events_;
-  Nanos epoch_mono_, epoch_vehicle_;
-  truth::Writer truth_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-  std::vector<std::thread> hogs_;
-  std::vector<Step> steps_;
 };
 
 std::vector<truth::Log> read_truths(const fs::path& dir) {
@@ -346,7 +272,7 @@ int run(const Options& o) {
   mon_opt.log_file = (dir.path() / "logs" / "monitor.log").string();
   ChildProcess monitor(mon_argv, mon_opt);
   DiagnosticsLog diagnostics(cfg.dds);  // when the rig said a topic's stamps were unsynchronized
-  HostFaults host(plan.events, plan.epoch_mono_ns, epoch_vehicle, (dir.path() / "truth" / "host.jsonl").string());
+  HostFaults host(plan.events, plan.epoch_mono_ns, (dir.path() / "truth" / "host.jsonl").string());
   host.start();
 
   std::vector<MonitorLine> monitor_lines;
