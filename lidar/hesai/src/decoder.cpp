@@ -106,6 +106,10 @@ struct DecoderImpl {
   std::int64_t prev_sensor_us = 0;  // the previous packet's tail time of day (µs)
   bool have_seq = false;
   std::uint32_t prev_seq = 0;       // UDP sequence number (expected value after a mismatch)
+  LateHole hole;                    // where the current scan last counted packets missing
+  TimeJudge time_judge;
+  bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
+  std::uint32_t rejected_since_prev = 0;  // packets dropped (bad time / azimuth) since the last good one
 
   explicit DecoderImpl(DecoderConfig config)
       : cfg(std::move(config)), mi(&model_info(cfg.model)), scans(scan_options(cfg), stats) {
@@ -184,8 +188,116 @@ struct DecoderImpl {
     window_open = false;
     have_seq = false;
     prev_trailing_bad = 0;
+    hole.open = 0;
+    time_judge.reset();
+    rejected_since_prev = 0;
+    turning = false;
+  }
+
+  // Ends the current scan; the hole of late packets was that scan's.
+  std::optional<Scan> end(bool complete) noexcept {
+    hole.open = 0;
+    return scans.end_scan(complete);
+  }
+
+  void put_group(const std::uint8_t* blk, int a, Nanos group_stamp, bool overlap, int n, std::uint8_t mode, float unit);
+
+  // A late packet whose azimuth lies where the current scan counted packets missing (outside the
+  // cut's window): its points go into the scan, an earlier first firing becomes its stamp.
+  void place_late(const std::uint8_t* p, const int* az, const detail::AzimuthFit& fit, int groups, int n,
+                  std::uint8_t mode, float unit, Nanos stamp, Nanos rx_ns) {
+    scans.begin_packet();
+    PendingScan& cur = scans.current();
+    cur.rebase(stamp);
+    for (int g = 0; g < groups; ++g) {
+      if ((fit.bad >> g) & 1U) continue;
+      const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
+      const Nanos last_rx = cur.scan.last_rx_ns;
+      cur.touch(group_stamp, rx_ns);
+      cur.scan.last_rx_ns = std::max(last_rx, rx_ns);
+      put_group(p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size, az[g], group_stamp, false, n,
+                mode, unit);
+    }
+    --hole.open;
+    scans.fill_missing();
   }
 };
+
+// One firing group's points: into the current scan, or (inside the cut's window, `overlap`) the
+// channels already past the cut into the next. Shared by the packet loop and late packets.
+inline void DecoderImpl::put_group(const std::uint8_t* blk, int a, Nanos group_stamp, bool overlap, int n,
+                                   std::uint8_t mode, float unit) {
+  const auto& tab = angles();
+  const auto rm = static_cast<ReturnMode>(mode);
+  const bool xt = cfg.model == Model::kPandarXT32;
+  const float thresh = static_cast<float>(cfg.dual_distance_threshold_m);
+  const float sa = tab.sin[static_cast<std::size_t>(a)];
+  const float ca = tab.cos[static_cast<std::size_t>(a)];
+  const std::int64_t a_udeg = static_cast<std::int64_t>(a) * 10'000 - cut_udeg;
+  const std::uint8_t* units = blk + mi->block_units;
+  for (std::size_t c = 0; c < ch.size(); ++c) {
+    const ChannelTable& t = ch[c];
+    Scan* s = &scans.scan();
+    if (overlap) {
+      std::int64_t rel = (a_udeg + t.off_udeg) % kMicroDeg;
+      if (rel < 0) rel += kMicroDeg;
+      if (rel <= kNextScanSpan) s = &scans.next().scan;
+    }
+    const std::uint8_t* u0 = units + c * mi->unit_size;
+    const Echo e0{le16(u0), u0[2]};
+    if (n == 1) {
+      const std::uint8_t type = rm == ReturnMode::kStrongest ? kReturnStrongest
+                                : rm == ReturnMode::kLast    ? kReturnLast
+                                : rm == ReturnMode::kFirst   ? kReturnFirst
+                                                             : kReturnUnknown;
+      point(*s, t, e0, unit, sa, ca, group_stamp, type);
+      continue;
+    }
+    const std::uint8_t* u1 = u0 + mi->block_size;
+    const Echo e1{le16(u1), u1[2]};
+    const bool second_stronger = e1.refl > e0.refl;
+    std::uint8_t t0 = kReturnUnknown, t1 = kReturnUnknown;
+    int last_idx = e1.raw > e0.raw ? 1 : 0;  // modes without a last echo: the farther one
+    switch (rm) {
+      case ReturnMode::kLastStrongest:
+        t0 = second_stronger ? kReturnLast : kReturnStrongestAndLast;
+        t1 = second_stronger ? kReturnStrongest : kReturnSecondStrongest;
+        last_idx = 0;
+        break;
+      case ReturnMode::kFirstLast:  // the XT32 sends the last echo first
+        t0 = xt ? kReturnLast : kReturnFirst;
+        t1 = xt ? kReturnFirst : kReturnLast;
+        last_idx = xt ? 0 : 1;
+        break;
+      case ReturnMode::kFirstStrongest:
+        t0 = kReturnFirst;
+        t1 = second_stronger ? kReturnStrongest : kReturnSecondStrongest;
+        break;
+      default:  // first + second
+        t0 = kReturnFirst;
+        break;
+    }
+    switch (cfg.returns) {
+      case ReturnSelection::kStrongest:
+        if (second_stronger) {
+          point(*s, t, e1, unit, sa, ca, group_stamp, t1);
+        } else {
+          point(*s, t, e0, unit, sa, ca, group_stamp, t0);
+        }
+        break;
+      case ReturnSelection::kLast:
+        point(*s, t, last_idx == 0 ? e0 : e1, unit, sa, ca, group_stamp, last_idx == 0 ? t0 : t1);
+        break;
+      case ReturnSelection::kDual: {
+        const bool same = e0.raw == e1.raw && e0.refl == e1.refl;
+        const float gap = std::abs(static_cast<float>(e0.raw) - static_cast<float>(e1.raw)) * unit;
+        if (!same && !(gap < thresh)) point(*s, t, e0, unit, sa, ca, group_stamp, t0);
+        point(*s, t, e1, unit, sa, ca, group_stamp, same && rm == ReturnMode::kLastStrongest ? t0 : t1);
+        break;
+      }
+    }
+  }
+}
 
 std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) noexcept {
   const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
@@ -208,48 +320,93 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   }
   int first_good = 0;
   while ((fit.bad >> first_good) & 1U) ++first_good;
+  // Every group at one azimuth while the rotor turns: a frozen encoder. Corrupt, never a scan of
+  // its own (a stuck azimuth at the cut made ~377 one-packet scans a second: issue 26 item 7).
+  if (groups > 1 && fit.step < 0.5 && have_prev && turning) {
+    ++stats.implausible_steps;
+    ++rejected_since_prev;
+    scans.reject(PacketStatus::kBadAzimuth);
+    last = PacketStatus::kBadAzimuth;
+    return std::nullopt;
+  }
   const std::uint8_t* utc = p + mi->tail_utc;  // year, month, day, hour, minute, second
   const std::int64_t sensor_us = ((static_cast<std::int64_t>(utc[3]) * 60 + utc[4]) * 60 + utc[5]) * 1'000'000 +
                                  static_cast<std::int64_t>(le32(p + mi->tail_timestamp));
   const bool has_seq = packet.data.size() == mi->packet_size_alt || cfg.model == Model::kPandarXT32;
   const std::uint32_t seq = has_seq ? le32(p + packet.data.size() - 4) : 0;
 
-  // Lost packets: the UDP sequence number where the azimuth and time step agree with it, else
-  // the azimuth step (inside the FOV) and the sensor's time step; a step back is a duplicate or
-  // a late packet.
+  // Order and duplicates are judged before the time (issue 26 item 1): a late packet is placed
+  // or counted, never the end of its scan. One packet whose time jumps while its azimuth (and
+  // sequence number) continue is corrupt (item 2); only a sustained step ends the scan. Lost
+  // packets: the UDP sequence number where the azimuth and time step agree with it, else the
+  // azimuth step (inside the FOV) and the sensor's time step.
   std::optional<Scan> out;
-  if (have_prev && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {  // ends the scan; continuity starts over
-    ++stats.time_jumps;
-    scans.merge(out, scans.end_scan(false));
-    scans.drop_next();
-    have_prev = false;
-    have_seq = false;
-  }
   std::uint32_t missing = 0;
+  std::uint32_t slots = 0;  // packet slots between the previous good packet and this one
+  const Nanos period_ns = static_cast<Nanos>(mi->group_period_ns) * groups;
   if (have_prev) {
     constexpr std::int64_t kDayUs = 86'400'000'000LL;
     std::int64_t dt_us = sensor_us - prev_sensor_us;
     if (dt_us < -kDayUs / 2) dt_us += kDayUs;
-    const auto gap = detail::azimuth_gap(
-        fov, {.prev_az = prev_az,
-              .groups_since_prev = prev_trailing_bad + first_good + 1,
-              .first_az = az[first_good],
-              .group_step = fit.step,
-              .groups_per_packet = groups,
-              .dt_ns = dt_us * 1000,
-              .packet_period_ns = static_cast<Nanos>(mi->group_period_ns) * groups});
+    detail::GapInput in{.prev_az = prev_az,
+                        .groups_since_prev = prev_trailing_bad + first_good + 1,
+                        .first_az = az[first_good],
+                        .group_step = fit.step,
+                        .groups_per_packet = groups,
+                        .dt_ns = dt_us * 1000,
+                        .packet_period_ns = period_ns};
+    const bool jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    // A late packet steps back in time too: placed when within the reorder window.
+    const bool far_back = stamp < prev_stamp - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
+    if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
+    auto gap = detail::azimuth_gap(fov, in);
     if (gap.backwards) {
+      if (in.dt_ns > period_ns / 2 && !jumped) {  // time moved on, azimuth back: frozen azimuth
+        ++stats.implausible_steps;
+        ++rejected_since_prev;
+        scans.reject(PacketStatus::kBadAzimuth);
+        last = PacketStatus::kBadAzimuth;
+        return std::nullopt;
+      }
+      if (hole.holds(az[first_good]) && !far_back && !window_open) {
+        place_late(p, az, fit, groups, n, mode, unit, stamp, packet.rx_ns);
+        return std::nullopt;
+      }
       scans.reject(PacketStatus::kOutOfOrder);
       last = PacketStatus::kOutOfOrder;
-      return out;
+      return std::nullopt;
+    }
+    if (gap.implausible) {  // an azimuth its time cannot reach (frozen encoder): corrupt, never a cut
+      ++stats.implausible_steps;
+      ++rejected_since_prev;
+      scans.reject(PacketStatus::kBadAzimuth);
+      last = PacketStatus::kBadAzimuth;
+      return std::nullopt;
+    }
+    switch (time_judge.judge(jumped, !gap.resync && gap.missing == 0)) {
+      case TimeJudge::Verdict::kOk: break;
+      case TimeJudge::Verdict::kCorrupt:
+        ++stats.implausible_steps;
+        ++rejected_since_prev;
+        scans.reject(PacketStatus::kBadTime);
+        last = PacketStatus::kBadTime;
+        return std::nullopt;
+      case TimeJudge::Verdict::kJump:  // a real clock step: the scan ends; continuity starts over
+        ++stats.time_jumps;
+        scans.merge(out, end(false));
+        scans.drop_next();
+        have_prev = false;
+        have_seq = false;
+        gap = {};
+        break;
     }
     missing = gap.missing;
-    if (gap.resync) {  // a jump back: no cut, nothing missing, continuity from this packet on
+    if (have_prev && gap.resync) {  // a jump back: no cut, nothing missing, continuity from this packet on
       ++stats.implausible_steps;
       have_prev = false;
       have_seq = false;
     }
-    if (has_seq && have_seq) {
+    if (have_prev && has_seq && have_seq && gap.turns == 0) {
       const std::uint32_t d = seq - prev_seq;
       const std::uint32_t slack = 1 + gap.missing / 8;
       if (d != 0 && d < 0x8000'0000U && (d - 1 <= gap.missing + slack && d - 1 + slack >= gap.missing)) {
@@ -259,16 +416,54 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         ++stats.implausible_steps;
       }
     }
+    if (have_prev && gap.turns > 0) {
+      // Whole turns passed unseen: the scan ends at its cut with what it lacks to there, the turns
+      // between are lost scans, the next starts with what it lacks (as the Velodyne decoder).
+      const int a0 = az[first_good];
+      const bool az_crosses = detail::turn_step(prev_az, emit_raw) > 0 &&
+                              detail::turn_step(prev_az, emit_raw) <= detail::turn_step(prev_az, a0);
+      // Rejected packets (a frozen azimuth) filled these slots first: dropped, not missing too.
+      std::uint32_t rejected = rejected_since_prev;
+      const auto take = [&](std::uint32_t k) {
+        const std::uint32_t r = std::min(k, rejected);
+        rejected -= r;
+        return k - r;
+      };
+      scans.add_missing(take(detail::packets_on_arc(fov, prev_az, emit_raw, fit.step, groups)));
+      scans.merge(out, end(scans.current().from_cut));
+      scans.drop_next();
+      window_open = false;
+      (void)take(static_cast<std::uint32_t>(std::lround((gap.turns - (az_crosses ? 0 : 1)) * fov.length() /
+                                                        std::max(1.0, fit.step * groups))));
+      scans.add_missing(take(detail::packets_on_arc(fov, emit_raw, a0, fit.step, groups)));
+      scans.lose_scans(gap.turns + (az_crosses ? 1U : 0U) - 1U);
+      have_prev = false;
+      have_seq = false;
+      missing = 0;
+    } else if (have_prev) {
+      // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
+      slots = missing;
+      missing -= std::min(missing, rejected_since_prev);
+    }
   }
+  rejected_since_prev = 0;
+  turning = fit.step >= 0.5;
   if (has_seq) {
-    prev_seq = have_seq && missing + 1 != seq - prev_seq ? prev_seq + missing + 1 : seq;
+    prev_seq = have_seq && slots + 1 != seq - prev_seq ? prev_seq + slots + 1 : seq;
     have_seq = true;
   }
 
   prev_stamp = stamp;
   prev_sensor_us = sensor_us;
   scans.begin_packet();
-  if (missing > 0) scans.add_missing(missing);
+  // Packets lost across the cut: those past it are the next scan's (issue 26 item 3).
+  std::uint32_t missing_next = 0;
+  if (missing > 0 && have_prev && crosses(prev_az, az_step(prev_az, az[first_good]), emit_raw, true))
+    missing_next = detail::missing_after_cut(fov, emit_raw, az[first_good], fit.step, first_good + 1, groups, missing);
+  if (missing > missing_next) {
+    scans.add_missing(missing - missing_next);
+    hole = {prev_az, az[first_good], detail::kTurn, missing - missing_next};
+  }
   if (fit.bad != 0) {
     const auto nb = static_cast<std::uint64_t>(std::popcount(fit.bad));
     stats.corrupt_blocks += nb;
@@ -276,10 +471,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     ++scans.scan().dropped;
   }
 
-  const auto& tab = angles();
-  const auto rm = static_cast<ReturnMode>(mode);
-  const bool xt = cfg.model == Model::kPandarXT32;
-  const float thresh = static_cast<float>(cfg.dual_distance_threshold_m);
   for (int g = 0; g < groups; ++g) {
     if ((fit.bad >> g) & 1U) continue;
     const std::uint8_t* blk = p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size;
@@ -302,75 +493,15 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     if (overlap) scans.next().touch(group_stamp, packet.rx_ns);
     scans.current().touch(group_stamp, packet.rx_ns);
 
-    const float sa = tab.sin[static_cast<std::size_t>(a)];
-    const float ca = tab.cos[static_cast<std::size_t>(a)];
-    const std::int64_t a_udeg = static_cast<std::int64_t>(a) * 10'000 - cut_udeg;
-    const std::uint8_t* units = blk + mi->block_units;
-    for (std::size_t c = 0; c < ch.size(); ++c) {
-      const ChannelTable& t = ch[c];
-      Scan* s = &scans.scan();
-      if (overlap) {
-        std::int64_t rel = (a_udeg + t.off_udeg) % kMicroDeg;
-        if (rel < 0) rel += kMicroDeg;
-        if (rel <= kNextScanSpan) s = &scans.next().scan;
-      }
-      const std::uint8_t* u0 = units + c * mi->unit_size;
-      const Echo e0{le16(u0), u0[2]};
-      if (n == 1) {
-        const std::uint8_t type = rm == ReturnMode::kStrongest ? kReturnStrongest
-                                  : rm == ReturnMode::kLast    ? kReturnLast
-                                  : rm == ReturnMode::kFirst   ? kReturnFirst
-                                                               : kReturnUnknown;
-        point(*s, t, e0, unit, sa, ca, group_stamp, type);
-        continue;
-      }
-      const std::uint8_t* u1 = u0 + mi->block_size;
-      const Echo e1{le16(u1), u1[2]};
-      const bool second_stronger = e1.refl > e0.refl;
-      std::uint8_t t0 = kReturnUnknown, t1 = kReturnUnknown;
-      int last_idx = e1.raw > e0.raw ? 1 : 0;  // modes without a last echo: the farther one
-      switch (rm) {
-        case ReturnMode::kLastStrongest:
-          t0 = second_stronger ? kReturnLast : kReturnStrongestAndLast;
-          t1 = second_stronger ? kReturnStrongest : kReturnSecondStrongest;
-          last_idx = 0;
-          break;
-        case ReturnMode::kFirstLast:  // the XT32 sends the last echo first
-          t0 = xt ? kReturnLast : kReturnFirst;
-          t1 = xt ? kReturnFirst : kReturnLast;
-          last_idx = xt ? 0 : 1;
-          break;
-        case ReturnMode::kFirstStrongest:
-          t0 = kReturnFirst;
-          t1 = second_stronger ? kReturnStrongest : kReturnSecondStrongest;
-          break;
-        default:  // first + second
-          t0 = kReturnFirst;
-          break;
-      }
-      switch (cfg.returns) {
-        case ReturnSelection::kStrongest:
-          if (second_stronger) {
-            point(*s, t, e1, unit, sa, ca, group_stamp, t1);
-          } else {
-            point(*s, t, e0, unit, sa, ca, group_stamp, t0);
-          }
-          break;
-        case ReturnSelection::kLast:
-          point(*s, t, last_idx == 0 ? e0 : e1, unit, sa, ca, group_stamp, last_idx == 0 ? t0 : t1);
-          break;
-        case ReturnSelection::kDual: {
-          const bool same = e0.raw == e1.raw && e0.refl == e1.refl;
-          const float gap = std::abs(static_cast<float>(e0.raw) - static_cast<float>(e1.raw)) * unit;
-          if (!same && !(gap < thresh)) point(*s, t, e0, unit, sa, ca, group_stamp, t0);
-          point(*s, t, e1, unit, sa, ca, group_stamp, same && rm == ReturnMode::kLastStrongest ? t0 : t1);
-          break;
-        }
-      }
-    }
+    put_group(blk, a, group_stamp, overlap, n, mode, unit);
     if (cut_here) {
-      scans.merge(out, scans.end_scan(scans.current().from_cut));
+      scans.merge(out, end(scans.current().from_cut));
       window_open = false;
+      if (missing_next > 0) {
+        scans.add_missing(missing_next);
+        hole = {prev_az, az[first_good], detail::kTurn, missing_next};
+        missing_next = 0;
+      }
     }
     have_prev = true;
     prev_az = a;

@@ -138,6 +138,9 @@ struct DecoderImpl {
   long prev_base = 0;          // measurement id of the previous packet's column 0
   std::uint64_t prev_ts = 0;   // its first valid column's sensor time
   long packets_per_frame = 1;
+  LateHole hole;                // packet slots where the current scan last counted packets missing
+  TimeJudge time_judge;
+  std::uint32_t rejected_since_prev = 0;  // packets dropped for their time since the last good one
 
   // Packet slots strictly between slot `from` and slot `to` of one frame (to > from) that hold
   // columns of the column window (the sensor's FOV: only those can be missing).
@@ -240,6 +243,15 @@ struct DecoderImpl {
     have_fid = false;
     have_stamp = false;
     have_base = false;
+    hole.open = 0;
+    time_judge.reset();
+    rejected_since_prev = 0;
+  }
+
+  // Ends the current scan; the hole of late packets was that scan's.
+  std::optional<Scan> end(bool complete) noexcept {
+    hole.open = 0;
+    return scans.end_scan(complete);
   }
 };
 
@@ -251,10 +263,16 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     if (id != m.init_id) ++stats.init_id_mismatches;
   }
 
-  // Column headers first: the packet's first valid column gives its time and frame position.
+  // Column headers first: the packet's first column on the majority line of its measurement ids
+  // (id = base + column) gives its time and frame position (issue 26 item 5); a column off it is
+  // corrupt: not decoded, counted (bad_measurement_ids, the scan's dropped). A packet with no
+  // majority (a frozen encoder: every id alike) is dropped whole.
   std::size_t n_valid = 0;
   std::uint64_t first_ts = 0;
   long base = 0;  // measurement id of the packet's first column
+  bool damaged = false;
+  bool one_line = true;
+  const long cpp_cols = static_cast<long>(layout.columns_per_packet);
   for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
     cols[c] = column_header_at(p + layout.column_offset(c), layout);
     col_ok[c] = 0;
@@ -262,47 +280,119 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       ++stats.invalid_columns;
     } else if (cols[c].measurement_id >= m.columns_per_frame) {
       ++stats.bad_measurement_ids;
+      damaged = true;
     } else {
       col_ok[c] = 1;
+      const long b = static_cast<long>(cols[c].measurement_id) - static_cast<long>(c);
       if (n_valid++ == 0) {
         first_ts = cols[c].timestamp_ns;
-        base = static_cast<long>(cols[c].measurement_id) - static_cast<long>(c);
+        base = b;
+      } else if (b != base) {
+        one_line = false;
       }
     }
   }
+  if (!one_line) {
+    long best = base;
+    std::size_t best_n = 0;
+    for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
+      if (col_ok[c] == 0) continue;
+      const long b = static_cast<long>(cols[c].measurement_id) - static_cast<long>(c);
+      std::size_t k = 0;
+      for (std::size_t j = 0; j < layout.columns_per_packet; ++j)
+        k += col_ok[j] != 0 && static_cast<long>(cols[j].measurement_id) - static_cast<long>(j) == b ? 1 : 0;
+      if (k > best_n) {
+        best_n = k;
+        best = b;
+      }
+    }
+    if (best_n * 2 <= n_valid || best % cpp_cols != 0) {
+      ++stats.implausible_steps;
+      ++rejected_since_prev;
+      scans.reject(PacketStatus::kBadAzimuth);
+      last = PacketStatus::kBadAzimuth;
+      return std::nullopt;
+    }
+    base = best;
+    n_valid = 0;
+    for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
+      if (col_ok[c] == 0) continue;
+      if (static_cast<long>(cols[c].measurement_id) - static_cast<long>(c) != base) {
+        col_ok[c] = 0;
+        ++stats.bad_measurement_ids;
+        ++stats.implausible_steps;
+        damaged = true;
+      } else if (n_valid++ == 0) {
+        first_ts = cols[c].timestamp_ns;
+      }
+    }
+  }
+  // An invalid column inside the column window is a damaged column (outside it the sensor sends none).
+  for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
+    const long at = base + static_cast<long>(c);
+    if (!cols[c].valid() && n_valid > 0 && at >= static_cast<long>(window_first) && at <= static_cast<long>(window_last))
+      damaged = true;
+  }
 
   std::optional<Scan> out;
-  if (n_valid > 0) {
-    if (have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {
-      ++stats.time_jumps;
-      out = scans.end_scan(false);
-      have_fid = false;
+  const std::uint32_t fid = frame_id_at(p, layout);
+  // Order and duplicates are judged before the time (issue 26 item 1): a late packet is placed in
+  // the hole it left or counted, never the end of its scan. Then one packet whose time jumps while
+  // its measurement ids continue the previous packet's is corrupt (item 2); a sustained step ends
+  // the scan. Frame and packet continuity: the measurement ids say where in the frame a packet is; a
+  // frame id that changes while they continue the frame is corrupted (counted, not a cut); a frame
+  // that starts (ids wrap) with the frame id unchanged is a new frame if its time is later (a
+  // corrupted frame id), else a late packet. Lost packets: the window's packet slots skipped, plus
+  // whole frames the column times say were skipped.
+  const long cpp = static_cast<long>(layout.columns_per_packet);
+  const long slot = base >= 0 ? base / cpp : 0;
+  bool late = false;
+  if (n_valid > 0 && have_base && have_fid) {
+    const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
+    const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
+    const double reorder_ns = 16.0 * static_cast<double>(cpp) * m.column_period_ns();  // 16 packets
+    // Duplicate or late. Negated as a double: dt may be INT64_MIN.
+    if (slot <= prev_slot && dt <= 0 && -static_cast<double>(dt) <= reorder_ns) {
+      if (fid == prev_fid && hole.holds(slot)) {
+        late = true;  // placed below, continuity untouched
+      } else {
+        scans.reject(PacketStatus::kOutOfOrder);
+        last = PacketStatus::kOutOfOrder;
+        return out;
+      }
+    }
+  }
+  if (n_valid > 0 && !late) {
+    const bool jumped = have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    bool continues = false;
+    if (have_base && have_fid) {
+      const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
+      continues = slot == prev_slot + 1 || (slot == 0 && prev_slot == packets_per_frame - 1);
+    }
+    switch (time_judge.judge(jumped, continues)) {
+      case TimeJudge::Verdict::kOk: break;
+      case TimeJudge::Verdict::kCorrupt:
+        ++stats.implausible_steps;
+        ++rejected_since_prev;
+        scans.reject(PacketStatus::kBadTime);
+        last = PacketStatus::kBadTime;
+        return out;
+      case TimeJudge::Verdict::kJump:
+        ++stats.time_jumps;
+        out = end(false);
+        have_fid = false;
+        break;
     }
     prev_stamp = stamp;
     have_stamp = true;
   }
-  const std::uint32_t fid = frame_id_at(p, layout);
-  // Frame and packet continuity. The measurement ids say where in the frame a packet is; a frame
-  // id that changes while they continue the frame is corrupted (counted, not a cut); a frame that
-  // starts (ids wrap) with the frame id unchanged is a new frame if its time is later (a
-  // corrupted frame id), else a late packet. Lost packets: the window's packet slots skipped,
-  // plus whole frames the column times say were skipped.
-  bool new_frame = have_fid && fid != prev_fid;
+  bool new_frame = have_fid && fid != prev_fid && !late;
   std::uint32_t missing_before = 0, missing_after = 0;
-  const long cpp = static_cast<long>(layout.columns_per_packet);
-  const long slot = base >= 0 ? base / cpp : 0;
-  if (n_valid > 0 && have_base && have_fid) {
+  if (n_valid > 0 && have_base && have_fid && !late) {
     const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
     const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
     const double col_ns = m.column_period_ns();
     const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
-    const double reorder_ns = 16.0 * static_cast<double>(cpp) * col_ns;  // a reordering window of 16 packets
-    // Duplicate or late. Negated as a double: dt may be INT64_MIN.
-    if (ahead == 1 && dt <= 0 && -static_cast<double>(dt) <= reorder_ns) {
-      scans.reject(PacketStatus::kOutOfOrder);
-      last = PacketStatus::kOutOfOrder;
-      return out;
-    }
     if (dt <= 0) {  // a jump back in time (sensor restart, a looping replay): continuity starts over
       ++stats.implausible_steps;
     } else {
@@ -314,31 +404,48 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
         new_frame = false;
         missing_before = window_slots(prev_slot, slot);
+        if (missing_before > 0) hole = {prev_slot, slot, 0, missing_before};
       } else {
         if (!new_frame) ++stats.implausible_steps;  // a new frame with the frame id unchanged: corrupted
         new_frame = true;
         missing_before = window_slots(prev_slot, packets_per_frame);
-        missing_after = window_slots(-1, slot) +
-                        static_cast<std::uint32_t>(ahead + extra - 1) * window_slots(-1, packets_per_frame);
+        // Frames skipped whole are lost scans, not missing packets of the next one.
+        missing_after = window_slots(-1, slot);
+        if (ahead + extra > 1) scans.lose_scans(static_cast<std::uint64_t>(ahead + extra - 1));
       }
     }
+    // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
+    const std::uint32_t r = std::min(rejected_since_prev, missing_before);
+    missing_before -= r;
+    missing_after -= std::min(rejected_since_prev - r, missing_after);
+    if (hole.open > missing_before && !new_frame) hole.open = missing_before;
   }
-  if (n_valid > 0) {
+  if (!late) rejected_since_prev = 0;
+  if (n_valid > 0 && !late) {
     have_base = true;
     prev_base = base;
     prev_ts = first_ts;
   }
   PendingScan& cur = scans.current();
+  if (late) {
+    --hole.open;
+    scans.fill_missing();
+    cur.rebase(stamp);
+  }
   if (missing_before > 0) scans.add_missing(missing_before);
-  if (new_frame && cur.scan.packets > 0) out = scans.end_scan(cur.from_cut);
-  if (missing_after > 0) scans.add_missing(missing_after);
+  if (new_frame && cur.scan.packets > 0) out = end(cur.from_cut);
+  if (missing_after > 0) {
+    scans.add_missing(missing_after);
+    hole = {-1, slot, 0, missing_after};  // the new frame's first slots
+  }
   if (cur.scan.packets == 0) {
     cur.from_cut = new_frame || (n_valid > 0 && base <= static_cast<long>(window_first));
     cur.scan.first_rx_ns = packet.rx_ns;
   }
   ++cur.scan.packets;
-  cur.scan.last_rx_ns = packet.rx_ns;
-  if (!have_fid || new_frame) prev_fid = fid;  // a corrupted frame id is not remembered
+  cur.scan.last_rx_ns = std::max(cur.scan.last_rx_ns, packet.rx_ns);
+  if (damaged) ++cur.scan.dropped;
+  if ((!have_fid || new_frame) && !late) prev_fid = fid;  // a corrupted frame id is not remembered
   have_fid = true;
   if (n_valid == 0) return out;
 
@@ -363,7 +470,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   }
   // The frame's last packet ends the scan now instead of with the next frame's first packet.
   const long last_col = base + static_cast<long>(layout.columns_per_packet) - 1;
-  if (!out && last_col >= static_cast<long>(window_last)) out = scans.end_scan(cur.from_cut);
+  if (!out && !late && last_col >= static_cast<long>(window_last)) out = end(cur.from_cut);
   return out;
 }
 

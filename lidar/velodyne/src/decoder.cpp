@@ -100,6 +100,10 @@ struct DecoderImpl {
   detail::AzimuthFov fov;
   int prev_trailing_bad = 0;       // groups after prev_az in the previous packet that were corrupt
   std::uint32_t prev_sensor_us = 0;  // the previous packet's own time (µs since the hour)
+  LateHole hole;                     // where the current scan last counted packets missing
+  TimeJudge time_judge;
+  bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
+  std::uint32_t rejected_since_prev = 0;  // packets dropped (bad time / azimuth) since the last good one
 
   explicit DecoderImpl(DecoderConfig config)
       : cfg(std::move(config)), info(&model_info(cfg.model)), scans(scan_options(cfg), stats) {
@@ -211,122 +215,12 @@ struct DecoderImpl {
                                               t_base + t.t_ns, t.ring, rtype, 0});
   }
 
-  PacketStatus check(std::span<const std::byte> bytes) const noexcept { return check_packet(bytes, cfg.model); }
-  std::optional<Scan> decode(const PacketView& packet, Nanos stamp) noexcept;
-  void restart() noexcept {
-    have_prev = false;
-    early_cut = false;
-    prev_trailing_bad = 0;
-  }
-};
-
-std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) noexcept {
-  const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
-  const std::uint8_t mode = p[offsetof(RawDataPacket, return_mode)];
-  const bool dual = mode == static_cast<std::uint8_t>(ReturnMode::kDual);
-  const std::uint8_t single_type = mode == static_cast<std::uint8_t>(ReturnMode::kLast)        ? kReturnLast
-                                   : mode == static_cast<std::uint8_t>(ReturnMode::kStrongest) ? kReturnStrongest
-                                                                                              : kReturnUnknown;
-  const int step = dual ? 2 : 1;
-  const int groups = static_cast<int>(kBlocksPerPacket) / step;  // firing groups (dual: block pairs)
-  int az[kBlocksPerPacket];
-  int na[kBlocksPerPacket];  // reduced to [0, 36000) for the fit
-  for (int k = 0; k < groups; ++k) {
-    az[k] = rd16(p + static_cast<std::size_t>(k * step) * sizeof(RawBlock) + 2);
-    na[k] = az[k] == kAzimuthCount ? 0 : az[k];
-  }
-  // One corrupted azimuth must not cut the scan: groups off the packet's line are not decoded.
-  const detail::AzimuthFit fit = detail::fit_azimuths(na, groups);
-  if (fit.good * 2 <= groups) {  // no line at all: the packet is garbage
-    ++stats.implausible_steps;
-    scans.reject(PacketStatus::kBadAzimuth);
-    last = PacketStatus::kBadAzimuth;
-    return std::nullopt;
-  }
-  int first_good = 0;
-  while ((fit.bad >> first_good) & 1U) ++first_good;
-  const std::uint32_t sensor_us = le32(p + offsetof(RawDataPacket, timestamp));
-
-  // A time jump ends the scan (partial); continuity starts over.
-  std::optional<Scan> out;
-  if (have_prev && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns)) {
-    ++stats.time_jumps;
-    out = scans.end_scan(false);
-    have_prev = false;
-  }
-  // Lost packets: the azimuth step from the previous packet (inside the FOV) and the sensor's
-  // own time step; a step back is a duplicate or a late packet.
-  detail::GapResult gap{};
-  if (have_prev) {
-    constexpr std::int64_t kHourUs = 3'600'000'000LL;
-    std::int64_t dt_us = static_cast<std::int64_t>(sensor_us) - prev_sensor_us;
-    if (dt_us < -kHourUs / 2) dt_us += kHourUs;
-    gap = detail::azimuth_gap(fov, {.prev_az = prev_az,
-                                    .groups_since_prev = prev_trailing_bad + first_good + 1,
-                                    .first_az = na[first_good],
-                                    .group_step = fit.step,
-                                    .groups_per_packet = groups,
-                                    .dt_ns = dt_us * 1000,
-                                    .packet_period_ns = static_cast<Nanos>(block_ns) * groups});
-    if (gap.backwards) {
-      scans.reject(PacketStatus::kOutOfOrder);
-      last = PacketStatus::kOutOfOrder;
-      return out;
-    }
-    if (gap.resync) {  // a jump back: no cut, nothing missing, continuity from this packet on
-      ++stats.implausible_steps;
-      have_prev = false;
-      gap = {};
-    }
-  }
-
-  prev_stamp = stamp;
-  prev_sensor_us = sensor_us;
-  scans.begin_packet();
-  if (fit.bad != 0) {
-    const auto n = static_cast<std::uint32_t>(std::popcount(fit.bad));
-    stats.corrupt_blocks += n;
-    stats.implausible_steps += n;
-    ++scans.scan().dropped;
-  }
-
-  for (int k = 0; k < groups; ++k) {
-    if ((fit.bad >> k) & 1U) continue;
-    const int b = k * step;
+  // One firing group's points into the current scan (its t after the scan's stamp: t_base); returns
+  // the group's azimuth advance (0: not interpolated). Shared by the packet loop and late packets.
+  [[gnu::always_inline]] inline std::uint32_t put_group(const std::uint8_t* p, int k, int b, const int* az,
+                                                        const detail::AzimuthFit& fit, int groups, bool dual,
+                                                        std::uint8_t single_type, std::uint32_t t_base) {
     const int a = az[k];
-    // For the cut, 360.00° is the last position of the revolution (VeloView splits after it).
-    const int a_cut = a == kAzimuthCount ? kAzimuthCount - 1 : a;
-    if (have_prev && !out) {
-      // The first group's step was judged by azimuth_gap (forward, whatever its length: lost
-      // packets, the FOV's blind arc); later steps inside a packet are on the fitted line.
-      const int s = az_step(prev_az, a_cut);
-      const bool plausible = k == first_good || s < kAzimuthCount / 2;
-      const bool crosses = plausible && s > 0 && az_step(prev_az, cut) > 0 && az_step(prev_az, cut) <= s;
-      bool cut_done = false;
-      if (k == first_good && gap.missing > 0) {
-        // Packets lost across the cut: those past it belong to the next scan.
-        std::uint32_t after = 0;
-        if (crosses && !early_cut)
-          after = detail::missing_after_cut(fov, cut, na[k], fit.step, k + 1, groups, gap.missing);
-        scans.add_missing(gap.missing - after);
-        if (crosses && !early_cut) {
-          out = scans.end_scan(scans.current().from_cut, true);
-          scans.add_missing(after);
-          cut_done = true;
-        }
-      }
-      if (!cut_done && early_cut) {
-        if (!crosses) ++stats.early_cut_misses;  // prediction wrong: this block joined the new scan early
-      } else if (!cut_done && crosses) {
-        out = scans.end_scan(scans.current().from_cut, true);
-      }
-    }
-    early_cut = false;
-    have_prev = true;
-    prev_az = a_cut;
-    const Nanos block_stamp = stamp + static_cast<Nanos>(k) * block_ns;
-    scans.current().touch(block_stamp, packet.rx_ns);
-    const auto t_base = static_cast<std::uint32_t>(block_stamp - scans.scan().stamp);
     // Azimuth advance over this block: to the next block, or from the previous one for the last
     // (a packet with a corrupted block: the fitted step).
     std::uint32_t agap = 0;
@@ -336,7 +230,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       agap = static_cast<std::uint32_t>(k + 1 < groups ? az_step(a, az[k + 1]) : az_step(az[k - 1], a));
     }
     if (agap > 1000) agap = 0;  // not a plausible rotation step: do not interpolate
-    last_gap = static_cast<int>(agap);
 
     BlockAngles ang;
     block_angles(a, agap, ang);
@@ -345,7 +238,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
         emit(ch[c], rd16(e + 3 * c), e[3 * c + 2], ang.sa[c], ang.ca[c], t_base, single_type);
       }
-      continue;
+      return agap;
     }
     const std::uint8_t* o = e + sizeof(RawBlock);
     for (std::size_t c = 0; c < kChannelsPerBlock; ++c) {
@@ -376,6 +269,237 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
           break;
       }
     }
+    return agap;
+  }
+
+  // Ends the current scan; the hole of late packets was that scan's.
+  std::optional<Scan> end(bool complete, bool next_from_cut = false) noexcept {
+    hole.open = 0;
+    return scans.end_scan(complete, next_from_cut);
+  }
+
+  // A late packet whose azimuth lies where the current scan counted packets missing: its points go
+  // into the scan (an earlier first firing becomes the scan's stamp) and the count goes down.
+  void place_late(const std::uint8_t* p, const int* az, const detail::AzimuthFit& fit, int groups, int step, bool dual,
+                  std::uint8_t single_type, Nanos stamp, Nanos rx_ns) {
+    scans.begin_packet();
+    PendingScan& cur = scans.current();
+    bool rebased = false;
+    for (int k = 0; k < groups; ++k) {
+      // Only the groups inside the hole: a late packet across the cut has its earlier ones in the
+      // scan already published (a drop there, not here).
+      if (((fit.bad >> k) & 1U) != 0 || !hole.holds(az[k] == kAzimuthCount ? kAzimuthCount - 1 : az[k])) continue;
+      const Nanos block_stamp = stamp + static_cast<Nanos>(k) * block_ns;
+      if (!rebased) {
+        cur.rebase(block_stamp);
+        rebased = true;
+      }
+      const Nanos last_rx = cur.scan.last_rx_ns;
+      cur.touch(block_stamp, rx_ns);
+      cur.scan.last_rx_ns = std::max(last_rx, rx_ns);
+      const auto t_base = static_cast<std::uint32_t>(block_stamp - cur.scan.stamp);
+      (void)put_group(p, k, k * step, az, fit, groups, dual, single_type, t_base);
+    }
+    --hole.open;
+    scans.fill_missing();
+  }
+
+  PacketStatus check(std::span<const std::byte> bytes) const noexcept { return check_packet(bytes, cfg.model); }
+  std::optional<Scan> decode(const PacketView& packet, Nanos stamp) noexcept;
+  void restart() noexcept {
+    have_prev = false;
+    early_cut = false;
+    prev_trailing_bad = 0;
+    hole.open = 0;
+    time_judge.reset();
+    rejected_since_prev = 0;
+    turning = false;
+  }
+};
+
+std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) noexcept {
+  const auto* p = reinterpret_cast<const std::uint8_t*>(packet.data.data());
+  const std::uint8_t mode = p[offsetof(RawDataPacket, return_mode)];
+  const bool dual = mode == static_cast<std::uint8_t>(ReturnMode::kDual);
+  const std::uint8_t single_type = mode == static_cast<std::uint8_t>(ReturnMode::kLast)        ? kReturnLast
+                                   : mode == static_cast<std::uint8_t>(ReturnMode::kStrongest) ? kReturnStrongest
+                                                                                              : kReturnUnknown;
+  const int step = dual ? 2 : 1;
+  const int groups = static_cast<int>(kBlocksPerPacket) / step;  // firing groups (dual: block pairs)
+  int az[kBlocksPerPacket];
+  int na[kBlocksPerPacket];  // reduced to [0, 36000) for the fit
+  for (int k = 0; k < groups; ++k) {
+    az[k] = rd16(p + static_cast<std::size_t>(k * step) * sizeof(RawBlock) + 2);
+    na[k] = az[k] == kAzimuthCount ? 0 : az[k];
+  }
+  // One corrupted azimuth must not cut the scan: groups off the packet's line are not decoded.
+  const detail::AzimuthFit fit = detail::fit_azimuths(na, groups);
+  if (fit.good * 2 <= groups) {  // no line at all: the packet is garbage
+    ++stats.implausible_steps;
+    scans.reject(PacketStatus::kBadAzimuth);
+    last = PacketStatus::kBadAzimuth;
+    return std::nullopt;
+  }
+  int first_good = 0;
+  while ((fit.bad >> first_good) & 1U) ++first_good;
+  // Every group at one azimuth while the rotor turns: a frozen encoder. Corrupt, never a scan of
+  // its own (a stuck azimuth at the cut made ~377 one-packet scans a second: issue 26 item 7).
+  if (groups > 1 && fit.step < 0.5 && have_prev && turning) {
+    ++stats.implausible_steps;
+    ++rejected_since_prev;
+    scans.reject(PacketStatus::kBadAzimuth);
+    last = PacketStatus::kBadAzimuth;
+    return std::nullopt;
+  }
+  const std::uint32_t sensor_us = le32(p + offsetof(RawDataPacket, timestamp));
+
+  // Order and duplicates are judged before the time: a late packet is placed or counted, never
+  // the end of its scan (issue 26 item 1). Then one packet whose time jumps while its azimuth
+  // continues is corrupt (item 2); only a sustained step ends the scan.
+  std::optional<Scan> out;
+  detail::GapResult gap{};
+  const Nanos period_ns = static_cast<Nanos>(block_ns) * groups;
+  if (have_prev) {
+    constexpr std::int64_t kHourUs = 3'600'000'000LL;
+    std::int64_t dt_us = static_cast<std::int64_t>(sensor_us) - prev_sensor_us;
+    if (dt_us < -kHourUs / 2) dt_us += kHourUs;
+    detail::GapInput in{.prev_az = prev_az,
+                        .groups_since_prev = prev_trailing_bad + first_good + 1,
+                        .first_az = na[first_good],
+                        .group_step = fit.step,
+                        .groups_per_packet = groups,
+                        .dt_ns = dt_us * 1000,
+                        .packet_period_ns = period_ns};
+    const bool jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    // A late packet steps back in time too: placed when within the reorder window.
+    const bool far_back = stamp < prev_stamp - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
+    if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
+    gap = detail::azimuth_gap(fov, in);
+    if (gap.backwards) {
+      // Stepped back with its time not later: a duplicate or a late packet (placed in its hole).
+      // Its time moved on by more than half a packet: a new packet with a frozen azimuth.
+      if (in.dt_ns > period_ns / 2 && !jumped) {
+        ++stats.implausible_steps;
+        ++rejected_since_prev;
+        scans.reject(PacketStatus::kBadAzimuth);
+        last = PacketStatus::kBadAzimuth;
+        return std::nullopt;
+      }
+      int last_good_k = groups - 1;
+      while ((fit.bad >> last_good_k) & 1U) --last_good_k;
+      if ((hole.holds(na[first_good]) || hole.holds(na[last_good_k])) && !far_back) {
+        place_late(p, az, fit, groups, step, dual, single_type, stamp, packet.rx_ns);
+        return std::nullopt;
+      }
+      scans.reject(PacketStatus::kOutOfOrder);
+      last = PacketStatus::kOutOfOrder;
+      return std::nullopt;
+    }
+    if (gap.implausible) {  // an azimuth its time cannot reach (frozen encoder): corrupt, never a cut
+      ++stats.implausible_steps;
+      ++rejected_since_prev;
+      scans.reject(PacketStatus::kBadAzimuth);
+      last = PacketStatus::kBadAzimuth;
+      return std::nullopt;
+    }
+    switch (time_judge.judge(jumped, !gap.resync && gap.missing == 0)) {
+      case TimeJudge::Verdict::kOk: break;
+      case TimeJudge::Verdict::kCorrupt:
+        ++stats.implausible_steps;
+        ++rejected_since_prev;
+        scans.reject(PacketStatus::kBadTime);
+        last = PacketStatus::kBadTime;
+        return std::nullopt;
+      case TimeJudge::Verdict::kJump:  // a real clock step: the scan ends; continuity starts over
+        ++stats.time_jumps;
+        out = end(false);
+        have_prev = false;
+        gap = {};
+        break;
+    }
+    if (have_prev && gap.resync) {  // a jump back: no cut, nothing missing, continuity from this packet on
+      ++stats.implausible_steps;
+      have_prev = false;
+      gap = {};
+    }
+    if (have_prev && gap.turns > 0) {
+      // Whole turns passed unseen (packets lost or rejected): the scan ends at its cut with what it
+      // lacks to there, the turns between are lost scans, the next starts with what it lacks.
+      const int a0 = na[first_good];
+      const bool az_crosses = detail::turn_step(prev_az, cut) > 0 && detail::turn_step(prev_az, cut) <= detail::turn_step(prev_az, a0);
+      // Rejected packets (a frozen azimuth) filled these slots first: dropped, not missing too.
+      std::uint32_t rejected = rejected_since_prev;
+      const auto take = [&](std::uint32_t k) {
+        const std::uint32_t r = std::min(k, rejected);
+        rejected -= r;
+        return k - r;
+      };
+      if (!early_cut) scans.add_missing(take(detail::packets_on_arc(fov, prev_az, cut, fit.step, groups)));
+      out = end(scans.current().from_cut, true);
+      (void)take(static_cast<std::uint32_t>(std::lround((gap.turns - (az_crosses ? 0 : 1)) * fov.length() /
+                                                        std::max(1.0, fit.step * groups))));
+      scans.add_missing(take(detail::packets_on_arc(fov, cut, a0, fit.step, groups)));
+      scans.lose_scans(gap.turns + (az_crosses ? 1U : 0U) - 1U);
+      have_prev = false;  // the cut is done: the first group opens the new scan
+      gap = {};
+    } else if (have_prev) {
+      // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
+      gap.missing -= std::min<std::uint32_t>(gap.missing, rejected_since_prev);
+    }
+  }
+  rejected_since_prev = 0;
+  turning = fit.step >= 0.5;
+
+  prev_stamp = stamp;
+  prev_sensor_us = sensor_us;
+  scans.begin_packet();
+  if (fit.bad != 0) {
+    const auto n = static_cast<std::uint32_t>(std::popcount(fit.bad));
+    stats.corrupt_blocks += n;
+    stats.implausible_steps += n;
+    ++scans.scan().dropped;
+  }
+
+  for (int k = 0; k < groups; ++k) {
+    if ((fit.bad >> k) & 1U) continue;
+    const int b = k * step;
+    const int a = az[k];
+    // For the cut, 360.00° is the last position of the revolution (VeloView splits after it).
+    const int a_cut = a == kAzimuthCount ? kAzimuthCount - 1 : a;
+    if (have_prev && !out) {
+      // The first group's step was judged by azimuth_gap (forward, whatever its length: lost
+      // packets, the FOV's blind arc); later steps inside a packet are on the fitted line.
+      const int s = az_step(prev_az, a_cut);
+      const bool plausible = k == first_good || s < kAzimuthCount / 2;
+      const bool crosses = plausible && s > 0 && az_step(prev_az, cut) > 0 && az_step(prev_az, cut) <= s;
+      bool cut_done = false;
+      if (k == first_good && gap.missing > 0) {
+        // Packets lost across the cut: those past it belong to the next scan.
+        std::uint32_t after = 0;
+        if (crosses && !early_cut)
+          after = detail::missing_after_cut(fov, cut, na[k], fit.step, k + 1, groups, gap.missing);
+        scans.add_missing(gap.missing - after);
+        hole = {prev_az, a_cut, detail::kTurn, gap.missing - after};
+        if (crosses && !early_cut) {
+          out = end(scans.current().from_cut, true);
+          scans.add_missing(after);
+          hole = {cut == 0 ? detail::kTurn - 1 : cut - 1, a_cut, detail::kTurn, after};  // past the cut only
+          cut_done = true;
+        }
+      }
+      if (!cut_done && early_cut) {
+        if (!crosses) ++stats.early_cut_misses;  // prediction wrong: this block joined the new scan early
+      } else if (!cut_done && crosses) {
+        out = end(scans.current().from_cut, true);
+      }
+    }
+    early_cut = false;
+    have_prev = true;
+    prev_az = a_cut;
+    const Nanos block_stamp = stamp + static_cast<Nanos>(k) * block_ns;
+    scans.current().touch(block_stamp, packet.rx_ns);
+    const auto t_base = static_cast<std::uint32_t>(block_stamp - scans.scan().stamp);
+    last_gap = static_cast<int>(put_group(p, k, b, az, fit, groups, dual, single_type, t_base));
   }
   int last_good = groups - 1;
   while ((fit.bad >> last_good) & 1U) --last_good;
@@ -387,7 +511,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   if (!out && have_prev && last_gap > 0 && prev_trailing_bad == 0) {
     const int to_cut = az_step(prev_az, cut);
     if (to_cut > 0 && to_cut + kEarlyCutMargin <= last_gap) {
-      out = scans.end_scan(scans.current().from_cut, true);
+      out = end(scans.current().from_cut, true);
       early_cut = true;
     }
   }

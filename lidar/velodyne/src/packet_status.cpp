@@ -12,6 +12,7 @@ const char* to_string(PacketStatus s) noexcept {
     case PacketStatus::kNotData: return "not_data";
     case PacketStatus::kTimeBackwards: return "time_backwards";
     case PacketStatus::kOutOfOrder: return "out_of_order";
+    case PacketStatus::kBadTime: return "bad_time";
   }
   return "unknown";
 }

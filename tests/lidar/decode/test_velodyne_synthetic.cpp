@@ -260,9 +260,13 @@ TEST(VelodyneScans, TimeJumpEndsTheScan) {
   auto after = rotate(dec, 4800, 10, 40, 9'000'000'000 - 3'600'000'000'000);
   EXPECT_EQ(dec.stats().time_jumps, 1U);
   EXPECT_TRUE(after.empty());  // the interrupted scan is partial: not emitted by default
+  // The first packet of the step is judged alone (a corrupt time: dropped, counted); the second
+  // confirms the step (issue 26 item 2).
+  EXPECT_EQ(dec.stats().by_status[static_cast<std::size_t>(PacketStatus::kBadTime)], 1U);
   const auto tail = dec.flush();
   ASSERT_TRUE(tail);
-  EXPECT_EQ(tail->packets, 10U);
+  EXPECT_EQ(tail->packets, 9U);
+  EXPECT_GE(tail->dropped, 1U);
   for (const auto& p : tail->points) EXPECT_LT(p.t, 20'000'000U);
 }
 

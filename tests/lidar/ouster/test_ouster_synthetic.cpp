@@ -169,25 +169,33 @@ TEST(OusterDecoder, HandCheckedGeometry) {
   j["beam_intrinsics"]["beam_azimuth_angles"] = {0.0};
   DecoderConfig cfg;
   cfg.metadata = parse_metadata(j.dump(), "one_beam.json");
-  std::vector<Column> cols(16);
-  for (std::size_t c = 0; c < 16; ++c) {
-    cols[c].measurement_id = static_cast<std::uint16_t>(c == 0 ? 0 : c == 1 ? 256 : 512 + c);
-    cols[c].timestamp_ns = kT0 + c;
-    cols[c].pixels = {Pixel{{10000, 1, 1}, {}, 0}};
-  }
-  const auto pkt = encode_packet(Profile::kRng19Rfl8Sig16Nir16, 1, 1, cols);
-  cfg.emit_partial_scans = true;
-  Decoder partial(cfg);
-  ASSERT_FALSE(partial.push(PacketView{as_bytes(pkt), 0, 7502}, 0));
-  const auto s = partial.flush();
+  // A packet's columns carry consecutive measurement ids (one off them is corrupt, issue 26 item 5):
+  // columns 0.. and, in a second packet, the quarter frame's 256...
+  const auto decode = [&](std::uint16_t first_id) {
+    std::vector<Column> cols(16);
+    for (std::size_t c = 0; c < 16; ++c) {
+      cols[c].measurement_id = static_cast<std::uint16_t>(first_id + c);
+      cols[c].timestamp_ns = kT0 + c;
+      cols[c].pixels = {Pixel{{10000, 1, 1}, {}, 0}};
+    }
+    const auto pkt = encode_packet(Profile::kRng19Rfl8Sig16Nir16, 1, 1, cols);
+    cfg.emit_partial_scans = true;
+    Decoder partial(cfg);
+    EXPECT_FALSE(partial.push(PacketView{as_bytes(pkt), 0, 7502}, 0));
+    return partial.flush();
+  };
+  const auto s = decode(0);
   ASSERT_TRUE(s);
   ASSERT_EQ(s->points.size(), 16U);
   EXPECT_NEAR(s->points[0].x, -10.0, 1e-5);
   EXPECT_NEAR(s->points[0].y, 0.0, 1e-5);
   EXPECT_NEAR(s->points[0].z, 0.03618, 1e-6);
-  EXPECT_NEAR(s->points[1].x, 0.0, 1e-5);
-  EXPECT_NEAR(s->points[1].y, 10.0, 1e-5);
   EXPECT_EQ(s->points[1].t, 1U) << "t = column time - first column time";
+  const auto q = decode(256);
+  ASSERT_TRUE(q);
+  ASSERT_EQ(q->points.size(), 16U);
+  EXPECT_NEAR(q->points[0].x, 0.0, 1e-5);
+  EXPECT_NEAR(q->points[0].y, 10.0, 1e-5);
 }
 
 TEST(OusterDecoder, DualReturnSelection) {
@@ -358,9 +366,15 @@ TEST(OusterDecoder, TimeJumpEndsScanAsPartial) {
   const Profile prof = Profile::kLegacy;
   Decoder dec(config_for(prof));
   (void)push_frame(dec, prof, 1, 0, 30);
-  // Same frame id, but the clock jumped back 10 s: the scan in progress is partial.
+  // Same frame id, but the clock jumped back 10 s and stays there: the scan in progress is partial.
+  // The first packet of the step is judged alone (its ids continue: a corrupt time, dropped); the
+  // second confirms the step (issue 26 item 2).
   const auto pkt = frame_packet(prof, 1, 30);
   EXPECT_FALSE(dec.push(PacketView{as_bytes(pkt), 0, 7502}, static_cast<Nanos>(column_time(1, 480)) - 10'000'000'000));
+  EXPECT_EQ(dec.stats().time_jumps, 0U);
+  EXPECT_EQ(dec.stats().by_status[static_cast<std::size_t>(PacketStatus::kBadTime)], 1U);
+  const auto pkt2 = frame_packet(prof, 1, 31);
+  EXPECT_FALSE(dec.push(PacketView{as_bytes(pkt2), 0, 7502}, static_cast<Nanos>(column_time(1, 496)) - 10'000'000'000));
   EXPECT_EQ(dec.stats().time_jumps, 1U);
   EXPECT_EQ(dec.stats().partial_scans_discarded, 1U);
 }

@@ -24,8 +24,9 @@ enum class PacketStatus : std::uint8_t {
   kNotData,        // e.g. a position packet on the data port
   kTimeBackwards,  // sensor time jumped back beyond tolerance
   kOutOfOrder,     // steps back (a duplicate or a late, reordered packet): not decoded again
+  kBadTime,        // one packet's time jumps while its azimuth / ids continue its neighbours': corrupt
 };
-inline constexpr std::size_t kPacketStatusCount = 8;  // PacketStatus values
+inline constexpr std::size_t kPacketStatusCount = 9;  // PacketStatus values
 
 const char* to_string(PacketStatus s) noexcept;
 

@@ -34,6 +34,10 @@ struct ScanStats {
   std::uint64_t time_jumps = 0;  // scans ended early because the packet time jumped
   std::uint64_t missing_packets = 0;      // lost between received packets (inside the FOV), summed over scans
   std::uint64_t implausible_steps = 0;    // corrupted azimuths / frame or measurement ids: dropped, not cuts
+  std::uint64_t late_placed = 0;   // late (reordered) packets put into the hole they left in their scan
+  // Scans the decoder knows it lost (issue 26): partial scans discarded, and whole turns the sensor
+  // time says passed while every packet was lost or rejected (stuck azimuth, loss bursts).
+  std::uint64_t scans_lost = 0;
   [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
 };
 
@@ -45,6 +49,48 @@ inline constexpr Nanos kBackwardsTolerance = 1'000'000;
 [[nodiscard]] constexpr bool is_time_jump(Nanos prev_ns, Nanos now_ns, Nanos max_gap_ns) noexcept {
   return now_ns < prev_ns - kBackwardsTolerance || now_ns > prev_ns + max_gap_ns;
 }
+
+// Judges a packet whose time jumped (is_time_jump) against its azimuth or ids: one packet whose
+// time jumps while its position continues the previous packet's is corrupt (dropped, counted
+// kBadTime: never a cut); the second in a row is a real clock step (a jump). Issue 26 item 2.
+class TimeJudge {
+ public:
+  enum class Verdict : std::uint8_t { kOk, kCorrupt, kJump };
+  Verdict judge(bool jumped, bool continues) noexcept {
+    if (!jumped) {
+      suspect_ = false;
+      return Verdict::kOk;
+    }
+    if (continues && !suspect_) {
+      suspect_ = true;
+      return Verdict::kCorrupt;
+    }
+    suspect_ = false;
+    return Verdict::kJump;
+  }
+  void reset() noexcept { suspect_ = false; }
+
+ private:
+  bool suspect_ = false;  // the previous packet was dropped for its time
+};
+
+// Where the current scan lost packets (the last gap counted missing): a late packet that lands
+// there is placed, and the missing count goes down (issue 26 item 1). Positions are the vendor's:
+// azimuth (0.01°) or packet slots.
+struct LateHole {
+  long from = 0, to = 0;    // exclusive ends, forward from `from` (wrapping at `wrap` when > 0)
+  long wrap = 0;
+  std::uint32_t open = 0;   // missing packets not yet arrived
+  [[nodiscard]] bool holds(long at) const noexcept {
+    if (open == 0) return false;
+    long d = at - from, span = to - from;
+    if (wrap > 0) {
+      d = ((d % wrap) + wrap) % wrap;
+      span = ((span % wrap) + wrap) % wrap;
+    }
+    return d > 0 && d < span;
+  }
+};
 
 // A scan being assembled, with what the decoder knows about it.
 struct PendingScan {
@@ -66,6 +112,13 @@ struct PendingScan {
       counted = true;
     }
     scan.last_rx_ns = rx_ns;
+  }
+  // A late packet fired before the scan's stamp: the scan starts at it, the points' t move on.
+  void rebase(Nanos earlier) noexcept {
+    if (!started || earlier >= scan.stamp) return;
+    const auto shift = static_cast<std::uint32_t>(std::min<Nanos>(scan.stamp - earlier, 0xFFFF'FFFFLL));
+    for (auto& p : scan.points) p.t += shift;
+    scan.stamp = earlier;
   }
   // Has packets and a stamp: worth emitting.
   [[nodiscard]] bool has_data() const noexcept { return scan.packets > 0 && started; }
@@ -123,6 +176,15 @@ class ScanAssembler {
     cur_.scan.missing_packets += n;
     stats_.missing_packets += n;
   }
+  // A packet counted missing in the current scan arrived late after all.
+  void fill_missing() noexcept {
+    if (cur_.scan.missing_packets == 0) return;
+    --cur_.scan.missing_packets;
+    --stats_.missing_packets;
+    ++stats_.late_placed;
+  }
+  // Scans lost as a whole (no sample for them).
+  void lose_scans(std::uint64_t n) noexcept { stats_.scans_lost += n; }
   // A new packet is being decoded: no scan has counted it yet.
   void begin_packet() noexcept {
     cur_.counted = false;
@@ -193,7 +255,10 @@ inline std::optional<Scan> ScanAssembler::end_scan(bool complete, bool next_from
   if (cur_.has_data() && (complete || options_.emit_partial_scans)) {
     out = emit();
   } else {
-    if (cur_.scan.packets > 0) ++stats_.partial_scans_discarded;
+    if (cur_.scan.packets > 0) {
+      ++stats_.partial_scans_discarded;
+      ++stats_.scans_lost;
+    }
     carried_drops = cur_.scan.dropped;  // drops stay visible in the next emitted scan
     recycle(std::move(cur_.scan.points));
   }
@@ -209,7 +274,10 @@ inline std::optional<Scan> ScanAssembler::end_scan(bool complete, bool next_from
 }
 
 inline void ScanAssembler::drop_next() noexcept {
-  if (nxt_.scan.packets > 0) ++stats_.partial_scans_discarded;
+  if (nxt_.scan.packets > 0) {
+    ++stats_.partial_scans_discarded;
+    ++stats_.scans_lost;
+  }
   recycle(std::move(nxt_.scan.points));
   nxt_ = fresh();
 }
@@ -219,6 +287,9 @@ inline void ScanAssembler::merge(std::optional<Scan>& out, std::optional<Scan>&&
   if (out) {
     --stats_.scans;
     ++stats_.partial_scans_discarded;
+    ++stats_.scans_lost;
+    later->seq = out->seq;  // published sequence numbers stay gapless: a gap is a loss downstream
+    --next_seq_;
     recycle(std::move(out->points));
   }
   out = std::move(later);

@@ -133,6 +133,10 @@ struct GapResult {
                              // replayed capture looping): continuity starts over, nothing missing
   std::uint32_t missing = 0; // packets lost in between (inside the FOV)
   int arc = 0;               // forward azimuth arc from prev_az to first_az
+  // The azimuth is farther ahead than the sensor time allows (a frozen or corrupted azimuth that
+  // happens to look ahead): the packet is corrupt, not the end of a turn (issue 26 item 2, 7).
+  bool implausible = false;
+  std::uint32_t turns = 0;   // whole turns the sensor time says passed beyond the azimuth's step
 };
 
 // How far back (in packets) a packet may step and still be a duplicate or a reordered one.
@@ -173,10 +177,26 @@ inline GapResult azimuth_gap(const AzimuthFov& fov, const GapInput& in) noexcept
   // The azimuth cannot tell whole turns apart; the sensor time can.
   if (time_known && pkt_arc > 0.5) {
     const double per_turn = fov.length() / pkt_arc;
-    if (k_t > k + per_turn / 2) k = k_t;
+    if (k > k_t + std::max(2.0, per_turn / 8)) {
+      r.implausible = true;
+      return r;
+    }
+    if (k_t > k + per_turn / 2) {
+      r.turns = static_cast<std::uint32_t>(std::lround(std::min((k_t - k) / per_turn, 1e6)));
+      k = k_t;
+    }
   }
   r.missing = static_cast<std::uint32_t>(std::lround(std::min(k, 1e6)));
   return r;
+}
+
+// Packets on the visible part of the arc from `from` to `to` (0.01°), at `group_step` per group.
+inline std::uint32_t packets_on_arc(const AzimuthFov& fov, int from, int to, double group_step,
+                                    int groups_per_packet) noexcept {
+  if (group_step <= 0.5) return 0;
+  const int arc = turn_step(from, to);
+  const int visible = arc - arc_outside(fov, from, arc);
+  return static_cast<std::uint32_t>(std::max(0L, std::lround(visible / (group_step * groups_per_packet) - 0.5)));
 }
 
 // Of `missing` packets lost on an arc that crosses `cut`, those after the cut (the next scan's).

@@ -1,0 +1,229 @@
+// Issue 26: the faults `rig chaos` injects, one at a time, at decoder level, for a model of each
+// vendor (the synthetic sensors' genuine packets through the registry's decoders, as the driver
+// runs them). Each case holds a faulted stream against the same stream decoded clean:
+//   - a packet one position late is placed in its scan: nothing missing, nothing dropped, the
+//     scan's stamp its first firing even when the late packet was the scan's first (item 1);
+//   - a late duplicate is a counted drop, never the end of its scan (item 1);
+//   - one packet with a corrupted time is a counted drop (bad_time), never a time jump (item 2);
+//   - a real clock step still ends the scan (a sustained step is a jump);
+//   - a frozen azimuth publishes no one-packet scans, counts the turns it cost as lost scans and
+//     its packets as dropped, never dropped and missing twice (item 7);
+//   - Hesai: packets lost just past the cut are the next scan's (item 3).
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/lidar/mock/packet_fields.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
+#include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
+#include "sensor_rig/lidar/scan_decoder.hpp"
+
+namespace sensor_rig::lidar {
+namespace {
+
+struct Pkt {
+  std::vector<std::byte> bytes;
+  Nanos stamp = 0;  // first firing (what the driver's stamper gives)
+  double rotor_deg = 0.0;
+};
+
+struct Stream {
+  std::vector<Pkt> pkts;
+  DecoderOptions options;
+  mock::FieldBytes time_field;
+  std::unique_ptr<mock::SyntheticSensor> sensor;  // for freeze_azimuth's layout
+};
+
+Stream render(const std::string& model, double seconds) {
+  mock::SyntheticOptions o;
+  o.model = model;
+  o.ouster_imu_period_ns = 0;
+  o.start_ns = 1'700'000'000'000'000'000LL;
+  Stream s;
+  s.sensor = mock::make_synthetic_sensor(o, mock::Scene::standard());
+  s.options.model = model;
+  if (mock::is_ouster_model(model)) {
+    s.options.metadata_text = mock::metadata_json(mock::synthetic_ouster_metadata(o));
+    s.options.metadata_name = "synthetic";
+  }
+  s.time_field = mock::PacketFields(*s.sensor).locate(mock::PacketField::kTime);
+  const auto n = static_cast<std::size_t>(s.sensor->packets_per_second() * seconds);
+  while (s.pkts.size() < n) {
+    const mock::SyntheticPacket p = s.sensor->next();
+    if (!p.truth.data) continue;
+    s.pkts.push_back({std::vector<std::byte>(p.bytes.begin(), p.bytes.end()), p.truth.acq_ns, p.truth.rotor_deg});
+  }
+  return s;
+}
+
+struct Decoded {
+  std::vector<Scan> scans;
+  DecoderCounters st;
+  [[nodiscard]] std::uint64_t missing() const {
+    std::uint64_t m = 0;
+    for (const auto& s : scans) m += s.missing_packets;
+    return m;
+  }
+  [[nodiscard]] std::uint64_t dropped() const {
+    std::uint64_t m = 0;
+    for (const auto& s : scans) m += s.dropped;
+    return m;
+  }
+  [[nodiscard]] std::uint64_t points() const {
+    std::uint64_t m = 0;
+    for (const auto& s : scans) m += s.points.size();
+    return m;
+  }
+};
+
+Decoded run(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
+  const auto dec = make_decoder(o);
+  Decoded r;
+  Nanos rx = 1'000'000'000;
+  for (const auto& p : pkts) {
+    rx += 100'000;
+    if (auto s = dec->push(PacketView{p.bytes, rx, 0}, p.stamp)) r.scans.push_back(std::move(*s));
+  }
+  r.st = dec->counters();
+  return r;
+}
+
+std::uint64_t status(const Decoded& d, PacketStatus s) { return d.st.by_status[static_cast<std::size_t>(s)]; }
+
+// Index of the packet that starts a scan (the first after the cut), near the stream's middle.
+std::size_t scan_start_near(const Stream& s, std::size_t from) {
+  for (std::size_t i = from; i + 1 < s.pkts.size(); ++i)
+    if (s.pkts[i + 1].rotor_deg < s.pkts[i].rotor_deg) return i + 1;
+  return from;
+}
+
+class ScanFaults : public ::testing::TestWithParam<const char*> {
+ protected:
+  void SetUp() override {
+    s_ = render(GetParam(), 1.0);
+    clean_ = run(s_.options, s_.pkts);
+    ASSERT_GE(clean_.scans.size(), 8U);
+    ASSERT_EQ(clean_.missing(), 0U);
+  }
+  Stream s_;
+  Decoded clean_;
+};
+
+TEST_P(ScanFaults, PacketOnePositionLateIsPlacedInItsScan) {
+  // Mid-scan, and the first packet of a scan (Hesai: outside the cut's overlap window, where a late
+  // packet is still a counted drop).
+  const std::size_t start = scan_start_near(s_, s_.pkts.size() / 2);
+  const auto half_scan = static_cast<std::size_t>(s_.sensor->packets_per_second() / 20.0);
+  const bool hesai = std::string(GetParam()).rfind("Pandar", 0) == 0;
+  for (const std::size_t at : {start + half_scan, hesai ? start + 4 : start}) {
+    auto pkts = s_.pkts;
+    std::swap(pkts[at], pkts[at + 1]);  // packet `at` arrives after its successor
+    const Decoded r = run(s_.options, pkts);
+    EXPECT_EQ(r.scans.size(), clean_.scans.size()) << at;
+    EXPECT_EQ(r.missing(), 0U) << at << ": the late packet arrived: not missing";
+    EXPECT_EQ(r.dropped(), 0U) << at;
+    EXPECT_EQ(r.points(), clean_.points()) << at;
+    EXPECT_EQ(r.st.late_placed, 1U) << at;
+    EXPECT_EQ(r.st.time_jumps, 0U) << at;
+    for (std::size_t k = 0; k < r.scans.size() && k < clean_.scans.size(); ++k)
+      EXPECT_EQ(r.scans[k].stamp, clean_.scans[k].stamp) << at << " scan " << k;
+  }
+}
+
+TEST_P(ScanFaults, LateDuplicateIsADropNotTheEndOfItsScan) {
+  auto pkts = s_.pkts;
+  const std::size_t at = pkts.size() / 2 + 3;
+  pkts.insert(pkts.begin() + static_cast<std::ptrdiff_t>(at + 6), pkts[at]);  // sent again 5 packets later
+  const Decoded r = run(s_.options, pkts);
+  EXPECT_EQ(r.scans.size(), clean_.scans.size());
+  EXPECT_EQ(r.missing(), 0U);
+  EXPECT_EQ(r.dropped(), 1U);
+  EXPECT_EQ(status(r, PacketStatus::kOutOfOrder), 1U);
+  EXPECT_EQ(r.st.time_jumps, 0U);
+  EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
+}
+
+TEST_P(ScanFaults, OneCorruptedTimeIsADropNotAJump) {
+  auto pkts = s_.pkts;
+  const std::size_t at = pkts.size() / 2 + 5;
+  for (std::size_t k = 0; k < s_.time_field.size; ++k) pkts[at].bytes[s_.time_field.offset + k] ^= std::byte{0xA5};
+  pkts[at].stamp += 2'768'000'000'000LL;  // the stamper maps the corrupted time: far off
+  const Decoded r = run(s_.options, pkts);
+  EXPECT_EQ(r.scans.size(), clean_.scans.size());
+  EXPECT_EQ(r.st.time_jumps, 0U);
+  EXPECT_EQ(status(r, PacketStatus::kBadTime), 1U);
+  EXPECT_EQ(r.dropped(), 1U);
+  EXPECT_EQ(r.missing(), 0U) << "a dropped packet is not missing too";
+  EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
+}
+
+TEST_P(ScanFaults, SustainedClockStepIsStillAJump) {
+  auto pkts = s_.pkts;
+  const std::size_t at = pkts.size() / 2 + 5;
+  for (std::size_t i = at; i < pkts.size(); ++i) pkts[i].stamp += 5'000'000'000LL;
+  const Decoded r = run(s_.options, pkts);
+  EXPECT_EQ(r.st.time_jumps, 1U);
+  EXPECT_EQ(status(r, PacketStatus::kBadTime), 1U) << "the first packet of the step is judged alone";
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, ScanFaults, ::testing::Values("VLP-32C", "VLP-16", "Pandar40P", "PandarXT32", "OS-LEGACY"),
+                         [](const auto& p) {
+                           std::string n = p.param;
+                           for (auto& c : n)
+                             if (c == '-') c = '_';
+                           return n;
+                         });
+
+// Spinning-azimuth vendors: an encoder that freezes for ~2.5 turns.
+class FrozenAzimuth : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(FrozenAzimuth, NoOnePacketScansTurnsCountedLostPacketsDroppedOnce) {
+  Stream s = render(GetParam(), 2.0);
+  const Decoded clean = run(s.options, s.pkts);
+  const mock::PacketFields fields(*s.sensor);
+  auto pkts = s.pkts;
+  const std::size_t from = pkts.size() / 4;
+  const auto n = static_cast<std::size_t>(s.sensor->packets_per_second() * 0.25);
+  const std::vector<std::byte> frozen = pkts[from].bytes;
+  for (std::size_t i = from; i < from + n; ++i) fields.freeze_azimuth(pkts[i].bytes, frozen);
+  const Decoded r = run(s.options, pkts);
+  for (const auto& sc : r.scans) EXPECT_GT(sc.packets, 10U) << "no one-packet scans";
+  // Scans published + lost = the clean run's scans (the turns the frozen azimuth hid are lost).
+  EXPECT_NEAR(static_cast<double>(r.scans.size() + r.st.scans_lost - clean.st.scans_lost),
+              static_cast<double>(clean.scans.size()), 1.0);
+  EXPECT_LE(r.missing() + r.dropped(), n + 2) << "each frozen packet counted once";
+  EXPECT_GE(r.missing() + r.dropped(), n / 4);
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, FrozenAzimuth, ::testing::Values("VLP-32C", "Pandar40P"), [](const auto& p) {
+  std::string n = p.param;
+  for (auto& c : n)
+    if (c == '-') c = '_';
+  return n;
+});
+
+// Hesai: four packets lost just after the cut are the next scan's, not the previous one's (the cut
+// is nebula's: the raw azimuth where every channel has passed 0°, a few degrees after the rotor's 0°).
+TEST(HesaiLossAtCut, SplitAtTheCut) {
+  Stream s = render("Pandar40P", 1.0);
+  const std::size_t start = scan_start_near(s, s.pkts.size() / 2);
+  std::vector<Pkt> pkts;
+  for (std::size_t i = 0; i < s.pkts.size(); ++i)
+    if (i < start + 4 || i > start + 7) pkts.push_back(s.pkts[i]);  // start+4..start+7 lost
+  const Decoded clean = run(s.options, s.pkts);
+  const Decoded r = run(s.options, pkts);
+  ASSERT_EQ(r.scans.size(), clean.scans.size());
+  std::size_t with_missing = 0;
+  for (std::size_t k = 0; k < r.scans.size(); ++k) {
+    if (r.scans[k].missing_packets == 0) continue;
+    ++with_missing;
+    EXPECT_EQ(r.scans[k].missing_packets, 4U);
+    EXPECT_LE(std::llabs(r.scans[k].stamp - s.pkts[start].stamp), 2'000'000) << "the scan after the cut lost them";
+  }
+  EXPECT_EQ(with_missing, 1U);
+}
+
+}  // namespace
+}  // namespace sensor_rig::lidar
