@@ -278,10 +278,20 @@ class Monitor {
   void take_stamps() {
     const Nanos now = vehicle_now_ns();
     stamps_reader_.take(
-        [&](const msg::SourceStamps& s, const dds_sample_info_t&) {
+        [&](const msg::SourceStamps& s, const dds_sample_info_t& info) {
           const std::string name = s.topic != nullptr ? s.topic : "";
           if (!wanted_.empty() && !wanted_.contains(name)) return;
-          topic(name).on_stamps(s, now);
+          TopicStats& st = topic(name);
+          // Stamps lost with their data are seen only as a gap in the writer's sequence numbers.
+          auto [it, first] = next_seq_.try_emplace({name, info.publication_handle}, s.seq + 1);
+          if (!first) {
+            if (s.seq > it->second && s.publish_ns >= st.counting_since) {
+              st.lost += s.seq - it->second;
+              st.seq_gaps += s.seq - it->second;
+            }
+            it->second = std::max(it->second, s.seq + 1);
+          }
+          st.on_stamps(s, now);
         },
         1024);
   }
@@ -296,6 +306,7 @@ class Monitor {
               take_trigger_status(st);
               take_camera_drops(st);
             }
+            take_counted_lost(st);
             if (st.name == nullptr || std::string_view(st.name).rfind("rig/sets/", 0) != 0) continue;
             std::string set_topic = "/";  // appended, not "/" + name: GCC 12 -O3 false -Wrestrict
             set_topic += st.name;
@@ -310,6 +321,21 @@ class Monitor {
           }
         },
         16);
+  }
+
+  // Units a node counted lost itself (`scans_lost`, `frames_lost`), on its topic.
+  void take_counted_lost(const msg::DiagnosticStatus& st) {
+    const char* topic_name = nullptr;
+    const char* lost = nullptr;
+    for (std::uint32_t k = 0; k < st.values._length; ++k) {
+      const auto& kv = st.values._buffer[k];
+      if (kv.key == nullptr || kv.value == nullptr) continue;
+      const std::string_view key(kv.key);
+      if (key == "topic") topic_name = kv.value;
+      if (key == "scans_lost" || key == "frames_lost") lost = kv.value;
+    }
+    if (topic_name == nullptr || lost == nullptr) return;
+    if (auto it = stats_.find(topic_name); it != stats_.end()) it->second.on_counted_lost(std::strtoull(lost, nullptr, 10));
   }
 
   // A camera's drops by stage (its node's counters), on its image_raw topic if this monitor reads it.
@@ -423,7 +449,9 @@ class Monitor {
                      {"size_bytes", st.last_size}, {"received", st.received},
                      {"lost", st.lost},     {"source_drops", st.source_drops},
                      {"missing_packets", st.missing_packets},
+                     {"counted_lost", st.counted_lost()},
                      {"info", st.info},     {"latency_ms", lat}};
+    if (st.seq_gaps > 0) j["seq_gaps"] = st.seq_gaps;
     if (st.malformed > 0) j["malformed"] = st.malformed;
     j["drops_by_stage"] = drops_json(st);
     std::printf("%s\n", j.dump().c_str());
@@ -506,6 +534,7 @@ class Monitor {
   dds::Participant participant_;
   dds::Topic<msg::SourceStamps> stamps_topic_;
   dds::Reader<msg::SourceStamps> stamps_reader_;
+  std::map<std::pair<std::string, dds_instance_handle_t>, std::uint64_t> next_seq_;  // per (topic, writer)
   dds::DiscoveryReader discovery_;
   std::set<std::string> wanted_;
   std::optional<RecordFile> record_;

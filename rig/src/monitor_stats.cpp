@@ -7,6 +7,19 @@
 
 namespace sensor_rig::rig {
 
+void TopicStats::on_counted_lost(std::uint64_t cumulative) {
+  if (!counted_lost_seen) {
+    counted_lost_seen = true;
+    counted_lost_first = counted_lost_last = cumulative;
+    return;
+  }
+  if (cumulative < counted_lost_last) {  // the node restarted: its count starts again from 0
+    counted_lost_before_restart = counted_lost();
+    counted_lost_first = 0;
+  }
+  counted_lost_last = cumulative;
+}
+
 void TopicStats::on_data(Nanos stamp, std::size_t size, const Arrival& a) {
   if (!data_seen) first_data(a.publish_ns);
   ++received;

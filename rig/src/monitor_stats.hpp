@@ -53,6 +53,16 @@ struct TopicStats {
   // in order, so they were written before it matched this reader (start-up), never lost.
   std::uint64_t before_match = 0;
   bool data_seen = false;
+  // Units the rig itself counted lost (issue 26 item 10): the node's /diagnostics `scans_lost` or
+  // `frames_lost` (cumulative, since this monitor's first status; a restarted node counts from 0).
+  std::uint64_t counted_lost_first = 0, counted_lost_last = 0, counted_lost_before_restart = 0;
+  bool counted_lost_seen = false;
+  void on_counted_lost(std::uint64_t cumulative);
+  [[nodiscard]] std::uint64_t counted_lost() const {
+    return counted_lost_before_restart + counted_lost_last - std::min(counted_lost_last, counted_lost_first);
+  }
+  // Samples whose stamps never came either: gaps in SourceStamps.seq per writer, counted in `lost`.
+  std::uint64_t seq_gaps = 0;
   CameraDrops camera;  // camera image_raw topics: the node's drops by stage
   std::size_t last_size = 0;
   std::string info;  // what the last sample says, in a few words (points, speed, state...)

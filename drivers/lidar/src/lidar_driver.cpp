@@ -81,7 +81,7 @@ std::unique_ptr<lidar::RingSource> make_ring_source(const LidarConfig& c) {
   r.interface = c.interface;
   r.port = static_cast<std::uint16_t>(c.port);
   r.second_port = has_second_port(c) ? static_cast<std::uint16_t>(c.position_port) : 0;
-  r.sensor_host = c.sensor_address.empty() ? 0 : ipv4_of(c.sensor_address);
+  r.sensor_host = c.sensor_address.empty() ? 0 : ipv4_of(c.sensor_address);  // the driver also locks
   r.retire_timeout_ms = c.ring_retire_ms;
   try {
     return std::make_unique<lidar::RingSource>(r);
@@ -227,6 +227,9 @@ struct LidarDriver::Impl {
   std::uint64_t incomplete_scans = 0;  // published scans with missing packets
   std::string last_error;
   lidar::DecoderCounters decoder_stats;
+  std::uint32_t locked_source = 0;           // the sensor's IPv4 (host order), driver thread only
+  std::uint64_t foreign_packets_local = 0;   // other senders' packets, driver thread only
+  std::uint64_t foreign_packets = 0;         // its copy for status()
   lidar::UdpSourceStats udp_stats;
   lidar::RingSourceStats ring_stats;
   timesync::StamperStatus sync;
@@ -265,6 +268,7 @@ struct LidarDriver::Impl {
     }
     fields = msg::point_fields(lidar::kPointFields);
     recorder = make_recorder(c);
+    if (!c.sensor_address.empty()) locked_source = ipv4_of(c.sensor_address);
   }
 
   // The datagram as received, before anything judges it (bad packets are what a recording is for):
@@ -409,6 +413,17 @@ struct LidarDriver::Impl {
     if (scan.missing_packets > 0) ++incomplete_scans;
   }
 
+  // One sensor per port (issue 26 item 6): the configured sensor_address, or the first sender seen;
+  // another sender's packets (a second sensor on a shared or broadcast port) are counted, never
+  // decoded or stamped: interleaved, two sensors' streams split every scan.
+  bool from_sensor(std::uint32_t src) noexcept {
+    if (src == 0) return true;  // the source did not say (a capture without addresses)
+    if (locked_source == 0) locked_source = src;
+    if (src == locked_source) return true;
+    ++foreign_packets_local;
+    return false;
+  }
+
   lidar::RecvResult receive(std::span<lidar::PacketSlot> slots, int timeout_ms) noexcept {
     return ring ? ring->receive(slots, timeout_ms) : udp->receive(slots, timeout_ms);
   }
@@ -434,6 +449,7 @@ struct LidarDriver::Impl {
           handle_second_port(s);
           continue;
         }
+        if (!from_sensor(s.src_addr)) continue;
         const auto packet = lidar::view(s, static_cast<std::uint16_t>(cfg.port));
         if (!decoder->is_data_packet(packet)) continue;
         if (auto scan = decoder->push(packet, packet_stamp(s.bytes(), s.rx_ns))) {
@@ -445,6 +461,7 @@ struct LidarDriver::Impl {
       drain_second_port_socket();
       std::lock_guard lock(mutex);
       decoder_stats = decoder->counters();
+      foreign_packets = foreign_packets_local;
       if (ring) {
         ring_stats = ring->stats();
       } else {
@@ -542,6 +559,11 @@ dds::DriverStatus LidarDriver::status() const {
   s.add_number("incomplete_scans", impl_->incomplete_scans);
   s.add_number("implausible_steps", d.implausible_steps);
   s.add_number("time_jumps", d.time_jumps);
+  s.add_number("late_placed", d.late_placed);
+  // Scans the driver knows it lost (discarded partial scans, whole turns unseen): the monitor's
+  // counted_lost (issue 26 item 10). Never the scans of a silent sensor: it made none.
+  s.add_number("scans_lost", d.scans_lost);
+  s.add_number("foreign_packets", impl_->foreign_packets);
   if (impl_->ring) {
     add_ring_counters(s, impl_->ring_stats);
   } else {

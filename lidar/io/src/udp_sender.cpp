@@ -1,7 +1,10 @@
 #include "sensor_rig/lidar/udp_sender.hpp"
 
 #include <algorithm>
+#include <arpa/inet.h>
+
 #include <cerrno>
+#include <cstring>
 #include <stdexcept>
 
 namespace sensor_rig::lidar {
@@ -16,6 +19,11 @@ UdpSender::UdpSender(std::span<const Endpoint> destinations, int send_buffer_byt
   fd_ = UdpSocketBuilder{}.send_buffer(send_buffer_bytes).build();
   msgs_.resize(max_batch);
   iovs_.resize(max_batch);
+  ctrl_.resize(max_batch);
+}
+
+std::uint32_t UdpSender::destination_addr(std::size_t i) const noexcept {
+  return i < dests_.size() ? ntohl(dests_[i].sin_addr.s_addr) : 0;
 }
 
 SendResult UdpSender::send(std::span<const std::byte> data, std::size_t destination) noexcept {
@@ -38,6 +46,17 @@ SendResult UdpSender::send_batch(std::span<const OutDatagram> batch) noexcept {
       h.msg_namelen = sizeof(sockaddr_in);
       h.msg_iov = &iovs_[i];
       h.msg_iovlen = 1;
+      if (d.source_addr != 0) {
+        h.msg_control = ctrl_[i].data();
+        h.msg_controllen = ctrl_[i].size();
+        cmsghdr* c = CMSG_FIRSTHDR(&h);
+        c->cmsg_level = IPPROTO_IP;
+        c->cmsg_type = IP_PKTINFO;
+        c->cmsg_len = CMSG_LEN(sizeof(in_pktinfo));
+        in_pktinfo info{};
+        info.ipi_spec_dst.s_addr = htonl(d.source_addr);
+        std::memcpy(CMSG_DATA(c), &info, sizeof info);
+      }
     }
     const int rc = ::sendmmsg(fd_.get(), msgs_.data(), static_cast<unsigned>(n), 0);
     ++stats_.batches;

@@ -92,6 +92,9 @@ ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOpti
   pending_tags.reserve(batch);
   const double rate = o.rate > 0 ? o.rate : 1.0;
   const bool send_position = o.send_position && sender.destinations() > 1;
+  // A second sensor's packets come from another address when we can send from one (loopback).
+  const std::uint32_t foreign_source =
+      (sender.destination_addr(0) >> 24) == 127 ? kForeignLoopbackSource : 0U;
 
   const Nanos t_begin = monotonic_now_ns();
   const Nanos start = o.start_monotonic_ns > 0 ? o.start_monotonic_ns : t_begin + o.lead_ns;
@@ -132,7 +135,8 @@ ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOpti
     st.max_late_ns = std::max(st.max_late_ns, late);
     std::vector<std::byte>& buf = bufs[pending.size()];
     buf.assign(fp.bytes.begin(), fp.bytes.end());
-    pending.push_back(OutDatagram{buf, fp.position ? std::size_t{1} : std::size_t{0}});
+    pending.push_back(OutDatagram{buf, fp.position ? std::size_t{1} : std::size_t{0},
+                                  fp.tag == kForeignTag ? foreign_source : 0U});
     pending_tags.push_back(fp.tag);
     (fp.position ? st.sent_position : st.sent_data) += 1;
     if (on_time || pending.size() == batch) flush();

@@ -82,6 +82,7 @@ std::optional<StreamPacket> TruthStream::next() {
     const FaultyPacket fp = sensor_->next();
     write_units();
     const SyntheticPacket& p = fp.packet;
+    if (!fp.device && p.truth.data) return StreamPacket{p.time_ns, p.bytes, p.position, kForeignTag, -1.0};
     if (!fp.device || !p.truth.data) return StreamPacket{p.time_ns, p.bytes, p.position, -1, -1.0};
     Pending& slot = ring_[next_seq_ % kRing];
     if (slot.live) put(slot);

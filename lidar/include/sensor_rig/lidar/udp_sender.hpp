@@ -5,6 +5,7 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -18,6 +19,9 @@ namespace sensor_rig::lidar {
 struct OutDatagram {
   std::span<const std::byte> data;
   std::size_t destination = 0;  // index into the sender's destinations
+  // Source IPv4 (host order) for this datagram, a local address (IP_PKTINFO); 0 = the socket's.
+  // The mock's second sensor sends from another address, as a real one would (issue 26 item 6).
+  std::uint32_t source_addr = 0;
 };
 
 struct SendResult {
@@ -45,12 +49,15 @@ class UdpSender {
 
   [[nodiscard]] const UdpSenderStats& stats() const noexcept { return stats_; }
   [[nodiscard]] std::size_t destinations() const noexcept { return dests_.size(); }
+  // Destination i's IPv4 address, host order.
+  [[nodiscard]] std::uint32_t destination_addr(std::size_t i) const noexcept;
 
  private:
   UniqueFd fd_;
   std::vector<sockaddr_in> dests_;
   std::vector<mmsghdr> msgs_;
   std::vector<iovec> iovs_;
+  std::vector<std::array<char, CMSG_SPACE(sizeof(in_pktinfo))>> ctrl_;  // IP_PKTINFO per datagram
   UdpSenderStats stats_;
 };
 

@@ -23,11 +23,17 @@ class PcapReader;
 
 namespace sensor_rig::lidar::mock {
 
+// StreamPacket::tag of a second sensor's packets: sent from another source address on loopback.
+inline constexpr std::int64_t kForeignTag = -2;
+// That address: 127.0.0.253 (any 127/8 address is local on Linux, no setup needed).
+inline constexpr std::uint32_t kForeignLoopbackSource = 0x7F0000FDU;
+
 struct StreamPacket {
   Nanos time_ns = 0;                 // the stream's own time (capture record time, sensor time)
   std::span<const std::byte> bytes;  // valid until the next call to next()
   bool position = false;             // for the second port: Velodyne position (8308), Ouster IMU (48 B)
   std::int64_t tag = -1;             // the truth record's part (truth_stream.hpp), -1 = none
+                                     // kForeignTag: another sensor's packet (lidar.second_sensor)
   double rotor_deg = -1.0;           // first firing, degrees past the scan cut (< 0: unknown)
 };
 
