@@ -100,7 +100,10 @@ std::string cyclone_uri(const DomainConfig& cfg) {
   return uri;
 }
 
-Participant::Participant(const DomainConfig& cfg, const SecurityConfig& security) : profile_(resolve_profile(cfg)) {
+Participant::Participant(const DomainConfig& cfg, const SecurityConfig& explicit_security)
+    : profile_(resolve_profile(cfg)) {
+  // RIG_DDS_SECURITY secures every participant that does not bring its own identity (issue 28).
+  const SecurityConfig security = explicit_security.enabled() ? explicit_security : security_from_environment();
   if (cfg.transport == Transport::kShm) {
     const auto probe = probe_roudi();
     if (!probe.answers) {

@@ -29,7 +29,9 @@ SecurityConfig security_files(const std::string& dir, const std::string& identit
   c.identity = identity;
   c.identity_ca = (d / "identity_ca.pem").string();
   c.permissions_ca = (d / "permissions_ca.pem").string();
-  c.governance = (d / "governance.p7s").string();
+  // A strict reader (`init --strict-reader NAME`) has a governance of its own.
+  c.governance = fs::is_regular_file(d / identity / "governance.p7s") ? (d / identity / "governance.p7s").string()
+                                                                      : (d / "governance.p7s").string();
   c.identity_certificate = (d / identity / "cert.pem").string();
   c.private_key = (d / identity / "key.pem").string();
   c.permissions = (d / identity / "permissions.p7s").string();
@@ -51,6 +53,16 @@ SecurityConfig security_files(const std::string& dir, const std::string& identit
   text << gov.rdbuf();
   check_governance(text.str(), c.governance);  // the signed text, as Cyclone will read it
   return c;
+}
+
+SecurityConfig security_from_environment() {
+  const char* env = std::getenv("RIG_DDS_SECURITY");
+  if (env == nullptr || *env == '\0') return {};
+  const std::string v(env);
+  const auto colon = v.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == v.size())
+    throw std::runtime_error("RIG_DDS_SECURITY='" + v + "': expected DIR:IDENTITY");
+  return security_files(v.substr(0, colon), v.substr(colon + 1));
 }
 
 std::string security_plugin_dir() {

@@ -17,6 +17,23 @@ std::string utc(std::time_t t) {
   return buf;
 }
 
+std::string write_rules(WriteProtection w) {
+  if (w == WriteProtection::kNone) return {};
+  const char* kind = w == WriteProtection::kSign ? "SIGN" : "NONE";
+  std::string r;
+  for (const char* expr : {"rt/vehicle/*", "rt/sensors/*", "rt/rig/*"}) {
+    r += std::string("        <topic_rule>\n          <topic_expression>") + expr +
+         "</topic_expression>\n"
+         "          <enable_discovery_protection>false</enable_discovery_protection>\n"
+         "          <enable_liveliness_protection>false</enable_liveliness_protection>\n"
+         "          <enable_read_access_control>false</enable_read_access_control>\n"
+         "          <enable_write_access_control>true</enable_write_access_control>\n"
+         "          <metadata_protection_kind>" + kind + "</metadata_protection_kind>\n"
+         "          <data_protection_kind>NONE</data_protection_kind>\n        </topic_rule>\n";
+  }
+  return r;
+}
+
 std::string topics(std::initializer_list<const char*> names) {
   std::string s = "<topics>";
   for (const char* n : names) s += std::string("<topic>") + n + "</topic>";
@@ -47,7 +64,15 @@ std::string identity_subject(const std::string& identity, const std::string& org
 // is not secret; integrity is what matters), its endpoints announced only to authenticated
 // participants (discovery protection). Other topics: no protection, so with
 // allow_unauthenticated_participants an ordinary ROS 2 node reads the sensors as before.
-std::string governance_xml(bool allow_unauthenticated, Protection command_protection) {
+//
+// With write protection (issue 28), rt/vehicle/*, rt/sensors/* and rt/rig/* get write access
+// control before `*`: a participant authenticated without a grant to publish them is refused by
+// every secured peer. kAccess keeps them unprotected on the wire, so ordinary ROS 2 nodes still
+// read them, and so secured readers still take an unauthenticated participant's writer unless they
+// run with allow_unauthenticated false (a strict reader: `rig security init --strict-reader`);
+// kSign adds metadata SIGN: every unauthenticated writer is refused, and every unauthenticated
+// reader too (Cyclone 0.10.2 matches a protected writer only with authenticated readers).
+std::string governance_xml(bool allow_unauthenticated, Protection command_protection, WriteProtection writes) {
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
        "<dds xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
@@ -73,7 +98,8 @@ std::string governance_xml(bool allow_unauthenticated, Protection command_protec
     << "</metadata_protection_kind>\n"
        "          <data_protection_kind>NONE</data_protection_kind>\n"
        "        </topic_rule>\n"
-       "        <topic_rule>\n"
+    << write_rules(writes)
+    << "        <topic_rule>\n"
        "          <topic_expression>*</topic_expression>\n"
        "          <enable_discovery_protection>false</enable_discovery_protection>\n"
        "          <enable_liveliness_protection>false</enable_liveliness_protection>\n"
@@ -103,6 +129,11 @@ std::string permissions_xml(const std::string& identity, const std::string& subj
       break;
     case Role::kReader:
       rule = "<subscribe>" + topics({"*"}) + "</subscribe>";
+      break;
+    case Role::kNode:  // every rig node but the dbw processes; never the command topic (no wildcard over it)
+      rule = "<publish>" + topics({"rt/sensors/*", "rt/rig/*", "rt/vehicle/state", "rt/vehicle/dbw/status",
+                                   "rt/diagnostics"}) +
+             "</publish><subscribe>" + topics({"*"}) + "</subscribe>";
       break;
   }
   std::ostringstream x;

@@ -77,6 +77,10 @@ std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
   std::vector<std::pair<std::string, Role>> ids{{o.bridge, Role::kBridge}};
   for (const auto& n : o.commanders) ids.emplace_back(n, Role::kCommander);
   for (const auto& n : o.readers) ids.emplace_back(n, Role::kReader);
+  for (const auto& n : o.strict_readers) ids.emplace_back(n, Role::kReader);
+  std::vector<std::string> nodes = o.nodes;
+  if (o.protect_writes != WriteProtection::kNone && nodes.empty()) nodes.emplace_back("rig_node");
+  for (const auto& n : nodes) ids.emplace_back(n, Role::kNode);
   std::set<std::string> seen;
   for (const auto& [name, role] : ids) {
     check_name(name);
@@ -110,11 +114,17 @@ std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
   const auto crl = x509::make_crl(ca.id_ca.get(), ca.id_ca_key.get(), {}, ca_not_after);
   x509::write_crl(out(dir / "identity_crl.pem"), crl.get());
 
-  const std::string governance = governance_xml(o.allow_unauthenticated, o.command_protection);
+  const std::string governance = governance_xml(o.allow_unauthenticated, o.command_protection, o.protect_writes);
   write_text(out(dir / "governance.xml"), governance);
   x509::write_smime(out(dir / "governance.p7s"), governance, ca.perm_ca.get(), ca.perm_ca_key.get());
 
   for (const auto& [name, role] : ids) write_identity(dir, name, role, o.organization, o.key_type, o.days, ca, written);
+  // A strict reader's own governance: the same rules, unauthenticated participants ignored.
+  const std::string strict = governance_xml(false, o.command_protection, o.protect_writes);
+  for (const auto& n : o.strict_readers) {
+    write_text(out(dir / n / "governance.xml"), strict);
+    x509::write_smime(out(dir / n / "governance.p7s"), strict, ca.perm_ca.get(), ca.perm_ca_key.get());
+  }
   return written;
 }
 

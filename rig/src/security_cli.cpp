@@ -112,12 +112,26 @@ void register_security_cli(CLI::App& app, cli::Context& ctx) {
   init->add_flag("--no-unauthenticated", *no_unauth,
                  "governance without allow_unauthenticated_participants: ordinary ROS 2 nodes see nothing");
   init->add_flag("--force", o->force, "replace an earlier init in DIR");
+  auto writes = std::make_shared<std::string>("none");
+  init->add_option("--protect-writes", *writes,
+                   "write access control on rt/vehicle/*, rt/sensors/*, rt/rig/*: access (reads stay open; strict "
+                   "readers refuse ungranted writers) or sign (every reader and writer must be authenticated)")
+      ->check(CLI::IsMember({"none", "access", "sign"}))
+      ->capture_default_str();
+  init->add_option("--node", o->nodes, "identities of the rig's nodes, may publish its topics (with --protect-writes; "
+                                       "default rig_node; RIG_DDS_SECURITY=DIR:NAME runs a process as one)");
+  init->add_option("--strict-reader", o->strict_readers,
+                   "read-only identities that take the rig's topics only from granted writers (repeat)");
   auto protection = std::make_shared<std::string>("sign-origin");
   init->add_option("--cmd-protection", *protection,
                    "submessage protection of /vehicle/dbw/cmd (dds/README.md: what each costs)")
       ->check(CLI::IsMember({"none", "sign", "encrypt", "sign-origin", "encrypt-origin"}))  // none: --no-unauthenticated
       ->capture_default_str();
-  init->callback([o, rsa, no_unauth, protection, &ctx] {
+  init->callback([o, rsa, no_unauth, protection, writes, &ctx] {
+    const std::map<std::string, dds::WriteProtection> write_kinds{{"none", dds::WriteProtection::kNone},
+                                                                  {"access", dds::WriteProtection::kAccess},
+                                                                  {"sign", dds::WriteProtection::kSign}};
+    o->protect_writes = write_kinds.at(*writes);
     const std::map<std::string, dds::Protection> kinds{{"none", dds::Protection::kNone},
                                                        {"sign", dds::Protection::kSign},
                                                        {"encrypt", dds::Protection::kEncrypt},

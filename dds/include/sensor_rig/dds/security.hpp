@@ -29,6 +29,12 @@ struct SecurityConfig {
 // credentials write /vehicle/dbw/cmd in Cyclone 0.10.2 (check_governance, security_init.hpp).
 SecurityConfig security_files(const std::string& dir, const std::string& identity);
 
+// RIG_DDS_SECURITY=DIR:IDENTITY in the environment: every participant of this process (and of the
+// processes it starts) made without a SecurityConfig of its own authenticates as IDENTITY — how
+// the whole rig runs secured (`rig security init --protect-writes`). Empty when unset; throws as
+// security_files.
+SecurityConfig security_from_environment();
+
 // When the identity stops working: the earliest expiry of its certificate, its grant, the two CAs
 // and the revocation list, and which one that is.
 struct SecurityExpiry {

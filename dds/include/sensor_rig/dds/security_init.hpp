@@ -21,11 +21,22 @@ enum class KeyType { kEcP256, kRsa2048 };  // what Cyclone's auth plugin accepts
 enum class Protection { kNone, kSign, kEncrypt, kSignOrigin, kEncryptOrigin };
 std::string to_governance_word(Protection p);  // NONE, SIGN, ..., SIGN_WITH_ORIGIN_AUTHENTICATION
 
+// Write protection of rt/vehicle/*, rt/sensors/*, rt/rig/* (issue 28; dds/README.md has the costs):
+// kAccess: write access control only (reads stay open to ordinary nodes; a writer without
+// credentials is refused only by strict readers), kSign: also signed submessages (every writer and
+// every reader must be authenticated).
+enum class WriteProtection { kNone, kAccess, kSign };
+
 struct SecurityInitOptions {
   std::string dir;
   std::string bridge = "dbw_bridge";                   // subscribes commands, publishes status/state
   std::vector<std::string> commanders = {"dbw_command"};  // may publish commands
   std::vector<std::string> readers = {"reader"};          // may subscribe to everything, publish nothing
+  // Readers with a governance of their own (NAME/governance.p7s) without unauthenticated
+  // participants: they take rt/vehicle/*, rt/sensors/*, rt/rig/* only from granted writers.
+  std::vector<std::string> strict_readers;
+  WriteProtection protect_writes = WriteProtection::kNone;
+  std::vector<std::string> nodes;  // may publish the rig's own topics (with protect_writes; default rig_node)
   KeyType key_type = KeyType::kEcP256;
   int days = 365;                     // validity of the identities' certificates and grants
   int ca_days = 3650;                 // validity of the two CAs (identities never outlive them)
@@ -42,8 +53,9 @@ struct SecurityInitOptions {
 std::vector<std::string> init_security_dir(const SecurityInitOptions& o);
 
 // The governance and permissions documents (unsigned XML), for init and for the tests.
-std::string governance_xml(bool allow_unauthenticated, Protection command_protection = Protection::kSignOrigin);
-enum class Role { kBridge, kCommander, kReader };
+std::string governance_xml(bool allow_unauthenticated, Protection command_protection = Protection::kSignOrigin,
+                           WriteProtection writes = WriteProtection::kNone);
+enum class Role { kBridge, kCommander, kReader, kNode };
 std::string permissions_xml(const std::string& identity, const std::string& subject, Role role,
                             std::time_t not_after);
 // Throws std::runtime_error when Cyclone 0.10.2 would let a participant without credentials write
