@@ -1,11 +1,15 @@
 #pragma once
 // Shared by the DDS Security process tests: what reached the mock ECU's bus, and a forged grant.
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/can/candump.hpp"
+#include "sensor_rig/dds/topic.hpp"
+#include "sensor_rig/dds/types.hpp"
 
 namespace sensor_rig::dbw::test {
 
@@ -36,6 +40,27 @@ inline void forge(const std::filesystem::path& real, const std::filesystem::path
   copy(rogue / "permissions_ca.pem", out / "permissions_ca.pem");
   copy(rogue / "governance.p7s", out / "governance.p7s");
   copy(rogue / "reader/permissions.p7s", out / "reader/permissions.p7s");
+}
+
+// The bridge's last /diagnostics status ("dbw/bridge"): level, message and key/values, from what
+// `reader` has received so far (empty values when none came).
+struct BridgeDiagnostics {
+  std::uint8_t level = 255;
+  std::string message;
+  std::map<std::string, std::string> values;
+};
+inline void take_bridge_diagnostics(const dds::Reader<msg::DiagnosticArray>& reader, BridgeDiagnostics& out) {
+  reader.take([&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
+    for (std::uint32_t i = 0; i < a.status._length; ++i) {
+      const auto& st = a.status._buffer[i];
+      if (std::string(st.name) != "dbw/bridge") continue;
+      out.level = st.level;
+      out.message = st.message;
+      out.values.clear();
+      for (std::uint32_t k = 0; k < st.values._length; ++k)
+        out.values[st.values._buffer[k].key] = st.values._buffer[k].value;
+    }
+  }, 16);
 }
 
 }  // namespace sensor_rig::dbw::test

@@ -91,6 +91,8 @@ TEST_P(DbwSecurityMatrix, NoWriterWithoutAValidGrantReachesTheBus) {
   dds::QosSpec deep;
   deep.depth = 64;
   dds::Reader<msg::DbwStatus> status(participant, status_topic, deep);
+  dds::Topic<msg::DiagnosticArray> diag_topic(participant, "/diagnostics");
+  dds::Reader<msg::DiagnosticArray> diagnostics(participant, diag_topic);
   bool engaged = false;
   unsigned long long counted = 0;
   const auto poll = [&](int ms) {
@@ -147,6 +149,14 @@ TEST_P(DbwSecurityMatrix, NoWriterWithoutAValidGrantReachesTheBus) {
   EXPECT_TRUE(engaged) << "the granted source did not engage\n" << rig.output("bridge");
   EXPECT_GT(counted, 100U);
   EXPECT_GT(dbw::test::enabled_requests(rig.bus_log(), granted_start), 10) << "no enabled request on the bus";
+  // The bridge's identity expiry in /diagnostics: 365 days, nothing to warn about.
+  dbw::test::BridgeDiagnostics diag;
+  dbw::test::take_bridge_diagnostics(diagnostics, diag);
+  EXPECT_EQ(diag.level, 0) << diag.message;
+  EXPECT_EQ(diag.values["security_identity"], "dbw_bridge");
+  EXPECT_TRUE(diag.values["security_days_left"] == "364" || diag.values["security_days_left"] == "365")
+      << diag.values["security_days_left"];
+  EXPECT_NE(diag.values["security_expires"].find("Z ("), std::string::npos) << diag.values["security_expires"];
   EXPECT_EQ(rig.stop(mon1), 0) << rig.output("mon1");
   EXPECT_EQ(rig.stop(mon2), 0) << rig.output("mon2");
   EXPECT_EQ(rig.stop(bridge), 0) << rig.output("bridge");

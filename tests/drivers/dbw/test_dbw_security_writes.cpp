@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "dbw_processes.hpp"
+#include "dbw_security_processes.hpp"
 #include "sensor_rig/dds/security.hpp"
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
@@ -66,8 +67,9 @@ TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) 
   const int domain = 180 + (static_cast<int>(::getpid()) + 4 * w.index + 2) % 20;
   const std::string dom = std::to_string(domain);
   const std::string sec = rig.path("sec");
+  // Identities for 20 days: the bridge's /diagnostics warns (30 days ahead).
   ASSERT_EQ(rig.wait_exit(rig.start("init", {"security", "init", sec, "--protect-writes", w.kind, "--strict-reader",
-                                             "strict"}),
+                                             "strict", "--days", "20"}),
                           15000),
             0)
       << rig.output("init");
@@ -78,6 +80,8 @@ TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) 
   dds::Participant strict_p(sensor_rig::drivers::domain_config(domain), dds::security_files(sec, "strict"));
   dds::Topic<msg::VehicleState> strict_t(strict_p, sensor_rig::drivers::kStateTopic);
   dds::Reader<msg::VehicleState> strict_r(strict_p, strict_t);
+  dds::Topic<msg::DiagnosticArray> diag_topic(strict_p, "/diagnostics");
+  dds::Reader<msg::DiagnosticArray> diagnostics(strict_p, diag_topic);
   const auto collect = [&](int ms) {
     Seen s;
     const Nanos end = vehicle_now_ns() + static_cast<Nanos>(ms) * 1'000'000;
@@ -125,6 +129,12 @@ TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) 
     EXPECT_LT(both_rate, 1.3 * spoofer_rate) << rig.output("monitor");
   }
   EXPECT_EQ(rig.stop(monitor), 0) << rig.output("monitor");
+  dbw::test::BridgeDiagnostics diag;
+  dbw::test::take_bridge_diagnostics(diagnostics, diag);
+  EXPECT_EQ(diag.level, 1) << diag.message;
+  EXPECT_NE(diag.message.find("certificate of 'dbw_bridge' expires"), std::string::npos) << diag.message;
+  EXPECT_TRUE(diag.values["security_days_left"] == "19" || diag.values["security_days_left"] == "20")
+      << diag.values["security_days_left"];
   EXPECT_EQ(rig.stop(bridge), 0) << rig.output("bridge");
   EXPECT_EQ(rig.stop(spoofer), 0) << rig.output("spoofer");
   EXPECT_EQ(rig.stop(mock), 0);
