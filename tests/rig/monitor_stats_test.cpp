@@ -186,6 +186,21 @@ TEST(MonitorStats, ReleaseAllAtTheEndKeepsUndecidedOut) {
   EXPECT_EQ(t.rows[1].seq, 2u);
 }
 
+// Units the node counted lost itself (its /diagnostics scans_lost, cumulative): counted from the
+// monitor's first status, across a restart of the node (its count starts again from 0). Issue 26.
+TEST(MonitorStats, CountedLostFollowsTheNodeAcrossARestart) {
+  TopicStats st;
+  EXPECT_EQ(st.counted_lost(), 0U);
+  st.on_counted_lost(7);  // before this monitor: not its to count
+  EXPECT_EQ(st.counted_lost(), 0U);
+  st.on_counted_lost(9);
+  EXPECT_EQ(st.counted_lost(), 2U);
+  st.on_counted_lost(1);  // the node restarted
+  EXPECT_EQ(st.counted_lost(), 3U);
+  st.on_counted_lost(4);
+  EXPECT_EQ(st.counted_lost(), 6U);
+}
+
 TEST(SampleRecord, StageLatenciesNeedBothStamps) {
   SampleRecord r;
   r.acquisition_ns = kT0;

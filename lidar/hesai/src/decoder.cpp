@@ -109,6 +109,7 @@ struct DecoderImpl {
   LateHole hole;                    // where the current scan last counted packets missing
   TimeJudge time_judge;
   bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
+  detail::BlindArc blind;  // a sector the sensor stopped sending (learned, not loss)
   std::uint32_t rejected_since_prev = 0;  // packets dropped (bad time / azimuth) since the last good one
 
   explicit DecoderImpl(DecoderConfig config)
@@ -433,6 +434,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       scans.merge(out, end(scans.current().from_cut));
       scans.drop_next();
       window_open = false;
+      // The next scan starts at the cut when it lacks less than half its turn; otherwise its
+      // stamp (its first packet) would lie nearer the next turn's: not published, a lost scan.
+      scans.current().from_cut = 2 * detail::turn_step(emit_raw, a0) < fov.length();
       (void)take(static_cast<std::uint32_t>(std::lround((gap.turns - (az_crosses ? 0 : 1)) * fov.length() /
                                                         std::max(1.0, fit.step * groups))));
       scans.add_missing(take(detail::packets_on_arc(fov, emit_raw, a0, fit.step, groups)));
@@ -444,10 +448,13 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
       slots = missing;
       missing -= std::min(missing, rejected_since_prev);
+      const long tol = std::lround(2.0 * fit.step * groups);
+      if (missing >= 2 && blind.is_blind(prev_az, az[first_good], tol, detail::kTurn)) missing = 0;
     }
   }
   rejected_since_prev = 0;
   turning = fit.step >= 0.5;
+  blind.seen(az[first_good], detail::kTurn);
   if (has_seq) {
     prev_seq = have_seq && slots + 1 != seq - prev_seq ? prev_seq + slots + 1 : seq;
     have_seq = true;
@@ -486,8 +493,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       }
       cut_here = crosses(prev_az, step, emit_raw, judged);
     } else {
-      // First block (or after a time jump) inside the window: the window's start was not seen.
+      // First block (or after a time jump) inside the window: the window's start was not seen,
+      // but the points past the cut that go to the next scan do start it at the cut (a sensor
+      // that restarts at 0° begins here: its first whole turn is a complete scan, issue 26).
       window_open = in_sector(reset_raw, emit_raw, a) && a != emit_raw;
+      if (window_open && !scans.next().started) scans.next().from_cut = true;
     }
     const bool overlap = window_open || cut_here;
     if (overlap) scans.next().touch(group_stamp, packet.rx_ns);

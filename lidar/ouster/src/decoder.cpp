@@ -9,6 +9,7 @@
 #include <string>
 
 #include "sensor_rig/lidar/ouster/packet.hpp"
+#include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 #include "pixel_reader.hpp"
 #include "profile_table.hpp"
@@ -140,6 +141,7 @@ struct DecoderImpl {
   long packets_per_frame = 1;
   LateHole hole;                // packet slots where the current scan last counted packets missing
   TimeJudge time_judge;
+  detail::BlindArc blind;  // packet slots the sensor stopped sending (learned, not loss)
   std::uint32_t rejected_since_prev = 0;  // packets dropped for their time since the last good one
 
   // Packet slots strictly between slot `from` and slot `to` of one frame (to > from) that hold
@@ -404,6 +406,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
         new_frame = false;
         missing_before = window_slots(prev_slot, slot);
+        if (missing_before >= 2 && rejected_since_prev == 0 && blind.is_blind(prev_slot, slot, 2, 0)) missing_before = 0;
         if (missing_before > 0) hole = {prev_slot, slot, 0, missing_before};
       } else {
         if (!new_frame) ++stats.implausible_steps;  // a new frame with the frame id unchanged: corrupted
@@ -421,6 +424,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     if (hole.open > missing_before && !new_frame) hole.open = missing_before;
   }
   if (!late) rejected_since_prev = 0;
+  if (!late && n_valid > 0) blind.seen(slot, 0);
   if (n_valid > 0 && !late) {
     have_base = true;
     prev_base = base;
@@ -439,7 +443,10 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     hole = {-1, slot, 0, missing_after};  // the new frame's first slots
   }
   if (cur.scan.packets == 0) {
-    cur.from_cut = new_frame || (n_valid > 0 && base <= static_cast<long>(window_first));
+    // A frame whose first half was lost is not published (its stamp, its first packet's, would lie
+    // nearer the next frame's): at its end it is a lost scan.
+    cur.from_cut = (new_frame && (missing_after == 0 || 2 * slot < packets_per_frame)) ||
+                   (n_valid > 0 && base <= static_cast<long>(window_first));
     cur.scan.first_rx_ns = packet.rx_ns;
   }
   ++cur.scan.packets;

@@ -103,6 +103,7 @@ struct DecoderImpl {
   LateHole hole;                     // where the current scan last counted packets missing
   TimeJudge time_judge;
   bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
+  detail::BlindArc blind;  // a sector the sensor stopped sending (learned, not loss)
   std::uint32_t rejected_since_prev = 0;  // packets dropped (bad time / azimuth) since the last good one
 
   explicit DecoderImpl(DecoderConfig config)
@@ -435,7 +436,10 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         return k - r;
       };
       if (!early_cut) scans.add_missing(take(detail::packets_on_arc(fov, prev_az, cut, fit.step, groups)));
-      out = end(scans.current().from_cut, true);
+      // The next scan starts at the cut when it lacks less than half its turn; otherwise its
+      // stamp (its first packet) would lie nearer the next turn's: not published, a lost scan.
+      const bool next_whole = 2 * detail::turn_step(cut, a0) < fov.length();
+      out = end(scans.current().from_cut, next_whole);
       (void)take(static_cast<std::uint32_t>(std::lround((gap.turns - (az_crosses ? 0 : 1)) * fov.length() /
                                                         std::max(1.0, fit.step * groups))));
       scans.add_missing(take(detail::packets_on_arc(fov, cut, a0, fit.step, groups)));
@@ -445,10 +449,13 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     } else if (have_prev) {
       // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
       gap.missing -= std::min<std::uint32_t>(gap.missing, rejected_since_prev);
+      const long tol = std::lround(2.0 * fit.step * groups);
+      if (gap.missing >= 2 && blind.is_blind(prev_az, na[first_good], tol, detail::kTurn)) gap.missing = 0;
     }
   }
   rejected_since_prev = 0;
   turning = fit.step >= 0.5;
+  blind.seen(na[first_good], detail::kTurn);
 
   prev_stamp = stamp;
   prev_sensor_us = sensor_us;

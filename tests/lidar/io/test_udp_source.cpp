@@ -90,6 +90,22 @@ TEST(UdpSource, ReceivesBatchWithKernelTimestamps) {
   EXPECT_EQ(std::to_integer<int>(last.bytes()[0]), static_cast<int>((kCount - 1) & 0xFF));
 }
 
+// The mock's second sensor (issue 26 item 6): a datagram can leave from another local address, so
+// the receiver sees another sender, as with a second real unit on the port.
+TEST(UdpSender, SendsFromAnotherLocalAddress) {
+  UdpSource src(loopback());
+  const Endpoint dst{"127.0.0.1", src.port()};
+  UdpSender tx(std::span<const Endpoint>(&dst, 1));
+  EXPECT_EQ(tx.destination_addr(0), 0x7F000001u);
+  SlotArena arena(4);
+  const auto p = payload(100, 1);
+  const std::array<OutDatagram, 2> batch{OutDatagram{p, 0, 0}, OutDatagram{p, 0, 0x7F0000FDu}};
+  ASSERT_EQ(tx.send_batch(batch).sent, 2u);
+  ASSERT_EQ(drain(src, arena.slots(), 2), 2u);
+  EXPECT_EQ(arena.slots()[0].src_addr, 0x7F000001u);
+  EXPECT_EQ(arena.slots()[1].src_addr, 0x7F0000FDu);
+}
+
 TEST(UdpSource, TimestampsFollowSendTimes) {
   UdpSource src(loopback());
   const Endpoint dst{"127.0.0.1", src.port()};

@@ -274,7 +274,10 @@ TEST(SyntheticCompleteness, PartialFovIsNotMissing) {
   }
   DecoderOptions o = options("VLP-16");
   const Decoded blind = run(o, fov);
-  EXPECT_GT(blind.st.missing_packets, 100U) << "without the FOV setting the rest of the turn is missing";
+  // Without the FOV setting the rest of the turn is missing once: from the second turn on the same
+  // gap is learned as a blind sector (issue 26 item 4).
+  EXPECT_GT(blind.st.missing_packets, 40U) << "without the FOV setting the rest of the turn is missing";
+  EXPECT_LT(blind.st.missing_packets, 60U) << "only the first turn";
   o.fov_start_deg = 30.0;
   o.fov_end_deg = 120.0;
   const Decoded r = run(o, fov);

@@ -168,6 +168,33 @@ TEST_P(ScanFaults, SustainedClockStepIsStillAJump) {
   EXPECT_EQ(status(r, PacketStatus::kBadTime), 1U) << "the first packet of the step is judged alone";
 }
 
+// A sector the sensor stops sending for a while (its FOV setting changed, lidar.blind_sector): the
+// first turn cannot be told from a loss burst (counted missing); from the second on it is the FOV,
+// not loss; once the sector sends again, a loss there counts again (item 4).
+TEST_P(ScanFaults, BlindSectorIsLearnedAfterOneTurn) {
+  std::vector<Pkt> pkts;
+  const Nanos t0 = s_.pkts.front().stamp;
+  std::size_t after_blind = 0;
+  for (const auto& p : s_.pkts) {
+    const Nanos t = p.stamp - t0;
+    if (t >= 250'000'000 && t < 650'000'000 && p.rotor_deg >= 90.0 && p.rotor_deg < 180.0) continue;
+    pkts.push_back(p);
+    if (t >= 750'000'000 && after_blind == 0 && p.rotor_deg > 120.0 && p.rotor_deg < 150.0) after_blind = pkts.size() - 1;
+  }
+  ASSERT_GT(after_blind, 0U);
+  pkts.erase(pkts.begin() + static_cast<std::ptrdiff_t>(after_blind));  // a loss inside the sector, sending again
+  const Decoded r = run(s_.options, pkts);
+  EXPECT_EQ(r.scans.size(), clean_.scans.size());
+  std::size_t incomplete = 0;
+  std::string per_scan;
+  for (const auto& sc : r.scans) {
+    incomplete += sc.missing_packets > 0 ? 1 : 0;
+    per_scan += std::to_string(sc.missing_packets) + " ";
+  }
+  EXPECT_EQ(incomplete, 2U) << per_scan << "the blind sector's first turn, and the loss after it sends again";
+  EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, ScanFaults, ::testing::Values("VLP-32C", "VLP-16", "Pandar40P", "PandarXT32", "OS-LEGACY"),
                          [](const auto& p) {
                            std::string n = p.param;

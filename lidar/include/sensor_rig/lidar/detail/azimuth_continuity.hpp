@@ -199,6 +199,39 @@ inline std::uint32_t packets_on_arc(const AzimuthFov& fov, int from, int to, dou
   return static_cast<std::uint32_t>(std::max(0L, std::lround(visible / (group_step * groups_per_packet) - 0.5)));
 }
 
+// A sector the sensor stopped sending (its FOV setting changed at run time, issue 26 item 4): the
+// same gap two turns in a row is that, not loss, until a packet comes from inside it again. The
+// first turn of a new blind sector cannot be told from a loss burst: it is counted missing.
+// Positions are the vendor's (0.01° with wrap = kTurn, or packet slots with wrap = 0).
+struct BlindArc {
+  long from = 0, to = 0, margin = 0;
+  bool candidate = false, learned = false;
+  // A gap from `a` to `b` (tol: how far its ends may move): true when it is the blind arc.
+  bool is_blind(long a, long b, long tol, long wrap) noexcept {
+    const auto dist = [&](long x, long y) {
+      long d = x > y ? x - y : y - x;
+      return wrap > 0 && d > wrap / 2 ? wrap - d : d;
+    };
+    const bool same = candidate && dist(a, from) <= tol && dist(b, to) <= tol;
+    from = a;  // its ends move by up to a packet each turn: follow them
+    to = b;
+    margin = tol;
+    candidate = true;
+    learned = same;
+    return same;
+  }
+  // A packet at `at`: from inside the blind arc, the sector sends again.
+  void seen(long at, long wrap) noexcept {
+    if (!candidate) return;
+    long d = at - from, span = to - from;
+    if (wrap > 0) {
+      d = ((d % wrap) + wrap) % wrap;
+      span = ((span % wrap) + wrap) % wrap;
+    }
+    if (d > margin && d < span - margin) candidate = learned = false;
+  }
+};
+
 // Of `missing` packets lost on an arc that crosses `cut`, those after the cut (the next scan's).
 inline std::uint32_t missing_after_cut(const AzimuthFov& fov, int cut, int first_az, double group_step,
                                        int groups_before_first, int groups_per_packet,
