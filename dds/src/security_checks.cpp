@@ -53,9 +53,9 @@ void check_governance(const std::string& governance, const std::string& where) {
   for (std::string rule; !(rule = element(governance, "topic_rule", pos, &end)).empty(); pos = end) {
     if (::fnmatch(element(rule, "topic_expression").c_str(), kProtectedCommandTopic, 0) != 0) continue;
     const bool write_controlled = element(rule, "enable_write_access_control") == "true";
-    const bool protected_ = element(rule, "metadata_protection_kind") != "NONE" ||
+    const bool signed_or_encrypted = element(rule, "metadata_protection_kind") != "NONE" ||
                             element(rule, "data_protection_kind") != "NONE";
-    if (write_controlled && protected_) return;
+    if (write_controlled && signed_or_encrypted) return;
     throw std::runtime_error(
         "DDS Security: " + where + " lets a participant without credentials write " + kProtectedCommandTopic +
         ": allow_unauthenticated_participants with " +

@@ -6,6 +6,7 @@
 #include <openssl/pem.h>
 #include <openssl/x509v3.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "x509.hpp"
@@ -86,6 +87,7 @@ void write_crl(const std::string& path, X509_CRL* crl) {
 std::vector<std::string> revoked_serials(X509_CRL* crl) {
   std::vector<std::string> out;
   STACK_OF(X509_REVOKED)* revoked = X509_CRL_get_REVOKED(crl);
+  out.reserve(static_cast<std::size_t>(std::max(0, sk_X509_REVOKED_num(revoked))));
   for (int i = 0; i < sk_X509_REVOKED_num(revoked); ++i)
     out.push_back(decimal(X509_REVOKED_get0_serialNumber(sk_X509_REVOKED_value(revoked, i))));
   return out;
