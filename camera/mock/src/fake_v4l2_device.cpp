@@ -301,8 +301,11 @@ int FakeV4l2Device::poll(int fd, int timeout_ms) {
                 break;
               }
           if (gap_left_ > 0) {  // the device drops this slot's frame itself: its sequence moves on
+            // A frame made and lost in the device or its driver (what a real sequence gap is:
+            // uvcvideo counts the frames it drops), so `dropped`, a loss the rig must count (its
+            // `missing_frames`), not `not_sent` (issue 27 item 5).
             --gap_left_;
-            record(sequence_++, due, due, truth::Fate::kNotSent, gap_fault_);
+            record(sequence_++, due, due, truth::Fate::kDropped, gap_fault_);
             continue;
           }
           if (fill_one(due)) return 1;

@@ -67,8 +67,8 @@ TEST(V4l2Chaos, FaultFreeTruthIsWhatV4l2Reads) {
   EXPECT_EQ(test::count_fate(log, truth::Fate::kSent), log.parts.size());
 }
 
-// A gap of 4: the sequence V4l2Source reads jumps by 5 once, and the truth has exactly those 4
-// frames not_sent with the fault.
+// A gap of 4: the sequence V4l2Source reads jumps by 5 once, V4l2Source counts the 4 missing, and
+// the truth has exactly those 4 frames dropped (made and lost in the device) with the fault.
 TEST(V4l2Chaos, SequenceGapJumpsAndIsRecorded) {
   test::ChaosFolder folder;
   std::uint64_t jumps = 0, jump = 0, last = 0, missing = 0;
@@ -92,9 +92,9 @@ TEST(V4l2Chaos, SequenceGapJumpsAndIsRecorded) {
   EXPECT_EQ(jumps, 1u);
   EXPECT_EQ(jump, 5u);
   const auto log = truth::read(folder.truth());
-  EXPECT_EQ(test::count_fate(log, truth::Fate::kNotSent), 4u);
+  EXPECT_EQ(test::count_fate(log, truth::Fate::kDropped), 4u);
   for (const auto& p : log.parts) {
-    if (p.fate == truth::Fate::kNotSent) {
+    if (p.fate == truth::Fate::kDropped) {
       EXPECT_EQ(p.fault, 1u);
     }
   }
