@@ -38,9 +38,10 @@ for m in "${modes[@]}"; do
     access|sign) "$rig" security init "$sec" --protect-writes "$m" >/dev/null 2>&1; env_sec=("RIG_DDS_SECURITY=$sec:rig_node") ;;
     *) echo "unknown mode $m" >&2; exit 2 ;;
   esac
-  python3 - "$root/config/mock_rig.yaml" "$conf" "$domain" "$out/bus_$m.sock" "$([ "$m" = plain ] || echo "$sec")" <<'PY'
+  python3 - "$root/config/mock_rig.yaml" "$conf" "$domain" "$out/bus_$m.sock" "$([ "$m" = plain ] || echo "$sec")" \
+    "$((10000 + $$ % 400 * 10))" <<'PY'
 import sys, yaml
-src, dst, domain, bus, sec = sys.argv[1:6]
+src, dst, domain, bus, sec, port_offset = sys.argv[1:7]
 c = yaml.safe_load(open(src))
 c["rig"]["dds"]["domain"] = int(domain)
 for k in ("cameras", "sync_sets"):
@@ -48,7 +49,7 @@ for k in ("cameras", "sync_sets"):
 for lidar in c["lidars"]:  # clear of another rig's LIDAR ports on this host
     for key in ("port", "position_port", "imu_port"):
         if key in lidar:
-            lidar[key] += 10000
+            lidar[key] += int(port_offset)
 c["dbw"]["bus"] = bus
 if sec:
     c["dbw"]["security"] = {"dir": sec}
@@ -58,7 +59,7 @@ PY
   rig_pid=$!
   sleep 8
   env "${env_sec[@]}" "$rig" monitor --domain "$domain" --rt-priority 15 --duration "$secs" --json \
-    --summary "$out/summary_$m.json" >/dev/null 2>"$out/monitor_$m.log" &
+    --summary "$out/summary_$m.json" >"$out/monitor_$m.jsonl" 2>"$out/monitor_$m.log" &
   mon_pid=$!
   python3 - "$rig_pid" "$mon_pid" "$secs" "$out/cpu_$m.json" <<'PY'
 import json, os, sys, time
@@ -99,6 +100,7 @@ json.dump({"seconds": dt, "procs": procs}, open(dst, "w"))
 PY
   wait "$mon_pid" || echo "monitor ($m) exited with $?: $(tail -3 "$out/monitor_$m.log")" >&2
   wait "$rig_pid" || { echo "rig up ($m) exited with $?:" >&2; grep -iE "error|refused|denied" "$out/up_$m.log" | head -5 >&2; }
+  grep -q "driver start failed" "$out/up_$m.log" && { grep "driver start failed" "$out/up_$m.log" >&2; exit 1; }
   rig_pid=""
 done
 python3 - "$out" "$secs" "${modes[@]}" <<'PY'
