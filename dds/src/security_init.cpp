@@ -118,7 +118,11 @@ std::vector<std::string> init_security_dir(const SecurityInitOptions& o) {
   write_text(out(dir / "governance.xml"), governance);
   x509::write_smime(out(dir / "governance.p7s"), governance, ca.perm_ca.get(), ca.perm_ca_key.get());
 
-  for (const auto& [name, role] : ids) write_identity(dir, name, role, o.organization, o.key_type, o.days, ca, written);
+  for (const auto& [name, role] : ids) {
+    write_identity(dir, name, role, o.organization, o.key_type, o.days, ca, written);
+    fs::remove(dir / name / "governance.p7s");  // a strict reader's, from an earlier init (--force)
+    fs::remove(dir / name / "governance.xml");
+  }
   // A strict reader's own governance: the same rules, unauthenticated participants ignored.
   const std::string strict = governance_xml(false, o.command_protection, o.protect_writes);
   for (const auto& n : o.strict_readers) {

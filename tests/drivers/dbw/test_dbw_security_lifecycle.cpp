@@ -213,6 +213,46 @@ TEST(SecurityIssue28, ValidityCappedByTheCasAndShorterByDefault) {
   EXPECT_LE(short_e.not_after, std::time(nullptr) + 7L * 86400 + 60);
 }
 
+// --protect-writes: the rig's topics under write access control, a node identity that may publish
+// them but never commands, and strict readers with a governance of their own (picked at load).
+TEST(SecurityIssue28, WriteProtectionRulesNodeGrantAndStrictReaders) {
+  Dir d;
+  auto o = small_init(d);
+  o.protect_writes = dds::WriteProtection::kAccess;
+  o.strict_readers = {"planner"};
+  dds::init_security_dir(o);
+  const fs::path s = o.dir;
+  const std::string gov = read(s / "governance.xml");
+  for (const std::string expr : {"rt/vehicle/*", "rt/sensors/*", "rt/rig/*"}) {
+    const auto at = gov.find("<topic_expression>" + expr + "</topic_expression>");
+    ASSERT_NE(at, std::string::npos) << expr;
+    const std::string rule = gov.substr(at, gov.find("</topic_rule>", at) - at);
+    EXPECT_NE(rule.find("<enable_write_access_control>true"), std::string::npos) << expr;
+    EXPECT_NE(rule.find("<enable_read_access_control>false"), std::string::npos) << expr;
+    EXPECT_NE(rule.find("<metadata_protection_kind>NONE"), std::string::npos) << expr;
+  }
+  // The command rule still comes first (first match wins) and the loader accepts it.
+  EXPECT_LT(gov.find("rt/vehicle/dbw/cmd"), gov.find("rt/vehicle/*"));
+  EXPECT_NO_THROW(dds::check_governance(gov, "g"));
+  const std::string node = read(s / "rig_node/permissions.xml");
+  const std::string publish = node.substr(node.find("<publish>"), node.find("</publish>") - node.find("<publish>"));
+  EXPECT_NE(publish.find("<topic>rt/sensors/*</topic>"), std::string::npos) << publish;
+  EXPECT_EQ(publish.find("rt/vehicle/*"), std::string::npos) << "a wildcard over the command topic: " << publish;
+  EXPECT_EQ(publish.find("dbw/cmd"), std::string::npos) << publish;
+  EXPECT_EQ(dds::security_files(o.dir, "planner").governance, (s / "planner/governance.p7s").string());
+  EXPECT_NE(read(s / "planner/governance.xml").find("<allow_unauthenticated_participants>false"), std::string::npos);
+  EXPECT_EQ(dds::security_files(o.dir, "reader").governance, (s / "governance.p7s").string());
+  // --force without the strict reader: its old governance goes with it.
+  o.force = true;
+  o.strict_readers.clear();
+  o.readers = {"reader", "planner"};
+  o.protect_writes = dds::WriteProtection::kSign;
+  dds::init_security_dir(o);
+  EXPECT_FALSE(fs::exists(s / "planner/governance.p7s"));
+  EXPECT_NE(read(s / "governance.xml").find("<metadata_protection_kind>SIGN</metadata_protection_kind>"),
+            std::string::npos);
+}
+
 TEST(SecurityIssue28, ExpiryInDiagnosticsWarns30DaysAhead) {
   dds::SecurityExpiry e{1'900'000'000, "certificate"};
   const auto status = [&](std::time_t now) {
