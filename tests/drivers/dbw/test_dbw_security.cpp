@@ -288,6 +288,12 @@ TEST(DbwSecurityConfig, ValidatedAtLoadWithPositions) {
   EXPECT_NE(p.find("rig.yaml:4:21: security.command_identity: DDS Security: identity 'teleop'"), std::string::npos) << p;
   p = dbw_problems("security:\n  dir: " + o.dir + "\n  identity: x\n");
   EXPECT_NE(p.find("rig.yaml:3:3: security.identity: unknown key"), std::string::npos) << p;
+  // Issue 28: a key others may read is a config problem at load, not a surprise at `rig up`.
+  fs::permissions(fs::path(o.dir) / "dbw_bridge/key.pem", fs::perms::others_read, fs::perm_options::add);
+  p = dbw_problems("security:\n  dir: " + o.dir + "\n");
+  EXPECT_NE(p.find("rig.yaml:2:8: security.dir: DDS Security: private key of identity 'dbw_bridge'"), std::string::npos)
+      << p;
+  EXPECT_NE(p.find("(mode 0604)"), std::string::npos) << p;
 }
 
 }  // namespace
