@@ -323,7 +323,7 @@ class Monitor {
         16);
   }
 
-  // Units a node counted lost itself (`scans_lost`, `frames_lost`), on its topic.
+  // Units a node counted lost itself (`counted_lost`, `scans_lost`, `frames_lost`), on its topic.
   void take_counted_lost(const msg::DiagnosticStatus& st) {
     const char* topic_name = nullptr;
     const char* lost = nullptr;
@@ -332,7 +332,8 @@ class Monitor {
       if (kv.key == nullptr || kv.value == nullptr) continue;
       const std::string_view key(kv.key);
       if (key == "topic") topic_name = kv.value;
-      if (key == "scans_lost" || key == "frames_lost") lost = kv.value;
+      // A node's own total: counted_lost (camera nodes), else scans_lost (LIDAR) or frames_lost.
+      if (key == "counted_lost" || ((key == "scans_lost" || key == "frames_lost") && lost == nullptr)) lost = kv.value;
     }
     if (topic_name == nullptr || lost == nullptr) return;
     if (auto it = stats_.find(topic_name); it != stats_.end()) it->second.on_counted_lost(std::strtoull(lost, nullptr, 10));

@@ -395,6 +395,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       case TimeJudge::Verdict::kJump:  // a real clock step: the scan ends; continuity starts over
         ++stats.time_jumps;
         scans.merge(out, end(false));
+        // The lookahead scan (points already past the cut) will never be completed either.
+        if (scans.current().scan.packets > 0) scans.merge(out, end(false));
         scans.drop_next();
         have_prev = false;
         have_seq = false;
@@ -493,11 +495,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       }
       cut_here = crosses(prev_az, step, emit_raw, judged);
     } else {
-      // First block (or after a time jump) inside the window: the window's start was not seen,
-      // but the points past the cut that go to the next scan do start it at the cut (a sensor
-      // that restarts at 0° begins here: its first whole turn is a complete scan, issue 26).
+      // First block (or after a time jump) inside the window: the window's start was not seen
+      // (channels that passed the cut before it are not in the next scan: it is partial).
       window_open = in_sector(reset_raw, emit_raw, a) && a != emit_raw;
-      if (window_open && !scans.next().started) scans.next().from_cut = true;
     }
     const bool overlap = window_open || cut_here;
     if (overlap) scans.next().touch(group_stamp, packet.rx_ns);
