@@ -210,8 +210,9 @@ TEST_P(FrozenAzimuth, NoShortScansTurnsCountedLostPacketsDroppedOnce) {
   Stream s = render(GetParam(), 2.0);
   const Decoded clean = run(s.options, s.pkts);
   const mock::PacketFields fields(*s.sensor);
-  // Frozen mid-scan, and from a scan's first packet on.
-  for (const std::size_t from : {s.pkts.size() / 4, scan_start_near(s, s.pkts.size() / 4)}) {
+  // Frozen mid-scan, from a scan's first packet on, and from its predecessor's last.
+  for (const std::size_t from : {s.pkts.size() / 4, scan_start_near(s, s.pkts.size() / 4),
+                                 scan_start_near(s, s.pkts.size() / 4) - 1}) {
     auto pkts = s.pkts;
     const auto n = static_cast<std::size_t>(s.sensor->packets_per_second() * 0.25);
     const std::vector<std::byte> frozen = pkts[from].bytes;
