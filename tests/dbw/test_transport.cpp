@@ -111,11 +111,21 @@ TEST(Transport, APeerOutlivesTheBusOwnerAndRejoinsWhenItReturns) {
   can::RxFrame rx;
   ASSERT_EQ(bus->send(frame(0x10, 1)), can::IoStatus::kOk);
   ASSERT_EQ(peer->receive(rx, 1000), can::IoStatus::kOk);
+  // A bus-off the bus reports (an error frame) is not a lost connection: it holds until the restart.
+  ASSERT_EQ(bus->send(can::make_error_frame(true, false)), can::IoStatus::kOk);
+  ASSERT_EQ(peer->receive(rx, 1000), can::IoStatus::kOk);
+  ASSERT_EQ(peer->bus_state(), can::BusState::kBusOff);
+  EXPECT_EQ(peer->receive(rx, 300), can::IoStatus::kTimeout);
+  EXPECT_EQ(peer->bus_state(), can::BusState::kBusOff) << "no reconnect clears a reported bus-off";
+  EXPECT_EQ(peer->send(frame(0x1F, 1)), can::IoStatus::kBusOff);
+  ASSERT_EQ(bus->send(can::make_error_frame(false, true)), can::IoStatus::kOk);
+  ASSERT_EQ(peer->receive(rx, 1000), can::IoStatus::kOk);
+  ASSERT_EQ(peer->bus_state(), can::BusState::kActive);
   bus.reset();  // the ECU died
   EXPECT_EQ(peer->receive(rx, 200), can::IoStatus::kTimeout) << "not kClosed: the bus is still there";
   EXPECT_EQ(peer->bus_state(), can::BusState::kBusOff);
   EXPECT_EQ(peer->send(frame(0x11, 1)), can::IoStatus::kBusOff);
-  EXPECT_EQ(peer->stats().bus_off_events.load(), 1U);
+  EXPECT_EQ(peer->stats().bus_off_events.load(), 2U) << "the reported one, then the lost connection";
   bus = can::open_transport("unix-listen:" + path);  // restarted
   const auto t0 = std::chrono::steady_clock::now();
   while (peer->bus_state() == can::BusState::kBusOff && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(5))

@@ -69,6 +69,7 @@ bool SeqpacketTransport::try_reconnect() noexcept {
     std::lock_guard lock(fd_mu_);
     fd_ = std::move(fd);
   }
+  disconnected_ = false;
   state_ = BusState::kActive;
   return true;
 }
@@ -76,7 +77,9 @@ bool SeqpacketTransport::try_reconnect() noexcept {
 IoStatus SeqpacketTransport::receive(RxFrame& out, int timeout_ms) noexcept {
   const Nanos deadline = deadline_after(timeout_ms);
   while (true) {
-    if (state_ == BusState::kBusOff && !reconnect_path_.empty() && !try_reconnect()) {
+    // Only a lost connection is retried: a bus-off the bus itself reported (an error frame) stays
+    // until the bus says it restarted.
+    if (disconnected_ && !try_reconnect()) {
       // Off the bus: nothing arrives; wait out the timeout in short steps so a reconnect is prompt.
       const int left = remaining_ms(deadline);
       if (left == 0) return IoStatus::kTimeout;
@@ -88,6 +91,7 @@ IoStatus SeqpacketTransport::receive(RxFrame& out, int timeout_ms) noexcept {
     if (w != IoStatus::kOk) return w;
     IoStatus r = detail::recv_frame(fd_.get(), out, stats_);
     if (r == IoStatus::kClosed && !reconnect_path_.empty()) {
+      disconnected_ = true;
       state_ = BusState::kBusOff;  // the bridge sees it as a bus-off: disengaged, nothing sent
       ++stats_.bus_off_events;
       next_attempt_ns_ = 0;

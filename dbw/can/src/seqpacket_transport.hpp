@@ -29,6 +29,7 @@ class SeqpacketTransport final : public Transport {
   std::string reconnect_path_;
   std::mutex fd_mu_;         // the receiving thread replaces fd_ while others send on it
   Nanos next_attempt_ns_ = 0;
+  bool disconnected_ = false;  // the bus owner went away (receiving thread only)
 };
 
 // The bus: listens on a path; frames from any peer reach the owner (receive) and every other peer;
