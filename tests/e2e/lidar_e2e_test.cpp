@@ -358,7 +358,12 @@ TEST(LidarEndToEnd, DeadDeviceAndBadPacketsAreReportedInDiagnostics) {
   EXPECT_EQ(st.values["dropped_bad_block_flag"], std::to_string(bad.bad_block_flag));
   EXPECT_EQ(st.values["dropped_bad_azimuth"], std::to_string(bad.bad_azimuth));
   EXPECT_EQ(st.values["dropped_wrong_model"], std::to_string(bad.wrong_model));
-  EXPECT_EQ(st.values.at("packets_dropped"), std::to_string(bad.total()));
+  // The second sender is a sensor restarted with another clock: the first packet after its time jump
+  // is judged alone (a single implausible time is a corrupt packet, issue 26) and dropped as bad_time,
+  // counted, until the next one confirms the step. Whether it lands in this status depends on timing.
+  const auto bad_time = st.values.count("dropped_bad_time") ? std::stoull(st.values.at("dropped_bad_time")) : 0ULL;
+  EXPECT_LE(bad_time, 1ULL);
+  EXPECT_EQ(st.values.at("packets_dropped"), std::to_string(bad.total() + bad_time));
 }
 
 }  // namespace
