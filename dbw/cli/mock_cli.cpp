@@ -49,8 +49,8 @@ mock::Fault from_event(const faults::FaultEvent& e, double start_s) {
 }
 
 // Under `rig chaos`: the plan's dbw.* faults of this device, timed from this process's start (the
-// ECU's clock), each recorded in the truth record when it begins. A restarted mock takes only what
-// has not begun yet: the faults before its start were its predecessor's.
+// ECU's clock), each recorded in the truth record when it begins. A restarted mock takes what has not
+// ended yet: the faults over before its start were its predecessor's.
 class PlannedFaults {
  public:
   PlannedFaults(const std::string& device, std::vector<mock::Fault>& faults) {
@@ -59,9 +59,16 @@ class PlannedFaults {
     const faults::Plan plan = faults::read_plan(plan_path);
     const double offset_s = static_cast<double>(plan.epoch_mono_ns - monotonic_now_ns()) * 1e-9;
     for (const auto& e : plan.for_device(device)) {
-      if (e.kind.rfind("dbw.", 0) != 0 || offset_s + e.at_s < 0) continue;
-      faults.push_back(from_event(e, offset_s + e.at_s));
-      events_.push_back(e);
+      // Over before this process started: its predecessor's. Still on (the mock was restarted inside
+      // it): injected for what is left of it, and recorded again by this run.
+      if (e.kind.rfind("dbw.", 0) != 0 || offset_s + e.at_s + e.duration_s < 0) continue;
+      faults::FaultEvent left = e;
+      if (offset_s + e.at_s < 0) {
+        left.duration_s = offset_s + e.at_s + e.duration_s;
+        left.at_s = -offset_s;
+      }
+      faults.push_back(from_event(left, offset_s + left.at_s));
+      events_.push_back(left);
     }
     truth_ = std::make_unique<truth::Writer>(faults::chaos_truth_path(device),
                                              truth::Header{device, "dbw", "mock Paravan ECU", "", "", "CLOCK_MONOTONIC"});

@@ -96,8 +96,16 @@ class Checker {
         ++r_.faults[f.kind];
         recorded[log.header.device].insert(f.id);
       }
+    // A device's mock killed (host.kill_mock) for the whole of a fault could not inject it: not a lie.
+    auto while_dead = [&](const faults::FaultEvent& e) {
+      return std::any_of(in_.events.begin(), in_.events.end(), [&](const faults::FaultEvent& k) {
+        return k.kind == "host.kill_mock" && k.device == e.device && k.at_s <= e.at_s &&
+               e.at_s + e.duration_s <= k.at_s + fault_span_s(k) + 0.5;  // + the restarted mock's start
+      });
+    };
     for (const auto& e : in_.events) {
       if (in_.window_end_ns > 0 && event_begin(e) >= in_.window_end_ns) continue;  // planned after the end
+      if (while_dead(e)) continue;
       const std::string owner = e.device.empty() ? std::string("host") : e.device;
       const bool host_kind = e.device_class() == faults::DeviceClass::kHost;
       const auto it = recorded.find(host_kind ? std::string("host") : owner);

@@ -213,6 +213,16 @@ TEST(ChaosCheck, APlannedFaultNoMockRecordedIsReported) {
   in.truths[0].faults.push_back(truth::FaultRecord{7, "lidar.reorder", kT0 + 2 * 1'000'000'000LL, kT0 + 2 * 1'000'000'000LL, 20, "n=1"});
   r = check(in);
   EXPECT_TRUE(r.invariants.at("faults_injected"));
+  // Planned while its mock was killed (host.kill_mock, restarted 1 s later): it could not be injected.
+  in.events.push_back(faults::FaultEvent{8, "host.kill_mock", "front", 3.0, 0.0, {{"restart_s", "1"}}});
+  in.events.push_back(faults::FaultEvent{9, "lidar.stuck_azimuth", "front", 3.2, 0.5, {}});
+  in.truths.push_back(truth::Log{});
+  in.truths.back().header.device = "host";
+  in.truths.back().faults.push_back(truth::FaultRecord{8, "host.kill_mock", kT0 + 3'000'000'000LL, kT0 + 4'000'000'000LL, -1, ""});
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("faults_injected")) << result_text(r);
+  in.events.back().at_s = 4.4;  // it outlasts the dead time: it must be there
+  EXPECT_FALSE(check(in).invariants.at("faults_injected"));
   EXPECT_EQ(r.faults.at("lidar.reorder"), 1u);
 }
 
