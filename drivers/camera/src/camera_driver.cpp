@@ -219,11 +219,8 @@ struct CameraDriver::Impl {
           publish(c.frame);
           break;
         case camera::CaptureStatus::kIncomplete: {
-          // The camera is sending (a lossy link drops packets): not the silence the watchdog is
-          // for. Reopening it under 1 % packet loss did not bring a frame more (issue 27).
           std::lock_guard lock(mutex);
           ++incomplete_since_publish;
-          last_frame_mono_ns = monotonic_now_ns();
           break;
         }
         case camera::CaptureStatus::kDisconnected:
