@@ -10,8 +10,6 @@
 #include <thread>
 #include <vector>
 
-#include "exposure_watcher.hpp"
-
 namespace sensor_rig::camera {
 namespace {
 
@@ -113,7 +111,10 @@ std::string AravisSource::describe() const {
 }
 
 double AravisSource::exposure_us() const {
-  if (const Nanos ns = last_exposure_ns_.load(); ns > 0) return static_cast<double>(ns) / 1000.0;
+  {
+    std::lock_guard el(exposure_mutex_);
+    if (exposure_known_.ns > 0) return static_cast<double>(exposure_known_.ns) / 1000.0;
+  }
   return details().exposure_us;
 }
 
@@ -134,7 +135,10 @@ void AravisSource::open() {
   }
   control_lost_.store(false);
   last_frame_id_ = 0;  // a reopened camera may have restarted its ids
-  last_exposure_ns_.store(0);
+  {
+    std::lock_guard el(exposure_mutex_);
+    exposure_known_ = {};
+  }
   AravisDetails details;
   try {
     {
@@ -161,7 +165,7 @@ void AravisSource::open() {
   }
   {
     std::lock_guard lock(mutex_);
-    std::lock_guard gl(*gc_mutex_);
+    std::lock_guard gl(gc_mutex_);
     st_ = std::move(fresh);
     details_ = details;
   }
@@ -170,20 +174,40 @@ void AravisSource::open() {
   {
     std::lock_guard pl(ptp_mutex_);
     ptp_stop_ = false;
+    exposure_want_ = 0;
   }
-  if (!exposure_read_feature_.empty())
-    exposure_ = std::make_unique<detail::ExposureWatcher>(st_->device, exposure_read_feature_, gc_mutex_);
-  if (cfg_.ptp.enable) ptp_thread_ = std::thread([this] { status_loop(); });
+  if (cfg_.ptp.enable || !exposure_read_feature_.empty()) ptp_thread_ = std::thread([this] { status_loop(); });
 }
 
-// The PTP status thread: a GVCP round trip every status_poll_ms, never on the capture thread.
+// The source's own thread for GenICam reads that are GVCP round trips, never on the capture
+// thread: the exposure of each frame just received (the fake, like a camera without chunk data,
+// tells it only through its register: read right after the frame, before the next exposure
+// starts), and the PTP status every status_poll_ms.
 void AravisSource::status_loop() {
-  const auto period = std::chrono::milliseconds(std::max(cfg_.ptp.status_poll_ms, 10));
+  const Nanos ptp_period = static_cast<Nanos>(std::max(cfg_.ptp.status_poll_ms, 10)) * 1'000'000;
+  Nanos next_ptp = monotonic_now_ns() + ptp_period;
+  std::uint64_t read_for = 0;
   std::unique_lock pl(ptp_mutex_);
-  while (!ptp_cv_.wait_for(pl, period, [this] { return ptp_stop_; })) {
+  for (;;) {
+    const Nanos wait = cfg_.ptp.enable ? std::max<Nanos>(next_ptp - monotonic_now_ns(), 0) : 1'000'000'000;
+    (void)ptp_cv_.wait_for(pl, std::chrono::nanoseconds(wait), [&] { return ptp_stop_ || exposure_want_ != read_for; });
+    if (ptp_stop_) return;
+    const std::uint64_t want = exposure_want_;
     pl.unlock();
-    {
-      std::lock_guard gl(*gc_mutex_);
+    if (want != read_for && !exposure_read_feature_.empty()) {
+      read_for = want;
+      std::lock_guard gl(gc_mutex_);
+      GError* err = nullptr;
+      const double us = control_lost_.load() ? 0.0 : arv_device_get_float_feature_value(st_->device, exposure_read_feature_.c_str(), &err);
+      if (err != nullptr) take_error(err);
+      else if (us > 0) {
+        std::lock_guard el(exposure_mutex_);
+        exposure_known_ = {want, static_cast<Nanos>(std::llround(us * 1000.0))};
+      }
+    }
+    if (cfg_.ptp.enable && monotonic_now_ns() >= next_ptp) {
+      next_ptp = monotonic_now_ns() + ptp_period;
+      std::lock_guard gl(gc_mutex_);
       if (!control_lost_.load()) poll_ptp();
     }
     pl.lock();
@@ -439,7 +463,7 @@ PtpState AravisSource::ptp() const {
 
 void AravisSource::set_feature(const std::string& name, const std::string& value) {
   std::lock_guard lock(mutex_);
-  std::lock_guard gl(*gc_mutex_);
+  std::lock_guard gl(gc_mutex_);
   if (st_->device == nullptr) throw CameraError("aravis " + cfg_.device + ": not open");
   const std::string assignment = name + "=" + value;
   GError* err = nullptr;
@@ -490,10 +514,6 @@ void AravisSource::fold_stats() noexcept {
 
 void AravisSource::close() noexcept {
   streaming_.store(false);  // triggers refuse from here on, without waiting for this close
-  if (exposure_) {  // a read on a dead camera takes seconds: not waited for
-    if (control_lost_.load()) exposure_->abandon();
-    exposure_.reset();
-  }
   stop_ptp_thread();  // before the camera goes; a status read in flight is at most one GVCP timeout
   ptp_locked_.store(false);
   std::lock_guard lock(mutex_);
@@ -527,7 +547,7 @@ void AravisSource::close() noexcept {
 
 std::string AravisSource::feature(const std::string& name) const {
   std::lock_guard lock(mutex_);
-  std::lock_guard gl(*gc_mutex_);
+  std::lock_guard gl(gc_mutex_);
   if (st_->device == nullptr) return {};
   ArvGcNode* node = arv_device_get_feature(st_->device, name.c_str());
   if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) return {};
@@ -546,7 +566,7 @@ bool AravisSource::trigger() {
   // across another thread's open, so a trigger waits at most for a GenICam access in flight.
   if (!streaming_.load() || control_lost_.load()) return false;
   std::lock_guard lock(mutex_);
-  std::lock_guard gl(*gc_mutex_);
+  std::lock_guard gl(gc_mutex_);
   if (st_->camera == nullptr || control_lost_.load()) return false;
   GError* err = nullptr;
   arv_camera_software_trigger(st_->camera, &err);
@@ -636,12 +656,17 @@ Capture AravisSource::next(int timeout_ms) {
     m.packets = details_.packet_size > 36 ? static_cast<std::uint32_t>((want + static_cast<std::size_t>(details_.packet_size) - 37) /
                                                                        static_cast<std::size_t>(details_.packet_size - 36))
                                           : 0;
-  if (exposure_) {  // the exposure of a frame before (read after it came), then ask for this one's
-    const auto known = exposure_->known();
-    m.exposure_seq = known.seq;
-    m.exposure_ns = known.ns;
-    if (known.ns > 0) last_exposure_ns_.store(known.ns);
-    exposure_->want(m.seq);
+  {
+    std::lock_guard el(exposure_mutex_);
+    m.exposure_seq = exposure_known_.seq;
+    m.exposure_ns = exposure_known_.ns;
+  }
+  if (!exposure_read_feature_.empty()) {  // this frame's exposure: read by the status thread
+    {
+      std::lock_guard pl(ptp_mutex_);
+      exposure_want_ = m.seq;
+    }
+    ptp_cv_.notify_all();
   }
   ++completed_;
   c.status = CaptureStatus::kFrame;

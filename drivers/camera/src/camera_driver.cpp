@@ -239,20 +239,8 @@ struct CameraDriver::Impl {
         last = last_frame_mono_ns;
       }
       const Nanos silent = monotonic_now_ns() - last;
-      if (src->is_open() && silent > static_cast<Nanos>(cfg.watchdog()) * 1'000'000) {
-        if (trigger != nullptr && !trigger->firing()) {
-          // Its trigger source stopped (a stopped LIDAR): the camera is not at fault and a reopen
-          // would not bring frames (issue 27 item 2: 29 reopens in 15 s). Reported by status().
-          set_state("not triggered");
-          std::lock_guard lock(mutex);
-          last_frame_mono_ns = monotonic_now_ns();  // watched again from when the trigger resumes
-        } else {
-          lose("no frame for " + std::to_string(silent / 1'000'000) + " ms");
-        }
-      } else if (trigger != nullptr && trigger->firing()) {
-        std::lock_guard lock(mutex);
-        if (state == "not triggered") state = "streaming";
-      }
+      if (src->is_open() && silent > static_cast<Nanos>(cfg.watchdog()) * 1'000'000)
+        lose("no frame for " + std::to_string(silent / 1'000'000) + " ms");
       std::lock_guard lock(mutex);
       source_stats = src->stats();
       if (cfg.source.ptp.enable) ptp = src->ptp();

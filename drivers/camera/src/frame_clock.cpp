@@ -20,11 +20,14 @@ constexpr std::size_t kMaxPending = 8;
 timesync::ClockMapperConfig mapper_config(Nanos /*exposure_ns*/) {
   timesync::ClockMapperConfig c;
   c.fixed_delay_ns = 0;
-  // A frame every 33-100 ms: buckets of 200 ms keep a few samples each for the minimum. (1 s
-  // buckets locked later and no better: replayed on three campaigns' records, 6 frames beyond
-  // 1 ms against 2-3.)
-  c.bucket_ns = 200'000'000;
-  c.lock_buckets = 5;
+  // The envelope is each bucket's minimum delay: with 2 frames per 200 ms bucket that minimum was
+  // the transport jitter (ms on a loaded host), and a lock from 1 s of them carried a bias of
+  // 1-2 ms (and drift of hundreds of ppm) for the camera's whole run. 10 frames per 1 s bucket,
+  // locked after 3 s (host fallback before: arrival - exposure).
+  c.bucket_ns = 1'000'000'000;
+  c.lock_buckets = 3;
+  c.lock_span_ns = 3'000'000'000;
+  c.relock_buckets = 2;
   // A jump (or a persistent shift) is confirmed over 1 s of frames, not 3 of them: a host or fake
   // hiccup delays a few frames by tens of ms in a row, and a line re-seeded from them was 2-6 ms
   // off until the next hiccup. A real step (PTP state, cold start) is mapped with the old line

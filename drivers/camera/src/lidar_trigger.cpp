@@ -295,11 +295,6 @@ void LidarTrigger::run() {
   }
 }
 
-bool LidarTrigger::firing() const {
-  std::lock_guard lock(mutex_);
-  return figures_.predicting;
-}
-
 LidarTriggerFigures LidarTrigger::figures(std::size_t member) const {
   std::lock_guard lock(mutex_);
   LidarTriggerFigures f = figures_;

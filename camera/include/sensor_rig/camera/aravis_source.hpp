@@ -31,9 +31,6 @@ struct _ArvCamera;
 struct _ArvDevice;
 
 namespace sensor_rig::camera {
-namespace detail {
-class ExposureWatcher;
-}
 
 // Opens the ArvDevice for a device string; returns an owned reference (ArvDevice*) or throws.
 // Default: the network (id, IP, MAC, then serial through the device list); camera/mock adds
@@ -86,14 +83,14 @@ class AravisSource final : public FrameSource {
   void publish_ptp(const std::string& status, bool reset, const std::string& error);
   std::string read_ptp_status(_ArvDevice* dev, std::string& error);
   void stop_ptp_thread() noexcept;
-  void status_loop();  // the PTP status thread
+  void status_loop();  // the status thread: per-frame exposure reads, PTP polls
 
   SourceConfig cfg_;
   AravisDeviceOpener opener_;
   mutable std::mutex mutex_;  // camera control (open/close/trigger) from two threads
   // GenICam access (trigger, features, the PTP poll): taken after mutex_; the PTP thread takes
   // only this one, so stats() never waits for its GVCP round trip.
-  std::shared_ptr<std::mutex> gc_mutex_ = std::make_shared<std::mutex>();  // shared with the exposure watcher
+  mutable std::mutex gc_mutex_;
   std::unique_ptr<State> st_;
   std::atomic<bool> control_lost_{false};
   std::atomic<bool> streaming_{false};
@@ -118,9 +115,14 @@ class AravisSource final : public FrameSource {
   std::thread ptp_thread_;
   std::condition_variable ptp_cv_;
   bool ptp_stop_ = false;  // under ptp_mutex_
+  std::uint64_t exposure_want_ = 0;  // under ptp_mutex_: the frame whose exposure to read next
   std::string exposure_read_feature_;  // ExposureTime | ExposureTimeAbs as read back at open; "": none
-  std::unique_ptr<detail::ExposureWatcher> exposure_;  // reads each frame's exposure (capture thread's)
-  std::atomic<Nanos> last_exposure_ns_{0};              // the latest it read
+  struct KnownExposure {
+    std::uint64_t seq = 0;
+    Nanos ns = 0;
+  };
+  mutable std::mutex exposure_mutex_;  // exposure_known_: the status thread writes, next() reads
+  KnownExposure exposure_known_;
 };
 
 // Aravis' own open by name, falling back to a serial-number match in the device list.

@@ -83,7 +83,6 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   void exposed(std::size_t member, Nanos tick, Nanos device_exposure_ns) override;
   void observe_sweep(std::span<const timesync::SweepSample> samples) noexcept override;
   void add_status(dds::DriverStatus& s, std::size_t member) const override;
-  [[nodiscard]] bool firing() const override;
   [[nodiscard]] LidarTriggerFigures figures(std::size_t member = 0) const;
   [[nodiscard]] const LidarTriggerConfig& config() const noexcept { return cfg_; }
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
