@@ -101,21 +101,14 @@ AravisSource::AravisSource(SourceConfig cfg, AravisDeviceOpener opener)
 
 AravisSource::~AravisSource() { close(); }
 
-// Lock-free: the capture loop asks every turn, and must not queue behind a trigger's GVCP call on
-// a camera that stopped answering (its watchdog would never run).
-bool AravisSource::is_open() const noexcept { return open_.load(); }
+bool AravisSource::is_open() const noexcept {
+  std::lock_guard lock(mutex_);
+  return st_->stream != nullptr;
+}
 
 std::string AravisSource::describe() const {
   return "aravis " + cfg_.device + " " + info(cfg_.format).genicam + " " + std::to_string(cfg_.width) + "x" +
          std::to_string(cfg_.height) + "@" + std::to_string(cfg_.frame_rate) + " trigger " + to_string(cfg_.trigger);
-}
-
-double AravisSource::exposure_us() const {
-  {
-    std::lock_guard el(exposure_mutex_);
-    if (exposure_known_.ns > 0) return static_cast<double>(exposure_known_.ns) / 1000.0;
-  }
-  return details().exposure_us;
 }
 
 AravisDetails AravisSource::details() const {
@@ -135,10 +128,6 @@ void AravisSource::open() {
   }
   control_lost_.store(false);
   last_frame_id_ = 0;  // a reopened camera may have restarted its ids
-  {
-    std::lock_guard el(exposure_mutex_);
-    exposure_known_ = {};
-  }
   AravisDetails details;
   try {
     {
@@ -169,48 +158,24 @@ void AravisSource::open() {
     st_ = std::move(fresh);
     details_ = details;
   }
-  open_.store(true);
   streaming_.store(true);
-  {
-    std::lock_guard pl(ptp_mutex_);
-    ptp_stop_ = false;
-    exposure_want_ = 0;
-  }
-  if (cfg_.ptp.enable || !exposure_read_feature_.empty()) ptp_thread_ = std::thread([this] { status_loop(); });
-}
-
-// The source's own thread for GenICam reads that are GVCP round trips, never on the capture
-// thread: the exposure of each frame just received (the fake, like a camera without chunk data,
-// tells it only through its register: read right after the frame, before the next exposure
-// starts), and the PTP status every status_poll_ms.
-void AravisSource::status_loop() {
-  const Nanos ptp_period = static_cast<Nanos>(std::max(cfg_.ptp.status_poll_ms, 10)) * 1'000'000;
-  Nanos next_ptp = monotonic_now_ns() + ptp_period;
-  std::uint64_t read_for = 0;
-  std::unique_lock pl(ptp_mutex_);
-  for (;;) {
-    const Nanos wait = cfg_.ptp.enable ? std::max<Nanos>(next_ptp - monotonic_now_ns(), 0) : 1'000'000'000;
-    (void)ptp_cv_.wait_for(pl, std::chrono::nanoseconds(wait), [&] { return ptp_stop_ || exposure_want_ != read_for; });
-    if (ptp_stop_) return;
-    const std::uint64_t want = exposure_want_;
-    pl.unlock();
-    if (want != read_for && !exposure_read_feature_.empty()) {
-      read_for = want;
-      std::lock_guard gl(gc_mutex_);
-      GError* err = nullptr;
-      const double us = control_lost_.load() ? 0.0 : arv_device_get_float_feature_value(st_->device, exposure_read_feature_.c_str(), &err);
-      if (err != nullptr) take_error(err);
-      else if (us > 0) {
-        std::lock_guard el(exposure_mutex_);
-        exposure_known_ = {want, static_cast<Nanos>(std::llround(us * 1000.0))};
+  if (cfg_.ptp.enable) {
+    {
+      std::lock_guard pl(ptp_mutex_);
+      ptp_stop_ = false;
+    }
+    ptp_thread_ = std::thread([this] {
+      const auto period = std::chrono::milliseconds(std::max(cfg_.ptp.status_poll_ms, 10));
+      std::unique_lock pl(ptp_mutex_);
+      while (!ptp_cv_.wait_for(pl, period, [this] { return ptp_stop_; })) {
+        pl.unlock();
+        {
+          std::lock_guard gl(gc_mutex_);
+          if (!control_lost_.load()) poll_ptp();
+        }
+        pl.lock();
       }
-    }
-    if (cfg_.ptp.enable && monotonic_now_ns() >= next_ptp) {
-      next_ptp = monotonic_now_ns() + ptp_period;
-      std::lock_guard gl(gc_mutex_);
-      if (!control_lost_.load()) poll_ptp();
-    }
-    pl.lock();
+    });
   }
 }
 
@@ -276,7 +241,6 @@ void AravisSource::configure(State& st, AravisDetails& details) {
     arv_device_set_features_from_string(dev, assignment.c_str(), &err);
     check("feature " + assignment);
   }
-  exposure_read_feature_.clear();
   // What the device has after the features (one may set ExposureTime, issue 27 item 9): the frame clock's exposure -> leader delay.
   for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {
     if (arv_device_is_feature_available(dev, name, nullptr) == FALSE) continue;
@@ -286,7 +250,6 @@ void AravisSource::configure(State& st, AravisDetails& details) {
       continue;
     }
     details.exposure_us = us;
-    exposure_read_feature_ = name;
     break;
   }
   // 6b. PTP, after the features (a feature may select the PTP profile or clock).
@@ -517,7 +480,6 @@ void AravisSource::close() noexcept {
   stop_ptp_thread();  // before the camera goes; a status read in flight is at most one GVCP timeout
   ptp_locked_.store(false);
   std::lock_guard lock(mutex_);
-  open_.store(false);
   if (st_->camera == nullptr) return;
   // The device's heartbeat thread outlives this close by seconds on the release thread below: a
   // CCP read of a restarted camera that nobody controls yet is "control-lost", which must reach
@@ -656,27 +618,14 @@ Capture AravisSource::next(int timeout_ms) {
     m.packets = details_.packet_size > 36 ? static_cast<std::uint32_t>((want + static_cast<std::size_t>(details_.packet_size) - 37) /
                                                                        static_cast<std::size_t>(details_.packet_size - 36))
                                           : 0;
-  {
-    std::lock_guard el(exposure_mutex_);
-    m.exposure_seq = exposure_known_.seq;
-    m.exposure_ns = exposure_known_.ns;
-  }
-  if (!exposure_read_feature_.empty()) {  // this frame's exposure: read by the status thread
-    {
-      std::lock_guard pl(ptp_mutex_);
-      exposure_want_ = m.seq;
-    }
-    ptp_cv_.notify_all();
-  }
   ++completed_;
   c.status = CaptureStatus::kFrame;
   c.frame = Frame(m, mem.first(want), [stream, b] { arv_stream_push_buffer(stream, b); });
   return c;
 }
 
-// The capture thread's (the one that opens and closes): no lock, so that a trigger in a GVCP
-// timeout never holds the capture loop, and with it the watchdog, off.
 SourceStats AravisSource::stats() const {
+  std::lock_guard lock(mutex_);
   SourceStats s = base_;
   if (st_->stream != nullptr) {
     guint64 completed = 0, failures = 0, underruns = 0;

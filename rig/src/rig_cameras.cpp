@@ -210,7 +210,6 @@ void CameraRig::supervise(std::vector<dds::DriverStatus>& statuses) {
 void CameraRig::stop() {
   for (auto& [name, g] : impl_->groups) g->stop();
   for (auto& t : impl_->lidar_triggers) t->stop();
-  for (auto& d : impl_->drivers) d->request_stop();  // all at once, then each joined (issue 27 item 1)
   for (auto& d : impl_->drivers) d->stop();
   for (auto& f : impl_->fakes)
     if (f.process.pid() > 0) f.process.stop(1000);

@@ -276,8 +276,6 @@ void CameraDriver::start() {
   log::info("camera", impl_->cfg.name + ": " + impl_->src->describe() + " -> " + impl_->image_topic_name);
 }
 
-void CameraDriver::request_stop() noexcept { impl_->stop_flag.store(true); }
-
 void CameraDriver::stop() {
   impl_->stop_flag.store(true);
   if (!impl_->thread.joinable()) return;

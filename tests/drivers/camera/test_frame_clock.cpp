@@ -197,40 +197,5 @@ TEST(FrameClock, ADeviceClockStepIsNeverPublishedOutsideTheArrivalWindow) {
   }
 }
 
-
-// Issue 27 item 9: auto exposure, 5-15 ms frame to frame, the source telling each frame's exposure
-// one frame later (read from the camera after the frame): the mapping follows the exposure start,
-// not the shortest exposure's arrival (which biased every stamp by the difference, -5 ms here).
-TEST(FrameClock, AnExposureThatChangesEveryFrameIsFollowed) {
-  const Nanos t0 = 1'800'000'000'000'000'000;
-  FrameClock clock(10'000'000);
-  std::mt19937 rng(11);
-  std::uniform_int_distribution<Nanos> exposure(5'000'000, 15'000'000);
-  std::uniform_int_distribution<Nanos> jitter(100'000, 3'000'000);
-  Nanos prev_exposure = 0;
-  double worst = 0;
-  for (int i = 1; i <= 200; ++i) {
-    const Nanos start = t0 + static_cast<Nanos>(i) * 100'000'000;
-    const Nanos e = exposure(rng);
-    camera::FrameMeta m;
-    m.seq = static_cast<std::uint64_t>(i);
-    m.domain = camera::TimeDomain::kDeviceTicks;
-    m.device_ns = 3'000'000'000 + (start - t0);
-    m.first_rx_ns = start + e + jitter(rng);
-    m.complete_ns = m.first_rx_ns + 2'000'000;
-    if (i > 1) {  // the previous frame's exposure, read after it arrived
-      m.exposure_seq = static_cast<std::uint64_t>(i - 1);
-      m.exposure_ns = prev_exposure;
-    }
-    prev_exposure = e;
-    const auto s = clock.stamp(m);
-    if (i > 100) {
-      EXPECT_EQ(s.source, StampSource::kDeviceMapped) << i;
-      worst = std::max(worst, std::abs(static_cast<double>(s.vehicle_ns - start)));
-    }
-  }
-  EXPECT_LT(worst, 1e6);
-}
-
 }  // namespace
 }  // namespace sensor_rig::drivers

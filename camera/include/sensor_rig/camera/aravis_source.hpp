@@ -67,8 +67,7 @@ class AravisSource final : public FrameSource {
   // Sets a GenICam feature now ("name=value" as in SourceConfig::features); throws CameraError.
   void set_feature(const std::string& name, const std::string& value);
   [[nodiscard]] PtpState ptp() const override;
-  // The exposure read back after configuration, or the latest one the status thread read.
-  [[nodiscard]] double exposure_us() const override;
+  [[nodiscard]] double exposure_us() const override { return details().exposure_us; }
 
  private:
   struct State;
@@ -83,7 +82,6 @@ class AravisSource final : public FrameSource {
   void publish_ptp(const std::string& status, bool reset, const std::string& error);
   std::string read_ptp_status(_ArvDevice* dev, std::string& error);
   void stop_ptp_thread() noexcept;
-  void status_loop();  // the status thread: per-frame exposure reads, PTP polls
 
   SourceConfig cfg_;
   AravisDeviceOpener opener_;
@@ -93,8 +91,7 @@ class AravisSource final : public FrameSource {
   mutable std::mutex gc_mutex_;
   std::unique_ptr<State> st_;
   std::atomic<bool> control_lost_{false};
-  std::atomic<bool> streaming_{false};
-  std::atomic<bool> open_{false};       // is_open(): from open() to close()  // open and streaming: trigger() may take the locks
+  std::atomic<bool> streaming_{false};  // open and streaming: trigger() may take the locks
   SourceStats base_;  // totals of streams already closed
   std::atomic<std::uint64_t> timeouts_{0};  // written by the capture thread, read by status()
   std::atomic<std::uint64_t> disconnects_{0};
@@ -115,14 +112,6 @@ class AravisSource final : public FrameSource {
   std::thread ptp_thread_;
   std::condition_variable ptp_cv_;
   bool ptp_stop_ = false;  // under ptp_mutex_
-  std::uint64_t exposure_want_ = 0;  // under ptp_mutex_: the frame whose exposure to read next
-  std::string exposure_read_feature_;  // ExposureTime | ExposureTimeAbs as read back at open; "": none
-  struct KnownExposure {
-    std::uint64_t seq = 0;
-    Nanos ns = 0;
-  };
-  mutable std::mutex exposure_mutex_;  // exposure_known_: the status thread writes, next() reads
-  KnownExposure exposure_known_;
 };
 
 // Aravis' own open by name, falling back to a serial-number match in the device list.

@@ -39,11 +39,6 @@ struct FrameMeta {
   Nanos complete_ns = 0;          // host CLOCK_REALTIME: frame complete, handed to the caller
   Nanos complete_mono_ns = 0;     // CLOCK_MONOTONIC sampled with complete_ns (same instant)
   std::uint32_t packets = 0;      // GigE packets of this frame (0: not packetised)
-  // The exposure time of frame `exposure_seq` (this one or an earlier one) as the device reported
-  // it, ns; 0: not known per frame. The clock mapping follows an exposure that changes while
-  // streaming (auto exposure, another controller) with it (issue 27 item 9).
-  std::uint64_t exposure_seq = 0;
-  Nanos exposure_ns = 0;
 };
 
 // A filled buffer on loan from its source; move-only; gives the buffer back when destroyed.

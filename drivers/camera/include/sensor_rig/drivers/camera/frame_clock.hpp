@@ -13,7 +13,6 @@
 // Device-clock stamps never go backwards when CLOCK_REALTIME is stepped back (timesync's
 // MonotonicStamps: held, then slewed out); trigger ticks are the clock's readings as they are.
 #include <cstdint>
-#include <deque>
 
 #include "sensor_rig/camera/frame.hpp"
 #include "sensor_rig/timesync/clock_mapper.hpp"
@@ -58,20 +57,11 @@ class FrameClock {
 
  private:
   FrameStamp device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept;
-  // Feeds the mapper (device time, exposure start by the arrival): with the frame's own exposure
-  // where the source reports it a frame or two later (FrameMeta::exposure_seq), else the latest.
-  void observe(const camera::FrameMeta& m, Nanos device) noexcept;
-  struct Pending {
-    std::uint64_t seq;
-    Nanos device;
-    Nanos first_rx;
-  };
 
   timesync::ClockMapper mapper_;
   timesync::MonotonicStamps monotonic_;  // the topic's stamps across realtime steps (kept over reopens)
   Nanos exposure_ns_;
   Rejected rejected_;
-  std::deque<Pending> pending_;  // frames waiting for their exposure (sources that report it)
 };
 
 }  // namespace sensor_rig::drivers
