@@ -5,9 +5,6 @@ namespace {
 
 // How far before its trigger tick a mapped exposure start may fall (the mapping's error).
 constexpr Nanos kMappedExposureSlackNs = 5'000'000;
-// A frame's first packet leaves at its exposure end; transport and a loaded host delay its arrival,
-// never by this much: an exposure start further back than this is a clock error.
-constexpr Nanos kArrivalWindowNs = 100'000'000;
 
 timesync::ClockMapperConfig mapper_config(Nanos exposure_ns) {
   timesync::ClockMapperConfig c;
@@ -46,13 +43,6 @@ FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept
 }
 
 FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
-  // Exposure start can lie neither after the first packet arrived nor long before its exposure.
-  const auto plausible = [&](Nanos t) { return t <= m.first_rx_ns && t >= m.first_rx_ns - exposure_ns_ - kArrivalWindowNs; };
-  const auto reject = [&](Nanos t) {
-    ++rejected_.count;
-    rejected_.last_ns = m.first_rx_ns;
-    rejected_.last_error_ns = t - (m.first_rx_ns - exposure_ns_);
-  };
   switch (m.domain) {
     case camera::TimeDomain::kMonotonic: {
       // The offset of the two clocks sampled together at this frame's dequeue: a clock step
@@ -60,34 +50,21 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
       const Nanos t = m.device_ns + (m.complete_ns - m.complete_mono_ns);
       return {t, StampSource::kMonotonic, t};
     }
-    case camera::TimeDomain::kVehicle: {
-      // PTP time: kept only where it agrees with the arrival; the mapper follows the raw ticks all
-      // along, so a PTP stamp found wrong (or a PTP drop) falls back to a fresh line.
-      const Nanos raw = m.device_ticks_ns != 0 ? m.device_ticks_ns : m.device_ns;
-      mapper_.observe(raw, m.first_rx_ns);
-      if (plausible(m.device_ns)) return {m.device_ns, StampSource::kVehicle, m.device_ns};
-      reject(m.device_ns);
-      const auto r = mapper_.map(raw);
-      if (r.valid && r.state == timesync::SyncState::kLocked && plausible(r.vehicle_ns))
-        return {r.vehicle_ns, StampSource::kDeviceMapped, r.vehicle_ns};
-      return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0};
-    }
+    case camera::TimeDomain::kVehicle:
+      return {m.device_ns, StampSource::kVehicle, m.device_ns};
     case camera::TimeDomain::kDeviceTicks:
       break;
   }
   mapper_.observe(m.device_ns, m.first_rx_ns);
-  auto r = mapper_.map(m.device_ns);
-  if (r.valid && !plausible(r.vehicle_ns)) {  // a device clock step the mapper has not confirmed yet
-    reject(r.vehicle_ns);
-    r.valid = false;
-  }
+  const auto r = mapper_.map(m.device_ns);
   const Nanos device = r.valid ? r.vehicle_ns : 0;
   if (tick_ns > 0 && tick_ns <= m.first_rx_ns) {
     // The tick is when the exposure was asked for; a locked device clock mapping says when it happened.
     // A mapped exposure after the frame arrived, or long before its trigger, is the mapping's
     // error, not the camera's: the tick then.
-    const bool near_tick = r.valid && r.state == timesync::SyncState::kLocked && r.vehicle_ns >= tick_ns - kMappedExposureSlackNs;
-    if (near_tick) return {r.vehicle_ns, StampSource::kTriggerExposure, device};
+    const bool plausible = r.valid && r.state == timesync::SyncState::kLocked && r.vehicle_ns <= m.first_rx_ns &&
+                           r.vehicle_ns >= tick_ns - kMappedExposureSlackNs;
+    if (plausible) return {r.vehicle_ns, StampSource::kTriggerExposure, device};
     return {tick_ns, StampSource::kTriggerTick, device};
   }
   if (r.valid) return {r.vehicle_ns, StampSource::kDeviceMapped, device};

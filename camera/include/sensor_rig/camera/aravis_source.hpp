@@ -26,10 +26,6 @@
 
 #include "sensor_rig/camera/source.hpp"
 
-// Aravis' handle types, declared as <arv.h> does (its headers stay out of this one).
-struct _ArvCamera;
-struct _ArvDevice;
-
 namespace sensor_rig::camera {
 
 // Opens the ArvDevice for a device string; returns an owned reference (ArvDevice*) or throws.
@@ -71,16 +67,15 @@ class AravisSource final : public FrameSource {
 
  private:
   struct State;
-  void configure(State& st, AravisDetails& details);
-  void set_line_trigger(_ArvCamera* cam);
-  void start_stream(State& st);
+  void configure();
+  void set_line_trigger();
+  void start_stream();
   void fold_stats() noexcept;
-  void count_missing_frames(std::uint64_t id) noexcept;  // capture thread
-  void setup_ptp(_ArvDevice* dev);  // at open, before the state is installed (no lock)
-  void poll_ptp();                          // under gc_mutex_
-  std::string ptp_reset(_ArvDevice* dev, const std::string& status);
+  void setup_ptp();                    // under mutex_ + gc_mutex_, at open
+  void poll_ptp();                     // under gc_mutex_
+  std::string ptp_reset(const std::string& status);
   void publish_ptp(const std::string& status, bool reset, const std::string& error);
-  std::string read_ptp_status(_ArvDevice* dev, std::string& error);
+  std::string read_ptp_status(std::string& error);
   void stop_ptp_thread() noexcept;
 
   SourceConfig cfg_;
@@ -91,7 +86,6 @@ class AravisSource final : public FrameSource {
   mutable std::mutex gc_mutex_;
   std::unique_ptr<State> st_;
   std::atomic<bool> control_lost_{false};
-  std::atomic<bool> streaming_{false};  // open and streaming: trigger() may take the locks
   SourceStats base_;  // totals of streams already closed
   std::atomic<std::uint64_t> timeouts_{0};  // written by the capture thread, read by status()
   std::atomic<std::uint64_t> disconnects_{0};
@@ -100,8 +94,6 @@ class AravisSource final : public FrameSource {
   std::atomic<std::uint64_t> incomplete_missing_{0};
   std::atomic<std::uint64_t> incomplete_other_{0};
   std::atomic<std::uint64_t> completed_{0};
-  std::atomic<std::uint64_t> missing_frames_{0};  // block-id gaps (count_missing_frames)
-  std::uint64_t last_frame_id_ = 0;               // capture thread: the last popped frame's id, 0: none
   AravisDetails details_;
   // PTP: the state (under ptp_mutex_), the lock flag next() reads, the status thread.
   mutable std::mutex ptp_mutex_;

@@ -32,9 +32,6 @@ struct FrameMeta {
   PixelFormat format = PixelFormat::kMono8;
   Nanos device_ns = 0;            // exposure start in `domain`
   TimeDomain domain = TimeDomain::kDeviceTicks;
-  // The device's own reading before any conversion (PTP TAI -> UTC): what the clock mapper is fed,
-  // so a PTP stamp found implausible falls back to a fresh mapping. 0: the same as device_ns.
-  Nanos device_ticks_ns = 0;
   Nanos first_rx_ns = 0;          // host CLOCK_REALTIME: first packet (GigE leader) / buffer ready
   Nanos complete_ns = 0;          // host CLOCK_REALTIME: frame complete, handed to the caller
   Nanos complete_mono_ns = 0;     // CLOCK_MONOTONIC sampled with complete_ns (same instant)
