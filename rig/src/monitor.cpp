@@ -282,9 +282,11 @@ class Monitor {
           const std::string name = s.topic != nullptr ? s.topic : "";
           if (!wanted_.empty() && !wanted_.contains(name)) return;
           TopicStats& st = topic(name);
-          // Stamps lost with their data are seen only as a gap in the writer's sequence numbers.
+          // Stamps lost with their data are seen only as a gap in the writer's sequence numbers. Sensor
+          // topics only: the bridge stamps the commands it transmits, not every command it takes, so
+          // its sequence numbers skip by design.
           auto [it, first] = next_seq_.try_emplace({name, info.publication_handle}, s.seq + 1);
-          if (!first) {
+          if (!first && name.rfind("/sensors/", 0) == 0) {
             if (s.seq > it->second && s.publish_ns >= st.counting_since) {
               st.lost += s.seq - it->second;
               st.seq_gaps += s.seq - it->second;
