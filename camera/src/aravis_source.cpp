@@ -1,5 +1,6 @@
 #include "sensor_rig/camera/aravis_source.hpp"
 
+#include <arpa/inet.h>
 #include <arv.h>
 
 #include <mutex>
@@ -8,6 +9,8 @@
 #include <cstdint>
 #include <thread>
 #include <vector>
+
+#include "exposure_watcher.hpp"
 
 namespace sensor_rig::camera {
 namespace {
@@ -42,7 +45,6 @@ std::string feature_text(ArvDevice* dev, const char* name, std::string& error) {
   return v != nullptr ? v : "";
 }
 
-bool ptp_locked(const std::string& status) { return status == "Master" || status == "Slave"; }
 
 void on_control_lost(ArvDevice* /*device*/, gpointer user) {
   static_cast<std::atomic<bool>*>(user)->store(true);
@@ -76,6 +78,10 @@ void* open_aravis_network_device(const std::string& device) {
   ArvDevice* d = arv_open_device(device.c_str(), &err);
   if (d != nullptr) return d;
   const std::string first = take_error(err);
+  // An address needs no discovery: Aravis already tried it (a dead camera's attempt then costs its
+  // GVCP timeouts, ~0.1 s, instead of a second of broadcast discovery on every retry).
+  in_addr ip{};
+  if (::inet_pton(AF_INET, device.c_str(), &ip) == 1) throw CameraError("aravis " + device + ": " + first);
   // A bare serial number is not one of Aravis' keys: find it in the device list.
   arv_update_device_list();
   for (unsigned i = 0; i < arv_get_n_devices(); ++i) {
@@ -97,14 +103,18 @@ AravisSource::AravisSource(SourceConfig cfg, AravisDeviceOpener opener)
 
 AravisSource::~AravisSource() { close(); }
 
-bool AravisSource::is_open() const noexcept {
-  std::lock_guard lock(mutex_);
-  return st_->stream != nullptr;
-}
+// Lock-free: the capture loop asks every turn, and must not queue behind a trigger's GVCP call on
+// a camera that stopped answering (its watchdog would never run).
+bool AravisSource::is_open() const noexcept { return open_.load(); }
 
 std::string AravisSource::describe() const {
   return "aravis " + cfg_.device + " " + info(cfg_.format).genicam + " " + std::to_string(cfg_.width) + "x" +
          std::to_string(cfg_.height) + "@" + std::to_string(cfg_.frame_rate) + " trigger " + to_string(cfg_.trigger);
+}
+
+double AravisSource::exposure_us() const {
+  if (const Nanos ns = last_exposure_ns_.load(); ns > 0) return static_cast<double>(ns) / 1000.0;
+  return details().exposure_us;
 }
 
 AravisDetails AravisSource::details() const {
@@ -112,61 +122,85 @@ AravisDetails AravisSource::details() const {
   return details_;
 }
 
+// Everything that talks to the device runs on a State of its own, with none of the locks trigger()
+// takes: a camera that does not answer costs its own opener time, never its trigger group's
+// (issue 27 item 1). The new state is installed under the locks at the end, then triggers pass.
 void AravisSource::open() {
   close();
-  std::lock_guard one_open_at_a_time(aravis_open_mutex());
-  std::lock_guard lock(mutex_);
+  auto fresh = std::make_unique<State>();
+  {
+    std::lock_guard lock(mutex_);
+    fresh->pool = std::move(st_->pool);  // reused when the size matches (start_stream)
+  }
   control_lost_.store(false);
-  auto* device = static_cast<ArvDevice*>(opener_(cfg_.device));  // throws CameraError
-  GError* err = nullptr;
-  st_->camera = arv_camera_new_with_device(device, &err);
-  g_object_unref(device);  // the camera holds its own reference
-  if (st_->camera == nullptr) throw CameraError("aravis " + cfg_.device + ": " + take_error(err));
-  st_->device = arv_camera_get_device(st_->camera);
-  st_->gv = arv_camera_is_gv_device(st_->camera) != FALSE;
-  g_signal_connect_data(st_->device, "control-lost", reinterpret_cast<GCallback>(&on_control_lost), &control_lost_,
-                        nullptr, GConnectFlags{});
+  last_frame_id_ = 0;  // a reopened camera may have restarted its ids
+  last_exposure_ns_.store(0);
+  AravisDetails details;
   try {
-    configure();
-    start_stream();
-    if (cfg_.ptp.enable) {
-      {
-        std::lock_guard pl(ptp_mutex_);
-        ptp_stop_ = false;
-      }
-      ptp_thread_ = std::thread([this] {
-        const auto period = std::chrono::milliseconds(std::max(cfg_.ptp.status_poll_ms, 10));
-        std::unique_lock pl(ptp_mutex_);
-        while (!ptp_cv_.wait_for(pl, period, [this] { return ptp_stop_; })) {
-          pl.unlock();
-          {
-            std::lock_guard gl(gc_mutex_);
-            if (!control_lost_.load()) poll_ptp();
-          }
-          pl.lock();
-        }
-      });
+    {
+      std::lock_guard one_open_at_a_time(aravis_open_mutex());  // GenICam XML parsing only
+      auto* device = static_cast<ArvDevice*>(opener_(cfg_.device));  // throws CameraError
+      GError* err = nullptr;
+      fresh->camera = arv_camera_new_with_device(device, &err);
+      g_object_unref(device);  // the camera holds its own reference
+      if (fresh->camera == nullptr) throw CameraError("aravis " + cfg_.device + ": " + take_error(err));
     }
+    fresh->device = arv_camera_get_device(fresh->camera);
+    fresh->gv = arv_camera_is_gv_device(fresh->camera) != FALSE;
+    g_signal_connect_data(fresh->device, "control-lost", reinterpret_cast<GCallback>(&on_control_lost), &control_lost_,
+                          nullptr, GConnectFlags{});
+    configure(*fresh, details);
+    start_stream(*fresh);
   } catch (...) {
-    if (st_->stream != nullptr) arv_stream_set_emit_signals(st_->stream, FALSE);
-    unref(st_->stream);
-    unref(st_->camera);
-    st_->device = nullptr;
+    if (fresh->stream != nullptr) arv_stream_set_emit_signals(fresh->stream, FALSE);
+    if (fresh->device != nullptr)
+      g_signal_handlers_disconnect_matched(fresh->device, G_SIGNAL_MATCH_DATA, 0, 0, nullptr, nullptr, &control_lost_);
+    unref(fresh->stream);
+    unref(fresh->camera);
     throw;
+  }
+  {
+    std::lock_guard lock(mutex_);
+    std::lock_guard gl(*gc_mutex_);
+    st_ = std::move(fresh);
+    details_ = details;
+  }
+  open_.store(true);
+  streaming_.store(true);
+  {
+    std::lock_guard pl(ptp_mutex_);
+    ptp_stop_ = false;
+  }
+  if (!exposure_read_feature_.empty())
+    exposure_ = std::make_unique<detail::ExposureWatcher>(st_->device, exposure_read_feature_, gc_mutex_);
+  if (cfg_.ptp.enable) ptp_thread_ = std::thread([this] { status_loop(); });
+}
+
+// The PTP status thread: a GVCP round trip every status_poll_ms, never on the capture thread.
+void AravisSource::status_loop() {
+  const auto period = std::chrono::milliseconds(std::max(cfg_.ptp.status_poll_ms, 10));
+  std::unique_lock pl(ptp_mutex_);
+  while (!ptp_cv_.wait_for(pl, period, [this] { return ptp_stop_; })) {
+    pl.unlock();
+    {
+      std::lock_guard gl(*gc_mutex_);
+      if (!control_lost_.load()) poll_ptp();
+    }
+    pl.lock();
   }
 }
 
-void AravisSource::configure() {
-  ArvCamera* cam = st_->camera;
-  ArvDevice* dev = st_->device;
+void AravisSource::configure(State& st, AravisDetails& details) {
+  ArvCamera* cam = st.camera;
+  ArvDevice* dev = st.device;
   GError* err = nullptr;
   const auto check = [&](const std::string& what) {
     if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": " + what + ": " + take_error(err));
   };
-  details_ = {};
-  if (const char* v = arv_camera_get_vendor_name(cam, nullptr)) details_.vendor = v;
-  if (const char* v = arv_camera_get_model_name(cam, nullptr)) details_.model = v;
-  if (const char* v = arv_camera_get_device_serial_number(cam, nullptr)) details_.serial = v;
+  details = {};
+  if (const char* v = arv_camera_get_vendor_name(cam, nullptr)) details.vendor = v;
+  if (const char* v = arv_camera_get_model_name(cam, nullptr)) details.model = v;
+  if (const char* v = arv_camera_get_device_serial_number(cam, nullptr)) details.serial = v;
   // 0. stopped: a device its last controller left acquiring (our own handle released after
   // mark_lost(), a crashed process) keeps its stream going to that controller's old port, and
   // many cameras lock format and ROI while acquiring (camera/README.md "Reopening a live camera").
@@ -188,7 +222,7 @@ void AravisSource::configure() {
   if (arv_camera_is_frame_rate_available(cam, nullptr) != FALSE) {
     arv_camera_set_frame_rate(cam, cfg_.frame_rate, &err);
     check("frame rate " + std::to_string(cfg_.frame_rate));
-    details_.frame_rate = arv_camera_get_frame_rate(cam, nullptr);
+    details.frame_rate = arv_camera_get_frame_rate(cam, nullptr);
   }
   // 4. exposure: SFNC ExposureTime, older cameras ExposureTimeAbs.
   if (cfg_.exposure_us > 0) {
@@ -197,25 +231,14 @@ void AravisSource::configure() {
       if (arv_device_is_feature_available(dev, name, nullptr) == FALSE) continue;
       arv_device_set_float_feature_value(dev, name, cfg_.exposure_us, &err);
       if (err == nullptr) {
-        details_.exposure_feature = name;
+        details.exposure_feature = name;
         break;
       }
       tried += std::string(name) + ": " + take_error(err) + "; ";
     }
-    if (details_.exposure_feature.empty())
+    if (details.exposure_feature.empty())
       throw CameraError("aravis " + cfg_.device + ": exposure " + std::to_string(cfg_.exposure_us) + " us: " +
                         (tried.empty() ? "no ExposureTime/ExposureTimeAbs feature" : tried));
-  }
-  // What the device has (rounded, or its own when not set): the frame clock's exposure -> leader delay.
-  for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {
-    if (arv_device_is_feature_available(dev, name, nullptr) == FALSE) continue;
-    const double us = arv_device_get_float_feature_value(dev, name, &err);
-    if (err != nullptr) {
-      take_error(err);
-      continue;
-    }
-    details_.exposure_us = us;
-    break;
   }
   // 5. gain.
   if (cfg_.gain_db >= 0) {
@@ -229,6 +252,19 @@ void AravisSource::configure() {
     arv_device_set_features_from_string(dev, assignment.c_str(), &err);
     check("feature " + assignment);
   }
+  exposure_read_feature_.clear();
+  // What the device has after the features (one may set ExposureTime, issue 27 item 9): the frame clock's exposure -> leader delay.
+  for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {
+    if (arv_device_is_feature_available(dev, name, nullptr) == FALSE) continue;
+    const double us = arv_device_get_float_feature_value(dev, name, &err);
+    if (err != nullptr) {
+      take_error(err);
+      continue;
+    }
+    details.exposure_us = us;
+    exposure_read_feature_ = name;
+    break;
+  }
   // 6b. PTP, after the features (a feature may select the PTP profile or clock).
   ptp_locked_.store(false);
   {
@@ -237,10 +273,7 @@ void AravisSource::configure() {
     ptp_ = {};
     ptp_.resets = resets;  // across reopens
   }
-  if (cfg_.ptp.enable) {
-    std::lock_guard gl(gc_mutex_);
-    setup_ptp();
-  }
+  if (cfg_.ptp.enable) setup_ptp(dev);  // the status thread starts after open
   // 7. trigger.
   switch (cfg_.trigger) {
     case TriggerMode::kFreeRun:
@@ -252,11 +285,11 @@ void AravisSource::configure() {
       check("software trigger");
       break;
     case TriggerMode::kLine:
-      set_line_trigger();
+      set_line_trigger(cam);
       break;
   }
   // GigE transport: packet size (or negotiated), inter-packet delay, no packet socket.
-  if (st_->gv) {
+  if (st.gv) {
     if (cfg_.packet_size > 0) {
       arv_camera_gv_set_packet_size(cam, cfg_.packet_size, &err);
       check("packet size");
@@ -268,7 +301,7 @@ void AravisSource::configure() {
       arv_camera_gv_set_packet_delay(cam, cfg_.packet_delay_ns, &err);
       check("packet delay");
     }
-    details_.packet_size = static_cast<int>(arv_camera_gv_get_packet_size(cam, nullptr));
+    details.packet_size = static_cast<int>(arv_camera_gv_get_packet_size(cam, nullptr));
     arv_camera_gv_set_stream_options(
         cam, cfg_.packet_socket ? ARV_GV_STREAM_OPTION_NONE : ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
   }
@@ -276,8 +309,7 @@ void AravisSource::configure() {
 
 // FrameStart on the configured line and edge (arv_camera_set_trigger: every other trigger off,
 // AcquisitionFrameRateEnable off, RisingEdge where offered). The line must be one the device lists.
-void AravisSource::set_line_trigger() {
-  ArvCamera* cam = st_->camera;
+void AravisSource::set_line_trigger(ArvCamera* cam) {
   const std::string& line = cfg_.trigger_line;
   const std::string& edge = cfg_.trigger_activation;
   const std::string what = "aravis " + cfg_.device + ": line trigger ";
@@ -299,14 +331,14 @@ void AravisSource::set_line_trigger() {
   if (err != nullptr) throw CameraError(what + "TriggerActivation " + edge + ": " + take_error(err));
 }
 
-std::string AravisSource::read_ptp_status(std::string& error) {
+std::string AravisSource::read_ptp_status(ArvDevice* dev, std::string& error) {
   const Nanos t0 = monotonic_now_ns();
   if (!ptp_latch_feature_.empty()) {  // SFNC: the status is the latched data set's
     GError* err = nullptr;
-    arv_device_execute_command(st_->device, ptp_latch_feature_.c_str(), &err);
+    arv_device_execute_command(dev, ptp_latch_feature_.c_str(), &err);
     if (err != nullptr) error = ptp_latch_feature_ + ": " + take_error(err);
   }
-  std::string status = error.empty() ? feature_text(st_->device, ptp_status_feature_.c_str(), error) : std::string();
+  std::string status = error.empty() ? feature_text(dev, ptp_status_feature_.c_str(), error) : std::string();
   const auto us = static_cast<std::int64_t>((monotonic_now_ns() - t0) / 1000);
   std::lock_guard pl(ptp_mutex_);
   ++ptp_.polls;
@@ -315,8 +347,7 @@ std::string AravisSource::read_ptp_status(std::string& error) {
 }
 
 // Disable and enable; "" or what failed. The caller counts it with the status read after it.
-std::string AravisSource::ptp_reset(const std::string& status) {
-  ArvDevice* dev = st_->device;
+std::string AravisSource::ptp_reset(ArvDevice* dev, const std::string& status) {
   std::string name;
   {
     std::lock_guard pl(ptp_mutex_);
@@ -334,12 +365,12 @@ void AravisSource::publish_ptp(const std::string& status, bool reset, const std:
   if (reset) ++ptp_.resets;
   if (!error.empty()) ptp_.error = error;
   ptp_.status = status;
-  ptp_.locked = ptp_locked(status);
+  // Only Slave follows the PU's grandmaster; Master is the camera's own clock unless it is meant to be.
+  ptp_.locked = status == "Slave" || (status == "Master" && cfg_.ptp.grandmaster);
   ptp_locked_.store(ptp_.locked);
 }
 
-void AravisSource::setup_ptp() {
-  ArvDevice* dev = st_->device;
+void AravisSource::setup_ptp(ArvDevice* dev) {
   std::string name;
   for (const char* f : {"PtpEnable", "GevIEEE1588"})
     if (arv_device_is_feature_available(dev, f, nullptr) != FALSE) {
@@ -362,28 +393,29 @@ void AravisSource::setup_ptp() {
     ptp_.enable_feature = name;
   }
   std::string error;
-  std::string status = read_ptp_status(error);
+  std::string status = read_ptp_status(dev, error);
   if (!error.empty()) throw CameraError("aravis " + cfg_.device + ": " + error);
   // Not running (yet): disable and enable once, as a faulty clock servo needs.
   const bool reset = status == "Faulty" || status == "Disabled" || status == "Initializing";
   std::string reset_error;
   if (reset) {
-    reset_error = ptp_reset(status);
-    status = read_ptp_status(error);
+    reset_error = ptp_reset(dev, status);
+    status = read_ptp_status(dev, error);
     if (!error.empty()) throw CameraError("aravis " + cfg_.device + ": " + error);
   }
   publish_ptp(status, reset, reset_error);
 }
 
 void AravisSource::poll_ptp() {
-  if (st_->device == nullptr) return;
+  ArvDevice* dev = st_->device;
+  if (dev == nullptr) return;
   std::string error;
-  std::string status = read_ptp_status(error);
+  std::string status = read_ptp_status(dev, error);
   // Faulty/Disabled: reset. Initializing is what a reset leads to: wait for it.
   const bool reset = error.empty() && (status == "Faulty" || status == "Disabled");
   if (reset) {
-    const std::string reset_error = ptp_reset(status);
-    status = read_ptp_status(error);
+    const std::string reset_error = ptp_reset(dev, status);
+    status = read_ptp_status(dev, error);
     if (error.empty()) error = reset_error;
   }
   if (!error.empty() && status.empty()) status = "unknown";  // the read failed
@@ -407,7 +439,7 @@ PtpState AravisSource::ptp() const {
 
 void AravisSource::set_feature(const std::string& name, const std::string& value) {
   std::lock_guard lock(mutex_);
-  std::lock_guard gl(gc_mutex_);
+  std::lock_guard gl(*gc_mutex_);
   if (st_->device == nullptr) throw CameraError("aravis " + cfg_.device + ": not open");
   const std::string assignment = name + "=" + value;
   GError* err = nullptr;
@@ -415,31 +447,31 @@ void AravisSource::set_feature(const std::string& name, const std::string& value
   if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": feature " + assignment + ": " + take_error(err));
 }
 
-void AravisSource::start_stream() {
+void AravisSource::start_stream(State& st) {
   GError* err = nullptr;
-  st_->payload = arv_camera_get_payload(st_->camera, &err);
+  st.payload = arv_camera_get_payload(st.camera, &err);
   if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": payload: " + take_error(err));
   const std::size_t image = frame_bytes(cfg_.format, cfg_.width, cfg_.height);
-  if (st_->payload < image) st_->payload = image;
-  if (!st_->pool || st_->pool->bytes() != st_->payload || st_->pool->count() != static_cast<std::size_t>(cfg_.buffers))
-    st_->pool = std::make_unique<BufferPool>(static_cast<std::size_t>(cfg_.buffers), st_->payload);
-  st_->stream = arv_camera_create_stream(st_->camera, nullptr, nullptr, &err);
-  if (st_->stream == nullptr) throw CameraError("aravis " + cfg_.device + ": stream: " + take_error(err));
-  if (st_->gv) {
-    g_object_set(st_->stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
+  if (st.payload < image) st.payload = image;
+  if (!st.pool || st.pool->bytes() != st.payload || st.pool->count() != static_cast<std::size_t>(cfg_.buffers))
+    st.pool = std::make_unique<BufferPool>(static_cast<std::size_t>(cfg_.buffers), st.payload);
+  st.stream = arv_camera_create_stream(st.camera, nullptr, nullptr, &err);
+  if (st.stream == nullptr) throw CameraError("aravis " + cfg_.device + ": stream: " + take_error(err));
+  if (st.gv) {
+    g_object_set(st.stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
                  static_cast<gint>(cfg_.socket_buffer_bytes), "packet-timeout", 20'000u, "frame-retention",
                  static_cast<guint>(std::max(100'000.0, 2e6 / std::max(cfg_.frame_rate, 1.0))), nullptr);
   }
   // Every pool buffer becomes one stream buffer, once: Aravis writes the image into pool memory.
-  st_->buffers.clear();
-  for (std::size_t i = 0; i < st_->pool->count(); ++i) {
-    auto buf = st_->pool->buffer(i);
+  st.buffers.clear();
+  for (std::size_t i = 0; i < st.pool->count(); ++i) {
+    auto buf = st.pool->buffer(i);
     // The pool index rides in the buffer's user data (GLib's GUINT_TO_POINTER idiom).
-    ArvBuffer* b = arv_buffer_new_full(st_->payload, buf.data(), reinterpret_cast<gpointer>(static_cast<std::uintptr_t>(i)), nullptr);  // NOLINT(performance-no-int-to-ptr)
-    st_->buffers.push_back(b);
-    arv_stream_push_buffer(st_->stream, b);
+    ArvBuffer* b = arv_buffer_new_full(st.payload, buf.data(), reinterpret_cast<gpointer>(static_cast<std::uintptr_t>(i)), nullptr);  // NOLINT(performance-no-int-to-ptr)
+    st.buffers.push_back(b);
+    arv_stream_push_buffer(st.stream, b);
   }
-  arv_camera_start_acquisition(st_->camera, &err);
+  arv_camera_start_acquisition(st.camera, &err);
   if (err != nullptr) throw CameraError("aravis " + cfg_.device + ": start acquisition: " + take_error(err));
 }
 
@@ -457,9 +489,15 @@ void AravisSource::fold_stats() noexcept {
 }
 
 void AravisSource::close() noexcept {
+  streaming_.store(false);  // triggers refuse from here on, without waiting for this close
+  if (exposure_) {  // a read on a dead camera takes seconds: not waited for
+    if (control_lost_.load()) exposure_->abandon();
+    exposure_.reset();
+  }
   stop_ptp_thread();  // before the camera goes; a status read in flight is at most one GVCP timeout
   ptp_locked_.store(false);
   std::lock_guard lock(mutex_);
+  open_.store(false);
   if (st_->camera == nullptr) return;
   // The device's heartbeat thread outlives this close by seconds on the release thread below: a
   // CCP read of a restarted camera that nobody controls yet is "control-lost", which must reach
@@ -489,7 +527,7 @@ void AravisSource::close() noexcept {
 
 std::string AravisSource::feature(const std::string& name) const {
   std::lock_guard lock(mutex_);
-  std::lock_guard gl(gc_mutex_);
+  std::lock_guard gl(*gc_mutex_);
   if (st_->device == nullptr) return {};
   ArvGcNode* node = arv_device_get_feature(st_->device, name.c_str());
   if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node)) return {};
@@ -504,14 +542,31 @@ std::string AravisSource::feature(const std::string& name) const {
 
 bool AravisSource::trigger() {
   if (cfg_.trigger != TriggerMode::kSoftware) return false;  // free run or a line: nothing to send
+  // Not streaming (opening, closing, lost): refused at once; the locks below are never held
+  // across another thread's open, so a trigger waits at most for a GenICam access in flight.
+  if (!streaming_.load() || control_lost_.load()) return false;
   std::lock_guard lock(mutex_);
-  std::lock_guard gl(gc_mutex_);
+  std::lock_guard gl(*gc_mutex_);
   if (st_->camera == nullptr || control_lost_.load()) return false;
   GError* err = nullptr;
   arv_camera_software_trigger(st_->camera, &err);
   if (err == nullptr) return true;
   g_error_free(err);
   return false;
+}
+
+// GigE Vision 1.x block ids run 1..65535 and wrap to 1 (0 is reserved): a step of more than one
+// is frames the camera made that never came out of the stream (an underrun, a frame Aravis dropped).
+// A step back or a huge one is a rebooted camera: no loss known, counting starts again.
+void AravisSource::count_missing_frames(std::uint64_t id) noexcept {
+  constexpr std::int64_t kWrap = 65535;
+  constexpr std::int64_t kPlausibleGap = 1000;
+  if (last_frame_id_ != 0 && id != 0) {
+    std::int64_t d = static_cast<std::int64_t>(id) - static_cast<std::int64_t>(last_frame_id_);
+    if (id <= 0xFFFF && last_frame_id_ <= 0xFFFF && d <= 0) d += kWrap;
+    if (d > 1 && d <= kPlausibleGap) missing_frames_.fetch_add(static_cast<std::uint64_t>(d - 1));
+  }
+  last_frame_id_ = id;
 }
 
 Capture AravisSource::next(int timeout_ms) {
@@ -532,6 +587,7 @@ Capture AravisSource::next(int timeout_ms) {
   }
   const Nanos real = vehicle_now_ns();
   const Nanos mono = monotonic_now_ns();
+  count_missing_frames(arv_buffer_get_frame_id(b));
   const auto status = arv_buffer_get_status(b);
   const bool image = arv_buffer_get_payload_type(b) == ARV_BUFFER_PAYLOAD_TYPE_IMAGE;
   if (status != ARV_BUFFER_STATUS_SUCCESS || !image ||
@@ -566,6 +622,7 @@ Capture AravisSource::next(int timeout_ms) {
   m.step = row_step(cfg_.format, cfg_.width);
   m.format = cfg_.format;
   m.device_ns = static_cast<Nanos>(arv_buffer_get_timestamp(b));
+  m.device_ticks_ns = m.device_ns;
   m.domain = TimeDomain::kDeviceTicks;
   if (ptp_locked_.load(std::memory_order_relaxed)) {  // PTP time: TAI (or UTC) ns since 1970
     m.domain = TimeDomain::kVehicle;
@@ -579,14 +636,22 @@ Capture AravisSource::next(int timeout_ms) {
     m.packets = details_.packet_size > 36 ? static_cast<std::uint32_t>((want + static_cast<std::size_t>(details_.packet_size) - 37) /
                                                                        static_cast<std::size_t>(details_.packet_size - 36))
                                           : 0;
+  if (exposure_) {  // the exposure of a frame before (read after it came), then ask for this one's
+    const auto known = exposure_->known();
+    m.exposure_seq = known.seq;
+    m.exposure_ns = known.ns;
+    if (known.ns > 0) last_exposure_ns_.store(known.ns);
+    exposure_->want(m.seq);
+  }
   ++completed_;
   c.status = CaptureStatus::kFrame;
   c.frame = Frame(m, mem.first(want), [stream, b] { arv_stream_push_buffer(stream, b); });
   return c;
 }
 
+// The capture thread's (the one that opens and closes): no lock, so that a trigger in a GVCP
+// timeout never holds the capture loop, and with it the watchdog, off.
 SourceStats AravisSource::stats() const {
-  std::lock_guard lock(mutex_);
   SourceStats s = base_;
   if (st_->stream != nullptr) {
     guint64 completed = 0, failures = 0, underruns = 0;
@@ -606,6 +671,7 @@ SourceStats AravisSource::stats() const {
   s.incomplete_other = incomplete_other_;
   s.timeouts = timeouts_;
   s.disconnects = disconnects_;
+  s.missing_frames = missing_frames_;
   return s;
 }
 

@@ -2,12 +2,17 @@
 
 #include <linux/videodev2.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 
 namespace sensor_rig::camera {
 namespace {
+
+// An exposure the device does not report (auto exposure, no V4L2_CID_EXPOSURE_ABSOLUTE read back):
+// the figure UVC cameras run at indoors; its error is the stamp's error under end-of-frame stamps.
+constexpr double kAssumedExposureUs = 10'000.0;
 
 Nanos timeval_ns(const timeval& tv) {
   return static_cast<Nanos>(tv.tv_sec) * 1'000'000'000 + static_cast<Nanos>(tv.tv_usec) * 1000;
@@ -39,6 +44,7 @@ void V4l2Source::open() {
   const int fd = dev_->open(cfg_.device);
   if (fd < 0) fail("open", fd);
   fd_ = fd;
+  have_sequence_ = false;
   v4l2_capability cap{};
   if (const int rc = dev_->ioctl(fd_, VIDIOC_QUERYCAP, &cap); rc < 0) fail("VIDIOC_QUERYCAP", rc);
   const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
@@ -85,18 +91,35 @@ void V4l2Source::set_rate_and_controls() {
   p.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   p.parm.capture.timeperframe.numerator = 1000;
   p.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(std::lround(cfg_.frame_rate * 1000.0));
-  if (const int rc = dev_->ioctl(fd_, VIDIOC_S_PARM, &p); rc < 0 && rc != -ENOTTY) fail("VIDIOC_S_PARM", rc);
+  const int prc = dev_->ioctl(fd_, VIDIOC_S_PARM, &p);
+  if (prc < 0 && prc != -ENOTTY) fail("VIDIOC_S_PARM", prc);
+  // The interval the driver granted (it may round or refuse the asked rate): the readout model's period.
+  const auto& tpf = p.parm.capture.timeperframe;
+  period_ns_ = prc == 0 && tpf.denominator > 0 && tpf.numerator > 0
+                   ? static_cast<Nanos>(1e9 * tpf.numerator / tpf.denominator)
+                   : static_cast<Nanos>(1e9 / std::max(cfg_.frame_rate, 1.0));
+  exposure_us_ = 0.0;
   if (cfg_.exposure_us > 0) {
     v4l2_control manual{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL};
     (void)dev_->ioctl(fd_, VIDIOC_S_CTRL, &manual);  // not every device has auto exposure
     // V4L2_CID_EXPOSURE_ABSOLUTE is in units of 100 µs.
-    v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, static_cast<std::int32_t>(std::lround(cfg_.exposure_us / 100.0))};
+    v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, std::max<std::int32_t>(1, static_cast<std::int32_t>(std::lround(cfg_.exposure_us / 100.0)))};  // < 50 us: 1, not 0
     if (const int rc = dev_->ioctl(fd_, VIDIOC_S_CTRL, &c); rc < 0) fail("exposure (V4L2_CID_EXPOSURE_ABSOLUTE)", rc);
+    exposure_us_ = static_cast<double>(c.value) * 100.0;
   }
+  // What the device has (its own, or the rounded one set): read back where it answers.
+  v4l2_control g{V4L2_CID_EXPOSURE_ABSOLUTE, 0};
+  if (dev_->ioctl(fd_, VIDIOC_G_CTRL, &g) == 0 && g.value > 0) exposure_us_ = static_cast<double>(g.value) * 100.0;
   if (cfg_.gain_db >= 0) {
     v4l2_control c{V4L2_CID_GAIN, static_cast<std::int32_t>(std::lround(cfg_.gain_db))};
     if (const int rc = dev_->ioctl(fd_, VIDIOC_S_CTRL, &c); rc < 0) fail("gain (V4L2_CID_GAIN)", rc);
   }
+}
+
+Nanos V4l2Source::eof_offset_ns() const noexcept {
+  const double exposure = exposure_us_ > 0 ? exposure_us_ : kAssumedExposureUs;
+  const Nanos readout = cfg_.readout_us > 0 ? static_cast<Nanos>(cfg_.readout_us * 1000.0) : period_ns_ / 2;
+  return static_cast<Nanos>(exposure * 1000.0) + readout;
 }
 
 void V4l2Source::start_streaming() {
@@ -181,6 +204,11 @@ Capture V4l2Source::next(int timeout_ms) {
   }
   const Nanos real = vehicle_now_ns();
   const Nanos mono = monotonic_now_ns();
+  // Sequence gaps: frames the device (or its driver) made and never handed out.
+  if (have_sequence_ && b.sequence > last_sequence_ + 1 && b.sequence - last_sequence_ < 1000)
+    stats_.missing_frames += b.sequence - last_sequence_ - 1;
+  last_sequence_ = b.sequence;
+  have_sequence_ = true;
   if (b.index >= buffers_.size() || (b.flags & V4L2_BUF_FLAG_ERROR) != 0 || b.bytesused < image_bytes_) {
     ++stats_.incomplete;
     ++stats_.incomplete_other;
@@ -197,9 +225,10 @@ Capture V4l2Source::next(int timeout_ms) {
   m.format = cfg_.format;
   m.domain = TimeDomain::kMonotonic;
   m.device_ns = timeval_ns(b.timestamp);
-  // End-of-frame stamps: exposure started about one frame period earlier.
-  if ((b.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_EOF && cfg_.frame_rate > 0)
-    m.device_ns -= static_cast<Nanos>(1e9 / cfg_.frame_rate);
+  // An end-of-frame stamp: the exposure started exposure + readout earlier (not a whole period).
+  const bool eof = cfg_.v4l2_stamp == "end" ||
+                   (cfg_.v4l2_stamp == "auto" && (b.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_EOF);
+  if (eof) m.device_ns -= eof_offset_ns();
   m.first_rx_ns = real - (mono - timeval_ns(b.timestamp));
   m.complete_ns = real;
   m.complete_mono_ns = mono;

@@ -167,8 +167,12 @@ void CameraRig::start() {
     // real-time too, but one below the camera's own (capture, Aravis stream) threads, which in the
     // car never share a core with the camera's sending. At the same priority the two stereo fakes'
     // sending held the rig's stream threads off their leaders: +0.6 ms on the mapped exposure.
-    if (f.options.program != camera::mock::GigeFakeOptions{}.program && c.realtime_priority > 1)
-      f.options.realtime_priority = c.realtime_priority - 1;
+    // A camera without a priority of its own gets the lowest SCHED_FIFO one (1): above every normal
+    // thread, below every real-time thread of the rig. At normal priority a loaded host held the
+    // free-running fakes' leaders 2-4 ms past the exposure end for tens of seconds, and the rig's
+    // clock mapping (leader = exposure start + exposure) carried that as a 2 ms bias (issue 27).
+    if (f.options.program != camera::mock::GigeFakeOptions{}.program)
+      f.options.realtime_priority = c.realtime_priority > 1 ? c.realtime_priority - 1 : 1;
     f.camera = c.name;
     // Under `rig chaos` (RIG_CHAOS_DIR): the camera's faults from the plan, its truth record (only
     // rig-fake-gige-camera takes them; Aravis's own fake would refuse the options).
@@ -210,6 +214,7 @@ void CameraRig::supervise(std::vector<dds::DriverStatus>& statuses) {
 void CameraRig::stop() {
   for (auto& [name, g] : impl_->groups) g->stop();
   for (auto& t : impl_->lidar_triggers) t->stop();
+  for (auto& d : impl_->drivers) d->request_stop();  // all at once, then each joined (issue 27 item 1)
   for (auto& d : impl_->drivers) d->stop();
   for (auto& f : impl_->fakes)
     if (f.process.pid() > 0) f.process.stop(1000);

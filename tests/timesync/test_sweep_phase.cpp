@@ -192,6 +192,25 @@ TEST(SweepPhase, ActualCrossingIsInterpolatedFromBothSides) {
   EXPECT_FALSE(p.crossing_near(90.0, future));
 }
 
+// Issue 27 item 11: the samples' clock steps back 2 s (a host-time LIDAR, CLOCK_REALTIME stepped):
+// the phase is re-acquired from the new samples within a few scans, not lost until time caught up
+// (every sample was dropped as reordered for the step's length: no trigger for 2 s).
+TEST(SweepPhase, AClockStepBackReacquiresThePhase) {
+  SweepPhase p;
+  Feed f;
+  f.run(p, kT0, kT0 + 500'000'000);
+  constexpr Nanos kStep = 2'000'000'000;
+  f.rot.phase_deg -= 360.0 * f.rot.rate_hz * static_cast<double>(kStep) * 1e-9;  // same rotation, earlier stamps
+  const Nanos back = kT0 + 500'000'000 - kStep;
+  f.run(p, back, back + 300'000'000);
+  const Nanos now = back + 300'000'000;
+  EXPECT_EQ(p.status(now).state, SweepState::kLocked);
+  EXPECT_GE(p.status(now).gaps, 1u);
+  const Nanos err = worst_error(p, f.rot, now);
+  EXPECT_GE(err, 0);
+  EXPECT_LT(err, 150'000);
+}
+
 TEST(SweepPhase, ReorderedAndNonFiniteSamplesAreCounted) {
   SweepPhase p;
   Feed f;

@@ -8,6 +8,11 @@
 
 namespace sensor_rig::timesync {
 namespace {
+// Older than the newest sample by more than this is a clock step back, not reordering (which
+// is within a batch of packets).
+constexpr Nanos kClockStepBackNs = 250'000'000;
+}  // namespace
+namespace {
 
 double wrap360(double a) noexcept {
   const double r = std::fmod(a, 360.0);
@@ -100,6 +105,14 @@ void SweepPhase::accept(SweepSample s) noexcept {
   }
   const Point& last = points_.back();
   if (s.t_ns < last.t - 1'000'000) {  // simultaneous lasers share a time; older than that is reordered
+    // Far older: the clock the samples are stamped in stepped back (a host-time LIDAR, a
+    // CLOCK_REALTIME step). Dropping every sample until time caught up left the triggered cameras
+    // without a prediction for the step's length (issue 27 item 11): the phase starts again here.
+    if (last.t - s.t_ns > kClockStepBackNs) {
+      ++st_.gaps;
+      restart_from(s);
+      return;
+    }
     ++st_.reordered;
     return;
   }

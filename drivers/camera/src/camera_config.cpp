@@ -20,9 +20,10 @@ const char* to_string(CameraMockConfig::Kind k) noexcept {
 
 int CameraConfig::watchdog() const noexcept {
   if (watchdog_ms > 0) return watchdog_ms;
-  // Three frame periods, at least 500 ms (a fresh stream's first frame), reported within 1 s.
+  // Three frame periods, at least 500 ms (a fresh stream's first frame). It follows the period: a
+  // 1 Hz camera capped at 800 ms was reopened before every frame (issue 27 item 2).
   const double period_ms = source.frame_rate > 0 ? 1000.0 / source.frame_rate : 1000.0;
-  return static_cast<int>(std::clamp(3.0 * period_ms, 500.0, 800.0));
+  return static_cast<int>(std::max(3.0 * period_ms, 500.0));
 }
 
 namespace {
@@ -65,8 +66,10 @@ CameraOutputsConfig parse_outputs(const config::Node& n, camera::PixelFormat for
 camera::PtpConfig parse_ptp(const config::Node& n, const std::string& backend) {
   camera::PtpConfig p;
   if (!n.expect_map()) return p;
-  n.allow_keys({"enable", "timescale", "tai_utc_offset_s"});
+  n.allow_keys({"enable", "timescale", "tai_utc_offset_s", "grandmaster"});
   p.enable = n.get_bool("enable", false);
+  // Only a camera meant to be the grandmaster may stamp while Master (issue 27 item 7).
+  p.grandmaster = n.get_bool("grandmaster", false);
   p.tai = n.get_choice("timescale", {"tai", "utc"}, "tai") == "tai";
   p.tai_utc_offset_s = static_cast<int>(n.get_int("tai_utc_offset_s", 0, 100, 37));
   if (!p.tai && n.has("tai_utc_offset_s")) n.fail("tai_utc_offset_s", "only with timescale: tai (a UTC camera needs no offset)");
@@ -96,7 +99,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
   if (!n.expect_map()) return c;
   n.allow_keys({"name", "backend", "device", "pixel_format", "width", "height", "frame_rate", "calibration", "exposure_us",
                 "gain_db", "features", "trigger", "packet_size", "packet_delay_ns", "socket_buffer_bytes", "buffers",
-                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock", "outputs", "ptp"});
+                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock", "outputs", "ptp", "stamp_at", "readout_us"});
   c.name = n.get_string("name");
   for (char ch : c.name)
     if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) {
@@ -185,7 +188,13 @@ CameraConfig parse_camera_config(const config::Node& n) {
   }
   c.frame_id = n.get_string("frame_id", "camera_" + c.name);
   c.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
-  c.watchdog_ms = static_cast<int>(n.get_int("watchdog_ms", 0, 900, 0));
+  c.watchdog_ms = static_cast<int>(n.get_int("watchdog_ms", 0, 60'000, 0));
+  // V4L2 buffer stamps (camera/README.md "V4L2 stamps"): where the driver takes them, the readout.
+  s.v4l2_stamp = n.get_choice("stamp_at", {"auto", "start", "end"}, "auto");
+  s.readout_us = n.get_double("readout_us", 0.0, 1'000'000.0, 0.0);
+  if (s.backend != "v4l2")
+    for (const char* k : {"stamp_at", "readout_us"})
+      if (n.has(k)) n.fail(k, "only for the v4l2 backend (a GigE camera reports its exposure start)");
   if (auto q = n.child("qos")) c.qos = dds::QosSpec::from_config(*q, c.qos);
   if (auto m = n.child("mock")) c.mock = parse_mock(*m);
   if (auto o = n.child("outputs")) c.outputs = parse_outputs(*o, s.format);

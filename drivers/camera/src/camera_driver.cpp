@@ -2,6 +2,7 @@
 
 #include <pthread.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <thread>
@@ -18,7 +19,23 @@
 namespace sensor_rig::drivers {
 namespace {
 
-constexpr Nanos kReopenEveryNs = 250'000'000;
+// Reopen attempts back off exponentially from the first to the cap: a dead camera costs a few
+// GVCP timeouts every 2 s, and a camera that comes back streams again well within the 5 s the
+// campaign allows (its open is ~0.1-0.3 s). Reset by a successful open.
+constexpr Nanos kReopenFirstNs = 250'000'000;
+constexpr Nanos kReopenMaxNs = 2'000'000'000;
+// A device stamp rejected this recently flags the topic unsynchronized in /diagnostics.
+constexpr Nanos kUnsyncHoldNs = 2'000'000'000;
+
+// What a rejected device stamp's error suggests: TAI taken as UTC or the other way round is a
+// wrong `timescale` (detected, not applied), anything else a clock that is not the PU's.
+std::string stamp_fix(Nanos error_ns, const camera::PtpConfig& ptp) {
+  const Nanos tai_utc = static_cast<Nanos>(ptp.tai_utc_offset_s > 0 ? ptp.tai_utc_offset_s : 37) * 1'000'000'000;
+  const auto near = [&](Nanos v) { return std::llabs(error_ns - v) < 1'000'000'000; };
+  if (ptp.enable && (near(tai_utc) || near(-tai_utc)))
+    return std::string("off by TAI - UTC: ptp timescale is ") + (ptp.tai ? "tai" : "utc") + ", the camera's is not";
+  return "host arrival time used";
+}
 
 }  // namespace
 
@@ -46,6 +63,7 @@ struct CameraDriver::Impl {
   std::uint64_t lost_reports = 0;
   std::uint64_t incomplete_since_publish = 0;
   Nanos last_frame_host_ns = 0;
+  Nanos last_frame_mono_ns = 0;  // the watchdog's clock: a CLOCK_REALTIME step neither trips nor blinds it
   bool open = false;
   std::string state = "opening";
   std::string last_error;
@@ -54,6 +72,8 @@ struct CameraDriver::Impl {
   camera::PtpState ptp;
   timesync::ClockMapperStatus sync;
   timesync::MonotonicStampsStatus monotonic;
+  FrameClock::Rejected rejected;   // device stamps outside the arrival window
+  Nanos rejected_seen_mono_ns = 0; // when the count last grew (CLOCK_MONOTONIC)
   timesync::RealtimeStepDetector realtime_steps;  // told to the clock: stamps held over a step back
 
   Impl(const CameraConfig& c, std::unique_ptr<camera::FrameSource> s, const dds::Participant& p, dds::StampsWriter& st,
@@ -128,6 +148,7 @@ struct CameraDriver::Impl {
     if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
     stamp_source = st.source;
     last_frame_host_ns = publish;
+    last_frame_mono_ns = monotonic_now_ns();
   }
 
   void set_state(const std::string& s, const std::string& err = {}) {
@@ -139,14 +160,15 @@ struct CameraDriver::Impl {
   bool try_open() {
     try {
       src->open();
-      // A reopened device may restart its tick counter. Exposure: the config's, else the
-      // device's own (a triggered camera's mapped exposure is off by what is assumed here).
-      const double exposure_us = cfg.source.exposure_us > 0 ? cfg.source.exposure_us : src->exposure_us();
+      // A reopened device may restart its tick counter. Exposure: what the device reports it uses
+      // after every feature was applied (issue 27 item 9), else the config's.
+      const double exposure_us = src->exposure_us() > 0 ? src->exposure_us() : cfg.source.exposure_us;
       clock.reset(static_cast<Nanos>(exposure_us * 1000.0));
       std::lock_guard lock(mutex);
       open = true;
       state = "streaming";
       last_frame_host_ns = vehicle_now_ns();  // the watchdog starts now
+      last_frame_mono_ns = monotonic_now_ns();
       return true;
     } catch (const std::exception& e) {
       set_state("opening", e.what());
@@ -167,6 +189,7 @@ struct CameraDriver::Impl {
 
   void run() {
     Nanos next_open = 0;
+    Nanos backoff = kReopenFirstNs;
     bool was_open = false;
     while (!stop_flag.load() && !shutdown_requested()) {
       if (!src->is_open()) {
@@ -175,8 +198,12 @@ struct CameraDriver::Impl {
           ::usleep(20'000);
           continue;
         }
-        next_open = now + kReopenEveryNs;
-        if (!try_open()) continue;
+        if (!try_open()) {
+          next_open = monotonic_now_ns() + backoff;
+          backoff = std::min(backoff * 2, kReopenMaxNs);
+          continue;
+        }
+        backoff = kReopenFirstNs;
         if (was_open) {
           std::lock_guard lock(mutex);
           ++reopens;
@@ -192,8 +219,11 @@ struct CameraDriver::Impl {
           publish(c.frame);
           break;
         case camera::CaptureStatus::kIncomplete: {
+          // The camera is sending (a lossy link drops packets): not the silence the watchdog is
+          // for. Reopening it under 1 % packet loss did not bring a frame more (issue 27).
           std::lock_guard lock(mutex);
           ++incomplete_since_publish;
+          last_frame_mono_ns = monotonic_now_ns();
           break;
         }
         case camera::CaptureStatus::kDisconnected:
@@ -209,16 +239,30 @@ struct CameraDriver::Impl {
       Nanos last = 0;
       {
         std::lock_guard lock(mutex);
-        last = last_frame_host_ns;
+        last = last_frame_mono_ns;
       }
-      const Nanos silent = vehicle_now_ns() - last;
-      if (src->is_open() && silent > static_cast<Nanos>(cfg.watchdog()) * 1'000'000)
-        lose("no frame for " + std::to_string(silent / 1'000'000) + " ms");
+      const Nanos silent = monotonic_now_ns() - last;
+      if (src->is_open() && silent > static_cast<Nanos>(cfg.watchdog()) * 1'000'000) {
+        if (trigger != nullptr && !trigger->firing()) {
+          // Its trigger source stopped (a stopped LIDAR): the camera is not at fault and a reopen
+          // would not bring frames (issue 27 item 2: 29 reopens in 15 s). Reported by status().
+          set_state("not triggered");
+          std::lock_guard lock(mutex);
+          last_frame_mono_ns = monotonic_now_ns();  // watched again from when the trigger resumes
+        } else {
+          lose("no frame for " + std::to_string(silent / 1'000'000) + " ms");
+        }
+      } else if (trigger != nullptr && trigger->firing()) {
+        std::lock_guard lock(mutex);
+        if (state == "not triggered") state = "streaming";
+      }
       std::lock_guard lock(mutex);
       source_stats = src->stats();
       if (cfg.source.ptp.enable) ptp = src->ptp();
       sync = clock.status(vehicle_now_ns());
       monotonic = clock.monotonic();
+      if (clock.rejected().count != rejected.count) rejected_seen_mono_ns = monotonic_now_ns();
+      rejected = clock.rejected();
     }
     src->close();
   }
@@ -247,6 +291,8 @@ void CameraDriver::start() {
   log::info("camera", impl_->cfg.name + ": " + impl_->src->describe() + " -> " + impl_->image_topic_name);
 }
 
+void CameraDriver::request_stop() noexcept { impl_->stop_flag.store(true); }
+
 void CameraDriver::stop() {
   impl_->stop_flag.store(true);
   if (!impl_->thread.joinable()) return;
@@ -268,7 +314,8 @@ dds::DriverStatus CameraDriver::status() const {
   dds::DriverStatus s;
   s.name = "camera/" + c.name;
   s.hardware_id = std::string(c.source.backend) + ":" + c.source.device;
-  const Nanos age = impl_->last_frame_host_ns == 0 ? -1 : vehicle_now_ns() - impl_->last_frame_host_ns;
+  const Nanos age = impl_->last_frame_mono_ns == 0 ? -1 : monotonic_now_ns() - impl_->last_frame_mono_ns;
+  const bool unsynchronized = impl_->rejected_seen_mono_ns != 0 && monotonic_now_ns() - impl_->rejected_seen_mono_ns < kUnsyncHoldNs;
   if (!impl_->open) {
     s.level = impl_->published.samples() == 0 && impl_->lost_reports == 0 ? dds::Level::kWarn : dds::Level::kError;
     s.message = impl_->state + (impl_->last_error.empty() ? "" : ": " + impl_->last_error);
@@ -278,6 +325,12 @@ dds::DriverStatus CameraDriver::status() const {
   } else if (age > static_cast<Nanos>(c.watchdog()) * 1'000'000) {
     s.level = dds::Level::kError;
     s.message = "no frame for " + std::to_string(age / 1'000'000) + " ms";
+  } else if (unsynchronized) {
+    // Device stamps outside the arrival window were replaced: the topic's stamps are not the
+    // camera's clock right now (issue 27 item 7).
+    s.level = dds::Level::kWarn;
+    s.message = "unsynchronized: device stamps " + std::to_string(impl_->rejected.last_error_ns / 1'000'000) +
+                " ms off the arrival replaced (" + stamp_fix(impl_->rejected.last_error_ns, c.source.ptp) + ")";
   } else {
     s.message = "running";
   }
@@ -287,6 +340,10 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("frames", impl_->published.samples());
   s.add("frame_rate_hz", std::to_string(impl_->published.rate_hz()));
   s.add_number("incomplete", st.incomplete);
+  // Frames the camera made that never reached the rig (id / sequence gaps), and every frame made and
+  // not published: the cumulative count `rig monitor` and `rig chaos` read (issue 27 item 5).
+  s.add_number("missing_frames", st.missing_frames);
+  s.add_number("counted_lost", st.lost_frames());
   // Where incomplete frames went, by the stream's buffer status (rig monitor: drops by stage).
   s.add_number("incomplete_timeout", st.incomplete_timeout);
   s.add_number("incomplete_missing_packets", st.incomplete_missing_packets);
@@ -322,6 +379,8 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("stamp_backward_steps", impl_->monotonic.backward_steps);
   s.add_number("stamp_correction_ns", impl_->monotonic.correction_ns);
   s.add_number("stamp_device_backward", impl_->monotonic.device_backward);
+  s.add("stamp_sync", unsynchronized ? "unsynchronized" : "ok");
+  s.add_number("stamp_rejected", impl_->rejected.count);
   if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
   if (impl_->outputs) impl_->outputs->add_status(s);
   if (impl_->trigger != nullptr) impl_->trigger->add_status(s, impl_->trigger_member);

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <chrono>
 #include <cstring>
 #include <optional>
 
@@ -21,6 +22,12 @@ constexpr Nanos kSpinNs = 200'000;         // the last stretch is a busy wait (s
 constexpr Nanos kMaxSleepNs = 20'000'000;  // re-predict (and check stop) at least this often
 constexpr Nanos kLateNs = 1'000'000;
 constexpr std::size_t kKeepTicks = 32;     // ~3 s at 10 Hz: the frames of a tick come within it
+// A member's call that has not returned this long after the aim is given up on for the tick: a
+// camera's trigger is a GVCP write (~1.4 ms acknowledged); a dead or reopening camera must not hold
+// its partners' next shots (issue 27 item 1). Well under a 10 Hz period.
+constexpr Nanos kMemberDeadlineNs = 25'000'000;
+// A member still busy with an older shot when this one was aimed skips it rather than fire late.
+constexpr Nanos kStaleShotNs = 1'000'000;
 
 void sleep_until(clockid_t clock, Nanos t) {
   const timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
@@ -28,8 +35,12 @@ void sleep_until(clockid_t clock, Nanos t) {
   }
 }
 
-// Absolute CLOCK_REALTIME: the aim is vehicle time, and a step of the clock moves the wake-up with it.
-void sleep_until_realtime(Nanos t) { sleep_until(CLOCK_REALTIME, t); }
+// Towards a vehicle-time instant, on CLOCK_MONOTONIC: a CLOCK_REALTIME step during the sleep
+// neither stretches it nor cuts it short (issue 27 item 11); the loop predicts again on waking.
+void sleep_until_vehicle(Nanos t) {
+  const Nanos left = t - vehicle_now_ns();
+  if (left > 0) sleep_until(CLOCK_MONOTONIC, monotonic_now_ns() + left);
+}
 
 // The firing threads wait on CLOCK_MONOTONIC: an armed shot is at most kApproachNs away, and a
 // realtime step in between must not hold a member back while another fires.
@@ -88,6 +99,7 @@ void LidarTrigger::start(int realtime_priority) {
     shot_.called.assign(members_.size(), 0);
     shot_.accepted.assign(members_.size(), 0);
     generation = shot_.generation;
+    shot_.reported.assign(members_.size(), generation);
   }
   started_ns_.store(vehicle_now_ns());
   for (std::size_t i = 0; i < members_.size(); ++i) {
@@ -181,15 +193,22 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen) {
       seen = shot_.generation;
       aim = shot_.aim_mono;
     }
-    // Armed: fired even when stop() came meanwhile, so that no member fires alone.
-    spin_until_monotonic(aim);
-    const Nanos called = vehicle_now_ns();
-    const bool accepted = members_[i].trigger();
+    // Armed: fired even when stop() came meanwhile, so that no member fires alone. A shot whose
+    // aim passed while this member's camera held it in an older call is skipped, not fired late.
+    Nanos called = 0;
+    bool accepted = false;
+    if (monotonic_now_ns() <= aim + kStaleShotNs) {
+      spin_until_monotonic(aim);
+      called = vehicle_now_ns();
+      accepted = members_[i].trigger();
+    }
     {
       std::lock_guard lock(shot_mutex_);
-      shot_.called[i] = called;
-      shot_.accepted[i] = accepted ? 1 : 0;
-      ++shot_.done;
+      if (shot_.generation == seen) {  // the trigger thread still waits for this shot
+        shot_.called[i] = called;
+        shot_.accepted[i] = accepted ? 1 : 0;
+      }
+      shot_.reported[i] = seen;
     }
     shot_cv_.notify_all();
   }
@@ -198,20 +217,29 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen) {
 void LidarTrigger::fire(Nanos target, Nanos aim) {
   // Every member's firing thread calls its camera's trigger at the same instant: a group's stamps
   // (each its own call + latency) differ by the threads' wake-ups, not by a camera's round trip.
+  // The trigger thread waits for the calls up to a deadline: a member whose camera does not answer
+  // misses its tick (counted), its partners do not.
   Tick t{target, std::vector<Nanos>(members_.size(), 0), std::vector<Nanos>(members_.size(), 0), 0, false};
   Nanos first = 0;  // the earliest call (late wake-up), and the accepted calls' span (the spread)
   Nanos lo = 0, hi = 0;
   std::size_t accepted = 0;
+  std::vector<char> timed_out(members_.size(), 0);
   {
     std::unique_lock lock(shot_mutex_);
     shot_.aim_mono = monotonic_now_ns() + (aim - vehicle_now_ns());
-    shot_.done = 0;
-    ++shot_.generation;
+    std::fill(shot_.called.begin(), shot_.called.end(), 0);
+    std::fill(shot_.accepted.begin(), shot_.accepted.end(), 0);
+    const std::uint64_t gen = ++shot_.generation;
     shot_cv_.notify_all();
-    shot_cv_.wait(lock, [&] { return shot_.done == members_.size(); });
+    const auto deadline = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(shot_.aim_mono + kMemberDeadlineNs));
+    (void)shot_cv_.wait_until(lock, deadline, [&] {
+      return std::all_of(shot_.reported.begin(), shot_.reported.end(), [&](std::uint64_t r) { return r == gen; });
+    });
     for (std::size_t i = 0; i < members_.size(); ++i) {
+      if (shot_.reported[i] != gen) timed_out[i] = 1;
       const Nanos called = shot_.called[i];
-      first = i == 0 ? called : std::min(first, called);
+      if (called == 0) continue;
+      first = first == 0 ? called : std::min(first, called);
       if (shot_.accepted[i] == 0) continue;
       t.exposures[i] = called + latency_ns_;
       lo = accepted == 0 ? called : std::min(lo, called);
@@ -221,8 +249,9 @@ void LidarTrigger::fire(Nanos target, Nanos aim) {
   }
   std::lock_guard lock(mutex_);
   ++figures_.triggers;
-  if (first - aim > kLateNs) ++figures_.late;
+  if (first != 0 && first - aim > kLateNs) ++figures_.late;
   for (std::size_t i = 0; i < members_.size(); ++i) {
+    if (timed_out[i] != 0) ++members_[i].timed_out;
     if (t.exposures[i] == 0)
       ++members_[i].refused;
     else
@@ -252,18 +281,23 @@ void LidarTrigger::run() {
       figures_.predicting = target.has_value();
     }
     if (!target) {
-      sleep_until_realtime(now + 10'000'000);  // no prediction: no trigger (counted, in status)
+      sleep_until_vehicle(now + 10'000'000);  // no prediction: no trigger (counted, in status)
       continue;
     }
     const Nanos aim = *target - latency_ns_;
     if (aim - now > kApproachNs) {
       // Sleep towards it, then predict again: the newest scan may have moved it.
-      sleep_until_realtime(std::min(aim - kApproachNs, now + kMaxSleepNs));
+      sleep_until_vehicle(std::min(aim - kApproachNs, now + kMaxSleepNs));
       continue;
     }
     fire(*target, aim);
     last_target = *target;
   }
+}
+
+bool LidarTrigger::firing() const {
+  std::lock_guard lock(mutex_);
+  return figures_.predicting;
 }
 
 LidarTriggerFigures LidarTrigger::figures(std::size_t member) const {
@@ -274,6 +308,7 @@ LidarTriggerFigures LidarTrigger::figures(std::size_t member) const {
   if (member < members_.size()) {
     const auto& m = members_[member];
     f.refused = m.refused;
+    f.timed_out = m.timed_out;
     f.call_error = figure_of(m.call_error);
     f.to_exposure = figure_of(m.to_exposure);
     f.exposure_unmatched = m.unmatched;
@@ -299,6 +334,7 @@ void LidarTrigger::add_status(dds::DriverStatus& s, std::size_t member) const {
   s.add("trigger_sweep_hz", std::to_string(f.sweep.rate_hz));
   s.add_number("triggers", f.triggers);
   s.add_number("triggers_refused", f.refused);
+  s.add_number("triggers_timed_out", f.timed_out);
   s.add_number("triggers_late", f.late);
   s.add_number("trigger_prediction_lost", f.prediction_lost);
   // The phase figure's exposure start: the camera's own report, or the trigger call + latency.

@@ -1,8 +1,10 @@
 // AravisSource against in-process Aravis fakes (arv_fake_device): features in order with the
 // ExposureTimeAbs fallback, frames in pool memory, trigger modes, stereo pair stamps.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <set>
+#include <thread>
 
 #include "sensor_rig/camera/aravis_source.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
@@ -160,6 +162,25 @@ TEST(AravisInProcess, FeaturesTheDeviceLacksAreErrorsNamingThem) {
   nodev.device = "no-such-camera-serial";
   AravisSource src(nodev, mock::inprocess_fake_opener());
   EXPECT_THROW(src.open(), CameraError);
+}
+
+
+// Issue 27 item 1: an open that hangs on the network (a camera that does not answer: GVCP timeouts)
+// holds no lock a trigger needs: trigger() is refused at once meanwhile, not after the open. Before,
+// open() held the camera's lock throughout and the trigger group waited on it.
+TEST(AravisInProcess, ATriggerDuringAHangingOpenIsRefusedAtOnce) {
+  AravisSource src(fake("HANG1", TriggerMode::kSoftware), [](const std::string& d) -> void* {
+    ::usleep(1'200'000);
+    throw CameraError("aravis " + d + ": no answer");
+  });
+  std::thread opener([&] { EXPECT_THROW(src.open(), CameraError); });
+  ::usleep(100'000);
+  const Nanos t0 = monotonic_now_ns();
+  EXPECT_FALSE(src.trigger());
+  EXPECT_FALSE(src.is_open());
+  const Nanos took = monotonic_now_ns() - t0;
+  opener.join();
+  EXPECT_LT(took, 50'000'000) << "trigger() waited " << took / 1'000'000 << " ms for the open";
 }
 
 }  // namespace

@@ -135,7 +135,9 @@ TEST_F(GigeChaos, DiesThenReturns) {
   EXPECT_GE(after, 1u);
 }
 
-// PTP Master: the camera reports Master and stamps with its PTP clock, TAI: 37 s after UTC.
+// PTP Master: the camera reports Master and stamps with its PTP clock, TAI: 37 s after UTC. It
+// won the election on its own clock: not locked, its frames keep device ticks (issue 27 item 7;
+// they were published as vehicle time, 37 s off); with `grandmaster` it is the reference.
 TEST_F(GigeChaos, PtpMasterReportsMasterAndTai) {
   auto fake = start({"camera.ptp:state=Master@0+60"});
   auto c = cfg();
@@ -143,7 +145,19 @@ TEST_F(GigeChaos, PtpMasterReportsMasterAndTai) {
   AravisSource src(c);
   src.open();
   EXPECT_EQ(src.feature("PtpStatus"), "Master");
-  ASSERT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+  EXPECT_FALSE(src.ptp().locked);
+  {
+    const auto f = next_frame(src);
+    ASSERT_EQ(f.status, CaptureStatus::kFrame);
+    EXPECT_EQ(f.frame.meta().domain, TimeDomain::kDeviceTicks);
+  }
+  src.close();
+  c.ptp.grandmaster = true;
+  AravisSource gm(c);
+  gm.open();
+  EXPECT_TRUE(gm.ptp().locked);
+  gm.close();
+  src.open();
   src.close();
   fake.stop(1000);
   const auto log = truth::read(folder_.truth());

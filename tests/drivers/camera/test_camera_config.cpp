@@ -60,6 +60,19 @@ mock: {kind: gige, lost_packets_per_thousand: 2}
   EXPECT_GE(c.qos.depth, 3);
 }
 
+// Issue 27 item 2: the watchdog follows the frame period: a 1 Hz camera is not reopened before
+// every frame (it was capped at 800 ms); a 10 Hz one stays well under a second.
+TEST(CameraConfig, TheWatchdogFollowsTheFramePeriod) {
+  CameraConfig c;
+  c.source.frame_rate = 1.0;
+  EXPECT_GE(c.watchdog(), 3000);
+  c.source.frame_rate = 0.5;
+  EXPECT_GE(c.watchdog(), 6000);
+  c.source.frame_rate = 10.0;
+  EXPECT_LT(c.watchdog(), 1000);
+  EXPECT_GE(c.watchdog(), 300);
+}
+
 TEST(CameraConfig, BadValuesAreReportedAllAtOnceWithLines) {
   const auto p = parse(R"(name: front-narrow
 backend: v4l2

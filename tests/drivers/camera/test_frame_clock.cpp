@@ -137,5 +137,100 @@ TEST(FrameClock, MonotonicClockStampsStayMonotonicThroughRealtimeSteps) {
   EXPECT_EQ(err_at_end, 0);
 }
 
+
+// Issue 27 item 7: a PTP stamp 37 s off (a camera that won the election on its own TAI clock, or a
+// wrong timescale) is not published: the frame falls back to the mapped ticks, counted. Before, every
+// kVehicle stamp was taken as it came.
+TEST(FrameClock, APtpStampOutsideTheArrivalWindowFallsBackToTheMappedTicks) {
+  constexpr Nanos kExposure = 5'000'000;
+  constexpr Nanos kTai = 37'000'000'000;
+  const Nanos t0 = 1'800'000'000'000'000'000;
+  FrameClock clock(kExposure);
+  for (int i = 0; i < 60; ++i) {  // 6 s at 10 Hz: PTP time right (UTC), the mapper learns the ticks
+    const Nanos start = t0 + static_cast<Nanos>(i) * 100'000'000;
+    camera::FrameMeta m;
+    m.domain = camera::TimeDomain::kVehicle;
+    m.device_ticks_ns = start + kTai;  // the camera's TAI reading
+    m.device_ns = start;               // converted to UTC by the source
+    m.first_rx_ns = start + kExposure + 300'000;
+    m.complete_ns = m.first_rx_ns + 2'000'000;
+    const auto s = clock.stamp(m);
+    EXPECT_EQ(s.source, StampSource::kVehicle) << i;
+    EXPECT_EQ(s.vehicle_ns, start) << i;
+  }
+  EXPECT_EQ(clock.rejected().count, 0u);
+  for (int i = 60; i < 80; ++i) {  // the source now converts a clock that already is UTC: 37 s early
+    const Nanos start = t0 + static_cast<Nanos>(i) * 100'000'000;
+    camera::FrameMeta m;
+    m.domain = camera::TimeDomain::kVehicle;
+    m.device_ticks_ns = start + kTai;
+    m.device_ns = start - kTai;
+    m.first_rx_ns = start + kExposure + 300'000;
+    m.complete_ns = m.first_rx_ns + 2'000'000;
+    const auto s = clock.stamp(m);
+    EXPECT_NE(s.source, StampSource::kVehicle) << i;
+    EXPECT_LT(std::abs(s.vehicle_ns - start), 1'000'000) << i;  // mapped ticks: within 1 ms
+  }
+  EXPECT_EQ(clock.rejected().count, 20u);
+  EXPECT_NEAR(static_cast<double>(clock.rejected().last_error_ns), -static_cast<double>(kTai), 1e6);
+}
+
+// Issue 27 item 8: a device clock step (a PTP cold start steps the camera's clock by decades) must
+// never be published decades off while the mapper confirms the jump: every stamp stays within the
+// frame's arrival window (a guard: the mapper drops to unsynced on the step, and the window check
+// catches what it would map with the old line).
+TEST(FrameClock, ADeviceClockStepIsNeverPublishedOutsideTheArrivalWindow) {
+  constexpr Nanos kExposure = 2'000'000;
+  const Nanos t0 = 1'800'000'000'000'000'000;
+  FrameClock clock(kExposure);
+  for (int i = 0; i < 200; ++i) {
+    const Nanos start = t0 + static_cast<Nanos>(i) * 100'000'000;
+    camera::FrameMeta m;
+    m.domain = camera::TimeDomain::kDeviceTicks;
+    // Ticks from power-on for 10 s, then the camera's clock steps to TAI (+ 56 years).
+    m.device_ns = i < 100 ? 7'000'000'000 + (start - t0) : start + 37'000'000'000;
+    m.first_rx_ns = start + kExposure + 200'000;
+    m.complete_ns = m.first_rx_ns + 2'000'000;
+    const auto s = clock.stamp(m);
+    EXPECT_LE(s.vehicle_ns, m.first_rx_ns) << i;
+    EXPECT_GE(s.vehicle_ns, m.first_rx_ns - kExposure - 100'000'000) << i;
+  }
+}
+
+
+// Issue 27 item 9: auto exposure, 5-15 ms frame to frame, the source telling each frame's exposure
+// one frame later (read from the camera after the frame): the mapping follows the exposure start,
+// not the shortest exposure's arrival (which biased every stamp by the difference, -5 ms here).
+TEST(FrameClock, AnExposureThatChangesEveryFrameIsFollowed) {
+  const Nanos t0 = 1'800'000'000'000'000'000;
+  FrameClock clock(10'000'000);
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<Nanos> exposure(5'000'000, 15'000'000);
+  std::uniform_int_distribution<Nanos> jitter(100'000, 3'000'000);
+  Nanos prev_exposure = 0;
+  double worst = 0;
+  for (int i = 1; i <= 200; ++i) {
+    const Nanos start = t0 + static_cast<Nanos>(i) * 100'000'000;
+    const Nanos e = exposure(rng);
+    camera::FrameMeta m;
+    m.seq = static_cast<std::uint64_t>(i);
+    m.domain = camera::TimeDomain::kDeviceTicks;
+    m.device_ns = 3'000'000'000 + (start - t0);
+    m.first_rx_ns = start + e + jitter(rng);
+    m.complete_ns = m.first_rx_ns + 2'000'000;
+    if (i > 1) {  // the previous frame's exposure, read after it arrived
+      m.exposure_seq = static_cast<std::uint64_t>(i - 1);
+      m.exposure_ns = prev_exposure;
+    }
+    prev_exposure = e;
+    const auto s = clock.stamp(m);
+    if (i > 100) {
+      EXPECT_EQ(s.source, StampSource::kDeviceMapped) << i;
+      worst = std::max(worst, std::abs(static_cast<double>(s.vehicle_ns - start)));
+    }
+  }
+  EXPECT_LT(worst, 1e6);
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers

@@ -304,5 +304,37 @@ TEST(LidarTrigger, TheCamerasReportedExposureStartIsInThePhaseFigure) {
   EXPECT_EQ(values["exposure_unmatched"], "1");
 }
 
+
+// Issue 27 item 1: a member whose camera does not answer (its trigger call held for 1.5 s by GVCP
+// timeouts or a reopen) misses its ticks; its partner is fired at every crossing all the same, and
+// stop() waits for the hung call only. Before, each tick waited for every member: the healthy
+// camera of a stereo pair got a frame every few seconds.
+TEST(LidarTrigger, AMemberWhoseCameraHangsDoesNotStarveItsPartner) {
+  LidarTrigger trigger("stereo", LidarTriggerConfig{"front", 0.0, 0.0});
+  std::atomic<std::uint64_t> calls[2] = {0, 0};
+  trigger.add([&] {
+    ++calls[0];
+    ::usleep(1'500'000);
+    return false;
+  });
+  trigger.add([&] { return ++calls[1] > 0; });
+  const Sweep sweep{vehicle_now_ns(), -10.0, 200.0};
+  SimulatedLidar lidar(sweep, trigger);
+  trigger.start();
+  ::usleep(3'500'000);
+  const Nanos t_stop = monotonic_now_ns();
+  trigger.stop();
+  const Nanos stop_ns = monotonic_now_ns() - t_stop;
+  lidar.stop();
+  const auto right = trigger.figures(1);
+  const auto left = trigger.figures(0);
+  EXPECT_GE(calls[1].load(), 20u);  // ~30 crossings in 3.5 s once the sweep locked
+  EXPECT_LE(calls[0].load(), 4u);   // one call per 1.5 s: the hung camera's
+  EXPECT_EQ(right.refused, 0u);
+  EXPECT_GE(left.refused, 15u);
+  EXPECT_GE(left.timed_out, 1u);
+  EXPECT_LT(stop_ns, 1'600'000'000);  // at most the one call in flight
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers

@@ -26,7 +26,14 @@
 
 #include "sensor_rig/camera/source.hpp"
 
+// Aravis' handle types, declared as <arv.h> does (its headers stay out of this one).
+struct _ArvCamera;
+struct _ArvDevice;
+
 namespace sensor_rig::camera {
+namespace detail {
+class ExposureWatcher;
+}
 
 // Opens the ArvDevice for a device string; returns an owned reference (ArvDevice*) or throws.
 // Default: the network (id, IP, MAC, then serial through the device list); camera/mock adds
@@ -63,29 +70,34 @@ class AravisSource final : public FrameSource {
   // Sets a GenICam feature now ("name=value" as in SourceConfig::features); throws CameraError.
   void set_feature(const std::string& name, const std::string& value);
   [[nodiscard]] PtpState ptp() const override;
-  [[nodiscard]] double exposure_us() const override { return details().exposure_us; }
+  // The exposure read back after configuration, or the latest one the status thread read.
+  [[nodiscard]] double exposure_us() const override;
 
  private:
   struct State;
-  void configure();
-  void set_line_trigger();
-  void start_stream();
+  void configure(State& st, AravisDetails& details);
+  void set_line_trigger(_ArvCamera* cam);
+  void start_stream(State& st);
   void fold_stats() noexcept;
-  void setup_ptp();                    // under mutex_ + gc_mutex_, at open
-  void poll_ptp();                     // under gc_mutex_
-  std::string ptp_reset(const std::string& status);
+  void count_missing_frames(std::uint64_t id) noexcept;  // capture thread
+  void setup_ptp(_ArvDevice* dev);  // at open, before the state is installed (no lock)
+  void poll_ptp();                          // under gc_mutex_
+  std::string ptp_reset(_ArvDevice* dev, const std::string& status);
   void publish_ptp(const std::string& status, bool reset, const std::string& error);
-  std::string read_ptp_status(std::string& error);
+  std::string read_ptp_status(_ArvDevice* dev, std::string& error);
   void stop_ptp_thread() noexcept;
+  void status_loop();  // the PTP status thread
 
   SourceConfig cfg_;
   AravisDeviceOpener opener_;
   mutable std::mutex mutex_;  // camera control (open/close/trigger) from two threads
   // GenICam access (trigger, features, the PTP poll): taken after mutex_; the PTP thread takes
   // only this one, so stats() never waits for its GVCP round trip.
-  mutable std::mutex gc_mutex_;
+  std::shared_ptr<std::mutex> gc_mutex_ = std::make_shared<std::mutex>();  // shared with the exposure watcher
   std::unique_ptr<State> st_;
   std::atomic<bool> control_lost_{false};
+  std::atomic<bool> streaming_{false};
+  std::atomic<bool> open_{false};       // is_open(): from open() to close()  // open and streaming: trigger() may take the locks
   SourceStats base_;  // totals of streams already closed
   std::atomic<std::uint64_t> timeouts_{0};  // written by the capture thread, read by status()
   std::atomic<std::uint64_t> disconnects_{0};
@@ -94,6 +106,8 @@ class AravisSource final : public FrameSource {
   std::atomic<std::uint64_t> incomplete_missing_{0};
   std::atomic<std::uint64_t> incomplete_other_{0};
   std::atomic<std::uint64_t> completed_{0};
+  std::atomic<std::uint64_t> missing_frames_{0};  // block-id gaps (count_missing_frames)
+  std::uint64_t last_frame_id_ = 0;               // capture thread: the last popped frame's id, 0: none
   AravisDetails details_;
   // PTP: the state (under ptp_mutex_), the lock flag next() reads, the status thread.
   mutable std::mutex ptp_mutex_;
@@ -104,6 +118,9 @@ class AravisSource final : public FrameSource {
   std::thread ptp_thread_;
   std::condition_variable ptp_cv_;
   bool ptp_stop_ = false;  // under ptp_mutex_
+  std::string exposure_read_feature_;  // ExposureTime | ExposureTimeAbs as read back at open; "": none
+  std::unique_ptr<detail::ExposureWatcher> exposure_;  // reads each frame's exposure (capture thread's)
+  std::atomic<Nanos> last_exposure_ns_{0};              // the latest it read
 };
 
 // Aravis' own open by name, falling back to a serial-number match in the device list.

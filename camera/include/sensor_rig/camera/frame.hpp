@@ -32,10 +32,18 @@ struct FrameMeta {
   PixelFormat format = PixelFormat::kMono8;
   Nanos device_ns = 0;            // exposure start in `domain`
   TimeDomain domain = TimeDomain::kDeviceTicks;
+  // The device's own reading before any conversion (PTP TAI -> UTC): what the clock mapper is fed,
+  // so a PTP stamp found implausible falls back to a fresh mapping. 0: the same as device_ns.
+  Nanos device_ticks_ns = 0;
   Nanos first_rx_ns = 0;          // host CLOCK_REALTIME: first packet (GigE leader) / buffer ready
   Nanos complete_ns = 0;          // host CLOCK_REALTIME: frame complete, handed to the caller
   Nanos complete_mono_ns = 0;     // CLOCK_MONOTONIC sampled with complete_ns (same instant)
   std::uint32_t packets = 0;      // GigE packets of this frame (0: not packetised)
+  // The exposure time of frame `exposure_seq` (this one or an earlier one) as the device reported
+  // it, ns; 0: not known per frame. The clock mapping follows an exposure that changes while
+  // streaming (auto exposure, another controller) with it (issue 27 item 9).
+  std::uint64_t exposure_seq = 0;
+  Nanos exposure_ns = 0;
 };
 
 // A filled buffer on loan from its source; move-only; gives the buffer back when destroyed.

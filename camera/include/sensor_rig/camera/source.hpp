@@ -28,6 +28,9 @@ struct PtpConfig {
   bool tai = true;                // the camera's timescale: TAI (PTP's own) or UTC
   int tai_utc_offset_s = 37;      // TAI - UTC (37 s since 2017)
   int status_poll_ms = 1000;      // status re-read period (own thread, never per frame)
+  // Master is locked only for a camera meant to be the grandmaster: one that won the election
+  // because the PU's ptp4l is down (another domain, VLAN) runs on its own clock.
+  bool grandmaster = false;
 };
 
 // What a backend is asked to configure (the driver's config minus DDS). Applied in this order:
@@ -51,6 +54,12 @@ struct SourceConfig {
   bool packet_socket = false;          // Aravis' packet socket: receives nothing from the fake as root
   int buffers = 4;                     // pool size
   PtpConfig ptp;                       // aravis only
+  // V4L2 buffer timestamps: `auto` follows the buffer's flag (TSTAMP_SRC_EOF: end of frame, else
+  // start of exposure); a driver that stamps elsewhere without saying so needs `start`/`end`.
+  // An end-of-frame stamp lies exposure + readout after the exposure start: readout_us, 0 = half
+  // the granted frame period (a rolling shutter reads out over most of a frame at 10-30 Hz).
+  std::string v4l2_stamp = "auto";     // auto | start | end
+  double readout_us = 0.0;
 };
 
 // The PTP state a source reports (diagnostics).
@@ -58,7 +67,7 @@ struct PtpState {
   bool enabled = false;           // configured and enabled on the device
   std::string enable_feature;     // PtpEnable | GevIEEE1588
   std::string status;             // the device's status text (Master, Slave, Faulty, ...)
-  bool locked = false;            // Master or Slave: frames carry PTP time
+  bool locked = false;            // Slave (or Master when grandmaster): frames carry PTP time
   std::uint64_t resets = 0;       // disable + enable after Faulty/Disabled/Initializing
   std::uint64_t polls = 0;        // status reads
   std::int64_t poll_max_us = 0;   // the slowest status read (a GVCP round trip)
@@ -91,6 +100,11 @@ struct SourceStats {
   std::uint64_t missing_packets = 0;
   std::uint64_t resent_packets = 0;
   std::uint64_t disconnects = 0;
+  // Frames the device made that never reached next(): GigE block-id gaps (underruns, frames Aravis
+  // discarded), V4L2 sequence gaps. Counted within one open (a reopened device restarts its ids).
+  std::uint64_t missing_frames = 0;
+  // Every frame made and not returned: what the driver reports as `counted_lost`.
+  [[nodiscard]] std::uint64_t lost_frames() const noexcept { return incomplete + missing_frames; }
 };
 
 class FrameSource {

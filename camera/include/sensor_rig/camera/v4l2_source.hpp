@@ -25,6 +25,10 @@ class V4l2Source final : public FrameSource {
   Capture next(int timeout_ms) override;
   [[nodiscard]] SourceStats stats() const override { return stats_; }
   [[nodiscard]] std::string describe() const override;
+  // The exposure the device uses (the config's, else read back), us; 0: unknown.
+  [[nodiscard]] double exposure_us() const override { return exposure_us_; }
+  // End-of-frame stamp -> exposure start: exposure + readout (ns).
+  [[nodiscard]] Nanos eof_offset_ns() const noexcept;
 
  private:
   struct Mapped {
@@ -45,6 +49,10 @@ class V4l2Source final : public FrameSource {
   std::uint32_t image_bytes_ = 0;
   std::vector<Mapped> buffers_;
   SourceStats stats_;
+  double exposure_us_ = 0.0;     // set or read back at open; 0: unknown (auto)
+  Nanos period_ns_ = 0;          // the frame interval the device granted (S_PARM read back)
+  std::uint32_t last_sequence_ = 0;
+  bool have_sequence_ = false;   // within one open: a reopened device may restart its sequence
 };
 
 }  // namespace sensor_rig::camera

@@ -6,9 +6,14 @@
 // - CLOCK_MONOTONIC (V4L2): plus the realtime-monotonic offset sampled at this frame;
 // - software trigger: the exposure start the device reported, once its ticks are mapped (PTP
 //   time as it is); until then the vehicle time of the trigger tick that exposed it.
+// Every device stamp (PTP, mapped ticks) is checked against the frame's arrival: an exposure start
+// after the first packet arrived, or more than the arrival window before it, is the clock's error
+// (a camera that won the PTP election, a wrong timescale, a clock step not yet confirmed by the
+// mapper): the frame falls back to the mapped ticks, else the arrival minus the exposure, counted.
 // Device-clock stamps never go backwards when CLOCK_REALTIME is stepped back (timesync's
 // MonotonicStamps: held, then slewed out); trigger ticks are the clock's readings as they are.
 #include <cstdint>
+#include <deque>
 
 #include "sensor_rig/camera/frame.hpp"
 #include "sensor_rig/timesync/clock_mapper.hpp"
@@ -42,13 +47,31 @@ class FrameClock {
   void realtime_step(Nanos step_ns) noexcept { monotonic_.realtime_step(step_ns); }
   // A (re)opened device: its tick counter may have restarted, its exposure time changed.
   void reset(Nanos exposure_ns);
+  // Device stamps (PTP or mapped ticks) found outside the frame's arrival window and replaced
+  // (issue 27 items 7, 8): how many, when the last was (vehicle time), and by how much.
+  struct Rejected {
+    std::uint64_t count = 0;
+    Nanos last_ns = 0;
+    Nanos last_error_ns = 0;   // rejected stamp - (arrival - exposure)
+  };
+  [[nodiscard]] const Rejected& rejected() const noexcept { return rejected_; }
 
  private:
   FrameStamp device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept;
+  // Feeds the mapper (device time, exposure start by the arrival): with the frame's own exposure
+  // where the source reports it a frame or two later (FrameMeta::exposure_seq), else the latest.
+  void observe(const camera::FrameMeta& m, Nanos device) noexcept;
+  struct Pending {
+    std::uint64_t seq;
+    Nanos device;
+    Nanos first_rx;
+  };
 
   timesync::ClockMapper mapper_;
   timesync::MonotonicStamps monotonic_;  // the topic's stamps across realtime steps (kept over reopens)
   Nanos exposure_ns_;
+  Rejected rejected_;
+  std::deque<Pending> pending_;  // frames waiting for their exposure (sources that report it)
 };
 
 }  // namespace sensor_rig::drivers

@@ -41,6 +41,7 @@ struct LidarTriggerFigures {
   timesync::SweepStatus sweep;
   std::uint64_t triggers = 0;        // ticks fired
   std::uint64_t refused = 0;         // this camera refused the trigger (closed, lost)
+  std::uint64_t timed_out = 0;       // its call had not returned by the shot's deadline (counted in refused)
   std::uint64_t late = 0;            // fired more than 1 ms after the aimed time (woke late)
   std::uint64_t prediction_lost = 0; // times the prediction went away (LIDAR stopped / lost lock)
   std::uint64_t measured = 0;        // this camera's triggers in the phase figure below
@@ -82,6 +83,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   void exposed(std::size_t member, Nanos tick, Nanos device_exposure_ns) override;
   void observe_sweep(std::span<const timesync::SweepSample> samples) noexcept override;
   void add_status(dds::DriverStatus& s, std::size_t member) const override;
+  [[nodiscard]] bool firing() const override;
   [[nodiscard]] LidarTriggerFigures figures(std::size_t member = 0) const;
   [[nodiscard]] const LidarTriggerConfig& config() const noexcept { return cfg_; }
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
@@ -96,6 +98,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
     ErrorHistory call_error;        // |trigger call + latency - actual crossing|
     ErrorHistory to_exposure;       // reported exposure start - trigger call
     std::uint64_t refused = 0;
+    std::uint64_t timed_out = 0;    // its call had not returned by the shot's deadline (a dead camera)
     std::uint64_t unmatched = 0;
   };
   // The shot every firing thread takes: armed by the trigger thread, fired by all members at once.
@@ -104,7 +107,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
     Nanos aim_mono = 0;             // CLOCK_MONOTONIC instant of the calls
     std::vector<Nanos> called;      // per member: vehicle time of its trigger call
     std::vector<char> accepted;     // per member: the camera took the trigger
-    std::size_t done = 0;           // members finished with this generation
+    std::vector<std::uint64_t> reported;  // per member: the last generation it finished (or skipped)
     bool closing = false;           // stop(): firing threads end once nothing is armed
   };
   // A fired tick, until its crossing is measured and its frames have reported their exposure.

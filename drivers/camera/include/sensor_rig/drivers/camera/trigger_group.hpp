@@ -71,6 +71,9 @@ class TriggerSource {
   virtual void exposed(std::size_t /*member*/, Nanos /*tick*/, Nanos /*device_exposure_ns*/) {}
   // The trigger's own figures (for `member`) in that camera's /diagnostics status.
   virtual void add_status(dds::DriverStatus& /*s*/, std::size_t /*member*/) const {}
+  // The source fires its shots now (a LIDAR trigger: its sweep is predicted). A camera whose
+  // trigger source stopped sends nothing: its watchdog reports that instead of reopening it.
+  [[nodiscard]] virtual bool firing() const { return true; }
 };
 
 class TriggerGroup : public TriggerSource {
