@@ -13,14 +13,16 @@ cd "$src" || exit 2
 # The floor of each folder, and which floors it may include.
 declare -A allowed=(
   [common]="common"
-  [dds]="common dds"
+  [msgs]="common msgs"
+  [record]="common record"
+  [dds]="common msgs dds"
   [timesync]="common timesync"
   [lidar]="common lidar"
   [camera]="common camera"
   [dbw]="common dbw"
-  [drivers]="common dds timesync lidar camera dbw drivers"
-  [rig]="common dds timesync lidar camera dbw drivers"
-  [bench]="common dds timesync lidar camera dbw drivers bench"
+  [drivers]="common msgs dds timesync lidar camera dbw drivers"
+  [rig]="common msgs record dds timesync lidar camera dbw drivers"
+  [bench]="common msgs record dds timesync lidar camera dbw drivers bench"
 )
 fail=0
 for folder in "${!allowed[@]}"; do
@@ -43,11 +45,11 @@ while IFS= read -r line; do
   echo "layout: ${line%%:*} includes Cyclone (only dds/ may): ${line#*:}"
   fail=1
 done < <(grep -rnE '#include [<"](dds/dds\.h|dds/ddsrt|dds/ddsi|dds/ddsc)' --include='*.cpp' --include='*.hpp' --include='*.h' \
-           common timesync lidar camera dbw drivers rig bench 2>/dev/null | grep -v "^dds/")
+           common msgs record timesync lidar camera dbw drivers rig bench 2>/dev/null | grep -v "^dds/")
 
 # The link graph: a library's folder floor must be >= the floor of everything it links.
 if [ -n "$build" ] && command -v cmake >/dev/null; then
-  declare -A floor=([common]=1 [msgs]=2 [dds]=3 [timesync]=3 [lidar]=3 [camera]=3 [dbw]=3 [drivers]=4 [rig]=5 [bench]=6)
+  declare -A floor=([common]=1 [msgs]=2 [record]=3 [dds]=3 [timesync]=3 [lidar]=3 [camera]=3 [dbw]=3 [drivers]=4 [rig]=5 [bench]=6)
   graph_dir=$(mktemp -d)
   trap 'rm -rf "$graph_dir"' EXIT
   if cmake --graphviz="$graph_dir/g.dot" "$build" >/dev/null 2>&1; then

@@ -79,6 +79,13 @@ std::vector<Publication> DiscoveryReader::take(std::size_t max) {
           dds_duration_t blocking = 0;
           if (s.qos != nullptr && dds_qget_reliability(s.qos, &kind, &blocking) && kind == DDS_RELIABILITY_BEST_EFFORT)
             pub.reliability = QosSpec::Reliability::kBestEffort;
+          dds_durability_kind_t durability = DDS_DURABILITY_VOLATILE;
+          if (s.qos != nullptr && dds_qget_durability(s.qos, &durability) && durability != DDS_DURABILITY_VOLATILE)
+            pub.durability = QosSpec::Durability::kTransientLocal;
+          dds_history_kind_t history = DDS_HISTORY_KEEP_LAST;
+          int32_t depth = 1;
+          if (s.qos != nullptr && dds_qget_history(s.qos, &history, &depth))
+            pub.depth = history == DDS_HISTORY_KEEP_ALL ? 0 : depth;
           out.push_back(std::move(pub));
         });
     if (n < kBatch) break;

@@ -91,12 +91,14 @@ static void payload_init(void) {
 
 // As ddsi_sertype_default_init does for a keyless XCDR1 type, with payload_ops; serpool is set
 // once the sertype is registered (the domain's pool, which outlives every topic).
-static struct ddsi_sertype_default* payload_sertype_new(const dds_topic_descriptor_t* desc) {
+// With `ops` = Cyclone's own, exactly the sertype dds_create_topic makes (rig_create_cdr_topic).
+static struct ddsi_sertype_default* payload_sertype_new(const dds_topic_descriptor_t* desc,
+                                                       const struct ddsi_sertype_ops* ops) {
   enum ddsi_sertype_extensibility ext;
   if (!dds_stream_extensibility(desc->m_ops, &ext)) return NULL;
   struct ddsi_sertype_default* st = ddsrt_malloc(sizeof *st);
   memset(st, 0, sizeof *st);
-  ddsi_sertype_init(&st->c, desc->m_typename, &payload_ops, &ddsi_serdata_ops_cdr_nokey, true);
+  ddsi_sertype_init(&st->c, desc->m_typename, ops, &ddsi_serdata_ops_cdr_nokey, true);
   st->c.iox_size = desc->m_size;
   st->c.fixed_size = (st->c.fixed_size || (desc->m_flagset & DDS_TOPIC_FIXED_SIZE)) ? 1u : 0u;
   st->c.allowed_data_representation = (desc->m_flagset & DDS_TOPIC_RESTRICT_DATA_REPRESENTATION)
@@ -152,7 +154,7 @@ static dds_entity_t create_payload_topic(dds_entity_t participant, const dds_top
     ddsrt_mutex_unlock(&payload_lock);
     return dds_create_topic(participant, desc, name, qos, NULL);
   }
-  struct ddsi_sertype_default* st = payload_sertype_new(desc);
+  struct ddsi_sertype_default* st = payload_sertype_new(desc, &payload_ops);
   if (st == NULL) {
     ddsrt_mutex_unlock(&payload_lock);
     return DDS_RETCODE_BAD_PARAMETER;
@@ -194,4 +196,29 @@ int rig_payload_sizes_for_test(dds_entity_t participant, const dds_topic_descrip
   *cyclone = ddsi_sertype_ops_default.get_serialized_size(st, sample);
   dds_delete(topic);
   return DDS_RETCODE_OK;
+}
+
+dds_entity_t rig_create_cdr_topic(dds_entity_t participant, const dds_topic_descriptor_t* desc, const char* name,
+                                  const dds_qos_t* qos, const struct ddsi_sertype** sertype) {
+  *sertype = NULL;
+  ddsrt_once(&payload_once, payload_init);
+  if (desc->m_nkeys != 0) return DDS_RETCODE_UNSUPPORTED;  // a keyed serdata needs the keyed serdata ops
+  struct ddsi_sertype_default* st = payload_sertype_new(desc, &ddsi_sertype_ops_default);
+  if (st == NULL) return DDS_RETCODE_BAD_PARAMETER;
+  struct ddsi_sertype* registered = &st->c;
+  // As in create_payload_topic: the lock keeps a sertype of ours from being used before it has a pool.
+  ddsrt_mutex_lock(&payload_lock);
+  const dds_entity_t topic = dds_create_topic_sertype(participant, name, &registered, qos, NULL, NULL);
+  if (topic < 0) {
+    ddsi_sertype_unref(registered);
+  } else {
+    struct ddsi_sertype_default* reg = (struct ddsi_sertype_default*)registered;
+    if (reg->serpool == NULL) {
+      const struct ddsi_domaingv* gv = ddsrt_atomic_ldvoidp(&registered->gv);
+      reg->serpool = gv->serpool;
+    }
+    *sertype = registered;
+  }
+  ddsrt_mutex_unlock(&payload_lock);
+  return topic;
 }

@@ -18,6 +18,8 @@ struct Publication {
   std::string participant_guid;  // 32 hex digits
   std::string host;              // the writer's host (its participant's __Hostname), "" when not yet known
   QosSpec::Reliability reliability = QosSpec::Reliability::kReliable;
+  QosSpec::Durability durability = QosSpec::Durability::kVolatile;
+  int depth = 1;                 // the writer's keep-last depth; 0 = keep-all
   bool alive = true;             // false: the writer went away (only writer_guid is set then)
 };
 

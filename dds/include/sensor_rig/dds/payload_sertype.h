@@ -23,6 +23,14 @@ dds_entity_t rig_create_payload_topic(dds_entity_t participant, const dds_topic_
 int rig_payload_sizes_for_test(dds_entity_t participant, const dds_topic_descriptor_t* desc, const char* name,
                                size_t payload_offset, const void* sample, size_t* ours, size_t* cyclone);
 
+struct ddsi_sertype;
+// As dds_create_topic (Cyclone's default sertype in every respect, built as dds_create_topic builds
+// it) for a keyless type, and *sertype = the topic's sertype, valid while the topic lives: what
+// ddsi_serdata_from_ser_iov needs to turn received CDR bytes back into a sample to write
+// (dds/raw_topic.hpp). Cyclone 0.10.2 has no call that returns an entity's sertype.
+dds_entity_t rig_create_cdr_topic(dds_entity_t participant, const dds_topic_descriptor_t* desc, const char* name,
+                                  const dds_qos_t* qos, const struct ddsi_sertype** sertype);
+
 #if defined(__cplusplus)
 }
 #endif
