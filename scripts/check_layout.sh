@@ -15,14 +15,15 @@ declare -A allowed=(
   [common]="common"
   [msgs]="common msgs"
   [record]="common record"
+  [view]="common view"
   [dds]="common msgs dds"
   [timesync]="common timesync"
   [lidar]="common lidar"
   [camera]="common camera"
   [dbw]="common dbw"
   [drivers]="common msgs dds timesync lidar camera dbw drivers"
-  [rig]="common msgs record dds timesync lidar camera dbw drivers"
-  [bench]="common msgs record dds timesync lidar camera dbw drivers bench"
+  [rig]="common msgs record view dds timesync lidar camera dbw drivers"
+  [bench]="common msgs record view dds timesync lidar camera dbw drivers bench"
 )
 fail=0
 for folder in "${!allowed[@]}"; do
@@ -45,11 +46,11 @@ while IFS= read -r line; do
   echo "layout: ${line%%:*} includes Cyclone (only dds/ may): ${line#*:}"
   fail=1
 done < <(grep -rnE '#include [<"](dds/dds\.h|dds/ddsrt|dds/ddsi|dds/ddsc)' --include='*.cpp' --include='*.hpp' --include='*.h' \
-           common msgs record timesync lidar camera dbw drivers rig bench 2>/dev/null | grep -v "^dds/")
+           common msgs record view timesync lidar camera dbw drivers rig bench 2>/dev/null | grep -v "^dds/")
 
 # The link graph: a library's folder floor must be >= the floor of everything it links.
 if [ -n "$build" ] && command -v cmake >/dev/null; then
-  declare -A floor=([common]=1 [msgs]=2 [record]=3 [dds]=3 [timesync]=3 [lidar]=3 [camera]=3 [dbw]=3 [drivers]=4 [rig]=5 [bench]=6)
+  declare -A floor=([common]=1 [msgs]=2 [record]=3 [view]=3 [dds]=3 [timesync]=3 [lidar]=3 [camera]=3 [dbw]=3 [drivers]=4 [rig]=5 [bench]=6)
   graph_dir=$(mktemp -d)
   trap 'rm -rf "$graph_dir"' EXIT
   if cmake --graphviz="$graph_dir/g.dot" "$build" >/dev/null 2>&1; then

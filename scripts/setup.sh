@@ -15,6 +15,7 @@ PACKAGES=(
   lld                          # the linker of every build (CMake option RIG_LLD): 3-4x faster links
   python3
   liblz4-dev libzstd-dev        # MCAP chunk compression (rig record / play)
+  libboost-dev                 # Boost.Beast/Asio, header-only: rig view's WebSocket server (view/)
 )
 
 missing=()
