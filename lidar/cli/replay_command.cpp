@@ -119,6 +119,19 @@ std::string clock_of(const ReplayCliOptions& o) {
 // when their time comes), and ro.scheduled / ro.observer.
 std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::uint16_t port, mock::ReplayOptions& ro,
                                                 std::unique_ptr<mock::TruthStream>& truth_stream) {
+  // The synthetic sensor is built before the clock is read: its first packet may be due lead_ns
+  // (2 ms) later, and building an Ouster's rays took 3-11 ms under a starting rig (its first 11
+  // packets then left together, 16-18 ms late by its truth record, and the driver stamped that
+  // scan from them: test_lidar_synthetic_rig).
+  const mock::SyntheticOptions base = o.synthetic.empty() ? mock::SyntheticOptions{} : synthetic_options(o, port, 0);
+  std::unique_ptr<mock::SyntheticSensor> sensor;
+  if (!o.synthetic.empty()) {
+    try {
+      sensor = mock::make_synthetic_sensor(base, mock::Scene::standard());
+    } catch (const std::invalid_argument& e) {
+      throw cli::UsageError(e.what());
+    }
+  }
   const Nanos mono_now = monotonic_now_ns();
   const Nanos vehicle_now = vehicle_now_ns();
   const bool faulted = !o.fault_plan.empty() || !o.fault_specs.empty();
@@ -147,13 +160,6 @@ std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::
     ro.observer = truth_stream.get();
     return nullptr;
   }
-  const mock::SyntheticOptions base = synthetic_options(o, port, 0);
-  std::unique_ptr<mock::SyntheticSensor> sensor;
-  try {
-    sensor = mock::make_synthetic_sensor(base, mock::Scene::standard());
-  } catch (const std::invalid_argument& e) {
-    throw cli::UsageError(e.what());
-  }
   // The sensor's clock is the host's (a PTP-synced sensor): each packet leaves when the vehicle
   // time it is complete at comes, the first lead_ns from now at the earliest, later when the rotor
   // must first reach its phase-locked angle.
@@ -178,7 +184,8 @@ std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::
   };
   std::unique_ptr<mock::FaultySensor> faulty;
   try {
-    faulty = std::make_unique<mock::FaultySensor>(make, mock::SensorSetup{start, o.rpm, 0.0, 0}, std::move(f.sensor));
+    faulty = std::make_unique<mock::FaultySensor>(make, mock::SensorSetup{start, o.rpm, 0.0, 0}, std::move(f.sensor),
+                                                  std::move(sensor));
   } catch (const std::invalid_argument& e) {
     throw cli::UsageError(e.what());
   }
@@ -250,6 +257,8 @@ int run_replay_command(const ReplayCliOptions& o) {
   std::vector<Endpoint> dests{data};
   if (o.position_port != 0) dests.push_back(Endpoint{data.host, static_cast<std::uint16_t>(o.position_port)});
   if (!o.write_metadata.empty()) write_metadata(o, data.port);
+  // SCHED_FIFO before the stream is made: from the clock's reading on, the first packet's deadline runs.
+  apply_rt_priority(o.rt_priority);
   std::unique_ptr<mock::TruthStream> truth_stream;
   std::unique_ptr<mock::PacketStream> plain = make_stream(o, data.port, ro, truth_stream);
   mock::PacketStream& stream = truth_stream ? static_cast<mock::PacketStream&>(*truth_stream) : *plain;
@@ -258,7 +267,6 @@ int run_replay_command(const ReplayCliOptions& o) {
   log::info("replay", std::string(o.pcap.empty() ? "synthetic " + o.synthetic : o.pcap) + " -> " + o.to +
                           (o.position_port ? " (position packets -> port " + std::to_string(o.position_port) + ")"
                                            : std::string(" (position packets skipped)")));
-  apply_rt_priority(o.rt_priority);
   const mock::ReplayStats st = mock::run_replay(stream, sender, ro);
   if (truth_stream) truth_stream->finish();
   std::fprintf(stderr, "%s\n", mock::summary_line(st).c_str());

@@ -14,11 +14,12 @@ bool in_sector(double deg, double from, double to) noexcept {
 
 }  // namespace
 
-FaultySensor::FaultySensor(SensorFactory make, const SensorSetup& setup, std::vector<SensorFault> faults)
+FaultySensor::FaultySensor(SensorFactory make, const SensorSetup& setup, std::vector<SensorFault> faults,
+                           std::unique_ptr<SyntheticSensor> first)
     : make_(std::move(make)),
       setup_(setup),
       faults_(std::move(faults)),
-      sensor_(make_(setup)),
+      sensor_(first ? std::move(first) : make_(setup)),
       fields_(*sensor_),
       tracker_(sensor_->unit_rule()),
       rpm_now_(setup.rpm) {

@@ -58,9 +58,12 @@ struct FaultyPacket {
 
 class FaultySensor {
  public:
-  // `first` is the sensor as configured (its setup: `setup`). Throws std::invalid_argument when a
-  // fault cannot be done by this model (e.g. an rpm it cannot turn at, rpm_change on an Ouster).
-  FaultySensor(SensorFactory make, const SensorSetup& setup, std::vector<SensorFault> faults);
+  // `first`: the sensor as configured (its setup: `setup`), made by `make` when null (a sender
+  // builds it before it reads the clock: building an Ouster's rays takes milliseconds, and its
+  // first packet may be due 2 ms later). Throws std::invalid_argument when a fault cannot be done
+  // by this model (e.g. an rpm it cannot turn at, rpm_change on an Ouster).
+  FaultySensor(SensorFactory make, const SensorSetup& setup, std::vector<SensorFault> faults,
+               std::unique_ptr<SyntheticSensor> first = nullptr);
 
   FaultyPacket next();
   [[nodiscard]] const SyntheticSensor& sensor() const noexcept { return *sensor_; }
