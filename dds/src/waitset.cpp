@@ -18,6 +18,18 @@ void WaitSet::attach_reader(dds_entity_t reader, std::int64_t tag) {
   triggered_.resize(conditions_.size() + 1);
 }
 
+void WaitSet::detach_reader(dds_entity_t reader) noexcept {
+  for (auto it = conditions_.begin(); it != conditions_.end();) {
+    if (dds_get_parent(it->handle()) == reader) {
+      dds_waitset_detach(waitset_.handle(), it->handle());
+      it = conditions_.erase(it);  // the Entity deletes the condition
+    } else {
+      ++it;
+    }
+  }
+  triggered_.resize(conditions_.size() + 1);
+}
+
 void WaitSet::attach_guard(std::int64_t tag) {
   check(dds_waitset_attach(waitset_.handle(), guard_.handle(), static_cast<dds_attach_t>(tag)), "dds_waitset_attach");
   triggered_.resize(conditions_.size() + 1);

@@ -10,6 +10,7 @@ namespace rig {
 void register_cli(CLI::App& app, cli::Context& ctx);
 void register_security_cli(CLI::App& app, cli::Context& ctx);  // security init
 void register_chaos_cli(CLI::App& app, cli::Context& ctx);     // chaos
+void register_view_cli(CLI::App& app, cli::Context& ctx);      // view (Foxglove WebSocket server)
 }  // namespace rig
 namespace drivers {
 void register_lidar_cli(CLI::App& app, cli::Context& ctx);
@@ -20,6 +21,7 @@ inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
   rig::register_cli(app, ctx);  // up, demo, config, monitor
   rig::register_security_cli(app, ctx);
   rig::register_chaos_cli(app, ctx);
+  rig::register_view_cli(app, ctx);
 #ifdef RIG_HAVE_LIDAR
   lidar::register_cli(app, ctx);    // lidar replay
   drivers::register_lidar_cli(app, ctx);  // lidar decode (source -> timesync -> decoder -> PCD)

@@ -494,11 +494,17 @@ bool Server::has_subscribers(ChannelId id) const {
   return impl_->subscribers.count(id) != 0;
 }
 
-void Server::publish(ChannelId channel, std::uint64_t receive_ns, const std::uint8_t* data, std::size_t size) {
+void Server::publish(ChannelId channel, std::uint64_t receive_ns,
+                     std::span<const std::span<const std::uint8_t>> pieces) {
   auto& im = *impl_;
   if (!has_subscribers(channel)) return;
   // The one copy, outside the lock: a 7 MB image takes a millisecond to copy.
-  auto payload = std::make_shared<const std::vector<std::uint8_t>>(data, data + size);
+  std::size_t size = 0;
+  for (const auto& p : pieces) size += p.size();
+  auto bytes = std::make_shared<std::vector<std::uint8_t>>();
+  bytes->reserve(size);
+  for (const auto& p : pieces) bytes->insert(bytes->end(), p.begin(), p.end());
+  std::shared_ptr<const std::vector<std::uint8_t>> payload = std::move(bytes);
   std::lock_guard lock(im.mu);
   ++im.totals.published;
   const std::uint64_t seq = ++im.seq;

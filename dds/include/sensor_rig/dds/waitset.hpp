@@ -18,6 +18,9 @@ class WaitSet {
 
   // Wakes wait() with `tag` when the reader has data (any sample state). Throws DdsError.
   void attach_reader(dds_entity_t reader, std::int64_t tag);
+  // Detaches and deletes the read conditions of `reader` (before the reader goes, for a waitset
+  // whose readers come and go, as `rig view`'s). Never throws.
+  void detach_reader(dds_entity_t reader) noexcept;
   // Wakes wait() with `tag` after wake(); thread-safe.
   void attach_guard(std::int64_t tag);
   void wake() noexcept;

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -89,8 +90,13 @@ class Server {
   ChannelId add_channel(ChannelSpec spec);
   void remove_channel(ChannelId id);
   [[nodiscard]] bool has_subscribers(ChannelId id) const;
-  // Copies `size` bytes once for every subscriber of `channel`; never blocks on a client.
-  void publish(ChannelId channel, std::uint64_t receive_ns, const std::uint8_t* data, std::size_t size);
+  // Copies the payload once for every subscriber of `channel`; never blocks on a client. The
+  // payload may come in pieces (a shared-memory sample: a header made by the reader, then the chunk).
+  void publish(ChannelId channel, std::uint64_t receive_ns, std::span<const std::span<const std::uint8_t>> pieces);
+  void publish(ChannelId channel, std::uint64_t receive_ns, const std::uint8_t* data, std::size_t size) {
+    const std::span<const std::uint8_t> one[] = {{data, size}};
+    publish(channel, receive_ns, one);
+  }
   void broadcast_status(StatusLevel level, const std::string& message);
 
   [[nodiscard]] ServerStats stats() const;
