@@ -11,6 +11,7 @@ void register_cli(CLI::App& app, cli::Context& ctx);
 void register_security_cli(CLI::App& app, cli::Context& ctx);  // security init
 void register_chaos_cli(CLI::App& app, cli::Context& ctx);     // chaos
 void register_view_cli(CLI::App& app, cli::Context& ctx);      // view (Foxglove WebSocket server)
+void register_record_cli(CLI::App& app, cli::Context& ctx);    // record, play (MCAP)
 }  // namespace rig
 namespace drivers {
 void register_lidar_cli(CLI::App& app, cli::Context& ctx);
@@ -22,6 +23,7 @@ inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
   rig::register_security_cli(app, ctx);
   rig::register_chaos_cli(app, ctx);
   rig::register_view_cli(app, ctx);
+  rig::register_record_cli(app, ctx);
 #ifdef RIG_HAVE_LIDAR
   lidar::register_cli(app, ctx);    // lidar replay
   drivers::register_lidar_cli(app, ctx);  // lidar decode (source -> timesync -> decoder -> PCD)

@@ -45,7 +45,7 @@ function summarize(schemaName, m) {
     case "diagnostic_msgs/msg/DiagnosticArray":
       return { ...s, status: m.status.map((x) => ({ name: x.name, level: x.level, values: x.values.length })) };
     case "sensor_rig_msgs/msg/SourceStamps":
-      return { ...s, topic: m.topic, seq: String(m.seq), publish_ns: String(m.publish_ns) };
+      return { ...s, stamps_topic: m.topic, seq: String(m.seq), publish_ns: String(m.publish_ns) };
     default:
       return s;
   }

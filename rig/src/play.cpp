@@ -1,0 +1,208 @@
+#include "play.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "qos_profiles.hpp"
+#include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/common/percentile.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dds/raw_topic.hpp"
+#include "sensor_rig/dds/topic.hpp"
+#include "sensor_rig/msgs/ros2msg.hpp"
+#include "sensor_rig/record/mcap_reader.hpp"
+
+namespace sensor_rig::rig {
+namespace {
+
+// The files of a recording: PATH itself, or PATH/*.mcap in the order of their number suffix.
+std::vector<std::string> recording_files(const std::string& path) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(path)) return {path};
+  std::vector<std::pair<long, std::string>> files;
+  for (const auto& e : fs::directory_iterator(path)) {
+    if (e.path().extension() != ".mcap") continue;
+    const std::string stem = e.path().stem().string();
+    const auto us = stem.rfind('_');
+    long n = 0;
+    try {
+      n = us == std::string::npos ? 0 : std::stol(stem.substr(us + 1));
+    } catch (const std::exception&) {
+    }
+    files.emplace_back(n, e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<std::string> out;
+  for (auto& f : files) out.push_back(f.second);
+  if (out.empty()) throw cli::UsageError(path + ": a folder without .mcap files");
+  return out;
+}
+
+// Whether two ros2msg schemas describe the same fields (names, types, arrays), dependencies included.
+std::string schema_difference(const std::string& name, const std::string& theirs, const std::string& ours) {
+  try {
+    const auto a = msgs::parse_ros2msg_schema(name, theirs);
+    const auto b = msgs::parse_ros2msg_schema(name, ours);
+    std::map<std::string, const msgs::MsgDefinition*> by_name;
+    for (const auto& d : b) by_name[d.name] = &d;
+    for (const auto& d : a) {
+      const auto it = by_name.find(d.name);
+      if (it == by_name.end()) continue;  // a dependency the rig's text names otherwise: checked through its user
+      const auto& f1 = d.fields;
+      const auto& f2 = it->second->fields;
+      if (f1.size() != f2.size()) return d.name + " has " + std::to_string(f1.size()) + " fields, the rig's " + std::to_string(f2.size());
+      for (std::size_t i = 0; i < f1.size(); ++i)
+        if (f1[i].type != f2[i].type || f1[i].name != f2[i].name || f1[i].kind != f2[i].kind || f1[i].size != f2[i].size)
+          return d.name + " field " + std::to_string(i) + " is '" + f1[i].type + " " + f1[i].name + "', the rig's '" +
+                 f2[i].type + " " + f2[i].name + "'";
+    }
+    return {};
+  } catch (const std::invalid_argument& e) {
+    return std::string("schema does not parse: ") + e.what();
+  }
+}
+
+struct PlayTopic {
+  std::unique_ptr<dds::RawWriter> writer;
+  std::uint64_t played = 0, write_errors = 0;
+};
+
+}  // namespace
+
+int run_play(const PlayOptions& o) {
+  const auto files = recording_files(o.path);
+  dds::Participant participant(o.dds);
+  std::map<std::string, PlayTopic> topics;     // by ROS name
+  std::map<std::string, std::string> refused;  // topic -> why
+  const std::set<std::string> wanted(o.topics.begin(), o.topics.end());
+  nlohmann::json problems = nlohmann::json::array();
+  std::vector<std::unique_ptr<record::McapReader>> readers;
+  for (const auto& f : files) {
+    auto r = std::make_unique<record::McapReader>(f);  // McapError: not an MCAP file
+    if (!r->complete()) r->load_channels_from_chunks();
+    for (const auto& [id, ch] : r->channels()) {
+      if ((!wanted.empty() && wanted.count(ch.topic) == 0) || topics.count(ch.topic) != 0 || refused.count(ch.topic) != 0) continue;
+      const auto sit = r->schemas().find(ch.schema_id);
+      const std::string schema_name = sit != r->schemas().end() ? sit->second.name : "";
+      const dds::RegisteredType* type = dds::find_type_by_schema(schema_name);
+      std::string why;
+      if (ch.message_encoding != "cdr") why = "message encoding '" + ch.message_encoding + "', not cdr";
+      else if (sit == r->schemas().end()) why = "no schema " + std::to_string(ch.schema_id) + " in the file";
+      else if (type == nullptr) why = "type " + schema_name + " is not known to the rig";
+      else if (sit->second.encoding == "ros2msg") why = schema_difference(schema_name, sit->second.data, type->schema);
+      if (!why.empty()) {
+        refused[ch.topic] = why;
+        std::fprintf(stderr, "rig play: %s: refused: %s\n", ch.topic.c_str(), why.c_str());
+        continue;
+      }
+      dds::QosSpec q;
+      q.depth = 10;
+      if (const auto m = ch.metadata.find("offered_qos_profiles"); m != ch.metadata.end()) {
+        const auto parsed = parse_offered_qos_profiles(m->second);
+        if (parsed.ok) q = parsed.qos;
+      }
+      topics[ch.topic].writer = std::make_unique<dds::RawWriter>(participant, dds::ros_to_dds_topic(ch.topic), *type, q);
+    }
+    readers.push_back(std::move(r));
+  }
+  if (topics.empty()) {
+    std::fprintf(stderr, "rig play: %s: nothing to play\n", o.path.c_str());
+    return 1;
+  }
+  wait_for_shutdown(static_cast<int>(o.delay_s * 1000));
+
+  std::vector<double> late_ms;
+  std::uint64_t played = 0;
+  bool stop = false;
+  do {
+    bool have_base = false;
+    std::uint64_t first_log = 0, base_log = 0;
+    const Nanos t0 = monotonic_now_ns();
+    for (auto& r : readers) {
+      if (stop) break;
+      r->for_each_message([&](const record::McapMessage& m) {
+        if (shutdown_requested()) {
+          stop = true;
+          return false;
+        }
+        const auto ch = r->channels().find(m.channel_id);
+        if (ch == r->channels().end()) return true;
+        const auto t = topics.find(ch->second.topic);
+        if (t == topics.end()) return true;
+        if (first_log == 0) first_log = m.log_time;
+        if (m.log_time < first_log + static_cast<std::uint64_t>(o.start_s * 1e9)) return true;
+        if (!have_base) {
+          base_log = m.log_time;
+          have_base = true;
+        }
+        const double offset = m.log_time >= base_log ? static_cast<double>(m.log_time - base_log) / o.rate : 0.0;
+        const Nanos target = t0 + static_cast<Nanos>(offset);
+        const timespec ts{static_cast<time_t>(target / 1'000'000'000), static_cast<long>(target % 1'000'000'000)};
+        while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+          if (shutdown_requested()) {
+            stop = true;
+            return false;
+          }
+        }
+        late_ms.push_back(static_cast<double>(monotonic_now_ns() - target) / 1e6);
+        if (t->second.writer->write(m.data, vehicle_now_ns()).ok()) ++t->second.played;
+        else ++t->second.write_errors;
+        ++played;
+        return true;
+      });
+    }
+  } while (o.loop && !stop && played > 0);
+
+  for (const auto& r : readers)
+    for (const auto& p : r->problems()) {
+      std::fprintf(stderr, "rig play: %s: offset %llu: %s\n", r->path().c_str(), static_cast<unsigned long long>(p.offset), p.what.c_str());
+      problems.push_back({{"file", r->path()}, {"offset", p.offset}, {"what", p.what}});
+    }
+  std::sort(late_ms.begin(), late_ms.end());
+  nlohmann::json j;
+  j["played"] = played;
+  for (const auto& [name, t] : topics) j["topics"][name] = {{"played", t.played}, {"write_errors", t.write_errors}};
+  for (const auto& [name, why] : refused) j["refused"][name] = why;
+  j["late_ms"] = {{"p50", nearest_rank_percentile(late_ms, 0.5)}, {"p99", nearest_rank_percentile(late_ms, 0.99)},
+                  {"max", late_ms.empty() ? 0.0 : late_ms.back()}};
+  j["problems"] = problems;
+  std::printf("%s\n", j.dump().c_str());
+  std::fflush(stdout);
+  return problems.empty() ? 0 : 1;
+}
+
+void add_play(CLI::App& app, cli::Context& ctx) {
+  auto* cmd = app.add_subcommand("play", "Publish a recording's topics again at its timing");
+  auto o = std::make_shared<PlayOptions>();
+  auto domain = std::make_shared<int>(0);
+  cmd->add_option("PATH", o->path, "NAME.mcap, or a folder of split files")->required()->check(CLI::ExistingPath);
+  cmd->add_option("--rate", o->rate, "Speed factor")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_flag("--loop", o->loop, "Play again from the start at the end");
+  cmd->add_option("--start", o->start_s, "Skip the first S seconds")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--topics", o->topics, "Only these ROS topics");
+  cmd->add_option("--delay", o->delay_s, "Seconds between creating the writers and the first message (discovery)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--domain", *domain, "DDS domain id")->check(CLI::Range(0, 232));
+  cmd->add_option("--dds-profile", o->dds.profile, "Cyclone XML profile (default: loopback)");
+  cmd->add_option("--transport", o->dds.transport, "udp, or shm (a RouDi must run)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, dds::Transport>{{"udp", dds::Transport::kUdp},
+                                                                                {"shm", dds::Transport::kShm}}));
+  cmd->callback([&ctx, o, domain] {
+    o->dds.domain_id = static_cast<dds_domainid_t>(*domain);
+    try {
+      ctx.exit_code = run_play(*o);
+    } catch (const record::McapError& e) {
+      std::fprintf(stderr, "rig play: %s\n", e.what());
+      ctx.exit_code = cli::kRuntime;
+    }
+  });
+}
+
+}  // namespace sensor_rig::rig

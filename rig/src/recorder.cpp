@@ -1,0 +1,291 @@
+#include "recorder.hpp"
+
+#include <atomic>
+#include <cinttypes>
+#include <cstdio>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <thread>
+
+#include "qos_profiles.hpp"
+#include "record_queue.hpp"
+#include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dds/discovery.hpp"
+#include "sensor_rig/dds/topic.hpp"
+#include "sensor_rig/dds/waitset.hpp"
+#include "sensor_rig/record/split_writer.hpp"
+
+namespace sensor_rig::rig {
+
+struct RecordTopic {
+  std::string ros_name;
+  record::ChannelSpec spec;
+  std::unique_ptr<dds::RawReader> reader;
+  bool reliable = true;
+  // DDS thread:
+  std::uint64_t received = 0, received_bytes = 0, queue_dropped = 0;
+  // Writer thread (read by the DDS thread for progress):
+  std::atomic<std::uint64_t> written{0}, disk_dropped{0}, queued{0};
+  std::size_t channel = 0;  // writer thread only
+  bool has_channel = false;
+};
+
+namespace {
+
+struct WriterShared {
+  std::atomic<bool> failed{false};
+  std::mutex mu;
+  std::string error;
+  std::atomic<std::uint64_t> file_bytes{0}, files{0}, compress_ns{0}, write_ns{0}, chunks{0};
+  std::vector<std::string> file_names;  // under mu
+};
+
+void writer_loop(record::SplitWriter& out, RecordQueue& q, WriterShared& w) {
+  RecordItem item;
+  const auto publish = [&] {
+    const auto t = out.totals();
+    w.file_bytes = t.file_bytes;
+    w.compress_ns = static_cast<std::uint64_t>(t.compress_ns);
+    w.write_ns = static_cast<std::uint64_t>(t.write_ns);
+    w.chunks = t.chunks;
+    w.files = out.files().size();
+  };
+  const auto fail = [&](const std::string& why) {
+    std::lock_guard lock(w.mu);
+    if (w.error.empty()) w.error = why;
+    w.failed = true;
+  };
+  while (!q.closed_and_empty()) {
+    if (!q.pop(item, std::chrono::milliseconds(100))) continue;
+    RecordTopic& t = *item.topic;
+    --t.queued;
+    if (w.failed) {
+      ++t.disk_dropped;
+      item.sample.reset();
+      continue;
+    }
+    try {
+      if (!t.has_channel) {
+        t.channel = out.add_channel(t.spec);
+        t.has_channel = true;
+      }
+      const std::span<const std::byte> pieces[] = {item.sample.first(), item.sample.second()};
+      const Nanos pub = item.sample.source_ts() > 0 ? item.sample.source_ts() : item.sample.receive_ts();
+      out.write(t.channel, static_cast<std::uint64_t>(item.sample.receive_ts()), static_cast<std::uint64_t>(pub), pieces);
+      ++t.written;
+    } catch (const record::McapError& e) {
+      ++t.disk_dropped;
+      fail(e.what());
+    }
+    item.sample.reset();  // back to Cyclone (over shm: the chunk to the publisher's pool)
+    publish();
+  }
+  if (!w.failed) {
+    try {
+      out.close();
+    } catch (const record::McapError& e) {
+      fail(e.what());
+    }
+  }
+  publish();
+  std::lock_guard lock(w.mu);
+  w.file_names = out.files();
+}
+
+class Recorder {
+ public:
+  explicit Recorder(const RecordOptions& o)
+      : opt_(o), participant_(o.dds), discovery_(participant_), waitset_(participant_),
+        queue_(o.queue_mb << 20), wanted_(o.topics.begin(), o.topics.end()) {
+    waitset_.attach_reader(discovery_.handle(), -1);
+  }
+
+  int run(record::SplitWriter& out) {
+    std::thread writer([&] { writer_loop(out, queue_, shared_); });
+    const Nanos start = monotonic_now_ns();
+    const Nanos end = opt_.duration_s > 0 ? start + static_cast<Nanos>(opt_.duration_s * 1e9) : INT64_MAX;
+    Nanos next_progress = start + 1'000'000'000;
+    std::vector<std::int64_t> tags;
+    while (!shutdown_requested() && !shared_.failed && monotonic_now_ns() < end) {
+      waitset_.wait(tags, 50'000'000);
+      for (const auto tag : tags) {
+        if (tag < 0) discover();
+        else take(topics_[static_cast<std::size_t>(tag)]);
+      }
+      if (const Nanos now = monotonic_now_ns(); now >= next_progress) {
+        if (opt_.progress) progress(now - start);
+        next_progress += 1'000'000'000;
+      }
+    }
+    for (auto& t : topics_) take(t);  // what arrived before the stop
+    queue_.close();
+    writer.join();
+    for (auto& t : topics_) t.reader->update_status();
+    if (opt_.progress) progress(monotonic_now_ns() - start);
+    summary(monotonic_now_ns() - start);
+    if (shared_.failed) {
+      std::fprintf(stderr, "rig record: stopped: %s\n", shared_.error.c_str());
+      return 1;
+    }
+    return 0;
+  }
+
+ private:
+  void discover() {
+    for (const auto& pub : discovery_.take()) {
+      if (!pub.alive || pub.topic.rfind("rt/", 0) != 0) continue;
+      const std::string ros = dds::dds_to_ros_topic(pub.topic);
+      if (!wanted_.empty() && wanted_.count(ros) == 0) continue;
+      if (known_.count(ros) != 0) {
+        if (pub.reliability == dds::QosSpec::Reliability::kBestEffort && known_[ros] != nullptr && known_[ros]->reliable)
+          std::fprintf(stderr, "rig record: %s: a best-effort writer joined a topic recorded reliably: its samples are not recorded\n", ros.c_str());
+        continue;
+      }
+      const dds::RegisteredType* type = dds::find_type(pub.type);
+      if (type == nullptr) {
+        known_[ros] = nullptr;
+        skipped_[ros] = "type " + pub.type + " is not known to the rig (no schema)";
+        std::fprintf(stderr, "rig record: %s: not recorded: %s\n", ros.c_str(), skipped_[ros].c_str());
+        continue;
+      }
+      dds::QosSpec q;
+      q.reliability = pub.reliability;
+      q.durability = pub.durability;
+      q.depth = std::max(16, pub.depth);  // room for a burst while the thread takes another topic
+      dds::QosSpec offered = q;
+      offered.depth = pub.depth;
+      RecordTopic& t = topics_.emplace_back();
+      t.ros_name = ros;
+      t.reliable = pub.reliability == dds::QosSpec::Reliability::kReliable;
+      t.spec = {ros, type->schema_name, "ros2msg", type->schema, "cdr", {{"offered_qos_profiles", offered_qos_profiles({offered})}}};
+      t.reader = std::make_unique<dds::RawReader>(participant_, pub.topic, *type, q);
+      waitset_.attach_reader(t.reader->handle(), static_cast<std::int64_t>(topics_.size() - 1));
+      known_[ros] = &t;
+    }
+  }
+
+  void take(RecordTopic& t) {
+    RecordItem item;
+    item.topic = &t;
+    while (t.reader->take(item.sample)) {
+      ++t.received;
+      t.received_bytes += item.sample.size();
+      if (t.queued >= opt_.topic_queue) {
+        ++t.queue_dropped;
+        continue;
+      }
+      ++t.queued;
+      if (!queue_.push(std::move(item))) {
+        --t.queued;
+        ++t.queue_dropped;
+      }
+      item = RecordItem{};
+      item.topic = &t;
+    }
+  }
+
+  struct Totals {
+    std::uint64_t received = 0, bytes = 0, written = 0, dds_lost = 0, dds_rejected = 0, malformed = 0, queue = 0, disk = 0;
+  };
+  Totals totals() {
+    Totals s;
+    for (auto& t : topics_) {
+      s.received += t.received;
+      s.bytes += t.received_bytes;
+      s.written += t.written;
+      s.dds_lost += t.reader->lost();
+      s.dds_rejected += t.reader->rejected();
+      s.malformed += t.reader->malformed();
+      s.queue += t.queue_dropped;
+      s.disk += t.disk_dropped;
+    }
+    return s;
+  }
+
+  void progress(Nanos elapsed) {
+    for (auto& t : topics_) t.reader->update_status();
+    const Totals s = totals();
+    const double dt = static_cast<double>(elapsed - last_elapsed_) / 1e9;
+    const double rate = dt > 0 ? static_cast<double>(s.received - last_.received) / dt : 0;
+    const double mbs_in = dt > 0 ? static_cast<double>(s.bytes - last_.bytes) / dt / 1e6 : 0;
+    const auto file_bytes = shared_.file_bytes.load();
+    const double mbs_out = dt > 0 ? static_cast<double>(file_bytes - last_file_bytes_) / dt / 1e6 : 0;
+    std::fprintf(stderr,
+                 "rig record: %6.1f s  %zu topics  %8.1f msg/s  %7.1f MB/s in  %7.1f MB/s to disk  %" PRIu64
+                 " file(s) %.1f MB  queue %.1f MB  drops: dds %" PRIu64 " queue %" PRIu64 " disk %" PRIu64 "\n",
+                 static_cast<double>(elapsed) / 1e9, topics_.size(), rate, mbs_in, mbs_out, shared_.files.load(),
+                 static_cast<double>(file_bytes) / 1e6, static_cast<double>(queue_.bytes()) / 1e6,
+                 s.dds_lost + s.dds_rejected + s.malformed, s.queue, s.disk);
+    last_ = s;
+    last_elapsed_ = elapsed;
+    last_file_bytes_ = file_bytes;
+  }
+
+  void summary(Nanos elapsed) {
+    const Totals s = totals();
+    nlohmann::json j;
+    {
+      std::lock_guard lock(shared_.mu);
+      j["files"] = shared_.file_names;
+    }
+    j["seconds"] = static_cast<double>(elapsed) / 1e9;
+    j["received"] = s.received;
+    j["written"] = s.written;
+    j["bytes_received"] = s.bytes;
+    j["file_bytes"] = shared_.file_bytes.load();
+    j["chunks"] = shared_.chunks.load();
+    j["compression"] = std::string(record::mcap_name(opt_.compression).empty() ? "none" : record::mcap_name(opt_.compression));
+    j["writer_ms"] = {{"compress", static_cast<double>(shared_.compress_ns.load()) / 1e6},
+                      {"write", static_cast<double>(shared_.write_ns.load()) / 1e6}};
+    j["drops"] = {{"dds_lost", s.dds_lost}, {"dds_rejected", s.dds_rejected}, {"malformed", s.malformed},
+                  {"queue_full", s.queue}, {"disk", s.disk}};
+    for (auto& t : topics_) {
+      j["topics"][t.ros_name] = {{"type", t.spec.schema_name}, {"received", t.received}, {"written", t.written.load()},
+                                 {"dds_lost", t.reader->lost()}, {"dds_rejected", t.reader->rejected()},
+                                 {"malformed", t.reader->malformed()}, {"queue_full", t.queue_dropped},
+                                 {"disk", t.disk_dropped.load()}};
+    }
+    for (const auto& [topic, why] : skipped_) j["skipped"][topic] = why;
+    for (const auto& w : wanted_)
+      if (known_.count(w) == 0) j["not_seen"].push_back(w);
+    if (shared_.failed) j["error"] = shared_.error;
+    std::printf("%s\n", j.dump().c_str());
+    std::fflush(stdout);
+  }
+
+  const RecordOptions& opt_;
+  dds::Participant participant_;
+  dds::DiscoveryReader discovery_;
+  dds::WaitSet waitset_;
+  RecordQueue queue_;
+  WriterShared shared_;
+  std::set<std::string> wanted_;
+  std::deque<RecordTopic> topics_;  // stable addresses: queued items point at their topic
+  std::map<std::string, RecordTopic*> known_;  // nullptr: skipped
+  std::map<std::string, std::string> skipped_;
+  Totals last_;
+  Nanos last_elapsed_ = 0;
+  std::uint64_t last_file_bytes_ = 0;
+};
+
+}  // namespace
+
+int run_record(const RecordOptions& o) {
+  record::SplitOptions so;
+  so.out = o.out;
+  so.split_bytes = o.split_mb << 20;
+  so.split_ns = static_cast<Nanos>(o.split_s * 1e9);
+  so.mcap.compression = o.compression;
+  so.mcap.chunk_size = o.chunk_kb << 10;
+  so.mcap.library = "sensor-rig rig record";
+  record::SplitWriter out(so);  // throws McapError: the caller reports it
+  Recorder r(o);
+  return r.run(out);
+}
+
+}  // namespace sensor_rig::rig
