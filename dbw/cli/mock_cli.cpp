@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -45,6 +46,7 @@ mock::Fault from_event(const faults::FaultEvent& e, double start_s) {
   f.value = e.kind == "dbw.loss" ? e.number("p", 0.1) : 1.0;
   f.start_s = start_s;
   f.duration_s = e.duration_s;
+  f.id = e.id;
   return f;
 }
 
@@ -70,8 +72,10 @@ class PlannedFaults {
       faults.push_back(from_event(left, offset_s + left.at_s));
       events_.push_back(left);
     }
-    truth_ = std::make_unique<truth::Writer>(faults::chaos_truth_path(device),
-                                             truth::Header{device, "dbw", "mock Paravan ECU", "", "", "CLOCK_MONOTONIC"});
+    // Its units: the feedback frames, each one sample of /vehicle/state (the bridge publishes one per
+    // frame it takes, stamped with the frame's receive time).
+    truth_ = std::make_unique<truth::Writer>(
+        faults::chaos_truth_path(device), truth::Header{device, "dbw", "mock Paravan ECU", "/vehicle/state", "can_frame", "CLOCK_MONOTONIC"});
     epoch_mono_ = plan.epoch_mono_ns;
     thread_ = std::thread([this] { record(); });
   }
@@ -80,7 +84,55 @@ class PlannedFaults {
     if (thread_.joinable()) thread_.join();
   }
 
+  // Records each feedback frame `ecu` makes from now on: a unit of one part, with its fate. The ECU
+  // says what it did to the frame (dropped, damaged); the runner says whether the bus carried it to
+  // anyone (a frame made before the bridge reconnected to a restarted ECU reached no one: not sent).
+  void observe(mock::MockEcu& ecu, const Protocol& protocol, mock::RunOptions& run) {
+    if (!truth_) return;
+    const RoleMessage* feedback = protocol.rx("feedback");
+    if (feedback == nullptr) return;
+    ecu.set_observer([this](const mock::EmittedFrame& e) {
+      if (e.role != "feedback") return;
+      if (e.fate == mock::EmittedFrame::Fate::kDropped) {
+        record_unit(e, false);
+      } else {
+        pending_.push_back(e);
+      }
+    });
+    run.on_sent = [this, feedback](const can::Frame& f, bool heard) {
+      if (pending_.empty() || !feedback->matches(f)) return;
+      record_unit(pending_.front(), heard);
+      pending_.pop_front();
+    };
+  }
+
  private:
+  void record_unit(const mock::EmittedFrame& e, bool on_bus) {
+    using F = mock::EmittedFrame::Fate;
+    // Handed to the bus within microseconds of the step that made it (mock_runner.cpp).
+    const Nanos veh = vehicle_now_ns();
+    const auto id = static_cast<std::int64_t>(units_++);
+    truth_->unit({id, veh, e.now, 1});
+    truth::PartRecord p;
+    p.seq = static_cast<std::uint64_t>(id);
+    p.unit = id;
+    p.acq_ns = veh;
+    p.dev_ns = e.now;
+    p.fault = e.fault;
+    if (e.fate == F::kDropped) {
+      p.fate = truth::Fate::kDropped;
+    } else if (!on_bus) {
+      p.fate = truth::Fate::kNotSent;  // no node on the bus: made, heard by none, not a loss
+    } else {
+      p.tx_ns = veh;
+      p.fate = e.fate == F::kSent ? truth::Fate::kSent : truth::Fate::kCorrupted;
+    }
+    truth_->part(p);
+    // On disk before the bridge can publish it: a killed ECU (host.kill_mock) leaves no sample the
+    // truth lacks. 100 writes a second, a few microseconds each.
+    truth_->flush();
+  }
+
   void record() {
     for (const auto& e : events_) {
       const Nanos at = epoch_mono_ + static_cast<Nanos>(e.at_s * 1e9);
@@ -93,6 +145,8 @@ class PlannedFaults {
   }
   std::vector<faults::FaultEvent> events_;
   std::unique_ptr<truth::Writer> truth_;
+  std::uint64_t units_ = 0;                    // the ECU's thread only
+  std::deque<mock::EmittedFrame> pending_;     // made, not yet handed to the bus (the ECU's thread)
   Nanos epoch_mono_ = 0;
   std::atomic<bool> stop_{false};
   std::thread thread_;
@@ -132,6 +186,7 @@ int run_mock_paravan(const MockOptions& o) {
   }
   ro.print_state = o.print_state;
   mock::MockEcu ecu(protocol, std::move(faults), o.seed);
+  planned->observe(ecu, protocol, ro);
   std::fprintf(stderr, "mock paravan: %s, protocol %s (hash %s)%s%s\n", bus->name().c_str(),
                protocol.mapping_path().c_str(), protocol.config_hash().c_str(), ro.log_path.empty() ? "" : ", log ",
                ro.log_path.c_str());

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <set>
 
 namespace sensor_rig::rig::chaos {
@@ -20,6 +21,12 @@ struct UnitTruth {
   std::uint32_t produced = 0;  // parts the device produced (everything but not_sent)
   std::uint32_t lost = 0;      // dropped on the way
   std::uint32_t damaged = 0;   // corrupted or truncated
+  // Parts reordered (delayed) past every other part of their unit: the rig may have published the
+  // unit before they came (a scan ends at its last packet or the next scan's first), so it may count
+  // them missing: the sample lacks them. A late packet is placed or counted, but not in the past.
+  std::uint32_t late = 0;
+  Nanos last_tx = 0;           // the latest send of its parts that were not delayed
+  std::vector<Nanos> delayed_tx;
   Nanos first_intact_acq = 0;  // the earliest part that arrived as rendered (0 = none)
   const SampleRecord* sample = nullptr;
 };
@@ -59,9 +66,27 @@ bool touches(const faults::FaultEvent& e, const std::string& device, const std::
   return std::find(depends_on.begin(), depends_on.end(), e.device) != depends_on.end();
 }
 
+// Vehicle time that happened twice: a clock step back (or the return of a step forward) makes the
+// host's CLOCK_REALTIME read the same values again. A stamp in such a range names two instants, so
+// units and samples there are left out of the stamp-matched counts rather than matched by luck.
+std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths) {
+  std::vector<Interval> out;
+  for (const auto& log : truths)
+    for (const auto& f : log.faults) {
+      if (f.kind != "host.clock_step") continue;
+      const auto pos = f.detail.find("ms=");
+      if (pos == std::string::npos) continue;
+      const Nanos by = static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6);
+      // `at` was read before the step; the step is undone at `until` (in the clock as it was).
+      if (by < 0) out.push_back({f.at_ns + by, f.at_ns});
+      if (by > 0) out.push_back({f.until_ns, f.until_ns + by});
+    }
+  return out;
+}
+
 class Checker {
  public:
-  explicit Checker(const Input& in) : in_(in) {}
+  explicit Checker(const Input& in) : in_(in), doubled_(doubled_vehicle_time(in.truths)) {}
 
   Result run() {
     for (const auto& name : kInvariants) r_.invariants[name] = true;
@@ -138,7 +163,8 @@ class Checker {
     std::map<std::int64_t, std::size_t> index;
     for (const auto& u : log.units) {
       index[u.unit] = units.size();
-      units.push_back(UnitTruth{u});
+      units.emplace_back();
+      units.back().rec = u;
     }
     for (const auto& p : log.parts) {
       if (p.fate == truth::Fate::kNotSent) continue;
@@ -150,9 +176,13 @@ class Checker {
         ++u.produced;
         if (p.fate == truth::Fate::kDropped) ++u.lost;
         if (p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated) ++u.damaged;
+        if (p.fate == truth::Fate::kDelayed) u.delayed_tx.push_back(p.tx_ns);
+        else u.last_tx = std::max(u.last_tx, p.tx_ns);
         if (truth::delivered_intact(p.fate) && (u.first_intact_acq == 0 || p.acq_ns < u.first_intact_acq)) u.first_intact_acq = p.acq_ns;
       }
     }
+    for (auto& u : units)
+      for (const Nanos tx : u.delayed_tx) u.late += tx > u.last_tx ? 1U : 0U;
     // A device that writes no parts (one part per unit is implied): the unit itself was produced.
     if (log.parts.empty())
       for (auto& u : units) {
@@ -164,7 +194,7 @@ class Checker {
     const Nanos tolerance = match_tolerance(units);
     const double bound = stamp_bound_ms(t.device_class, in_.bounds);
     std::vector<double> errors;
-    auto in_window = [&](Nanos acq) { return acq >= in_.window_begin_ns && acq < in_.window_end_ns; };
+    auto in_window = [&](Nanos acq) { return acq >= in_.window_begin_ns && acq < in_.window_end_ns && !doubled(acq); };
 
     // Each published sample to the unit nearest its stamp.
     for (const SampleRecord* s : samples) {
@@ -214,11 +244,12 @@ class Checker {
                                           log.header.unit + " " + std::to_string(u.rec.unit) + " lost, " +
                                           std::to_string(reported) + " counted");
       }
-      if (s.missing_packets > u.lost + u.damaged) {
-        t.phantom_missing += s.missing_packets - (u.lost + u.damaged);
+      if (s.missing_packets > u.lost + u.damaged + u.late) {
+        t.phantom_missing += s.missing_packets - (u.lost + u.damaged + u.late);
         violation("no_phantom_loss", topic, "seq " + std::to_string(s.seq) + ": " + std::to_string(s.missing_packets) +
                                                 " packets counted missing, " + std::to_string(u.lost + u.damaged) +
-                                                " lost or damaged");
+                                                " lost or damaged" +
+                                                (u.late > 0 ? ", " + std::to_string(u.late) + " reordered past its end" : ""));
       }
       const bool incomplete = s.missing_packets > 0 || s.dropped > 0 || u.lost > 0;
       ++(incomplete ? t.published_incomplete : t.published_complete);
@@ -252,6 +283,10 @@ class Checker {
   }
 
   static std::vector<std::string> depends_of(const TopicExpectation& e) { return e.depends_on; }
+
+  bool doubled(Nanos t) const {
+    return std::any_of(doubled_.begin(), doubled_.end(), [t](const Interval& i) { return t >= i.begin && t < i.end; });
+  }
 
   bool flagged(const std::string& topic, Nanos t) const {
     const auto it = in_.unsynchronized.find(topic);
@@ -374,9 +409,9 @@ class Checker {
     }
     std::uint64_t made = 0, received = 0, lost = 0;
     for (const UnitTruth& u : units)
-      if (u.produced > 0 && u.rec.acq_ns >= a && u.rec.acq_ns < b) ++made;
+      if (u.produced > 0 && u.rec.acq_ns >= a && u.rec.acq_ns < b && !doubled(u.rec.acq_ns)) ++made;
     for (const SampleRecord* s : samples)
-      if (s->acquisition_ns >= a && s->acquisition_ns < b) ++(s->lost() ? lost : received);
+      if (s->acquisition_ns >= a && s->acquisition_ns < b && !doubled(s->acquisition_ns)) ++(s->lost() ? lost : received);
     const std::uint64_t counted = t.counted_lost;
     t.monitor_expected = made;
     if (made == 0 && samples.empty()) return;
@@ -392,6 +427,7 @@ class Checker {
   }
 
   const Input& in_;
+  const std::vector<Interval> doubled_;
   Result r_;
 };
 

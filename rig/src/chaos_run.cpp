@@ -18,6 +18,8 @@
 #include "sensor_rig/common/errors.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/dbw/bridge/defaults.hpp"
+#include "sensor_rig/dbw/bridge/protocol.hpp"
 
 namespace sensor_rig::rig::chaos {
 namespace {
@@ -181,6 +183,17 @@ std::map<std::string, TopicExpectation> expectations_of(const RigConfig& cfg) {
     TopicExpectation e{c.name, c.source.frame_rate, {}};
     if (c.lidar_trigger.enabled()) e.depends_on.push_back(c.lidar_trigger.lidar);
     out[camera_topic(c.name)] = e;
+  }
+  // The mock ECU's feedback frames, one /vehicle/state sample each, at the protocol's period.
+  if (cfg.dbw.enabled && cfg.dbw.mock_ecu) {
+    double rate_hz = 0;  // unknown: its isolation is not judged (the other invariants are)
+    try {
+      const auto p = dbw::Protocol::load(cfg.dbw.protocol.empty() ? dbw::default_protocol_config() : cfg.dbw.protocol);
+      if (p.timing().tx_period_ns > 0) rate_hz = 1e9 / static_cast<double>(p.timing().tx_period_ns);
+    } catch (const std::exception& e) {
+      log::warn("chaos", std::string("drive-by-wire protocol: ") + e.what() + "; /vehicle/state's rate is not judged");
+    }
+    out["/vehicle/state"] = {"paravan", rate_hz, {}};
   }
   return out;
 }

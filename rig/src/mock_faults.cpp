@@ -34,6 +34,10 @@ void MockFaults::run() {
     if (!sleep_until(epoch_mono_ + static_cast<Nanos>(e.at_s * 1e9))) return;
     apply(e);
   }
+  // This thread stays until the rig stops: the mocks it restarted have it as their parent thread, and
+  // PR_SET_PDEATHSIG (ChildProcess) sends them SIGTERM when that thread ends. Returning here stopped
+  // every restarted mock after the campaign's last kill or stall (the mock ECU left the bus for good).
+  while (!stop_) ::usleep(20'000);
 }
 
 void MockFaults::apply(const faults::FaultEvent& e) {

@@ -96,7 +96,7 @@ TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
     if (e.value("kind", "") == "camera.never_answers") silent.insert(e.value("device", ""));
   }
   const auto& topics = j["topics"];
-  EXPECT_EQ(topics.size(), 10u) << "3 LIDARs and 7 cameras";
+  EXPECT_EQ(topics.size(), 11u) << "3 LIDARs, 7 cameras and /vehicle/state";
   // A camera that never answers also silences its trigger partner today (issue 27 item 1): while that
   // defect is open, a camera made no frame is only a failure when no camera was planned dead.
   for (const auto& [topic, t] : topics.items()) {
@@ -123,6 +123,36 @@ TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
     if (!broken.contains(known)) std::printf("held this run (issue %s): %s on %s\n", issue.c_str(), known.first.c_str(), known.second.c_str());
   // A rig that does not stop after the campaign: issue 27 item 1 (a camera's stop on a dead camera).
   if (j.contains("campaign_errors")) std::printf("campaign errors (issue 27): %s\n", j["campaign_errors"].dump().c_str());
+}
+
+// Drive-by-wire alone, every dbw kind and the mock-process faults at fixed times: each feedback frame
+// the mock ECU made is a /vehicle/state sample or counted lost by the bridge, and every invariant
+// holds. The stall comes last on purpose: the thread that restarted the killed ECU used to end after
+// it, and PR_SET_PDEATHSIG then stopped the restarted ECU for the rest of the run.
+TEST(ChaosCampaign, DriveByWireHoldsEveryInvariantUnderItsFaults) {
+  if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
+  test::TempDir dir;
+  const std::string src = test::source_dir().string();
+  const std::string config = dir.write("dbw.yaml", "rig:\n  name: dbw-only\n  dds: {domain: 0, profile: " + src +
+                                                      "/config/cyclonedds/loopback.xml}\n  diagnostics_period_ms: 500\n"
+                                                      "dbw:\n  protocol: " + src + "/config/dbw/paravan_ref.yaml\n"
+                                                      "  bus: " + (dir.path / "bus.sock").string() + "\n  mock_ecu: true\n"
+                                                      "  command_source: {rate_hz: 50, steer_rad: 0.05, throttle: 0.2, gear: 4}\n");
+  const auto run = test::run_rig("chaos " + config + " --duration 22 --seed 4 --json --faults '"
+                                 "host.kill_mock@1>paravan;dbw.loss:p=0.2@3+2;dbw.bad_crc@6+0.5;dbw.stuck_counter@8+0.5;"
+                                 "dbw.bus_off@10+0.3;dbw.override@11.5+0.5;dbw.ecu_fault@13+0.5;dbw.no_status@14.5+0.3;"
+                                 "host.stall_mock:ms=300@16>paravan'");
+  ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
+  const auto last_nl = run.out.find_last_of('\n', run.out.size() - 2);
+  const auto j = nlohmann::json::parse(run.out.substr(last_nl == std::string::npos ? 0 : last_nl + 1), nullptr, false);
+  ASSERT_TRUE(j.is_object()) << run.out << "\n" << run.err;
+  const auto& t = j["topics"]["/vehicle/state"];
+  ASSERT_TRUE(t.is_object()) << run.out;
+  EXPECT_GT(t["sent"].get<std::uint64_t>(), 1500u) << "100 Hz for ~20 s";
+  EXPECT_GT(t["counted_lost"].get<std::uint64_t>(), 50u) << "the losses, bad CRCs and frozen counters were counted";
+  EXPECT_EQ(t["unaccounted"].get<std::uint64_t>(), 0u);
+  for (const auto& [name, verdict] : j["invariants"].items()) EXPECT_EQ(verdict, "held") << name << "\n" << run.err;
+  EXPECT_EQ(run.code, 0) << run.err;
 }
 
 }  // namespace

@@ -37,7 +37,26 @@ BridgeCore::BridgeCore(const Protocol& p) : p_(p), safety_(safety_config(p)), sc
       }
     }
   }
-  for (const auto& m : p_.rx_messages()) checkers_.emplace_back(m.e2e);
+  for (const auto& m : p_.rx_messages()) {
+    checkers_.emplace_back(m.e2e);
+    loss_.emplace_back(m.e2e);
+    feeds_state_.push_back(m.signal("speed") != nullptr || m.signal("steering_angle") != nullptr ||
+                           m.signal("yaw_rate") != nullptr);
+  }
+}
+
+std::uint64_t BridgeCore::feedback_lost() const noexcept {
+  std::uint64_t n = 0;
+  for (std::size_t i = 0; i < loss_.size(); ++i)
+    if (feeds_state_[i]) n += loss_[i].lost();
+  return n + feedback_not_delivered_;
+}
+
+std::uint64_t BridgeCore::feedback_gaps_unknown() const noexcept {
+  std::uint64_t n = 0;
+  for (std::size_t i = 0; i < loss_.size(); ++i)
+    if (feeds_state_[i]) n += loss_[i].gaps_unknown();
+  return n;
 }
 
 bool BridgeCore::on_command(const safety::Command& c, Nanos now, Nanos vehicle_now) {
@@ -67,10 +86,13 @@ RxKind BridgeCore::on_frame(const can::RxFrame& rx, Nanos now) {
     const bool protected_msg = rm.e2e.profile != safety::E2eProfile::kNone;
     if (rx.frame.len < rm.message->size) {
       if (protected_msg) safety_.on_e2e(false, now);
+      loss_[i].on_frame(rx.frame.payload(), safety::E2eStatus::kBadLayout, now);
       return RxKind::kE2eError;
     }
     if (protected_msg) {
-      const bool ok = safety::is_ok(checkers_[i].check(rx.frame.payload()));
+      const safety::E2eStatus st = checkers_[i].check(rx.frame.payload());
+      loss_[i].on_frame(rx.frame.payload(), st, now);
+      const bool ok = safety::is_ok(st);
       safety_.on_e2e(ok, now);
       if (!ok) return RxKind::kE2eError;
     }

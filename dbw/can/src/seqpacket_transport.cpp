@@ -189,6 +189,7 @@ IoStatus BusListener::send(const Frame& f) noexcept {
     std::lock_guard<std::mutex> lock(peers_mu_);
     accept_peers();
     relay(f, -1);
+    last_heard_ = !peers_.empty();  // a peer that took it is still there (one that closed was dropped)
   }
   ++stats_.sent;
   return IoStatus::kOk;

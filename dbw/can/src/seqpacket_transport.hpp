@@ -42,6 +42,7 @@ class BusListener final : public Transport {
   IoStatus receive(RxFrame& out, int timeout_ms) noexcept override;
   [[nodiscard]] int poll_fd() const noexcept override { return epoll_.get(); }
   [[nodiscard]] std::string name() const override { return name_; }
+  [[nodiscard]] bool last_send_heard() const noexcept override { return last_heard_; }
   [[nodiscard]] std::size_t peers() const {
     std::lock_guard<std::mutex> lock(peers_mu_);
     return peers_.size();
@@ -57,6 +58,7 @@ class BusListener final : public Transport {
   UniqueFd epoll_;
   // send() and receive() may run on different threads: both accept, relay to and drop peers.
   mutable std::mutex peers_mu_;
+  bool last_heard_ = true;  // the sending thread's
   std::vector<UniqueFd> peers_;
 };
 

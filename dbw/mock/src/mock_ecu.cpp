@@ -38,17 +38,14 @@ MockEcu::MockEcu(const Protocol& protocol, std::vector<Fault> faults, std::uint6
     : p_(protocol), faults_(std::move(faults)), rng_(seed) {
   for (const auto& m : p_.tx_messages()) checkers_.emplace_back(m.e2e);
   for (const auto& m : p_.rx_messages()) senders_.emplace_back(m.e2e);
+  last_counter_.assign(senders_.size(), -1);
   e2e_level_.assign(checkers_.size(), 0);
 }
 
-bool MockEcu::fault_active(FaultKind k, double t_s, double* value) const noexcept {
-  for (const auto& f : faults_) {
-    if (f.kind == k && f.active(t_s)) {
-      if (value != nullptr) *value = f.value;
-      return true;
-    }
-  }
-  return false;
+const Fault* MockEcu::fault_active(FaultKind k, double t_s) const noexcept {
+  for (const auto& f : faults_)
+    if (f.kind == k && f.active(t_s)) return &f;
+  return nullptr;
 }
 
 void MockEcu::disengage(const std::string& why) {
@@ -92,19 +89,35 @@ void MockEcu::on_frame(const can::Frame& f, Nanos now) {
   }
 }
 
-void MockEcu::emit(const RoleMessage& rm, std::initializer_list<std::pair<std::string_view, double>> values,
-                   safety::E2eSender& sender, double t_s, std::vector<can::Frame>& out) {
+void MockEcu::emit(std::size_t index, std::initializer_list<std::pair<std::string_view, double>> values, double t_s,
+                   Nanos now, std::vector<can::Frame>& out) {
+  const RoleMessage& rm = p_.rx_messages()[index];
+  safety::E2eSender& sender = senders_[index];
   can::Frame f;
   const std::uint8_t counter = sender.next_counter();
   if (!p_.encode(rm, values, &sender, f)) return;
-  if (fault_active(FaultKind::kStuckCounter, t_s)) sender.set_counter(counter);
-  if (fault_active(FaultKind::kBadCrc, t_s) && safety::has_crc(rm.e2e.profile)) f.data[rm.e2e.crc_byte] ^= 0x5A;
-  double loss = 0.0;
-  if (fault_active(FaultKind::kFrameLoss, t_s, &loss) && std::uniform_real_distribution<double>(0.0, 1.0)(rng_) < loss) {
+  EmittedFrame e;
+  e.role = rm.role;
+  e.now = now;
+  // A frozen counter: this frame gets the value the last one had (the first of the fault still counts on).
+  const bool protected_msg = rm.e2e.profile != safety::E2eProfile::kNone;
+  if (const Fault* stuck = fault_active(FaultKind::kStuckCounter, t_s)) {
+    sender.set_counter(counter);
+    if (protected_msg && last_counter_[index] == counter) e = {rm.role, EmittedFrame::Fate::kRepeatedCounter, stuck->id, now};
+  }
+  last_counter_[index] = counter;
+  if (const Fault* bad = fault_active(FaultKind::kBadCrc, t_s); bad != nullptr && safety::has_crc(rm.e2e.profile)) {
+    f.data[rm.e2e.crc_byte] ^= 0x5A;
+    e = {rm.role, EmittedFrame::Fate::kBadCrc, bad->id, now};
+  }
+  if (const Fault* loss = fault_active(FaultKind::kFrameLoss, t_s);
+      loss != nullptr && std::uniform_real_distribution<double>(0.0, 1.0)(rng_) < loss->value) {
     ++counters_.tx_dropped;
+    if (observer_) observer_({rm.role, EmittedFrame::Fate::kDropped, loss->id, now});
     return;
   }
   ++counters_.tx_frames;
+  if (observer_) observer_(e);
   out.push_back(f);
 }
 
@@ -120,7 +133,7 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
   const double dt = static_cast<double>(now - last_step_) * 1e-9;
   last_step_ = now;
 
-  const bool bus_off_now = fault_active(FaultKind::kBusOff, t_s);
+  const bool bus_off_now = fault_active(FaultKind::kBusOff, t_s) != nullptr;
   if (bus_off_now && !bus_off_) {
     bus_off_ = true;
     disengage("bus-off");
@@ -129,8 +142,8 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
     bus_off_ = false;
     out.push_back(can::make_error_frame(false, true));
   }
-  const bool override_now = fault_active(FaultKind::kDriverOverride, t_s);
-  const bool fault_now = fault_active(FaultKind::kEcuFault, t_s);
+  const bool override_now = fault_active(FaultKind::kDriverOverride, t_s) != nullptr;
+  const bool fault_now = fault_active(FaultKind::kEcuFault, t_s) != nullptr;
   if (override_now) disengage("driver override");
   if (fault_now) disengage("ecu fault");
 
@@ -166,19 +179,19 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
     const auto& s = model_.state();
     for (std::size_t i = 0; i < rxm.size(); ++i) {
       if (rxm[i].role == "status") {
-        if (fault_active(FaultKind::kNoStatus, t_s)) continue;
-        emit(rxm[i], {{"ready", ready ? 1 : 0}, {"engaged", engaged_ ? 1 : 0}, {"override", override_now ? 1 : 0},
-                      {"fault", fault_now ? 1 : 0}, {"fault_code", fault_now ? 1 : 0}},
-             senders_[i], t_s, out);
+        if (fault_active(FaultKind::kNoStatus, t_s) != nullptr) continue;
+        emit(i, {{"ready", ready ? 1 : 0}, {"engaged", engaged_ ? 1 : 0}, {"override", override_now ? 1 : 0},
+                 {"fault", fault_now ? 1 : 0}, {"fault_code", fault_now ? 1 : 0}},
+             t_s, now, out);
       } else if (rxm[i].role == "feedback") {
-        emit(rxm[i], {{"speed", s.speed}, {"steering_angle", s.steer}, {"yaw_rate", s.yaw_rate},
-                      {"gear", static_cast<double>(s.gear)}},
-             senders_[i], t_s, out);
+        emit(i, {{"speed", s.speed}, {"steering_angle", s.steer}, {"yaw_rate", s.yaw_rate},
+                 {"gear", static_cast<double>(s.gear)}},
+             t_s, now, out);
       } else if (rxm[i].role == "wheels" && now >= next_wheels_) {
         next_wheels_ = now + 2 * p_.timing().tx_period_ns;
         double w[4];
         model_.wheel_speeds(w);
-        emit(rxm[i], {{"fl", w[0]}, {"fr", w[1]}, {"rl", w[2]}, {"rr", w[3]}}, senders_[i], t_s, out);
+        emit(i, {{"fl", w[0]}, {"fr", w[1]}, {"rl", w[2]}, {"rr", w[3]}}, t_s, now, out);
       }
     }
   }

@@ -30,7 +30,9 @@ RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
     if (end > 0 && now >= end) break;
     if (now >= next_tick) {
       for (const auto& f : ecu.step(now)) {
-        if (bus.send(f) != can::IoStatus::kOk) ++r.send_failures;
+        const bool ok = bus.send(f) == can::IoStatus::kOk;
+        if (!ok) ++r.send_failures;
+        if (o.on_sent) o.on_sent(f, ok && bus.last_send_heard());
         write_log(vehicle_now_ns(), f);
       }
       next_tick += tick;

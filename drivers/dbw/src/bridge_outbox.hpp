@@ -41,18 +41,19 @@ class Outbox {
  public:
   static constexpr std::size_t kCapacity = 256;
 
-  // `wake`: notify the publisher now (events); stamps wait for its next poll.
-  void push(const OutboxItem& item, bool wake) noexcept {
+  // `wake`: notify the publisher now (events); stamps wait for its next poll. False: full, dropped.
+  bool push(const OutboxItem& item, bool wake) noexcept {
     {
       std::lock_guard<std::mutex> lock(mu_);
       if (size_ == items_.size()) {
         ++dropped_;
-        return;
+        return false;
       }
       items_[(head_ + size_) % items_.size()] = item;
       ++size_;
     }
     if (wake) cv_.notify_one();
+    return true;
   }
   // Waits up to `ms` for items, then hands each to `f` (outside the lock) and returns how many.
   template <class F>

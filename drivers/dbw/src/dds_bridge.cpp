@@ -212,7 +212,8 @@ class Runner {
           OutboxItem item;
           item.kind = OutboxItem::Kind::kState;
           item.feedback = core_.feedback();
-          outbox_.push(item, false);
+          item.stamps.ready_ns = vnow;  // decoded and checked: the sample is ready to publish
+          if (!outbox_.push(item, false)) core_.feedback_not_delivered();
         }
       } else if (st == can::IoStatus::kClosed) {
         log::error("dbw", "CAN transport closed: " + bus_.name());
@@ -297,7 +298,7 @@ class Runner {
         stamps_.write(kCmdTopic, msg::to_time(it.stamp), frame_id, it.seq, it.stamps);
         break;
       }
-      case OutboxItem::Kind::kState: publish_state(it.feedback); break;
+      case OutboxItem::Kind::kState: publish_state(it.feedback, it.stamps.ready_ns); break;
     }
   }
 
@@ -346,7 +347,9 @@ class Runner {
     if (written(status_writer_.write(m, stamp))) ++status_published_;
   }
 
-  void publish_state(const VehicleFeedback& fb) {
+  // One sample per feedback frame, with its source stamps on /rig/stamps like every sensor topic: the
+  // monitor shows its latency by stage, and `rig chaos` holds it against the mock ECU's truth.
+  void publish_state(const VehicleFeedback& fb, Nanos ready_ns) {
     msg::VehicleState m{};
     char frame_id[] = "base_link";
     m.header.stamp = msg::to_time(fb.stamp);
@@ -359,16 +362,32 @@ class Runner {
     m.steering_angle = fb.steering_angle;
     m.yaw_rate = fb.yaw_rate;
     m.gear = static_cast<std::uint8_t>(fb.gear);
-    if (written(state_writer_.write(m, vehicle_now_ns()))) ++state_published_;
+    dds::SampleStamps st;
+    st.acquisition_ns = fb.stamp;  // the frame's kernel receive time (SPEC §6: CAN)
+    st.first_rx_ns = st.last_rx_ns = fb.stamp;
+    st.ready_ns = ready_ns;
+    st.publish_ns = vehicle_now_ns();
+    st.packets = 1;
+    st.size_bytes = static_cast<std::uint32_t>(sizeof m);
+    const std::uint64_t seq = state_seq_++;
+    if (written(state_writer_.write(m, st.publish_ns))) {
+      ++state_published_;
+      st.written_ns = vehicle_now_ns();
+      stamps_.write(kStateTopic, m.header.stamp, frame_id, seq, st);
+    } else {
+      state_write_failures_.fetch_add(1, std::memory_order_relaxed);
+    }
   }
 
   void publish_diagnostics() {
     StatusSnapshot snap;
-    std::uint64_t deferred = 0;
+    std::uint64_t deferred = 0, feedback_lost = 0, feedback_gaps_unknown = 0;
     {
       std::lock_guard<std::mutex> lock(mu_);
       snap = snapshot();
       deferred = core_.counters().commands_deferred;
+      feedback_lost = core_.feedback_lost();
+      feedback_gaps_unknown = core_.feedback_gaps_unknown();
     }
     dds::DriverStatus d;
     d.name = "dbw/bridge";
@@ -391,7 +410,18 @@ class Runner {
     d.add_number("outbox_dropped", outbox_.dropped());
     // Issue 28: a lapsed certificate, grant or CA stops the bridge taking commands; warn 30 days ahead.
     if (security_.enabled()) dds::report_expiry(d, security_.identity, expiry_, std::time(nullptr));
-    diagnostics_.publish({d});
+    // /vehicle/state's own losses, on its topic, as every sensor node reports its units: the feedback
+    // frames the ECU sent that never became a sample (FrameLossCounter says how they are counted).
+    dds::DriverStatus state;
+    state.name = "dbw/vehicle_state";
+    state.hardware_id = bus_.name();
+    state.level = dds::Level::kOk;
+    state.message = "feedback frames lost or refused: counted";
+    state.add("topic", kStateTopic);
+    state.add_number("counted_lost", feedback_lost + state_write_failures_.load(std::memory_order_relaxed));
+    state.add_number("gaps_unknown", feedback_gaps_unknown);
+    state.add_number("published", state_published_);
+    diagnostics_.publish({d, state});
   }
 
   const Protocol& p_;
@@ -422,6 +452,8 @@ class Runner {
   LatencyHistogram take_to_send_;  // DDS thread only
   std::uint64_t status_published_ = 0;  // publisher thread only
   std::uint64_t state_published_ = 0;   // publisher thread only
+  std::atomic<std::uint64_t> state_write_failures_{0};
+  std::uint64_t state_seq_ = 0;  // publisher thread only
   std::uint64_t neutral_sets_on_stop_ = 0;
   bool transport_closed_ = false;  // CAN thread only
 };

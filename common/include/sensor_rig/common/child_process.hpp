@@ -32,6 +32,8 @@ struct ExitInfo {
   long max_rss_kb = 0;
 };
 
+// The child gets SIGTERM when its parent dies (PR_SET_PDEATHSIG). Linux counts the parent *thread*:
+// create a ChildProcess on a thread that lives as long as the child should (rig/src/mock_faults.cpp).
 class ChildProcess {
  public:
   ChildProcess() = default;

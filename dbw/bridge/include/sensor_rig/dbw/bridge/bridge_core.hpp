@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/dbw/bridge/frame_loss_counter.hpp"
 #include "sensor_rig/dbw/bridge/protocol.hpp"
 #include "sensor_rig/dbw/bridge/tx_schedule.hpp"
 #include "sensor_rig/dbw/can/transport.hpp"
@@ -58,6 +59,12 @@ class BridgeCore {
   [[nodiscard]] const VehicleFeedback& feedback() const noexcept { return fb_; }
   [[nodiscard]] BridgeCounters& counters() noexcept { return counters_; }
   [[nodiscard]] const Protocol& protocol() const noexcept { return p_; }
+  // Feedback frames (the messages /vehicle/state is made of) the ECU sent and the bridge did not hand
+  // on: lost on the bus, refused by the E2E check, or not delivered by the caller (FrameLossCounter).
+  [[nodiscard]] std::uint64_t feedback_lost() const noexcept;
+  [[nodiscard]] std::uint64_t feedback_gaps_unknown() const noexcept;
+  // The caller could not hand a feedback frame on (its queue was full, the write failed).
+  void feedback_not_delivered() noexcept { ++feedback_not_delivered_; }
 
  private:
   // What a tx message carries, resolved once: the hot path does no role-name lookups.
@@ -84,6 +91,9 @@ class BridgeCore {
   std::vector<std::vector<TxBinding>> tx_bindings_;  // per tx message
   std::vector<safety::E2eSender> senders_;   // per tx message
   std::vector<safety::E2eChecker> checkers_; // per rx message
+  std::vector<FrameLossCounter> loss_;       // per rx message
+  std::vector<bool> feeds_state_;            // per rx message: carries feedback (/vehicle/state)
+  std::uint64_t feedback_not_delivered_ = 0;
   safety::EcuStatus ecu_{};
   VehicleFeedback fb_{};
   BridgeCounters counters_{};

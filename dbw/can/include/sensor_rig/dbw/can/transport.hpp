@@ -99,6 +99,9 @@ class Transport {
   // A descriptor that becomes readable when receive() has something (-1 if none).
   [[nodiscard]] virtual int poll_fd() const noexcept = 0;
   [[nodiscard]] virtual std::string name() const = 0;
+  // False when the frame just sent reached no other node: a bus owner alone on its bus (the mock
+  // ECU's listener before the bridge has connected). A real CAN bus does not say; it is assumed heard.
+  [[nodiscard]] virtual bool last_send_heard() const noexcept { return true; }
 
   [[nodiscard]] BusState bus_state() const noexcept { return state_; }
   [[nodiscard]] const TransportStats& stats() const noexcept { return stats_; }

@@ -3,6 +3,7 @@
 // the PU's counters/CRCs and timeouts as a real ECU would, actuates a VehicleModel only while enabled
 // by valid, fresh commands, and injects faults. Pure: frames in, frames out, time as arguments.
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -25,6 +26,7 @@ struct Fault {
   double value = 1.0;  // loss probability
   double start_s = 0.0;
   double duration_s = -1.0;
+  std::uint64_t id = 0;  // the fault plan's event id (rig chaos), 0 = a --fault of the command line
   [[nodiscard]] bool active(double t_s) const noexcept {
     return t_s >= start_s && (duration_s < 0.0 || t_s < start_s + duration_s);
   }
@@ -39,6 +41,15 @@ struct EcuCounters {
   std::uint64_t pu_timeouts = 0;
 };
 
+// One frame the ECU made, and what became of it: the truth record's unit (a feedback frame is one
+// sample of /vehicle/state). `on_bus`: handed to the bus as made (or with the fault's change).
+struct EmittedFrame {
+  std::string_view role;  // status, feedback, wheels
+  enum class Fate : std::uint8_t { kSent, kDropped, kBadCrc, kRepeatedCounter } fate = Fate::kSent;
+  std::uint64_t fault = 0;  // the fault that decided the fate (its plan id), 0 = none
+  Nanos now = 0;            // the step's time (monotonic)
+};
+
 class MockEcu {
  public:
   MockEcu(const Protocol& protocol, std::vector<Fault> faults, std::uint64_t seed = 1);
@@ -49,6 +60,9 @@ class MockEcu {
   // or bus-off/restart error frames).
   std::vector<can::Frame> step(Nanos now);
 
+  // Called for every frame step() makes, before it is returned (the truth record of rig chaos).
+  void set_observer(std::function<void(const EmittedFrame&)> f) { observer_ = std::move(f); }
+
   [[nodiscard]] bool engaged() const noexcept { return engaged_; }
   [[nodiscard]] bool bus_off() const noexcept { return bus_off_; }
   [[nodiscard]] const VehicleModel& model() const noexcept { return model_; }
@@ -56,10 +70,10 @@ class MockEcu {
   [[nodiscard]] const std::string& last_disengage() const noexcept { return last_disengage_; }
 
  private:
-  bool fault_active(FaultKind k, double t_s, double* value = nullptr) const noexcept;
+  const Fault* fault_active(FaultKind k, double t_s) const noexcept;
   void disengage(const std::string& why);
-  void emit(const RoleMessage& rm, std::initializer_list<std::pair<std::string_view, double>> values,
-            safety::E2eSender& sender, double t_s, std::vector<can::Frame>& out);
+  void emit(std::size_t index, std::initializer_list<std::pair<std::string_view, double>> values, double t_s, Nanos now,
+            std::vector<can::Frame>& out);
 
   const Protocol& p_;
   std::vector<Fault> faults_;
@@ -67,6 +81,8 @@ class MockEcu {
   VehicleModel model_;
   std::vector<safety::E2eChecker> checkers_;  // per tx (PU->ECU) message
   std::vector<safety::E2eSender> senders_;    // per rx (ECU->PU) message
+  std::vector<int> last_counter_;             // per rx message: the counter of its last frame, -1 none
+  std::function<void(const EmittedFrame&)> observer_;
   std::vector<int> e2e_level_;
   Nanos start_ = -1;
   Nanos last_step_ = -1;

@@ -2,6 +2,7 @@
 // Runs a MockEcu on a transport: receives until the next 1 ms model tick, sends what the ECU emits,
 // and logs every frame seen on the bus (both directions) as candump -L.
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -16,6 +17,9 @@ struct RunOptions {
   std::string iface = "can0";
   int tick_ms = 1;
   bool print_state = false;  // one JSON line per second on stdout
+  // Each frame the ECU made, once handed to the bus: whether another node heard it (Transport::
+  // last_send_heard; false also when the send failed). For the truth record of rig chaos.
+  std::function<void(const can::Frame&, bool heard)> on_sent;
 };
 
 struct RunResult {

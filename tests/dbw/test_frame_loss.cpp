@@ -1,0 +1,159 @@
+// Feedback frames the bridge does not hand on are counted, exactly, against what the ECU really did:
+// FrameLossCounter on sequences whose truth is known, and the mock ECU (every fault that touches its
+// frames) feeding the real BridgeCore, each feedback frame the ECU made either taken or counted lost.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "dbw_test_data.hpp"
+#include "sensor_rig/dbw/bridge/bridge_core.hpp"
+#include "sensor_rig/dbw/bridge/frame_loss_counter.hpp"
+#include "sensor_rig/dbw/mock/mock_ecu.hpp"
+
+namespace dbw = sensor_rig::dbw;
+namespace mock = sensor_rig::dbw::mock;
+namespace s = sensor_rig::dbw::safety;
+using sensor_rig::Nanos;
+
+namespace {
+
+constexpr Nanos kMs = 1'000'000;
+
+s::E2eConfig p01() {
+  s::E2eConfig c;
+  c.profile = s::E2eProfile::kP01;
+  c.data_id = 0x123;
+  c.crc_byte = 0;
+  c.counter_byte = 1;
+  return c;
+}
+
+// A receiver of one protected message: the E2E check and the loss counter, as BridgeCore runs them.
+struct Receiver {
+  explicit Receiver(const s::E2eConfig& c) : checker(c), counter(c) {}
+  s::E2eChecker checker;
+  dbw::FrameLossCounter counter;
+  std::uint64_t taken = 0;
+  void on(std::span<const std::uint8_t> d, Nanos t) {
+    const auto st = checker.check(d);
+    counter.on_frame(d, st, t);
+    if (s::is_ok(st)) ++taken;
+  }
+};
+
+TEST(FrameLossCounter, RandomLossCorruptionAndFrozenCountersAreCountedExactly) {
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    const auto c = p01();
+    s::E2eSender sender(c);
+    Receiver rx(c);
+    std::uint64_t made = 0, invisible = 0;
+    int previous_counter = -1;
+    bool seen_any = false;
+    Nanos t = 0;
+    for (int i = 0; i < 3020; ++i) {
+      t += 10 * kMs + static_cast<Nanos>(u(rng) * 3 * kMs);  // a loaded ECU's jitter
+      std::array<std::uint8_t, 8> d{};
+      d[4] = static_cast<std::uint8_t>(i);
+      const std::uint8_t counter = sender.next_counter();
+      ASSERT_TRUE(sender.protect(d));
+      ++made;
+      const double r = i < 3000 ? u(rng) : 1.0;  // the last 20 healthy: every loss shown by a good frame
+      const bool repeats = static_cast<int>(counter) == previous_counter;
+      previous_counter = counter;
+      if (r < 0.05) {  // lost on the bus
+        // Lost with its predecessor's value (a frozen counter), or before the receiver had any frame to
+        // count from: nothing on the bus can show it.
+        if (repeats || !seen_any) ++invisible;
+        continue;
+      }
+      if (r < 0.08) d[0] ^= 0x5A;                              // a wrong CRC
+      if (r >= 0.08 && r < 0.10) sender.set_counter(counter);  // the next frame repeats this value
+      rx.on(d, t);
+      seen_any = true;
+    }
+    EXPECT_EQ(rx.taken + rx.counter.lost(), made - invisible)
+        << "seed " << seed << ": taken " << rx.taken << ", counted " << rx.counter.lost() << ", invisible " << invisible;
+    EXPECT_EQ(rx.counter.gaps_unknown(), 0u) << "seed " << seed;
+  }
+}
+
+TEST(FrameLossCounter, ASilenceIsNotALossAndAWrappedGapIsNotGuessed) {
+  const auto c = p01();
+  s::E2eSender sender(c);
+  Receiver rx(c);
+  Nanos t = 0;
+  auto send = [&](bool deliver) {
+    std::array<std::uint8_t, 8> d{};
+    ASSERT_TRUE(sender.protect(d));
+    t += 10 * kMs;
+    if (deliver) rx.on(d, t);
+  };
+  for (int i = 0; i < 47; ++i) send(true);  // the restart below starts away from where this stops
+  ASSERT_EQ(rx.counter.lost(), 0u);
+  // Bus-off for 300 ms: the ECU sends nothing (its counter stands still), then goes on.
+  t += 300 * kMs;
+  for (int i = 0; i < 10; ++i) send(true);
+  EXPECT_EQ(rx.counter.lost(), 0u) << "frames never sent are not lost";
+  EXPECT_EQ(rx.counter.gaps_unknown(), 0u) << "the counter went on where it stopped: a silence";
+  // A restarted ECU after a second, its counter from 0 again: the jump is not guessed as a loss.
+  sender = s::E2eSender(c);
+  t += 1000 * kMs;
+  const auto lost_before = rx.counter.lost();
+  for (int i = 0; i < 10; ++i) send(true);
+  EXPECT_EQ(rx.counter.gaps_unknown(), 1u);
+  EXPECT_EQ(rx.counter.lost() - lost_before, 1u) << "the first frame, refused for its jump (max_delta 1)";
+  // Three lost in a row: counted when the next good frame shows the jump.
+  const auto lost_mid = rx.counter.lost();
+  send(false), send(false), send(false);
+  send(true), send(true), send(true);
+  EXPECT_EQ(rx.counter.lost() - lost_mid, 4u) << "3 lost + the one refused for its jump (max_delta 1)";
+}
+
+TEST(FrameLossCounter, AMessageWithoutCounterIsNotCountable) {
+  dbw::FrameLossCounter none(s::E2eConfig{});
+  EXPECT_FALSE(none.countable());
+  std::array<std::uint8_t, 8> d{};
+  none.on_frame(d, s::E2eStatus::kBadCrc, 0);
+  EXPECT_EQ(none.lost(), 0u);
+}
+
+// The mock ECU under every fault that touches its frames, into the real BridgeCore: each feedback
+// frame the ECU reports making (its truth) is either taken by the bridge or counted by it, never both.
+TEST(FrameLoss, EveryFeedbackFrameTheEcuMadeIsTakenOrCounted) {
+  const dbw::Protocol p = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());
+  std::vector<mock::Fault> faults;
+  for (const char* spec : {"loss=0.2@1+2", "bad-crc@4+0.5", "stuck-counter@5+0.4", "bus-off@6+0.3", "loss=0.05@7+3"})
+    faults.push_back(mock::parse_fault(spec));
+  mock::MockEcu ecu(p, faults, 7);
+  std::uint64_t made = 0, dropped = 0, damaged = 0;
+  ecu.set_observer([&](const mock::EmittedFrame& e) {
+    if (e.role != "feedback") return;
+    ++made;
+    if (e.fate == mock::EmittedFrame::Fate::kDropped) ++dropped;
+    if (e.fate == mock::EmittedFrame::Fate::kBadCrc || e.fate == mock::EmittedFrame::Fate::kRepeatedCounter) ++damaged;
+  });
+  dbw::BridgeCore bridge(p);
+  std::uint64_t taken = 0;
+  Nanos now = 1'000'000'000;
+  for (int ms = 0; ms < 11'000; ++ms) {
+    now += kMs;
+    for (const auto& f : ecu.step(now)) {
+      dbw::can::RxFrame rx;
+      rx.frame = f;
+      rx.stamp = now;
+      if (bridge.on_frame(rx, now) == dbw::RxKind::kFeedback) ++taken;
+    }
+  }
+  ASSERT_GT(dropped, 50u);
+  ASSERT_GT(damaged, 20u);
+  // The run ends on healthy frames: every loss has been shown by a later good frame.
+  EXPECT_EQ(taken + bridge.feedback_lost(), made) << "taken " << taken << ", counted " << bridge.feedback_lost()
+                                                  << ", dropped " << dropped << ", damaged " << damaged;
+  // The 300 ms bus-off is a silence the counter shows (it went on where it stopped), not a gap.
+  EXPECT_EQ(bridge.feedback_gaps_unknown(), 0u);
+}
+
+}  // namespace
