@@ -67,6 +67,16 @@ class RigChild {
     ::kill(pid_, sig);
     return wait(ms);
   }
+  // The exit code as wait() gives it once the child has exited; -1 while it runs (never kills it).
+  int poll() {
+    if (pid_ <= 0) return exited_;
+    int st = 0;
+    if (::waitpid(pid_, &st, WNOHANG) == 0) return -1;
+    pid_ = -1;
+    exited_ = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    return exited_;
+  }
+  // Waits up to `ms` for the exit; SIGKILL after that (returns -1).
   int wait(int ms) {
     if (pid_ <= 0) return -1;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
@@ -96,6 +106,7 @@ class RigChild {
 
  private:
   pid_t pid_ = -1;
+  int exited_ = -1;
   std::string out_, err_;
 };
 
