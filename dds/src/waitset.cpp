@@ -37,6 +37,8 @@ void WaitSet::attach_guard(std::int64_t tag) {
 
 void WaitSet::wake() noexcept { dds_set_guardcondition(guard_.handle(), true); }
 
+void WaitSet::clear_guard() noexcept { dds_set_guardcondition(guard_.handle(), false); }
+
 void WaitSet::wait(std::vector<std::int64_t>& tags, Nanos timeout_ns) {
   tags.clear();
   if (triggered_.empty()) triggered_.resize(1);

@@ -141,6 +141,8 @@ void ViewBridge::poll(std::int64_t timeout_ns) {
   std::vector<std::pair<view::ChannelId, bool>> requests;
   {
     std::lock_guard lock(requests_mu_);
+    // Under the lock: a request_reader() after this sets it again, so none is left unseen.
+    waitset_.clear_guard();
     requests.swap(requests_);
   }
   for (const auto& [channel, wanted] : requests) {

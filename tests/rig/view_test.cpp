@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <fstream>
+#include <sstream>
 #include <atomic>
 #include <map>
 #include <mutex>
@@ -171,6 +173,26 @@ class RigView {
   json last_ = json::object();
 };
 
+// Share of one core `pid` used over `ms` (user + system, /proc/PID/stat).
+double cpu_share(pid_t pid, int ms) {
+  auto ticks = [pid] {
+    std::ifstream f("/proc/" + std::to_string(pid) + "/stat");
+    std::string line;
+    std::getline(f, line);
+    std::istringstream in(line.substr(line.rfind(')') + 2));
+    std::string field;
+    long long utime = 0, stime = 0;
+    for (int i = 3; i <= 15 && in >> field; ++i) {
+      if (i == 14) utime = std::stoll(field);
+      if (i == 15) stime = std::stoll(field);
+    }
+    return utime + stime;
+  };
+  const long long t0 = ticks();
+  std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+  return static_cast<double>(ticks() - t0) / static_cast<double>(::sysconf(_SC_CLK_TCK)) / (ms / 1000.0);
+}
+
 std::size_t check_against(const test::ViewClient& c, const std::string& topic, const std::map<Nanos, Sent>& sent,
                           bool cloud) {
   std::size_t n = 0;
@@ -250,6 +272,9 @@ TEST_F(RigViewTest, AdvertisesTheTopicsAndStreamsCloudsAndImagesAsWritten) {
       10'000))
       << view.stats().dump();
   EXPECT_EQ(view.stats()["dds"]["readers_opened"], 2);
+  // Idle again (no client, no reader): it sleeps in its waitset (a guard left triggered once made
+  // it spin at a whole core).
+  EXPECT_LT(cpu_share(view.process().pid(), 2000), 0.1);
 
   // A client that stays: the image writer goes, the client is told (unadvertise).
   test::ViewClient stay({"--url", view.url(), "--wait-topics", kCloud + "," + kImage, "--subscribe-all", "--duration",

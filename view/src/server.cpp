@@ -165,6 +165,9 @@ void Server::Impl::handshake(const std::shared_ptr<Session>& s) {
                          ++self->totals.clients_rejected;
                          return;
                        }
+                       // Clients send nothing before the 101; whatever the HTTP parse left would
+                       // otherwise prefix the first message.
+                       s->read_buf.consume(s->read_buf.size());
                        self->opened(s);
                      });
                    });
@@ -297,6 +300,12 @@ void Server::Impl::pump(const std::shared_ptr<Session>& s) {
     std::lock_guard lock(mu);
     s->pump_posted = false;
     if (s->writing || !s->open) return;
+    if (s->closing) {
+      s->writing = true;  // the close is the last frame
+      s->ws.async_close(websocket::close_code::going_away,
+                        [self = this, s](beast::error_code) { self->close_session(s, "server stopping"); });
+      return;
+    }
     if (!s->control.empty()) {
       s->text_out = std::move(s->control.front());
       s->control.pop_front();
@@ -440,18 +449,14 @@ void Server::stop() {
       std::lock_guard lock(self->mu);
       for (auto& [id, s] : self->sessions) open.push_back(s);
     }
-    // A client that reads gets a WebSocket close (going away); one that does not (a write in flight
-    // never completes) has its socket closed when the grace below ends.
+    // A client that reads gets a WebSocket close (going away), after the frame it is being sent;
+    // one that does not (that write never completes) has its socket closed when the grace ends.
     for (auto& s : open) {
-      bool idle = false;
       {
         std::lock_guard lock(self->mu);
-        idle = !s->writing;
-        if (idle) s->writing = true;  // nothing else starts a write now
+        s->closing = true;
       }
-      if (idle) s->ws.async_close(websocket::close_code::going_away, [self, s](beast::error_code) {
-        self->close_session(s, "server stopping");
-      });
+      self->pump(s);
     }
     auto grace = std::make_shared<net::steady_timer>(self->ioc, std::chrono::milliseconds(500));
     grace->async_wait([self, grace, open](beast::error_code) {

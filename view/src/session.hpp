@@ -68,6 +68,7 @@ struct Session {
   bool writing = false;      // an async_write is in flight
   bool pump_posted = false;  // a pump() is queued on the I/O thread
   bool overflow = false;     // control queue overflowed: being closed
+  bool closing = false;      // the server stops: a WebSocket close after the write in flight
   std::deque<std::string> control;
   std::optional<std::uint64_t> time_pending;
   std::map<SubscriptionId, Subscription> subs;

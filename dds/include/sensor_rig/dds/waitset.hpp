@@ -24,6 +24,9 @@ class WaitSet {
   // Wakes wait() with `tag` after wake(); thread-safe.
   void attach_guard(std::int64_t tag);
   void wake() noexcept;
+  // Untriggers the guard: a waitset whose guard carries repeated requests (not a one-off stop)
+  // calls this before handling them, or every wait() returns at once.
+  void clear_guard() noexcept;
 
   // Waits up to timeout_ns; `tags` gets the tags that triggered (empty on timeout).
   void wait(std::vector<std::int64_t>& tags, Nanos timeout_ns);
