@@ -123,6 +123,30 @@ TEST(ChaosCheck, MissingPacketsThatArrivedArePhantoms) {
   EXPECT_FALSE(check(in).invariants.at("no_phantom_loss"));
 }
 
+// lidar.reorder: a packet sent after its successors arrived. Counted missing while its unit's later
+// packets were still to come, it is a phantom (the rig could place it); sent after every other packet
+// of its unit (after the next scan's first), its scan may have gone out without it: missing is true.
+TEST(ChaosCheck, AReorderedPacketIsMissingOnlyWhenItCameAfterItsScan) {
+  Input in = honest();
+  auto& parts = in.truths[0].parts;
+  const auto delay = [&](int unit, std::uint32_t part, Nanos tx) {
+    auto& p = parts[static_cast<std::size_t>(unit) * kParts + part];
+    p.fate = truth::Fate::kDelayed;
+    p.tx_ns = tx;
+  };
+  delay(20, 4, parts[20 * kParts + 6].tx_ns + 1);  // after two successors, before the scan's end
+  in.samples[20].missing_packets = 1;
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss"));
+  EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 1u);
+  delay(30, kParts - 1, parts[31 * kParts].tx_ns + 1);  // the last packet, after the next scan's first
+  in.samples[30].missing_packets = 1;
+  r = check(in);
+  EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 1u) << "scan 30's is not a phantom:\n" << result_text(r);
+  in.samples[30].missing_packets = 2;  // but only that one packet
+  EXPECT_EQ(check(in).topics.at(kTopic).phantom_missing, 2u);
+}
+
 TEST(ChaosCheck, AStampTwoMillisecondsOffIsCaughtAndAFirstPacketLostMovesNothing) {
   Input in = honest();
   in.samples[30].acquisition_ns += 2'000'000;

@@ -451,7 +451,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       slots = missing;
       missing -= std::min(missing, rejected_since_prev);
       const long tol = std::lround(2.0 * fit.step * groups);
-      if (missing >= 2 && blind.is_blind(prev_az, az[first_good], tol, detail::kTurn)) missing = 0;
+      if (missing >= 2 && blind.is_blind(prev_az, az[first_good], tol, detail::kTurn, tol / 2)) missing = 0;
     }
   }
   rejected_since_prev = 0;

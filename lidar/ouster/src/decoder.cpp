@@ -350,11 +350,13 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   const long slot = base >= 0 ? base / cpp : 0;
   bool late = false;
   if (n_valid > 0 && have_base && have_fid) {
-    const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
     const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
     const double reorder_ns = 16.0 * static_cast<double>(cpp) * m.column_period_ns();  // 16 packets
-    // Duplicate or late. Negated as a double: dt may be INT64_MIN.
-    if (slot <= prev_slot && dt <= 0 && -static_cast<double>(dt) <= reorder_ns) {
+    // Duplicate or late: its columns fired before the previous packet's (within the reorder window),
+    // wherever its slot lies: the previous frame's last packet arriving after the next frame's first
+    // has a higher slot (it was taken for a new frame, and ended the one just begun). Negated as a
+    // double: dt may be INT64_MIN.
+    if (dt <= 0 && -static_cast<double>(dt) <= reorder_ns) {
       if (fid == prev_fid && hole.holds(slot)) {
         late = true;  // placed below, continuity untouched
       } else {
@@ -390,6 +392,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   }
   bool new_frame = have_fid && fid != prev_fid && !late;
   std::uint32_t missing_before = 0, missing_after = 0;
+  bool opened = false;  // this packet opened a hole (a gap before it, inside its frame)
   if (n_valid > 0 && have_base && have_fid && !late) {
     const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
     const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
@@ -406,8 +409,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
         new_frame = false;
         missing_before = window_slots(prev_slot, slot);
-        if (missing_before >= 2 && rejected_since_prev == 0 && blind.is_blind(prev_slot, slot, 2, 0)) missing_before = 0;
-        if (missing_before > 0) hole = {prev_slot, slot, 0, missing_before};
+        if (missing_before >= 2 && rejected_since_prev == 0 && blind.is_blind(prev_slot, slot, 2, 0, 0)) missing_before = 0;
+        if (missing_before > 0) {
+          hole = {prev_slot, slot, 0, missing_before};
+          opened = true;
+        }
       } else {
         if (!new_frame) ++stats.implausible_steps;  // a new frame with the frame id unchanged: corrupted
         new_frame = true;
@@ -421,7 +427,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     const std::uint32_t r = std::min(rejected_since_prev, missing_before);
     missing_before -= r;
     missing_after -= std::min(rejected_since_prev - r, missing_after);
-    if (hole.open > missing_before && !new_frame) hole.open = missing_before;
+    // Only the gap this packet opened shrinks: a packet that continues its predecessor leaves the
+    // hole open for the late packet still to come (lidar.reorder n > 1).
+    if (opened) hole.open = missing_before;
   }
   if (!late) rejected_since_prev = 0;
   if (!late && n_valid > 0) blind.seen(slot, 0);

@@ -450,7 +450,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
       gap.missing -= std::min<std::uint32_t>(gap.missing, rejected_since_prev);
       const long tol = std::lround(2.0 * fit.step * groups);
-      if (gap.missing >= 2 && blind.is_blind(prev_az, na[first_good], tol, detail::kTurn)) gap.missing = 0;
+      if (gap.missing >= 2 && blind.is_blind(prev_az, na[first_good], tol, detail::kTurn, tol / 2)) gap.missing = 0;
     }
   }
   rejected_since_prev = 0;
@@ -481,16 +481,16 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       const bool crosses = plausible && s > 0 && az_step(prev_az, cut) > 0 && az_step(prev_az, cut) <= s;
       bool cut_done = false;
       if (k == first_good && gap.missing > 0) {
-        // Packets lost across the cut: those past it belong to the next scan.
-        std::uint32_t after = 0;
+        // Packets lost across the cut: those past it belong to the next scan, one across it to both.
+        detail::CutSplit split{gap.missing, 0};
         if (crosses && !early_cut)
-          after = detail::missing_after_cut(fov, cut, na[k], fit.step, k + 1, groups, gap.missing);
-        scans.add_missing(gap.missing - after);
-        hole = {prev_az, a_cut, detail::kTurn, gap.missing - after};
+          split = detail::split_missing_at_cut(fov, cut, na[k], fit.step, k + 1, groups, gap.missing);
+        scans.add_missing(split.before);
+        hole = {prev_az, a_cut, detail::kTurn, split.before};
         if (crosses && !early_cut) {
           out = end(scans.current().from_cut, true);
-          scans.add_missing(after);
-          hole = {cut == 0 ? detail::kTurn - 1 : cut - 1, a_cut, detail::kTurn, after};  // past the cut only
+          scans.add_missing(split.after);
+          hole = {cut == 0 ? detail::kTurn - 1 : cut - 1, a_cut, detail::kTurn, split.after};  // past the cut only
           cut_done = true;
         }
       }

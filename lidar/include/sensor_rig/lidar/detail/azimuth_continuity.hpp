@@ -206,8 +206,12 @@ inline std::uint32_t packets_on_arc(const AzimuthFov& fov, int from, int to, dou
 struct BlindArc {
   long from = 0, to = 0, margin = 0;
   bool candidate = false, learned = false;
-  // A gap from `a` to `b` (tol: how far its ends may move): true when it is the blind arc.
-  bool is_blind(long a, long b, long tol, long wrap) noexcept {
+  // A gap from `a` to `b` (tol: how far its ends may move from turn to turn; inner: how far inside
+  // its ends a packet must lie to be one the gap lacked: a packet's width where the packet grid
+  // shifts from turn to turn, 0 for packet slots): true when it is the blind arc. `inner` must
+  // leave room inside a gap of two packets, or a loss burst there would never be unlearned and the
+  // next burst at the same place (lidar.loss_burst at_cut) would pass for a blind sector.
+  bool is_blind(long a, long b, long tol, long wrap, long inner) noexcept {
     const auto dist = [&](long x, long y) {
       long d = x > y ? x - y : y - x;
       return wrap > 0 && d > wrap / 2 ? wrap - d : d;
@@ -215,7 +219,7 @@ struct BlindArc {
     const bool same = candidate && dist(a, from) <= tol && dist(b, to) <= tol;
     from = a;  // its ends move by up to a packet each turn: follow them
     to = b;
-    margin = tol;
+    margin = inner;
     candidate = true;
     learned = same;
     return same;
@@ -231,6 +235,25 @@ struct BlindArc {
     if (d > margin && d < span - margin) candidate = learned = false;
   }
 };
+
+// Of `missing` packets lost on an arc that crosses `cut`: those with firings before the cut (the
+// scan that ends) and those with firings after it (the next scan's). A packet across the cut is in
+// both, as its firings are (a truth record counts it in both units); the next scan's hole then takes
+// its later firings when it comes late (its stamp moves back to them). Jitter up to half a group.
+struct CutSplit {
+  std::uint32_t before = 0, after = 0;
+};
+inline CutSplit split_missing_at_cut(const AzimuthFov& fov, int cut, int first_az, double group_step,
+                                     int groups_before_first, int groups_per_packet, std::uint32_t missing) noexcept {
+  if (group_step <= 0.5) return {missing, 0};
+  const int arc = turn_step(cut, first_az);
+  const int visible = arc - arc_outside(fov, cut, arc);
+  const double k = (visible / group_step - groups_before_first) / groups_per_packet;
+  const double tol = 0.5 / groups_per_packet;
+  const auto whole_after = static_cast<std::uint32_t>(std::max(0.0, std::floor(k + tol)));
+  const auto touching = static_cast<std::uint32_t>(std::max(0.0, std::ceil(k - tol)));
+  return {missing - std::min(whole_after, missing), std::min(touching, missing)};
+}
 
 // Of `missing` packets lost on an arc that crosses `cut`, those after the cut (the next scan's).
 inline std::uint32_t missing_after_cut(const AzimuthFov& fov, int cut, int first_az, double group_step,
