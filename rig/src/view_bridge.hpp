@@ -27,7 +27,9 @@ struct ViewOptions {
   view::ServerOptions server;
   double duration_s = 0;        // 0: until SIGINT/SIGTERM
   double stats_interval_s = 5;  // a JSON stats line on stdout this often (0: only at the end)
-  int reader_depth = 4;         // keep-last depth of each raw reader
+  // Keep-last depth of each raw reader: the bridge takes at once, but a burst (/rig/stamps: one per
+  // sensor at the same instant) must not overwrite samples before it wakes.
+  int reader_depth = 16;
 };
 
 // Runs until shutdown (or the duration); exit code (0, or 1 when the server could not start).

@@ -102,8 +102,9 @@ void register_view_cli(CLI::App& app, cli::Context& ctx) {
                                                                                 {"shm", dds::Transport::kShm}}));
   cmd->add_option("--duration", opt->duration_s, "Stop after S seconds (0: until Ctrl-C)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--queue", opt->server.queue_depth,
-                  "Messages kept per client and topic for a client that falls behind (the oldest are dropped)")
+  cmd->add_option("--queue", opt->server.queue.min_items,
+                  "Messages kept per client and topic for a client that falls behind, more while they fit in 1 MiB "
+                  "(the oldest are dropped)")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--stats-interval", opt->stats_interval_s, "Seconds between JSON stats lines on stdout (0: at the end only)")

@@ -86,20 +86,42 @@ TEST(ViewProtocol, MalformedRequestsAreErrorsWithAReason) {
 }
 
 TEST(ViewLatestQueue, KeepsTheNewestAndCountsDrops) {
-  LatestQueue<int> q(3);
-  for (int i = 0; i < 3; ++i) EXPECT_FALSE(q.push(i));
-  EXPECT_TRUE(q.push(3));
-  EXPECT_TRUE(q.push(4));
+  LatestQueue<int> q(QueueLimits{3, 3, 1 << 20});
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(q.push(i, 10), 0u);
+  EXPECT_EQ(q.push(3, 10), 1u);
+  EXPECT_EQ(q.push(4, 10), 1u);
   EXPECT_EQ(q.dropped(), 2u);
   ASSERT_EQ(q.size(), 3u);
+  EXPECT_EQ(q.bytes(), 30u);
   EXPECT_EQ(q.pop(), 2);
   EXPECT_EQ(q.pop(), 3);
   EXPECT_EQ(q.pop(), 4);
   EXPECT_TRUE(q.empty());
-  LatestQueue<int> zero(0);  // a depth of 0 would drop everything: it holds one
-  EXPECT_FALSE(zero.push(1));
-  EXPECT_TRUE(zero.push(2));
+  EXPECT_EQ(q.bytes(), 0u);
+  LatestQueue<int> zero(QueueLimits{0, 0, 0});  // a depth of 0 would drop everything: it holds one
+  EXPECT_EQ(zero.push(1, 1), 0u);
+  EXPECT_EQ(zero.push(2, 1), 1u);
   EXPECT_EQ(zero.front(), 2);
+}
+
+TEST(ViewLatestQueue, SmallMessagesQueueDeeperThanLargeOnes) {
+  // 1 MB clouds: the minimum of 2, whatever the byte budget says.
+  LatestQueue<int> clouds(QueueLimits{2, 256, 1 << 20});
+  for (int i = 0; i < 5; ++i) clouds.push(i, 1'000'000);
+  EXPECT_EQ(clouds.size(), 2u);
+  EXPECT_EQ(clouds.front(), 3);
+  EXPECT_EQ(clouds.dropped(), 3u);
+  // 200-byte stamps: as many as fit in the budget, capped at max_items.
+  LatestQueue<int> stamps(QueueLimits{2, 100, 1 << 20});
+  for (int i = 0; i < 150; ++i) stamps.push(i, 200);
+  EXPECT_EQ(stamps.size(), 100u);
+  EXPECT_EQ(stamps.front(), 50);
+  // Mixed: a large push evicts small ones down to the minimum, never the new one.
+  LatestQueue<int> mixed(QueueLimits{2, 100, 1000});
+  for (int i = 0; i < 4; ++i) mixed.push(i, 100);
+  EXPECT_EQ(mixed.push(9, 5000), 3u);
+  EXPECT_EQ(mixed.size(), 2u);
+  EXPECT_EQ(mixed.front(), 3);
 }
 
 }  // namespace

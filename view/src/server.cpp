@@ -247,7 +247,7 @@ void Server::Impl::handle_text(const std::shared_ptr<Session>& s, const std::str
         errors.push_back("subscribe: already subscribed to channel " + std::to_string(ch) + " (" + c->second.spec.topic +
                          ")");
       } else {
-        s->subs.emplace(sub, Subscription{ch, LatestQueue<QueuedMessage>(options.queue_depth)});
+        s->subs.emplace(sub, Subscription{ch, LatestQueue<QueuedMessage>(options.queue)});
         if (++subscribers[ch] == 1) firsts.push_back(ch);
       }
     }
@@ -384,7 +384,8 @@ void Server::Impl::tick_report() {
                                               "slow client: " + std::to_string(d - state.reported_dropped) +
                                                   " messages on " + topic +
                                                   " dropped in the last second (the newest " +
-                                                  std::to_string(state.queue.capacity()) + " are kept); " +
+                                                  std::to_string(state.queue.limits().min_items) +
+                                                  " or more are kept); " +
                                                   std::to_string(d) + " in all"));
           state.reported_dropped = d;
         }
@@ -516,7 +517,7 @@ void Server::publish(ChannelId channel, std::uint64_t receive_ns,
   for (auto& [sid, s] : im.sessions)
     for (auto& [sub, state] : s->subs) {
       if (state.channel != channel) continue;
-      if (state.queue.push(QueuedMessage{seq, message_data_header(sub, receive_ns), payload})) ++im.totals.dropped;
+      im.totals.dropped += state.queue.push(QueuedMessage{seq, message_data_header(sub, receive_ns), payload}, size);
       im.schedule_locked(s);
     }
 }

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "sensor_rig/view/latest_queue.hpp"
 #include "sensor_rig/view/protocol.hpp"
 
 namespace sensor_rig::view {
@@ -24,7 +25,9 @@ struct ServerOptions {
   std::string address = "127.0.0.1";  // loopback unless told otherwise
   std::uint16_t port = 8765;          // 0: a free port (port() tells which)
   std::string name = "sensor-rig";
-  std::size_t queue_depth = 4;        // messages per subscription before the oldest is dropped
+  // Per subscription (latest_queue.hpp): at least queue.min_items messages, more while they fit in
+  // queue.max_bytes; beyond that the oldest is dropped.
+  QueueLimits queue;
   // Text messages (advertise, status) waiting for one client: past this it is disconnected (its
   // channel list would be wrong if any were dropped), counted in closed_overflow.
   std::size_t control_limit = 4096;
