@@ -129,14 +129,17 @@ void McapWriter::flush_chunk() {
   if (chunk_.empty()) return;
   const Nanos t0 = monotonic_now_ns();
   const std::uint32_t crc = crc32(chunk_);
-  compressor_->compress(chunk_, compressed_);
+  // Uncompressed chunks are written from chunk_ itself (no copy).
+  const bool raw = opt_.compression == Compression::kNone;
+  if (!raw) compressor_->compress(chunk_, compressed_);
+  const std::span<const std::byte> records = raw ? std::span<const std::byte>(chunk_) : std::span<const std::byte>(compressed_);
   stats_.compress_ns += monotonic_now_ns() - t0;
 
   // Chunk record: header fields, then the records' u64 length and bytes (written from compressed_).
   scratch_.clear();
   Out h(scratch_);
   const std::string_view comp = mcap_name(opt_.compression);
-  const std::uint64_t content = 8 + 8 + 8 + 4 + 4 + comp.size() + 8 + compressed_.size();
+  const std::uint64_t content = 8 + 8 + 8 + 4 + 4 + comp.size() + 8 + records.size();
   h.le(opcode::kChunk);
   h.le(content);
   h.le(chunk_start_);
@@ -144,9 +147,9 @@ void McapWriter::flush_chunk() {
   h.le(static_cast<std::uint64_t>(chunk_.size()));
   h.le(crc);
   h.str(comp);
-  h.le(static_cast<std::uint64_t>(compressed_.size()));
+  h.le(static_cast<std::uint64_t>(records.size()));
   const std::uint64_t chunk_offset = offset_;
-  const std::uint64_t chunk_length = scratch_.size() + compressed_.size();
+  const std::uint64_t chunk_length = scratch_.size() + records.size();
   const std::size_t header_size = scratch_.size();
 
   // Message Index records, one per channel, right after the chunk (in the same write).
@@ -166,7 +169,7 @@ void McapWriter::flush_chunk() {
   }
   const std::uint64_t index_length = scratch_.size() - header_size;
   const std::span<const std::byte> all(scratch_);
-  const std::span<const std::byte> pieces[] = {all.first(header_size), compressed_, all.subspan(header_size)};
+  const std::span<const std::byte> pieces[] = {all.first(header_size), records, all.subspan(header_size)};
   write_out(pieces);
 
   Out ci(chunk_indexes_);
@@ -182,7 +185,7 @@ void McapWriter::flush_chunk() {
   }
   ci.le(index_length);
   ci.str(comp);
-  ci.le(static_cast<std::uint64_t>(compressed_.size()));
+  ci.le(static_cast<std::uint64_t>(records.size()));
   ci.le(static_cast<std::uint64_t>(chunk_.size()));
   ci.end_record(at);
 

@@ -3,6 +3,11 @@
 #include <time.h>
 
 #include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -14,6 +19,7 @@
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/percentile.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/common/thread_priority.hpp"
 #include "sensor_rig/dds/raw_topic.hpp"
 #include "sensor_rig/dds/topic.hpp"
 #include "sensor_rig/msgs/ros2msg.hpp"
@@ -74,6 +80,13 @@ struct PlayTopic {
   std::uint64_t played = 0, write_errors = 0;
 };
 
+// A message read ahead; topic == nullptr marks the start of a pass (--loop).
+struct Pending {
+  PlayTopic* topic = nullptr;
+  std::uint64_t log_time = 0;
+  std::vector<std::byte> data;
+};
+
 }  // namespace
 
 int run_play(const PlayOptions& o) {
@@ -116,49 +129,99 @@ int run_play(const PlayOptions& o) {
     std::fprintf(stderr, "rig play: %s: nothing to play\n", o.path.c_str());
     return 1;
   }
+  // A reader thread decompresses and copies the messages ahead (up to kAheadBytes) so that chunk
+  // decompression, CRC and page faults stay off the timed path; this thread only sleeps and writes.
+  constexpr std::size_t kAheadBytes = 256u << 20;
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<Pending> ahead;
+  std::size_t ahead_bytes = 0;
+  bool done = false;
+  std::atomic<bool> stop{false};
+  std::thread reader([&] {
+    const auto push = [&](Pending&& p) {
+      std::unique_lock lock(mu);
+      cv.wait(lock, [&] { return ahead_bytes < kAheadBytes || stop; });
+      ahead_bytes += p.data.size();
+      ahead.push_back(std::move(p));
+      cv.notify_all();
+    };
+    bool any = false;
+    do {
+      push(Pending{});  // a new pass: the timing restarts
+      std::uint64_t first_log = 0;
+      const std::uint64_t skip = static_cast<std::uint64_t>(o.start_s * 1e9);
+      for (auto& r : readers) {
+        if (stop) break;
+        r->for_each_message([&](const record::McapMessage& m) {
+          if (stop) return false;
+          const auto ch = r->channels().find(m.channel_id);
+          if (ch == r->channels().end()) return true;
+          const auto t = topics.find(ch->second.topic);
+          if (t == topics.end()) return true;
+          if (first_log == 0) first_log = m.log_time;
+          if (m.log_time < first_log + skip) return true;
+          any = true;
+          push(Pending{&t->second, m.log_time, std::vector<std::byte>(m.data.begin(), m.data.end())});
+          return true;
+        });
+      }
+    } while (o.loop && !stop && any);
+    std::lock_guard lock(mu);
+    done = true;
+    cv.notify_all();
+  });
+  if (o.rt_priority > 0) {
+    if (const auto r = try_realtime_priority(o.rt_priority); !r)
+      std::fprintf(stderr, "rig play: SCHED_FIFO %d refused (%s): normal scheduling\n", o.rt_priority, r.why_not.c_str());
+  }
   wait_for_shutdown(static_cast<int>(o.delay_s * 1000));
 
   std::vector<double> late_ms;
   std::uint64_t played = 0;
-  bool stop = false;
-  do {
-    bool have_base = false;
-    std::uint64_t first_log = 0, base_log = 0;
-    const Nanos t0 = monotonic_now_ns();
-    for (auto& r : readers) {
-      if (stop) break;
-      r->for_each_message([&](const record::McapMessage& m) {
-        if (shutdown_requested()) {
-          stop = true;
-          return false;
-        }
-        const auto ch = r->channels().find(m.channel_id);
-        if (ch == r->channels().end()) return true;
-        const auto t = topics.find(ch->second.topic);
-        if (t == topics.end()) return true;
-        if (first_log == 0) first_log = m.log_time;
-        if (m.log_time < first_log + static_cast<std::uint64_t>(o.start_s * 1e9)) return true;
-        if (!have_base) {
-          base_log = m.log_time;
-          have_base = true;
-        }
-        const double offset = m.log_time >= base_log ? static_cast<double>(m.log_time - base_log) / o.rate : 0.0;
-        const Nanos target = t0 + static_cast<Nanos>(offset);
-        const timespec ts{static_cast<time_t>(target / 1'000'000'000), static_cast<long>(target % 1'000'000'000)};
-        while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-          if (shutdown_requested()) {
-            stop = true;
-            return false;
-          }
-        }
-        late_ms.push_back(static_cast<double>(monotonic_now_ns() - target) / 1e6);
-        if (t->second.writer->write(m.data, vehicle_now_ns()).ok()) ++t->second.played;
-        else ++t->second.write_errors;
-        ++played;
-        return true;
-      });
+  bool have_base = false;
+  std::uint64_t base_log = 0;
+  Nanos t0 = 0;
+  while (!shutdown_requested()) {
+    Pending p;
+    {
+      std::unique_lock lock(mu);
+      cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return !ahead.empty() || done; });
+      if (ahead.empty()) {
+        if (done) break;
+        continue;
+      }
+      p = std::move(ahead.front());
+      ahead.pop_front();
+      ahead_bytes -= p.data.size();
+      cv.notify_all();
     }
-  } while (o.loop && !stop && played > 0);
+    if (p.topic == nullptr) {
+      have_base = false;
+      continue;
+    }
+    if (!have_base) {
+      base_log = p.log_time;
+      t0 = monotonic_now_ns();
+      have_base = true;
+    }
+    const double offset = p.log_time >= base_log ? static_cast<double>(p.log_time - base_log) / o.rate : 0.0;
+    const Nanos target = t0 + static_cast<Nanos>(offset);
+    const timespec ts{static_cast<time_t>(target / 1'000'000'000), static_cast<long>(target % 1'000'000'000)};
+    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR && !shutdown_requested()) {
+    }
+    if (shutdown_requested()) break;
+    late_ms.push_back(static_cast<double>(monotonic_now_ns() - target) / 1e6);
+    if (p.topic->writer->write(p.data, vehicle_now_ns()).ok()) ++p.topic->played;
+    else ++p.topic->write_errors;
+    ++played;
+  }
+  {
+    std::lock_guard lock(mu);
+    stop = true;
+    cv.notify_all();
+  }
+  reader.join();
 
   for (const auto& r : readers)
     for (const auto& p : r->problems()) {
@@ -190,6 +253,8 @@ void add_play(CLI::App& app, cli::Context& ctx) {
   cmd->add_option("--delay", o->delay_s, "Seconds between creating the writers and the first message (discovery)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--domain", *domain, "DDS domain id")->check(CLI::Range(0, 232));
+  cmd->add_option("--rt-priority", o->rt_priority, "SCHED_FIFO priority of the timed writing thread (0: normal)")
+      ->check(CLI::Range(0, 99));
   cmd->add_option("--dds-profile", o->dds.profile, "Cyclone XML profile (default: loopback)");
   cmd->add_option("--transport", o->dds.transport, "udp, or shm (a RouDi must run)")
       ->transform(CLI::CheckedTransformer(std::map<std::string, dds::Transport>{{"udp", dds::Transport::kUdp},

@@ -19,6 +19,7 @@ struct PlayOptions {
   double start_s = 0;          // skip the first S seconds of the recording
   std::vector<std::string> topics;  // ROS names; empty: all
   double delay_s = 1.0;        // after creating the writers, before the first message (discovery)
+  int rt_priority = 0;         // > 0: the timed writing thread SCHED_FIFO
   dds::DomainConfig dds;
 };
 
