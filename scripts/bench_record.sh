@@ -2,7 +2,8 @@
 # `rig record` on the whole mock rig (config/mock_rig.yaml on a domain of its own) for each chunk
 # compression, then `rig play` of one recording at several rates (BENCHMARKS.md, "Recording").
 # Usage: scripts/bench_record.sh [SECONDS] [OUT_DIR]   (run under flock /tmp/rig-rt.lock: it starts
-# the mock rig, whose ports and addresses are fixed). Prints one line per run.
+# the mock rig, whose ports and addresses are fixed). Prints one line per run. CAMERAS=1920x1200 sets
+# every camera to that size (the issue's full-size rig); PLAY=0 skips the `rig play` runs.
 set -euo pipefail
 secs=${1:-30}
 out=${2:-$(mktemp -d /tmp/rig-bench-record-XXXXXX)}
@@ -13,6 +14,9 @@ cfg=$out/mock_rig.yaml
 # The mock rig on domain $domain; its relative paths made absolute for the copy.
 sed -e "s|domain: 0|domain: $domain|" -e "s|profile: cyclonedds/|profile: $src/config/cyclonedds/|" \
     -e "s|protocol: dbw/|protocol: $src/config/dbw/|" "$src/config/mock_rig.yaml" > "$cfg"
+if [ -n "${CAMERAS:-}" ]; then
+  sed -i -e "s|^    width: [0-9]*|    width: ${CAMERAS%x*}|" -e "s|^    height: [0-9]*|    height: ${CAMERAS#*x}|" "$cfg"
+fi
 profile=$src/config/cyclonedds/loopback.xml
 "$rig" up "$cfg" --duration $((secs * 3 + 40)) > "$out/rig.log" 2>&1 &
 rig_pid=$!
@@ -39,6 +43,7 @@ done
 # The rig stopped: `rig play` alone on the host, into a domain without subscribers (the DDS writes
 # still serialize every sample); lateness = when the timed thread woke minus the message's due time.
 kill $rig_pid 2>/dev/null; wait $rig_pid 2>/dev/null || true
+[ "${PLAY:-1}" = 0 ] && exit 0
 sleep 3
 bench_play() {  # rate rt-priority
   "$rig" play "$out/rec_lz4.mcap" --domain $((domain + 1)) --dds-profile "$profile" --delay 0.5 --rate "$1" \
