@@ -270,5 +270,42 @@ TEST(SplitWriter, SplitsBySizeIntoCompleteFiles) {
   EXPECT_THROW(SplitWriter{o}, McapError);  // the folder is not empty any more
 }
 
+TEST(SplitWriter, SplitsByLogTime) {
+  test::TempDir dir;
+  SplitOptions o;
+  o.out = (dir.path / "rec").string();
+  o.split_ns = 1'000'000'000;  // 1 s of log time per file
+  o.mcap.compression = Compression::kZstd;
+  SplitWriter w(o);
+  const auto a = w.add_channel({"/cam/a", "sensor_msgs/msg/CompressedImage", "ros2msg",
+                                *msgs::ros2msg_schema("sensor_msgs/CompressedImage"), "cdr", {}});
+  const auto b = w.add_channel({"/cam/b", "sensor_msgs/msg/CompressedImage", "ros2msg",
+                                *msgs::ros2msg_schema("sensor_msgs/CompressedImage"), "cdr", {}});
+  // 50 messages 100 ms apart: 5 s -> files [0,1) [1,2) ... [4,5) s.
+  for (int i = 0; i < 50; ++i) {
+    std::vector<std::byte> payload;
+    const auto cdr = compressed_image_cdr(i, payload);
+    const std::span<const std::byte> pieces[] = {cdr};
+    w.write(i < 25 ? a : b, 5'000'000'000ull + static_cast<std::uint64_t>(i) * 100'000'000, 0, pieces);
+  }
+  w.close();
+  ASSERT_EQ(w.files().size(), 5u);
+  for (std::size_t f = 0; f < 5; ++f) {
+    McapReader r(w.files()[f]);
+    EXPECT_TRUE(r.complete());
+    std::uint64_t lo = UINT64_MAX, hi = 0;
+    const auto n = r.for_each_message([&](const McapMessage& m) {
+      lo = std::min(lo, m.log_time);
+      hi = std::max(hi, m.log_time);
+      return true;
+    });
+    EXPECT_EQ(n, 10u) << f;
+    EXPECT_EQ(lo, 5'000'000'000ull + f * 1'000'000'000ull);
+    EXPECT_LT(hi - lo, 1'000'000'000ull);
+    // Only the channels this file carries: /cam/a up to 2.4 s, /cam/b from 2.5 s.
+    EXPECT_EQ(r.channels().size(), f == 2 ? 2u : 1u) << f;
+  }
+}
+
 }  // namespace
 }  // namespace sensor_rig::record
