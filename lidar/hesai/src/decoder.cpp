@@ -203,8 +203,10 @@ struct DecoderImpl {
 
   void put_group(const std::uint8_t* blk, int a, Nanos group_stamp, bool overlap, int n, std::uint8_t mode, float unit);
 
-  // A late packet whose azimuth lies where the current scan counted packets missing (outside the
-  // cut's window): its points go into the scan, an earlier first firing becomes its stamp.
+  // A late packet whose azimuth lies where the current scan counted packets missing: its points go
+  // into the scan, an earlier first firing becomes its stamp. Inside the cut's window (still open:
+  // the scan before the cut not yet out) its channels past the cut go into the next scan, whose
+  // stamp moves back to them as well.
   void place_late(const std::uint8_t* p, const int* az, const detail::AzimuthFit& fit, int groups, int n,
                   std::uint8_t mode, float unit, Nanos stamp, Nanos rx_ns) {
     scans.begin_packet();
@@ -213,10 +215,18 @@ struct DecoderImpl {
     for (int g = 0; g < groups; ++g) {
       if ((fit.bad >> g) & 1U) continue;
       const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
+      const bool overlap = window_open && in_sector(reset_raw, emit_raw, az[g]) && az[g] != emit_raw;
+      if (overlap) {
+        PendingScan& nxt = scans.next();
+        nxt.rebase(group_stamp);
+        const Nanos nxt_rx = nxt.scan.last_rx_ns;
+        nxt.touch(group_stamp, rx_ns);
+        nxt.scan.last_rx_ns = std::max(nxt_rx, rx_ns);
+      }
       const Nanos last_rx = cur.scan.last_rx_ns;
       cur.touch(group_stamp, rx_ns);
       cur.scan.last_rx_ns = std::max(last_rx, rx_ns);
-      put_group(p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size, az[g], group_stamp, false, n,
+      put_group(p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size, az[g], group_stamp, overlap, n,
                 mode, unit);
     }
     --hole.open;
@@ -369,7 +379,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         last = PacketStatus::kBadAzimuth;
         return std::nullopt;
       }
-      if (hole.holds(az[first_good]) && !far_back && !window_open) {
+      if (hole.holds(az[first_good]) && !far_back) {
         place_late(p, az, fit, groups, n, mode, unit, stamp, packet.rx_ns);
         return std::nullopt;
       }
