@@ -3,7 +3,8 @@
 # compression, then `rig play` of one recording at several rates (BENCHMARKS.md, "Recording").
 # Usage: scripts/bench_record.sh [SECONDS] [OUT_DIR]   (run under flock /tmp/rig-rt.lock: it starts
 # the mock rig, whose ports and addresses are fixed). Prints one line per run. CAMERAS=1920x1200 sets
-# every camera to that size (the issue's full-size rig); PLAY=0 skips the `rig play` runs.
+# every camera to that size (the issue's full-size rig); PLAY=0 skips the `rig play` runs; REC_RT=N
+# runs the recorder at SCHED_FIFO N (--rt-priority).
 set -euo pipefail
 secs=${1:-30}
 out=${2:-$(mktemp -d /tmp/rig-bench-record-XXXXXX)}
@@ -24,7 +25,7 @@ trap 'kill $rig_pid 2>/dev/null; wait $rig_pid 2>/dev/null || true' EXIT
 sleep 8  # the rig's processes up, cameras streaming
 for c in none lz4 zstd; do
   /usr/bin/time -f "%e %U %S" -o "$out/time_$c" "$rig" record --out "$out/rec_$c.mcap" --domain $domain \
-    --dds-profile "$profile" --compression $c --duration "$secs" --no-progress > "$out/summary_$c.json" 2> "$out/err_$c"
+    --dds-profile "$profile" --compression $c --duration "$secs" --no-progress --rt-priority "${REC_RT:-0}" > "$out/summary_$c.json" 2> "$out/err_$c"
   read -r wall user sys < "$out/time_$c"
   python3 - "$out/summary_$c.json" "$c" "$wall" "$user" "$sys" <<'PY'
 import json, sys

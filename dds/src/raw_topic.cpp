@@ -1,5 +1,6 @@
 #include "sensor_rig/dds/raw_topic.hpp"
 
+#include <dds/ddsc/dds_loan_api.h>
 #include <dds/ddsi/ddsi_serdata.h>
 
 #include <bit>
@@ -71,6 +72,7 @@ RawWriter::RawWriter(const Participant& p, const std::string& dds_topic, const R
                         "rig_create_cdr_topic"));
   auto q = make_qos(qos);
   writer_ = Entity(check(dds_create_writer(p.handle(), topic_.handle(), q.get(), nullptr), "dds_create_writer"));
+  shm_ = dds_is_shared_memory_available(writer_.handle());
 }
 
 Result RawWriter::write(std::span<const std::span<const std::byte>> pieces, Nanos source_ts) noexcept {
@@ -86,6 +88,18 @@ Result RawWriter::write(std::span<const std::span<const std::byte>> pieces, Nano
   if (size < 4) return Result(DDS_RETCODE_BAD_PARAMETER);
   ddsi_serdata* sd = ddsi_serdata_from_ser_iov(sertype_, SDK_DATA, static_cast<ddsrt_msg_iovlen_t>(pieces.size()), iov, size);
   if (sd == nullptr) return Result(DDS_RETCODE_BAD_PARAMETER);
+  if (shm_) {
+    // Cyclone 0.10.2's dds_forwardcdr does not put a serdata without an iceoryx chunk into shared
+    // memory (its shm readers never get it): over shm the sample is deserialized and written as
+    // one, and Cyclone serializes it into a chunk itself.
+    void* sample = dds_alloc(type_->descriptor->m_size);
+    const bool ok = ddsi_serdata_to_sample(sd, sample, nullptr, nullptr);
+    ddsi_serdata_unref(sd);
+    const dds_return_t rc = ok ? dds_write_ts(writer_.handle(), sample, static_cast<dds_time_t>(source_ts))
+                               : DDS_RETCODE_BAD_PARAMETER;
+    dds_sample_free(sample, type_->descriptor, DDS_FREE_ALL);
+    return Result(rc);
+  }
   sd->statusinfo = 0;
   sd->timestamp.v = static_cast<dds_time_t>(source_ts);
   return Result(dds_forwardcdr(writer_.handle(), sd));  // consumes sd's reference

@@ -36,6 +36,8 @@ void add_record(CLI::App& app, cli::Context& ctx) {
   cmd->add_option("--queue-mb", o->queue_mb, "MiB queued for the writer thread at most (then samples are dropped, counted)")
       ->check(CLI::Range(1, 16384))->capture_default_str();
   cmd->add_flag("!--no-progress", o->progress, "No progress line on stderr");
+  cmd->add_option("--rt-priority", o->rt_priority, "SCHED_FIFO priority of the recorder's threads and its DDS threads (0: normal)")
+      ->check(CLI::Range(0, 99));
   cmd->callback([&ctx, o, domain, compression] {
     namespace fs = std::filesystem;
     std::error_code ec;

@@ -15,6 +15,7 @@
 #include "record_queue.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/shutdown.hpp"
+#include "sensor_rig/common/thread_priority.hpp"
 #include "sensor_rig/dds/discovery.hpp"
 #include "sensor_rig/dds/topic.hpp"
 #include "sensor_rig/dds/waitset.hpp"
@@ -107,6 +108,12 @@ class Recorder {
 
   int run(record::SplitWriter& out) {
     std::thread writer([&] { writer_loop(out, queue_, shared_); });
+    if (opt_.rt_priority > 0) {
+      // On a host the rig saturates, normal threads get what SCHED_FIFO ones leave: the recorder
+      // then falls behind and drops (counted). Both threads at the asked priority.
+      for (const auto& r : {try_realtime_priority(opt_.rt_priority), try_realtime_priority(writer.native_handle(), opt_.rt_priority)})
+        if (!r) std::fprintf(stderr, "rig record: SCHED_FIFO %d refused (%s): normal scheduling\n", opt_.rt_priority, r.why_not.c_str());
+    }
     const Nanos start = monotonic_now_ns();
     const Nanos end = opt_.duration_s > 0 ? start + static_cast<Nanos>(opt_.duration_s * 1e9) : INT64_MAX;
     Nanos next_progress = start + 1'000'000'000;
@@ -284,7 +291,9 @@ int run_record(const RecordOptions& o) {
   so.mcap.chunk_size = o.chunk_kb << 10;
   so.mcap.library = "sensor-rig rig record";
   record::SplitWriter out(so);  // throws McapError: the caller reports it
-  Recorder r(o);
+  RecordOptions with_rt = o;
+  with_rt.dds.realtime_priority = o.rt_priority;  // Cyclone's receive/delivery threads too
+  Recorder r(with_rt);
   return r.run(out);
 }
 

@@ -27,6 +27,7 @@ struct RecordOptions {
   std::size_t queue_mb = 256;       // bytes queued between the DDS thread and the writer at most
   std::size_t topic_queue = 128;    // samples queued per topic at most (over shm: chunks held)
   bool progress = true;             // a line on stderr once a second
+  int rt_priority = 0;              // > 0: the DDS thread, the writer thread and Cyclone's threads SCHED_FIFO
 };
 
 // Records until the duration, a signal, or a file error. Prints the summary (JSON, one line) on

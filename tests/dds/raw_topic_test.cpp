@@ -4,11 +4,14 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <filesystem>
+
 #include <cstring>
 #include <string>
 #include <vector>
 
 #include "sensor_rig/dds/raw_topic.hpp"
+#include "sensor_rig/dds/roudi.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "wait_bounds.hpp"
 
@@ -109,6 +112,90 @@ TEST(RawTopic, WriterRefusesBytesShorterThanAHeader) {
   RawWriter w(mine, ros_to_dds_topic(unique_topic("short")), *type, QosSpec{});
   const std::byte two[2] = {};
   EXPECT_FALSE(w.write(std::span<const std::byte>(two), 1).ok());
+}
+
+// Over shared memory: the raw reader's samples are the iceoryx chunks themselves (two pieces: a
+// made header, then the chunk), byte-equal to what the typed writer sent; a raw writer's samples
+// reach a typed reader. Run in a child (RouDi SIGTERMs registered processes when it stops).
+std::string shm_round_trip() {
+  DomainConfig cfg;
+  cfg.domain_id = 95;
+  cfg.transport = Transport::kShm;
+  Participant a(cfg);
+  Participant b(cfg);
+  QosSpec q;
+  q.depth = 16;
+  Topic<msg::PointCloud2> in_topic(a, "/test/raw/shm/in", q);
+  Writer<msg::PointCloud2> typed_writer(a, in_topic, q);
+  Topic<msg::PointCloud2> out_topic(a, "/test/raw/shm/out", q);
+  Reader<msg::PointCloud2> typed_reader(a, out_topic, q);
+  const RegisteredType* type = find_type("sensor_msgs::msg::dds_::PointCloud2_");
+  RawReader raw_reader(b, "rt/test/raw/shm/in", *type, q);
+  RawWriter raw_writer(b, "rt/test/raw/shm/out", *type, q);
+  if (!typed_writer.wait_for_readers(1, test::kDiscoveryMs) || !typed_reader.wait_for_writers(1, test::kDiscoveryMs))
+    return "not matched";
+  constexpr int kN = 10;
+  char frame[] = "shm";
+  for (int i = 0; i < kN; ++i) {
+    auto data = payload(i);
+    msg::PointCloud2 pc{};
+    pc.header.frame_id = frame;
+    pc.width = static_cast<std::uint32_t>(i);
+    pc.data = {static_cast<std::uint32_t>(data.size()), static_cast<std::uint32_t>(data.size()), data.data(), false};
+    if (!typed_writer.write(pc, 1000 + i).ok()) return "typed write failed";
+  }
+  std::string problems;
+  int got = 0, in_chunk = 0;
+  RawSample s;
+  wait_until([&] {
+    while (raw_reader.take(s)) {
+      in_chunk += s.in_shared_memory() ? 1 : 0;
+      if (s.in_shared_memory() && (s.first().size() != 4 || s.first()[1] != std::byte{1})) problems += "header; ";
+      const auto bytes = s.copy();
+      const auto body = cdr_body(bytes);
+      PointCloud2View v;
+      const auto want = payload(got);
+      if (!body || parse_cdr(*body, v) != CdrStatus::kOk || v.width != static_cast<std::uint32_t>(got) ||
+          v.data.size() != want.size() || std::memcmp(v.data.data(), want.data(), want.size()) != 0)
+        problems += "sample " + std::to_string(got) + " differs; ";
+      const std::span<const std::byte> pieces[] = {s.first(), s.second()};
+      if (!raw_writer.write(pieces, 2000 + got).ok()) problems += "raw write failed; ";
+      ++got;
+    }
+    return got >= kN;
+  }, 5000);
+  if (got != kN) problems += "raw reader got " + std::to_string(got) + "; ";
+  if (in_chunk == 0) problems += "no sample came in an iceoryx chunk; ";
+  int back = 0;
+  wait_until([&] {
+    typed_reader.take([&](const msg::PointCloud2& pc, const dds_sample_info_t&) {
+      const auto want = payload(back);
+      if (pc.data._length != want.size() || std::memcmp(pc.data._buffer, want.data(), want.size()) != 0)
+        problems += "written back " + std::to_string(back) + " differs; ";
+      ++back;
+    });
+    return back >= kN;
+  }, 5000);
+  if (back != kN) problems += "typed reader got " + std::to_string(back) + " back; ";
+  return problems;
+}
+
+TEST(RawTopic, SharedMemoryChunksReadInPlaceAndWrittenBack) {
+  if (::access("/usr/bin/iox-roudi", X_OK) != 0) GTEST_SKIP() << "no iox-roudi (Debian package iceoryx)";
+  if (probe_roudi().pid != 0) GTEST_SKIP() << "another RouDi runs on this machine; this test needs its own";
+  char dir[] = "/tmp/rig-raw-XXXXXX";
+  ASSERT_NE(::mkdtemp(dir), nullptr);
+  {
+    RouDi roudi("", std::string(dir) + "/roudi.log", false);
+    EXPECT_EXIT(
+        {
+          const std::string problems = shm_round_trip();
+          std::fprintf(stderr, "%s\n", problems.empty() ? "round trip ok" : problems.c_str());
+          std::_Exit(problems.empty() ? 0 : 1);
+        },
+        ::testing::ExitedWithCode(0), "round trip ok");
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -11,7 +11,8 @@
 // RawWriter turns given CDR bytes back into a serdata of the topic's sertype
 // (ddsi_serdata_from_ser_iov) and writes it with dds_forwardcdr, so the source timestamp is the one
 // given. Cyclone checks the bytes against the type when it deserializes them for a local reader;
-// remote readers get them as they are.
+// remote readers get them as they are. Over shared memory Cyclone 0.10.2 would not put such a
+// serdata into a chunk, so there the bytes are deserialized and written as a sample (one decode).
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -107,6 +108,7 @@ class RawWriter {
   Entity topic_;
   const ddsi_sertype* sertype_ = nullptr;  // the topic's, valid while topic_ lives
   Entity writer_;
+  bool shm_ = false;  // the writer publishes over iceoryx: deserialize and dds_write (raw_topic.cpp)
 };
 
 }  // namespace sensor_rig::dds
