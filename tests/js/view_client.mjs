@@ -135,6 +135,15 @@ client.on("advertise", (list) => {
     }
   }
 });
+// `time` messages (capability `time`): how many, and the last against this host's clock.
+let timeCount = 0;
+let lastTime = null;
+let timeBackwards = 0;
+client.on("time", ({ timestamp }) => {
+  if (lastTime !== null && timestamp < lastTime) timeBackwards++;
+  lastTime = timestamp;
+  timeCount++;
+});
 client.on("unadvertise", (ids) => {
   out({ event: "unadvertise", channelIds: ids, topics: ids.map((i) => channels.get(i)?.topic) });
   for (const i of ids) {
@@ -220,7 +229,9 @@ function done() {
   for (const [t, s] of perTopic)
     topics[t] = { count: s.count, bytes: s.bytes, latency_ms: { stamp: percentiles(s.lat_stamp),
                   server: percentiles(s.lat_server), source: percentiles(s.lat_source) } };
-  out({ event: "summary", topics, statuses, advertised: [...channels.values()].map((c) => c.topic), stalled });
+  const time = { count: timeCount, backwards: timeBackwards,
+                 last_minus_now_ms: lastTime === null ? null : (Number(lastTime) - nowNs()) / 1e6 };
+  out({ event: "summary", topics, statuses, advertised: [...channels.values()].map((c) => c.topic), stalled, time });
   client.close();
   setTimeout(() => process.exit(exitCode), 50);
 }

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -194,6 +195,11 @@ TEST_F(ViewServer, TwoClientsGetEveryChannelTheySubscribeDecodedAsPublished) {
     EXPECT_GE(check_messages(*c, "/test/b", pb.sent()), 20u);
     EXPECT_TRUE(c->events("schema_error").empty() && c->events("decode_error").empty()) << c->transcript();
     EXPECT_TRUE(c->summary()["statuses"].empty()) << c->transcript();
+    // `time` every 50 ms from the wall clock (the messages' timestamps' clock), never backwards.
+    const json time = c->summary()["time"];
+    EXPECT_GE(time["count"].get<int>(), 5) << time.dump();
+    EXPECT_EQ(time["backwards"], 0);
+    EXPECT_LT(std::abs(time["last_minus_now_ms"].get<double>()), 1000.0) << time.dump();
   }
   const auto st = server_->stats();
   EXPECT_EQ(st.protocol_errors, 0u);
