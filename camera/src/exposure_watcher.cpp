@@ -7,7 +7,7 @@ namespace sensor_rig::camera::detail {
 struct ExposureWatcher::Shared {
   ArvDevice* device = nullptr;  // our own reference
   std::string feature;
-  std::shared_ptr<std::mutex> genicam;
+  std::shared_ptr<std::timed_mutex> genicam;
   mutable std::mutex mutex;     // everything below
   std::condition_variable cv;
   bool stop = false;
@@ -18,7 +18,7 @@ struct ExposureWatcher::Shared {
   }
 };
 
-ExposureWatcher::ExposureWatcher(ArvDevice* device, std::string feature, std::shared_ptr<std::mutex> genicam)
+ExposureWatcher::ExposureWatcher(ArvDevice* device, std::string feature, std::shared_ptr<std::timed_mutex> genicam)
     : sh_(std::make_shared<Shared>()) {
   sh_->device = static_cast<ArvDevice*>(g_object_ref(device));
   sh_->feature = std::move(feature);

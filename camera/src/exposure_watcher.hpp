@@ -25,7 +25,7 @@ struct KnownExposure {
 class ExposureWatcher {
  public:
   // `genicam`: the lock every GenICam access of this camera takes (shared with the source).
-  ExposureWatcher(ArvDevice* device, std::string feature, std::shared_ptr<std::mutex> genicam);
+  ExposureWatcher(ArvDevice* device, std::string feature, std::shared_ptr<std::timed_mutex> genicam);
   ~ExposureWatcher();  // stops and joins (a live camera: at most one read)
   ExposureWatcher(const ExposureWatcher&) = delete;
   ExposureWatcher& operator=(const ExposureWatcher&) = delete;

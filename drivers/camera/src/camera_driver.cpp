@@ -241,18 +241,19 @@ struct CameraDriver::Impl {
         std::lock_guard lock(mutex);
         last = last_frame_mono_ns;
       }
-      const Nanos silent = monotonic_now_ns() - last;
-      if (src->is_open() && silent > static_cast<Nanos>(cfg.watchdog()) * 1'000'000) {
-        if (trigger != nullptr && !trigger->firing()) {
-          // Its trigger source stopped (a stopped LIDAR): the camera is not at fault and a reopen
-          // would not bring frames (issue 27 item 2: 29 reopens in 15 s). Reported by status().
+      const Nanos now = monotonic_now_ns();
+      const Nanos watchdog = static_cast<Nanos>(cfg.watchdog()) * 1'000'000;
+      if (src->is_open() && now - last > watchdog) {
+        // A triggered camera is silent for a reason only once it took a trigger: watched from the
+        // first one after its last frame. Without one (a stopped LIDAR, a sweep not predicted yet)
+        // it is not at fault and a reopen would not bring frames (issue 27 item 2: 29 reopens in
+        // 15 s; a reopen while the sweep locked lost sync_sets_test's first trigger). Reported.
+        const Nanos since = trigger != nullptr ? trigger->first_accepted_since(trigger_member, last) : last;
+        if (since == 0)
           set_state("not triggered");
-          std::lock_guard lock(mutex);
-          last_frame_mono_ns = monotonic_now_ns();  // watched again from when the trigger resumes
-        } else {
-          lose("no frame for " + std::to_string(silent / 1'000'000) + " ms");
-        }
-      } else if (trigger != nullptr && trigger->firing()) {
+        else if (now - since > watchdog)
+          lose("no frame for " + std::to_string((now - last) / 1'000'000) + " ms");
+      } else if (trigger != nullptr) {
         std::lock_guard lock(mutex);
         if (state == "not triggered") state = "streaming";
       }
@@ -319,6 +320,9 @@ dds::DriverStatus CameraDriver::status() const {
   if (!impl_->open) {
     s.level = impl_->published.samples() == 0 && impl_->lost_reports == 0 ? dds::Level::kWarn : dds::Level::kError;
     s.message = impl_->state + (impl_->last_error.empty() ? "" : ": " + impl_->last_error);
+  } else if (impl_->state == "not triggered") {
+    s.level = dds::Level::kWarn;
+    s.message = "not triggered: its trigger source fired no shot the camera took";
   } else if (impl_->published.samples() == 0 && age > 1'000'000'000) {
     s.level = dds::Level::kWarn;
     s.message = "waiting for frames";
@@ -350,6 +354,7 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("incomplete_other", st.incomplete_other);
   s.add_number("timeouts", st.timeouts);
   s.add_number("underruns", st.underruns);
+  s.add_number("trigger_busy", st.trigger_busy);
   s.add_number("missing_packets", st.missing_packets);
   s.add_number("resent_packets", st.resent_packets);
   s.add_number("lost_reports", impl_->lost_reports);

@@ -115,7 +115,9 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
     reject(r.vehicle_ns);
     r.valid = false;
   }
-  const Nanos device = r.valid ? r.vehicle_ns : 0;
+  // The device's exposure start (for the trigger's phase figure) only from a locked mapping: before,
+  // the line is the first frames' arrivals, whose host delay (40 ms under load) it would carry.
+  const Nanos device = r.valid && r.state == timesync::SyncState::kLocked ? r.vehicle_ns : 0;
   if (tick_ns > 0 && tick_ns <= m.first_rx_ns) {
     // The tick is when the exposure was asked for; a locked device clock mapping says when it happened.
     // A mapped exposure after the frame arrived, or long before its trigger, is the mapping's

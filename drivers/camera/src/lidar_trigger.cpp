@@ -100,6 +100,9 @@ void LidarTrigger::start(int realtime_priority) {
     shot_.accepted.assign(members_.size(), 0);
     generation = shot_.generation;
     shot_.reported.assign(members_.size(), generation);
+    shot_.busy.assign(members_.size(), 0);
+    shot_.abandoned.assign(members_.size(), 0);
+    shot_.taken.assign(members_.size(), 0);
   }
   started_ns_.store(vehicle_now_ns());
   for (std::size_t i = 0; i < members_.size(); ++i) {
@@ -186,24 +189,32 @@ void LidarTrigger::settle(Nanos newest) noexcept {
 void LidarTrigger::run_member(std::size_t i, std::uint64_t seen) {
   for (;;) {
     Nanos aim = 0;
+    bool fire_it = false;  // not skipped as stale (see below)
     {
       std::unique_lock lock(shot_mutex_);
       shot_cv_.wait(lock, [&] { return shot_.generation != seen || shot_.closing; });
       if (shot_.generation == seen) return;  // closing with nothing armed
       seen = shot_.generation;
       aim = shot_.aim_mono;
+      // Given up on before this thread even took it (counted refused): not fired.
+      fire_it = shot_.abandoned[i] == 0 && (shot_.busy[i] == 0 || monotonic_now_ns() <= aim + kStaleShotNs);
+      shot_.taken[i] = fire_it ? 1 : 0;
     }
     // Armed: fired even when stop() came meanwhile, so that no member fires alone. A shot whose
     // aim passed while this member's camera held it in an older call is skipped, not fired late.
+    // One whose thread merely woke late (a loaded host) fires: its partners woke late too, and a
+    // skipped shot is a lost frame (it cost sync_sets_test 1-8 refused triggers in 4 s under load).
     Nanos called = 0;
     bool accepted = false;
-    if (monotonic_now_ns() <= aim + kStaleShotNs) {
+    if (fire_it) {
       spin_until_monotonic(aim);
       called = vehicle_now_ns();
       accepted = members_[i].trigger();
     }
+    bool late = false;  // the trigger thread gave up waiting for this call
     {
       std::lock_guard lock(shot_mutex_);
+      late = shot_.generation != seen || shot_.abandoned[i] != 0;
       if (shot_.generation == seen) {  // the trigger thread still waits for this shot
         shot_.called[i] = called;
         shot_.accepted[i] = accepted ? 1 : 0;
@@ -211,7 +222,22 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen) {
       shot_.reported[i] = seen;
     }
     shot_cv_.notify_all();
+    if (late && called != 0) settle_late_call(i, seen, called, accepted);
   }
+}
+
+void LidarTrigger::settle_late_call(std::size_t i, std::uint64_t generation, Nanos called, bool accepted) {
+  std::lock_guard lock(mutex_);
+  if (!accepted) {
+    ++members_[i].refused;
+    return;
+  }
+  // Taken, only late (the camera answered after the deadline): its frame comes for this tick.
+  const Nanos exposure = called + latency_ns_;
+  members_[i].exposures.add(exposure);
+  members_[i].accepted_mono.add(monotonic_now_ns());
+  const auto it = std::find_if(ticks_.begin(), ticks_.end(), [&](const Tick& t) { return t.generation == generation; });
+  if (it != ticks_.end()) it->exposures[i] = exposure;
 }
 
 void LidarTrigger::fire(Nanos target, Nanos aim) {
@@ -219,24 +245,35 @@ void LidarTrigger::fire(Nanos target, Nanos aim) {
   // (each its own call + latency) differ by the threads' wake-ups, not by a camera's round trip.
   // The trigger thread waits for the calls up to a deadline: a member whose camera does not answer
   // misses its tick (counted), its partners do not.
-  Tick t{target, std::vector<Nanos>(members_.size(), 0), std::vector<Nanos>(members_.size(), 0), 0, false};
+  Tick t{0, target, std::vector<Nanos>(members_.size(), 0), std::vector<Nanos>(members_.size(), 0), 0, false};
   Nanos first = 0;  // the earliest call (late wake-up), and the accepted calls' span (the spread)
   Nanos lo = 0, hi = 0;
   std::size_t accepted = 0;
   std::vector<char> timed_out(members_.size(), 0);
+  std::vector<char> in_flight(members_.size(), 0);  // timed out in this shot's call (not an older one's)
+  // Taken before the shot is let go (lock order shot_mutex_, mutex_): a late call's settlement
+  // (settle_late_call) then finds this tick.
+  std::unique_lock figures_lock(mutex_, std::defer_lock);
   {
     std::unique_lock lock(shot_mutex_);
     shot_.aim_mono = monotonic_now_ns() + (aim - vehicle_now_ns());
     std::fill(shot_.called.begin(), shot_.called.end(), 0);
     std::fill(shot_.accepted.begin(), shot_.accepted.end(), 0);
+    std::fill(shot_.abandoned.begin(), shot_.abandoned.end(), 0);
+    std::fill(shot_.taken.begin(), shot_.taken.end(), 0);
+    for (std::size_t i = 0; i < members_.size(); ++i) shot_.busy[i] = shot_.reported[i] != shot_.generation ? 1 : 0;
     const std::uint64_t gen = ++shot_.generation;
+    t.generation = gen;
     shot_cv_.notify_all();
     const auto deadline = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(shot_.aim_mono + kMemberDeadlineNs));
     (void)shot_cv_.wait_until(lock, deadline, [&] {
       return std::all_of(shot_.reported.begin(), shot_.reported.end(), [&](std::uint64_t r) { return r == gen; });
     });
     for (std::size_t i = 0; i < members_.size(); ++i) {
-      if (shot_.reported[i] != gen) timed_out[i] = 1;
+      if (shot_.reported[i] != gen) {
+        timed_out[i] = shot_.abandoned[i] = 1;
+        in_flight[i] = shot_.taken[i];
+      }
       const Nanos called = shot_.called[i];
       if (called == 0) continue;
       first = first == 0 ? called : std::min(first, called);
@@ -246,19 +283,24 @@ void LidarTrigger::fire(Nanos target, Nanos aim) {
       hi = std::max(hi, called);
       ++accepted;
     }
+    figures_lock.lock();
   }
-  std::lock_guard lock(mutex_);
   ++figures_.triggers;
   if (first != 0 && first - aim > kLateNs) ++figures_.late;
   for (std::size_t i = 0; i < members_.size(); ++i) {
     if (timed_out[i] != 0) ++members_[i].timed_out;
+    // A call in flight for this shot is refused or recorded when it returns (settle_late_call); a
+    // member still in an older shot's call never takes this one: refused now.
+    if (in_flight[i] != 0) continue;
     if (t.exposures[i] == 0)
       ++members_[i].refused;
-    else
+    else {
       members_[i].exposures.add(t.exposures[i]);
+      members_[i].accepted_mono.add(monotonic_now_ns());
+    }
   }
   if (accepted > 1) spread_.add(hi - lo);
-  if (accepted > 0) ticks_.push_back(std::move(t));
+  if (accepted > 0 || std::any_of(timed_out.begin(), timed_out.end(), [](char c) { return c != 0; })) ticks_.push_back(std::move(t));
   while (ticks_.size() > kKeepTicks) {  // the LIDAR's samples stopped coming: never measured
     if (!ticks_.front().settled) ++figures_.unmeasured;
     ticks_.pop_front();
@@ -295,9 +337,9 @@ void LidarTrigger::run() {
   }
 }
 
-bool LidarTrigger::firing() const {
+Nanos LidarTrigger::first_accepted_since(std::size_t member, Nanos mono) const {
   std::lock_guard lock(mutex_);
-  return figures_.predicting;
+  return member < members_.size() ? members_[member].accepted_mono.first_since(mono) : 0;
 }
 
 LidarTriggerFigures LidarTrigger::figures(std::size_t member) const {

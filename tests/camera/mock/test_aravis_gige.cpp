@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -117,6 +118,55 @@ TEST_F(GigeFake, SoftwareTriggerModeGivesOneFramePerTriggerAndNoneWithout) {
     EXPECT_EQ(outcomes(), before + 1) << "more than one frame for trigger " << i;
   }
   EXPECT_GE(src.stats().completed, 1u);
+  src.close();
+  fake.stop(500);
+}
+
+// Issue 27 item 1: a trigger never queues behind another access to the camera stuck in a GVCP
+// timeout (here a feature read to a camera that stopped answering: the fake stopped with SIGSTOP;
+// in the rig the exposure read or the PTP poll). It is refused at once, counted (trigger_busy),
+// and the camera takes triggers again when it answers. Before, it waited for the read's retries.
+TEST_F(GigeFake, ATriggerIsRefusedNotQueuedBehindAnAccessInAGvcpTimeout) {
+  mock::GigeFakeOptions o;
+  o.address = address(0);
+  auto fake = mock::start_gige_fake(o);
+  AravisSource src(triggered_cfg(o.address));
+  src.open();
+  ASSERT_TRUE(src.trigger());
+  // The write must still be in its retries when the trigger comes (now and then it was answered
+  // before the stop took hold): an attempt where it was not is not this test's case, and repeated.
+  bool held = false;
+  bool taken = true;
+  Nanos waited = 0;
+  for (int attempt = 0; attempt < 3 && !held; ++attempt) {
+    ASSERT_EQ(::kill(fake.pid(), SIGSTOP), 0);
+    std::atomic<Nanos> written{0};
+    std::thread writer([&] {
+      try {  // a write (a read may come from Aravis' register cache) holds the camera through its GVCP retries
+        src.set_feature("ExposureTimeAbs", "5000");
+      } catch (const CameraError&) {  // the camera did not answer: what this test makes it do
+      }
+      written.store(monotonic_now_ns());
+    });
+    ::usleep(50'000);  // well inside the write's first GVCP timeout (500 ms)
+    const Nanos t0 = monotonic_now_ns();
+    taken = src.trigger();
+    waited = monotonic_now_ns() - t0;
+    ::kill(fake.pid(), SIGCONT);
+    writer.join();
+    held = written.load() > t0;
+  }
+  ASSERT_TRUE(held) << "the write was answered at once in every attempt";
+  EXPECT_FALSE(taken);
+  EXPECT_LT(waited, 30'000'000) << "a trigger waited " << waited / 1'000'000 << " ms behind the write";
+  EXPECT_EQ(src.stats().trigger_busy, 1u);
+  // The camera answers again: triggers are taken.
+  bool again = false;
+  for (int i = 0; i < 20 && !again; ++i) {
+    again = src.trigger();
+    if (!again) ::usleep(50'000);
+  }
+  EXPECT_TRUE(again);
   src.close();
   fake.stop(500);
 }

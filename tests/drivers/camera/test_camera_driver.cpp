@@ -241,7 +241,7 @@ class StoppedTrigger : public TriggerSource {
  public:
   std::size_t add(std::function<bool()> /*trigger*/) override { return 0; }
   [[nodiscard]] Nanos tick_before(Nanos /*t*/, std::size_t /*member*/) const override { return 0; }
-  [[nodiscard]] bool firing() const override { return false; }
+  [[nodiscard]] Nanos first_accepted_since(std::size_t /*member*/, Nanos /*mono*/) const override { return 0; }
 };
 
 // Issue 27 item 2: a triggered camera whose trigger source stopped sends nothing; that is reported

@@ -10,6 +10,22 @@
 namespace sensor_rig::drivers {
 namespace {
 
+// A triggered frame before the device clock's mapping locked carries no device exposure start: the
+// line is then the first arrivals', and one frame held 40 ms by the host put a 40 ms error in the
+// LIDAR trigger's phase figure (sync_sets_test under load). The frame keeps its tick.
+TEST(FrameClock, NoDeviceExposureFromAMappingNotLockedYet) {
+  FrameClock clock(2'000'000);
+  const Nanos t0 = vehicle_now_ns();
+  camera::FrameMeta m;
+  m.domain = camera::TimeDomain::kDeviceTicks;
+  m.device_ns = 5'000'000'000;
+  m.first_rx_ns = t0 + 2'000'000 + 40'000'000;  // exposure end + a 40 ms host hiccup
+  const auto s = clock.stamp(m, t0);
+  EXPECT_EQ(s.source, StampSource::kTriggerTick);
+  EXPECT_EQ(s.vehicle_ns, t0);
+  EXPECT_EQ(s.device_exposure_ns, 0);
+}
+
 TEST(FrameClock, DriftingDeviceTicksMapToVehicleTime) {
   constexpr double kDriftPpm = 80.0;
   constexpr Nanos kDeviceOffset = 5'000'000'000'000;  // the camera counts from its power-up

@@ -336,5 +336,45 @@ TEST(LidarTrigger, AMemberWhoseCameraHangsDoesNotStarveItsPartner) {
   EXPECT_LT(stop_ns, 1'600'000'000);  // at most the one call in flight
 }
 
+// A camera that takes every trigger but acknowledges it after the shot's deadline (30 ms: a GVCP
+// retry on a loaded host) exposes for each of them: its ticks are recorded when the call returns
+// (its frames are stamped by them), never counted refused, and it is fired at every crossing
+// (it is idle again when the next shot is armed). Before, each such tick was refused and lost.
+TEST(LidarTrigger, ACallReturningAfterTheDeadlineStillRecordsItsTick) {
+  LidarTrigger trigger("stereo", LidarTriggerConfig{"front", 0.0, 0.0});
+  std::mutex m;
+  std::vector<Nanos> called[2];
+  const auto member = [&](std::size_t i, useconds_t hold) {
+    return [&, i, hold] {
+      {
+        std::lock_guard lock(m);
+        called[i].push_back(vehicle_now_ns());
+      }
+      ::usleep(hold);
+      return true;
+    };
+  };
+  trigger.add(member(0, 30'000));
+  trigger.add(member(1, 0));
+  const Sweep sweep{vehicle_now_ns(), 10.0, 200.0};
+  SimulatedLidar lidar(sweep, trigger);
+  trigger.start();
+  ::usleep(2'500'000);
+  trigger.stop();
+  lidar.stop();
+  const auto slow = trigger.figures(0);
+  const auto fast = trigger.figures(1);
+  std::lock_guard lock(m);
+  ASSERT_GE(called[1].size(), 10u);
+  EXPECT_GE(called[0].size() + 1, called[1].size());  // fired at (nearly) every crossing its partner was
+  EXPECT_EQ(slow.refused, 0u);
+  EXPECT_EQ(fast.refused, 0u);
+  EXPECT_GE(slow.timed_out, called[0].size() - 1);
+  // Every call's tick is known (the last 10: the trigger keeps 16): a frame exposed after the call
+  // maps to the tick of that call.
+  for (std::size_t k = called[0].size() - 10; k < called[0].size(); ++k)
+    EXPECT_NEAR(static_cast<double>(trigger.tick_before(called[0][k] + 2'000'000, 0)), static_cast<double>(called[0][k]), 1e6) << k;
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers

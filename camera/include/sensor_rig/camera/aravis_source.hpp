@@ -90,10 +90,14 @@ class AravisSource final : public FrameSource {
 
   SourceConfig cfg_;
   AravisDeviceOpener opener_;
-  mutable std::mutex mutex_;  // camera control (open/close/trigger) from two threads
-  // GenICam access (trigger, features, the PTP poll): taken after mutex_; the PTP thread takes
-  // only this one, so stats() never waits for its GVCP round trip.
-  std::shared_ptr<std::mutex> gc_mutex_ = std::make_shared<std::mutex>();  // shared with the exposure watcher
+  // Camera control (open/close/trigger) from two threads. Timed: trigger() waits for either lock
+  // at most kTriggerLockWaitMs (see trigger()).
+  mutable std::timed_mutex mutex_;
+  // GenICam access (trigger, features, the PTP poll, the exposure read): taken after mutex_; the
+  // PTP thread and the exposure watcher take only this one, so stats() never waits for their GVCP
+  // round trips.
+  std::shared_ptr<std::timed_mutex> gc_mutex_ = std::make_shared<std::timed_mutex>();  // shared with the exposure watcher
+  std::atomic<std::uint64_t> trigger_lock_busy_{0};  // triggers refused: a GenICam access held the camera
   std::unique_ptr<State> st_;
   std::atomic<bool> control_lost_{false};
   std::atomic<bool> streaming_{false};

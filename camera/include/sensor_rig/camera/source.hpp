@@ -103,6 +103,9 @@ struct SourceStats {
   // Frames the device made that never reached next(): GigE block-id gaps (underruns, frames Aravis
   // discarded), V4L2 sequence gaps. Counted within one open (a reopened device restarts its ids).
   std::uint64_t missing_frames = 0;
+  // Software triggers refused because another access to the camera (a GenICam read in a GVCP
+  // timeout) held it past the trigger's wait: the trigger never queues behind it.
+  std::uint64_t trigger_busy = 0;
   // Every frame made and not returned: what the driver reports as `counted_lost`.
   [[nodiscard]] std::uint64_t lost_frames() const noexcept { return incomplete + missing_frames; }
 };

@@ -30,7 +30,7 @@ struct FrameStamp {
   Nanos vehicle_ns = 0;
   StampSource source = StampSource::kHostFallback;
   // The exposure start the device reported, in vehicle time (its ticks mapped, PTP, V4L2): also
-  // for a frame stamped with its trigger tick; 0 while the device's clock is not mapped yet.
+  // for a frame stamped with its trigger tick; 0 while the device's clock mapping is not locked.
   Nanos device_exposure_ns = 0;
 };
 

@@ -41,7 +41,9 @@ struct LidarTriggerFigures {
   timesync::SweepStatus sweep;
   std::uint64_t triggers = 0;        // ticks fired
   std::uint64_t refused = 0;         // this camera refused the trigger (closed, lost)
-  std::uint64_t timed_out = 0;       // its call had not returned by the shot's deadline (counted in refused)
+  // Its call had not returned by the shot's deadline; settled when it returns: refused, or its
+  // tick recorded late (a camera that took the trigger exposes for it: the frame is stamped by it).
+  std::uint64_t timed_out = 0;
   std::uint64_t late = 0;            // fired more than 1 ms after the aimed time (woke late)
   std::uint64_t prediction_lost = 0; // times the prediction went away (LIDAR stopped / lost lock)
   std::uint64_t measured = 0;        // this camera's triggers in the phase figure below
@@ -83,7 +85,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   void exposed(std::size_t member, Nanos tick, Nanos device_exposure_ns) override;
   void observe_sweep(std::span<const timesync::SweepSample> samples) noexcept override;
   void add_status(dds::DriverStatus& s, std::size_t member) const override;
-  [[nodiscard]] bool firing() const override;
+  [[nodiscard]] Nanos first_accepted_since(std::size_t member, Nanos mono) const override;
   [[nodiscard]] LidarTriggerFigures figures(std::size_t member = 0) const;
   [[nodiscard]] const LidarTriggerConfig& config() const noexcept { return cfg_; }
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
@@ -94,6 +96,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
     std::thread thread;             // its firing thread
     // Under mutex_:
     RecentTicks exposures;          // its frame stamps
+    RecentTicks accepted_mono;      // CLOCK_MONOTONIC when its accepted calls were settled
     ErrorHistory device_error;      // |exposure start the camera reported - actual crossing|
     ErrorHistory call_error;        // |trigger call + latency - actual crossing|
     ErrorHistory to_exposure;       // reported exposure start - trigger call
@@ -108,10 +111,14 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
     std::vector<Nanos> called;      // per member: vehicle time of its trigger call
     std::vector<char> accepted;     // per member: the camera took the trigger
     std::vector<std::uint64_t> reported;  // per member: the last generation it finished (or skipped)
+    std::vector<char> busy;         // per member: still in an older shot's call when this one was armed
+    std::vector<char> abandoned;    // per member: the trigger thread stopped waiting for its call
+    std::vector<char> taken;        // per member: its firing thread took this shot (calls, not skips)
     bool closing = false;           // stop(): firing threads end once nothing is armed
   };
   // A fired tick, until its crossing is measured and its frames have reported their exposure.
   struct Tick {
+    std::uint64_t generation;       // the shot that fired it
     Nanos target;                   // predicted crossing
     std::vector<Nanos> exposures;   // per member: fired + latency; 0 = refused
     std::vector<Nanos> device;      // per member: exposure start the camera reported; 0 = none
@@ -121,6 +128,8 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   void run();
   void run_member(std::size_t i, std::uint64_t seen);  // seen: the shots armed before it started
   void fire(Nanos target, Nanos aim);
+  // A member's call that returned after its shot's deadline: refused, or its tick recorded now.
+  void settle_late_call(std::size_t i, std::uint64_t generation, Nanos called, bool accepted);
   void settle(Nanos newest) noexcept;  // ticks whose crossing the samples now cover
   void add_device_error(const Tick& t, std::size_t member) noexcept;
 

@@ -31,6 +31,13 @@ class RecentTicks {
       if (v <= t && v > best) best = v;
     return best;
   }
+  // The earliest tick at or after t; 0 when none (kept).
+  [[nodiscard]] Nanos first_since(Nanos t) const noexcept {
+    Nanos best = 0;
+    for (Nanos v : ticks_)
+      if (v >= t && (best == 0 || v < best)) best = v;
+    return best;
+  }
 
  private:
   static constexpr std::size_t kKeep = 16;
@@ -71,9 +78,11 @@ class TriggerSource {
   virtual void exposed(std::size_t /*member*/, Nanos /*tick*/, Nanos /*device_exposure_ns*/) {}
   // The trigger's own figures (for `member`) in that camera's /diagnostics status.
   virtual void add_status(dds::DriverStatus& /*s*/, std::size_t /*member*/) const {}
-  // The source fires its shots now (a LIDAR trigger: its sweep is predicted). A camera whose
-  // trigger source stopped sends nothing: its watchdog reports that instead of reopening it.
-  [[nodiscard]] virtual bool firing() const { return true; }
+  // CLOCK_MONOTONIC time of the first trigger `member`'s camera took at or after `mono` (0: none).
+  // A triggered camera's watchdog counts from it: a camera whose trigger source stopped (a stopped
+  // LIDAR, or one not predicted yet) sends nothing and is reported, not reopened (issue 27 item 2).
+  // This default: taken continuously (the watchdog counts from `mono`).
+  [[nodiscard]] virtual Nanos first_accepted_since(std::size_t /*member*/, Nanos mono) const { return mono; }
 };
 
 class TriggerGroup : public TriggerSource {
