@@ -182,7 +182,8 @@ class Recorder {
     while (t.reader->take(item.sample)) {
       ++t.received;
       t.received_bytes += item.sample.size();
-      if (t.queued >= opt_.topic_queue) {
+      // Over shm a queued sample holds its publisher's iceoryx chunk: bounded per topic too.
+      if (opt_.dds.transport == dds::Transport::kShm && t.queued >= opt_.topic_queue) {
         ++t.queue_dropped;
         continue;
       }

@@ -25,7 +25,7 @@ struct RecordOptions {
   double split_s = 0;
   std::size_t chunk_kb = 4096;      // uncompressed bytes per chunk
   std::size_t queue_mb = 256;       // bytes queued between the DDS thread and the writer at most
-  std::size_t topic_queue = 128;    // samples queued per topic at most (over shm: chunks held)
+  std::size_t topic_queue = 128;    // over shm: samples (= the publishers' chunks) queued per topic at most
   bool progress = true;             // a line on stderr once a second
   int rt_priority = 0;              // > 0: the DDS thread, the writer thread and Cyclone's threads SCHED_FIFO
 };
