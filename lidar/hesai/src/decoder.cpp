@@ -212,11 +212,13 @@ struct DecoderImpl {
     scans.begin_packet();
     PendingScan& cur = scans.current();
     cur.rebase(stamp);
+    bool in_next = false;
     for (int g = 0; g < groups; ++g) {
       if ((fit.bad >> g) & 1U) continue;
       const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
       const bool overlap = window_open && in_sector(reset_raw, emit_raw, az[g]) && az[g] != emit_raw;
       if (overlap) {
+        in_next = true;
         PendingScan& nxt = scans.next();
         nxt.rebase(group_stamp);
         const Nanos nxt_rx = nxt.scan.last_rx_ns;
@@ -231,6 +233,7 @@ struct DecoderImpl {
     }
     --hole.open;
     scans.fill_missing();
+    if (in_next) scans.fill_missing_next();  // counted in both: it has channels in both
   }
 };
 
@@ -476,13 +479,25 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   prev_sensor_us = sensor_us;
   scans.begin_packet();
   // Packets lost across the cut: those past it are the next scan's (issue 26 item 3).
-  std::uint32_t missing_next = 0;
-  if (missing > 0 && have_prev && crosses(prev_az, az_step(prev_az, az[first_good]), emit_raw, true))
-    missing_next = detail::missing_after_cut(fov, emit_raw, az[first_good], fit.step, first_good + 1, groups, missing);
+  // Packets lost inside the cut's window have channels in both scans: missing in both, as a truth
+  // record counts them (the next scan hid them: rig chaos, lidar.loss_burst at_cut).
+  std::uint32_t missing_next = 0, missing_window = 0;
+  if (missing > 0 && have_prev) {
+    const int step0 = az_step(prev_az, az[first_good]);
+    if (crosses(prev_az, step0, emit_raw, true))
+      missing_next = detail::missing_after_cut(fov, emit_raw, az[first_good], fit.step, first_good + 1, groups, missing);
+    std::uint32_t touching = 0;
+    if (window_open)
+      touching = missing;
+    else if (crosses(prev_az, step0, reset_raw, true))
+      touching = detail::split_missing_at_cut(fov, reset_raw, az[first_good], fit.step, first_good + 1, groups, missing).after;
+    missing_window = touching > missing_next ? touching - missing_next : 0;
+  }
   if (missing > missing_next) {
     scans.add_missing(missing - missing_next);
     hole = {prev_az, az[first_good], detail::kTurn, missing - missing_next};
   }
+  if (missing_window > 0) scans.add_missing_next(missing_window);
   if (fit.bad != 0) {
     const auto nb = static_cast<std::uint64_t>(std::popcount(fit.bad));
     stats.corrupt_blocks += nb;

@@ -181,18 +181,18 @@ TEST_P(ScanFaults, PacketLateAcrossThePublishedCutIsCountedOnce) {
     for (std::size_t k = 0; k < r.scans.size(); ++k) {
       EXPECT_EQ(r.scans[k].stamp, clean_.scans[k].stamp) << "scan " << k;
       if (r.scans[k].missing_packets == 0) {
-        // Left (issue 26): a Hesai packet inside the cut's window that comes after the window closed
-        // has channels past the cut; the next scan lacks them (80 points) and counts nothing missing.
-        if (!hesai || k == 0 || r.scans[k - 1].missing_packets == 0) {
-          EXPECT_EQ(r.scans[k].points.size(), clean_.scans[k].points.size()) << "scan " << k;
-        }
+        EXPECT_EQ(r.scans[k].points.size(), clean_.scans[k].points.size()) << "scan " << k;
         continue;
       }
       EXPECT_EQ(r.scans[k].missing_packets, 1U) << "scan " << k;
       EXPECT_LT(r.scans[k].points.size(), clean_.scans[k].points.size()) << "scan " << k;
       ++lacking;
     }
-    EXPECT_EQ(lacking, 1U) << "the scan published before its packet came";
+    // Pandar40P: its channels look up to ~3.2° apart, so a packet inside the cut's window has
+    // channels in both scans; come after the window closed, both lack them (not placed in the scan
+    // being assembled: left, issue 26). The PandarXT32's channels fire at one azimuth.
+    const bool both = std::string(GetParam()) == "Pandar40P";
+    EXPECT_EQ(lacking, both ? 2U : 1U) << "the scans published (or cut) before its packet came";
   }
 }
 

@@ -176,6 +176,17 @@ class ScanAssembler {
     cur_.scan.missing_packets += n;
     stats_.missing_packets += n;
   }
+  // `n` packets lost with data in the lookahead scan as well (Hesai: inside the cut's window).
+  void add_missing_next(std::uint32_t n) noexcept {
+    nxt_.scan.missing_packets += n;
+    stats_.missing_packets += n;
+  }
+  // A packet counted missing in the lookahead scan arrived late after all.
+  void fill_missing_next() noexcept {
+    if (nxt_.scan.missing_packets == 0) return;
+    --nxt_.scan.missing_packets;
+    --stats_.missing_packets;
+  }
   // A packet counted missing in the current scan arrived late after all.
   void fill_missing() noexcept {
     if (cur_.scan.missing_packets == 0) return;
