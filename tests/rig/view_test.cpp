@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <atomic>
@@ -22,6 +24,7 @@
 #include <thread>
 
 #include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/dds/roudi.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "view_client.hpp"
 #include "wait.hpp"
@@ -54,15 +57,17 @@ struct Sent {
 // A PointCloud2 writer and an Image writer at `hz`, each sample's data different; what was written
 // is remembered by stamp.
 class Publishers {
-  static dds::DomainConfig domain() {
+  static dds::DomainConfig domain(dds::Transport transport) {
     dds::DomainConfig d;
     d.domain_id = kDomain;
+    d.transport = transport;
     return d;
   }
 
  public:
-  Publishers(std::uint32_t points, std::uint32_t image_w, std::uint32_t image_h, int hz)
-      : participant_(domain()), cloud_topic_(participant_, kCloud), image_topic_(participant_, kImage),
+  Publishers(std::uint32_t points, std::uint32_t image_w, std::uint32_t image_h, int hz,
+             dds::Transport transport = dds::Transport::kUdp)
+      : participant_(domain(transport)), cloud_topic_(participant_, kCloud), image_topic_(participant_, kImage),
         cloud_(std::make_unique<dds::Writer<msg::PointCloud2>>(participant_, cloud_topic_)),
         image_(std::make_unique<dds::Writer<msg::Image>>(participant_, image_topic_)) {
     thread_ = std::thread([=, this] { run(points, image_w, image_h, hz); });
@@ -148,12 +153,12 @@ class Publishers {
 // `rig view` in its own process, its JSON stats lines collected.
 class RigView {
  public:
-  RigView() : port_(free_tcp_port()) {
+  explicit RigView(const std::string& transport = "udp") : port_(free_tcp_port()) {
     ChildOptions o;
     o.pipe_stdio = true;
     proc_ = ChildProcess({std::getenv("RIG_BIN") != nullptr ? std::getenv("RIG_BIN") : RIG_DEFAULT_BIN, "view",
                           "--domain", std::to_string(kDomain), "--port", std::to_string(port_), "--stats-interval",
-                          "0.5"},
+                          "0.5", "--transport", transport},
                          o);
   }
   [[nodiscard]] std::string url() const { return "ws://127.0.0.1:" + std::to_string(port_); }
@@ -358,6 +363,50 @@ TEST_F(RigViewTest, AStalledClientDoesNotSlowAnotherAndBadInputIsAnswered) {
   const json summary = bad.summary();
   for (const auto& st : summary["statuses"]) errors += st["level"] == 2 ? 1 : 0;
   EXPECT_EQ(errors, 9u) << bad.transcript();
+}
+
+// iox-roudi, stopping, sends SIGTERM to every process registered with it, this test's own included
+// (its publishers' participant): ignored from before the RouDi starts until after it has stopped.
+class IgnoreSigterm {
+ public:
+  IgnoreSigterm() {
+    struct sigaction ign {};
+    ign.sa_handler = SIG_IGN;
+    ::sigaction(SIGTERM, &ign, &old_);
+  }
+  ~IgnoreSigterm() { ::sigaction(SIGTERM, &old_, nullptr); }
+  IgnoreSigterm(const IgnoreSigterm&) = delete;
+  IgnoreSigterm& operator=(const IgnoreSigterm&) = delete;
+
+ private:
+  struct sigaction old_ {};
+};
+
+// With shared memory on both sides (their own RouDi), a sample reaches rig view as an iceoryx chunk
+// (dds::RawSample: a header made by the reader, then the chunk: two pieces); the client must still
+// get each cloud and image whole.
+TEST_F(RigViewTest, OverSharedMemoryCloudsAndImagesArriveWhole) {
+  if (::access("/usr/bin/iox-roudi", X_OK) != 0) GTEST_SKIP() << "no iox-roudi (Debian package iceoryx)";
+  if (dds::probe_roudi().pid != 0) GTEST_SKIP() << "another RouDi runs on this machine; this test needs its own";
+  const std::string log = "/tmp/rig-view-test-roudi-" + std::to_string(::getpid()) + ".log";
+  struct RemoveLog {
+    std::string path;
+    ~RemoveLog() { std::remove(path.c_str()); }
+  } remove_log{log};
+  IgnoreSigterm ignore_sigterm;  // destroyed after the RouDi
+  dds::RouDi roudi("", log, false);
+  Publishers pub(20'000, 320, 240, 10, dds::Transport::kShm);
+  RigView view("shm");
+  ASSERT_TRUE(test::wait_for([&] { return view.stats().value("channels", 0) >= 2; }, 30'000)) << view.stats().dump();
+  test::ViewClient c({"--url", view.url(), "--wait-topics", kCloud + "," + kImage, "--subscribe", kCloud + "," + kImage,
+                      "--count", "10", "--print-messages", "--timeout", "60"});
+  ASSERT_TRUE(c.wait_exit(90'000)) << c.transcript();
+  EXPECT_EQ(c.exit_status(), 0) << c.transcript();
+  EXPECT_GE(check_against(c, kCloud, pub.clouds(), true), 10u) << c.transcript();
+  EXPECT_GE(check_against(c, kImage, pub.images(), false), 10u);
+  view.process().signal(SIGTERM);
+  ASSERT_TRUE(view.process().wait_exit(10'000));
+  EXPECT_EQ(view.process().exit_status(), 0);
 }
 
 }  // namespace
