@@ -30,19 +30,52 @@ TriggerGroup::TriggerGroup(std::string name, double rate_hz) : name_(std::move(n
 TriggerGroup::~TriggerGroup() { stop(); }
 
 std::size_t TriggerGroup::add(std::function<bool()> trigger) {
-  members_.push_back(std::move(trigger));
+  Member m;
+  m.trigger = std::move(trigger);
+  members_.push_back(std::move(m));
   return members_.size() - 1;
 }
 
 void TriggerGroup::start() {
   if (thread_.joinable()) return;
   stop_.store(false);
+  {
+    std::lock_guard lock(calls_mutex_);
+    closing_ = false;
+  }
+  for (std::size_t i = 0; i < members_.size(); ++i) members_[i].thread = std::thread([this, i] { run_member(i); });
   thread_ = std::thread([this] { run(); });
 }
 
 void TriggerGroup::stop() {
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
+  {
+    std::lock_guard lock(calls_mutex_);
+    closing_ = true;
+  }
+  calls_cv_.notify_all();
+  for (auto& m : members_)  // a call in flight is waited for (at most one per member)
+    if (m.thread.joinable()) m.thread.join();
+}
+
+std::uint64_t TriggerGroup::skipped(std::size_t member) const {
+  std::lock_guard lock(calls_mutex_);
+  return member < members_.size() ? members_[member].skipped : 0;
+}
+
+void TriggerGroup::run_member(std::size_t i) {
+  std::unique_lock lock(calls_mutex_);
+  for (;;) {
+    calls_cv_.wait(lock, [&] { return members_[i].pending || closing_; });
+    if (!members_[i].pending) return;  // closing, nothing to call
+    members_[i].pending = false;
+    members_[i].busy = true;
+    lock.unlock();
+    (void)members_[i].trigger();  // a closed camera refuses: its driver reports that
+    lock.lock();
+    members_[i].busy = false;
+  }
 }
 
 Nanos TriggerGroup::tick_before(Nanos t, std::size_t /*member*/) const {
@@ -62,7 +95,16 @@ void TriggerGroup::run() {
       std::lock_guard lock(mutex_);
       recent_.add(tick);
     }
-    for (auto& m : members_) (void)m();  // a closed camera refuses: its driver reports that
+    {
+      std::lock_guard lock(calls_mutex_);
+      for (auto& m : members_) {
+        if (m.busy || m.pending)
+          ++m.skipped;  // still in an older tick's call: this one is not queued behind it
+        else
+          m.pending = true;
+      }
+    }
+    calls_cv_.notify_all();
     ticks_.fetch_add(1);
     next += period;
     if (const Nanos now = monotonic_now_ns(); next < now) next = now;  // late: no burst

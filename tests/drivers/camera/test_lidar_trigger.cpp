@@ -376,5 +376,31 @@ TEST(LidarTrigger, ACallReturningAfterTheDeadlineStillRecordsItsTick) {
     EXPECT_NEAR(static_cast<double>(trigger.tick_before(called[0][k] + 2'000'000, 0)), static_cast<double>(called[0][k]), 1e6) << k;
 }
 
+// Issue 27 item 1, the periodic group (`group:` without a LIDAR): a member whose camera hangs in
+// its trigger call (1.5 s of GVCP timeouts) misses its ticks, counted; its partner is called at
+// every tick. Before, the members were called one after another: the partner got a call per 1.5 s.
+TEST(TriggerGroup, AMemberWhoseCameraHangsDoesNotStarveItsPartner) {
+  TriggerGroup group("stereo", 20.0);
+  std::atomic<std::uint64_t> calls[2] = {0, 0};
+  group.add([&] {
+    ++calls[0];
+    ::usleep(1'500'000);
+    return false;
+  });
+  group.add([&] { return ++calls[1] > 0; });
+  group.start();
+  ::usleep(2'000'000);
+  const Nanos t_stop = monotonic_now_ns();
+  group.stop();
+  const Nanos stop_ns = monotonic_now_ns() - t_stop;
+  const std::uint64_t ticks = group.ticks();
+  EXPECT_GE(ticks, 35u);  // 20 Hz for 2 s
+  EXPECT_GE(calls[1].load() + 1, ticks);  // every tick (the last may be in flight at stop)
+  EXPECT_LE(calls[0].load(), 2u);
+  EXPECT_GE(group.skipped(0), ticks - 2);
+  EXPECT_EQ(group.skipped(1), 0u);
+  EXPECT_LT(stop_ns, 1'600'000'000);  // at most the one call in flight
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers

@@ -3,6 +3,7 @@
 // rate, triggers every member back to back and records the tick's vehicle time, so the frames it
 // exposed carry the same stamp.
 #include <atomic>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -98,13 +99,29 @@ class TriggerGroup : public TriggerSource {
   // Vehicle time of the latest tick at or before `t` (0: none yet): one for all members.
   [[nodiscard]] Nanos tick_before(Nanos t, std::size_t member) const override;
   [[nodiscard]] std::uint64_t ticks() const noexcept { return ticks_.load(); }
+  // Ticks `member` missed because its previous call had not returned (a camera in GVCP timeouts).
+  [[nodiscard]] std::uint64_t skipped(std::size_t member) const;
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
 
  private:
+  // Each member is called on a thread of its own: the tick never waits for a call, so a member
+  // whose camera does not answer misses its ticks (counted) and its partners do not (issue 27
+  // item 1; they were called one after another).
+  struct Member {
+    std::function<bool()> trigger;
+    std::thread thread;
+    bool pending = false;  // under calls_mutex_: a tick to call
+    bool busy = false;     // in its call
+    std::uint64_t skipped = 0;
+  };
   void run();
+  void run_member(std::size_t i);
   std::string name_;
   double rate_hz_;
-  std::vector<std::function<bool()>> members_;
+  std::vector<Member> members_;
+  mutable std::mutex calls_mutex_;  // members_' pending/busy/skipped, closing_
+  std::condition_variable calls_cv_;
+  bool closing_ = false;
   std::thread thread_;
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> ticks_{0};
