@@ -9,7 +9,8 @@
 // refused frames in between carried. A counter of N values cannot tell k lost frames from k + N, nor a
 // loss from an ECU that was silent (bus-off, restart: frames never sent are not lost): a jump across a
 // silence with room for more than half a counter turn is counted as `gaps_unknown`, never guessed.
-// Also invisible: a lost frame that carried its predecessor's value (a frozen counter).
+// A frozen counter (the same value repeated) cannot show a loss either: while it is frozen, frames
+// missing from a silence are counted from the message's learned period instead.
 #include <cstdint>
 #include <span>
 
@@ -40,6 +41,7 @@ class FrameLossCounter {
   Nanos longest_silence_ = 0;          // between arrivals since the last good frame
   std::uint32_t refused_values_ = 0;   // bit per counter value the refused frames since then carried
   bool refused_since_ = false;
+  bool last_repeated_ = false;         // the last frame repeated its predecessor's counter
   double period_ns_ = 0;               // the message's period, learned from consecutive good frames
   std::uint64_t lost_ = 0;
   std::uint64_t gaps_unknown_ = 0;
