@@ -228,6 +228,25 @@ TEST(ChaosCheck, RecoveryIsTheFirstCompleteScanAfterTheFault) {
   EXPECT_NEAR(r.topics.at(kTopic).recovery_max_s, 0.1, 1e-6);
 }
 
+// A camera planned dead for the whole run has no recovery to judge, not even from its trigger
+// LIDAR's faults (the whole-rig campaign reported stereo_right "not back" after an rpm change).
+TEST(ChaosCheck, ACameraThatNeverAnswersHasNoRecoveryToJudge) {
+  Input in = honest();
+  const std::string cam = "/sensors/camera/stereo_right/image_raw";
+  truth::Log dead;
+  dead.header = truth::Header{"stereo_right", "camera", "arv-fake", cam, "frame", "camera ns"};
+  dead.faults.push_back(truth::FaultRecord{1, "camera.never_answers", kT0, kT0 + kScans * kPeriod, -1, ""});
+  in.truths.push_back(dead);
+  in.expected[cam] = TopicExpectation{"stereo_right", 10.0, {"front"}};
+  in.events.push_back(faults::FaultEvent{1, "camera.never_answers", "stereo_right", 0.0, 0.0, {}});  // as planned: no duration
+  in.events.push_back(faults::FaultEvent{2, "lidar.rpm_change", "front", 1.0, 0.5, {}});
+  in.truths[0].faults.push_back(truth::FaultRecord{2, "lidar.rpm_change", kT0 + kPeriod * 10, kT0 + kPeriod * 15, 10, ""});
+  in.bounds.camera_recovery_s = 1.0;  // so that the deadline falls inside this 5 s window
+  const Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("recovery")) << result_text(r);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+}
+
 TEST(ChaosCheck, APlannedFaultNoMockRecordedIsReported) {
   Input in = honest();
   in.events.push_back(faults::FaultEvent{7, "lidar.reorder", "front", 2.0, 0.0, {{"n", "1"}, {"ms", "0"}}});
