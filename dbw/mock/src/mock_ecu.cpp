@@ -175,7 +175,11 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
   if (bus_off_) return out;
   const auto& rxm = p_.rx_messages();
   if (now >= next_status_) {
-    next_status_ = now + p_.timing().tx_period_ns;
+    // On the ECU's own grid, as a real ECU's cyclic messages: `now + period` slipped by each step's
+    // lateness (the 1 ms tick), and the mock sent at 97 Hz instead of 100 (rig chaos' isolation saw it).
+    // Far behind (a stalled process), it starts a new grid rather than bursting to catch up.
+    next_status_ += p_.timing().tx_period_ns;
+    if (next_status_ <= now) next_status_ = now + p_.timing().tx_period_ns;
     const auto& s = model_.state();
     for (std::size_t i = 0; i < rxm.size(); ++i) {
       if (rxm[i].role == "status") {
@@ -188,7 +192,8 @@ std::vector<can::Frame> MockEcu::step(Nanos now) {
                  {"gear", static_cast<double>(s.gear)}},
              t_s, now, out);
       } else if (rxm[i].role == "wheels" && now >= next_wheels_) {
-        next_wheels_ = now + 2 * p_.timing().tx_period_ns;
+        next_wheels_ += 2 * p_.timing().tx_period_ns;
+        if (next_wheels_ <= now) next_wheels_ = now + 2 * p_.timing().tx_period_ns;
         double w[4];
         model_.wheel_speeds(w);
         emit(i, {{"fl", w[0]}, {"fr", w[1]}, {"rl", w[2]}, {"rr", w[3]}}, t_s, now, out);
