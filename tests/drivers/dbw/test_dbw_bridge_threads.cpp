@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -137,6 +138,8 @@ TEST(DbwBridgeThreads, FastSourceScheduleAndStopInOneProcess) {
   std::uint64_t stamped = 0, answered = 0, ecu_out_of_range = 0;
   const auto take_stamps = [&] {
     stamps.take([&](const msg::SourceStamps& s, const dds_sample_info_t&) {
+      // The commands' stamps (each /vehicle/state sample has its own too).
+      if (s.topic == nullptr || std::string_view(s.topic) != sensor_rig::drivers::kCmdTopic) return;
       ++stamped;
       if (s.ecu_status_ns == 0) return;  // no ECU status answered this command (e.g. at stop)
       ++answered;
