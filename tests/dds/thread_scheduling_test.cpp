@@ -11,6 +11,7 @@
 #include <map>
 #include <string>
 
+#include "dds_domain_lease.hpp"
 #include "sensor_rig/dds/participant.hpp"
 #include "sensor_rig/dds/thread_scheduling.hpp"
 #include "sensor_rig/dds/types.hpp"
@@ -44,7 +45,7 @@ bool may_use_rtprio() {
 
 TEST(DdsThreadScheduling, ReceiveDeliveryAndEventThreadsRunFifoWherePermitted) {
   DomainConfig cfg;
-  cfg.domain_id = static_cast<dds_domainid_t>(180 + ::getpid() % 40);  // a domain of its own: a fresh Cyclone
+  cfg.domain_id = static_cast<dds_domainid_t>(sensor_rig::test::lease_dds_domain());  // a fresh Cyclone of its own
   cfg.realtime_priority = 13;
   Participant p(cfg);
   QosSpec q;

@@ -46,6 +46,7 @@
 #include <thread>
 #include <vector>
 
+#include "dds_domain_lease.hpp"
 #include "rig_process.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/config_node.hpp"
@@ -289,7 +290,7 @@ TEST(FastDdsInterop, DefaultRos2SubscribersReceiveEveryScan) {
   const auto rig = mock_rig_front(where.source, why);
   ASSERT_TRUE(rig) << why;
   FastDdsShmGuard shm;
-  const int domain = 150 + static_cast<int>(::getpid() % 60);  // private to this run
+  const int domain = sensor_rig::test::lease_dds_domain();  // private to this run
   const std::string ros_topic = "/sensors/lidar/interop_" + std::to_string(::getpid()) + "/points";
   dds::Participant p(dds::DomainConfig{static_cast<dds_domainid_t>(domain), rig->profile});
   dds::Topic<msg::PointCloud2> topic(p, ros_topic, rig->lidar.qos);
@@ -367,7 +368,7 @@ TEST(FastDdsInterop, OneNodeReadsEveryCloudOfThePhaseLockedRig) {
   const auto front = mock_rig_front(where.source, why);
   ASSERT_TRUE(front) << why;
   FastDdsShmGuard shm;
-  const int domain = 150 + static_cast<int>((::getpid() + 30) % 60);
+  const int domain = sensor_rig::test::lease_dds_domain();
   const char* depth_env = std::getenv("RIG_INTEROP_RIG_DEPTH");
   const std::string qos =
       "{reliability: reliable, depth: " +

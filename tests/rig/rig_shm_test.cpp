@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "dds_domain_lease.hpp"
 #include "rig_process.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/dds/roudi.hpp"
@@ -21,7 +22,7 @@
 namespace sensor_rig {
 namespace {
 
-const dds_domainid_t kDomain = 60 + static_cast<dds_domainid_t>(::getpid() % 40);
+const dds_domainid_t kDomain = static_cast<dds_domainid_t>(sensor_rig::test::lease_dds_domain());
 
 std::string rig_bin() { return std::getenv("RIG_BIN"); }
 std::string source_dir() { return std::getenv("RIG_SOURCE_DIR"); }

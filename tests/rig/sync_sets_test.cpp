@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "dds_domain_lease.hpp"
 #include "rig_config.hpp"
 #include "sensor_rig/common/errors.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
@@ -93,7 +94,7 @@ TEST(SyncSetsConfig, ReportsEveryProblemWithItsPosition) {
 // an incomplete set in the node's diagnostics.
 TEST(SyncSetNode, PublishesCompleteSetsFromStampsAndCountsIncompleteOnes) {
   dds::DomainConfig dc;
-  dc.domain_id = static_cast<dds_domainid_t>(100 + ::getpid() % 100);  // away from a running rig
+  dc.domain_id = static_cast<dds_domainid_t>(sensor_rig::test::lease_dds_domain());  // away from a running rig
   dds::Participant p(dc);
   SyncSetConfig sc;
   sc.name = "pair_" + std::to_string(::getpid());

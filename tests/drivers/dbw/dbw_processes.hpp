@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "dds_domain_lease.hpp"
 #include "dbw_test_data.hpp"
 
 namespace sensor_rig::dbw::test {
@@ -59,17 +60,17 @@ enum class DomainBy : std::uint8_t {
 };
 
 // One process test's world:
-//   RigProcesses rig("dbw_faults", 37);
+//   RigProcesses rig("dbw_faults");
 //   if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
 //   const pid_t mock = rig.start_mock({"--duration", "25"});
 //   ASSERT_GT(mock, 0) << "mock ECU did not create its bus socket";
 //   const pid_t bridge = rig.start("bridge", {"dbw", "bridge", "--transport", rig.bus(), ...});
 class RigProcesses {
  public:
-  // `tag` names the work directory (<tmp>/<tag>_<pid>); `salt` spreads the domains of tests that
-  // run at the same time (domain 100 + (pid + salt) % 100).
-  explicit RigProcesses(const std::string& tag, int salt = 0, DomainBy by = DomainBy::kEnvironment)
-      : domain_(100 + (static_cast<int>(::getpid()) + salt) % 100),
+  // `tag` names the work directory (<tmp>/<tag>_<pid>); the domain is leased, so no test that runs
+  // at the same time shares it (tests/support/dds_domain_lease.hpp).
+  explicit RigProcesses(const std::string& tag, DomainBy by = DomainBy::kEnvironment)
+      : domain_(sensor_rig::test::lease_dds_domain()),
         dir_(std::filesystem::temp_directory_path() / (tag + "_" + std::to_string(::getpid()))) {
     if (const char* b = std::getenv("RIG_BIN"); b != nullptr && std::filesystem::exists(b)) bin_ = b;
     if (by == DomainBy::kEnvironment) {

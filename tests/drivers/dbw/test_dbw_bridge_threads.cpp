@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bridge_outbox.hpp"
+#include "dds_domain_lease.hpp"
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
 #include "sensor_rig/dbw/bridge/defaults.hpp"
 #include "sensor_rig/dbw/mock/mock_runner.hpp"
@@ -113,7 +114,7 @@ TEST(DbwBridgeEcuStage, FirstGoodStatusAfterTheWriteCompletesTheStamps) {
 }
 
 TEST(DbwBridgeThreads, FastSourceScheduleAndStopInOneProcess) {
-  const int domain = 100 + (::getpid() + 13) % 100;
+  const int domain = sensor_rig::test::lease_dds_domain();
   const auto protocol = dbw::Protocol::load(dbw::default_protocol_config());
   auto ends = dbw::can::make_socketpair();  // named, not a structured binding: lambdas capture them
   auto& bridge_end = ends.first;

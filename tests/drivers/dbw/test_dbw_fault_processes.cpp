@@ -207,7 +207,7 @@ BusLog read_bus_log(const std::string& path, const dbw::Protocol& p) {
 }
 
 TEST(DbwFaultProcesses, EveryFaultDisengagesWithItsReasonAndOnlyNeutralFramesFollow) {
-  dbw::test::RigProcesses rig("dbw_faults", 37);
+  dbw::test::RigProcesses rig("dbw_faults");
   if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
   // The research car's table: steering out of range is rejected, throttle above 0.6 clamped.
   const fs::path cfg = dbw::test::source_dir() / "config/dbw";

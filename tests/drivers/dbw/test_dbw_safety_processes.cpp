@@ -120,7 +120,7 @@ int active_frames(const std::vector<PuFrame>& frames, Nanos from, Nanos to) {
 }
 
 TEST(DbwSafetyProcesses, WritersRestartClockShiftAndSigterm) {
-  dbw::test::RigProcesses rig("dbw_safety", 71, dbw::test::DomainBy::kFlag);
+  dbw::test::RigProcesses rig("dbw_safety", dbw::test::DomainBy::kFlag);
   if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
   const std::string dom = std::to_string(rig.domain());
   const auto protocol = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());

@@ -46,7 +46,7 @@ long long json_number(const std::string& text, const std::string& key) {
 }
 
 TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
-  dbw::test::RigProcesses rig("dbw_security", 53, dbw::test::DomainBy::kFlag);
+  dbw::test::RigProcesses rig("dbw_security", dbw::test::DomainBy::kFlag);
   if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
   const std::string dom = std::to_string(rig.domain());
   const std::string sec = rig.path("sec");
@@ -153,7 +153,7 @@ namespace {
 // Credentials Cyclone refuses, and plugins that are not there: `rig dbw send` exits 1 saying so
 // (no participant, nothing sent), instead of running as an ordinary participant.
 TEST(DbwSecurityProcesses, RefusedCredentialsAndMissingPluginsAreReported) {
-  dbw::test::RigProcesses rig("dbw_security_refused", 59, dbw::test::DomainBy::kFlag);
+  dbw::test::RigProcesses rig("dbw_security_refused", dbw::test::DomainBy::kFlag);
   if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
   const std::string sec = rig.path("sec");
   ASSERT_EQ(rig.wait_exit(rig.start("init", {"security", "init", sec}), 10000), 0) << rig.output("init");

@@ -35,7 +35,6 @@ namespace {
 
 struct Writes {
   const char* kind;
-  int index;
   bool plain_reads_real;  // an ordinary reader still gets the authenticated bridge's samples
 };
 
@@ -62,9 +61,9 @@ double last_state_rate(const std::string& monitor_output) {
 
 TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) {
   const Writes w = GetParam();
-  dbw::test::RigProcesses rig(std::string("dbw_sec_writes_") + w.kind, 0, dbw::test::DomainBy::kFlag);
+  dbw::test::RigProcesses rig(std::string("dbw_sec_writes_") + w.kind, dbw::test::DomainBy::kFlag);
   if (!rig.have_rig()) GTEST_SKIP() << "RIG_BIN not set or rig not built";
-  const int domain = 180 + (static_cast<int>(::getpid()) + 4 * w.index + 2) % 20;
+  const int domain = rig.domain();
   const std::string dom = std::to_string(domain);
   const std::string sec = rig.path("sec");
   // Identities for 20 days: the bridge's /diagnostics warns (30 days ahead).
@@ -142,7 +141,7 @@ TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) 
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, DbwSecurityWrites,
-                         ::testing::Values(Writes{"access", 0, true}, Writes{"sign", 1, false}),
+                         ::testing::Values(Writes{"access", true}, Writes{"sign", false}),
                          [](const ::testing::TestParamInfo<Writes>& i) { return std::string(i.param.kind); });
 
 }  // namespace
