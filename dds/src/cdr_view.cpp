@@ -34,6 +34,13 @@ class CdrCursor {
     return swap_ ? __builtin_bswap32(v) : v;  // std::byteswap is C++23
   }
   std::int32_t i32() noexcept { return static_cast<std::int32_t>(u32()); }
+  std::uint16_t u16() noexcept {
+    const auto b = take(2, 2);
+    if (b.empty()) return 0;
+    std::uint16_t v = 0;
+    std::memcpy(&v, b.data(), sizeof v);
+    return swap_ ? __builtin_bswap16(v) : v;
+  }
   // Length (with the NUL) then the characters; the view leaves the NUL out.
   std::string_view string() noexcept {
     const std::uint32_t n = u32();
@@ -94,6 +101,9 @@ void read_header_and_size(CdrCursor& c, View& out) {
   out.width = c.u32();
 }
 
+// Smallest serialized LidarPacket: stamp, address, ports, data length.
+constexpr std::size_t kMinLidarPacketBytes = 8 + 4 + 2 + 2 + 4;
+
 // Smallest serialized PointField: name length + NUL, offset, datatype, padding, count.
 constexpr std::size_t kMinPointFieldBytes = 4 + 1 + 3 + 4 + 1 + 3 + 4;
 
@@ -147,6 +157,41 @@ CdrStatus parse_cdr(const CdrBody& in, ImageView& out) {
   out.encoding = c.string();
   out.is_bigendian = c.u8();
   out.step = c.u32();
+  out.data = c.octets();
+  return c.status();
+}
+
+CdrStatus parse_cdr(const CdrBody& in, LidarPacketsView& out) {
+  CdrCursor c(in);
+  out.header = c.header();
+  out.model = c.string();
+  out.data_port = c.u16();
+  const std::uint32_t n = c.sequence_length(kMinLidarPacketBytes);
+  out.packets.clear();
+  out.packets.reserve(n);
+  for (std::uint32_t i = 0; i < n && c.status() == CdrStatus::kOk; ++i) {
+    LidarPacketView p;
+    p.sec = c.i32();
+    p.nanosec = c.u32();
+    p.src_address = c.u32();
+    p.src_port = c.u16();
+    p.dst_port = c.u16();
+    p.data = c.octets();
+    out.packets.push_back(p);
+  }
+  return c.status();
+}
+
+CdrStatus parse_cdr(const CdrBody& in, CanFrameView& out) {
+  CdrCursor c(in);
+  out.header = c.header();
+  out.id = c.u32();
+  out.is_rtr = c.boolean();
+  out.is_extended = c.boolean();
+  out.is_error = c.boolean();
+  out.is_fd = c.boolean();
+  out.brs = c.boolean();
+  out.esi = c.boolean();
   out.data = c.octets();
   return c.status();
 }

@@ -1,5 +1,5 @@
-// `rig lidar replay`: a mock LIDAR (SPEC §7). Sends a capture's UDP payloads (--pcap) or a
-// synthetic sensor's packets (--synthetic MODEL, any of the seven models) to HOST:PORT at their own timing, scaled by
+// `rig lidar replay`: a mock LIDAR (SPEC §7). Sends a capture's UDP payloads (--pcap), a
+// recording's raw LIDAR channel (--mcap, mcap_stream.hpp) or a synthetic sensor's packets (--synthetic MODEL, any of the seven models) to HOST:PORT at their own timing, scaled by
 // --rate, optionally looping, with injected network faults. Position packets (port 8308 in a
 // capture; GPRMC + PPS from the synthetic sensor) go to --position-port on the same host when
 // given, else they are skipped. Ends with one summary line on stderr (and --json on stdout).
@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "lidar_commands.hpp"
+#include "mcap_stream.hpp"
 #include "replay_faults.hpp"
 #include "sensor_rig/lidar/decoder_files.hpp"
 #include "sensor_rig/lidar/return_selection.hpp"
@@ -34,6 +35,9 @@ namespace {
 
 struct ReplayCliOptions {
   std::string pcap;
+  std::string mcap;        // a recording's raw channel (rig record --raw)
+  std::string mcap_topic;  // its topic, /sensors/lidar/NAME/packets
+  double delay_s = 0;      // the first packet this long after the start (subscribers match meanwhile)
   std::string synthetic;
   std::string to;
   double rate = 1.0;
@@ -108,7 +112,7 @@ void write_metadata(const ReplayCliOptions& o, std::uint16_t port) {
 
 // What "dev" is in the truth record: the clock each vendor's packets carry.
 std::string clock_of(const ReplayCliOptions& o) {
-  if (o.synthetic.empty()) return "none (a capture: units and acquisition unknown)";
+  if (o.synthetic.empty()) return "none (a capture or recording: units and acquisition unknown)";
   if (mock::is_ouster_model(o.synthetic)) return "sensor ns, PTP-synced (column timestamps)";
   if (o.synthetic.rfind("Pandar", 0) == 0) return "sensor UTC ns, us resolution (tail time moved to the first firing)";
   return "sensor us since the top of the hour, as ns";
@@ -144,11 +148,15 @@ std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::
       std::filesystem::create_directories(std::filesystem::path(o.truth).parent_path());
     return truth::open_if(o.truth, header);
   };
-  if (!o.pcap.empty()) {
+  if (!o.pcap.empty() || !o.mcap.empty()) {
     std::unique_ptr<mock::PacketStream> capture;
     try {
-      capture = std::make_unique<mock::PcapStream>(o.pcap);
-    } catch (const PcapError& e) {
+      if (!o.mcap.empty()) {
+        capture = std::make_unique<McapPacketStream>(o.mcap, o.mcap_topic);
+      } else {
+        capture = std::make_unique<mock::PcapStream>(o.pcap);
+      }
+    } catch (const std::exception& e) {  // PcapError, McapError, no such channel
       throw std::runtime_error(std::string("cannot replay: ") + e.what());
     }
     if (!faulted && o.truth.empty()) return capture;
@@ -214,12 +222,15 @@ std::string json_line(const mock::ReplayStats& s) {
 }
 
 int run_replay_command(const ReplayCliOptions& o) {
-  if (o.pcap.empty() == o.synthetic.empty()) throw cli::UsageError("give exactly one of --pcap FILE or --synthetic MODEL");
+  const int sources = int{!o.pcap.empty()} + int{!o.mcap.empty()} + int{!o.synthetic.empty()};
+  if (sources != 1) throw cli::UsageError("give exactly one of --pcap FILE, --mcap FILE or --synthetic MODEL");
+  if (!o.mcap.empty() && o.mcap_topic.empty()) throw cli::UsageError("--mcap needs --mcap-topic /sensors/lidar/NAME/packets");
+  if (o.mcap.empty() && !o.mcap_topic.empty()) throw cli::UsageError("--mcap-topic applies to --mcap");
   if (!(o.rate > 0.0 && std::isfinite(o.rate))) throw cli::UsageError("--rate must be > 0");
-  if (o.loop && !o.synthetic.empty()) throw cli::UsageError("--loop applies to --pcap (a synthetic sensor never ends)");
-  if (!o.pcap.empty() && !(o.calibration.empty() && o.metadata.empty() && o.write_metadata.empty()))
+  if (o.loop && !o.synthetic.empty()) throw cli::UsageError("--loop applies to --pcap and --mcap (a synthetic sensor never ends)");
+  if (o.synthetic.empty() && !(o.calibration.empty() && o.metadata.empty() && o.write_metadata.empty()))
     throw cli::UsageError("--calibration, --metadata and --write-metadata apply to --synthetic");
-  if (!o.pcap.empty() && o.phase_lock) throw cli::UsageError("--phase-lock applies to --synthetic (a capture keeps its own phase)");
+  if (o.synthetic.empty() && o.phase_lock) throw cli::UsageError("--phase-lock applies to --synthetic (a capture keeps its own phase)");
   if (o.phase_lock && o.rate != 1.0) throw cli::UsageError("--phase-lock needs --rate 1 (the lock is to real seconds)");
   if (o.to.empty()) {
     if (o.write_metadata.empty()) throw cli::UsageError("--to HOST:PORT is required");
@@ -239,6 +250,7 @@ int run_replay_command(const ReplayCliOptions& o) {
   ro.loop = o.loop;
   ro.duration_ns = static_cast<Nanos>(o.duration_s * 1e9);
   ro.max_packets = o.count;
+  if (o.delay_s > 0) ro.lead_ns = static_cast<Nanos>(o.delay_s * 1e9);
   ro.send_position = o.position_port != 0;
   ro.faults.drop_rate = o.drop;
   ro.faults.corrupt_rate = o.corrupt;
@@ -264,7 +276,8 @@ int run_replay_command(const ReplayCliOptions& o) {
   mock::PacketStream& stream = truth_stream ? static_cast<mock::PacketStream&>(*truth_stream) : *plain;
   UdpSender sender(dests, o.send_buffer);
 
-  log::info("replay", std::string(o.pcap.empty() ? "synthetic " + o.synthetic : o.pcap) + " -> " + o.to +
+  const std::string what = !o.synthetic.empty() ? "synthetic " + o.synthetic : !o.pcap.empty() ? o.pcap : o.mcap + " " + o.mcap_topic;
+  log::info("replay", what + " -> " + o.to +
                           (o.position_port ? " (position packets -> port " + std::to_string(o.position_port) + ")"
                                            : std::string(" (position packets skipped)")));
   const mock::ReplayStats st = mock::run_replay(stream, sender, ro);
@@ -272,11 +285,11 @@ int run_replay_command(const ReplayCliOptions& o) {
   std::fprintf(stderr, "%s\n", mock::summary_line(st).c_str());
   if (o.json) std::printf("%s\n", json_line(st).c_str());
   if (!st.stream_error.empty()) {
-    std::fprintf(stderr, "error: capture ended early: %s\n", st.stream_error.c_str());
+    std::fprintf(stderr, "error: %s ended early: %s\n", o.mcap.empty() ? "capture" : "recording", st.stream_error.c_str());
     return cli::kRuntime;
   }
   if (st.read == 0 && !st.stopped) {
-    std::fprintf(stderr, "error: no UDP packets in %s\n", o.pcap.c_str());
+    std::fprintf(stderr, "error: no UDP packets in %s\n", (o.mcap.empty() ? o.pcap : o.mcap + " " + o.mcap_topic).c_str());
     return cli::kRuntime;
   }
   return cli::kOk;
@@ -291,9 +304,15 @@ void register_replay_command(CLI::App& lidar, cli::Context& ctx) {
   auto* synth = cmd->add_option("--synthetic", opts->synthetic,
                                 "render a synthetic sensor instead: " + mock::synthetic_model_names());
   pcap->excludes(synth);
+  auto* mcap = cmd->add_option("--mcap", opts->mcap, "a recording's raw LIDAR channel (rig record --raw) to replay")
+                   ->check(CLI::ExistingFile);
+  mcap->excludes(pcap)->excludes(synth);
+  cmd->add_option("--mcap-topic", opts->mcap_topic, "with --mcap: the raw channel, /sensors/lidar/NAME/packets");
+  cmd->add_option("--delay", opts->delay_s, "send the first packet S seconds after the start (a replayed drive: "
+                  "time for the driver's subscribers to match)")->check(CLI::Range(0.0, 60.0));
   cmd->add_option("--to", opts->to, "destination HOST:PORT of the data packets (required unless only --write-metadata)");
   cmd->add_option("--rate", opts->rate, "speed factor (2 = twice as fast as recorded)")->capture_default_str();
-  cmd->add_flag("--loop", opts->loop, "restart the capture at its end");
+  cmd->add_flag("--loop", opts->loop, "restart the capture (or recording) at its end");
   cmd->add_option("--rpm", opts->rpm, "synthetic: rotation speed")->capture_default_str()->check(CLI::Range(60.0, 1200.0));
   cmd->add_option("--phase-lock", opts->phase_lock,
                   "synthetic: the rotor passes DEG (the azimuth; Ouster: measurement id x 360 / W) at every whole "

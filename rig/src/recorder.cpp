@@ -160,6 +160,11 @@ class Recorder {
         std::fprintf(stderr, "rig record: %s: not recorded: %s\n", ros.c_str(), skipped_[ros].c_str());
         continue;
       }
+      if (is_raw_channel(type->schema_name) && !opt_.raw && wanted_.empty()) {
+        known_[ros] = nullptr;  // never matched: its driver does not publish it (summary: "raw_off")
+        raw_off_.insert(ros);
+        continue;
+      }
       dds::QosSpec q;
       q.reliability = pub.reliability;
       q.durability = pub.durability;
@@ -259,6 +264,7 @@ class Recorder {
                                  {"disk", t.disk_dropped.load()}};
     }
     for (const auto& [topic, why] : skipped_) j["skipped"][topic] = why;
+    for (const auto& topic : raw_off_) j["raw_off"].push_back(topic);
     for (const auto& w : wanted_)
       if (known_.count(w) == 0) j["not_seen"].push_back(w);
     if (shared_.failed) j["error"] = shared_.error;
@@ -276,12 +282,17 @@ class Recorder {
   std::deque<RecordTopic> topics_;  // stable addresses: queued items point at their topic
   std::map<std::string, RecordTopic*> known_;  // nullptr: skipped
   std::map<std::string, std::string> skipped_;
+  std::set<std::string> raw_off_;  // raw channels seen and not recorded (no --raw)
   Totals last_;
   Nanos last_elapsed_ = 0;
   std::uint64_t last_file_bytes_ = 0;
 };
 
 }  // namespace
+
+bool is_raw_channel(const std::string& schema_name) {
+  return schema_name == "sensor_rig_msgs/msg/LidarPackets" || schema_name == "sensor_rig_msgs/msg/CanFrame";
+}
 
 int run_record(const RecordOptions& o) {
   record::SplitOptions so;

@@ -28,7 +28,13 @@ struct RecordOptions {
   std::size_t topic_queue = 128;    // over shm: samples (= the publishers' chunks) queued per topic at most
   bool progress = true;             // a line on stderr once a second
   int rt_priority = 0;              // > 0: the DDS thread, the writer thread and Cyclone's threads SCHED_FIFO
+  // The raw channels (LIDAR packets, CAN frames: is_raw_channel) too; without, only when named.
+  bool raw = false;
 };
+
+// A type whose topics are raw channels: the drivers publish them only while a reader is matched,
+// so recording every discovered topic must not turn them on unless asked (--raw).
+bool is_raw_channel(const std::string& schema_name);
 
 // Records until the duration, a signal, or a file error. Prints the summary (JSON, one line) on
 // stdout. Returns the exit code: 0, or 1 when the file failed (the reason on stderr).

@@ -164,6 +164,7 @@ std::string describe(const RigConfig& cfg) {
       o << "]";
     }
     if (l.mock.kind == LidarMockConfig::Kind::kReplay) o << " [mock: replay " << l.mock.pcap << "]";
+    if (l.mock.kind == LidarMockConfig::Kind::kMcap) o << " [mock: mcap " << l.mock.file << " " << l.mock.topic << "]";
     o << "\n";
   }
   o << describe_cameras(cfg.cameras);

@@ -40,6 +40,11 @@ std::vector<std::string> lidar_mock_command(const std::string& rig_exe, const Li
   if (l.mock.kind == LidarMockConfig::Kind::kReplay) {
     argv.insert(argv.end(), {"--pcap", l.mock.pcap, "--rate", std::to_string(l.mock.rate)});
     if (l.mock.loop) argv.emplace_back("--loop");
+  } else if (l.mock.kind == LidarMockConfig::Kind::kMcap) {
+    // The recorded packets to the driver's ports; the second port's (position / IMU) with them.
+    argv.insert(argv.end(), {"--mcap", l.mock.file, "--mcap-topic", l.mock.topic, "--rate", std::to_string(l.mock.rate),
+                             "--delay", std::to_string(l.mock.delay_s)});
+    if (l.mock.loop) argv.emplace_back("--loop");
   } else {
     argv.insert(argv.end(), {"--synthetic", l.model, "--rpm", std::to_string(l.mock.rpm)});
     if (l.mock.phase_deg) argv.insert(argv.end(), {"--phase-lock", std::to_string(*l.mock.phase_deg)});

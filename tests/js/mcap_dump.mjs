@@ -44,6 +44,19 @@ function summarize(schemaName, m) {
       return { ...s, width: m.width, height: m.height, distortion_model: m.distortion_model, k: Array.from(m.k) };
     case "diagnostic_msgs/msg/DiagnosticArray":
       return { ...s, status: m.status.map((x) => ({ name: x.name, level: x.level, values: x.values.length })) };
+    case "sensor_rig_msgs/msg/LidarPackets": {
+      // The raw channel: each datagram's addresses and size, and one FNV-1a over the batch's payloads.
+      let h = 0x811c9dc5;
+      for (const p of m.packets)
+        for (let i = 0; i < p.data.length; i++) h = Math.imul(h ^ p.data[i], 0x01000193) >>> 0;
+      return { ...s, model: m.model, data_port: m.data_port, data_fnv: h >>> 0,
+               packets: m.packets.map((p) => ({ stamp_ns: String(BigInt(p.stamp.sec) * 1000000000n + BigInt(p.stamp.nanosec)),
+                                               src_address: p.src_address, src_port: p.src_port, dst_port: p.dst_port,
+                                               size: p.data.length })) };
+    }
+    case "sensor_rig_msgs/msg/CanFrame":
+      return { ...s, id: m.id, is_extended: m.is_extended, is_rtr: m.is_rtr, is_error: m.is_error, is_fd: m.is_fd,
+               data: Array.from(m.data) };
     case "sensor_rig_msgs/msg/SourceStamps":
       return { ...s, stamps_topic: m.topic, seq: String(m.seq), publish_ns: String(m.publish_ns) };
     default:

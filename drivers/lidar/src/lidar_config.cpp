@@ -13,17 +13,32 @@ namespace sensor_rig::drivers {
 namespace {
 
 LidarMockConfig parse_mock(const config::Node& n) {
-  n.allow_keys({"kind", "pcap", "rate", "loop", "rpm", "phase_deg", "drop_rate", "corrupt_rate"});
+  n.allow_keys({"kind", "pcap", "file", "topic", "delay", "rate", "loop", "rpm", "phase_deg", "drop_rate", "corrupt_rate"});
   LidarMockConfig m;
-  const auto kind = n.get_choice("kind", {"none", "synthetic", "replay"}, "none");
+  const auto kind = n.get_choice("kind", {"none", "synthetic", "replay", "mcap"}, "none");
   m.kind = kind == "synthetic" ? LidarMockConfig::Kind::kSynthetic
            : kind == "replay"  ? LidarMockConfig::Kind::kReplay
+           : kind == "mcap"    ? LidarMockConfig::Kind::kMcap
                                : LidarMockConfig::Kind::kNone;
+  const bool mcap = m.kind == LidarMockConfig::Kind::kMcap;
   m.pcap = n.get_path("pcap", "");
   if (m.kind == LidarMockConfig::Kind::kReplay && m.pcap.empty()) n.fail("pcap", "replay mock needs a pcap file");
   if (!m.pcap.empty() && !std::filesystem::exists(m.pcap)) n.fail("pcap", "file not found: " + m.pcap);
+  if (!m.pcap.empty() && mcap) n.fail("pcap", "an mcap mock reads file: (a recording), not pcap:");
+  m.file = n.get_path("file", "");
+  if (mcap && m.file.empty()) n.fail("kind", "an mcap mock needs file: a recording made with rig record --raw");
+  if (!mcap && n.has("file")) n.fail("file", "only used with kind: mcap");
+  if (!m.file.empty() && !std::filesystem::is_regular_file(m.file)) n.fail("file", "file not found: " + m.file);
+  if (n.has("topic")) {
+    m.topic = n.get_string("topic");
+    if (!mcap) n.fail("topic", "only used with kind: mcap");
+    else if (m.topic.rfind("/sensors/lidar/", 0) != 0 || !m.topic.ends_with("/packets"))
+      n.fail("topic", "'" + m.topic + "' is not a raw LIDAR channel (/sensors/lidar/NAME/packets)");
+  }
+  if (n.has("delay") && !mcap) n.fail("delay", "only used with kind: mcap");
+  m.delay_s = n.get_double("delay", 0.0, 60.0, 1.0);
   m.rate = n.get_double("rate", 0.01, 100.0, 1.0);
-  m.loop = n.get_bool("loop", true);
+  m.loop = n.get_bool("loop", !mcap);  // a recorded drive plays once, as rig play does
   m.rpm = static_cast<int>(n.get_int("rpm", 300, 1200, 600));
   if (n.has("phase_deg")) {
     m.phase_deg = n.get_double("phase_deg", 0.0, 359.999, 0.0);
@@ -180,6 +195,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
   if (auto m = n.child("mock")) l.mock = parse_mock(*m);
+  if (l.mock.kind == LidarMockConfig::Kind::kMcap && l.mock.topic.empty()) l.mock.topic = "/sensors/lidar/" + l.name + "/packets";
   if (auto r = n.child("record")) l.record = parse_record(*r);
   check_decoder_files(n, l);
   const bool synthetic = l.mock.kind == LidarMockConfig::Kind::kSynthetic;

@@ -19,6 +19,7 @@
 #include "sensor_rig/drivers/lidar/sweep_samples.hpp"
 #include "sensor_rig/timesync/host_clock.hpp"
 #include "sensor_rig/timesync/monotonic_stamps.hpp"
+#include "sensor_rig/dds/on_demand_writer.hpp"
 #include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 
@@ -94,6 +95,14 @@ std::unique_ptr<lidar::RingSource> make_ring_source(const LidarConfig& c) {
 dds::QosSpec side_qos() {
   dds::QosSpec q;
   q.depth = 10;
+  return q;
+}
+
+// Raw packets: reliable keep-last 64 (one sample per receive call): a recorder that lags a little
+// loses nothing, and the driver's write never blocks.
+dds::QosSpec raw_qos() {
+  dds::QosSpec q;
+  q.depth = 64;
   return q;
 }
 
@@ -193,6 +202,10 @@ struct LidarDriver::Impl {
   std::vector<msg::PointField> fields;
   // `record:`: raw packets of both ports, as received; queued here, written on its own thread.
   std::unique_ptr<lidar::RecorderThread> recorder;
+  // /sensors/lidar/<name>/packets: every datagram as received, written only while a reader (rig
+  // record --raw) is matched; the packets point into the slots (no copy before Cyclone's).
+  dds::OnDemandWriter<msg::LidarPackets> raw;
+  std::vector<msg::LidarPacket> raw_batch;
   std::thread thread;
   std::atomic<bool> stop_flag{false};
   std::vector<timesync::SweepObserver*> sweep_observers;  // set before start(), read by the thread
@@ -221,6 +234,8 @@ struct LidarDriver::Impl {
   std::uint64_t imu_dropped_size = 0;      // second-port packets that are not 48 bytes
   std::uint64_t imu_dropped_non_finite = 0;
   std::uint64_t sweep_samples_sent = 0;    // to the sweep observers (LIDAR-triggered cameras)
+  std::uint64_t raw_packets = 0;           // datagrams written to the raw topic
+  std::uint64_t raw_write_errors = 0;
   timesync::MonotonicStampsStatus stamp_monotonic;  // scan_monotonic's, for status()
   std::size_t last_points = 0;
   std::uint32_t last_missing = 0;      // missing packets of the last published scan
@@ -251,7 +266,8 @@ struct LidarDriver::Impl {
         imu_topic_name("/sensors/lidar/" + c.name + "/imu"),
         fix_topic_name("/sensors/lidar/" + c.name + "/fix"),
         imu_frame_id(c.frame_id + "_imu"),
-        gps_frame_id(c.frame_id + "_gps") {
+        gps_frame_id(c.frame_id + "_gps"),
+        raw(p, "/sensors/lidar/" + c.name + "/packets", raw_qos()) {
     ouster = model_vendor_is(c, "ouster");
     if (has_second_port(c)) {
       if (!ring) {
@@ -268,6 +284,7 @@ struct LidarDriver::Impl {
     }
     fields = msg::point_fields(lidar::kPointFields);
     recorder = make_recorder(c);
+    raw_batch.reserve(arena.slots().size());
     if (!c.sensor_address.empty()) locked_source = ipv4_of(c.sensor_address);
   }
 
@@ -277,6 +294,38 @@ struct LidarDriver::Impl {
     if (!recorder) return;
     const lidar::UdpAddressing a{slot.src_addr, slot.src_port, slot.dst_addr, slot.dst_port};
     recorder->push(slot.bytes(), slot.rx_ns, lidar::DatagramHeaders{a, slot.captured_headers()});
+  }
+
+  // The datagrams of one receive call on the raw topic, as they arrived (foreign and bad ones too).
+  // Called after they were decoded, so a recording never delays a scan.
+  void publish_raw(std::span<const lidar::PacketSlot> slots) {
+    if (slots.empty() || !raw.active()) return;
+    raw_batch.clear();
+    for (const auto& s : slots) {
+      msg::LidarPacket p{};
+      p.stamp = msg::to_time(s.rx_ns);
+      p.src_address = s.src_addr;
+      p.src_port = s.src_port;
+      p.dst_port = s.dst_port;
+      // Cyclone serializes from the slot; the C type is not const-correct and is never written through.
+      p.data._buffer = const_cast<std::uint8_t*>(reinterpret_cast<const std::uint8_t*>(s.buffer.data()));
+      p.data._length = p.data._maximum = static_cast<std::uint32_t>(s.size);
+      raw_batch.push_back(p);
+    }
+    msg::LidarPackets m{};
+    m.header.stamp = msg::to_time(slots.front().rx_ns);
+    m.header.frame_id = const_cast<char*>(cfg.name.c_str());
+    m.model = const_cast<char*>(cfg.model.c_str());
+    m.data_port = static_cast<std::uint16_t>(cfg.port);
+    m.packets._buffer = raw_batch.data();
+    m.packets._length = m.packets._maximum = static_cast<std::uint32_t>(raw_batch.size());
+    const auto rc = raw.write(m, vehicle_now_ns());
+    std::lock_guard lock(mutex);
+    raw_packets += slots.size();
+    if (!rc.ok()) {
+      ++raw_write_errors;
+      last_error = "dds write (packets): " + rc.message();
+    }
   }
 
   // Vehicle time of the packet's first firing (timesync/ decides how; see its README).
@@ -307,6 +356,7 @@ struct LidarDriver::Impl {
         record(slot);
         handle_second_port(slot);
       }
+      publish_raw(position_arena.slots().first(r.count));
       if (r.count < position_arena.slots().size()) break;
     }
   }
@@ -458,6 +508,7 @@ struct LidarDriver::Impl {
           decoder->recycle(std::move(scan->points));
         }
       }
+      publish_raw(slots.first(r.count));
       drain_second_port_socket();
       std::lock_guard lock(mutex);
       decoder_stats = decoder->counters();
@@ -575,6 +626,11 @@ dds::DriverStatus LidarDriver::status() const {
   if (!impl_->sweep_observers.empty()) {
     s.add_number("sweep_observers", impl_->sweep_observers.size());
     s.add_number("sweep_samples", impl_->sweep_samples_sent);
+  }
+  if (impl_->raw_packets > 0) {
+    s.add("raw_topic", impl_->raw.ros_name());
+    s.add_number("raw_packets", impl_->raw_packets);
+    s.add_number("raw_write_errors", impl_->raw_write_errors);
   }
   if (impl_->recorder) {
     const auto& r = rec.sink.stats;

@@ -68,8 +68,35 @@ struct ImageView {
   std::span<const std::byte> data;
 };
 
+// sensor_rig_msgs/LidarPacket(s): the raw channel of a LIDAR (msgs/idl/sensor_rig_msgs.idl).
+struct LidarPacketView {
+  std::int32_t sec = 0;
+  std::uint32_t nanosec = 0;
+  std::uint32_t src_address = 0;
+  std::uint16_t src_port = 0;
+  std::uint16_t dst_port = 0;
+  std::span<const std::byte> data;
+};
+
+struct LidarPacketsView {
+  HeaderView header;
+  std::string_view model;
+  std::uint16_t data_port = 0;
+  std::vector<LidarPacketView> packets;  // reused across parses when the view is
+};
+
+// sensor_rig_msgs/CanFrame: the raw channel of the CAN bus.
+struct CanFrameView {
+  HeaderView header;
+  std::uint32_t id = 0;
+  bool is_rtr = false, is_extended = false, is_error = false, is_fd = false, brs = false, esi = false;
+  std::span<const std::byte> data;
+};
+
 // Fill `out` from `in`; on anything but kOk `out` is unspecified and must not be used.
 CdrStatus parse_cdr(const CdrBody& in, PointCloud2View& out);
 CdrStatus parse_cdr(const CdrBody& in, ImageView& out);
+CdrStatus parse_cdr(const CdrBody& in, LidarPacketsView& out);
+CdrStatus parse_cdr(const CdrBody& in, CanFrameView& out);
 
 }  // namespace sensor_rig::dds

@@ -16,10 +16,15 @@ namespace sensor_rig::drivers {
 
 // How the LIDAR's mock (started by `rig up` beside the driver) produces packets.
 struct LidarMockConfig {
-  enum class Kind { kNone, kSynthetic, kReplay } kind = Kind::kNone;
+  enum class Kind { kNone, kSynthetic, kReplay, kMcap } kind = Kind::kNone;
   std::string pcap;          // replay: capture file (falls back to synthetic when absent and optional)
-  double rate = 1.0;         // replay speed factor
-  bool loop = true;
+  // mcap: a recording's raw channel of this LIDAR (`rig record --raw`), sent at its recorded
+  // receive times through the real driver (docs/recording.md "Replaying raw channels").
+  std::string file;
+  std::string topic;         // mcap: default /sensors/lidar/<name>/packets
+  double delay_s = 1.0;      // mcap: the first packet this long after the start (as rig play --delay)
+  double rate = 1.0;         // replay / mcap speed factor
+  bool loop = true;          // replay / mcap: from the start again at the end (mcap: default false)
   int rpm = 600;             // synthetic: rotation speed
   // synthetic: phase lock, the rotor angle at every whole second (lidar/mock/phase_lock.hpp); LIDARs
   // locked alike complete their scans together. nullopt: free running, from whenever it starts.

@@ -1,0 +1,223 @@
+// Raw LIDAR channels (issue 29): `rig up` runs a synthetic VLP-32C through its driver while `rig
+// record --raw` records its packets and its scans; then `rig up` replays the recorded packets
+// through the same driver (mock: {kind: mcap}) while another recorder takes the scans. Every live
+// scan that lies wholly inside the raw recording must come out of the replay with the same stamp
+// (sensor time, GPRMC hour, no clock correction: the packets' own) and the same point count, and
+// the replay has no other scan in that window. The raw channel is also read by @mcap/core
+// (tests/js/mcap_dump.mjs); a cut and a corrupted recording replay what is intact and say where not.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "dds_domain_lease.hpp"
+#include "record_support.hpp"
+#include "sensor_rig/dds/cdr_view.hpp"
+#include "sensor_rig/record/mcap_reader.hpp"
+
+namespace sensor_rig::rig {
+namespace {
+
+constexpr std::uint32_t kVlp32cPacket = 1206;
+constexpr std::uint32_t kPositionPacket = 512;
+constexpr Nanos kScanNs = 100'000'000;  // 600 rpm
+
+std::string profile() { return (test::source_dir() / "config/cyclonedds/loopback.xml").string(); }
+
+struct Recorded {
+  std::map<Nanos, std::uint32_t> scans;  // stamp -> points
+  std::uint64_t packets = 0, data_packets = 0, position_packets = 0, batches = 0;
+  Nanos first_rx = 0, last_rx = 0;
+  std::multiset<std::uint32_t> batch_fnv;  // per message: FNV-1a over its packets' payloads
+  std::vector<record::McapProblem> problems;
+};
+
+// Our own reading of a file: record/McapReader and dds/cdr_view.
+Recorded read_recording(const std::string& file, const std::string& lidar) {
+  Recorded r;
+  record::McapReader reader(file);
+  dds::PointCloud2View cloud;
+  dds::LidarPacketsView raw;
+  reader.for_each_message([&](const record::McapMessage& m) {
+    const auto& topic = reader.channels().at(m.channel_id).topic;
+    const auto body = dds::cdr_body(m.data);
+    if (!body) return true;
+    if (topic == "/sensors/lidar/" + lidar + "/points" && dds::parse_cdr(*body, cloud) == dds::CdrStatus::kOk) {
+      r.scans[static_cast<Nanos>(cloud.header.sec) * 1'000'000'000 + cloud.header.nanosec] = cloud.width;
+    } else if (topic == "/sensors/lidar/" + lidar + "/packets" && dds::parse_cdr(*body, raw) == dds::CdrStatus::kOk) {
+      ++r.batches;
+      std::uint32_t fnv = 0x811c9dc5u;
+      for (const auto& p : raw.packets) {
+        const Nanos rx = static_cast<Nanos>(p.sec) * 1'000'000'000 + p.nanosec;
+        if (r.first_rx == 0 || rx < r.first_rx) r.first_rx = rx;
+        r.last_rx = std::max(r.last_rx, rx);
+        ++r.packets;
+        ++(p.dst_port == raw.data_port ? r.data_packets : r.position_packets);
+        for (const auto b : p.data) fnv = (fnv ^ std::to_integer<std::uint32_t>(b)) * 0x01000193u;
+      }
+      r.batch_fnv.insert(fnv);
+    }
+    return true;
+  });
+  r.problems = reader.problems();
+  return r;
+}
+
+class RawReplay : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    domain_ = test::lease_dds_domain();
+    port_ = test::free_udp_port();
+    position_port_ = test::free_udp_port();
+  }
+
+  // One VLP-32C named `raw29`, stamped from its packets alone, with the given mock.
+  std::string config(const std::string& name, const std::string& mock) const {
+    return dir_.write(name, "rig:\n  name: raw-replay\n  dds: {domain: " + std::to_string(domain_) + ", profile: " +
+                                profile() + "}\nlidars:\n  - name: raw29\n    model: VLP-32C\n    port: " +
+                                std::to_string(port_) + "\n    position_port: " + std::to_string(position_port_) +
+                                "\n    time_source: sensor\n    clock_correction: never\n    mock: " + mock + "\n");
+  }
+
+  test::RigChild record(const std::vector<std::string>& extra, const std::string& out, double seconds) const {
+    std::vector<std::string> args{"record", "--out", out, "--domain", std::to_string(domain_), "--dds-profile", profile(),
+                                  "--duration", std::to_string(seconds), "--no-progress"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return test::RigChild(args, out + ".out", out + ".err");
+  }
+
+  test::TempDir dir_;
+  int domain_ = 0, port_ = 0, position_port_ = 0;
+};
+
+TEST_F(RawReplay, ScansReplayedThroughTheDriverEqualTheLiveOnes) {
+  const std::string live = (dir_.path / "live.mcap").string();
+  const std::string replayed = (dir_.path / "replayed.mcap").string();
+  {
+    test::RigChild up({"up", config("live.yaml", "{kind: synthetic, rpm: 600}"), "--duration", "60"},
+                      (dir_.path / "up_live.out").string(), (dir_.path / "up_live.err").string());
+    ASSERT_TRUE(up.started());
+    // --raw: every topic, the raw channel included (its driver publishes it only while recorded).
+    test::RigChild rec = record({"--raw"}, live, 5.0);
+    ASSERT_EQ(rec.wait(90'000), 0) << rec.err();
+    const auto s = rec.summary();
+    ASSERT_GT(s["topics"]["/sensors/lidar/raw29/packets"]["written"].get<int>(), 0) << rec.out() << rec.err();
+    EXPECT_EQ(s["drops"]["queue_full"], 0);
+    up.signal_and_wait(SIGINT, 20'000);
+  }
+  const Recorded l = read_recording(live, "raw29");
+  ASSERT_TRUE(l.problems.empty());
+  ASSERT_GT(l.data_packets, 1000u);  // ~1500 a second
+  EXPECT_GT(l.position_packets, 0u);  // the second port's too: the replay needs their GPRMC hour
+
+  // The live scans wholly inside the raw recording: their every packet was recorded.
+  std::map<Nanos, std::uint32_t> inside;
+  for (const auto& [stamp, points] : l.scans)
+    if (stamp >= l.first_rx && stamp + kScanNs <= l.last_rx) inside[stamp] = points;
+  ASSERT_GE(inside.size(), 20u) << "live scans " << l.scans.size();
+
+  {
+    // The recorder first: it matches the replay's writer during the mock's 1 s delay.
+    const double span_s = static_cast<double>(l.last_rx - l.first_rx) / 1e9;
+    test::RigChild rec = record({"/sensors/lidar/raw29/points"}, replayed, span_s + 8.0);
+    test::RigChild up({"up", config("replay.yaml", "{kind: mcap, file: " + live + ", delay: 2}"), "--duration", "60"},
+                      (dir_.path / "up_replay.out").string(), (dir_.path / "up_replay.err").string());
+    ASSERT_TRUE(up.started());
+    ASSERT_EQ(rec.wait(120'000), 0) << rec.err();
+    up.signal_and_wait(SIGINT, 20'000);
+    EXPECT_EQ(rec.summary()["raw_off"], nullptr) << "a named recording records no other topic";
+  }
+  const Recorded r = read_recording(replayed, "raw29");
+  EXPECT_EQ(r.packets, 0u) << "the raw channel was not asked for";
+  std::size_t matched = 0;
+  for (const auto& [stamp, points] : inside) {
+    const auto it = r.scans.find(stamp);
+    if (it == r.scans.end()) {
+      ADD_FAILURE() << "live scan " << stamp << " (" << points << " points) not replayed";
+      continue;
+    }
+    EXPECT_EQ(it->second, points) << "scan " << stamp;
+    ++matched;
+  }
+  EXPECT_EQ(matched, inside.size());
+  // Nothing else in that window: a scan split in two or made up would show here.
+  std::size_t replayed_inside = 0;
+  for (const auto& [stamp, points] : r.scans)
+    if (stamp >= inside.begin()->first && stamp <= inside.rbegin()->first) ++replayed_inside;
+  EXPECT_EQ(replayed_inside, inside.size());
+  std::printf("live: %zu scans, %zu inside the raw recording (%llu packets in %llu messages); replay: %zu scans, %zu matched\n",
+              l.scans.size(), inside.size(), static_cast<unsigned long long>(l.packets),
+              static_cast<unsigned long long>(l.batches), r.scans.size(), matched);
+
+  // An independent reader decodes the raw channel from the schema in the file.
+  const auto j = test::mcap_dump(live);
+  ASSERT_FALSE(j.contains("error")) << j.dump().substr(0, 2000);
+  EXPECT_EQ(j["undecodable"], 0);
+  const auto& ch = j["channels"]["/sensors/lidar/raw29/packets"];
+  EXPECT_EQ(ch["schema"], "sensor_rig_msgs/msg/LidarPackets");
+  EXPECT_EQ(ch["count"], l.batches);
+  std::uint64_t packets = 0, data = 0, position = 0;
+  std::multiset<std::uint32_t> fnv;
+  for (const auto& m : j["messages"]) {
+    if (m["topic"] != "/sensors/lidar/raw29/packets") continue;
+    EXPECT_EQ(m["frame_id"], "raw29");
+    EXPECT_EQ(m["model"], "VLP-32C");
+    for (const auto& p : m["packets"]) {
+      ++packets;
+      EXPECT_EQ(p["src_address"], 0x7F000001u);  // the mock sends from loopback
+      if (p["dst_port"] == port_) {
+        ++data;
+        EXPECT_EQ(p["size"], kVlp32cPacket);
+      } else {
+        ++position;
+        EXPECT_EQ(p["dst_port"], position_port_);
+        EXPECT_EQ(p["size"], kPositionPacket);
+      }
+    }
+    fnv.insert(m["data_fnv"].get<std::uint32_t>());
+  }
+  EXPECT_EQ(packets, l.packets);
+  EXPECT_EQ(data, l.data_packets);
+  EXPECT_EQ(position, l.position_packets);
+  EXPECT_EQ(fnv, l.batch_fnv) << "payloads differ";
+
+  // A cut recording and one with a corrupt chunk: what is intact is sent, the place is named, exit 1.
+  const auto size = std::filesystem::file_size(live);
+  const std::string cut = (dir_.path / "cut.mcap").string();
+  std::filesystem::copy_file(live, cut);
+  std::filesystem::resize_file(cut, size / 2);
+  const std::string corrupt = (dir_.path / "corrupt.mcap").string();
+  std::filesystem::copy_file(live, corrupt);
+  {
+    std::fstream f(corrupt, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(size / 3));
+    const char junk[16] = {'\x5a', '\x5a', '\x5a', '\x5a', '\x5a', '\x5a', '\x5a', '\x5a',
+                           '\x5a', '\x5a', '\x5a', '\x5a', '\x5a', '\x5a', '\x5a', '\x5a'};
+    f.write(junk, sizeof junk);
+  }
+  for (const auto& [file, says] : {std::pair<std::string, std::string>{cut, "offset"}, {corrupt, "chunk at offset"}}) {
+    SCOPED_TRACE(file);
+    const Recorded intact = read_recording(file, "raw29");
+    ASSERT_FALSE(intact.problems.empty());
+    ASSERT_GT(intact.packets, 0u);
+    ASSERT_LT(intact.packets, l.packets);
+    test::RigChild replay({"lidar", "replay", "--mcap", file, "--mcap-topic", "/sensors/lidar/raw29/packets", "--to",
+                           "127.0.0.1:" + std::to_string(test::free_udp_port()), "--position-port",
+                           std::to_string(test::free_udp_port()), "--rate", "20", "--json"},
+                          file + ".out", file + ".err");
+    EXPECT_EQ(replay.wait(120'000), 1) << replay.err();
+    const auto s = replay.summary();
+    ASSERT_FALSE(s.is_discarded()) << replay.out() << replay.err();
+    EXPECT_EQ(s["sent_data"].get<std::uint64_t>(), intact.data_packets) << replay.err();
+    EXPECT_EQ(s["sent_position"].get<std::uint64_t>(), intact.position_packets);
+    EXPECT_NE(replay.err().find("recording ended early"), std::string::npos) << replay.err();
+    EXPECT_NE(replay.err().find(says), std::string::npos) << replay.err();
+  }
+}
+
+}  // namespace
+}  // namespace sensor_rig::rig
