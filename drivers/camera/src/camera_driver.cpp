@@ -74,6 +74,7 @@ struct CameraDriver::Impl {
   timesync::MonotonicStampsStatus monotonic;
   FrameClock::Rejected rejected;   // device stamps outside the arrival window
   Nanos rejected_seen_mono_ns = 0; // when the count last grew (CLOCK_MONOTONIC)
+  Nanos slewed_seen_mono_ns = 0;   // when a stamp last carried a step back's correction (FrameStamp::slewed)
   timesync::RealtimeStepDetector realtime_steps;  // told to the clock: stamps held over a step back
 
   Impl(const CameraConfig& c, std::unique_ptr<camera::FrameSource> s, const dds::Participant& p, dds::StampsWriter& st,
@@ -146,6 +147,7 @@ struct CameraDriver::Impl {
     if (outputs) outputs->offer(m, st.vehicle_ns, f.data());
     std::lock_guard lock(mutex);
     if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
+    if (st.slewed) slewed_seen_mono_ns = monotonic_now_ns();
     stamp_source = st.source;
     last_frame_host_ns = publish;
     last_frame_mono_ns = monotonic_now_ns();
@@ -316,7 +318,12 @@ dds::DriverStatus CameraDriver::status() const {
   s.name = "camera/" + c.name;
   s.hardware_id = std::string(c.source.backend) + ":" + c.source.device;
   const Nanos age = impl_->last_frame_mono_ns == 0 ? -1 : monotonic_now_ns() - impl_->last_frame_mono_ns;
-  const bool unsynchronized = impl_->rejected_seen_mono_ns != 0 && monotonic_now_ns() - impl_->rejected_seen_mono_ns < kUnsyncHoldNs;
+  const auto recent = [](Nanos seen) { return seen != 0 && monotonic_now_ns() - seen < kUnsyncHoldNs; };
+  const bool rejected_recently = recent(impl_->rejected_seen_mono_ns);
+  // Stamps held and slewed after a CLOCK_REALTIME step back are later than vehicle time by up to the
+  // step for ten times its length (timesync/README.md "Realtime steps"): flagged, not passed as exact.
+  const bool slewed_recently = recent(impl_->slewed_seen_mono_ns);
+  const bool unsynchronized = rejected_recently || slewed_recently;
   if (!impl_->open) {
     s.level = impl_->published.samples() == 0 && impl_->lost_reports == 0 ? dds::Level::kWarn : dds::Level::kError;
     s.message = impl_->state + (impl_->last_error.empty() ? "" : ": " + impl_->last_error);
@@ -329,6 +336,10 @@ dds::DriverStatus CameraDriver::status() const {
   } else if (age > static_cast<Nanos>(c.watchdog()) * 1'000'000) {
     s.level = dds::Level::kError;
     s.message = "no frame for " + std::to_string(age / 1'000'000) + " ms";
+  } else if (slewed_recently && !rejected_recently) {
+    s.level = dds::Level::kWarn;
+    s.message = "unsynchronized: stamps slewed after a CLOCK_REALTIME step back (" +
+                std::to_string(impl_->monotonic.correction_ns / 1'000'000) + " ms still added)";
   } else if (unsynchronized) {
     // Device stamps outside the arrival window were replaced: the topic's stamps are not the
     // camera's clock right now (issue 27 item 7).

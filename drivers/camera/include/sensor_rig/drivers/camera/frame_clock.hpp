@@ -32,7 +32,13 @@ struct FrameStamp {
   // The exposure start the device reported, in vehicle time (its ticks mapped, PTP, V4L2): also
   // for a frame stamped with its trigger tick; 0 while the device's clock mapping is not locked.
   Nanos device_exposure_ns = 0;
+  // The stamp carries more than kSlewFlagNs of a CLOCK_REALTIME step back that MonotonicStamps
+  // holds and slews out: it is later than vehicle time by that much, knowingly (the node flags the
+  // topic unsynchronized meanwhile: the stamp no longer names the exposure).
+  bool slewed = false;
 };
+// A correction beyond this (the camera stamp bound of rig chaos) makes a stamp `slewed`.
+inline constexpr Nanos kSlewFlagNs = 1'000'000;
 
 class FrameClock {
  public:
