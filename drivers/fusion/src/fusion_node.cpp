@@ -25,17 +25,24 @@ struct InputScan {
   Nanos stamp = 0;
   Nanos first_rx_ns = 0;
   Nanos written_ns = 0;  // the input on the wire
-  Nanos arrival_ns = 0;  // handed to this node
+  Nanos arrival_ns = 0;  // handed to this node (monotonic: the matcher's deadlines must not step)
   std::uint32_t packets = 0, dropped = 0, missing_packets = 0;
   std::vector<lidar::PointXYZIRT> points;
 };
 
-// One source's part of the open sweep: filtered on arrival straight into the published buffer
-// (the sweep's last scan is the only one filtered after the sweep is complete).
+// One source's part of an open sweep: filtered on arrival straight into the sweep's published
+// buffer (the sweep's last scan is the only one filtered after the sweep is complete).
 struct SweepPart {
   bool present = false;
   InputScan meta;  // points moved out (recycled)
   std::size_t begin = 0, end = 0;  // its points in the fused buffer
+};
+
+// An open sweep (the matcher's id; 0 = free): its parts and its points = the published buffer, reused.
+struct SweepSlot {
+  std::uint64_t id = 0;
+  std::vector<SweepPart> parts;
+  std::vector<FusedPoint> fused;
 };
 
 SweepMatcherConfig matcher_config(const FusionConfig& c, std::size_t sources) {
@@ -60,8 +67,10 @@ struct FusionNode::Impl {
   std::vector<Input> inputs;
   std::vector<ScanFilter> filters;  // thread only
   SweepMatcher matcher;             // thread only
-  std::vector<SweepPart> parts;     // thread only
-  std::vector<FusedPoint> fused;    // the open sweep's points = the published buffer, reused
+  std::vector<SweepSlot> slots;     // thread only: one per open sweep, reused
+  // Thread only, per source: packets a whole scan of it holds (its last scan's packets + missing),
+  // what a sweep without it is missing; 0 until it delivered.
+  std::vector<std::uint32_t> expected_packets;
   std::vector<msg::PointField> fields = msg::point_fields(kFusedPointFields);
   dds::Topic<msg::PointCloud2> topic;
   dds::Writer<msg::PointCloud2> writer;
@@ -83,7 +92,7 @@ struct FusionNode::Impl {
   std::string last_error;
 
   Impl(const FusionConfig& c, const std::vector<LidarConfig>& lidars, const dds::Participant& p, dds::StampsWriter& s)
-      : cfg(c), inputs(lidars.size()), matcher(matcher_config(c, lidars.size())), parts(lidars.size()),
+      : cfg(c), inputs(lidars.size()), matcher(matcher_config(c, lidars.size())), expected_packets(lidars.size(), 0),
         topic(p, kFusedTopic, c.qos), writer(p, topic, c.qos), stamps(s), filter_counters(lidars.size()) {
     for (std::size_t i = 0; i < lidars.size(); ++i) {
       const auto& l = lidars[i];
@@ -96,7 +105,7 @@ struct FusionNode::Impl {
   }
 
   void enqueue(std::uint32_t source, const lidar::Scan& scan, Nanos written_ns) {
-    InputScan in{source, scan.stamp, scan.first_rx_ns, written_ns, vehicle_now_ns(),
+    InputScan in{source, scan.stamp, scan.first_rx_ns, written_ns, monotonic_now_ns(),
                  scan.packets, scan.dropped, scan.missing_packets, {}};
     {
       std::lock_guard lock(mutex);
@@ -121,30 +130,54 @@ struct FusionNode::Impl {
     spare.push_back(std::move(points));
   }
 
+  SweepSlot& slot_for(std::uint64_t id) {
+    for (auto& s : slots)
+      if (s.id == id) return s;
+    for (auto& s : slots)
+      if (s.id == 0) {
+        s.id = id;
+        return s;
+      }
+    auto& s = slots.emplace_back();
+    s.id = id;
+    s.parts.resize(inputs.size());
+    return s;
+  }
+
   void handle(InputScan& in) {
-    const auto step = matcher.push(in.source, in.stamp, in.arrival_ns);
-    if (step.emit_open) emit();
-    if (step.store) {
-      auto& part = parts[in.source];
-      part.begin = fused.size();
-      filters[in.source].apply(in.points, fused);
-      part.end = fused.size();
+    const auto place = matcher.push(in.source, in.stamp, in.arrival_ns);
+    expected_packets[in.source] = in.packets + in.missing_packets;
+    if (!place.late) {
+      auto& slot = slot_for(place.sweep);
+      auto& part = slot.parts[in.source];
+      part.begin = slot.fused.size();
+      filters[in.source].apply(in.points, slot.fused);
+      part.end = slot.fused.size();
       part.present = true;
       recycle(std::move(in.points));
       part.meta = std::move(in);
     } else {
       recycle(std::move(in.points));
     }
-    if (step.emit_after) emit();
   }
 
-  // The open sweep's parts as one cloud: stamp = the earliest scan's, each point's t re-based on it.
-  void emit() {
+  void emit_ready() {
+    while (auto closed = matcher.ready(monotonic_now_ns())) emit(*closed);
+  }
+
+  // A closed sweep's parts as one cloud: stamp = the earliest scan's, each point's t re-based on it.
+  // Its stamps count a missing LIDAR's whole scan as missing packets.
+  void emit(const ClosedSweep& closed) {
+    SweepSlot& slot = slot_for(closed.id);
     Nanos stamp = INT64_MAX, first_rx = INT64_MAX, last_written = 0;
     std::size_t sources = 0;
     std::uint32_t packets = 0, dropped = 0, missing = 0;
-    for (const auto& p : parts) {
-      if (!p.present) continue;
+    for (std::size_t i = 0; i < slot.parts.size(); ++i) {
+      const auto& p = slot.parts[i];
+      if (!p.present) {
+        missing += expected_packets[i];
+        continue;
+      }
       stamp = std::min(stamp, p.meta.stamp);
       first_rx = std::min(first_rx, p.meta.first_rx_ns);
       last_written = std::max(last_written, p.meta.written_ns);
@@ -153,21 +186,23 @@ struct FusionNode::Impl {
       missing += p.meta.missing_packets;
       ++sources;
     }
-    if (sources == 0) return;
-    for (auto& p : parts) {
-      if (!p.present) continue;
-      const auto offset = static_cast<std::uint64_t>(p.meta.stamp - stamp);
-      if (offset != 0)
-        for (std::size_t k = p.begin; k < p.end; ++k)
-          fused[k].t = static_cast<std::uint32_t>(std::min<std::uint64_t>(fused[k].t + offset, UINT32_MAX));
-      p.present = false;
+    if (sources != 0) {
+      for (auto& p : slot.parts) {
+        if (!p.present) continue;
+        const auto offset = static_cast<std::uint64_t>(p.meta.stamp - stamp);
+        if (offset != 0)
+          for (std::size_t k = p.begin; k < p.end; ++k)
+            slot.fused[k].t = static_cast<std::uint32_t>(std::min<std::uint64_t>(slot.fused[k].t + offset, UINT32_MAX));
+      }
+      write(slot.fused, stamp, first_rx, last_written, packets, dropped, missing, sources);
     }
-    write(stamp, first_rx, last_written, packets, dropped, missing, sources);
-    fused.clear();  // capacity kept: the next sweep fills it again
+    for (auto& p : slot.parts) p.present = false;
+    slot.fused.clear();  // capacity kept: a later sweep fills it again
+    slot.id = 0;
   }
 
-  void write(Nanos stamp, Nanos first_rx, Nanos last_input, std::uint32_t packets, std::uint32_t dropped,
-             std::uint32_t missing, std::size_t sources) {
+  void write(const std::vector<FusedPoint>& fused, Nanos stamp, Nanos first_rx, Nanos last_input, std::uint32_t packets,
+             std::uint32_t dropped, std::uint32_t missing, std::size_t sources) {
     const Nanos ready = vehicle_now_ns();
     msg::PointCloud2 pc{};
     pc.header.stamp = msg::to_time(stamp);
@@ -178,7 +213,7 @@ struct FusionNode::Impl {
     pc.fields._length = pc.fields._maximum = static_cast<std::uint32_t>(fields.size());
     pc.point_step = sizeof(FusedPoint);
     pc.row_step = pc.point_step * pc.width;
-    pc.data._buffer = reinterpret_cast<std::uint8_t*>(fused.data());
+    pc.data._buffer = reinterpret_cast<std::uint8_t*>(const_cast<FusedPoint*>(fused.data()));
     pc.data._length = pc.data._maximum = pc.row_step;
     pc.is_dense = true;
     const Nanos publish = vehicle_now_ns();
@@ -206,14 +241,17 @@ struct FusionNode::Impl {
       {
         std::unique_lock lock(mutex);
         const Nanos deadline = matcher.deadline();
-        const auto wait = std::chrono::nanoseconds(deadline < 0 ? 50'000'000 : std::max<Nanos>(0, deadline - vehicle_now_ns()));
+        const auto wait = std::chrono::nanoseconds(deadline < 0 ? 50'000'000 : std::max<Nanos>(0, deadline - monotonic_now_ns()));
         wake.wait_for(lock, wait, [this] { return stop_flag || !queue.empty(); });
         if (stop_flag || shutdown_requested()) return;
         batch.swap(queue);
       }
-      for (auto& in : batch) handle(in);
+      for (auto& in : batch) {
+        handle(in);
+        emit_ready();  // before the next scan: a sweep goes out as soon as it is whole
+      }
       batch.clear();
-      if (matcher.poll(vehicle_now_ns())) emit();
+      emit_ready();  // deadlines
       publish_counters();
     }
   }
@@ -246,8 +284,10 @@ void FusionNode::stop() {
   const auto& c = impl_->sweep_counters;
   log::info("fusion", "sweeps=" + std::to_string(c.sweeps) + " complete=" + std::to_string(c.complete) +
                           " partial_timeout=" + std::to_string(c.partial_timeout) +
+                          " partial_dead=" + std::to_string(c.partial_dead) +
                           " partial_next_sweep=" + std::to_string(c.partial_next_sweep) +
-                          " late_scans=" + std::to_string(c.late_scans));
+                          " late_scans=" + std::to_string(c.late_scans) + " repeated_scans=" + std::to_string(c.repeated_scans) +
+                          " clock_steps_back=" + std::to_string(c.clock_steps_back));
 }
 
 dds::DriverStatus FusionNode::status() const {
@@ -279,8 +319,11 @@ dds::DriverStatus FusionNode::status() const {
   s.add("sweep_rate_hz", std::to_string(m.published.rate_hz()));
   s.add_number("complete_sweeps", c.complete);
   s.add_number("partial_timeout", c.partial_timeout);
+  s.add_number("partial_dead", c.partial_dead);
   s.add_number("partial_next_sweep", c.partial_next_sweep);
   s.add_number("late_scans", c.late_scans);
+  s.add_number("repeated_scans", c.repeated_scans);
+  s.add_number("clock_steps_back", c.clock_steps_back);
   s.add_number("dropped_backlog", m.dropped_backlog);
   s.add_number("points_last_sweep", m.last_points);
   s.add_number("lidars_last_sweep", m.last_sources);

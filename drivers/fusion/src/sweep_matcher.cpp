@@ -1,76 +1,195 @@
 #include "sensor_rig/drivers/fusion/sweep_matcher.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 
 namespace sensor_rig::drivers {
+namespace {
+
+Nanos floor_mod(Nanos a, Nanos p) noexcept {
+  const Nanos m = a % p;
+  return m < 0 ? m + p : m;
+}
+
+std::int64_t floor_div(Nanos a, Nanos p) noexcept { return (a - floor_mod(a, p)) / p; }
+
+// a - b on the circle of one period, in [-p/2, p/2).
+Nanos signed_circular(Nanos d, Nanos p) noexcept { return floor_mod(d + p / 2, p) - p / 2; }
+
+Nanos circular_distance(Nanos a, Nanos b, Nanos p) noexcept {
+  const Nanos d = floor_mod(a - b, p);
+  return std::min(d, p - d);
+}
+
+// How many emitted rotations are remembered to tell a late scan (the node queues at most a few).
+constexpr std::size_t kEmittedRemembered = 16;
+// A source whose phase moved alone for this many scans changed its own phase (a restarted,
+// free-running sensor), not with the clock: the boundary is placed anew.
+constexpr int kOwnPhaseScans = 3;
+
+}  // namespace
 
 SweepMatcher::SweepMatcher(const SweepMatcherConfig& cfg) : cfg_(cfg) {
   if (cfg_.sources == 0) throw std::invalid_argument("sweep matcher: no sources");
-  if (cfg_.max_spread_ns <= 0 || cfg_.timeout_ns <= 0)
-    throw std::invalid_argument("sweep matcher: max_spread and timeout must be > 0");
-  present_.assign(cfg_.sources, false);
+  if (cfg_.period_ns <= 0 || cfg_.timeout_ns <= 0)
+    throw std::invalid_argument("sweep matcher: period and timeout must be > 0");
+  sources_.resize(cfg_.sources);
   counters_.missing.assign(cfg_.sources, 0);
 }
 
-void SweepMatcher::open(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns) {
-  std::fill(present_.begin(), present_.end(), false);
-  present_[source] = true;
-  count_ = 1;
-  open_ = true;
-  min_stamp_ = max_stamp_ = stamp_ns;
-  opened_at_ = arrival_ns;
+std::int64_t SweepMatcher::rotation_of(const Source& src, Nanos stamp) const noexcept {
+  return floor_div(stamp - boundary_ - src.offset, cfg_.period_ns);
 }
 
-void SweepMatcher::close(bool complete, std::uint64_t& reason) {
-  ++counters_.sweeps;
-  ++reason;
-  if (!complete)
-    for (std::size_t i = 0; i < present_.size(); ++i)
-      if (!present_[i]) ++counters_.missing[i];
-  emitted_before_ = min_stamp_;
-  open_ = false;
+// A phase that jumps by more than an eighth of a rotation is a step of the source's timeline. A step
+// of the vehicle clock reaches the sources one scan after another: until every live source has
+// shown it, the ones that stepped keep their offset (their scans then match each other's, never
+// an unstepped scan of another rotation); then the boundary moves by the step.
+void SweepMatcher::track_phase(Source& src, Nanos stamp) {
+  const Nanos p = cfg_.period_ns, tolerance = p / 8;
+  const Nanos phase = floor_mod(stamp, p);
+  if (!src.seen) {
+    src = Source{.seen = true, .alive = true, .last_stamp = stamp, .phase = phase};
+    return;
+  }
+  const Nanos jump = signed_circular(phase - src.phase, p);
+  src.phase = phase;
+  if (std::abs(jump) > tolerance) {
+    ++counters_.phase_steps;
+    src.offset = signed_circular(src.offset + jump, p);
+    src.offset_scans = 0;
+    if (std::abs(src.offset) <= tolerance) src.offset = 0;  // caught up with a step the others made
+  }
+  if (src.offset == 0) return;
+  const Nanos step = src.offset;
+  bool everyone = true;
+  for (const auto& s : sources_)
+    if (s.seen && s.alive && std::abs(signed_circular(s.offset - step, p)) > tolerance) everyone = false;
+  if (everyone) {
+    boundary_ = floor_mod(boundary_ + step, p);
+    for (auto& s : sources_) {
+      s.offset = signed_circular(s.offset - step, p);  // a dead source has yet to show the step
+      if (std::abs(s.offset) <= tolerance) s.offset = 0;
+    }
+  } else if (++src.offset_scans > kOwnPhaseScans) {
+    for (auto& s : sources_) s.offset = 0;
+    place_boundary(true);
+  }
 }
 
-SweepStep SweepMatcher::push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns) {
-  SweepStep step;
-  if (source >= cfg_.sources || stamp_ns < emitted_before_) {
+// The boundary goes into the middle of the widest gap between the sources' phases. It stays where it
+// is while no phase comes near it (within a quarter of that gap): phases that jitter across two
+// nearly equal gaps must not move it back and forth, since moving it renumbers rotations.
+void SweepMatcher::place_boundary(bool anew) {
+  const Nanos p = cfg_.period_ns;
+  std::vector<Nanos> phases;
+  for (const auto& s : sources_)
+    if (s.seen) phases.push_back(floor_mod(s.phase - s.offset, p));  // in the boundary's timeline
+  if (phases.empty()) return;
+  std::sort(phases.begin(), phases.end());
+  Nanos widest = -1, middle = 0;
+  for (std::size_t i = 0; i < phases.size(); ++i) {
+    const Nanos next = i + 1 < phases.size() ? phases[i + 1] : phases[0] + p;
+    if (next - phases[i] > widest) {
+      widest = next - phases[i];
+      middle = floor_mod(phases[i] + widest / 2, p);
+    }
+  }
+  Nanos nearest = p;
+  for (const Nanos ph : phases) nearest = std::min(nearest, circular_distance(boundary_, ph, p));
+  if (anew || !boundary_set_ || nearest < widest / 4) {
+    boundary_ = middle;
+    boundary_set_ = true;
+  }
+}
+
+SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns) {
+  Placement out;
+  if (source >= cfg_.sources) {
     ++counters_.late_scans;
-    step.late = true;
-    return step;
+    out.late = true;
+    return out;
   }
-  if (open_) {
-    const bool fits = !present_[source] && std::max(max_stamp_, stamp_ns) - std::min(min_stamp_, stamp_ns) <= cfg_.max_spread_ns;
-    if (!fits && stamp_ns < min_stamp_) {  // older than the open sweep and not part of it
-      ++counters_.late_scans;
-      step.late = true;
-      return step;
-    }
-    if (fits) {
-      present_[source] = true;
-      ++count_;
-      min_stamp_ = std::min(min_stamp_, stamp_ns);
-      max_stamp_ = std::max(max_stamp_, stamp_ns);
-    } else {
-      step.emit_open = true;  // the caller emits what the sweep holds before storing this scan
-      close(false, counters_.partial_next_sweep);
-      open(source, stamp_ns, arrival_ns);
-    }
-  } else {
-    open(source, stamp_ns, arrival_ns);
+  auto& src = sources_[source];
+  src.alive = true;  // delivering, even if this scan comes too late
+  // A source's scans come in order: stamps that go back mean its clock stepped back, and the
+  // rotations emitted on the old timeline say nothing about the new one.
+  if (src.seen && stamp_ns < src.last_stamp - cfg_.period_ns / 2) {
+    ++counters_.clock_steps_back;
+    emitted_.clear();
   }
-  step.store = true;
-  if (count_ == cfg_.sources) {
-    step.emit_after = true;
-    close(true, counters_.complete);
+  // The phase first, so that a source's first scan never lies on the boundary.
+  track_phase(src, stamp_ns);
+  place_boundary(false);
+  const std::int64_t rotation = rotation_of(src, stamp_ns);
+  src.last_stamp = stamp_ns;
+  if (std::find(emitted_.begin(), emitted_.end(), rotation) != emitted_.end()) {
+    ++counters_.late_scans;
+    out.late = true;
+    return out;
   }
-  return step;
+  auto it = std::find_if(open_.begin(), open_.end(), [&](const Sweep& s) { return s.rotation == rotation; });
+  if (it != open_.end() && it->present[source]) {
+    ++counters_.repeated_scans;
+    out.late = true;
+    return out;
+  }
+  if (it == open_.end()) {
+    Sweep s;
+    s.id = next_id_++;
+    s.rotation = rotation;
+    s.opened_at = arrival_ns;
+    s.present.assign(cfg_.sources, false);
+    open_.push_back(std::move(s));
+    it = std::prev(open_.end());
+  }
+  it->present[source] = true;
+  ++it->count;
+  src.last_sweep = it->id;
+  out.sweep = it->id;
+  return out;
 }
 
-bool SweepMatcher::poll(Nanos now_ns) {
-  if (!open_ || now_ns - opened_at_ < cfg_.timeout_ns) return false;
-  close(false, counters_.partial_timeout);
+// Nothing more to wait for: each source is in, has moved on to a later sweep, or is dead.
+bool SweepMatcher::settled(const Sweep& s) const noexcept {
+  for (std::size_t i = 0; i < sources_.size(); ++i)
+    if (!s.present[i] && sources_[i].alive && sources_[i].last_sweep <= s.id) return false;
   return true;
 }
+
+ClosedSweep SweepMatcher::close_front(std::uint64_t& reason) {
+  Sweep s = std::move(open_.front());
+  open_.pop_front();
+  ++counters_.sweeps;
+  ++reason;
+  for (std::size_t i = 0; i < s.present.size(); ++i)
+    if (!s.present[i]) ++counters_.missing[i];
+  emitted_.push_back(s.rotation);
+  if (emitted_.size() > kEmittedRemembered) emitted_.pop_front();
+  return ClosedSweep{s.id, s.count == cfg_.sources, std::move(s.present)};
+}
+
+std::optional<ClosedSweep> SweepMatcher::ready(Nanos now_ns) {
+  if (open_.empty()) return std::nullopt;
+  const auto timed_out = [&](const Sweep& s) { return now_ns - s.opened_at >= cfg_.timeout_ns; };
+  // The newest sweep that may go out; every older one goes out before it.
+  bool any = open_.size() > kMaxOpen;
+  for (auto it = open_.rbegin(); !any && it != open_.rend(); ++it) any = settled(*it) || timed_out(*it);
+  if (!any) return std::nullopt;
+  const Sweep& f = open_.front();
+  if (f.count == cfg_.sources) return close_front(counters_.complete);
+  if (!settled(f) && timed_out(f)) {
+    for (std::size_t i = 0; i < sources_.size(); ++i)  // waited for in vain: not waited for again
+      if (!f.present[i] && sources_[i].last_sweep <= f.id) sources_[i].alive = false;
+    return close_front(counters_.partial_timeout);
+  }
+  bool moved_on = !settled(f);  // forced out by a newer sweep
+  for (std::size_t i = 0; i < sources_.size(); ++i)
+    if (!f.present[i] && sources_[i].last_sweep > f.id) moved_on = true;
+  return close_front(moved_on ? counters_.partial_next_sweep : counters_.partial_dead);
+}
+
+Nanos SweepMatcher::deadline() const noexcept { return open_.empty() ? -1 : open_.front().opened_at + cfg_.timeout_ns; }
 
 }  // namespace sensor_rig::drivers

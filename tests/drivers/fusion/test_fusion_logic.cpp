@@ -1,6 +1,5 @@
 // The fused cloud's pure parts, no PCL and no DDS: the extrinsics' rotation order and signs against
-// hand-computed points, their config validation, and the sweep matching (complete sweeps, a missing
-// LIDAR -> timeout -> the subset emitted and counted, the next sweep closing a subset, late scans).
+// hand-computed points and their config validation (the sweep matching: test_sweep_matcher.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +10,6 @@
 
 #include "sensor_rig/common/config_node.hpp"
 #include "sensor_rig/drivers/fusion/fusion_config.hpp"
-#include "sensor_rig/drivers/fusion/sweep_matcher.hpp"
 #include "sensor_rig/drivers/lidar/extrinsics.hpp"
 
 namespace sensor_rig::drivers {
@@ -94,75 +92,6 @@ TEST(FusionConfig, CropBoxAndTimingValidated) {
   EXPECT_EQ(problems->items()[1].line, 5);  // voxel leaf
   EXPECT_EQ(problems->items()[2].line, 3);  // timeout <= spread
   EXPECT_TRUE(f.crop_box.enabled);
-}
-
-constexpr Nanos kMs = 1'000'000;
-
-TEST(SweepMatcher, CompleteWhenTheLastLidarDelivers) {
-  SweepMatcher m({3, 100 * kMs, 150 * kMs});
-  // Phases 0, 40, 90 ms; each scan arrives 100 ms (one rotation) after its stamp.
-  for (int sweep = 0; sweep < 5; ++sweep) {
-    const Nanos base = sweep * 100 * kMs;
-    auto s = m.push(0, base, base + 100 * kMs);
-    EXPECT_TRUE(s.store && !s.emit_open && !s.emit_after);
-    s = m.push(1, base + 40 * kMs, base + 140 * kMs);
-    EXPECT_TRUE(s.store && !s.emit_open && !s.emit_after);
-    EXPECT_FALSE(m.poll(base + 145 * kMs));
-    s = m.push(2, base + 90 * kMs, base + 190 * kMs);
-    EXPECT_TRUE(s.store && s.emit_after && !s.emit_open);
-    EXPECT_EQ(m.deadline(), -1);
-  }
-  EXPECT_EQ(m.counters().sweeps, 5u);
-  EXPECT_EQ(m.counters().complete, 5u);
-  EXPECT_EQ(m.counters().partial_timeout + m.counters().partial_next_sweep, 0u);
-}
-
-TEST(SweepMatcher, MissingLidarTimesOutAndTheSubsetIsCounted) {
-  SweepMatcher m({3, 100 * kMs, 150 * kMs});
-  m.push(0, 0, 100 * kMs);
-  m.push(2, 60 * kMs, 160 * kMs);  // lidar 1 is dead
-  EXPECT_EQ(m.deadline(), 250 * kMs);
-  EXPECT_FALSE(m.poll(249 * kMs));
-  EXPECT_TRUE(m.poll(250 * kMs));  // the subset {0, 2} is emitted
-  EXPECT_FALSE(m.poll(400 * kMs));
-  EXPECT_EQ(m.counters().partial_timeout, 1u);
-  EXPECT_EQ(m.counters().missing, (std::vector<std::uint64_t>{0, 1, 0}));
-  // It comes back: the next sweep is complete again.
-  m.push(0, 100 * kMs, 200 * kMs);
-  m.push(1, 130 * kMs, 230 * kMs);
-  EXPECT_TRUE(m.push(2, 160 * kMs, 260 * kMs).emit_after);
-  EXPECT_EQ(m.counters().complete, 1u);
-  EXPECT_EQ(m.counters().sweeps, 2u);
-}
-
-TEST(SweepMatcher, NextSweepClosesAnOpenSubset) {
-  SweepMatcher m({2, 100 * kMs, 500 * kMs});
-  m.push(0, 0, 100 * kMs);
-  // Lidar 0 again before lidar 1 came: the open sweep {0} goes out first, the scan opens the next.
-  auto s = m.push(0, 100 * kMs, 200 * kMs);
-  EXPECT_TRUE(s.emit_open && s.store && !s.emit_after);
-  // Lidar 1 too far from the open sweep (stamp 250 ms: spread 150 > 100): closes {0} again.
-  s = m.push(1, 250 * kMs, 350 * kMs);
-  EXPECT_TRUE(s.emit_open && s.store);
-  s = m.push(0, 220 * kMs, 320 * kMs);  // within 100 ms of the open sweep {1 @ 250}
-  EXPECT_TRUE(s.store && s.emit_after && !s.emit_open);
-  EXPECT_EQ(m.counters().partial_next_sweep, 2u);
-  EXPECT_EQ(m.counters().complete, 1u);
-  EXPECT_EQ(m.counters().missing, (std::vector<std::uint64_t>{0, 2}));
-}
-
-TEST(SweepMatcher, LateScansAreDroppedAndCounted) {
-  SweepMatcher m({2, 100 * kMs, 150 * kMs});
-  m.push(0, 1000 * kMs, 1100 * kMs);
-  EXPECT_TRUE(m.push(1, 1050 * kMs, 1150 * kMs).emit_after);
-  // Stamped before the emitted sweep: late.
-  EXPECT_TRUE(m.push(1, 900 * kMs, 1200 * kMs).late);
-  // Before an open sweep and too far from it to join: late as well.
-  EXPECT_TRUE(m.push(0, 1200 * kMs, 1300 * kMs).store);
-  EXPECT_TRUE(m.push(1, 1050 * kMs, 1310 * kMs).late);
-  EXPECT_TRUE(m.push(7, 1100 * kMs, 1210 * kMs).late);  // no such source
-  EXPECT_EQ(m.counters().late_scans, 3u);
-  EXPECT_THROW(SweepMatcher({0, 1, 1}), std::invalid_argument);
 }
 
 }  // namespace

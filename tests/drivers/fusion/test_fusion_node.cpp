@@ -2,7 +2,9 @@
 // (ScanObserver) come out as one PointCloud2 on rt/sensors/lidar/fused/points in base_link, with
 // the fused layout, source ids and times re-based on the earliest scan, its stamps on
 // rt/rig/stamps (last input on the wire -> fused on the wire); a dead LIDAR's sweep goes out as
-// a subset after the timeout, reported in the node's status.
+// a subset after the timeout, reported in the node's status; a LIDAR that stops costs one timeout,
+// the later sweeps go out without waiting for it, and their stamps count its scan as missing packets.
+// The fixed topic names: a leased DDS domain.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -14,6 +16,7 @@
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/fusion/fused_point.hpp"
 #include "sensor_rig/drivers/fusion/fusion_node.hpp"
+#include "dds_domain_lease.hpp"
 #include "status_value.hpp"
 #include "wait.hpp"
 #include "wait_bounds.hpp"
@@ -35,6 +38,7 @@ struct FusedSeen {
 struct StampsSeen {
   Nanos acquisition = 0, last_rx = 0, written = 0;
   std::uint64_t seq = 0;
+  std::uint32_t packets = 0, missing_packets = 0;
 };
 
 LidarConfig lidar(const std::string& name, Extrinsics e) {
@@ -44,11 +48,11 @@ LidarConfig lidar(const std::string& name, Extrinsics e) {
   return c;
 }
 
-lidar::Scan scan(Nanos stamp, float x, std::size_t n) {
+lidar::Scan scan(Nanos stamp, float x, std::size_t n, std::uint32_t packets = 10) {
   lidar::Scan s;
   s.stamp = stamp;
   s.first_rx_ns = stamp + 1000;
-  s.packets = 10;
+  s.packets = packets;
   for (std::size_t i = 0; i < n; ++i)
     s.points.push_back({x, static_cast<float>(i), 0.0F, 1.0F, static_cast<std::uint32_t>(1000 * i), 0, 1, 0});
   return s;
@@ -56,8 +60,15 @@ lidar::Scan scan(Nanos stamp, float x, std::size_t n) {
 
 class FusionNodeDds : public ::testing::Test {
  protected:
-  FusionNodeDds() : stamps_writer_(pub_), fused_topic_(sub_, kFusedTopic, cfg().qos), fused_(sub_, fused_topic_, cfg().qos),
+  FusionNodeDds() : pub_(domain()), sub_(domain()), stamps_writer_(pub_), fused_topic_(sub_, kFusedTopic, cfg().qos), fused_(sub_, fused_topic_, cfg().qos),
                     stamps_topic_(sub_, dds::kStampsTopic, dds::stamps_qos()), stamps_(sub_, stamps_topic_, dds::stamps_qos()) {}
+
+  static dds::DomainConfig domain() {
+    static const int leased = test::lease_dds_domain();
+    dds::DomainConfig d;
+    d.domain_id = static_cast<dds_domainid_t>(leased);
+    return d;
+  }
 
   static FusionConfig cfg() {
     FusionConfig c;
@@ -79,7 +90,8 @@ class FusionNodeDds : public ::testing::Test {
       seen_.push_back(std::move(f));
     });
     stamps_.take([this](const msg::SourceStamps& s, const auto&) {
-      if (std::string(s.topic) == kFusedTopic) stamped_.push_back({s.acquisition_ns, s.last_rx_ns, s.written_ns, s.seq});
+      if (std::string(s.topic) == kFusedTopic)
+        stamped_.push_back({s.acquisition_ns, s.last_rx_ns, s.written_ns, s.seq, s.packets, s.missing_packets});
     });
   }
   bool wait_clouds(std::size_t n) {
@@ -163,6 +175,48 @@ TEST_F(FusionNodeDds, DeadLidarSweepGoesOutAsSubsetAfterTimeout) {
   EXPECT_EQ(status_value(st, "lidars_last_sweep"), "1");
   EXPECT_EQ(st.level, dds::Level::kWarn);
   EXPECT_NE(st.message.find("partial"), std::string::npos) << st.message;
+}
+
+// Rotation n of LIDAR i is stamped t0 + n * 100 ms + its phase; the right LIDAR (phase 45 ms,
+// 12 packets a scan) stops after rotation 0 and comes back at rotation 4.
+TEST_F(FusionNodeDds, StoppedLidarCostsOneTimeoutAndIsCountedMissing) {
+  const std::vector<LidarConfig> lidars{lidar("front", {}), lidar("left", {.yaw_deg = 90}), lidar("right", {.yaw_deg = -90})};
+  FusionNode node(cfg(), lidars, pub_, stamps_writer_);
+  node.start();
+  ASSERT_TRUE(fused_.wait_for_writers(1, test::kDiscoveryMs));
+  const Nanos t0 = vehicle_now_ns();
+  const Nanos phase[3] = {0, 20'000'000, 45'000'000};
+  const auto hand_over = [&](int n, std::size_t i) {
+    const Nanos stamp = t0 + n * 100'000'000LL + phase[i];
+    node.input(i)->observe_scan(scan(stamp, 5, 2, i == 2 ? 12 : 10), stamp + 100'000'000);
+  };
+  for (std::size_t i = 0; i < 3; ++i) hand_over(0, i);
+  ASSERT_TRUE(wait_clouds(1));
+  for (int n = 1; n <= 3; ++n) {  // the right one is silent
+    hand_over(n, 0);
+    hand_over(n, 1);
+    ASSERT_TRUE(wait_clouds(static_cast<std::size_t>(n) + 1)) << "rotation " << n;
+  }
+  for (int n = 4; n <= 5; ++n)  // back; its scan first, so that no sweep is closed before it came
+    for (std::size_t i : {2, 0, 1}) hand_over(n, i);
+  ASSERT_TRUE(wait_clouds(6));
+  ASSERT_EQ(seen_.size(), 6u);
+  for (int n = 0; n < 6; ++n) {
+    SCOPED_TRACE("rotation " + std::to_string(n));
+    const bool whole = n == 0 || n >= 4;
+    EXPECT_EQ(seen_[static_cast<std::size_t>(n)].stamp, t0 + n * 100'000'000LL);
+    EXPECT_EQ(seen_[static_cast<std::size_t>(n)].points.size(), whole ? 6u : 4u);
+    EXPECT_EQ(stamped_[static_cast<std::size_t>(n)].packets, whole ? 32u : 20u);
+    EXPECT_EQ(stamped_[static_cast<std::size_t>(n)].missing_packets, whole ? 0u : 12u);  // the right one's scan
+  }
+  // Rotation 1 waited for it until the timeout; 2 and 3 went out with the left scan (a node that
+  // waited for a stopped LIDAR would have timed out three times).
+  EXPECT_TRUE(wait_for([&] { return status_value(node.status(), "complete_sweeps") == "3"; }, 2000));
+  const auto st = node.status();
+  EXPECT_EQ(status_value(st, "partial_timeout"), "1");
+  EXPECT_EQ(status_value(st, "partial_dead"), "2");
+  EXPECT_EQ(status_value(st, "missing_right"), "3");
+  EXPECT_EQ(status_value(st, "late_scans"), "0");
 }
 
 }  // namespace

@@ -1,16 +1,23 @@
 #pragma once
 // Which LIDAR scans make one sweep of the fused cloud. Pure: stamps and arrival times are
-// arguments, no clock, no threads, no points (the node keeps those per source).
+// arguments, no clock, no threads, no points (the node keeps those per sweep and source).
 //
-// The first scan opens a sweep; a scan of another source joins it while the sweep's stamps stay
-// within `max_spread_ns` (one rotation: every LIDAR delivers one scan per period, whatever its
-// phase). The sweep is emitted when every source has joined (complete), or as a subset when
-// - a source delivers again, or a scan's stamp would stretch the sweep beyond max_spread (the
-//   next sweep began: the open one is closed first, then the scan opens the next), or
-// - `timeout_ns` passed since the sweep opened (arrival time; poll()).
-// A scan stamped before the last emitted sweep's first stamp, or before the open sweep and too far
-// from it to join, is late and dropped.
+// Sweeps are matched by rotation, not by spread: the LIDARs turn at one period P (phase-locked,
+// `max_spread_ms`), so each source's stamps keep one phase (stamp mod P). The sweep boundary lies in
+// the middle of the widest gap between the sources' phases, and a scan belongs to the rotation
+// floor((stamp - boundary) / P): the sweep whose scans lie closest together, whichever scan arrives
+// first or late. A clock step moves every source's phase alike: the boundary follows once each live
+// source has shown it. A scan of a rotation whose sweep was emitted is late (dropped, counted); a
+// second scan of one source in one rotation is dropped and counted too.
+//
+// A sweep is emitted (oldest first; emitting one emits every older open sweep before it) when each
+// source is in, has moved on to a later sweep, or is dead; or `timeout_ns` after its first scan
+// arrived. A source that a sweep waited for until the timeout is dead until it delivers again, so
+// a stopped LIDAR costs one timeout and no later sweep waits for it. A source's stamps going back
+// (a clock step back) start a new timeline: its scans are not late for that.
 #include <cstdint>
+#include <deque>
+#include <optional>
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
@@ -19,50 +26,83 @@ namespace sensor_rig::drivers {
 
 struct SweepMatcherConfig {
   std::uint32_t sources = 1;
-  Nanos max_spread_ns = 100'000'000;  // one rotation at 600 rpm
-  Nanos timeout_ns = 150'000'000;     // > max_spread: the latest phase still makes it
-};
-
-// What push() asks the caller to do, in this order.
-struct SweepStep {
-  bool emit_open = false;   // emit the sweep as it was before this scan (a subset: next sweep began)
-  bool store = false;       // keep this scan as its source's part of the (new) open sweep
-  bool emit_after = false;  // then emit the open sweep (this scan completed it)
-  bool late = false;        // the scan is dropped
+  Nanos period_ns = 100'000'000;   // one rotation (600 rpm), the period every LIDAR is locked to
+  Nanos timeout_ns = 150'000'000;  // arrival clock: a sweep waits at most this long after its first scan
 };
 
 struct SweepCounters {
-  std::uint64_t sweeps = 0;              // emitted
+  std::uint64_t sweeps = 0;  // emitted
   std::uint64_t complete = 0;
-  std::uint64_t partial_timeout = 0;     // subsets emitted by the timeout
-  std::uint64_t partial_next_sweep = 0;  // subsets closed by the next sweep's first scan
-  std::uint64_t late_scans = 0;
+  std::uint64_t partial_timeout = 0;     // waited for a live source until the timeout
+  std::uint64_t partial_dead = 0;        // every live source was in; the dead ones were not waited for
+  std::uint64_t partial_next_sweep = 0;  // the missing sources moved on to a later sweep, or it was emitted
+  std::uint64_t late_scans = 0;          // their rotation's sweep was already emitted
+  std::uint64_t repeated_scans = 0;      // a second scan of one source in one rotation
+  std::uint64_t clock_steps_back = 0;    // a source's stamps went back (a new timeline)
+  std::uint64_t phase_steps = 0;         // a source's phase jumped (a clock step, or its own phase changed)
   std::vector<std::uint64_t> missing;    // per source: emitted sweeps without its scan
+};
+
+// A sweep to emit: the scans pushed with this id, in the order they came.
+struct ClosedSweep {
+  std::uint64_t id = 0;
+  bool complete = false;
+  std::vector<bool> present;  // per source
 };
 
 class SweepMatcher {
  public:
   explicit SweepMatcher(const SweepMatcherConfig& cfg);  // throws std::invalid_argument
 
-  SweepStep push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns);
-  // True when the open sweep timed out: emit it (a subset) now.
-  bool poll(Nanos now_ns);
-  // Arrival deadline of the open sweep (poll then), or -1 when none is open.
-  [[nodiscard]] Nanos deadline() const noexcept { return open_ ? opened_at_ + cfg_.timeout_ns : -1; }
+  struct Placement {
+    bool late = false;        // dropped: late, repeated or an unknown source
+    std::uint64_t sweep = 0;  // else: the sweep it joined (ClosedSweep::id)
+  };
+  // `arrival_ns` on a clock that does not step (monotonic). Then call ready() until it returns none.
+  Placement push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns);
+  // The next sweep to emit now, oldest first, or none.
+  std::optional<ClosedSweep> ready(Nanos now_ns);
+  // Arrival deadline of the oldest open sweep (call ready() then), or -1 when none is open.
+  [[nodiscard]] Nanos deadline() const noexcept;
+  [[nodiscard]] std::size_t open_sweeps() const noexcept { return open_.size(); }
   [[nodiscard]] const SweepCounters& counters() const noexcept { return counters_; }
   [[nodiscard]] const SweepMatcherConfig& config() const noexcept { return cfg_; }
 
+  // At most this many sweeps are open at once; a further one emits the oldest (node buffers are finite).
+  static constexpr std::size_t kMaxOpen = 4;
+
  private:
-  void open(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns);
-  void close(bool complete, std::uint64_t& reason);
+  struct Source {
+    bool seen = false;
+    bool alive = true;  // until a sweep waited for it in vain
+    Nanos last_stamp = 0;
+    Nanos phase = 0;   // last stamp mod period
+    Nanos offset = 0;  // its timeline stepped by this, and not every live source's has yet
+    int offset_scans = 0;
+    std::uint64_t last_sweep = 0;  // id of the sweep its last scan joined (0: none)
+  };
+  struct Sweep {
+    std::uint64_t id = 0;
+    std::int64_t rotation = 0;
+    Nanos opened_at = 0;
+    std::vector<bool> present;
+    std::uint32_t count = 0;
+  };
+
+  [[nodiscard]] std::int64_t rotation_of(const Source& src, Nanos stamp) const noexcept;
+  void track_phase(Source& src, Nanos stamp);
+  void place_boundary(bool anew);
+  [[nodiscard]] bool settled(const Sweep& s) const noexcept;
+  ClosedSweep close_front(std::uint64_t& reason);
 
   SweepMatcherConfig cfg_;
   SweepCounters counters_;
-  std::vector<bool> present_;
-  std::uint32_t count_ = 0;
-  bool open_ = false;
-  Nanos min_stamp_ = 0, max_stamp_ = 0, opened_at_ = 0;
-  Nanos emitted_before_ = INT64_MIN;  // the last emitted sweep's first stamp
+  std::vector<Source> sources_;
+  std::deque<Sweep> open_;            // by creation (= id) order
+  std::deque<std::int64_t> emitted_;  // rotations of the last emitted sweeps (late scans are told by them)
+  Nanos boundary_ = 0;                // in [0, period)
+  bool boundary_set_ = false;
+  std::uint64_t next_id_ = 1;
 };
 
 }  // namespace sensor_rig::drivers

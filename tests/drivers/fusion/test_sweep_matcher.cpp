@@ -1,0 +1,339 @@
+// The sweep matcher against ground truth: a simulated rig of phase-locked LIDARs makes scans whose
+// rotation is known (rotation n of LIDAR s is stamped n * period + phase_s), hands them over in
+// arrival order as the node does (each LIDAR's scans in order), and polls at every deadline. Every
+// emitted sweep must hold scans of one rotation only and say complete exactly when it has all; a
+// stopped LIDAR must cost one timeout, then no sweep waits for it; a late scan joins its own
+// rotation or is dropped, never another's; a LIDAR that comes back is fused from its next rotation;
+// a clock step (the stamps jump, arrival time does not) costs at most the rotations it cuts.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <set>
+#include <vector>
+
+#include "sensor_rig/drivers/fusion/sweep_matcher.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+constexpr Nanos kMs = 1'000'000;
+constexpr Nanos kPeriod = 100 * kMs;
+constexpr Nanos kTimeout = 150 * kMs;
+constexpr Nanos kDelivery = kPeriod + 2 * kMs;  // a scan is handed over one rotation + 2 ms after its first firing
+
+struct TrueScan {
+  std::uint32_t source = 0;
+  std::int64_t rotation = 0;  // the truth
+  Nanos stamp = 0;            // what the LIDAR stamped (vehicle time: steps with the clock)
+  Nanos arrival = 0;          // handed to the node (monotonic)
+};
+
+struct Emitted {
+  Nanos at = 0;
+  bool complete = false;
+  std::vector<TrueScan> scans;
+};
+
+// Scans of `rotations` [first, last) for LIDARs at `phases`, delivered kDelivery after their stamp.
+std::vector<TrueScan> rig_scans(const std::vector<Nanos>& phases, std::int64_t first, std::int64_t last) {
+  std::vector<TrueScan> v;
+  for (std::int64_t n = first; n < last; ++n)
+    for (std::uint32_t s = 0; s < phases.size(); ++s) {
+      const Nanos stamp = n * kPeriod + phases[s];
+      v.push_back({s, n, stamp, stamp + kDelivery});
+    }
+  return v;
+}
+
+void erase_scans(std::vector<TrueScan>& v, std::uint32_t source, std::int64_t from, std::int64_t to) {
+  std::erase_if(v, [&](const TrueScan& t) { return t.source == source && t.rotation >= from && t.rotation < to; });
+}
+
+TrueScan& find_scan(std::vector<TrueScan>& v, std::uint32_t source, std::int64_t rotation) {
+  for (auto& t : v)
+    if (t.source == source && t.rotation == rotation) return t;
+  throw std::logic_error("no such scan");
+}
+
+// The node's loop on simulated time: scans in arrival order (each source's in order), ready()
+// after each and at every deadline in between.
+class SimulatedRig {
+ public:
+  explicit SimulatedRig(std::uint32_t sources) : m_({sources, kPeriod, kTimeout}), sources_(sources) {}
+
+  void feed(std::vector<TrueScan> scans) {
+    std::map<std::uint32_t, Nanos> last;  // a source's scans arrive in order
+    for (auto& t : scans) {
+      t.arrival = std::max(t.arrival, last[t.source]);
+      last[t.source] = t.arrival;
+    }
+    std::stable_sort(scans.begin(), scans.end(), [](const TrueScan& a, const TrueScan& b) { return a.arrival < b.arrival; });
+    for (const auto& t : scans) {
+      advance(t.arrival);
+      const auto place = m_.push(t.source, t.stamp, t.arrival);
+      if (place.late)
+        dropped_.push_back(t);
+      else
+        open_[place.sweep].push_back(t);
+      drain(t.arrival);
+    }
+    if (!scans.empty()) advance(scans.back().arrival + 10 * kTimeout);
+  }
+
+  // Every emitted sweep holds one rotation, says complete exactly when it has every source, and
+  // every scan fed is emitted or dropped.
+  void expect_truth(std::size_t fed) const {
+    std::size_t seen = dropped_.size();
+    for (const auto& e : emitted_) {
+      ASSERT_FALSE(e.scans.empty());
+      std::set<std::uint32_t> sources;
+      for (const auto& t : e.scans) {
+        EXPECT_EQ(t.rotation, e.scans[0].rotation) << "sweep emitted at " << e.at / kMs << " ms mixes rotations "
+                                                  << e.scans[0].rotation << " and " << t.rotation;
+        sources.insert(t.source);
+      }
+      EXPECT_EQ(sources.size(), e.scans.size());
+      EXPECT_EQ(e.complete, sources.size() == sources_) << "rotation " << e.scans[0].rotation;
+      seen += e.scans.size();
+    }
+    EXPECT_EQ(seen, fed);
+    EXPECT_TRUE(open_.empty());
+  }
+
+  // The emitted sweep holding rotation n's scans (the first, when split), or nullptr.
+  [[nodiscard]] const Emitted* sweep_of(std::int64_t n) const {
+    for (const auto& e : emitted_)
+      if (e.scans[0].rotation == n) return &e;
+    return nullptr;
+  }
+  // How long after its last scan arrived a rotation's sweep went out.
+  [[nodiscard]] Nanos wait_of(std::int64_t n) const {
+    const Emitted* e = sweep_of(n);
+    if (e == nullptr) return -1;
+    Nanos last = 0;
+    for (const auto& t : e->scans) last = std::max(last, t.arrival);
+    return e->at - last;
+  }
+
+  SweepMatcher m_;
+  std::uint32_t sources_;
+  std::map<std::uint64_t, std::vector<TrueScan>> open_;
+  std::vector<Emitted> emitted_;
+  std::vector<TrueScan> dropped_;
+
+ private:
+  void drain(Nanos now) {
+    while (auto c = m_.ready(now)) {
+      auto it = open_.find(c->id);
+      ASSERT_NE(it, open_.end()) << "sweep " << c->id << " was never given a scan";
+      std::size_t present = 0;
+      for (bool p : c->present) present += p ? 1 : 0;
+      EXPECT_EQ(present, it->second.size());
+      emitted_.push_back({now, c->complete, std::move(it->second)});
+      open_.erase(it);
+    }
+  }
+  void advance(Nanos to) {
+    for (Nanos d = m_.deadline(); d >= 0 && d <= to; d = m_.deadline()) drain(d);
+  }
+};
+
+const std::vector<Nanos> kPhases{0, 20 * kMs, 45 * kMs};  // the widest gap: 45 -> 100 ms
+
+TEST(SweepMatcher, CompleteSweepsGoOutWhenTheLastScanArrives) {
+  auto scans = rig_scans(kPhases, 0, 30);
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  ASSERT_EQ(run.emitted_.size(), 30u);
+  for (std::int64_t n = 0; n < 30; ++n) EXPECT_EQ(run.wait_of(n), 0) << n;
+  EXPECT_EQ(run.m_.counters().complete, 30u);
+}
+
+// Whichever LIDAR delivers first: the rotation decides, so a rig whose first scan is a late phase
+// is grouped the same (the spread rule grouped {45, 100, 120} when 45 came first).
+TEST(SweepMatcher, StartupOnALatePhaseKeepsRotationsApart) {
+  auto scans = rig_scans(kPhases, 0, 10);
+  erase_scans(scans, 0, 0, 1);
+  erase_scans(scans, 1, 0, 1);
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  for (std::int64_t n = 1; n < 10; ++n) {
+    ASSERT_NE(run.sweep_of(n), nullptr) << n;
+    EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+  }
+}
+
+TEST(SweepMatcher, StoppedLidarCostsOneTimeoutThenNoSweepWaitsForIt) {
+  auto scans = rig_scans(kPhases, 0, 40);
+  erase_scans(scans, 1, 10, 40);  // the middle phase stops after rotation 9
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  ASSERT_EQ(run.emitted_.size(), 40u);
+  // Rotation 10 waited for it (the timeout after its first scan arrived), then it is dead: rotation
+  // 11, whole by then, goes out at the same moment, and no later one waits.
+  EXPECT_EQ(run.sweep_of(10)->at, 10 * kPeriod + kDelivery + kTimeout);
+  EXPECT_EQ(run.sweep_of(11)->at, run.sweep_of(10)->at);
+  for (std::int64_t n = 12; n < 40; ++n) EXPECT_EQ(run.wait_of(n), 0) << "rotation " << n << " waited";
+  EXPECT_EQ(run.m_.counters().missing, (std::vector<std::uint64_t>{0, 30, 0}));
+  EXPECT_EQ(run.m_.counters().partial_timeout, 1u);
+  EXPECT_TRUE(run.dropped_.empty());
+}
+
+// The latest phase stops: the next scan of the first phase does not close its rotation early,
+// nor does it have to wait for it (the spread rule closed each sweep one rotation later).
+TEST(SweepMatcher, StoppedLatestPhaseDoesNotDelayTheOthers) {
+  auto scans = rig_scans(kPhases, 0, 40);
+  erase_scans(scans, 2, 5, 40);
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  EXPECT_EQ(run.sweep_of(5)->at, 5 * kPeriod + kDelivery + kTimeout);  // waited for it once
+  EXPECT_EQ(run.sweep_of(6)->at, run.sweep_of(5)->at);
+  for (std::int64_t n = 7; n < 40; ++n) EXPECT_EQ(run.wait_of(n), 0) << "rotation " << n << " waited";
+}
+
+// The last phase's scan of rotation 5 comes after the first phase's scan of rotation 6 (within
+// the timeout): it completes rotation 5; the spread rule fused it into rotation 6 as "complete".
+TEST(SweepMatcher, LateScanJoinsItsOwnRotation) {
+  auto scans = rig_scans(kPhases, 0, 12);
+  find_scan(scans, 2, 5).arrival = 6 * kPeriod + kDelivery + 3 * kMs;
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  ASSERT_EQ(run.emitted_.size(), 12u);
+  for (const auto& e : run.emitted_) EXPECT_TRUE(e.complete);
+  EXPECT_TRUE(run.dropped_.empty());
+}
+
+// Later than the timeout: rotation 5 goes out without it, and rotation 6, whole but for the same
+// LIDAR (its next scan queued behind), with it; both scans are dropped, never fused into rotation 6.
+TEST(SweepMatcher, ScanLaterThanTheTimeoutIsDroppedNotFusedIntoTheNextRotation) {
+  auto scans = rig_scans(kPhases, 0, 12);
+  find_scan(scans, 2, 5).arrival = 5 * kPeriod + kDelivery + kTimeout + 10 * kMs;
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  ASSERT_EQ(run.dropped_.size(), 2u);
+  EXPECT_EQ(run.dropped_[0].rotation, 5);
+  EXPECT_EQ(run.dropped_[1].rotation, 6);
+  EXPECT_FALSE(run.sweep_of(5)->complete);
+  for (std::int64_t n = 7; n < 12; ++n) EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+  EXPECT_EQ(run.m_.counters().late_scans, 2u);
+}
+
+// A LIDAR that skipped one rotation (its decoder discarded the scan): its next scan shows the
+// rotation is done for it, so the rotation goes out then, before the timeout.
+TEST(SweepMatcher, SkippedRotationClosesWhenTheLidarMovesOn) {
+  auto scans = rig_scans(kPhases, 0, 12);
+  erase_scans(scans, 0, 5, 6);
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  EXPECT_EQ(run.sweep_of(5)->at, 6 * kPeriod + kDelivery);  // with its scan of rotation 6
+  for (std::int64_t n = 6; n < 12; ++n) EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+}
+
+TEST(SweepMatcher, LidarThatComesBackIsFusedFromItsNextRotation) {
+  for (std::uint32_t gone = 0; gone < 3; ++gone) {
+    SCOPED_TRACE("lidar " + std::to_string(gone));
+    auto scans = rig_scans(kPhases, 0, 40);
+    erase_scans(scans, gone, 10, 20);
+    SimulatedRig run(3);
+    run.feed(scans);
+    run.expect_truth(scans.size());
+    for (std::int64_t n = 21; n < 40; ++n) {
+      ASSERT_NE(run.sweep_of(n), nullptr) << n;
+      EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+      EXPECT_EQ(run.wait_of(n), 0) << n;
+    }
+    EXPECT_LE(run.dropped_.size(), 1u);  // at most its first scan back, when the others had gone out
+  }
+}
+
+// The vehicle clock steps (the LIDARs' stamps with it, one scan after another; arrival time is
+// monotonic): at most the rotations the step cuts are partial, no sweep mixes rotations, and the
+// rig is whole again two rotations later.
+void expect_recovers_from_step(Nanos step, Nanos at) {
+  SCOPED_TRACE("step " + std::to_string(step / kMs) + " ms");
+  auto scans = rig_scans(kPhases, 0, 40);
+  for (auto& t : scans)
+    if (t.stamp > at) t.stamp += step;
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  const std::int64_t cut = at / kPeriod;
+  for (std::int64_t n = 0; n < 40; ++n) {
+    if (n >= cut && n <= cut + 1) continue;
+    ASSERT_NE(run.sweep_of(n), nullptr) << n;
+    EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+    EXPECT_EQ(run.wait_of(n), 0) << n;
+  }
+  EXPECT_TRUE(run.dropped_.empty());
+}
+
+TEST(SweepMatcher, ClockStepForward) { expect_recovers_from_step(1000 * 1000 * kMs + 37 * kMs, 10 * kPeriod + 10 * kMs); }
+
+TEST(SweepMatcher, ClockStepBack) {
+  expect_recovers_from_step(-537 * kMs, 10 * kPeriod + 10 * kMs);  // within the rotations it remembers
+  expect_recovers_from_step(-3 * 1000 * kMs - 37 * kMs, 10 * kPeriod + 30 * kMs);
+}
+
+// A free-running LIDAR restarted with another phase (no clock step: the others keep theirs): the
+// boundary is placed anew and the rig is whole again within a few rotations, never mixed.
+TEST(SweepMatcher, OwnPhaseChangeOfOneLidar) {
+  auto scans = rig_scans(kPhases, 0, 40);
+  for (auto& t : scans)
+    if (t.source == 0 && t.rotation >= 10) {
+      t.stamp += 30 * kMs;  // phase 0 -> 30 ms: a jump, by itself (the others keep theirs)
+      t.arrival += 30 * kMs;
+    }
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  EXPECT_GE(run.m_.counters().phase_steps, 1u);
+  for (std::int64_t n = 0; n < 40; ++n) {
+    ASSERT_NE(run.sweep_of(n), nullptr) << n;
+    EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+  }
+}
+
+// Phases that split the rotation into nearly equal gaps and jitter by 1-2 ms: any of the three
+// groupings is one rotation of the rig, but it must stay the same one (a boundary that moved back
+// and forth would split and mix sweeps).
+TEST(SweepMatcher, JitterAcrossEqualGapsKeepsTheBoundary) {
+  const std::vector<Nanos> phases{0, 33 * kMs, 66 * kMs};
+  auto scans = rig_scans(phases, 0, 60);
+  for (auto& t : scans) t.stamp += (t.rotation % 2 == 0 ? 1 : -1) * static_cast<Nanos>(t.source) * kMs;
+  SimulatedRig run(3);
+  run.feed(scans);
+  EXPECT_TRUE(run.dropped_.empty());
+  std::set<std::vector<std::int64_t>> groupings;  // per sweep: each source's rotation - the first source's
+  std::size_t complete = 0;
+  for (const auto& e : run.emitted_) {
+    if (!e.complete) continue;
+    ++complete;
+    std::vector<std::int64_t> g(3);
+    for (const auto& t : e.scans) g[t.source] = t.rotation;
+    for (auto& r : g) r -= e.scans[0].rotation;
+    groupings.insert(g);
+  }
+  EXPECT_GE(complete, 58u);  // the first and the last rotation may be cut by the grouping
+  EXPECT_EQ(groupings.size(), 1u);
+  EXPECT_EQ(run.m_.counters().partial_timeout + run.m_.counters().partial_next_sweep, run.emitted_.size() - complete);
+}
+
+TEST(SweepMatcher, UnknownSourceIsDroppedAndConfigChecked) {
+  SweepMatcher m({2, kPeriod, kTimeout});
+  EXPECT_TRUE(m.push(7, 0, kDelivery).late);
+  EXPECT_EQ(m.counters().late_scans, 1u);
+  EXPECT_THROW(SweepMatcher({0, 1, 1}), std::invalid_argument);
+  EXPECT_THROW(SweepMatcher({1, 0, 1}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sensor_rig::drivers
