@@ -13,6 +13,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "dds_domain_lease.hpp"
 #include "record_support.hpp"
@@ -217,6 +218,58 @@ TEST_F(RawReplay, ScansReplayedThroughTheDriverEqualTheLiveOnes) {
     EXPECT_NE(replay.err().find("recording ended early"), std::string::npos) << replay.err();
     EXPECT_NE(replay.err().find(says), std::string::npos) << replay.err();
   }
+}
+
+// The CAN bus's raw channel: the mock ECU logs every frame on the bus (candump -L); the frames the
+// bridge received and `rig record --raw` wrote, decoded by @mcap/core, are the ECU's frames of the
+// log one for one, in order, from the first recorded to the last (none lost, none made up).
+TEST_F(RawReplay, CanFramesAreTheBusFramesOneForOne) {
+  const std::string bus = "raw29bus" + std::to_string(::getpid());
+  const std::string log = (dir_.path / "bus.log").string();
+  const std::string file = (dir_.path / "can.mcap").string();
+  test::RigChild ecu({"mock", "paravan", "--transport", "unix-listen:" + bus, "--log", log, "--duration", "60"},
+                     (dir_.path / "ecu.out").string(), (dir_.path / "ecu.err").string());
+  ASSERT_TRUE(ecu.started());
+  test::RigChild bridge({"dbw", "bridge", "--transport", "unix:" + bus, "--domain", std::to_string(domain_), "--duration", "60"},
+                        (dir_.path / "bridge.out").string(), (dir_.path / "bridge.err").string());
+  ASSERT_TRUE(bridge.started());
+  test::RigChild rec = record({"--raw"}, file, 3.0);
+  ASSERT_EQ(rec.wait(60'000), 0) << rec.err();
+  bridge.signal_and_wait(SIGINT, 20'000);
+  ecu.signal_and_wait(SIGINT, 20'000);
+  EXPECT_EQ(rec.summary()["topics"]["/vehicle/can/frames"]["queue_full"], 0);
+
+  const auto j = test::mcap_dump(file);
+  ASSERT_FALSE(j.contains("error")) << j.dump().substr(0, 2000);
+  EXPECT_EQ(j["channels"]["/vehicle/can/frames"]["schema"], "sensor_rig_msgs/msg/CanFrame");
+  std::vector<std::string> recorded;  // "ID#DATA" as candump writes them
+  std::set<std::string> ids;
+  for (const auto& m : j["messages"]) {
+    if (m["topic"] != "/vehicle/can/frames") continue;
+    char id[16];
+    std::snprintf(id, sizeof id, m["is_extended"].get<bool>() ? "%08X" : "%03X", m["id"].get<unsigned>());
+    std::string text = std::string(id) + "#";
+    for (const auto& b : m["data"]) {
+      char hex[3];
+      std::snprintf(hex, sizeof hex, "%02X", b.get<unsigned>());
+      text += hex;
+    }
+    ids.insert(id);
+    recorded.push_back(text);
+    EXPECT_FALSE(m["frame_id"].get<std::string>().empty());
+  }
+  ASSERT_GE(recorded.size(), 100u);  // the ECU's cyclic frames, ~250 a second
+  std::vector<std::string> sent;  // the log's frames of those ids
+  std::istringstream in(test::read_file(log));
+  for (std::string line; std::getline(in, line);) {
+    const auto sp = line.rfind(' ');
+    const std::string frame = line.substr(sp + 1);
+    if (ids.count(frame.substr(0, frame.find('#'))) != 0) sent.push_back(frame);
+  }
+  const auto first = std::search(sent.begin(), sent.end(), recorded.begin(), recorded.begin() + 8);
+  ASSERT_NE(first, sent.end()) << "the first recorded frames are not in the bus log: " << recorded.front();
+  ASSERT_GE(static_cast<std::size_t>(sent.end() - first), recorded.size());
+  EXPECT_TRUE(std::equal(recorded.begin(), recorded.end(), first)) << "recorded frames differ from the bus log";
 }
 
 }  // namespace

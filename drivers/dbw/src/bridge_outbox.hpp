@@ -10,6 +10,7 @@
 
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
+#include "sensor_rig/dbw/can/transport.hpp"
 #include "sensor_rig/dbw/safety/safety_core.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 
@@ -81,6 +82,57 @@ class Outbox {
   mutable std::mutex mu_;
   std::condition_variable cv_;
   std::array<OutboxItem, kCapacity> items_{};
+  std::size_t head_ = 0;
+  std::size_t size_ = 0;
+  std::uint64_t dropped_ = 0;
+};
+
+// Received CAN frames for the raw channel (/vehicle/can/frames), filled by the CAN thread only while
+// a reader is matched and written by the publisher thread: the control path never waits on a DDS
+// write. Its own ring, so a busy bus never crowds the events and stamps out of the outbox. Full:
+// the frame is counted and dropped.
+class RawFrameRing {
+ public:
+  static constexpr std::size_t kCapacity = 1024;
+
+  bool push(const dbw::can::RxFrame& f) noexcept {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (size_ == items_.size()) {
+      ++dropped_;
+      return false;
+    }
+    items_[(head_ + size_) % items_.size()] = f;
+    ++size_;
+    return true;
+  }
+  // Hands every queued frame to `f` (64 at a time, outside the lock); returns how many.
+  template <class F>
+  std::size_t drain(F&& f) {
+    std::size_t total = 0;
+    std::array<dbw::can::RxFrame, 64> batch;
+    for (;;) {
+      std::size_t n = 0;
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        while (n < batch.size() && size_ > 0) {
+          batch[n++] = items_[head_];
+          head_ = (head_ + 1) % items_.size();
+          --size_;
+        }
+      }
+      for (std::size_t i = 0; i < n; ++i) f(batch[i]);
+      total += n;
+      if (n < batch.size()) return total;
+    }
+  }
+  [[nodiscard]] std::uint64_t dropped() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return dropped_;
+  }
+
+ private:
+  mutable std::mutex mu_;
+  std::array<dbw::can::RxFrame, kCapacity> items_{};
   std::size_t head_ = 0;
   std::size_t size_ = 0;
   std::uint64_t dropped_ = 0;

@@ -19,6 +19,7 @@
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
 #include "sensor_rig/dds/diagnostics.hpp"
+#include "sensor_rig/dds/on_demand_writer.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
@@ -66,6 +67,15 @@ dds::QosSpec status_qos() {
   return q;
 }
 
+// The raw channel of the bus: every received frame while recorded (rig record --raw). Reliable
+// keep-last 256: a recorder that lags a little loses nothing, and the write never blocks.
+constexpr const char* kRawFramesTopic = "/vehicle/can/frames";
+dds::QosSpec raw_frames_qos() {
+  dds::QosSpec q;
+  q.depth = 256;
+  return q;
+}
+
 class Runner {
  public:
   Runner(const Protocol& p, can::Transport& bus, const DdsBridgeOptions& o)
@@ -74,7 +84,8 @@ class Runner {
         cmd_topic_(participant_, kCmdTopic),
         status_topic_(participant_, kStatusTopic, status_qos()), state_topic_(participant_, kStateTopic),
         reader_(participant_, cmd_topic_), status_writer_(participant_, status_topic_, status_qos()),
-        state_writer_(participant_, state_topic_), stamps_(participant_), diagnostics_(participant_) {
+        state_writer_(participant_, state_topic_), stamps_(participant_), diagnostics_(participant_),
+        raw_frames_(participant_, kRawFramesTopic, raw_frames_qos()), bus_name_(bus.name()) {
     if (security_.enabled()) expiry_ = dds::security_expiry(security_);
     frames_.reserve(16);
   }
@@ -207,6 +218,7 @@ class Runner {
       const Nanos vnow = vehicle_now_ns();
       const auto push = [this](const OutboxItem& it) { outbox_.push(it, false); };
       if (st == can::IoStatus::kOk) {
+        if (raw_frames_.active()) raw_ring_.push(rx);  // one relaxed load when nobody records
         const RxKind kind = awaiting_ecu_.on_frame(core_, rx, mono, push);  // core_.on_frame + the ecu stage
         if (kind == RxKind::kFeedback) {
           OutboxItem item;
@@ -262,6 +274,7 @@ class Runner {
       const bool last_round = !publishing_;
       while (outbox_.drain(last_round ? 0 : 5, [this](const OutboxItem& it) { publish(it); }) > 0) {
       }
+      raw_ring_.drain([this](const can::RxFrame& f) { publish_raw(f); });
       if (last_round) break;
       const Nanos mono = monotonic_now_ns();
       if (mono >= next_status) {
@@ -299,6 +312,27 @@ class Runner {
         break;
       }
       case OutboxItem::Kind::kState: publish_state(it.feedback, it.stamps.ready_ns); break;
+    }
+  }
+
+  // One received frame on the raw channel, as can_msgs/Frame has it plus CAN FD's flags.
+  void publish_raw(const can::RxFrame& rx) {
+    msg::CanFrame m{};
+    m.header.stamp = msg::to_time(rx.stamp);
+    m.header.frame_id = bus_name_.data();
+    m.id = rx.frame.id;
+    m.is_rtr = rx.frame.rtr;
+    m.is_extended = rx.frame.extended;
+    m.is_error = rx.frame.error;
+    m.is_fd = rx.frame.fd;
+    m.brs = rx.frame.brs;
+    m.esi = rx.frame.esi;
+    m.data._buffer = const_cast<std::uint8_t*>(rx.frame.data.data());  // never written through
+    m.data._length = m.data._maximum = rx.frame.len;
+    if (raw_frames_.write(m, vehicle_now_ns()).ok()) {
+      ++raw_frames_written_;
+    } else {
+      ++raw_frames_failed_;
     }
   }
 
@@ -408,6 +442,11 @@ class Runner {
     d.add_number("frames_sent", snap.frames_sent);
     d.add_number("frames_received", snap.frames_received);
     d.add_number("outbox_dropped", outbox_.dropped());
+    if (raw_frames_written_ + raw_frames_failed_ + raw_ring_.dropped() > 0) {
+      d.add("raw_topic", kRawFramesTopic);
+      d.add_number("raw_frames", raw_frames_written_);
+      d.add_number("raw_frames_dropped", raw_ring_.dropped() + raw_frames_failed_);
+    }
     // Issue 28: a lapsed certificate, grant or CA stops the bridge taking commands; warn 30 days ahead.
     if (security_.enabled()) dds::report_expiry(d, security_.identity, expiry_, std::time(nullptr));
     // /vehicle/state's own losses, on its topic, as every sensor node reports its units: the feedback
@@ -439,6 +478,10 @@ class Runner {
   dds::Writer<msg::VehicleState> state_writer_;
   dds::StampsWriter stamps_;
   dds::DiagnosticsPublisher diagnostics_;
+  dds::OnDemandWriter<msg::CanFrame> raw_frames_;
+  std::string bus_name_;  // the raw frames' frame_id
+  RawFrameRing raw_ring_;
+  std::uint64_t raw_frames_written_ = 0, raw_frames_failed_ = 0;  // publisher thread only
   std::mutex mu_;  // the core, the transport's send side, last_cmd_rx_, silence_to_neutral_ms_
   std::atomic<bool> stop_{false};
   std::atomic<bool> publishing_{true};
