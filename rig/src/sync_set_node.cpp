@@ -132,6 +132,8 @@ void SyncSetNode::supervise(std::vector<dds::DriverStatus>& statuses) {
     d.add_number("incomplete", st.incomplete);
     d.add_number("dropped", st.dropped);
     d.add_number("late", st.late);
+    d.add_number("implausible", st.implausible);  // future stamps not followed by their member (issue 27 item 6)
+    d.add_number("jumps", st.jumps);
     d.add_number("timeouts", st.timeouts);
     d.add_number("spread_p50_ms", p.p50);
     d.add_number("spread_p99_ms", p.p99);

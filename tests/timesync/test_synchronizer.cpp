@@ -330,6 +330,52 @@ TEST(Synchronizer, QueueOverflowDropsTheOldest) {
   EXPECT_EQ(sync.stats().dropped, 6u);
 }
 
+// Two members at 10 Hz (the rig's sets: min interval 50 ms, timeout 500 ms); member 1's stamp at
+// `wild` is `offset` away from its instant, or from there on when `sustained`.
+struct StepRun {
+  std::uint64_t sets = 0;
+  SyncStats stats;
+};
+StepRun run_with_step(int wild, Nanos offset, bool sustained, bool both) {
+  Synchronizer sync(approx(2, 5 * kMs, 500 * kMs, 50 * kMs));
+  SyncSet set;
+  StepRun r;
+  for (int k = 0; k < 50; ++k) {
+    const Nanos t = kT0 + k * 100 * kMs;
+    const bool stepped = sustained ? k >= wild : k == wild;
+    const auto seq = static_cast<std::uint64_t>(k);
+    sync.push({0, t + (stepped && both ? offset : 0), seq, t + 5 * kMs}, t + 5 * kMs);
+    sync.push({1, t + kMs + (stepped ? offset : 0), seq, t + 8 * kMs}, t + 8 * kMs);
+    sync.poll(t + 60 * kMs);
+    while (sync.pop(set)) ++r.sets;
+  }
+  r.stats = sync.stats();
+  return r;
+}
+
+// Issue 27 item 6: one stamp 10 s in the future (a camera clock glitch, a frame reordered by its
+// device clock) was queued; once member 1's normal samples were used it was the pivot, timed out,
+// and its drop pinned member 1 (every later sample "late") for 10 s: 15 sets of 49. Now it is
+// held, member 1's next sample shows it wild: counted, in no set, and every other set is made.
+TEST(Synchronizer, OneFutureStampIsCountedAndDoesNotStallItsMember) {
+  const auto r = run_with_step(10, 10'000 * kMs, false, false);
+  EXPECT_EQ(r.sets, 49u);
+  EXPECT_EQ(r.stats.implausible, 1u);
+  EXPECT_EQ(r.stats.late, 0u);
+  EXPECT_EQ(r.stats.jumps, 0u);
+  EXPECT_EQ(r.stats.dropped_per_member[1], 1u);  // the wild one
+}
+
+// A step that lasts (the host clock stepped forward, every member's mapping follows): each member's
+// first stamp there waits for its next, then both go in; no set is lost.
+TEST(Synchronizer, ASustainedStepIsFollowed) {
+  const auto r = run_with_step(20, 5'000 * kMs, true, true);
+  EXPECT_EQ(r.sets, 50u);
+  EXPECT_EQ(r.stats.jumps, 2u);
+  EXPECT_EQ(r.stats.implausible, 0u);
+  EXPECT_EQ(r.stats.late, 0u);
+}
+
 TEST(Synchronizer, RejectsBadConfig) {
   SyncConfig c;
   c.members = 0;

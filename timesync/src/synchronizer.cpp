@@ -60,6 +60,8 @@ Synchronizer::Synchronizer(SyncConfig cfg) : cfg_(std::move(cfg)) {
   if (!cfg_.min_interval_ns.empty() && cfg_.min_interval_ns.size() != cfg_.members)
     throw std::invalid_argument("synchronizer: min_interval_ns needs one value per member");
   if (cfg_.min_interval_ns.empty()) cfg_.min_interval_ns.assign(cfg_.members, 0);
+  if (cfg_.max_jump_ns < 0) throw std::invalid_argument("synchronizer: negative max_jump");
+  if (cfg_.max_jump_ns == 0) cfg_.max_jump_ns = cfg_.timeout_ns;
   if (cfg_.policy == SyncPolicy::kExact) cfg_.max_spread_ns = 0;
   members_.resize(cfg_.members);
   chosen_.assign(cfg_.members, -1);
@@ -68,6 +70,34 @@ Synchronizer::Synchronizer(SyncConfig cfg) : cfg_(std::move(cfg)) {
 
 PushResult Synchronizer::push(const SyncSample& s, Nanos now_ns) noexcept {
   if (s.member >= members_.size()) return PushResult::kBadMember;
+  Member& m = members_[s.member];
+  if (m.held) {
+    const SyncSample held = *m.held;
+    m.held.reset();
+    if (s.stamp_ns >= held.stamp_ns) {  // the member stays there: a step (a clock stepped), followed
+      ++stats_.jumps;
+      (void)accept(held, now_ns);
+      return accept(s, now_ns);
+    }
+    // The member came back: the held stamp was a wild one (a glitch, a reordered device clock).
+    ++stats_.implausible;
+    ++stats_.dropped;
+    ++stats_.dropped_per_member[s.member];
+  }
+  if (beyond_every_stamp(s.stamp_ns)) {
+    m.held = s;
+    return PushResult::kHeld;
+  }
+  return accept(s, now_ns);
+}
+
+bool Synchronizer::beyond_every_stamp(Nanos stamp) const noexcept {
+  Nanos latest = kNone;
+  for (const auto& m : members_) latest = std::max(latest, m.watermark);
+  return latest != kNone && stamp - latest > cfg_.max_jump_ns;
+}
+
+PushResult Synchronizer::accept(const SyncSample& s, Nanos now_ns) noexcept {
   Member& m = members_[s.member];
   if (m.consumed != kNone && s.stamp_ns <= m.consumed) {
     ++stats_.late;

@@ -5,6 +5,7 @@
 // caller's clock), no I/O, no threads. See timesync/README.md "Synchronizer" for the algorithm.
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
@@ -27,6 +28,12 @@ struct SyncConfig {
   // the pivot (one period of latency); a bound lets it be final as soon as the members are in.
   std::vector<Nanos> min_interval_ns;  // empty = 0 for all
   std::size_t max_queue = 64;          // per member; the oldest sample goes when full
+  // A stamp more than this beyond every stamp pushed so far is held until its member's next
+  // sample: one at or after it confirms a step (both go in), an earlier one shows it was a wild
+  // stamp (counted `implausible`, in no set). Queued, one future stamp became the pivot once its
+  // member's normal samples were used, timed out and pinned the member (every sample before it
+  // late) until vehicle time reached it. 0: the timeout.
+  Nanos max_jump_ns = 0;
 };
 
 struct SyncSample {
@@ -47,6 +54,7 @@ enum class PushResult : std::uint8_t {
   kLate,        // at or before the last stamp this member already gave to a decision
   kDuplicate,   // this member already holds a sample with this stamp
   kBadMember,
+  kHeld,        // far beyond every stamp so far: waits for its member's next sample (max_jump_ns)
 };
 
 struct SyncStats {
@@ -58,6 +66,8 @@ struct SyncStats {
   std::uint64_t duplicates = 0;
   std::uint64_t timeouts = 0;     // pivots decided by the timeout (complete or not)
   std::uint64_t overflows = 0;
+  std::uint64_t implausible = 0;  // future stamps their member's next sample did not follow (also dropped)
+  std::uint64_t jumps = 0;        // future stamps confirmed by the next sample: a step, followed
   std::vector<std::uint64_t> dropped_per_member;
 };
 
@@ -79,10 +89,13 @@ class Synchronizer {
     std::deque<SyncSample> queue;        // sorted by stamp
     Nanos watermark = kNone;             // latest stamp ever pushed
     Nanos consumed = kNone;              // latest stamp given to a decision
+    std::optional<SyncSample> held;      // a stamp beyond max_jump_ns, until the next sample
   };
   static constexpr Nanos kNone = INT64_MIN;
   enum class Decision : std::uint8_t { kWait, kEmit, kDropPivot, kDropGroup };
 
+  PushResult accept(const SyncSample& s, Nanos now_ns) noexcept;
+  [[nodiscard]] bool beyond_every_stamp(Nanos stamp) const noexcept;
   void run(Nanos now_ns) noexcept;
   Decision decide(Nanos now_ns) noexcept;
   void drop(std::uint32_t m, const SyncSample& s) noexcept;
