@@ -26,7 +26,7 @@ struct FusionConfig {
   CropBoxConfig crop_box;
   double voxel_leaf_m = 0.0;  // 0 = no voxel filter
   int timeout_ms = 150;       // a sweep waits at most this long (after its first scan) for the rest
-  int max_spread_ms = 100;    // the scans of one sweep lie within this (one rotation)
+  int max_spread_ms = 100;    // one rotation: the period the LIDARs turn at (sweeps are matched by rotation)
   // SCHED_FIFO priority of the node's thread, 0 = normal: on a busy 2-core PU a normal thread
   // waits behind other work for milliseconds after the last scan arrived.
   int realtime_priority = 0;

@@ -3,7 +3,8 @@
 // (ScanObserver, a copy of the points, no DDS in between); the node's thread filters each scan on
 // arrival (ScanFilter: base_link, ego crop box, voxels), groups scans into sweeps (SweepMatcher)
 // and writes each sweep as one PointCloud2 on rt/sensors/lidar/fused/points + its stamps on
-// rt/rig/stamps. A sweep waits for every LIDAR, or emits the subset it has after timeout_ms.
+// rt/rig/stamps. A sweep waits for every live LIDAR, or emits the subset it has after timeout_ms;
+// a missing LIDAR's scan counts in the stamps' missing_packets.
 #include <memory>
 #include <string>
 #include <vector>
