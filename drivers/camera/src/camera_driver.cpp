@@ -112,7 +112,7 @@ struct CameraDriver::Impl {
   void publish(camera::Frame& f) {
     const Nanos ready = vehicle_now_ns();
     const auto& m = f.meta();
-    const Nanos tick = trigger != nullptr ? trigger->tick_before(m.first_rx_ns, trigger_member) : 0;
+    const Nanos tick = trigger != nullptr ? trigger->tick_before(clock.trigger_reference(m), trigger_member) : 0;
     const auto st = clock.stamp(m, tick);
     // The camera's own exposure start of a triggered frame: the trigger's phase figure includes
     // the camera's trigger -> exposure delay where the device reports it.

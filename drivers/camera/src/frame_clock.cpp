@@ -75,10 +75,10 @@ void FrameClock::observe(const camera::FrameMeta& m, Nanos device) noexcept {
 
 FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
   FrameStamp s = device_stamp(m, tick_ns);
-  if (s.source != StampSource::kTriggerTick) {
-    s.vehicle_ns = monotonic_.apply(s.vehicle_ns);
-    s.slewed = monotonic_.status().correction_ns > kSlewFlagNs;
-  }
+  // Every source through the one filter: trigger ticks bypassed it, so after a host step back a
+  // triggered camera's topic went back with its ticks and forward again with its mapped exposures.
+  s.vehicle_ns = monotonic_.apply(s.vehicle_ns);
+  s.slewed = monotonic_.status().correction_ns > kSlewFlagNs;
   return s;
 }
 

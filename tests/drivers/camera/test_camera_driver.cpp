@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
+#include <deque>
 #include <map>
 #include <mutex>
 
@@ -235,6 +238,127 @@ TEST(CameraDriver, PtpLockedCameraStampsDeviceTimeAndReportsTheLock) {
   std::remove(xml.c_str());
 }
 
+
+// A software-triggered camera whose exposure plus delivery exceeds the trigger period: each call
+// starts an exposure now (its truth: the exposure start, vehicle time) of 45 ms; the first packet
+// leaves at exposure end and reaches the host 0.2 ms later, every other frame 8 ms later (a loaded
+// link): 53 ms after its trigger, beyond the 50 ms period. Device ticks: CLOCK_MONOTONIC.
+class SlowTriggeredCamera : public camera::FrameSource {
+ public:
+  static constexpr Nanos kExposureNs = 45'000'000;
+  void open() override { open_ = true; }
+  void close() noexcept override { open_ = false; }
+  [[nodiscard]] bool is_open() const noexcept override { return open_; }
+  bool trigger() override {
+    std::lock_guard lock(mutex_);
+    const Nanos mono = monotonic_now_ns();
+    const Nanos delay = truth_.size() % 2 == 0 ? 200'000 : 8'000'000;
+    pending_.push_back({truth_.size(), mono, vehicle_now_ns(), mono + kExposureNs + delay});
+    truth_.push_back(pending_.back().exposure_vehicle);
+    cv_.notify_all();
+    return true;
+  }
+  camera::Capture next(int timeout_ms) override {
+    camera::Capture c;
+    std::unique_lock lock(mutex_);
+    const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(timeout_ms) * 1'000'000;
+    for (;;) {
+      const Nanos now = monotonic_now_ns();
+      if (!pending_.empty() && now >= pending_.front().arrival_mono) break;
+      if (now >= deadline) return c;  // timeout
+      const Nanos until = pending_.empty() ? deadline : std::min(deadline, pending_.front().arrival_mono);
+      cv_.wait_for(lock, std::chrono::nanoseconds(until - now));
+    }
+    const Shot s = pending_.front();
+    pending_.pop_front();
+    camera::FrameMeta m;
+    m.seq = s.seq;
+    m.width = 8;
+    m.height = 8;
+    m.step = 8;
+    m.format = camera::PixelFormat::kMono8;
+    m.domain = camera::TimeDomain::kDeviceTicks;
+    m.device_ns = s.exposure_mono;
+    m.complete_ns = vehicle_now_ns();
+    m.complete_mono_ns = monotonic_now_ns();
+    m.first_rx_ns = m.complete_ns - (m.complete_mono_ns - s.arrival_mono);
+    c.status = camera::CaptureStatus::kFrame;
+    c.frame = camera::Frame(m, {pixels_.data(), pixels_.size()}, [] {});
+    return c;
+  }
+  [[nodiscard]] camera::SourceStats stats() const override { return {}; }
+  [[nodiscard]] double exposure_us() const override { return static_cast<double>(kExposureNs) / 1000.0; }
+  [[nodiscard]] std::string describe() const override { return "slow triggered camera"; }
+  [[nodiscard]] std::vector<Nanos> truth() const {
+    std::lock_guard lock(mutex_);
+    return truth_;
+  }
+
+ private:
+  struct Shot {
+    std::uint64_t seq;
+    Nanos exposure_mono;
+    Nanos exposure_vehicle;
+    Nanos arrival_mono;
+  };
+  std::atomic<bool> open_{false};
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Shot> pending_;
+  std::vector<Nanos> truth_;  // exposure start per frame (seq), vehicle time
+  std::vector<std::uint8_t> pixels_ = std::vector<std::uint8_t>(64, 0);
+};
+
+// Issue 27 item 12: a frame was matched to the latest trigger tick before its first packet; when
+// exposure + delivery exceed the period that is the next tick: stamps one period late, and where
+// the delivery varies two frames on one tick (a duplicate stamp). Each published stamp must name
+// its own frame's exposure: the nearest true exposure start, no two stamps on one, within a
+// quarter period (the tick is the trigger call, the call's latency on a loaded host is its error).
+TEST(CameraDriver, ATriggeredFrameLongerThanThePeriodKeepsItsOwnTick) {
+  dds::Participant p;
+  dds::StampsWriter stamps(p);
+  TriggerGroup group("slow", 20.0);
+  CameraConfig c;
+  c.name = unique("drv_slow_trigger");
+  c.frame_id = "camera_" + c.name;
+  c.source.format = camera::PixelFormat::kMono8;
+  c.source.width = 8;
+  c.source.height = 8;
+  c.source.frame_rate = 20;
+  c.source.trigger = camera::TriggerMode::kSoftware;
+  c.info = camera::uncalibrated(8, 8);
+  auto src = std::make_unique<SlowTriggeredCamera>();
+  auto* cam = src.get();
+  dds::Topic<msg::Image> it(p, "/sensors/camera/" + c.name + "/image_raw", c.qos);
+  dds::Reader<msg::Image> images(p, it, c.qos);
+  CameraDriver driver(c, std::move(src), p, stamps, &group);
+  driver.start();
+  ASSERT_TRUE(images.wait_for_writers(1, test::kDiscoveryMs));
+  group.start();
+  std::vector<Nanos> published;
+  // 40 frames: 2 s, past the device clock mapping's lock (~1 s): trigger ticks, then mapped exposures.
+  ASSERT_TRUE(wait_for([&] {
+    images.take([&](const msg::Image& m, const dds_sample_info_t&) { published.push_back(msg::from_time(m.header.stamp)); });
+    return published.size() >= 40;
+  }, 10'000));
+  group.stop();
+  driver.stop();
+  const auto truth = cam->truth();
+  std::map<std::size_t, int> named;
+  int late = 0;
+  for (const Nanos stamp : published) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < truth.size(); ++i)
+      if (std::llabs(truth[i] - stamp) < std::llabs(truth[best] - stamp)) best = i;
+    ++named[best];
+    const Nanos err = stamp - truth[best];
+    late += err > 12'500'000 || err < -12'500'000 ? 1 : 0;
+    EXPECT_LT(std::llabs(err), 12'500'000) << "frame " << best << ": stamp " << static_cast<double>(err) / 1e6 << " ms off its exposure";
+  }
+  int twice = 0;
+  for (const auto& [frame, n] : named) twice += n > 1 ? n - 1 : 0;
+  EXPECT_EQ(twice, 0) << "stamps on another frame's exposure (" << late << " beyond a quarter period)";
+}
 
 // A trigger source that has stopped firing (its LIDAR stopped): every call refused, never firing.
 class StoppedTrigger : public TriggerSource {

@@ -154,6 +154,37 @@ TEST(FrameClock, MonotonicClockStampsStayMonotonicThroughRealtimeSteps) {
 }
 
 
+// Issue 27 item 12: a triggered camera's frames are stamped with their trigger tick (host time) until
+// the device clock mapping locks. The ticks bypassed the topic's monotonic filter: after a host step
+// back of 500 ms the topic went back with the ticks (and forward again once mapped exposures came).
+// Now the ticks go through the same filter: held, slewed, flagged; never backwards.
+TEST(FrameClock, TriggerTickStampsStayMonotonicThroughAStepBack) {
+  FrameClock clock(2'000'000);
+  timesync::RealtimeStepDetector steps;
+  const Nanos mono0 = 50'000'000'000;
+  const Nanos rt0 = 1'800'000'000'000'000'000;
+  Nanos last = 0, offset = 0;
+  bool flagged = false;
+  for (int i = 0; i < 8; ++i) {  // 0.8 s at 10 Hz: the mapping is not locked, every stamp a tick
+    if (i == 4) offset = -500'000'000;
+    const Nanos mono = mono0 + static_cast<Nanos>(i) * 100'000'000;
+    const Nanos tick = rt0 + (mono - mono0) + offset;  // the trigger thread's CLOCK_REALTIME reading
+    camera::FrameMeta m;
+    m.device_ns = mono;
+    m.first_rx_ns = tick + 2'500'000;
+    m.complete_ns = m.first_rx_ns + 1'000'000;
+    m.complete_mono_ns = mono + 3'500'000;
+    clock.realtime_step(steps.observe(m.complete_ns, m.complete_mono_ns));
+    const auto s = clock.stamp(m, tick);
+    EXPECT_EQ(s.source, StampSource::kTriggerTick) << i;
+    EXPECT_GE(s.vehicle_ns, last) << "frame " << i << " went back";
+    last = s.vehicle_ns;
+    flagged = flagged || s.slewed;
+  }
+  EXPECT_EQ(clock.monotonic().backward_steps, 1u);
+  EXPECT_TRUE(flagged) << "held stamps are not vehicle time: flagged";
+}
+
 // Issue 27 item 7: a PTP stamp 37 s off (a camera that won the election on its own TAI clock, or a
 // wrong timescale) is not published: the frame falls back to the mapped ticks, counted. Before, every
 // kVehicle stamp was taken as it came.

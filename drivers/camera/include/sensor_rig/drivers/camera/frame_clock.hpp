@@ -10,8 +10,9 @@
 // after the first packet arrived, or more than the arrival window before it, is the clock's error
 // (a camera that won the PTP election, a wrong timescale, a clock step not yet confirmed by the
 // mapper): the frame falls back to the mapped ticks, else the arrival minus the exposure, counted.
-// Device-clock stamps never go backwards when CLOCK_REALTIME is stepped back (timesync's
-// MonotonicStamps: held, then slewed out); trigger ticks are the clock's readings as they are.
+// A topic's stamps never go backwards when CLOCK_REALTIME is stepped back (timesync's
+// MonotonicStamps: held, then slewed out), trigger ticks included: a triggered camera switches
+// between its ticks and its mapped exposures, and one filter for both keeps the topic monotonic.
 #include <cstdint>
 #include <deque>
 
@@ -48,6 +49,13 @@ class FrameClock {
   // `tick_ns`: vehicle time of the software trigger tick that exposed the frame (0: none).
   FrameStamp stamp(const camera::FrameMeta& m, Nanos tick_ns = 0) noexcept;
   [[nodiscard]] timesync::ClockMapperStatus status(Nanos now) const { return mapper_.status(now); }
+  // The instant whose latest trigger tick exposed this frame: its first packet less the exposure
+  // (the packet leaves at exposure end). Not the arrival: when exposure + delivery exceed the
+  // trigger period the next tick has fired by then (issue 27 item 12: stamps one period late, two
+  // frames on one tick).
+  [[nodiscard]] Nanos trigger_reference(const camera::FrameMeta& m) const noexcept {
+    return m.first_rx_ns - (m.exposure_ns > 0 ? m.exposure_ns : exposure_ns_);  // the latest exposure known
+  }
   [[nodiscard]] const timesync::MonotonicStampsStatus& monotonic() const noexcept { return monotonic_.status(); }
   // CLOCK_REALTIME was stepped (the caller's RealtimeStepDetector): a step back is absorbed.
   void realtime_step(Nanos step_ns) noexcept { monotonic_.realtime_step(step_ns); }
