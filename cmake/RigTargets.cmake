@@ -32,6 +32,25 @@ if(RIG_FUZZ)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
+# The standard headers the project's files include most (counted over the sources), precompiled once
+# for the libraries and once more, with GoogleTest, for the tests.
+set(RIG_PCH_STD_HEADERS <algorithm> <array> <atomic> <chrono> <cmath> <condition_variable> <cstddef>
+    <cstdint> <cstdio> <cstdlib> <cstring> <deque> <filesystem> <fstream> <functional> <map> <memory>
+    <mutex> <optional> <set> <span> <sstream> <stdexcept> <string> <string_view> <thread> <utility> <vector>)
+
+# GCC 12 with a precompiled <string> reports std::string copies as out of bounds (-Warray-bounds on
+# char_traits' memcpy: the false-positive family of GCC bugs 105329/105651, seen on
+# dds/src/security_checks.cpp, not without the PCH). Clang (make fuzz) keeps these warnings, and the
+# ASan/UBSan stage checks bounds at run time.
+set(_rig_gcc12_pch_flags "")
+if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
+  set(_rig_gcc12_pch_flags -Wno-array-bounds -Wno-stringop-overflow -Wno-stringop-overread)
+endif()
+
+# -pthread for every file: Aravis's and GLib's pkg-config flags bring it (and with it _REENTRANT) to
+# the camera libraries, and a precompiled header is only used where such macros are the same.
+add_compile_options($<$<COMPILE_LANGUAGE:CXX>:-pthread>)
+
 # rig_library(NAME SOURCES... DEPS ...): a static library with the area's public include dir.
 function(rig_library name)
   cmake_parse_arguments(A "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
@@ -40,6 +59,26 @@ function(rig_library name)
                                      PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
   target_link_libraries(${name} PUBLIC ${A_DEPS} PRIVATE rig_warnings ${A_PRIVATE_DEPS})
   set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  # One precompiled header of the standard library for every library's C++ files: parsing was
+  # 40-77 % of a typical library file's compile at -O3 (-ftime-report on 8 files); with the PCH, 24
+  # library files chosen at random compiled in 87 s instead of 109 s (-21 %, side by side, Release,
+  # 2026-11-28), ~205 such files in each of make test's two full builds.
+  # Only the standard library: a third-party or project header in it would let a file compile
+  # here without its own #include.
+  if(NOT TARGET rig_library_pch)
+    add_library(rig_library_pch OBJECT ${CMAKE_SOURCE_DIR}/cmake/library_pch.cpp)
+    target_link_libraries(rig_library_pch PRIVATE rig_warnings)
+    target_compile_options(rig_library_pch PRIVATE ${_rig_gcc12_pch_flags})
+    set_target_properties(rig_library_pch PROPERTIES POSITION_INDEPENDENT_CODE ON)
+    target_precompile_headers(rig_library_pch PRIVATE ${RIG_PCH_STD_HEADERS})
+  endif()
+  target_precompile_headers(${name} REUSE_FROM rig_library_pch)
+  target_compile_options(${name} PRIVATE ${_rig_gcc12_pch_flags})
+  foreach(_src IN LISTS A_SOURCES)
+    if(_src MATCHES "\\.c$")
+      set_source_files_properties(${_src} PROPERTIES SKIP_PRECOMPILE_HEADERS ON)
+    endif()
+  endforeach()
 endfunction()
 
 # rig_test(NAME LABEL SOURCES... DEPS ...): a GoogleTest executable registered with ctest.
@@ -65,7 +104,7 @@ function(rig_test name)
     target_link_libraries(rig_test_pch PRIVATE GTest::gtest GTest::gmock rig_warnings)
     target_compile_options(rig_test_pch PRIVATE ${_gcc12_test_flags})
     target_compile_definitions(rig_test_pch PRIVATE ${_rig_test_defaults})
-    target_precompile_headers(rig_test_pch PRIVATE <gtest/gtest.h> <gmock/gmock.h>)
+    target_precompile_headers(rig_test_pch PRIVATE ${RIG_PCH_STD_HEADERS} <gtest/gtest.h> <gmock/gmock.h>)
   endif()
   target_compile_options(${name} PRIVATE ${_gcc12_test_flags})
   # ctest's environment (below) as built-in defaults: an executable run by hand finds the rig and

@@ -117,6 +117,9 @@ TEST(DbwSecurityProcesses, OnlyThePermittedSourceDrives) {
   EXPECT_NE(rig.output("plain").find("dbw send: 300 commands"), std::string::npos) << rig.output("plain");
   EXPECT_NE(rig.output("forged").find("dbw send: 300 commands"), std::string::npos) << rig.output("forged");
   poll(300);
+  // Only this test's bridge writes the status in its domain: another test's bridge would be read as
+  // this one (CI once ran two dbw tests in one domain when domains were derived from the pid).
+  ASSERT_EQ(status.matched(), 1U) << "more than one /vehicle/dbw/status writer in domain " << dom;
   EXPECT_FALSE(engaged) << "a sender without permission engaged the bridge";
   EXPECT_EQ(counted, 0U) << "the bridge took commands from a sender without permission";
   EXPECT_EQ(dbw::test::enabled_requests(rig.bus_log(), 0), 0) << "an enabled request reached the bus";

@@ -1,0 +1,1 @@
+// The translation unit that builds the libraries' precompiled header (cmake/RigTargets.cmake).
