@@ -36,8 +36,8 @@ void add_record(CLI::App& app, cli::Context& ctx) {
   cmd->add_option("--queue-mb", o->queue_mb, "MiB queued for the writer thread at most (then samples are dropped, counted)")
       ->check(CLI::Range(1, 16384))->capture_default_str();
   cmd->add_flag("--raw", o->raw,
-                "Also the raw channels: each LIDAR's packets (/sensors/lidar/NAME/packets) and the CAN frames "
-                "(/vehicle/can/frames), which the drivers publish only while recorded");
+                "Also the raw channels (beside every topic, or beside the TOPICs named): each LIDAR's packets "
+                "(/sensors/lidar/NAME/packets) and the CAN frames (/vehicle/can/frames), which the drivers publish only while recorded");
   cmd->add_flag("!--no-progress", o->progress, "No progress line on stderr");
   cmd->add_option("--rt-priority", o->rt_priority, "SCHED_FIFO priority of the recorder's threads and its DDS threads (0: normal)")
       ->check(CLI::Range(0, 99));

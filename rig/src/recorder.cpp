@@ -147,7 +147,10 @@ class Recorder {
     for (const auto& pub : discovery_.take()) {
       if (!pub.alive || pub.topic.rfind("rt/", 0) != 0) continue;
       const std::string ros = dds::dds_to_ros_topic(pub.topic);
-      if (!wanted_.empty() && wanted_.count(ros) == 0) continue;
+      // Named topics restrict the recording; --raw adds every raw channel to them.
+      const dds::RegisteredType* known_type = dds::find_type(pub.type);
+      const bool raw = known_type != nullptr && is_raw_channel(known_type->schema_name);
+      if (!wanted_.empty() && wanted_.count(ros) == 0 && !(raw && opt_.raw)) continue;
       if (known_.count(ros) != 0) {
         if (pub.reliability == dds::QosSpec::Reliability::kBestEffort && known_[ros] != nullptr && known_[ros]->reliable)
           std::fprintf(stderr, "rig record: %s: a best-effort writer joined a topic recorded reliably: its samples are not recorded\n", ros.c_str());
@@ -160,7 +163,7 @@ class Recorder {
         std::fprintf(stderr, "rig record: %s: not recorded: %s\n", ros.c_str(), skipped_[ros].c_str());
         continue;
       }
-      if (is_raw_channel(type->schema_name) && !opt_.raw && wanted_.empty()) {
+      if (raw && !opt_.raw && wanted_.count(ros) == 0) {
         known_[ros] = nullptr;  // never matched: its driver does not publish it (summary: "raw_off")
         raw_off_.insert(ros);
         continue;

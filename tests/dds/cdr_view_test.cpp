@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "sensor_msgs.h"
+#include "sensor_rig_msgs.h"
 
 namespace sensor_rig::dds {
 namespace {
@@ -299,6 +300,77 @@ TEST(CdrView, WritesFuzzSeedsWhenAsked) {
     const std::size_t skip = i == 3 ? 4 : 0;
     f.write(reinterpret_cast<const char*>(wire.data() + skip), static_cast<std::streamsize>(wire.size() - skip));
     ASSERT_TRUE(f.good());
+  }
+}
+
+// The raw channels (issue 29): Cyclone's serializer writes, the views read back every field; every
+// truncation is kTruncated (or a string error), never a read past the end.
+TEST(CdrView, LidarPacketsAndCanFrameRoundTripInBothByteOrders) {
+  std::vector<std::uint8_t> a(1206), b(512);
+  for (std::size_t i = 0; i < a.size(); ++i) a[i] = static_cast<std::uint8_t>(i * 7);
+  for (std::size_t i = 0; i < b.size(); ++i) b[i] = static_cast<std::uint8_t>(i * 3 + 1);
+  sensor_rig_msgs_msg_dds__LidarPacket_ packets[2] = {};
+  packets[0].stamp = {1'700'000'000, 123'456'789};
+  packets[0].src_address = 0xC0A801C9;
+  packets[0].src_port = 2368;
+  packets[0].dst_port = 2368;
+  packets[0].data = {static_cast<std::uint32_t>(a.size()), static_cast<std::uint32_t>(a.size()), a.data(), false};
+  packets[1].stamp = {1'700'000'001, 5};
+  packets[1].src_address = 0x7F000001;
+  packets[1].src_port = 40000;
+  packets[1].dst_port = 8308;
+  packets[1].data = {static_cast<std::uint32_t>(b.size()), static_cast<std::uint32_t>(b.size()), b.data(), false};
+  char frame[] = "front", model[] = "VLP-32C";
+  sensor_rig_msgs_msg_dds__LidarPackets_ m{};
+  m.header.stamp = packets[0].stamp;
+  m.header.frame_id = frame;
+  m.model = model;
+  m.data_port = 2368;
+  m.packets = {2, 2, packets, false};
+  std::uint8_t can_data[3] = {0x16, 0x10, 0xff};
+  char bus[] = "can0";
+  sensor_rig_msgs_msg_dds__CanFrame_ f{};
+  f.header.stamp = {1'700'000'002, 7};
+  f.header.frame_id = bus;
+  f.id = 0x18FF1234;
+  f.is_extended = true;
+  f.is_fd = true;
+  f.esi = true;
+  f.data = {3, 3, can_data, false};
+  for (const auto order : {std::endian::little, std::endian::big}) {
+    const Bytes raw = serialize(m, sensor_rig_msgs_msg_dds__LidarPackets__desc, order);
+    LidarPacketsView v;
+    ASSERT_EQ(parse_cdr(*cdr_body(raw), v), CdrStatus::kOk);
+    EXPECT_EQ(v.header.frame_id, "front");
+    EXPECT_EQ(v.model, "VLP-32C");
+    EXPECT_EQ(v.data_port, 2368);
+    ASSERT_EQ(v.packets.size(), 2u);
+    EXPECT_EQ(v.packets[0].sec, 1'700'000'000);
+    EXPECT_EQ(v.packets[0].nanosec, 123'456'789u);
+    EXPECT_EQ(v.packets[0].src_address, 0xC0A801C9u);
+    EXPECT_EQ(v.packets[1].src_port, 40000);
+    EXPECT_EQ(v.packets[1].dst_port, 8308);
+    ASSERT_EQ(v.packets[0].data.size(), a.size());
+    EXPECT_EQ(std::memcmp(v.packets[0].data.data(), a.data(), a.size()), 0);
+    ASSERT_EQ(v.packets[1].data.size(), b.size());
+    EXPECT_EQ(std::memcmp(v.packets[1].data.data(), b.data(), b.size()), 0);
+    for (std::size_t cut = 4; cut < raw.size(); cut += 37) {
+      const Bytes part(raw.begin(), raw.begin() + static_cast<std::ptrdiff_t>(cut));
+      EXPECT_NE(parse_cdr(*cdr_body(part), v), CdrStatus::kOk) << cut;
+    }
+    const Bytes can = serialize(f, sensor_rig_msgs_msg_dds__CanFrame__desc, order);
+    CanFrameView c;
+    ASSERT_EQ(parse_cdr(*cdr_body(can), c), CdrStatus::kOk);
+    EXPECT_EQ(c.header.frame_id, "can0");
+    EXPECT_EQ(c.id, 0x18FF1234u);
+    EXPECT_TRUE(c.is_extended && c.is_fd && c.esi);
+    EXPECT_FALSE(c.is_rtr || c.is_error || c.brs);
+    ASSERT_EQ(c.data.size(), 3u);
+    EXPECT_EQ(std::to_integer<int>(c.data[2]), 0xff);
+    for (std::size_t cut = 4; cut < can.size(); ++cut) {
+      const Bytes part(can.begin(), can.begin() + static_cast<std::ptrdiff_t>(cut));
+      EXPECT_NE(parse_cdr(*cdr_body(part), c), CdrStatus::kOk) << cut;
+    }
   }
 }
 
