@@ -230,14 +230,26 @@ TEST_F(RawReplay, CanFramesAreTheBusFramesOneForOne) {
   test::RigChild ecu({"mock", "paravan", "--transport", "unix-listen:" + bus, "--log", log, "--duration", "60"},
                      (dir_.path / "ecu.out").string(), (dir_.path / "ecu.err").string());
   ASSERT_TRUE(ecu.started());
+  // The ECU listening (its start line) before the bridge connects: the bridge does not retry.
+  const auto up = [](test::RigChild& c, const std::string& line) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(test::kDiscoveryMs);
+    while (c.err().find(line) == std::string::npos && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return c.err().find(line) != std::string::npos;
+  };
+  ASSERT_TRUE(up(ecu, "mock paravan:")) << ecu.err();
   test::RigChild bridge({"dbw", "bridge", "--transport", "unix:" + bus, "--domain", std::to_string(domain_), "--duration", "60"},
                         (dir_.path / "bridge.out").string(), (dir_.path / "bridge.err").string());
   ASSERT_TRUE(bridge.started());
-  test::RigChild rec = record({"--raw"}, file, 3.0);
+  // The bridge up (its start line) before the recorder's 3 s begin: a loaded host starts it slowly.
+  ASSERT_TRUE(up(bridge, "dbw bridge:")) << bridge.err();
+  test::RigChild rec = record({"--raw"}, file, 6.0);
   ASSERT_EQ(rec.wait(60'000), 0) << rec.err();
   bridge.signal_and_wait(SIGINT, 20'000);
   ecu.signal_and_wait(SIGINT, 20'000);
-  EXPECT_EQ(rec.summary()["topics"]["/vehicle/can/frames"]["queue_full"], 0);
+  const auto summary = rec.summary();
+  ASSERT_TRUE(summary.contains("topics") && summary["topics"].contains("/vehicle/can/frames")) << rec.out() << rec.err();
+  EXPECT_EQ(summary["topics"]["/vehicle/can/frames"]["queue_full"], 0);
 
   const auto j = test::mcap_dump(file);
   ASSERT_FALSE(j.contains("error")) << j.dump().substr(0, 2000);
@@ -268,7 +280,9 @@ TEST_F(RawReplay, CanFramesAreTheBusFramesOneForOne) {
   }
   const auto first = std::search(sent.begin(), sent.end(), recorded.begin(), recorded.begin() + 8);
   ASSERT_NE(first, sent.end()) << "the first recorded frames are not in the bus log: " << recorded.front();
-  ASSERT_GE(static_cast<std::size_t>(sent.end() - first), recorded.size());
+  ASSERT_GE(static_cast<std::size_t>(sent.end() - first), recorded.size())
+      << "log " << sent.size() << " frames of those ids, from the first recorded " << (sent.end() - first) << "; recorded "
+      << recorded.size() << "; ecu: " << ecu.err();
   EXPECT_TRUE(std::equal(recorded.begin(), recorded.end(), first)) << "recorded frames differ from the bus log";
 }
 
