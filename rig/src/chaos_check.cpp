@@ -196,10 +196,14 @@ class Checker {
     std::vector<double> errors;
     auto in_window = [&](Nanos acq) { return acq >= in_.window_begin_ns && acq < in_.window_end_ns && !doubled(acq); };
 
-    // Each published sample to the unit nearest its stamp.
+    // Each published sample to the unit nearest its stamp. A camera frame whose stamp the rig flagged
+    // (slewed after a host clock step back: later than its exposure by up to the step) is its unit by
+    // frame id instead, where the stamp would name a neighbour (issue 27: V4L2 frames "published twice").
+    const bool by_frame_id = t.device_class == "camera" || t.device_class == "v4l2";
     for (const SampleRecord* s : samples) {
       if (!in_window(s->acquisition_ns)) continue;
-      UnitTruth* u = nearest(units, s->acquisition_ns, tolerance);
+      UnitTruth* u = by_frame_id && flagged(topic, s->acquisition_ns) ? same_frame(units, *s) : nullptr;
+      if (u == nullptr) u = nearest(units, s->acquisition_ns, tolerance);
       if (u == nullptr) {
         ++t.unmatched;
         violation("stamps", topic, "seq " + std::to_string(s->seq) + " stamped at " + at_s(s->acquisition_ns) +
@@ -310,6 +314,18 @@ class Checker {
     for (std::size_t i = 1; i < units.size(); ++i) gaps.push_back(units[i].rec.acq_ns - units[i - 1].rec.acq_ns);
     std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
     return std::max<Nanos>(gaps[gaps.size() / 2] / 2, 1'000'000);
+  }
+
+  // The unit with the sample's frame id (a camera's 16-bit GVSP block id, a V4L2 sequence: the low
+  // 16 bits of the truth's unit) nearest its first packet's arrival, within 1 s.
+  static UnitTruth* same_frame(std::vector<UnitTruth>& units, const SampleRecord& s) {
+    if (s.first_rx_ns == 0) return nullptr;
+    UnitTruth* best = nullptr;
+    for (auto& u : units) {
+      if ((static_cast<std::uint64_t>(u.rec.unit) & 0xffff) != (s.seq & 0xffff)) continue;
+      if (best == nullptr || std::llabs(u.rec.acq_ns - s.first_rx_ns) < std::llabs(best->rec.acq_ns - s.first_rx_ns)) best = &u;
+    }
+    return best != nullptr && std::llabs(best->rec.acq_ns - s.first_rx_ns) <= kSecond ? best : nullptr;
   }
 
   static UnitTruth* nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance) {

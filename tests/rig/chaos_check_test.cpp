@@ -190,6 +190,49 @@ TEST(ChaosCheck, AScanSplitInTwoIsPublishedTwice) {
   EXPECT_EQ(r.topics.at(kTopic).published_twice, 1u);
 }
 
+// A V4L2 camera after a host clock step back: the rig holds its stamps and slews the step out (the
+// topic never goes back), so frames 20..44 are stamped 240..0 ms after their exposure, less 10 ms a
+// frame. Matched by stamp, every tenth lands on its predecessor's frame: "published twice" and
+// unaccounted, as the whole-rig campaign reported. The rig flags those stamps (stamp_sync); a flagged
+// camera frame is its unit by frame id (sequence), its stamp error flagged, and nothing is lost.
+TEST(ChaosCheck, SlewedCameraStampsTheRigFlaggedAreMatchedByFrameId) {
+  const std::string topic = "/sensors/camera/usb/image_raw";
+  Input in;
+  truth::Log log;
+  log.header = truth::Header{"usb", "v4l2", "fake", topic, "frame", "CLOCK_MONOTONIC"};
+  for (int u = 0; u < kScans; ++u) {
+    const Nanos acq = kT0 + u * kPeriod;
+    log.units.push_back(truth::UnitRecord{u, acq, acq, 1});
+    log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, acq, acq, acq, truth::Fate::kSent, 0});
+    SampleRecord s;
+    s.topic = topic;
+    s.seq = static_cast<std::uint64_t>(u);
+    const Nanos correction = u >= 20 && u < 45 ? (44 - u) * 10'000'000 : 0;
+    s.acquisition_ns = acq + correction;
+    s.first_rx_ns = acq;  // the buffer's CLOCK_MONOTONIC stamp in vehicle time: never slewed
+    s.publish_ns = acq + 5'000'000;
+    s.received_ns = s.publish_ns + 1'000'000;
+    s.packets = 1;
+    in.samples.push_back(s);
+  }
+  in.truths.push_back(log);
+  in.monitor[topic] = MonitorTotals{kScans, 0};
+  in.expected[topic] = TopicExpectation{"usb", 10.0, {}};
+  in.epoch_vehicle_ns = kT0;
+  in.window_begin_ns = kT0;
+  in.window_end_ns = kT0 + kScans * kPeriod;
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("accounted")) << "unflagged, the shifted stamps name neighbours";
+  EXPECT_GT(r.topics.at(topic).published_twice, 0u);
+  in.unsynchronized[topic] = {{kT0 + 20 * kPeriod, kT0 + 47 * kPeriod}};
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(topic).published_twice, 0u);
+  EXPECT_EQ(r.topics.at(topic).unaccounted, 0u);
+  EXPECT_EQ(r.topics.at(topic).stamps_flagged, 24u);  // 240..10 ms off (the last one is exact)
+}
+
 TEST(ChaosCheck, AStarvedHealthyDeviceBreaksIsolation) {
   Input in = honest();
   in.expected[kTopic].rate_hz = 10.0;
