@@ -1,5 +1,5 @@
 // `rig lidar replay`: a mock LIDAR (SPEC §7). Sends a capture's UDP payloads (--pcap), a
-// recording's raw LIDAR channel (--mcap, mcap_stream.hpp) or a synthetic sensor's packets (--synthetic MODEL, any of the seven models) to HOST:PORT at their own timing, scaled by
+// recording's raw LIDAR channel (--mcap, read by the opener the rig registers) or a synthetic sensor's packets (--synthetic MODEL, any of the seven models) to HOST:PORT at their own timing, scaled by
 // --rate, optionally looping, with injected network faults. Position packets (port 8308 in a
 // capture; GPRMC + PPS from the synthetic sensor) go to --position-port on the same host when
 // given, else they are skipped. Ends with one summary line on stderr (and --json on stdout).
@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "lidar_commands.hpp"
-#include "mcap_stream.hpp"
 #include "replay_faults.hpp"
 #include "sensor_rig/lidar/decoder_files.hpp"
 #include "sensor_rig/lidar/return_selection.hpp"
@@ -37,6 +36,7 @@ struct ReplayCliOptions {
   std::string pcap;
   std::string mcap;        // a recording's raw channel (rig record --raw)
   std::string mcap_topic;  // its topic, /sensors/lidar/NAME/packets
+  mock::RecordingOpener open_recording;  // what reads it (the rig's, see register_replay_command)
   double delay_s = 0;      // the first packet this long after the start (subscribers match meanwhile)
   std::string synthetic;
   std::string to;
@@ -152,7 +152,8 @@ std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::
     std::unique_ptr<mock::PacketStream> capture;
     try {
       if (!o.mcap.empty()) {
-        capture = std::make_unique<McapPacketStream>(o.mcap, o.mcap_topic);
+        if (!o.open_recording) throw std::runtime_error("this build reads no recordings (--mcap)");
+        capture = o.open_recording(o.mcap, o.mcap_topic);
       } else {
         capture = std::make_unique<mock::PcapStream>(o.pcap);
       }
@@ -297,8 +298,9 @@ int run_replay_command(const ReplayCliOptions& o) {
 
 }  // namespace
 
-void register_replay_command(CLI::App& lidar, cli::Context& ctx) {
+void register_replay_command(CLI::App& lidar, cli::Context& ctx, mock::RecordingOpener open_recording) {
   auto opts = std::make_shared<ReplayCliOptions>();
+  opts->open_recording = std::move(open_recording);
   auto* cmd = lidar.add_subcommand("replay", "mock LIDAR: send a capture or a synthetic sensor over UDP at real timing");
   auto* pcap = cmd->add_option("--pcap", opts->pcap, "capture to replay (pcap/pcapng)")->check(CLI::ExistingFile);
   auto* synth = cmd->add_option("--synthetic", opts->synthetic,

@@ -1,9 +1,10 @@
 #pragma once
 // Every area's register function; the list is the whole `rig` command tree.
 #include "sensor_rig/common/cli.hpp"
+#include "lidar_recording_stream.hpp"
 
 namespace sensor_rig {
-namespace lidar { void register_cli(CLI::App& app, cli::Context& ctx); }
+namespace lidar { void register_cli(CLI::App& app, cli::Context& ctx, mock::RecordingOpener open_recording); }
 namespace dbw { void register_cli(CLI::App& app, cli::Context& ctx); }
 namespace bench { void register_cli(CLI::App& app, cli::Context& ctx); }
 namespace rig {
@@ -25,7 +26,7 @@ inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
   rig::register_view_cli(app, ctx);
   rig::register_record_cli(app, ctx);
 #ifdef RIG_HAVE_LIDAR
-  lidar::register_cli(app, ctx);    // lidar replay
+  lidar::register_cli(app, ctx, rig::open_lidar_recording);  // lidar replay (--mcap read by record/)
   drivers::register_lidar_cli(app, ctx);  // lidar decode (source -> timesync -> decoder -> PCD)
 #endif
 #ifdef RIG_HAVE_DBW

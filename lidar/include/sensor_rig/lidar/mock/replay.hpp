@@ -4,6 +4,7 @@
 // the fault injector. Pacing sleeps on absolute CLOCK_MONOTONIC deadlines (clock_nanosleep) and
 // sends everything already due in one sendmmsg batch when it falls behind.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -54,6 +55,11 @@ class PacketStream {
   virtual bool rewind() = 0;                        // back to the start (for --loop); false if it cannot
   [[nodiscard]] virtual std::string error() const { return {}; }  // why the stream ended early
 };
+
+// Opens a recording's raw LIDAR channel (`rig record --raw`: file, topic) as a packet stream; throws
+// with the reason. lidar/ has no MCAP reader or CDR views (record/ and dds/ are not below it), so
+// the `rig` executable hands one down (rig/src/lidar_recording_stream.hpp).
+using RecordingOpener = std::function<std::unique_ptr<PacketStream>(const std::string& path, const std::string& topic)>;
 
 // UDP payloads of a pcap file, position = destination port 8308 or a 48-byte Ouster IMU packet.
 // Throws PcapError on open.

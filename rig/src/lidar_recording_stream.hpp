@@ -20,9 +20,9 @@ namespace sensor_rig::record {
 class McapReader;
 }
 
-namespace sensor_rig::lidar {
+namespace sensor_rig::rig {
 
-class McapPacketStream final : public mock::PacketStream {
+class McapPacketStream final : public lidar::mock::PacketStream {
  public:
   // Throws std::runtime_error when the file is not MCAP or has no LidarPackets channel `topic`
   // (the message names the LidarPackets channels it has).
@@ -31,7 +31,7 @@ class McapPacketStream final : public mock::PacketStream {
   McapPacketStream(const McapPacketStream&) = delete;
   McapPacketStream& operator=(const McapPacketStream&) = delete;
 
-  std::optional<mock::StreamPacket> next() override;
+  std::optional<lidar::mock::StreamPacket> next() override;
   bool rewind() override;
   [[nodiscard]] std::string error() const override;
   // The recorded LIDAR model and data port (from the first message; empty / 0 before it).
@@ -60,4 +60,9 @@ class McapPacketStream final : public mock::PacketStream {
   Packet current_;                // what next() returned last
 };
 
-}  // namespace sensor_rig::lidar
+// The opener `rig lidar replay --mcap` and mock {kind: mcap} use (lidar::mock::RecordingOpener).
+inline std::unique_ptr<lidar::mock::PacketStream> open_lidar_recording(const std::string& path, const std::string& topic) {
+  return std::make_unique<McapPacketStream>(path, topic);
+}
+
+}  // namespace sensor_rig::rig

@@ -1,4 +1,4 @@
-#include "mcap_stream.hpp"
+#include "lidar_recording_stream.hpp"
 
 #include <stdexcept>
 
@@ -6,7 +6,7 @@
 #include "sensor_rig/dds/cdr_view.hpp"
 #include "sensor_rig/record/mcap_reader.hpp"
 
-namespace sensor_rig::lidar {
+namespace sensor_rig::rig {
 namespace {
 
 constexpr std::size_t kAheadBytes = 32u << 20;
@@ -107,7 +107,7 @@ void McapPacketStream::produce() {
   cv_.notify_all();
 }
 
-std::optional<mock::StreamPacket> McapPacketStream::next() {
+std::optional<lidar::mock::StreamPacket> McapPacketStream::next() {
   std::unique_lock lock(mu_);
   cv_.wait(lock, [&] { return !queue_.empty() || done_; });
   if (queue_.empty()) return std::nullopt;
@@ -115,7 +115,7 @@ std::optional<mock::StreamPacket> McapPacketStream::next() {
   queue_.pop_front();
   queued_bytes_ -= current_.bytes.size();
   cv_.notify_all();
-  return mock::StreamPacket{current_.time_ns, current_.bytes, current_.position, -1, -1.0};
+  return lidar::mock::StreamPacket{current_.time_ns, current_.bytes, current_.position, -1, -1.0};
 }
 
 bool McapPacketStream::rewind() {
@@ -134,4 +134,4 @@ std::string McapPacketStream::model() const {
   return model_;
 }
 
-}  // namespace sensor_rig::lidar
+}  // namespace sensor_rig::rig
