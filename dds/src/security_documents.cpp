@@ -120,7 +120,9 @@ std::string permissions_xml(const std::string& identity, const std::string& subj
   std::string rule;
   switch (role) {
     case Role::kBridge:
-      rule = "<publish>" + topics({"rt/vehicle/dbw/status", "rt/vehicle/state", "rt/rig/stamps", "rt/diagnostics"}) +
+      // rt/vehicle/can/frames: the raw CAN channel, written while a recorder reads it (rig record --raw).
+      rule = "<publish>" + topics({"rt/vehicle/dbw/status", "rt/vehicle/state", "rt/vehicle/can/frames", "rt/rig/stamps",
+                                   "rt/diagnostics"}) +
              "</publish><subscribe>" + topics({kProtectedCommandTopic}) + "</subscribe>";
       break;
     case Role::kCommander:
@@ -132,7 +134,7 @@ std::string permissions_xml(const std::string& identity, const std::string& subj
       break;
     case Role::kNode:  // every rig node but the dbw processes; never the command topic (no wildcard over it)
       rule = "<publish>" + topics({"rt/sensors/*", "rt/rig/*", "rt/vehicle/state", "rt/vehicle/dbw/status",
-                                   "rt/diagnostics"}) +
+                                   "rt/vehicle/can/frames", "rt/diagnostics"}) +
              "</publish><subscribe>" + topics({"*"}) + "</subscribe>";
       break;
   }
