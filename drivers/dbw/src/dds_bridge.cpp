@@ -87,6 +87,9 @@ class Runner {
         state_writer_(participant_, state_topic_), stamps_(participant_), diagnostics_(participant_),
         raw_frames_(participant_, kRawFramesTopic, raw_frames_qos()), bus_name_(bus.name()) {
     if (security_.enabled()) expiry_ = dds::security_expiry(security_);
+    if (raw_frames_.refused())
+      log::warn("dbw", std::string("the security grants do not name ") + kRawFramesTopic +
+                           ": the raw CAN channel stays off (rig security init makes grants that do)");
     frames_.reserve(16);
   }
 

@@ -39,11 +39,19 @@ class OnDemandWriter {
     dds_listener_t* l = MatchedCount::make_listener(count_.get());
     const dds_entity_t w = dds_create_writer(p.handle(), topic_.handle(), q.get(), l);
     dds_delete_listener(l);
+    // An optional channel the security grants do not name (permissions made before it existed)
+    // stays off, and says so (refused()), rather than stopping the node it belongs to.
+    if (w == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY) {
+      refused_ = true;
+      return;
+    }
     writer_ = Entity(check(w, "dds_create_writer"));
     count_->refresh(writer_.handle());
   }
-  // Whether a reader is matched: only then is a sample worth making.
+  // Whether a reader is matched: only then is a sample worth making (never when refused()).
   [[nodiscard]] bool active() const noexcept { return count_->any(); }
+  // Whether DDS Security refused this writer (its topic is not in the participant's grants).
+  [[nodiscard]] bool refused() const noexcept { return refused_; }
   Result write(const T& sample, Nanos source_ts) const noexcept {
     return Result(dds_write_ts(writer_.handle(), &sample, static_cast<dds_time_t>(source_ts)));
   }
@@ -54,6 +62,7 @@ class OnDemandWriter {
   std::unique_ptr<MatchedCount> count_;  // outlives writer_ (declared first, destroyed last)
   Topic<T> topic_;
   Entity writer_;
+  bool refused_ = false;
 };
 
 }  // namespace sensor_rig::dds
