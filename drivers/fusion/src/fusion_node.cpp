@@ -26,6 +26,7 @@ struct InputScan {
   Nanos first_rx_ns = 0;
   Nanos written_ns = 0;  // the input on the wire
   Nanos arrival_ns = 0;  // handed to this node (monotonic: the matcher's deadlines must not step)
+  std::uint64_t seq = 0;  // the scan's seq on /rig/stamps: its identity in the sweep's members
   std::uint32_t packets = 0, dropped = 0, missing_packets = 0;
   std::vector<lidar::PointXYZIRT> points;
 };
@@ -53,6 +54,14 @@ SweepMatcherConfig matcher_config(const FusionConfig& c, std::size_t sources) {
 // Scans waiting for the node's thread beyond this many per LIDAR are dropped (oldest first).
 constexpr std::size_t kMaxQueuedPerSource = 3;
 
+// The members sets are small: reliable, keep-last 16 (as the synchronizer's), so that a reader
+// polling slower than a burst of sweeps loses none.
+dds::QosSpec members_qos() {
+  dds::QosSpec q;
+  q.depth = 16;
+  return q;
+}
+
 }  // namespace
 
 struct FusionNode::Impl {
@@ -64,6 +73,7 @@ struct FusionNode::Impl {
 
   FusionConfig cfg;
   std::vector<std::string> names;
+  std::vector<std::string> lidar_topics;  // per source: its scans' topic, as the members name it
   std::vector<Input> inputs;
   std::vector<ScanFilter> filters;  // thread only
   SweepMatcher matcher;             // thread only
@@ -74,6 +84,9 @@ struct FusionNode::Impl {
   std::vector<msg::PointField> fields = msg::point_fields(kFusedPointFields);
   dds::Topic<msg::PointCloud2> topic;
   dds::Writer<msg::PointCloud2> writer;
+  dds::Topic<msg::SyncSet> members_topic;
+  dds::Writer<msg::SyncSet> members_writer;
+  std::vector<msg::SetMember> members;  // thread only: the sweep being written, reused
   dds::StampsWriter& stamps;
   std::thread thread;
 
@@ -83,6 +96,7 @@ struct FusionNode::Impl {
   std::deque<InputScan> queue;
   std::vector<std::vector<lidar::PointXYZIRT>> spare;  // recycled point buffers: no page faults per scan
   std::uint64_t dropped_backlog = 0;
+  std::uint64_t members_write_errors = 0;
   std::uint64_t seq = 0;
   dds::PublishStats published;
   SweepCounters sweep_counters;
@@ -93,11 +107,13 @@ struct FusionNode::Impl {
 
   Impl(const FusionConfig& c, const std::vector<LidarConfig>& lidars, const dds::Participant& p, dds::StampsWriter& s)
       : cfg(c), inputs(lidars.size()), matcher(matcher_config(c, lidars.size())), expected_packets(lidars.size(), 0),
-        topic(p, kFusedTopic, c.qos), writer(p, topic, c.qos), stamps(s), filter_counters(lidars.size()) {
+        topic(p, kFusedTopic, c.qos), writer(p, topic, c.qos), members_topic(p, kFusedSetsTopic, members_qos()),
+        members_writer(p, members_topic, members_qos()), stamps(s), filter_counters(lidars.size()) {
     for (std::size_t i = 0; i < lidars.size(); ++i) {
       const auto& l = lidars[i];
       if (!l.extrinsics) throw std::invalid_argument("fusion: lidar " + l.name + " has no extrinsics");
       names.push_back(l.name);
+      lidar_topics.push_back("/sensors/lidar/" + l.name + "/points");
       inputs[i].node = this;
       inputs[i].source = static_cast<std::uint32_t>(i);
       filters.emplace_back(to_transform(*l.extrinsics), c.crop_box, c.voxel_leaf_m, static_cast<std::uint16_t>(i));
@@ -105,7 +121,7 @@ struct FusionNode::Impl {
   }
 
   void enqueue(std::uint32_t source, const lidar::Scan& scan, Nanos written_ns) {
-    InputScan in{source, scan.stamp, scan.first_rx_ns, written_ns, monotonic_now_ns(),
+    InputScan in{source, scan.stamp, scan.first_rx_ns, written_ns, monotonic_now_ns(), scan.seq,
                  scan.packets, scan.dropped, scan.missing_packets, {}};
     {
       std::lock_guard lock(mutex);
@@ -166,18 +182,25 @@ struct FusionNode::Impl {
   }
 
   // A closed sweep's parts as one cloud: stamp = the earliest scan's, each point's t re-based on it.
-  // Its stamps count a missing LIDAR's whole scan as missing packets.
+  // Its stamps count a missing LIDAR's whole scan as missing packets; its members set names the
+  // scans it holds (the same parts, so the two cannot disagree).
   void emit(const ClosedSweep& closed) {
     SweepSlot& slot = slot_for(closed.id);
     Nanos stamp = INT64_MAX, first_rx = INT64_MAX, last_written = 0;
     std::size_t sources = 0;
     std::uint32_t packets = 0, dropped = 0, missing = 0;
+    members.clear();
     for (std::size_t i = 0; i < slot.parts.size(); ++i) {
       const auto& p = slot.parts[i];
       if (!p.present) {
         missing += expected_packets[i];
         continue;
       }
+      msg::SetMember m{};
+      m.topic = const_cast<char*>(lidar_topics[i].c_str());  // C type not const-correct; not written through
+      m.stamp = msg::to_time(p.meta.stamp);
+      m.seq = p.meta.seq;
+      members.push_back(m);
       stamp = std::min(stamp, p.meta.stamp);
       first_rx = std::min(first_rx, p.meta.first_rx_ns);
       last_written = std::max(last_written, p.meta.written_ns);
@@ -223,10 +246,27 @@ struct FusionNode::Impl {
     // "first/last packet" of the fused cloud: the inputs' first packet, the last input on the wire.
     const dds::SampleStamps st{stamp, first_rx, last_input, ready, publish, written, packets, dropped, pc.row_step, missing};
     stamps.write(kFusedTopic, pc.header.stamp, pc.header.frame_id, n, st);
+    const bool members_written = write_members(stamp, n);
     std::lock_guard lock(mutex);
+    if (!members_written) ++members_write_errors;
     if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
     last_points = fused.size();
     last_sources = sources;
+  }
+
+  // After the cloud and its stamps: the cloud's latency does not pay for it. set_seq = the cloud's seq.
+  bool write_members(Nanos stamp, std::uint64_t seq_of_cloud) {
+    Nanos latest = stamp;
+    for (const auto& m : members) latest = std::max(latest, msg::from_time(m.stamp));
+    msg::SyncSet set{};
+    set.header.stamp = msg::to_time(stamp);
+    set.header.frame_id = const_cast<char*>(kFusedSetName);
+    set.set_seq = seq_of_cloud;
+    set.spread_ns = latest - stamp;
+    set.members._buffer = members.data();
+    set.members._length = set.members._maximum = static_cast<std::uint32_t>(members.size());
+    set.members._release = false;
+    return members_writer.write(set, vehicle_now_ns()).ok();
   }
 
   void publish_counters() {
@@ -341,6 +381,10 @@ dds::DriverStatus FusionNode::status() const {
     if (i < c.missing.size()) s.add_number("missing_" + m.names[i], c.missing[i]);
   }
   s.add_number("write_errors", m.published.write_errors());
+  s.add("members_topic", kFusedSetsTopic);
+  s.add_number("members_write_errors", m.members_write_errors);
+  // Scans handed over and fused into no sweep: what `rig chaos` accounts a published scan by.
+  s.add_number("scans_dropped", c.late_scans + c.repeated_scans + m.dropped_backlog);
   return s;
 }
 

@@ -4,11 +4,15 @@
 // rt/rig/stamps (last input on the wire -> fused on the wire); a dead LIDAR's sweep goes out as
 // a subset after the timeout, reported in the node's status; a LIDAR that stops costs one timeout,
 // the later sweeps go out without waiting for it, and their stamps count its scan as missing packets.
+// Every sweep's members (rt/rig/sets/fused: topic, stamp, seq of each scan fused; set_seq = the
+// cloud's seq) are held against the scans the test handed over.
 // The fixed topic names: a leased DDS domain.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstring>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -35,6 +39,22 @@ struct FusedSeen {
   std::vector<FusedPoint> points;
 };
 
+// One member of a fused sweep as published: (topic, stamp, seq on /rig/stamps).
+struct MemberSeen {
+  std::string topic;
+  Nanos stamp = 0;
+  std::uint64_t seq = 0;
+  bool operator==(const MemberSeen&) const = default;
+};
+std::ostream& operator<<(std::ostream& o, const MemberSeen& m) { return o << m.topic << "@" << m.stamp << "#" << m.seq; }
+
+struct SetSeen {
+  Nanos stamp = 0;
+  std::uint64_t set_seq = 0;
+  std::string frame;
+  std::vector<MemberSeen> members;
+};
+
 struct StampsSeen {
   Nanos acquisition = 0, last_rx = 0, written = 0;
   std::uint64_t seq = 0;
@@ -48,9 +68,10 @@ LidarConfig lidar(const std::string& name, Extrinsics e) {
   return c;
 }
 
-lidar::Scan scan(Nanos stamp, float x, std::size_t n, std::uint32_t packets = 10) {
+lidar::Scan scan(Nanos stamp, float x, std::size_t n, std::uint32_t packets = 10, std::uint64_t seq = 0) {
   lidar::Scan s;
   s.stamp = stamp;
+  s.seq = seq;
   s.first_rx_ns = stamp + 1000;
   s.packets = packets;
   for (std::size_t i = 0; i < n; ++i)
@@ -61,7 +82,14 @@ lidar::Scan scan(Nanos stamp, float x, std::size_t n, std::uint32_t packets = 10
 class FusionNodeDds : public ::testing::Test {
  protected:
   FusionNodeDds() : pub_(domain()), sub_(domain()), stamps_writer_(pub_), fused_topic_(sub_, kFusedTopic, cfg().qos), fused_(sub_, fused_topic_, cfg().qos),
-                    stamps_topic_(sub_, dds::kStampsTopic, dds::stamps_qos()), stamps_(sub_, stamps_topic_, dds::stamps_qos()) {}
+                    stamps_topic_(sub_, dds::kStampsTopic, dds::stamps_qos()), stamps_(sub_, stamps_topic_, dds::stamps_qos()),
+                    sets_topic_(sub_, kFusedSetsTopic, sets_qos()), sets_(sub_, sets_topic_, sets_qos()) {}
+
+  static dds::QosSpec sets_qos() {
+    dds::QosSpec q;
+    q.depth = 16;
+    return q;
+  }
 
   static dds::DomainConfig domain() {
     static const int leased = test::lease_dds_domain();
@@ -93,9 +121,17 @@ class FusionNodeDds : public ::testing::Test {
       if (std::string(s.topic) == kFusedTopic)
         stamped_.push_back({s.acquisition_ns, s.last_rx_ns, s.written_ns, s.seq, s.packets, s.missing_packets});
     });
+    sets_.take([this](const msg::SyncSet& s, const auto&) {
+      SetSeen set{msg::from_time(s.header.stamp), s.set_seq, s.header.frame_id, {}};
+      for (std::uint32_t i = 0; i < s.members._length; ++i) {
+        const auto& m = s.members._buffer[i];
+        set.members.push_back({m.topic, msg::from_time(m.stamp), m.seq});
+      }
+      sets_seen_.push_back(std::move(set));
+    });
   }
   bool wait_clouds(std::size_t n) {
-    return wait_for([&] { drain(); return seen_.size() >= n && stamped_.size() >= n; }, 5000);
+    return wait_for([&] { drain(); return seen_.size() >= n && stamped_.size() >= n && sets_seen_.size() >= n; }, 5000);
   }
 
   dds::Participant pub_, sub_;
@@ -104,7 +140,10 @@ class FusionNodeDds : public ::testing::Test {
   dds::Reader<msg::PointCloud2> fused_;
   dds::Topic<msg::SourceStamps> stamps_topic_;
   dds::Reader<msg::SourceStamps> stamps_;
+  dds::Topic<msg::SyncSet> sets_topic_;
+  dds::Reader<msg::SyncSet> sets_;
   std::vector<FusedSeen> seen_;
+  std::vector<SetSeen> sets_seen_;
   std::vector<StampsSeen> stamped_;
 };
 
@@ -114,11 +153,12 @@ TEST_F(FusionNodeDds, ThreeLidarsBecomeOneCloudInBaseLink) {
   FusionNode node(cfg(), lidars, pub_, stamps_writer_);
   node.start();
   ASSERT_TRUE(fused_.wait_for_writers(1, test::kDiscoveryMs));
+  ASSERT_TRUE(sets_.wait_for_writers(1, test::kDiscoveryMs));
   const Nanos t0 = vehicle_now_ns();
   // Phases 0, 30, 60 ms; each scan handed over "after its write".
-  node.input(1)->observe_scan(scan(t0 + 30'000'000, 5, 3), t0 + 130'000'000);
-  node.input(0)->observe_scan(scan(t0, 10, 2), t0 + 100'000'000);
-  node.input(2)->observe_scan(scan(t0 + 60'000'000, 7, 4), t0 + 160'000'000);
+  node.input(1)->observe_scan(scan(t0 + 30'000'000, 5, 3, 10, 41), t0 + 130'000'000);
+  node.input(0)->observe_scan(scan(t0, 10, 2, 10, 7), t0 + 100'000'000);
+  node.input(2)->observe_scan(scan(t0 + 60'000'000, 7, 4, 10, 1234), t0 + 160'000'000);
   ASSERT_TRUE(wait_clouds(1));
   const auto& f = seen_[0];
   EXPECT_EQ(f.frame, "base_link");
@@ -151,6 +191,14 @@ TEST_F(FusionNodeDds, ThreeLidarsBecomeOneCloudInBaseLink) {
   EXPECT_EQ(stamped_[0].acquisition, t0);
   EXPECT_EQ(stamped_[0].last_rx, t0 + 160'000'000);  // the last input on the wire
   EXPECT_GT(stamped_[0].written, 0);
+  // Its members: the three scans handed over, in config order, paired with the cloud by stamp and seq.
+  ASSERT_EQ(sets_seen_.size(), 1u);
+  EXPECT_EQ(sets_seen_[0].stamp, t0);
+  EXPECT_EQ(sets_seen_[0].set_seq, stamped_[0].seq);
+  EXPECT_EQ(sets_seen_[0].frame, "fused");
+  EXPECT_EQ(sets_seen_[0].members, (std::vector<MemberSeen>{{"/sensors/lidar/front/points", t0, 7},
+                                                             {"/sensors/lidar/left/points", t0 + 30'000'000, 41},
+                                                             {"/sensors/lidar/right/points", t0 + 60'000'000, 1234}}));
   EXPECT_TRUE(wait_for([&] { return status_value(node.status(), "complete_sweeps") == "1"; }, 2000));
   EXPECT_EQ(status_value(node.status(), "source_2"), "right");
 }
@@ -188,9 +236,15 @@ TEST_F(FusionNodeDds, StoppedLidarCostsOneTimeoutAndIsCountedMissing) {
   ASSERT_TRUE(fused_.wait_for_writers(1, test::kDiscoveryMs));
   const Nanos t0 = vehicle_now_ns();
   const Nanos phase[3] = {0, 20'000'000, 45'000'000};
+  const char* topics[3] = {"/sensors/lidar/front/points", "/sensors/lidar/left/points", "/sensors/lidar/right/points"};
+  std::vector<std::vector<MemberSeen>> sent(6);  // per rotation: the scans handed over, in config order
+  std::uint64_t seq[3] = {100, 200, 300};        // each LIDAR's own /rig/stamps seq
   const auto hand_over = [&](int n, std::size_t i) {
     const Nanos stamp = t0 + n * 100'000'000LL + phase[i];
-    node.input(i)->observe_scan(scan(stamp, 5, 2, i == 2 ? 12 : 10), stamp + 100'000'000);
+    node.input(i)->observe_scan(scan(stamp, 5, 2, i == 2 ? 12 : 10, seq[i]), stamp + 100'000'000);
+    auto& s = sent[static_cast<std::size_t>(n)];
+    s.push_back({topics[i], stamp, seq[i]++});
+    std::sort(s.begin(), s.end(), [](const MemberSeen& a, const MemberSeen& b) { return a.topic < b.topic; });
   };
   for (std::size_t i = 0; i < 3; ++i) hand_over(0, i);
   ASSERT_TRUE(wait_clouds(1));
@@ -203,6 +257,7 @@ TEST_F(FusionNodeDds, StoppedLidarCostsOneTimeoutAndIsCountedMissing) {
     for (std::size_t i : {2, 0, 1}) hand_over(n, i);
   ASSERT_TRUE(wait_clouds(6));
   ASSERT_EQ(seen_.size(), 6u);
+  ASSERT_EQ(sets_seen_.size(), 6u);
   for (int n = 0; n < 6; ++n) {
     SCOPED_TRACE("rotation " + std::to_string(n));
     const bool whole = n == 0 || n >= 4;
@@ -210,6 +265,12 @@ TEST_F(FusionNodeDds, StoppedLidarCostsOneTimeoutAndIsCountedMissing) {
     EXPECT_EQ(seen_[static_cast<std::size_t>(n)].points.size(), whole ? 6u : 4u);
     EXPECT_EQ(stamped_[static_cast<std::size_t>(n)].packets, whole ? 32u : 20u);
     EXPECT_EQ(stamped_[static_cast<std::size_t>(n)].missing_packets, whole ? 0u : 12u);  // the right one's scan
+    // The members say the same: the scans of this rotation that were handed over, the right one's
+    // absent while it was silent; the set pairs with the cloud by stamp and seq.
+    const auto& set = sets_seen_[static_cast<std::size_t>(n)];
+    EXPECT_EQ(set.stamp, seen_[static_cast<std::size_t>(n)].stamp);
+    EXPECT_EQ(set.set_seq, stamped_[static_cast<std::size_t>(n)].seq);
+    EXPECT_EQ(set.members, sent[static_cast<std::size_t>(n)]);
   }
   // Rotation 1 waited for it until the timeout; 2 and 3 went out with the left scan (a node that
   // waited for a stopped LIDAR would have timed out three times).

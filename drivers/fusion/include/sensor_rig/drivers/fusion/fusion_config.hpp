@@ -11,6 +11,11 @@
 namespace sensor_rig::drivers {
 
 inline constexpr const char* kFusedTopic = "/sensors/lidar/fused/points";
+// Each fused sweep's members (sensor_rig_msgs/SyncSet, the synchronizer's type): header.stamp = the
+// fused cloud's, set_seq = the fused cloud's seq on /rig/stamps, one member (topic, stamp, seq on
+// /rig/stamps) per LIDAR scan it holds. "fused" is reserved as a sync_sets: name for it.
+inline constexpr const char* kFusedSetName = "fused";
+inline constexpr const char* kFusedSetsTopic = "/rig/sets/fused";
 
 // An axis-aligned box in base_link; points inside it are removed (the ego vehicle: roof rack,
 // body, mirrors seen by the LIDARs).
