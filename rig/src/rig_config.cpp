@@ -163,6 +163,9 @@ std::string describe(const RigConfig& cfg) {
       if (l.mock.phase_deg) o << ", phase-locked " << *l.mock.phase_deg << " deg";
       o << "]";
     }
+    // What a real sensor's scans are sized for (shared-memory pools): said, or the slowest speed.
+    if (l.mock.kind != LidarMockConfig::Kind::kSynthetic && !lidar::mock::is_ouster_model(l.model))
+      o << ", " << drivers::sizing_rpm(l) << " rpm" << (l.rpm > 0 ? "" : " (not said: sized for the slowest, `rpm:` to say)");
     if (l.mock.kind == LidarMockConfig::Kind::kReplay) o << " [mock: replay " << l.mock.pcap << "]";
     if (l.mock.kind == LidarMockConfig::Kind::kMcap) o << " [mock: mcap " << l.mock.file << " " << l.mock.topic << "]";
     o << "\n";

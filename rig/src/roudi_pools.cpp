@@ -31,11 +31,12 @@ std::string read_file(const std::string& path) {
 }
 
 // The most points a scan of this LIDAR can carry: one full rotation of every laser (both returns
-// when dual), at the mock's rpm or the 600 rpm (10 Hz) the models' figures assume.
+// when dual) at the speed it is sized for (drivers::sizing_rpm: the mock's, the config's `rpm`, else
+// the slowest a sensor can be set to; the models' figures are for 600 rpm). Sized at 600 rpm, a
+// real sensor set to 300 rpm failed every write (issue 26 item 7).
 std::uint64_t max_scan_points(const LidarConfig& l) {
   const std::uint64_t returns = l.returns == lidar::ReturnSelection::kDual ? 2 : 1;
-  const bool synthetic = l.mock.kind == LidarMockConfig::Kind::kSynthetic && l.mock.rpm > 0;
-  const double slower = synthetic ? std::max(1.0, 600.0 / l.mock.rpm) : 1.0;
+  const double slower = std::max(1.0, 600.0 / drivers::sizing_rpm(l));
   const auto at_rpm = [&](int typical) {
     return static_cast<std::uint64_t>(std::ceil(static_cast<double>(typical) * slower)) * returns;
   };

@@ -79,6 +79,20 @@ TEST_F(ConfigCheck, TheBaseConfigIsValid) {
   EXPECT_EQ(r.code, 0) << r.err;
 }
 
+// What a real Velodyne's scans are sized for is said (the slowest speed unless `rpm` says), and a
+// sensor's `rpm` is its synthetic mock's speed when the mock does not give its own.
+TEST_F(ConfigCheck, TheSpeedScansAreSizedForIsShownAndSetsTheMock) {
+  auto r = run_rig("config check " + write("unsaid.yaml", with(kBase, {})));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("300 rpm (not said: sized for the slowest"), std::string::npos) << r.out;
+  r = run_rig("config check " + write("said.yaml", with(kBase, {{7, "    rpm: 600"}})));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(", 600 rpm\n"), std::string::npos) << r.out;
+  r = run_rig("config check " + write("mock.yaml", with(kBase, {{7, "    rpm: 900\n    mock: {kind: synthetic}"}})));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("[mock: synthetic 900 rpm"), std::string::npos) << r.out;
+}
+
 TEST_F(ConfigCheck, EachMistakeExitsTwoAtItsLine) {
   struct Case {
     const char* what;
@@ -98,6 +112,15 @@ TEST_F(ConfigCheck, EachMistakeExitsTwoAtItsLine) {
        "used twice"},
       {"Cyclone thread priority out of range", {{2, "  name: check\n  dds:\n    realtime_priority: 120"}},
        "4 rig.dds.realtime_priority", ""},
+      {"rotation speed below the slowest a sensor turns", {{7, "    rpm: 250"}}, "7 lidars[0].rpm", ""},
+      {"rpm on an Ouster (its lidar_mode says)",
+       {{9, "    model: OS-LEGACY"}, {10, "    port: 7502\n    rpm: 600\n    mock: {kind: synthetic}"}},
+       "11 lidars[1].rpm",
+       "lidar_mode"},
+      {"the sensor's rpm and its synthetic mock's disagree",
+       {{7, "    rpm: 300\n    mock: {kind: synthetic,\n           rpm: 600}"}},
+       "9 lidars[0].mock.rpm",
+       "give one of them"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.what);

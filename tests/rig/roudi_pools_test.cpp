@@ -7,6 +7,7 @@
 #include <string>
 
 #include "rig_config.hpp"
+#include "sensor_rig/lidar/velodyne/model.hpp"
 #include "roudi_pools.hpp"
 #include "test_data.hpp"
 
@@ -124,6 +125,39 @@ TEST(RoudiPools, SyntheticOusterWithoutMetadataIsSizedAsItsMockSends) {
   ASSERT_EQ(loads.size(), 2U);
   EXPECT_EQ(loads[0].max_sample_bytes, 1024ULL * 32 * 24 + 1024);
   EXPECT_EQ(loads[1].max_sample_bytes, 2048ULL * 128 * 2 * 24 + 1024);
+}
+
+// A real Velodyne is sized for the speed it is set to (`rpm`), or for the slowest it can be set to
+// when the config does not say: sized at 600 rpm, a sensor set to 300 rpm sent scans of twice the
+// points and every write failed (issue 26 item 7). The truth here is the sensor's physics, not the
+// model table the code sizes from: a block of 32 firings every block_us whatever the speed, so a
+// rotation at R rpm carries 60/R s of blocks.
+TEST(RoudiPools, RealVelodynesAreSizedForTheSpeedTheyAreSetTo) {
+  const auto points_per_rotation = [](const std::string& model, int rpm) {
+    const auto& info = lidar::velodyne::model_info(*lidar::velodyne::model_from_name(model));
+    return static_cast<std::uint64_t>(60.0 / rpm / (info.block_us * 1e-6) * 32.0);
+  };
+  for (const std::string model : {"VLP-16", "VLP-32C", "HDL-32E"}) {
+    RigConfig cfg;
+    cfg.dds.transport = dds::Transport::kShm;
+    LidarConfig l;
+    l.model = model;
+    l.name = "unsaid";  // no mock, no rpm: a real sensor at an unknown speed
+    cfg.lidars.push_back(l);
+    l.name = "at600";
+    l.rpm = 600;
+    cfg.lidars.push_back(l);
+    l.name = "at300";
+    l.rpm = 300;
+    cfg.lidars.push_back(l);
+    const auto loads = shm_topic_loads(cfg, 1);
+    ASSERT_EQ(loads.size(), 3U);
+    const auto holds = [](const ShmTopicLoad& t, std::uint64_t points) { return t.max_sample_bytes >= points * 24 + 1024; };
+    EXPECT_TRUE(holds(loads[0], points_per_rotation(model, 300))) << model << ": unsaid speed, " << loads[0].max_sample_bytes << " B";
+    EXPECT_TRUE(holds(loads[1], points_per_rotation(model, 600))) << model;
+    EXPECT_TRUE(holds(loads[2], points_per_rotation(model, 300))) << model;
+    EXPECT_LT(loads[1].max_sample_bytes, loads[2].max_sample_bytes) << model << ": said 600 rpm is sized smaller";
+  }
 }
 
 }  // namespace

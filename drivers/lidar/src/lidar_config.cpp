@@ -120,7 +120,7 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   if (!n.expect_map()) return l;
   n.allow_keys({"name", "model", "host", "port", "position_port", "imu_port", "receive_buffer_bytes", "source",
                 "interface", "sensor_address", "ring_retire_ms", "calibration",
-                "metadata", "returns", "min_range", "max_range", "cut_angle", "fov", "azimuth", "time_source", "hour_source", "clock_correction",
+                "metadata", "returns", "min_range", "max_range", "cut_angle", "fov", "azimuth", "rpm", "time_source", "hour_source", "clock_correction",
                 "frame_id", "extrinsics", "realtime_priority", "qos", "mock", "record"});
   l.name = n.get_string("name");
   for (char c : l.name)
@@ -180,6 +180,11 @@ LidarConfig parse_lidar_config(const config::Node& n) {
       "azimuth", {{"per-laser", lidar::AzimuthInterpolation::kPerLaser},
                   {"per-sequence", lidar::AzimuthInterpolation::kPerSequence}},
       lidar::AzimuthInterpolation::kPerLaser);
+  if (n.has("rpm")) {
+    l.rpm = static_cast<int>(n.get_int("rpm", kSlowestRpm, 1200, 600));
+    if (lidar::mock::is_ouster_model(l.model))
+      n.fail("rpm", "Ouster: the rotation is the lidar_mode of its metadata (e.g. 1024x10), not a config key");
+  }
   using timesync::Correction;
   using timesync::HourSource;
   using timesync::TimeSource;
@@ -194,7 +199,16 @@ LidarConfig parse_lidar_config(const config::Node& n) {
   if (auto e = n.child("extrinsics")) l.extrinsics = parse_extrinsics(*e);
   l.realtime_priority = static_cast<int>(n.get_int("realtime_priority", 0, 98, 0));
   if (auto q = n.child("qos")) l.qos = dds::QosSpec::from_config(*q, l.qos);
-  if (auto m = n.child("mock")) l.mock = parse_mock(*m);
+  if (auto m = n.child("mock")) {
+    l.mock = parse_mock(*m);
+    // One speed: the sensor's `rpm` is the mock's unless the mock says its own, which must agree.
+    if (l.rpm > 0 && l.mock.kind == LidarMockConfig::Kind::kSynthetic) {
+      if (!m->has("rpm")) l.mock.rpm = l.rpm;
+      else if (l.mock.rpm != l.rpm)
+        m->fail("rpm", "the synthetic sensor turns at " + std::to_string(l.mock.rpm) + " rpm but the LIDAR's rpm is " +
+                           std::to_string(l.rpm) + ": give one of them");
+    }
+  }
   if (l.mock.kind == LidarMockConfig::Kind::kMcap && l.mock.topic.empty()) l.mock.topic = "/sensors/lidar/" + l.name + "/packets";
   if (auto r = n.child("record")) l.record = parse_record(*r);
   check_decoder_files(n, l);
@@ -211,6 +225,11 @@ LidarConfig parse_lidar_config(const config::Node& n) {
     }
   }
   return l;
+}
+
+int sizing_rpm(const LidarConfig& c) noexcept {
+  if (c.mock.kind == LidarMockConfig::Kind::kSynthetic && c.mock.rpm > 0) return c.mock.rpm;
+  return c.rpm > 0 ? c.rpm : kSlowestRpm;
 }
 
 lidar::mock::SyntheticOptions synthetic_mock_options(const LidarConfig& c) {

@@ -83,6 +83,11 @@ struct LidarConfig {
   double fov_start_deg = 0.0;
   double fov_end_deg = 0.0;
   lidar::AzimuthInterpolation azimuth = lidar::AzimuthInterpolation::kPerLaser;  // Velodyne: per-laser | per-sequence
+  // Velodyne / Hesai: the rotation speed the sensor is set to (its web page or API), 0 = not said.
+  // It sizes what a scan can hold (the shared-memory pools): a scan at 300 rpm carries twice the
+  // points of one at 600. Not said, a real sensor is sized for its slowest speed (kSlowestRpm);
+  // a synthetic mock turns at this speed unless mock.rpm says otherwise.
+  int rpm = 0;
   timesync::TimeSource time_source = timesync::TimeSource::kHost;    // sensor | host
   timesync::HourSource hour_source = timesync::HourSource::kGprmc;   // sensor time: gprmc (host as fallback) | host
   timesync::Correction clock_correction = timesync::Correction::kAuto;  // through the clock mapper: auto | always | never
@@ -95,6 +100,13 @@ struct LidarConfig {
   LidarMockConfig mock;
   LidarRecordConfig record;
 };
+
+// The slowest rotation a Velodyne or Hesai can be set to (VLP-16/32C, HDL-32E: 300-1200 rpm): what a
+// real sensor whose `rpm` the config does not give is sized for.
+inline constexpr int kSlowestRpm = 300;
+// The rotation speed a LIDAR's scans are sized for: its synthetic mock's, else its config's `rpm`,
+// else kSlowestRpm. (Ouster: its metadata's lidar_mode, not this.)
+int sizing_rpm(const LidarConfig& c) noexcept;
 
 // Parses one `lidars:` item; problems go to the node's problem list (reported all at once).
 LidarConfig parse_lidar_config(const config::Node& n);
