@@ -162,6 +162,37 @@ TEST(ClockMapper, DetectsAForwardStepWithinAFewSamplesAndRelocks) {
   EXPECT_EQ(m.status().jumps, 1u);
 }
 
+// Issue 27 item 8: while a step is being confirmed map() still uses the old line; deviation() says
+// so (how many samples, by how much, which way) so that a caller can refuse those stamps.
+TEST(ClockMapper, APendingStepIsReportedUntilConfirmed) {
+  DelayModel dm;
+  dm.tail_prob = 0;
+  SimLink link(4, dm);
+  SimDevice dev;
+  ClockMapper m(config_for(dm));
+  run(m, dev, link, 100.0, 0, 5 * kSec, 5 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+  EXPECT_EQ(m.deviation().samples, 0u);
+  for (const Nanos step : {-80 * kMs, 80 * kMs}) {  // back (arrivals late), then forward (early)
+    SCOPED_TRACE(step);
+    dev.step_ns += step;
+    const Nanos from = dev.t0 + 6 * kSec + (step < 0 ? 0 : 2 * kSec);
+    std::size_t pending = 0;
+    for (int i = 0; i < 20; ++i) {
+      const Nanos t = from + i * 10 * kMs;
+      if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) break;
+      ++pending;
+      const auto d = m.deviation();
+      EXPECT_EQ(d.samples, pending);
+      EXPECT_NEAR(static_cast<double>(d.shift_ns), static_cast<double>(-step), 1e6);
+    }
+    EXPECT_GE(pending, 1u);
+    EXPECT_EQ(m.deviation().samples, 0u);
+    run(m, dev, link, 100.0, (from - dev.t0) + 300 * kMs, 1 * kSec, 200 * kMs);
+  }
+  EXPECT_EQ(m.status().jumps, 2u);
+}
+
 TEST(ClockMapper, DetectsADeviceClockResetAtLidarRate) {
   DelayModel dm;
   SimLink link(13, dm);

@@ -292,6 +292,14 @@ ObserveResult ClockMapper::observe(Nanos device_ns, Nanos host_ns) noexcept {
   return ObserveResult::kAccepted;
 }
 
+ClockMapper::Deviation ClockMapper::deviation() const noexcept {
+  if (candidates_.empty() || !have_model_) return {};
+  const Candidate& first = candidates_.front();
+  const double resid = static_cast<double>(sat_sub(first.y_ns, anchor_y_)) - predict_y(first.device_ns);
+  if (!(std::fabs(resid) < 9e18)) return {candidates_.size(), resid < 0 ? std::numeric_limits<Nanos>::min() : std::numeric_limits<Nanos>::max()};
+  return {candidates_.size(), std::llround(resid)};
+}
+
 SyncState ClockMapper::state_at_gap(Nanos gap_ns) const noexcept {
   if (!have_model_ || gap_ns > cfg_.holdover_max_ns) return SyncState::kUnsynced;
   if (gap_ns > cfg_.holdover_after_ns) return SyncState::kHoldover;

@@ -397,6 +397,9 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("stamp_device_backward", impl_->monotonic.device_backward);
   s.add("stamp_sync", unsynchronized ? "unsynchronized" : "ok");
   s.add_number("stamp_rejected", impl_->rejected.count);
+  // Of them: replaced while the mapper held a device clock step it had not confirmed (issue 27 item 8).
+  s.add_number("stamp_rejected_steps", impl_->rejected.steps);
+  s.add_number("sync_jumps", impl_->sync.jumps);
   if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
   if (impl_->outputs) impl_->outputs->add_status(s);
   if (impl_->trigger != nullptr) impl_->trigger->add_status(s, impl_->trigger_member);

@@ -14,6 +14,16 @@ constexpr Nanos kArrivalWindowNs = 1'000'000'000;
 
 constexpr std::size_t kMaxPending = 8;
 
+// Consecutive samples later than the line by a consistent amount before the line is distrusted:
+// one or two late frames are a host hiccup (the mapped stamp is right, the arrival is not); more,
+// and a device clock stepped back is as likely (the mapped stamp would be the step off).
+constexpr std::size_t kStepSamples = 3;
+
+// The mapper's line disagrees with the recent arrivals: a device clock step it has not confirmed.
+bool unconfirmed_step(const timesync::ClockMapper::Deviation& d) noexcept {
+  return d.samples > 0 && (d.shift_ns < 0 || d.samples >= kStepSamples);
+}
+
 // The mapper is fed the exposure start by the arrival (first packet - exposure), so its line does
 // not depend on the exposure: one that changes while streaming changes what is subtracted per
 // frame, not the fit (issue 27 item 9).
@@ -85,8 +95,9 @@ FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept
 FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
   // Exposure start can lie neither after the first packet arrived nor long before its exposure.
   const auto plausible = [&](Nanos t) { return t <= m.first_rx_ns && t >= m.first_rx_ns - exposure_ns_ - kArrivalWindowNs; };
-  const auto reject = [&](Nanos t) {
+  const auto reject = [&](Nanos t, bool step) {
     ++rejected_.count;
+    if (step) ++rejected_.steps;
     rejected_.last_ns = m.first_rx_ns;
     rejected_.last_error_ns = t - (m.first_rx_ns - exposure_ns_);
   };
@@ -101,22 +112,34 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
       // PTP time: kept only where it agrees with the arrival; the mapper follows the raw ticks all
       // along, so a PTP stamp found wrong (or a PTP drop) falls back to a fresh line.
       const Nanos raw = m.device_ticks_ns != 0 ? m.device_ticks_ns : m.device_ns;
+      // A PTP stamp within the window is taken even while the raw ticks show a step: stepping the
+      // clock is how the servo corrects it (a cold start's Uncalibrated -> Slave), and the host
+      // follows the same grandmaster; the mapped line is what is distrusted then.
       observe(m, raw);
       if (plausible(m.device_ns)) return {m.device_ns, StampSource::kVehicle, m.device_ns};
-      reject(m.device_ns);
+      const bool ticks_stepped = unconfirmed_step(mapper_.deviation());
+      reject(m.device_ns, false);
       const auto r = mapper_.map(raw);
-      if (r.valid && r.state == timesync::SyncState::kLocked && plausible(r.vehicle_ns))
-        return {r.vehicle_ns, StampSource::kDeviceMapped, r.vehicle_ns};
-      return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0};
+      if (r.valid && r.state == timesync::SyncState::kLocked && plausible(r.vehicle_ns) && !ticks_stepped)
+        return {r.vehicle_ns, StampSource::kDeviceMapped, r.vehicle_ns, false, true};
+      return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0, false, true};
     }
     case camera::TimeDomain::kDeviceTicks:
       break;
   }
   observe(m, m.device_ns);
   auto r = mapper_.map(m.device_ns);
-  if (r.valid && !plausible(r.vehicle_ns)) {  // a device clock step the mapper has not confirmed yet
-    reject(r.vehicle_ns);
+  // A device clock step the mapper has not confirmed yet: far outside the window (a PTP cold start,
+  // decades), or inside it, where only the arrivals disagreeing with the line show it.
+  // (A step forward by decades also puts the mapping out of holdover: invalid, still a step.)
+  const auto deviation = mapper_.deviation();
+  const bool stepped = unconfirmed_step(deviation);
+  bool replaced = false;
+  if (stepped || (r.valid && !plausible(r.vehicle_ns))) {
+    // The old line puts the exposure start the step off what the arrival says.
+    reject(r.valid ? r.vehicle_ns : m.first_rx_ns - exposure_ns_ - deviation.shift_ns, stepped);
     r.valid = false;
+    replaced = true;
   }
   // The device's exposure start (for the trigger's phase figure) only from a locked mapping: before,
   // the line is the first frames' arrivals, whose host delay (40 ms under load) it would carry.
@@ -127,10 +150,10 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
     // error, not the camera's: the tick then.
     const bool near_tick = r.valid && r.state == timesync::SyncState::kLocked && r.vehicle_ns >= tick_ns - kMappedExposureSlackNs;
     if (near_tick) return {r.vehicle_ns, StampSource::kTriggerExposure, device};
-    return {tick_ns, StampSource::kTriggerTick, device};
+    return {tick_ns, StampSource::kTriggerTick, device, false, replaced};
   }
   if (r.valid) return {r.vehicle_ns, StampSource::kDeviceMapped, device};
-  return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0};
+  return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0, false, replaced};
 }
 
 }  // namespace sensor_rig::drivers

@@ -93,6 +93,16 @@ class ClockMapper {
   [[nodiscard]] ClockMapperStatus status(Nanos host_now_ns) const;
 
   [[nodiscard]] SyncState state() const noexcept { return state_; }
+  // Samples that disagree with the line by more than outlier_threshold_ns, consistently with each
+  // other, and have not (yet) confirmed a jump: map() still uses the old line for them. shift_ns is
+  // the first one's residual in (host - device): positive, the arrivals are later than the line
+  // (a host delay, or the device clock stepped back); negative, earlier than the line allows (the
+  // device clock stepped forward, or the line is late). samples == 0: none pending.
+  struct Deviation {
+    std::size_t samples = 0;
+    Nanos shift_ns = 0;
+  };
+  [[nodiscard]] Deviation deviation() const noexcept;
   [[nodiscard]] const ClockMapperConfig& config() const noexcept { return cfg_; }
   void reset() noexcept;  // back to unsynced; counters kept
 

@@ -10,6 +10,10 @@
 // after the first packet arrived, or more than the arrival window before it, is the clock's error
 // (a camera that won the PTP election, a wrong timescale, a clock step not yet confirmed by the
 // mapper): the frame falls back to the mapped ticks, else the arrival minus the exposure, counted.
+// A device clock step inside the window (seconds, milliseconds) is caught by the mapper's pending
+// deviation: arrivals earlier than its line allows (the clock stepped forward) at once, later ones
+// (stepped back, or a host delay) once kStepSamples agree; those frames fall back to the arrival
+// too, counted, until the jump is confirmed and the line re-seeded (issue 27 item 8).
 // A topic's stamps never go backwards when CLOCK_REALTIME is stepped back (timesync's
 // MonotonicStamps: held, then slewed out), trigger ticks included: a triggered camera switches
 // between its ticks and its mapped exposures, and one filter for both keeps the topic monotonic.
@@ -37,6 +41,9 @@ struct FrameStamp {
   // holds and slews out: it is later than vehicle time by that much, knowingly (the node flags the
   // topic unsynchronized meanwhile: the stamp no longer names the exposure).
   bool slewed = false;
+  // The device's stamp was found wrong and replaced (outside the arrival window, or its clock
+  // stepped and the mapper has not confirmed the new line yet): counted in rejected().
+  bool replaced = false;
 };
 // A correction beyond this (the camera stamp bound of rig chaos) makes a stamp `slewed`.
 inline constexpr Nanos kSlewFlagNs = 1'000'000;
@@ -65,6 +72,7 @@ class FrameClock {
   // (issue 27 items 7, 8): how many, when the last was (vehicle time), and by how much.
   struct Rejected {
     std::uint64_t count = 0;
+    std::uint64_t steps = 0;   // of them: while the mapper held an unconfirmed device clock step (item 8)
     Nanos last_ns = 0;
     Nanos last_error_ns = 0;   // rejected stamp - (arrival - exposure)
   };
