@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "exposure_watcher.hpp"
+#include "gvsp_payload.hpp"
 
 namespace sensor_rig::camera {
 namespace {
@@ -64,6 +65,7 @@ struct AravisSource::State {
   std::vector<ArvBuffer*> buffers;  // owned by the stream once pushed
   std::size_t payload = 0;
   std::uint64_t seq = 0;
+  detail::ChunkReader chunks;  // the capture thread's
 };
 
 // Aravis 0.8 parses each device's GenICam XML while opening it, and opening from several threads at
@@ -255,6 +257,7 @@ void AravisSource::configure(State& st, AravisDetails& details) {
     arv_device_set_features_from_string(dev, assignment.c_str(), &err);
     check("feature " + assignment);
   }
+  st.chunks.set_tick_hz(detail::timestamp_tick_hz(dev));  // ChunkTimestamp ticks -> ns
   exposure_read_feature_.clear();
   // What the device has after the features (one may set ExposureTime, issue 27 item 9): the frame clock's exposure -> leader delay.
   for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {
@@ -601,29 +604,30 @@ Capture AravisSource::next(int timeout_ms) {
   const Nanos mono = monotonic_now_ns();
   count_missing_frames(arv_buffer_get_frame_id(b));
   const auto status = arv_buffer_get_status(b);
-  const bool image = arv_buffer_get_payload_type(b) == ARV_BUFFER_PAYLOAD_TYPE_IMAGE;
-  if (status != ARV_BUFFER_STATUS_SUCCESS || !image ||
-      static_cast<std::uint32_t>(arv_buffer_get_image_width(b)) != cfg_.width ||
-      static_cast<std::uint32_t>(arv_buffer_get_image_height(b)) != cfg_.height) {
+  // Any payload type that carries the image (with chunks, chunk data, multipart), at its real
+  // row stride (GVSP row padding): issue 27 items 3 and 13, gvsp_payload.hpp.
+  const auto located = status == ARV_BUFFER_STATUS_SUCCESS ? detail::locate_image(b, cfg_.width, cfg_.height, cfg_.format)
+                                                           : detail::LocatedImage{0, 0, "incomplete"};
+  if (status != ARV_BUFFER_STATUS_SUCCESS || !located.error.empty()) {
     ++incomplete_;
     if (status == ARV_BUFFER_STATUS_TIMEOUT) ++incomplete_timeout_;
     else if (status == ARV_BUFFER_STATUS_MISSING_PACKETS) ++incomplete_missing_;
     else ++incomplete_other_;
     c.status = CaptureStatus::kIncomplete;
-    c.error = "frame " + std::to_string(arv_buffer_get_frame_id(b)) + " status " + std::to_string(static_cast<int>(status));
+    c.error = "frame " + std::to_string(arv_buffer_get_frame_id(b)) + " status " + std::to_string(static_cast<int>(status)) +
+              (status == ARV_BUFFER_STATUS_SUCCESS ? ": " + located.error : "");
     arv_stream_push_buffer(stream, b);
     return c;
   }
-  std::size_t size = 0;
-  const void* data = arv_buffer_get_image_data(b, &size);
+  const void* data = arv_buffer_get_data(b, nullptr);
   const auto index = static_cast<std::size_t>(reinterpret_cast<std::uintptr_t>(arv_buffer_get_user_data(b)));
   auto mem = st_->pool->buffer(index);
-  const std::size_t want = frame_bytes(cfg_.format, cfg_.width, cfg_.height);
-  if (data != mem.data() || size < want) {  // not our memory or short: never publish it
+  const std::size_t want = std::size_t{located.step} * cfg_.height;
+  if (data != mem.data() || located.offset + want > mem.size()) {  // not our memory or short: never publish it
     ++incomplete_;
     ++incomplete_other_;
     c.status = CaptureStatus::kIncomplete;
-    c.error = "buffer of " + std::to_string(size) + " bytes, expected " + std::to_string(want);
+    c.error = "buffer of " + std::to_string(mem.size()) + " bytes, image of " + std::to_string(want) + " at " + std::to_string(located.offset);
     arv_stream_push_buffer(stream, b);
     return c;
   }
@@ -631,7 +635,7 @@ Capture AravisSource::next(int timeout_ms) {
   m.seq = arv_buffer_get_frame_id(b);
   m.width = cfg_.width;
   m.height = cfg_.height;
-  m.step = row_step(cfg_.format, cfg_.width);
+  m.step = located.step;
   m.format = cfg_.format;
   m.device_ns = static_cast<Nanos>(arv_buffer_get_timestamp(b));
   m.device_ticks_ns = m.device_ns;
@@ -648,7 +652,13 @@ Capture AravisSource::next(int timeout_ms) {
     m.packets = details_.packet_size > 36 ? static_cast<std::uint32_t>((want + static_cast<std::size_t>(details_.packet_size) - 37) /
                                                                        static_cast<std::size_t>(details_.packet_size - 36))
                                           : 0;
-  if (exposure_) {  // the exposure of a frame before (read after it came), then ask for this one's
+  const auto chunk = st_->chunks.read(st_->camera, b);  // none unless the buffer has chunks
+  m.chunk_timestamp_ns = chunk.timestamp_ns;
+  if (chunk.exposure_ns > 0) {  // this frame's own exposure: nothing to read over GVCP (issue 27 item 9)
+    m.exposure_seq = m.seq;
+    m.exposure_ns = chunk.exposure_ns;
+    last_exposure_ns_.store(chunk.exposure_ns);
+  } else if (exposure_) {  // the exposure of a frame before (read after it came), then ask for this one's
     const auto known = exposure_->known();
     m.exposure_seq = known.seq;
     m.exposure_ns = known.ns;
@@ -657,7 +667,7 @@ Capture AravisSource::next(int timeout_ms) {
   }
   ++completed_;
   c.status = CaptureStatus::kFrame;
-  c.frame = Frame(m, mem.first(want), [stream, b] { arv_stream_push_buffer(stream, b); });
+  c.frame = Frame(m, mem.subspan(located.offset, want), [stream, b] { arv_stream_push_buffer(stream, b); });
   return c;
 }
 

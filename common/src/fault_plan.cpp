@@ -38,7 +38,8 @@ constexpr std::array<KindInfo, 33> kKinds{{
      "PTP state (Disabled, Listening, Uncalibrated, Slave, Master, Faulty) with a TAI offset and a clock step"},
     {"camera.exposure_change", DC::kCamera, "us=8000", 0, "exposure time changed while streaming"},
     {"camera.auto_exposure", DC::kCamera, "", 3, "auto exposure on: exposure varies frame to frame"},
-    {"camera.chunk_data", DC::kCamera, "", 3, "chunk data (timestamp, frame id) appended to the payload"},
+    {"camera.chunk_data", DC::kCamera, "payload=image", 3,
+     "chunks (timestamp, exposure) appended to each frame: payload=image (0x4001, image + chunks) or chunk (0x0004, the image its first chunk)"},
     {"camera.packet_loss", DC::kCamera, "p=0.01,resend=1", 2, "GVSP packets lost (resend=1: the camera answers resends)"},
     {"camera.padded_rows", DC::kCamera, "bytes=64", 2, "rows padded to a stride wider than width x bytes per pixel"},
     // USB cameras (V4L2).

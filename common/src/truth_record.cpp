@@ -71,8 +71,11 @@ void Writer::put(const char* line, int n) {
 
 void Writer::unit(const UnitRecord& r) {
   char buf[160];
-  const int n = std::snprintf(buf, sizeof buf, "{\"u\":%" PRId64 ",\"acq\":%" PRId64 ",\"dev\":%" PRId64 ",\"parts\":%" PRIu32 "}\n",
-                              r.unit, r.acq_ns, r.dev_ns, r.parts);
+  const int n = r.exposure_ns > 0
+                    ? std::snprintf(buf, sizeof buf, "{\"u\":%" PRId64 ",\"acq\":%" PRId64 ",\"dev\":%" PRId64 ",\"parts\":%" PRIu32 ",\"exp\":%" PRId64 "}\n",
+                                    r.unit, r.acq_ns, r.dev_ns, r.parts, r.exposure_ns)
+                    : std::snprintf(buf, sizeof buf, "{\"u\":%" PRId64 ",\"acq\":%" PRId64 ",\"dev\":%" PRId64 ",\"parts\":%" PRIu32 "}\n",
+                                    r.unit, r.acq_ns, r.dev_ns, r.parts);
   put(buf, n);
 }
 
@@ -162,7 +165,7 @@ Log read(const std::string& path) {
                                          j.value("until", Nanos{0}), u < 0 ? u : u + unit_offset, j.value("detail", "")});
       } else if (j.contains("u")) {
         log.units.push_back(UnitRecord{j.at("u").get<std::int64_t>() + unit_offset, j.at("acq").get<Nanos>(), j.value("dev", Nanos{0}),
-                                       j.value("parts", std::uint32_t{0})});
+                                       j.value("parts", std::uint32_t{0}), j.value("exp", Nanos{0})});
       } else {
         throw std::runtime_error("neither a unit, a part nor a fault");
       }

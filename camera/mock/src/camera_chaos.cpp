@@ -118,13 +118,13 @@ CameraTruth::CameraTruth(const std::string& path, const std::string& device, std
     : writer_(path, truth::Header{device, std::string(device_class), std::string(model), "/sensors/camera/" + device + "/image_raw",
                                   "frame", std::string(clock)}) {}
 
-void CameraTruth::frame(std::int64_t unit, Nanos acq_ns, Nanos dev_ns, Nanos tx_ns, truth::Fate fate, std::uint64_t fault) {
+void CameraTruth::frame(std::int64_t unit, Nanos acq_ns, Nanos dev_ns, Nanos tx_ns, truth::Fate fate, std::uint64_t fault, Nanos exposure_ns) {
   std::uint64_t seq = 0;
   {
     std::lock_guard lock(mutex_);
     seq = part_seq_++;
   }
-  writer_.unit(truth::UnitRecord{unit, acq_ns, dev_ns, 1});
+  writer_.unit(truth::UnitRecord{unit, acq_ns, dev_ns, 1, exposure_ns});
   writer_.part(truth::PartRecord{seq, unit, acq_ns, dev_ns, fate == truth::Fate::kNotSent ? 0 : tx_ns, fate, fault});
 }
 

@@ -218,13 +218,76 @@ std::string hex(std::uint32_t v) {
 }
 }  // namespace
 
-std::string chaos_ptp_genicam_xml(bool gev_ieee1588) {
+std::string fake_camera_genicam_xml() {
   ArvFakeCamera* cam = arv_fake_camera_new("RIGCHAOSXML");
   if (cam == nullptr) throw std::runtime_error("arv_fake_camera_new failed");
   std::size_t size = 0;
   const char* data = arv_fake_camera_get_genicam_xml(cam, &size);
   std::string xml = data != nullptr ? std::string(data, size) : std::string();
   g_object_unref(cam);
+  return xml;
+}
+
+namespace {
+constexpr const char* kFakePayloadFormula = "<Formula>WIDTH * HEIGHT * ((PIXELFORMAT>>16)&amp;0xFF) / 8</Formula>";
+constexpr const char* kChaosChunkNodes = R"(
+  <Boolean Name="ChunkModeActive" NameSpace="Standard">
+    <pValue>ChaosChunkModeRegister</pValue>
+    <OnValue>1</OnValue>
+    <OffValue>0</OffValue>
+  </Boolean>
+  <IntReg Name="ChunkTimestamp" NameSpace="Standard">
+    <Address>0x0</Address>
+    <Length>8</Length>
+    <AccessMode>RO</AccessMode>
+    <pPort>ChaosChunkTimestampPort</pPort>
+    <Cachable>NoCache</Cachable>
+    <Sign>Unsigned</Sign>
+    <Endianess>BigEndian</Endianess>
+  </IntReg>
+  <Port Name="ChaosChunkTimestampPort"><ChunkID>@TIMESTAMP@</ChunkID></Port>
+  <FloatReg Name="ChunkExposureTime" NameSpace="Standard">
+    <Address>0x0</Address>
+    <Length>8</Length>
+    <AccessMode>RO</AccessMode>
+    <pPort>ChaosChunkExposurePort</pPort>
+    <Cachable>NoCache</Cachable>
+    <Endianess>BigEndian</Endianess>
+  </FloatReg>
+  <Port Name="ChaosChunkExposurePort"><ChunkID>@EXPOSURE@</ChunkID></Port>
+)";
+}  // namespace
+
+std::string chaos_chunk_genicam_xml(std::string xml) {
+  const auto payload = xml.find("<IntSwissKnife Name=\"PayloadSize\"");
+  const auto formula = payload == std::string::npos ? payload : xml.find(kFakePayloadFormula, payload);
+  if (formula == std::string::npos || xml.rfind("</RegisterDescription>") == std::string::npos)
+    throw std::runtime_error("the fake's PayloadSize is not WIDTH * HEIGHT * bits / 8 any more");
+  char chunk_bytes[16];
+  std::snprintf(chunk_bytes, sizeof chunk_bytes, "%zu", kChaosChunkTrailerBytes);
+  xml.replace(formula, std::string(kFakePayloadFormula).size(),
+              std::string("<pVariable Name=\"PAD\">ChaosRowPaddingRegister</pVariable>\n"
+                          "\t\t<pVariable Name=\"CHUNKMODE\">ChaosChunkModeRegister</pVariable>\n"
+                          "\t\t<pVariable Name=\"CHUNKPLAN\">ChaosChunkPlanRegister</pVariable>\n"
+                          "\t\t<Formula>WIDTH * HEIGHT * ((PIXELFORMAT>>16)&amp;0xFF) / 8 + HEIGHT * PAD + ((CHUNKMODE | CHUNKPLAN) &amp; 1) * ") +
+                  chunk_bytes + "</Formula>");
+  std::string nodes = kChaosChunkNodes;
+  const auto put = [&nodes](const std::string& mark, std::uint32_t id) {
+    char text[16];
+    std::snprintf(text, sizeof text, "%08X", id);
+    nodes.replace(nodes.find(mark), mark.size(), text);
+  };
+  put("@TIMESTAMP@", kChaosChunkIdTimestamp);
+  put("@EXPOSURE@", kChaosChunkIdExposure);
+  nodes += test_register("ChaosChunkModeRegister", hex(kChaosChunkModeRegister), "RW") +
+           test_register("ChaosRowPaddingRegister", hex(kChaosRowPaddingRegister), "RO") +
+           test_register("ChaosChunkPlanRegister", hex(kChaosChunkPlanRegister), "RO");
+  add_nodes(xml, nodes);
+  return xml;
+}
+
+std::string chaos_ptp_genicam_xml(bool gev_ieee1588) {
+  std::string xml = fake_camera_genicam_xml();
   if (xml.rfind("</RegisterDescription>") == std::string::npos)
     throw std::runtime_error("the fake's GenICam data is not a RegisterDescription");
   std::string nodes = kChaosPtpNodes;

@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 #include <gio/gio.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 
@@ -25,8 +26,11 @@ constexpr const char* kClock =
 std::string detail_of(const faults::FaultEvent& e) {
   if (e.kind == "camera.packet_loss")
     return "p=" + e.text("p") + (e.number("resend") != 0 ? "; resend asked but not answered (the Aravis fake has no PACKETRESEND)" : "");
-  if (e.kind == "camera.padded_rows" || e.kind == "camera.chunk_data")
-    return "not injected: the Aravis 0.8.26 fake sends neither row padding nor chunk data";
+  if (e.kind == "camera.padded_rows")
+    return "rows padded by " + e.text("bytes") + " bytes (GVSP x_padding, padding bytes 0xFF)";
+  if (e.kind == "camera.chunk_data")
+    return std::string("chunks ChunkTimestamp, ChunkExposureTime; payload type ") +
+           (e.text("payload") == "chunk" ? "0x0004 (chunk data, the image its first chunk)" : "0x4001 (image + chunks)");
   if (e.kind == "camera.ptp") return "state=" + e.text("state") + " tai_offset_s=" + e.text("tai_offset_s") + " step_ms=" + e.text("step_ms");
   if (e.kind == "camera.exposure_change") return "ExposureTimeAbs " + e.text("us") + " us";
   if (e.kind == "camera.slow_open") return "silent until " + e.text("s") + " s after the first GVCP request";
@@ -48,7 +52,45 @@ void GigeFakeChaos::booted(ArvFakeCamera* cam) {
   gvsp_ = nullptr;
   if (answered_.exchange(0) > 0 || frame_.unit >= 0) units_.reboot();  // frame ids start again at 1
   frame_ = {};
-  if (cam != nullptr) update_ptp(cam, schedule_.now_s());
+  if (cam == nullptr) return;
+  update_ptp(cam, schedule_.now_s());
+  // What its PayloadSize counts (fake_cameras.hpp chaos_chunk_genicam_xml): the widest padding and
+  // the chunks its plan will have it send, as a camera configured so would say from the start.
+  std::uint32_t widest = 0;
+  for (const auto& e : schedule_.events())
+    if (e.kind == "camera.padded_rows") widest = std::max(widest, static_cast<std::uint32_t>(std::max(0.0, e.number("bytes", 64))));
+  arv_fake_camera_write_register(cam, kChaosRowPaddingRegister, widest);
+  arv_fake_camera_write_register(cam, kChaosChunkPlanRegister, schedule_.has("camera.chunk_data") ? 1 : 0);
+}
+
+GvspFrameShape GigeFakeChaos::shape_of(ArvFakeCamera* cam, double t, std::uint64_t dev_ns, std::uint32_t exposure_us) const {
+  GvspFrameShape shape;
+  if (const auto* pad = schedule_.active("camera.padded_rows", t))
+    shape.pad_bytes = static_cast<std::uint32_t>(std::max(0.0, pad->number("bytes", 64)));
+  guint32 chunk_mode = 0;
+  arv_fake_camera_read_register(cam, kChaosChunkModeRegister, &chunk_mode);
+  const auto* chunk = schedule_.active("camera.chunk_data", t);
+  shape.chunks = (chunk_mode & 1) != 0 || chunk != nullptr;
+  if (chunk != nullptr && chunk->text("payload") == "chunk") shape.payload_type = 0x0004;
+  shape.chunk_timestamp = dev_ns;
+  shape.chunk_exposure_us = exposure_us;
+  return shape;
+}
+
+bool GigeFakeChaos::is_stream(GSocket* socket) {
+  if (gvsp_ == nullptr && socket != nullptr) {
+    // The stream socket is the one not on the GVCP port (control and discovery acks are).
+    if (GSocketAddress* local = g_socket_get_local_address(socket, nullptr)) {
+      if (g_inet_socket_address_get_port(G_INET_SOCKET_ADDRESS(local)) != kGvcpPort) gvsp_ = socket;
+      g_object_unref(local);
+    }
+  }
+  return socket != nullptr && socket == gvsp_;
+}
+
+bool GigeFakeChaos::reshape(GSocket* socket, const void* data, std::size_t size, const GvspReshaper::Emit& emit) {
+  if (!is_stream(socket)) return false;
+  return reshaper_.feed(static_cast<const std::uint8_t*>(data), size, shape_, emit);
 }
 
 std::uint64_t GigeFakeChaos::silenced_by(double t) const {
@@ -100,20 +142,15 @@ std::uint32_t GigeFakeChaos::on_fill(ArvFakeCamera* cam, ArvBuffer* buffer, std:
     if (dev != stamp) arv_buffer_set_timestamp(buffer, static_cast<guint64>(dev));
   }
   frame_ = Frame{units_.unit(id), stamp, dev, 0, 0, 0, 0, 0};
+  shape_ = shape_of(cam, t, static_cast<std::uint64_t>(dev), step.us);
+  if (truth_ != nullptr && shape_.chunks) frame_.exposure_ns = Nanos{step.us} * 1000;  // what its chunk says
   return step.us;
 }
 
 bool GigeFakeChaos::on_send(GSocket* socket, const void* data, std::size_t size) {
-  if (gvsp_ == nullptr && socket != nullptr) {
-    // The stream socket is the one not on the GVCP port (control and discovery acks are).
-    if (GSocketAddress* local = g_socket_get_local_address(socket, nullptr)) {
-      if (g_inet_socket_address_get_port(G_INET_SOCKET_ADDRESS(local)) != kGvcpPort) gvsp_ = socket;
-      g_object_unref(local);
-    }
-  }
   const double t = schedule_.now_s();
   const std::uint64_t silent = silenced_by(t);
-  if (socket != gvsp_) return silent == 0;
+  if (!is_stream(socket)) return silent == 0;
   std::uint8_t type = 0;
   if (size >= kGvspHeader) std::memcpy(&type, static_cast<const std::uint8_t*>(data) + 4, 1);
   type &= 0x7f;
@@ -141,7 +178,7 @@ bool GigeFakeChaos::on_send(GSocket* socket, const void* data, std::size_t size)
     const auto fate = frame_.sent == 0 && frame_.silenced > 0    ? truth::Fate::kNotSent
                       : frame_.lost + frame_.silenced > 0 ? truth::Fate::kDropped
                                                           : truth::Fate::kSent;
-    truth_->frame(frame_.unit, frame_.acq, frame_.dev, frame_.tx, fate, fate == truth::Fate::kSent ? 0 : frame_.fault);
+    truth_->frame(frame_.unit, frame_.acq, frame_.dev, frame_.tx, fate, fate == truth::Fate::kSent ? 0 : frame_.fault, frame_.exposure_ns);
   }
   return send;
 }
@@ -190,7 +227,15 @@ extern "C" gssize g_socket_send_to(GSocket* socket, GSocketAddress* address, con
                                    GCancellable* cancellable, GError** error) {
   static const auto real = real_function<decltype(&g_socket_send_to)>("g_socket_send_to");
   auto* chaos = sensor_rig::camera::mock::g_chaos.load(std::memory_order_acquire);
-  if (chaos != nullptr && !chaos->on_send(socket, buffer, size)) return static_cast<gssize>(size);  // lost on the way
+  if (chaos == nullptr) return real(socket, address, buffer, size, cancellable, error);
+  // A frame with padded rows or chunks goes out as the datagrams the reshaper makes, each through
+  // the chaos (lost, silenced, recorded) as the fake's own would.
+  // A send that fails is the fake's to ignore (it only logs them): no GError for the many datagrams.
+  const bool reshaped = chaos->reshape(socket, buffer, size, [&](const std::uint8_t* d, std::size_t n) {
+    if (chaos->on_send(socket, d, n)) real(socket, address, reinterpret_cast<const gchar*>(d), n, cancellable, nullptr);
+  });
+  if (reshaped) return static_cast<gssize>(size);
+  if (!chaos->on_send(socket, buffer, size)) return static_cast<gssize>(size);  // lost on the way
   return real(socket, address, buffer, size, cancellable, error);
 }
 

@@ -15,6 +15,7 @@
 #include <set>
 #include <string>
 
+#include "gvsp_reshaper.hpp"
 #include "sensor_rig/camera/mock/camera_chaos.hpp"
 
 namespace sensor_rig::camera::mock {
@@ -36,11 +37,17 @@ class GigeFakeChaos {
   // The fake's thread. on_fill: returns the exposure to wait (us) and sets the reported stamp.
   std::uint32_t on_fill(ArvFakeCamera* cam, ArvBuffer* buffer, std::uint32_t exposure_us);
   bool on_send(GSocket* socket, const void* data, std::size_t size);  // false: do not send
+  // Before on_send: a stream datagram of a frame with padded rows or chunks (camera.padded_rows,
+  // camera.chunk_data, or ChunkModeActive set by the rig) is rewritten (gvsp_reshaper.hpp); `emit`
+  // gets each datagram to send instead. false: send this one as it is.
+  bool reshape(GSocket* socket, const void* data, std::size_t size, const GvspReshaper::Emit& emit);
   bool on_receive(ArvFakeCamera* cam);                                // false: ignore the datagram
   void finish();  // at exit: a camera still dead has its silence recorded
 
  private:
   [[nodiscard]] std::uint64_t silenced_by(double t) const;  // the event that keeps it silent, 0 = none
+  [[nodiscard]] bool is_stream(GSocket* socket);  // the GVSP socket (found at its first datagram)
+  GvspFrameShape shape_of(ArvFakeCamera* cam, double t, std::uint64_t dev_ns, std::uint32_t exposure_us) const;
   void update_ptp(ArvFakeCamera* cam, double t);
 
   CameraSchedule schedule_;
@@ -62,11 +69,14 @@ class GigeFakeChaos {
     Nanos acq = 0, dev = 0, tx = 0;
     std::uint32_t sent = 0, lost = 0, silenced = 0;
     std::uint64_t fault = 0;
+    Nanos exposure_ns = 0;  // what its ChunkExposureTime says; 0: no chunks
   } frame_;
   FrameUnits units_;
   ExposureFaults exposure_;
   GSocket* gvsp_ = nullptr;
   GSocket* gvcp_ = nullptr;
+  GvspFrameShape shape_;  // of the frame being sent
+  GvspReshaper reshaper_;
 };
 
 // The instance the interposed GLib functions call (null: pass everything through), and the fake

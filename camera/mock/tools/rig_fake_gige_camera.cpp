@@ -232,7 +232,10 @@ int main(int argc, char** argv) {
   Fake fake;
   try {
     chaos = std::make_unique<mock::GigeFakeChaos>(mock::GigeFakeChaos::Options{chaos_args, lost_per_thousand});
-    if (chaos->needs_ptp_features()) fake.genicam_xml = mock::chaos_ptp_genicam_xml(gev_ieee1588);
+    // Chunk mode and row padding always (ChunkModeActive through the rig's features:, the
+    // camera.chunk_data / camera.padded_rows faults); PTP features only under camera.ptp.
+    fake.genicam_xml = mock::chaos_chunk_genicam_xml(chaos->needs_ptp_features() ? mock::chaos_ptp_genicam_xml(gev_ieee1588)
+                                                                                 : mock::fake_camera_genicam_xml());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "rig-fake-gige-camera: %s\n", e.what());
     return 2;

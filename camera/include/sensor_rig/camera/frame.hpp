@@ -44,6 +44,9 @@ struct FrameMeta {
   // streaming (auto exposure, another controller) with it (issue 27 item 9).
   std::uint64_t exposure_seq = 0;
   Nanos exposure_ns = 0;
+  // The frame's ChunkTimestamp in ns of the device clock (the leader's clock, before any PTP
+  // conversion), from a camera in chunk mode; 0: no chunk (issue 27 item 3).
+  Nanos chunk_timestamp_ns = 0;
 };
 
 // A filled buffer on loan from its source; move-only; gives the buffer back when destroyed.

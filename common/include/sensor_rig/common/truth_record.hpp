@@ -56,6 +56,7 @@ struct UnitRecord {
   Nanos acq_ns = 0;  // true acquisition: a scan's first firing, a frame's exposure start (vehicle time)
   Nanos dev_ns = 0;  // the device clock's reading for it
   std::uint32_t parts = 0;  // parts the unit was made of (packets a complete scan has)
+  Nanos exposure_ns = 0;    // a camera frame's exposure as the camera reported it in the frame ("exp"); 0: not reported
 };
 
 struct PartRecord {

@@ -97,7 +97,8 @@ class CameraTruth {
   // Throws std::runtime_error when the file cannot be created.
   CameraTruth(const std::string& path, const std::string& device, std::string_view device_class, std::string_view model,
               std::string_view clock);
-  void frame(std::int64_t unit, Nanos acq_ns, Nanos dev_ns, Nanos tx_ns, truth::Fate fate, std::uint64_t fault = 0);
+  // exposure_ns: the exposure the camera reported for the frame (its chunk), 0: none.
+  void frame(std::int64_t unit, Nanos acq_ns, Nanos dev_ns, Nanos tx_ns, truth::Fate fate, std::uint64_t fault = 0, Nanos exposure_ns = 0);
   // Records the occurrence once; true when it was new.
   bool fault(const faults::FaultEvent& e, Nanos at_ns, Nanos until_ns, std::int64_t unit, const std::string& detail);
   void flush();

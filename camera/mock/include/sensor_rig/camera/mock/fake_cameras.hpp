@@ -69,6 +69,24 @@ inline constexpr std::uint32_t kChaosPtpEnableRegister = 0x8000;
 inline constexpr std::uint32_t kChaosPtpLatchRegister = 0x8004;
 inline constexpr std::uint32_t kChaosPtpStatusRegister = 0x8008;
 std::string chaos_ptp_genicam_xml(bool gev_ieee1588 = false);
+// The in-process fake's own GenICam XML (no network).
+std::string fake_camera_genicam_xml();
+// Chunk data and row padding (rig-fake-gige-camera, always): ChunkModeActive (Boolean on
+// kChaosChunkModeRegister, what the rig writes through `features:`), ChunkTimestamp (IntReg, 8 bytes)
+// and ChunkExposureTime (FloatReg, 8 bytes, us) on chunk ports kChaosChunkIdTimestamp /
+// kChaosChunkIdExposure, and a PayloadSize that counts what the fake may send beside the image:
+// Height x kChaosRowPaddingRegister (the widest camera.padded_rows of its plan) and
+// kChaosChunkTrailerBytes when ChunkModeActive or kChaosChunkPlanRegister (a camera.chunk_data in
+// its plan) is set, as a real camera's PayloadSize counts its padding and chunks. Takes and returns
+// an XML; throws std::runtime_error when the fake's PayloadSize is not the one this extends.
+inline constexpr std::uint32_t kChaosChunkModeRegister = 0x800c;
+inline constexpr std::uint32_t kChaosRowPaddingRegister = 0x8010;
+inline constexpr std::uint32_t kChaosChunkPlanRegister = 0x8014;
+inline constexpr std::uint32_t kChaosChunkIdImage = 0xA0000001;
+inline constexpr std::uint32_t kChaosChunkIdTimestamp = 0xA0000002;
+inline constexpr std::uint32_t kChaosChunkIdExposure = 0xA0000003;
+inline constexpr std::size_t kChaosChunkTrailerBytes = 8 + 16 + 16;  // image tag, timestamp, exposure
+std::string chaos_chunk_genicam_xml(std::string xml);
 // The fake's own XML plus TriggerSource entry Line1 (the fake has only Line0 and Software; in a
 // line mode it sends no frame at all), TriggerActivation entry FallingEdge, and
 // TriggerSoftwareTestRegister: a readable view of its write-only TriggerSoftware register (0x30c,

@@ -1,0 +1,61 @@
+#pragma once
+// What a GigE Vision buffer holds beside a plain image (issue 27 items 3 and 13): where the image is
+// in a buffer of any payload type (image, image with chunks, chunk data, multipart), the row stride
+// it really has (GVSP row padding), and the chunk values (ChunkTimestamp, ChunkExposureTime) a
+// camera in chunk mode appends to each frame. Used by AravisSource::next() on the capture thread.
+#include <arv.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "sensor_rig/camera/pixel_format.hpp"
+#include "sensor_rig/common/clock.hpp"
+
+namespace sensor_rig::camera::detail {
+
+// The image of a completed buffer: `offset` bytes into the buffer's data, rows `step` bytes apart
+// (row bytes + the camera's padding), `height` rows. error non-empty: no usable image of this size.
+struct LocatedImage {
+  std::size_t offset = 0;
+  std::uint32_t step = 0;
+  std::string error;
+};
+// `data`/`size`: the buffer's memory (arv_buffer_get_data). Image and image-with-chunks buffers:
+// the leader's size and padding; chunk data (payload type 4, no image infos): the first chunk, its
+// stride its length / height; multipart: the 2D image part of this size.
+LocatedImage locate_image(ArvBuffer* buffer, std::uint32_t width, std::uint32_t height, PixelFormat format);
+
+// The image chunk of a chunk-data buffer: the chunk at offset 0, walked from the end as Aravis does
+// (data, then id and length, big endian). Returns its length, 0 when the layout does not add up.
+std::size_t first_chunk_bytes(const std::uint8_t* data, std::size_t size);
+
+// GevTimestampTickFrequency where the device has it (a GVCP read: at open only), else 0.
+std::uint64_t timestamp_tick_hz(ArvDevice* device);
+
+// Per-frame chunk values through the camera's own GenICam chunk features (ChunkTimestamp in device
+// ticks, ChunkExposureTime in us): the parser is made from the device's XML once, at the first
+// buffer with chunks (no I/O: the XML is the one read at open).
+class ChunkReader {
+ public:
+  struct Values {
+    Nanos timestamp_ns = 0;  // ChunkTimestamp in ns of the device clock; 0: absent
+    Nanos exposure_ns = 0;   // ChunkExposureTime; 0: absent
+  };
+  ChunkReader() = default;
+  ~ChunkReader();
+  ChunkReader(const ChunkReader&) = delete;
+  ChunkReader& operator=(const ChunkReader&) = delete;
+
+  // `tick_hz`: the device's timestamp tick frequency (GevTimestampTickFrequency; 0: 1 GHz).
+  void set_tick_hz(std::uint64_t tick_hz) noexcept { tick_hz_ = tick_hz; }
+  Values read(ArvCamera* camera, ArvBuffer* buffer);
+  void reset();  // the camera was closed: its XML may differ after a reopen
+
+ private:
+  ArvChunkParser* parser_ = nullptr;
+  std::uint64_t tick_hz_ = 0;
+  bool has_timestamp_ = true, has_exposure_ = true;  // cleared at the first buffer that lacks them
+};
+
+}  // namespace sensor_rig::camera::detail
