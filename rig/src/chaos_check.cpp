@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <set>
 
+#include "chaos_fused_check.hpp"
+
 namespace sensor_rig::rig::chaos {
 namespace {
 
@@ -99,6 +101,7 @@ class Checker {
       if (log.header.topic.empty()) continue;
       check_topic(log, by_topic[log.header.topic]);
     }
+    if (in_.fused.enabled) check_fused_cloud(by_topic[kFusedCloudTopic]);
     return std::move(r_);
   }
 
@@ -107,6 +110,16 @@ class Checker {
     r_.invariants[invariant] = false;
     const auto n = std::count_if(r_.examples.begin(), r_.examples.end(), [&](const Example& e) { return e.invariant == invariant; });
     if (static_cast<std::size_t>(n) < kExamplesPerInvariant) r_.examples.push_back(Example{invariant, topic, what});
+  }
+
+  // The fused cloud has no truth of its own: its sweeps' members are held against the LIDARs'
+  // (chaos_fused_check.cpp); its rate while no fault touched a LIDAR or the host, as any topic's.
+  void check_fused_cloud(const std::vector<const SampleRecord*>& samples) {
+    const JudgeContext ctx{[this](Nanos t) { return doubled(t); }, [this](Nanos t) { return at_s(t); },
+                           [this](const std::string& i, const std::string& topic, const std::string& w) { violation(i, topic, w); }};
+    check_fused(in_, ctx, r_);
+    const auto e = in_.expected.find(kFusedCloudTopic);
+    if (e != in_.expected.end()) check_isolation(kFusedCloudTopic, r_.topics[kFusedCloudTopic], samples, e->second.rate_hz, e->second.depends_on);
   }
 
   Nanos event_begin(const faults::FaultEvent& e) const { return in_.epoch_vehicle_ns + seconds_ns(e.at_s); }

@@ -39,6 +39,26 @@ struct TopicExpectation {
   std::vector<std::string> depends_on;  // devices whose faults it rightly suffers (a triggered camera's LIDAR)
 };
 
+// The fused cloud (/sensors/lidar/fused/points): the members of each sweep as the fusion node
+// published them (/rig/sets/fused), and the scans it counted dropped (/diagnostics `fusion`).
+struct FusedMember {
+  std::string topic;
+  Nanos stamp = 0;
+  std::uint64_t seq = 0;  // on /rig/stamps
+};
+struct FusedSet {
+  std::uint64_t seq = 0;  // = the fused cloud's seq on /rig/stamps
+  Nanos stamp = 0;        // = the fused cloud's header.stamp
+  std::vector<FusedMember> members;
+};
+struct FusedInput {
+  bool enabled = false;                   // the config fuses its LIDARs: judged
+  std::vector<std::string> lidar_topics;  // the LIDARs fused, config order
+  Nanos period_ns = 100'000'000;          // one rotation (fusion.max_spread_ms): what "one rotation" means
+  std::vector<FusedSet> sets;
+  std::uint64_t scans_dropped = 0;        // fusion's scans_dropped counted in the window
+};
+
 struct Input {
   std::vector<truth::Log> truths;
   std::vector<faults::FaultEvent> events;  // the plan
@@ -50,6 +70,7 @@ struct Input {
   // Vehicle-time intervals in which the rig flagged a topic's stamps unsynchronized (/diagnostics
   // stamp_sync): a stamp outside its bound then is the rig's own warning, not a lie.
   std::map<std::string, std::vector<std::pair<Nanos, Nanos>>> unsynchronized;
+  FusedInput fused;
   Nanos window_begin_ns = 0;  // units are judged when their acquisition is in [begin, end)
   Nanos window_end_ns = 0;
   Bounds bounds;
@@ -93,8 +114,9 @@ struct Result {
   [[nodiscard]] bool all_held() const;
 };
 
-inline constexpr const char* kInvariants[] = {"accounted", "no_phantom_loss", "stamps", "isolation",
-                                              "recovery",  "monitor_agrees",  "faults_injected"};
+inline constexpr const char* kInvariants[] = {"accounted",      "no_phantom_loss", "stamps", "isolation", "recovery",
+                                              "monitor_agrees", "faults_injected", "fused"};
+inline constexpr const char* kFusedCloudTopic = "/sensors/lidar/fused/points";
 
 Result check(const Input& in);
 

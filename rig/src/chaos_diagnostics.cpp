@@ -1,6 +1,7 @@
 #include "chaos_diagnostics.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <string_view>
 
 #include "sensor_rig/dds/topic.hpp"
@@ -13,6 +14,15 @@ namespace {
 // configs): a flag covers the period before its status, and half of one after.
 constexpr Nanos kBefore = 1'500'000'000;
 constexpr Nanos kAfter = 500'000'000;
+
+// The counters the judge reads, as "status/key".
+bool watched_counter(std::string_view status, std::string_view key) { return status == "fusion" && key == "scans_dropped"; }
+
+dds::QosSpec sets_qos() {  // deeper than the writer's 16: the reader is polled every 100 ms
+  dds::QosSpec q;
+  q.depth = 64;
+  return q;
+}
 
 }  // namespace
 
@@ -35,8 +45,21 @@ DiagnosticsLog::~DiagnosticsLog() {
 void DiagnosticsLog::run() {
   const dds::Topic<msg::DiagnosticArray> topic(participant_, "/diagnostics");
   const dds::Reader<msg::DiagnosticArray> reader(participant_, topic);
+  const dds::Topic<msg::SyncSet> sets_topic(participant_, "/rig/sets/fused", sets_qos());
+  const dds::Reader<msg::SyncSet> sets(participant_, sets_topic, sets_qos());
   while (!stop_) {
-    if (!reader.wait(100)) continue;
+    (void)reader.wait(100);
+    sets.take(
+        [&](const msg::SyncSet& m, const dds_sample_info_t&) {
+          FusedSet set{m.set_seq, msg::from_time(m.header.stamp), {}};
+          for (std::uint32_t i = 0; i < m.members._length; ++i) {
+            const auto& mm = m.members._buffer[i];
+            set.members.push_back({mm.topic != nullptr ? mm.topic : "", msg::from_time(mm.stamp), mm.seq});
+          }
+          std::lock_guard lock(mutex_);
+          fused_sets_.push_back(std::move(set));
+        },
+        256);
     reader.take(
         [&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
           const Nanos t = msg::from_time(a.header.stamp);
@@ -50,6 +73,10 @@ void DiagnosticsLog::run() {
               const std::string_view key(kv.key), value(kv.value);
               if (key == "stamp_sync" && value == "unsynchronized") flagged = true;
               if (key == "topic") topic_value = kv.value;
+              if (st.name != nullptr && watched_counter(st.name, key)) {
+                std::lock_guard lock(mutex_);
+                counters_[std::string(st.name) + "/" + kv.key].emplace_back(t, std::strtoull(kv.value, nullptr, 10));
+              }
             }
             if (!flagged) continue;
             const std::string topic_name = status_topic(st.name != nullptr ? st.name : "", topic_value);
@@ -60,6 +87,23 @@ void DiagnosticsLog::run() {
         },
         64);
   }
+}
+
+std::vector<FusedSet> DiagnosticsLog::fused_sets() const {
+  std::lock_guard lock(mutex_);
+  return fused_sets_;
+}
+
+std::uint64_t DiagnosticsLog::counter_delta(const std::string& status, const std::string& key, Nanos begin, Nanos end) const {
+  std::lock_guard lock(mutex_);
+  const auto it = counters_.find(status + "/" + key);
+  if (it == counters_.end()) return 0;
+  std::uint64_t at_begin = 0, at_end = 0;
+  for (const auto& [t, v] : it->second) {
+    if (t <= begin) at_begin = v;
+    if (t <= end) at_end = v;
+  }
+  return at_end - std::min(at_end, at_begin);
 }
 
 std::map<std::string, Intervals> DiagnosticsLog::unsynchronized() const {

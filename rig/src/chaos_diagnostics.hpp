@@ -3,6 +3,8 @@
 // be trusted. A status value `stamp_sync: unsynchronized` flags its topic (the status's `topic` value,
 // or its name: camera/N -> /sensors/camera/N/image_raw, lidar/N -> /sensors/lidar/N/points); the
 // judge does not count a stamp outside its bound against the rig while the topic was flagged.
+// Also what the judge needs of the fused cloud: its sweeps' members (/rig/sets/fused) and the fusion
+// node's count of scans it dropped (/diagnostics `fusion`, `scans_dropped`).
 #include <atomic>
 #include <map>
 #include <mutex>
@@ -11,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "chaos_check.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dds/participant.hpp"
 
@@ -31,6 +34,11 @@ class DiagnosticsLog {
   // Per topic, when it was flagged: each flagged status covers the period before it (the rig
   // publishes once a period) and half a period after, merged.
   [[nodiscard]] std::map<std::string, Intervals> unsynchronized() const;
+  // Every fused sweep's members received, in order.
+  [[nodiscard]] std::vector<FusedSet> fused_sets() const;
+  // A counter of a status (fusion/scans_dropped) between two vehicle times: its value in the last
+  // status at or before `end` minus in the last at or before `begin` (0 before the first).
+  [[nodiscard]] std::uint64_t counter_delta(const std::string& status, const std::string& key, Nanos begin, Nanos end) const;
 
  private:
   void run();
@@ -38,6 +46,8 @@ class DiagnosticsLog {
   std::atomic<bool> stop_{false};
   mutable std::mutex mutex_;
   std::map<std::string, std::vector<Nanos>> flagged_;  // topic -> stamps of flagged statuses
+  std::map<std::string, std::vector<std::pair<Nanos, std::uint64_t>>> counters_;  // "status/key" -> (stamp, value)
+  std::vector<FusedSet> fused_sets_;
   std::thread thread_;
 };
 

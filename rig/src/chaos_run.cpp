@@ -138,6 +138,18 @@ void fit_to_models(std::vector<faults::FaultEvent>& events, const RigConfig& cfg
   }
 }
 
+// The fused sweeps' members as received, kept with the campaign (one JSON line per sweep).
+void write_fused_sets(const std::string& path, const std::vector<FusedSet>& sets) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return;
+  for (const auto& s : sets) {
+    nlohmann::json j{{"seq", s.seq}, {"stamp", s.stamp}, {"members", nlohmann::json::array()}};
+    for (const auto& m : s.members) j["members"].push_back({{"topic", m.topic}, {"stamp", m.stamp}, {"seq", m.seq}});
+    std::fprintf(f, "%s\n", j.dump().c_str());
+  }
+  std::fclose(f);
+}
+
 }  // namespace
 
 std::vector<std::string> injected_kinds() {
@@ -183,6 +195,12 @@ std::map<std::string, TopicExpectation> expectations_of(const RigConfig& cfg) {
     TopicExpectation e{c.name, c.source.frame_rate, {}};
     if (c.lidar_trigger.enabled()) e.depends_on.push_back(c.lidar_trigger.lidar);
     out[camera_topic(c.name)] = e;
+  }
+  // The fused cloud: one sweep per rotation while no fault touches a LIDAR (or the host).
+  if (cfg.fusion.enabled && !cfg.lidars.empty()) {
+    TopicExpectation e{"fusion", cfg.lidars.front().mock.rpm / 60.0, {}};
+    for (const auto& l : cfg.lidars) e.depends_on.push_back(l.name);
+    out[kFusedCloudTopic] = e;
   }
   // The mock ECU's feedback frames, one /vehicle/state sample each, at the protocol's period.
   if (cfg.dbw.enabled && cfg.dbw.mock_ecu) {
@@ -338,6 +356,16 @@ int run(const Options& o) {
   in.monitor = monitor_totals(monitor_lines, plan.epoch_mono_ns + kLead, plan.epoch_mono_ns + window_ns, in.counted_lost);
   in.expected = expectations_of(cfg);
   in.unsynchronized = diagnostics.unsynchronized();
+  if (cfg.fusion.enabled) {
+    in.fused.enabled = true;
+    for (const auto& l : cfg.lidars) in.fused.lidar_topics.push_back(lidar_topic(l.name));
+    in.fused.period_ns = static_cast<Nanos>(cfg.fusion.max_spread_ms) * 1'000'000;
+    in.fused.sets = diagnostics.fused_sets();
+    write_fused_sets((dir.path() / "fused_sets.jsonl").string(), in.fused.sets);
+    // Scans the fusion node dropped: its counter from the last status before the window to the
+    // first one a status period after it (a scan is counted when it comes, reported within a period).
+    in.fused.scans_dropped = diagnostics.counter_delta("fusion", "scans_dropped", in.window_begin_ns, in.window_end_ns + 1'500'000'000);
+  }
   Result r = check(in);
   r.campaign_errors = campaign_errors;
   std::fputs(result_text(r).c_str(), stderr);

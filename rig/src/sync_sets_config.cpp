@@ -38,6 +38,8 @@ std::vector<SyncSetConfig> parse_sync_sets(const config::Node& root, const std::
     if (!s.name.empty()) {
       if (s.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos)
         item.fail("name", "'" + s.name + "': lower-case letters, digits and _ only (it becomes a topic name)");
+      else if (s.name == "fused")  // the fused cloud's members go out on /rig/sets/fused (docs/topics.md)
+        item.fail("name", "'fused' is the fused cloud's members set (/rig/sets/fused); choose another name");
       else if (!names.insert(s.name).second)
         item.fail("name", "duplicate set name '" + s.name + "'");
     }

@@ -71,6 +71,8 @@ TEST(SyncSetsConfig, ReportsEveryProblemWithItsPosition) {
     members: [/sensors/lidar/front/points]
     max_spread_ms: -1
     colour: red
+  - name: fused
+    members: [/sensors/camera/left/image_raw, /sensors/camera/right/image_raw]
 )");
   try {
     (void)load_rig_config(path);
@@ -86,6 +88,7 @@ TEST(SyncSetsConfig, ReportsEveryProblemWithItsPosition) {
     EXPECT_NE(m.find("sync_sets[2].members: a set needs at least 2 members"), std::string::npos) << m;
     EXPECT_NE(m.find("sync_sets[2].max_spread_ms"), std::string::npos) << m;
     EXPECT_NE(m.find("colour"), std::string::npos) << m;
+    EXPECT_NE(m.find("sync_sets[3].name: 'fused' is the fused cloud's members set"), std::string::npos) << m;
   }
   std::filesystem::remove(path);
 }

@@ -1,0 +1,393 @@
+#include "chaos_fused_check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numbers>
+#include <set>
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+Nanos floor_mod(Nanos a, Nanos p) noexcept {
+  const Nanos m = a % p;
+  return m < 0 ? m + p : m;
+}
+std::int64_t floor_div(Nanos a, Nanos p) noexcept { return (a - floor_mod(a, p)) / p; }
+double ms(Nanos ns) { return static_cast<double>(ns) * 1e-6; }
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f", v);
+  return b;
+}
+
+// One scan as its mock made it: true first firing, and the first firing that arrived intact (a
+// scan whose first packets were lost may be stamped anywhere up to it, as the LIDAR topics).
+struct ScanTruth {
+  std::int64_t unit = 0;
+  Nanos acq = 0;
+  Nanos first_intact = 0;
+};
+
+// A fused LIDAR: its truth's scans by acquisition, its published scans (/rig/stamps) by seq.
+struct Lidar {
+  std::string topic, name;
+  std::vector<ScanTruth> units;
+  Nanos tolerance = 50'000'000;  // a published stamp belongs to the scan nearest it, within this
+  std::map<std::uint64_t, const SampleRecord*> by_seq;
+};
+
+std::vector<ScanTruth> scans_of(const truth::Log& log) {
+  std::vector<ScanTruth> out;
+  std::map<std::int64_t, std::size_t> index;
+  for (const auto& u : log.units) {
+    index[u.unit] = out.size();
+    out.push_back({u.unit, u.acq_ns, 0});
+  }
+  for (const auto& p : log.parts) {
+    if (!truth::delivered_intact(p.fate)) continue;
+    for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
+      const auto it = index.find(id);
+      if (it == index.end()) continue;
+      auto& s = out[it->second];
+      if (s.first_intact == 0 || p.acq_ns < s.first_intact) s.first_intact = p.acq_ns;
+    }
+  }
+  for (auto& s : out) s.first_intact = std::max(s.acq, s.first_intact);
+  std::sort(out.begin(), out.end(), [](const ScanTruth& a, const ScanTruth& b) { return a.acq < b.acq; });
+  return out;
+}
+
+Nanos half_median_gap(const std::vector<ScanTruth>& units) {
+  if (units.size() < 2) return 50'000'000;
+  std::vector<Nanos> gaps;
+  for (std::size_t i = 1; i < units.size(); ++i) gaps.push_back(units[i].acq - units[i - 1].acq);
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+  return std::max<Nanos>(gaps[gaps.size() / 2] / 2, 1'000'000);
+}
+
+const ScanTruth* nearest(const std::vector<ScanTruth>& units, Nanos t, Nanos tolerance) {
+  auto it = std::lower_bound(units.begin(), units.end(), t, [](const ScanTruth& u, Nanos v) { return u.acq < v; });
+  const ScanTruth* best = nullptr;
+  Nanos best_d = tolerance + 1;
+  for (auto c : {it, it == units.begin() ? it : std::prev(it)}) {
+    if (c == units.end()) continue;
+    const Nanos d = std::llabs(c->acq - t);
+    if (d < best_d) {
+      best_d = d;
+      best = &*c;
+    }
+  }
+  return best;
+}
+
+// The rotation boundary of the truth: the LIDARs turn phase-locked at one period, each scan starts
+// at its LIDAR's phase (the circular mean of its true acquisitions mod the period); the boundary lies
+// in the middle of the widest gap between the phases, as the fusion's matcher places its own. A
+// scan's rotation is floor((acquisition - boundary) / period): scans of one rotation are the ones
+// that lie closest together.
+Nanos rotation_boundary(const std::vector<Lidar>& lidars, Nanos period) {
+  std::vector<Nanos> phases;
+  for (const auto& l : lidars) {
+    if (l.units.empty()) continue;
+    double sx = 0, sy = 0;
+    for (const auto& u : l.units) {
+      const double a = 2 * std::numbers::pi * static_cast<double>(floor_mod(u.acq, period)) / static_cast<double>(period);
+      sx += std::cos(a);
+      sy += std::sin(a);
+    }
+    double mean = std::atan2(sy, sx);
+    if (mean < 0) mean += 2 * std::numbers::pi;
+    phases.push_back(floor_mod(std::llround(mean / (2 * std::numbers::pi) * static_cast<double>(period)), period));
+  }
+  if (phases.empty()) return 0;
+  std::sort(phases.begin(), phases.end());
+  Nanos widest = -1, middle = 0;
+  for (std::size_t i = 0; i < phases.size(); ++i) {
+    const Nanos next = i + 1 < phases.size() ? phases[i + 1] : phases[0] + period;
+    if (next - phases[i] > widest) {
+      widest = next - phases[i];
+      middle = floor_mod(phases[i] + widest / 2, period);
+    }
+  }
+  return middle;
+}
+
+std::string name_of(const std::string& topic) {
+  const std::string prefix = "/sensors/lidar/", suffix = "/points";
+  if (topic.rfind(prefix, 0) == 0 && topic.size() > prefix.size() + suffix.size())
+    return topic.substr(prefix.size(), topic.size() - prefix.size() - suffix.size());
+  return topic;
+}
+
+class FusedJudge {
+ public:
+  FusedJudge(const Input& in, const JudgeContext& ctx, Result& r)
+      : in_(in), ctx_(ctx), t_(r.topics[kFusedCloudTopic]), period_(in.fused.period_ns > 0 ? in.fused.period_ns : 100'000'000) {}
+
+  void run() {
+    t_.device = "fusion";
+    t_.device_class = "fusion";
+    load();
+    boundary_ = rotation_boundary(lidars_, period_);
+    for (const FusedSet& set : in_.fused.sets) judge_sweep(set);
+    account_scans();
+    unpaired_clouds();
+    if (!errors_.empty()) {
+      std::sort(errors_.begin(), errors_.end());
+      t_.stamp_error_p99_ms = errors_[std::min(errors_.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(errors_.size())))];
+      t_.stamp_error_max_ms = errors_.back();
+    }
+    check_monitor();
+  }
+
+ private:
+  struct Member {
+    const Lidar* lidar;
+    const SampleRecord* scan;
+    const ScanTruth* truth;  // nullptr: its stamp names no scan the mock made (the LIDAR's `stamps` says so)
+  };
+
+  void fail(const std::string& what) const { ctx_.violation("fused", kFusedCloudTopic, what); }
+  bool in_window(Nanos x) const { return x >= in_.window_begin_ns && x < in_.window_end_ns && !ctx_.doubled(x); }
+  std::int64_t rotation(Nanos acq) const { return floor_div(acq - boundary_, period_); }
+
+  void load() {
+    for (const auto& topic : in_.fused.lidar_topics) {
+      Lidar l;
+      l.topic = topic;
+      l.name = name_of(topic);
+      for (const auto& log : in_.truths)
+        if (log.header.topic == topic) l.units = scans_of(log);
+      l.tolerance = half_median_gap(l.units);
+      lidar_of_[topic] = lidars_.size();
+      lidars_.push_back(std::move(l));
+    }
+    for (const auto& s : in_.samples) {
+      if (s.topic == kFusedCloudTopic) clouds_.emplace(s.seq, &s);
+      else if (const auto it = lidar_of_.find(s.topic); it != lidar_of_.end()) lidars_[it->second].by_seq.emplace(s.seq, &s);
+    }
+  }
+
+  std::string scan_name(const Member& m) const {
+    std::string s = m.lidar->name + " seq " + std::to_string(m.scan->seq);
+    if (m.truth != nullptr)
+      s += " (scan " + std::to_string(m.truth->unit) + ", true acquisition " + ctx_.at_s(m.truth->acq) + " s, rotation " +
+           std::to_string(rotation(m.truth->acq) - rotation(in_.window_begin_ns)) + ")";
+    return s;
+  }
+
+  void judge_sweep(const FusedSet& set) {
+    sets_.insert(set.seq);
+    for (const auto& m : set.members)
+      if (const auto it = lidar_of_.find(m.topic); it != lidar_of_.end()) fused_in_[{it->second, m.seq}].push_back(set.seq);
+    if (!in_window(set.stamp)) return;
+    const std::string sweep = "sweep " + std::to_string(set.seq) + " (stamped at " + ctx_.at_s(set.stamp) + " s)";
+    const auto cit = clouds_.find(set.seq);
+    const SampleRecord* cloud = cit == clouds_.end() ? nullptr : cit->second;
+    if (cloud == nullptr) {
+      ++t_.unmatched;
+      fail(sweep + ": members published, no fused cloud stamped with its seq");
+    } else if (cloud->acquisition_ns != set.stamp) {
+      ++t_.unmatched;
+      fail(sweep + ": the fused cloud is stamped at " + ctx_.at_s(cloud->acquisition_ns) + " s, its members at " +
+           ctx_.at_s(set.stamp) + " s");
+      cloud = nullptr;
+    }
+    // The members: scans the LIDARs published (same topic, seq and stamp on /rig/stamps).
+    std::vector<Member> members;
+    std::set<std::string> topics;
+    std::uint32_t packets = 0, dropped = 0, missing = 0;
+    bool all_published = true;
+    for (const auto& m : set.members) {
+      const auto li = lidar_of_.find(m.topic);
+      const SampleRecord* s = nullptr;
+      if (li != lidar_of_.end())
+        if (const auto it = lidars_[li->second].by_seq.find(m.seq); it != lidars_[li->second].by_seq.end() && it->second->acquisition_ns == m.stamp)
+          s = it->second;
+      if (s == nullptr) {
+        ++t_.unmatched;
+        all_published = false;
+        fail(sweep + ": member " + m.topic + " seq " + std::to_string(m.seq) + " stamped at " + ctx_.at_s(m.stamp) +
+             " s was never published");
+        continue;
+      }
+      const Lidar& l = lidars_[li->second];
+      members.push_back({&l, s, nearest(l.units, s->acquisition_ns, l.tolerance)});
+      if (!topics.insert(m.topic).second) fail(sweep + " holds two scans of " + l.name);
+      packets += s->packets;
+      dropped += s->dropped;
+      missing += s->missing_packets;
+    }
+    // One rotation.
+    std::map<std::int64_t, const Member*> rotations;
+    const Member* earliest = nullptr;
+    for (const auto& m : members) {
+      if (m.truth == nullptr) continue;
+      rotations.emplace(rotation(m.truth->acq), &m);
+      if (earliest == nullptr || m.truth->acq < earliest->truth->acq) earliest = &m;
+    }
+    if (rotations.size() > 1) {
+      std::string what = sweep + " mixes rotations:";
+      for (const auto& [rot, m] : rotations) what += " " + scan_name(*m) + ";";
+      fail(what);
+    }
+    // Its stamp: the earliest member's (the fusion's rule), and so that scan's first firing (or up
+    // to its first packet that arrived).
+    if (!members.empty()) {
+      Nanos min_stamp = INT64_MAX;
+      for (const auto& m : members) min_stamp = std::min(min_stamp, m.scan->acquisition_ns);
+      if (min_stamp != set.stamp)
+        fail(sweep + ": stamped " + fmt(ms(set.stamp - min_stamp)) + " ms from its earliest member's stamp");
+    }
+    if (earliest != nullptr) {
+      const Nanos lo = earliest->truth->acq, hi = earliest->truth->first_intact;
+      const Nanos err = set.stamp < lo ? lo - set.stamp : set.stamp > hi ? set.stamp - hi : 0;
+      errors_.push_back(ms(err));
+      if (ms(err) > in_.bounds.lidar_stamp_ms && flagged(members, set.stamp)) {
+        ++t_.stamps_flagged;
+      } else if (ms(err) > in_.bounds.lidar_stamp_ms) {
+        ++t_.stamps_outside;
+        // A member's own stamp off its truth is the LIDAR's `stamps` violation, inherited: said so.
+        const Nanos own = earliest->scan->acquisition_ns - lo;
+        fail(sweep + ": stamp " + fmt(ms(set.stamp - lo)) + " ms from the true acquisition of its earliest member " +
+             scan_name(*earliest) + " (bound " + fmt(in_.bounds.lidar_stamp_ms) + " ms)" +
+             (ms(std::llabs(own)) > in_.bounds.lidar_stamp_ms ? "; inherited: that scan's own stamp is " + fmt(ms(own)) + " ms off" : ""));
+      }
+    }
+    if (cloud == nullptr || !all_published) return;
+    // Its stamps agree with its members: their packets, their drops, their missing packets plus
+    // each absent LIDAR's whole scan.
+    const bool says_complete = cloud->missing_packets == 0 && cloud->dropped == 0;
+    complete_[set.seq] = says_complete;
+    if (cloud->packets != packets || cloud->dropped != dropped || cloud->missing_packets < missing)
+      fail(sweep + ": its stamps say packets " + std::to_string(cloud->packets) + ", dropped " + std::to_string(cloud->dropped) +
+           ", missing " + std::to_string(cloud->missing_packets) + "; its members' scans " + std::to_string(packets) + ", " +
+           std::to_string(dropped) + ", " + std::to_string(missing));
+    if (says_complete && members.size() < lidars_.size()) {
+      std::string absent;
+      for (const auto& l : lidars_) {
+        if (topics.contains(l.topic)) continue;
+        absent += (absent.empty() ? "" : ", ") + l.name;
+        if (const SampleRecord* s = published_in(l, earliest); s != nullptr) absent += " (its scan seq " + std::to_string(s->seq) + " was published)";
+      }
+      t_.hidden_missing += lidars_.size() - members.size();
+      fail(sweep + " says complete (missing 0) with " + std::to_string(members.size()) + " of " + std::to_string(lidars_.size()) +
+           " LIDARs; absent: " + absent);
+    }
+    if (members.size() == lidars_.size() && cloud->missing_packets > missing) {
+      t_.phantom_missing += cloud->missing_packets - missing;
+      fail(sweep + " holds every LIDAR and counts " + std::to_string(cloud->missing_packets) + " packets missing; its scans miss " +
+           std::to_string(missing));
+    }
+  }
+
+  // The scan of LIDAR `l` published in the rotation of `ref` (nullptr: none, or no reference).
+  const SampleRecord* published_in(const Lidar& l, const Member* ref) const {
+    if (ref == nullptr || ref->truth == nullptr) return nullptr;
+    const auto want = rotation(ref->truth->acq);
+    for (const auto& [seq, s] : l.by_seq) {
+      const ScanTruth* u = nearest(l.units, s->acquisition_ns, l.tolerance);
+      if (u != nullptr && rotation(u->acq) == want) return s;
+    }
+    return nullptr;
+  }
+
+  bool flagged(const std::vector<Member>& members, Nanos t) const {
+    for (const auto& m : members) {
+      const auto it = in_.unsynchronized.find(m.lidar->topic);
+      if (it == in_.unsynchronized.end()) continue;
+      if (std::any_of(it->second.begin(), it->second.end(), [t](const auto& iv) { return t >= iv.first && t < iv.second; }))
+        return true;
+    }
+    return false;
+  }
+
+  // Every scan a fused LIDAR published in the window: in exactly one sweep, or counted dropped.
+  void account_scans() {
+    std::uint64_t not_fused = 0;
+    std::string first;
+    for (std::size_t li = 0; li < lidars_.size(); ++li)
+      for (const auto& [seq, s] : lidars_[li].by_seq) {
+        if (!in_window(s->acquisition_ns)) continue;
+        ++t_.sent;
+        const auto it = fused_in_.find({li, seq});
+        if (it == fused_in_.end()) {
+          ++not_fused;
+          if (first.empty()) first = lidars_[li].name + " seq " + std::to_string(seq) + " at " + ctx_.at_s(s->acquisition_ns) + " s";
+          continue;
+        }
+        if (it->second.size() > 1) {
+          ++t_.published_twice;
+          std::string sweeps;
+          for (const auto n : it->second) sweeps += (sweeps.empty() ? "" : " and ") + std::to_string(n);
+          ctx_.violation("fused", kFusedCloudTopic, lidars_[li].name + " seq " + std::to_string(seq) + " fused into sweeps " + sweeps);
+        }
+        const auto c = complete_.find(it->second.front());
+        ++(c != complete_.end() && c->second ? t_.published_complete : t_.published_incomplete);
+      }
+    t_.counted_lost = std::min(in_.fused.scans_dropped, not_fused);
+    t_.unaccounted = not_fused - t_.counted_lost;
+    if (t_.unaccounted > 0)
+      fail(std::to_string(t_.unaccounted) + " scans published by the LIDARs neither fused nor counted dropped by fusion (" +
+           std::to_string(in_.fused.scans_dropped) + " counted); first: " + first);
+  }
+
+  // Every fused cloud says its members.
+  void unpaired_clouds() {
+    for (const auto& [seq, s] : clouds_) {
+      if (!in_window(s->acquisition_ns) || sets_.contains(seq)) continue;
+      ++t_.unmatched;
+      fail("fused cloud seq " + std::to_string(seq) + " (stamped at " + ctx_.at_s(s->acquisition_ns) + " s) has no members on /rig/sets/fused");
+    }
+  }
+
+  // The monitor's record of the fused cloud holds one sample (received or lost) per sweep published.
+  void check_monitor() {
+    if (const auto m = in_.monitor.find(kFusedCloudTopic); m != in_.monitor.end()) {
+      t_.monitor_received = m->second.received;
+      t_.monitor_lost = m->second.lost;
+    }
+    if (clouds_.empty()) {
+      if (!in_.fused.sets.empty()) ctx_.violation("monitor_agrees", kFusedCloudTopic, "the monitor saw no fused cloud; " +
+                                                  std::to_string(in_.fused.sets.size()) + " sweeps were published");
+      return;
+    }
+    Nanos a = in_.window_begin_ns, b = in_.window_end_ns, first = INT64_MAX, last = INT64_MIN;
+    for (const auto& [seq, s] : clouds_) {
+      first = std::min(first, s->acquisition_ns);
+      last = std::max(last, s->acquisition_ns);
+    }
+    a = std::max(a, first);
+    b = std::min(b, last + 1);
+    std::uint64_t made = 0, seen = 0;
+    for (const auto& set : in_.fused.sets)
+      if (set.stamp >= a && set.stamp < b && !ctx_.doubled(set.stamp)) ++made;
+    for (const auto& [seq, s] : clouds_)
+      if (s->acquisition_ns >= a && s->acquisition_ns < b && !ctx_.doubled(s->acquisition_ns)) ++seen;
+    t_.monitor_expected = made;
+    if (seen != made)
+      ctx_.violation("monitor_agrees", kFusedCloudTopic, "monitor: " + std::to_string(seen) + " fused clouds received or lost; " +
+                                                             std::to_string(made) + " sweeps were published while it watched");
+  }
+
+  const Input& in_;
+  const JudgeContext& ctx_;
+  TopicResult& t_;
+  const Nanos period_;
+  Nanos boundary_ = 0;
+  std::vector<Lidar> lidars_;
+  std::map<std::string, std::size_t> lidar_of_;
+  std::map<std::uint64_t, const SampleRecord*> clouds_;                          // fused clouds by seq
+  std::set<std::uint64_t> sets_;                                                 // seqs of the members sets
+  std::map<std::pair<std::size_t, std::uint64_t>, std::vector<std::uint64_t>> fused_in_;  // (lidar, seq) -> sweeps
+  std::map<std::uint64_t, bool> complete_;                                       // sweep -> its stamps say complete
+  std::vector<double> errors_;
+};
+
+}  // namespace
+
+void check_fused(const Input& in, const JudgeContext& ctx, Result& r) { FusedJudge(in, ctx, r).run(); }
+
+}  // namespace sensor_rig::rig::chaos

@@ -1,0 +1,22 @@
+#pragma once
+// The judge's part for the fused cloud (/sensors/lidar/fused/points): its sweeps' members
+// (/rig/sets/fused) held against the LIDAR mocks' truth records and the LIDARs' published scans
+// (docs/faults.md "The fused cloud"). Called by check() when Input::fused.enabled.
+#include <functional>
+#include <string>
+
+#include "chaos_check.hpp"
+
+namespace sensor_rig::rig::chaos {
+
+struct JudgeContext {
+  std::function<bool(Nanos)> doubled;        // vehicle time that happened twice (a clock step): not judged
+  std::function<std::string(Nanos)> at_s;    // a vehicle time as seconds into the plan
+  std::function<void(const std::string& invariant, const std::string& topic, const std::string& what)> violation;
+};
+
+// Fills r.topics[kFusedCloudTopic] (sent = the fused LIDARs' scans published in the window) and
+// reports broken invariants (`fused`, `monitor_agrees`) through ctx.violation.
+void check_fused(const Input& in, const JudgeContext& ctx, Result& r);
+
+}  // namespace sensor_rig::rig::chaos

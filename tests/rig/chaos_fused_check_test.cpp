@@ -1,0 +1,206 @@
+// The judge of the fused cloud (issue 26 item 8): three phase-locked LIDARs' truth (30 rotations,
+// 100 ms, scans starting 0, 2 and 5 ms into a rotation), the scans they published, and the fused
+// sweeps with their members (/rig/sets/fused). Each planted lie is caught under `fused`, and its
+// honest twin holds.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "chaos_check.hpp"
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+constexpr Nanos kT0 = 1'800'000'000'000'000'000;
+constexpr Nanos kPeriod = 100'000'000;
+constexpr int kRotations = 30;
+constexpr std::uint32_t kParts = 4;
+constexpr Nanos kPhase[3] = {0, 2'000'000, 5'000'000};
+const std::string kNames[3] = {"front", "left", "right"};
+
+std::string topic_of(std::size_t i) { return "/sensors/lidar/" + kNames[i] + "/points"; }
+Nanos acq(std::size_t lidar, int rotation) { return kT0 + rotation * kPeriod + kPhase[lidar]; }
+// Each LIDAR's own seq on /rig/stamps: distinct per LIDAR, so that a member naming the wrong topic is told.
+std::uint64_t seq_of(std::size_t lidar, int rotation) { return 1000 * lidar + static_cast<std::uint64_t>(rotation); }
+
+truth::Log lidar_truth(std::size_t i) {
+  truth::Log log;
+  log.header = truth::Header{kNames[i], "lidar", "VLP-32C", topic_of(i), "scan", "sensor"};
+  std::uint64_t seq = 0;
+  for (int u = 0; u < kRotations; ++u) {
+    log.units.push_back(truth::UnitRecord{u, acq(i, u), acq(i, u), kParts});
+    for (std::uint32_t p = 0; p < kParts; ++p) {
+      const Nanos t = acq(i, u) + p * (kPeriod / kParts);
+      log.parts.push_back(truth::PartRecord{seq++, u, t, 0, t, truth::Fate::kSent, 0});
+    }
+  }
+  return log;
+}
+
+FusedMember member(std::size_t lidar, int rotation) { return {topic_of(lidar), acq(lidar, rotation), seq_of(lidar, rotation)}; }
+
+SampleRecord cloud(std::uint64_t seq, Nanos stamp, std::uint32_t packets, std::uint32_t missing) {
+  SampleRecord s;
+  s.topic = kFusedCloudTopic;
+  s.seq = seq;
+  s.acquisition_ns = stamp;
+  s.publish_ns = stamp + kPeriod + 5'000'000;
+  s.received_ns = s.publish_ns + 1'000'000;
+  s.packets = packets;
+  s.missing_packets = missing;
+  return s;
+}
+
+// An honest rig: every scan published, one sweep per rotation holding its three scans, stamped at
+// the earliest (the front's), its stamps the sum of its scans'.
+Input honest() {
+  Input in;
+  for (std::size_t i = 0; i < 3; ++i) {
+    in.truths.push_back(lidar_truth(i));
+    for (int u = 0; u < kRotations; ++u) {
+      SampleRecord s;
+      s.topic = topic_of(i);
+      s.seq = seq_of(i, u);
+      s.acquisition_ns = acq(i, u);
+      s.publish_ns = s.acquisition_ns + kPeriod + 5'000'000;
+      s.received_ns = s.publish_ns + 1'000'000;
+      s.packets = kParts;
+      in.samples.push_back(s);
+    }
+    in.monitor[topic_of(i)] = MonitorTotals{kRotations, 0};
+    in.expected[topic_of(i)] = TopicExpectation{kNames[i], 10.0, {}};
+  }
+  in.fused.enabled = true;
+  in.fused.period_ns = kPeriod;
+  for (std::size_t i = 0; i < 3; ++i) in.fused.lidar_topics.push_back(topic_of(i));
+  for (int u = 0; u < kRotations; ++u) {
+    in.fused.sets.push_back(FusedSet{static_cast<std::uint64_t>(u), acq(0, u), {member(0, u), member(1, u), member(2, u)}});
+    in.samples.push_back(cloud(static_cast<std::uint64_t>(u), acq(0, u), 3 * kParts, 0));
+  }
+  in.monitor[kFusedCloudTopic] = MonitorTotals{kRotations, 0};
+  in.expected[kFusedCloudTopic] = TopicExpectation{"fusion", 10.0, {"front", "left", "right"}};
+  in.epoch_vehicle_ns = kT0;
+  in.window_begin_ns = kT0;
+  in.window_end_ns = kT0 + kRotations * kPeriod;
+  return in;
+}
+
+SampleRecord& cloud_of(Input& in, std::uint64_t seq) {
+  for (auto& s : in.samples)
+    if (s.topic == kFusedCloudTopic && s.seq == seq) return s;
+  throw std::logic_error("no fused cloud " + std::to_string(seq));
+}
+
+bool example_says(const Result& r, const std::string& text) {
+  for (const auto& e : r.examples)
+    if (e.invariant == "fused" && e.topic == kFusedCloudTopic && e.what.find(text) != std::string::npos) return true;
+  return false;
+}
+
+TEST(ChaosFusedCheck, AnHonestFusedCloudHoldsEveryInvariant) {
+  const Result r = check(honest());
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  const TopicResult& t = r.topics.at(kFusedCloudTopic);
+  EXPECT_EQ(t.sent, 90u);  // the LIDARs' scans, each in one sweep
+  EXPECT_EQ(t.published_complete, 90u);
+  EXPECT_EQ(t.unaccounted, 0u);
+  EXPECT_EQ(t.monitor_expected, 30u);
+  EXPECT_DOUBLE_EQ(t.stamp_error_max_ms, 0.0);
+  // Reported as a topic with the same keys as the others.
+  const auto j = nlohmann::json::parse(result_json(r));
+  EXPECT_EQ(j["topics"][kFusedCloudTopic].size(), j["topics"]["/sensors/lidar/front/points"].size());
+  EXPECT_EQ(j["invariants"]["fused"], "held");
+}
+
+// After one late scan: the right LIDAR's rotation 11 fused with the others' 10, rotation 11 without it.
+TEST(ChaosFusedCheck, ASweepMixingRotationsIsCaught) {
+  Input in = honest();
+  in.fused.sets[10].members[2] = member(2, 11);
+  in.fused.sets[11].members.pop_back();
+  cloud_of(in, 11).packets = 2 * kParts;
+  cloud_of(in, 11).missing_packets = kParts;
+  cloud_of(in, 10).packets = 3 * kParts;
+  const Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "sweep 10 (stamped at 1.000 s) mixes rotations")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).unaccounted, 1u) << "the right LIDAR's rotation 10: in no sweep, not counted";
+  // Its honest twin: rotation 10's right scan in sweep 10, rotation 11 without it, that scan dropped and counted.
+  in = honest();
+  in.fused.sets[11].members.pop_back();
+  cloud_of(in, 11).packets = 2 * kParts;
+  cloud_of(in, 11).missing_packets = kParts;
+  in.fused.scans_dropped = 1;
+  const Result held = check(in);
+  EXPECT_TRUE(held.all_held()) << result_text(held);
+  EXPECT_EQ(held.topics.at(kFusedCloudTopic).counted_lost, 1u);
+  EXPECT_EQ(held.topics.at(kFusedCloudTopic).published_incomplete, 2u);
+}
+
+TEST(ChaosFusedCheck, AScanFusedTwiceIsCaught) {
+  Input in = honest();
+  // Sweep 12 published twice (a second set and cloud, seq 30, the same scans).
+  in.fused.sets.push_back(FusedSet{30, acq(0, 12), in.fused.sets[12].members});
+  in.samples.push_back(cloud(30, acq(0, 12), 3 * kParts, 0));
+  in.monitor[kFusedCloudTopic] = MonitorTotals{kRotations + 1, 0};
+  const Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).published_twice, 3u);
+  EXPECT_TRUE(example_says(r, "front seq 12 fused into sweeps 12 and 30")) << result_text(r);
+  EXPECT_TRUE(check(honest()).invariants.at("fused"));
+}
+
+TEST(ChaosFusedCheck, ASweepSayingCompleteWithoutALiveLidarsScanIsCaught) {
+  Input in = honest();
+  in.fused.sets[15].members.erase(in.fused.sets[15].members.begin() + 1);  // the left scan absent
+  cloud_of(in, 15).packets = 2 * kParts;
+  in.fused.scans_dropped = 1;  // and counted dropped: only the sweep's stamps lie
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "sweep 15 (stamped at 1.500 s) says complete (missing 0) with 2 of 3 LIDARs; absent: left (its scan seq 1015 was published)"))
+      << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).hidden_missing, 1u);
+  // Its honest twin: the stamps count the left LIDAR's whole scan missing.
+  cloud_of(in, 15).missing_packets = kParts;
+  r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+}
+
+TEST(ChaosFusedCheck, AFusedScanThatWasNeverPublishedIsCaught) {
+  Input in = honest();
+  in.fused.sets[20].members[0].seq = 777;  // no front scan has this seq
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "member /sensors/lidar/front/points seq 777 stamped at 2.000 s was never published")) << result_text(r);
+  EXPECT_GE(r.topics.at(kFusedCloudTopic).unmatched, 1u);
+  // A member with a published seq but another stamp is not that scan either.
+  in = honest();
+  in.fused.sets[20].members[0].stamp += 1'000'000;
+  EXPECT_FALSE(check(in).invariants.at("fused"));
+  EXPECT_TRUE(check(honest()).invariants.at("fused"));
+}
+
+TEST(ChaosFusedCheck, AFusedStampOffTheEarliestScanOrACloudWithoutMembersIsCaught) {
+  Input in = honest();
+  in.fused.sets[5].stamp += 200'000;  // 0.2 ms after the front's first firing
+  cloud_of(in, 5).acquisition_ns += 200'000;
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "stamp 0.200 ms from the true acquisition of its earliest member front seq 5")) << result_text(r);
+  in = honest();
+  in.fused.sets.erase(in.fused.sets.begin() + 7);
+  in.fused.scans_dropped = 0;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "fused cloud seq 7 (stamped at 0.700 s) has no members")) << result_text(r);
+}
+
+TEST(ChaosFusedCheck, NotJudgedWithoutFusion) {
+  Input in = honest();
+  in.fused = FusedInput{};
+  const Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_FALSE(r.topics.contains(kFusedCloudTopic));
+}
+
+}  // namespace
+}  // namespace sensor_rig::rig::chaos
