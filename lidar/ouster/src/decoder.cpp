@@ -133,6 +133,16 @@ struct DecoderImpl {
   ScanAssembler scans;  // current().from_cut: the scan began at the frame's first packet
   bool have_stamp = false;
   Nanos prev_stamp = 0;
+  // The caller's mapping of sensor time may move while the sensor's clock goes on (a host
+  // CLOCK_REALTIME step: the mapping follows the host, a PTP-synced sensor does not). The stamp
+  // jumps, the column times do not: that is no time jump (it cost the scan in progress and a dropped
+  // packet), and the scan goes on on the line it began on: vehicle minus sensor time at its first
+  // packet (scan_offset). A time jump is both clocks jumping (a sensor clock step, a corrupt column
+  // time the stamper mapped); the sensor's alone is a replay's loop under host stamps, as before.
+  Nanos scan_offset = 0;
+  bool have_offset = false;
+  Nanos prev_own = 0;      // the previous packet on its scan's line
+  bool mapping_moved = false;  // this scan's later packets are on its line, not the caller's stamps
   bool have_fid = false;
   std::uint32_t prev_fid = 0;
   bool have_base = false;
@@ -244,6 +254,8 @@ struct DecoderImpl {
   void restart() noexcept {
     have_fid = false;
     have_stamp = false;
+    have_offset = false;
+    mapping_moved = false;
     have_base = false;
     hole.open = 0;
     time_judge.reset();
@@ -336,6 +348,10 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       damaged = true;
   }
 
+  // The packet on the current scan's line (unsigned: a corrupt column time wraps, as the ids' do).
+  // A packet without column times (0) has only the caller's stamp.
+  const bool on_line = have_offset && first_ts != 0;
+  const Nanos own = on_line ? static_cast<Nanos>(first_ts + static_cast<std::uint64_t>(scan_offset)) : stamp;
   std::optional<Scan> out;
   const std::uint32_t fid = frame_id_at(p, layout);
   // Order and duplicates are judged before the time (issue 26 item 1): a late packet is placed in
@@ -367,7 +383,13 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     }
   }
   if (n_valid > 0 && !late) {
-    const bool jumped = have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    const bool stamp_jumped = have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    const bool sensor_jumped = !on_line || is_time_jump(prev_own, own, cfg.max_packet_gap_ns);
+    const bool jumped = stamp_jumped && sensor_jumped;
+    if (stamp_jumped && !sensor_jumped) {
+      mapping_moved = true;
+      ++stats.mapping_steps;
+    }
     bool continues = false;
     if (have_base && have_fid) {
       const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
@@ -388,6 +410,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         break;
     }
     prev_stamp = stamp;
+    prev_own = own;
     have_stamp = true;
   }
   bool new_frame = have_fid && fid != prev_fid && !late;
@@ -442,7 +465,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   if (late) {
     --hole.open;
     scans.fill_missing();
-    cur.rebase(stamp);
+    cur.rebase(mapping_moved ? own : stamp);
   }
   if (missing_before > 0) scans.add_missing(missing_before);
   if (new_frame && cur.scan.packets > 0) out = end(cur.from_cut);
@@ -467,14 +490,20 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   if (!cur.started) {
     cur.scan.stamp = stamp;
     cur.started = true;
+    // A new scan takes the mapping as it is now.
+    scan_offset = static_cast<Nanos>(static_cast<std::uint64_t>(stamp) - first_ts);
+    have_offset = true;
+    mapping_moved = false;
+    if (!late) prev_own = stamp;
   }
+  const Nanos at = mapping_moved && on_line ? own : stamp;
   // Saturating: a corrupt timestamp (fuzz_ouster's find) made these sums overflow int64 (UB).
   const auto saturate = [](bool overflowed, Nanos v, Nanos sign) {
     return overflowed ? (sign >= 0 ? std::numeric_limits<Nanos>::max() : std::numeric_limits<Nanos>::min()) : v;
   };
   Nanos t_packet = 0;
-  const bool packet_overflow = __builtin_sub_overflow(stamp, cur.scan.stamp, &t_packet);
-  t_packet = saturate(packet_overflow, t_packet, stamp);
+  const bool packet_overflow = __builtin_sub_overflow(at, cur.scan.stamp, &t_packet);
+  t_packet = saturate(packet_overflow, t_packet, at);
   for (std::size_t c = 0; c < layout.columns_per_packet; ++c) {
     if (col_ok[c] == 0) continue;
     const auto dt = static_cast<Nanos>(cols[c].timestamp_ns - first_ts);  // wraps for a column before the first

@@ -40,13 +40,14 @@ std::uint64_t column_time(std::uint64_t frame, std::size_t mid) {
   return kT0 + static_cast<std::uint64_t>(std::llround((static_cast<double>(frame) * 1024.0 + static_cast<double>(mid)) * kPeriod));
 }
 
-// Packet k (0..63) of frame `frame` (frame id = frame).
-std::vector<std::uint8_t> frame_packet(Profile prof, std::uint32_t frame, std::size_t k, std::size_t pixels = kPixels) {
+// Packet k (0..63) of frame `frame` (frame id = frame); `clock_ns`: the sensor's clock moved by that.
+std::vector<std::uint8_t> frame_packet(Profile prof, std::uint32_t frame, std::size_t k, std::size_t pixels = kPixels,
+                                       std::int64_t clock_ns = 0) {
   std::vector<Column> cols(16);
   for (std::size_t c = 0; c < 16; ++c) {
     const std::size_t mid = k * 16 + c;
     cols[c].measurement_id = static_cast<std::uint16_t>(mid);
-    cols[c].timestamp_ns = column_time(frame, mid);
+    cols[c].timestamp_ns = column_time(frame, mid) + static_cast<std::uint64_t>(clock_ns);
     for (std::size_t r = 0; r < pixels; ++r) cols[c].pixels.push_back(pixel_at(mid, r));
   }
   return encode_packet(prof, pixels, frame, cols, 7654321);
@@ -366,17 +367,54 @@ TEST(OusterDecoder, TimeJumpEndsScanAsPartial) {
   const Profile prof = Profile::kLegacy;
   Decoder dec(config_for(prof));
   (void)push_frame(dec, prof, 1, 0, 30);
-  // Same frame id, but the clock jumped back 10 s and stays there: the scan in progress is partial.
-  // The first packet of the step is judged alone (its ids continue: a corrupt time, dropped); the
-  // second confirms the step (issue 26 item 2).
-  const auto pkt = frame_packet(prof, 1, 30);
-  EXPECT_FALSE(dec.push(PacketView{as_bytes(pkt), 0, 7502}, static_cast<Nanos>(column_time(1, 480)) - 10'000'000'000));
+  // Same frame id, but the sensor's clock jumped back 10 s and stays there (its column times, and
+  // the stamps mapped from them): the scan in progress is partial. The first packet of the step is
+  // judged alone (its ids continue: a corrupt time, dropped); the second confirms the step (issue 26
+  // item 2).
+  constexpr std::int64_t kBack = -10'000'000'000;
+  const auto pkt = frame_packet(prof, 1, 30, kPixels, kBack);
+  EXPECT_FALSE(dec.push(PacketView{as_bytes(pkt), 0, 7502}, static_cast<Nanos>(column_time(1, 480)) + kBack));
   EXPECT_EQ(dec.stats().time_jumps, 0U);
   EXPECT_EQ(dec.stats().by_status[static_cast<std::size_t>(PacketStatus::kBadTime)], 1U);
-  const auto pkt2 = frame_packet(prof, 1, 31);
-  EXPECT_FALSE(dec.push(PacketView{as_bytes(pkt2), 0, 7502}, static_cast<Nanos>(column_time(1, 496)) - 10'000'000'000));
+  const auto pkt2 = frame_packet(prof, 1, 31, kPixels, kBack);
+  EXPECT_FALSE(dec.push(PacketView{as_bytes(pkt2), 0, 7502}, static_cast<Nanos>(column_time(1, 496)) + kBack));
   EXPECT_EQ(dec.stats().time_jumps, 1U);
   EXPECT_EQ(dec.stats().partial_scans_discarded, 1U);
+}
+
+// A host CLOCK_REALTIME step back of 500 ms in the middle of a frame (issue 26, the LIDAR campaign's
+// OS-LEGACY: the scan across the step was discarded and counted lost, a packet dropped for its
+// time): the driver's mapping follows the host, so the stamps step, but the PTP-synced sensor's
+// column times go on. The frame is whole and published on the line it began on (stamp, and every
+// point's t, from the column times); the next frame takes the moved mapping.
+TEST(OusterDecoder, AHostClockStepMovesTheStampsNotTheSensorsFrame) {
+  const Profile prof = Profile::kLegacy;
+  Decoder dec(config_for(prof));
+  (void)push_frame(dec, prof, 4);  // frame 4: locked on
+  constexpr Nanos kStep = -500'000'000;
+  std::vector<Scan> out;
+  for (std::size_t k = 0; k < 64; ++k) {
+    const auto pkt = frame_packet(prof, 5, k);
+    const Nanos stamp = static_cast<Nanos>(column_time(5, k * 16)) + (k >= 23 ? kStep : 0);
+    if (auto s = dec.push(PacketView{as_bytes(pkt), 0, 7502}, stamp)) out.push_back(std::move(*s));
+  }
+  const auto next = push_frame(dec, prof, 6);  // stamps still the frame's column times: see below
+  EXPECT_EQ(dec.stats().time_jumps, 0U);
+  EXPECT_EQ(dec.stats().by_status[static_cast<std::size_t>(PacketStatus::kBadTime)], 0U);
+  EXPECT_EQ(dec.stats().mapping_steps, 1U);
+  ASSERT_EQ(out.size(), 1U) << "frame 5 published, whole";
+  EXPECT_EQ(out[0].packets, 64U);
+  EXPECT_EQ(out[0].missing_packets, 0U);
+  EXPECT_EQ(out[0].dropped, 0U);
+  EXPECT_EQ(out[0].stamp, static_cast<Nanos>(column_time(5, 0)));
+  std::uint32_t max_t = 0;
+  for (const auto& p : out[0].points) max_t = std::max(max_t, p.t);
+  EXPECT_EQ(max_t, static_cast<std::uint32_t>(column_time(5, 1023) - column_time(5, 0))) << "t on the column times";
+  // push_frame stamps frame 6 with its column times: the mapping moved back (+500 ms) between two
+  // frames, so frame 6 takes it at its first packet and is whole too.
+  ASSERT_EQ(next.size(), 1U);
+  EXPECT_EQ(next[0].stamp, static_cast<Nanos>(column_time(6, 0)));
+  EXPECT_EQ(next[0].packets, 64U);
 }
 
 TEST(OusterDecoder, ScanDecoderInterface) {

@@ -10,6 +10,10 @@
 // column in packet order. point.t = (column timestamp - the packet's first valid column
 // timestamp) + (stamp - Scan::stamp). A scan is one frame (frame id); it is emitted with the
 // packet holding the last column of the column window, or when the frame id changes.
+// A time jump is the stamps and the column times jumping together: stamps that jump while the
+// column times go on are a mapping that moved (a host clock step), and the scan in progress keeps
+// the line it began on (its later packets' stamp = their column time + its first packet's offset;
+// DecoderStats::mapping_steps); the next scan takes the mapping as it is.
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -50,6 +54,9 @@ struct DecoderStats : ScanStats {
   std::uint64_t invalid_columns = 0;         // status bit 0 clear: skipped
   std::uint64_t bad_measurement_ids = 0;     // measurement id >= columns_per_frame: skipped
   std::uint64_t init_id_mismatches = 0;      // packets whose init_id differs from the metadata's (decoded)
+  // The caller's stamps jumped while the column times went on (its mapping moved: a host clock
+  // step): not a time jump; the scan in progress stays on the line it began on.
+  std::uint64_t mapping_steps = 0;
 };
 
 struct DecoderImpl;
