@@ -19,6 +19,9 @@ constexpr std::size_t kMaxPending = 8;
 // and a device clock stepped back is as likely (the mapped stamp would be the step off).
 constexpr std::size_t kStepSamples = 3;
 
+// A step of a PTP camera's raw ticks beyond this is no servo correction (the mapper's jump threshold).
+constexpr Nanos kPtpStepNs = 10'000'000;
+
 // The mapper's line disagrees with the recent arrivals: a device clock step it has not confirmed.
 bool unconfirmed_step(const timesync::ClockMapper::Deviation& d) noexcept {
   return d.samples > 0 && (d.shift_ns < 0 || d.samples >= kStepSamples);
@@ -112,13 +115,16 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
       // PTP time: kept only where it agrees with the arrival; the mapper follows the raw ticks all
       // along, so a PTP stamp found wrong (or a PTP drop) falls back to a fresh line.
       const Nanos raw = m.device_ticks_ns != 0 ? m.device_ticks_ns : m.device_ns;
-      // A PTP stamp within the window is taken even while the raw ticks show a step: stepping the
-      // clock is how the servo corrects it (a cold start's Uncalibrated -> Slave), and the host
-      // follows the same grandmaster; the mapped line is what is distrusted then.
+      // A small step of the raw ticks is the servo correcting the clock (a cold start's
+      // Uncalibrated -> Slave, ~ms): the PTP stamp is taken. A step beyond the mapper's jump
+      // threshold while PTP says locked is a clock that lost its master before the status poll
+      // (up to a second) says so: refused until the mapper confirms it.
       observe(m, raw);
-      if (plausible(m.device_ns)) return {m.device_ns, StampSource::kVehicle, m.device_ns};
-      const bool ticks_stepped = unconfirmed_step(mapper_.deviation());
-      reject(m.device_ns, false);
+      const auto deviation = mapper_.deviation();
+      const bool ticks_stepped = unconfirmed_step(deviation);
+      const bool ptp_stepped = ticks_stepped && (deviation.shift_ns > kPtpStepNs || deviation.shift_ns < -kPtpStepNs);
+      if (plausible(m.device_ns) && !ptp_stepped) return {m.device_ns, StampSource::kVehicle, m.device_ns};
+      reject(m.device_ns, ptp_stepped);
       const auto r = mapper_.map(raw);
       if (r.valid && r.state == timesync::SyncState::kLocked && plausible(r.vehicle_ns) && !ticks_stepped)
         return {r.vehicle_ns, StampSource::kDeviceMapped, r.vehicle_ns, false, true};

@@ -345,6 +345,40 @@ TEST(FrameClock, DeviceClockStepsAreNeverPublishedWrongUnflagged) {
   }
 }
 
+// A PTP Slave whose clock steps (the fakes' camera.ptp state=Listening step_ms=...: it lost its
+// master, and the rig's status poll says so up to a second later): the PTP stamps, still taken as
+// locked, are refused once the raw ticks show the step; a step of a few ms (a servo correction)
+// is not refused.
+TEST(FrameClock, APtpClockThatStepsBeforeTheStatusSaysSoIsNotPublished) {
+  for (const Nanos step : std::vector<Nanos>{-300'000'000, 300'000'000, -40'000'000, 40'000'000}) {
+    const std::string what = "PTP clock step " + std::to_string(step / 1'000'000) + " ms";
+    SCOPED_TRACE(what);
+    const StepRun r = run_frames(500, [&](int i, Nanos start, camera::FrameMeta& m) {
+      const Nanos ticks = start + kTaiNs + (i >= 300 ? step : 0);
+      if (i < 310) {  // the poll still says Slave for a second after the step
+        m.domain = camera::TimeDomain::kVehicle;
+        m.device_ticks_ns = ticks;
+        m.device_ns = ticks - kTaiNs;
+      } else {
+        m.domain = camera::TimeDomain::kDeviceTicks;
+        m.device_ns = ticks;
+      }
+    });
+    print(what.c_str(), r);
+    EXPECT_EQ(r.outside_window, 0);
+    EXPECT_EQ(r.wrong_unflagged, 0);
+    EXPECT_LE(r.wrong_published, 2);
+    EXPECT_EQ(r.right_at_end, 50);
+  }
+  const StepRun servo = run_frames(500, [&](int i, Nanos start, camera::FrameMeta& m) {
+    m.domain = camera::TimeDomain::kVehicle;
+    m.device_ticks_ns = start + kTaiNs + (i < 300 ? 4'000'000 : 0);  // Uncalibrated's 4 ms corrected
+    m.device_ns = start;
+  });
+  print("PTP servo step 4 ms", servo);
+  EXPECT_EQ(servo.replaced, 0);
+}
+
 // The fakes' camera.ptp state=cold_start (camera_chaos.cpp ptp_at): after 60 s as a PTP Slave the
 // camera restarts: Listening with its clock counting from power-on (decades back, device ticks
 // mapped), Uncalibrated stepped to TAI + 5 ms, then Slave at TAI (PTP stamps again).
