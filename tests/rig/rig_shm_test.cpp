@@ -8,15 +8,19 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "dds_domain_lease.hpp"
 #include "rig_process.hpp"
 #include "sensor_rig/common/child_process.hpp"
+#include "sensor_rig/dds/cdr_view.hpp"
 #include "sensor_rig/dds/roudi.hpp"
 #include "sensor_rig/dds/shared_memory.hpp"
 #include "sensor_rig/dds/types.hpp"
+#include "sensor_rig/record/mcap_reader.hpp"
 #include "wait_bounds.hpp"
 
 namespace sensor_rig {
@@ -170,6 +174,82 @@ TEST_F(ShmRig, LocalSubscriberGetsCloudsThroughSharedMemoryRemoteOneOverUdp) {
   EXPECT_FALSE(process_exists(roudi));
   EXPECT_FALSE(std::filesystem::exists("/dev/shm/iceoryx_mgmt"));
   EXPECT_FALSE(std::filesystem::exists("/tmp/roudi"));
+}
+
+// Each cloud of a recording, by its header stamp: FNV-1a of the point data, and whether it was whole
+// (width x height x point_step bytes). Malformed messages count under stamp 0.
+struct RecordedClouds {
+  std::map<std::int64_t, std::uint32_t> fnv;
+  std::uint64_t messages = 0, whole = 0;
+};
+RecordedClouds read_clouds(const std::string& file) {
+  RecordedClouds out;
+  record::McapReader r(file);
+  dds::PointCloud2View v;
+  r.for_each_message([&](const record::McapMessage& m) {
+    ++out.messages;
+    const auto body = dds::cdr_body(m.data);
+    if (!body || dds::parse_cdr(*body, v) != dds::CdrStatus::kOk) return true;
+    const std::int64_t stamp = std::int64_t{v.header.sec} * 1'000'000'000 + v.header.nanosec;
+    std::uint32_t h = 0x811c9dc5u;
+    for (const std::byte b : v.data) h = (h ^ static_cast<std::uint8_t>(b)) * 0x01000193u;
+    out.fnv[stamp] = h;
+    if (v.data.size() == std::size_t{v.width} * v.height * v.point_step && v.width > 1000) ++out.whole;
+    return true;
+  });
+  return out;
+}
+
+// `rig record --transport shm` beside `rig record --transport udp`, both on the shared-memory rig:
+// the same clouds, byte for byte (the shm recorder writes the CDR it takes from the iceoryx chunk,
+// the udp one what came over the wire), every one whole, none dropped, and each recorder's count
+// what it says it wrote.
+TEST_F(ShmRig, RecordingOverSharedMemoryKeepsEveryCloudByteForByte) {
+  const auto cfg = dir_.write("rig.yaml", rig_yaml("shm", test::free_udp_port()));
+  ChildProcess rig({rig_bin(), "up", cfg, "--duration", "25"}, logged("rig.log"));
+  ASSERT_NE(roudi_of(rig.pid(), 8000), 0) << "rig up started no RouDi:\n" << read_all(dir_.path / "rig.log");
+  const auto recorder = [&](const std::string& transport) {
+    ChildOptions o = logged("record_" + transport + ".log");
+    o.pipe_stdio = true;
+    return std::make_unique<ChildProcess>(
+        std::vector<std::string>{rig_bin(), "record", "/sensors/lidar/front/points", "--out",
+                                 (dir_.path / (transport + ".mcap")).string(), "--duration", "4", "--compression", "none",
+                                 "--domain", std::to_string(kDomain), "--dds-profile", profile(), "--transport", transport},
+        o);
+  };
+  auto shm = recorder("shm");
+  auto udp = recorder("udp");
+  std::map<std::string, nlohmann::json> summary;
+  for (auto& [name, child] : {std::pair{std::string("shm"), shm.get()}, std::pair{std::string("udp"), udp.get()}}) {
+    ASSERT_TRUE(child->wait_exit(test::kDiscoveryMs + 15000)) << name << ": " << read_all(dir_.path / ("record_" + name + ".log"));
+    EXPECT_EQ(child->exit_status(), 0) << name << ": " << read_all(dir_.path / ("record_" + name + ".log"));
+    for (const auto& line : child->read_lines()) {
+      const auto j = nlohmann::json::parse(line, nullptr, false);
+      if (j.is_object() && j.contains("topics")) summary[name] = j;
+    }
+    ASSERT_TRUE(summary.contains(name)) << name << ": no summary\n" << read_all(dir_.path / ("record_" + name + ".log"));
+  }
+  const auto shm_clouds = read_clouds((dir_.path / "shm.mcap").string());
+  const auto udp_clouds = read_clouds((dir_.path / "udp.mcap").string());
+  for (const auto& [name, c] : {std::pair{std::string("shm"), &shm_clouds}, std::pair{std::string("udp"), &udp_clouds}}) {
+    const auto& t = summary[name]["topics"]["/sensors/lidar/front/points"];
+    EXPECT_GE(c->messages, 20u) << name << ": 10 Hz for up to 4 s";
+    EXPECT_EQ(c->whole, c->messages) << name << ": every cloud whole";
+    EXPECT_EQ(t.value("written", 0u), c->messages) << name << ": " << summary[name].dump();
+    EXPECT_EQ(summary[name]["drops"].value("dds_lost", 1u) + summary[name]["drops"].value("queue_full", 1u), 0u) << summary[name].dump();
+  }
+  std::size_t both = 0, equal = 0;
+  for (const auto& [stamp, h] : shm_clouds.fnv) {
+    const auto it = udp_clouds.fnv.find(stamp);
+    if (it == udp_clouds.fnv.end()) continue;
+    ++both;
+    if (it->second == h) ++equal;
+  }
+  std::printf("recorded over shm %llu clouds, over udp %llu, %zu in both, %zu equal\n",
+              static_cast<unsigned long long>(shm_clouds.messages), static_cast<unsigned long long>(udp_clouds.messages), both, equal);
+  EXPECT_GE(both, 15u) << "the two recordings overlap for most of their 4 s";
+  EXPECT_EQ(equal, both) << "a cloud recorded over shared memory differs from the same cloud over UDP";
+  EXPECT_EQ(rig.stop(10000), 0) << read_all(dir_.path / "rig.log");
 }
 
 TEST_F(ShmRig, RoudiKilledMidRunIsReportedAndTheNextRunStartsClean) {
