@@ -76,6 +76,11 @@ void FrameClock::observe(const camera::FrameMeta& m, Nanos device) noexcept {
     return;
   }
   exposure_ns_ = m.exposure_ns;
+  if (m.exposure_seq == m.seq) {  // the frame's own exposure (its chunk data): observed at once
+    mapper_.observe(device, m.first_rx_ns - m.exposure_ns);
+    pending_.clear();
+    return;
+  }
   // The frame whose exposure just came is observed with it (those before it never got theirs).
   const auto it = std::find_if(pending_.begin(), pending_.end(), [&](const Pending& p) { return p.seq == m.exposure_seq; });
   if (it != pending_.end()) {

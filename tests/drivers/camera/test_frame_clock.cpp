@@ -474,5 +474,36 @@ TEST(FrameClock, AnExposureThatChangesEveryFrameIsFollowed) {
   EXPECT_LT(worst, 1e6);
 }
 
+// Issue 27 items 3 and 9: a camera in chunk mode tells each frame's exposure in the frame itself
+// (ChunkExposureTime: exposure_seq = seq). The mapping must be fed with it at once; it was looked
+// for among the frames before (never found), so the mapper starved and the stamps fell back to
+// the arrival less the exposure, off by the delivery jitter (up to 3 ms here).
+TEST(FrameClock, AFramesOwnExposureFromItsChunkIsFollowed) {
+  const Nanos t0 = 1'800'000'000'000'000'000;
+  FrameClock clock(10'000'000);
+  std::mt19937 rng(12);
+  std::uniform_int_distribution<Nanos> exposure(5'000'000, 15'000'000);
+  std::uniform_int_distribution<Nanos> jitter(100'000, 3'000'000);
+  double worst = 0;
+  for (int i = 1; i <= 200; ++i) {
+    const Nanos start = t0 + static_cast<Nanos>(i) * 100'000'000;
+    const Nanos e = exposure(rng);
+    camera::FrameMeta m;
+    m.seq = static_cast<std::uint64_t>(i);
+    m.domain = camera::TimeDomain::kDeviceTicks;
+    m.device_ns = 3'000'000'000 + (start - t0);
+    m.first_rx_ns = start + e + jitter(rng);
+    m.complete_ns = m.first_rx_ns + 2'000'000;
+    m.exposure_seq = m.seq;
+    m.exposure_ns = e;
+    const auto s = clock.stamp(m);
+    if (i > 100) {
+      EXPECT_EQ(s.source, StampSource::kDeviceMapped) << i;
+      worst = std::max(worst, std::abs(static_cast<double>(s.vehicle_ns - start)));
+    }
+  }
+  EXPECT_LT(worst, 1e6);
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers
