@@ -190,6 +190,77 @@ TEST(ChaosCheck, AScanSplitInTwoIsPublishedTwice) {
   EXPECT_EQ(r.topics.at(kTopic).published_twice, 1u);
 }
 
+// A LIDAR whose stamps followed a host clock step back and are slewed out (issue 26, the LIDAR
+// campaign's Ouster and Pandar40P): scans 20..44 stamped 250..10 ms before their first firing, and
+// after a restart of the sensor 45..49 a whole 500 ms early. Matched by stamp they named neighbours:
+// "published twice", "neither published nor counted lost", "matches no scan", and a stamp error of at
+// most half a period. Each scan is its unit by its first packet's arrival (same host clock as the
+// truth's sends): accounted, and the stamps judged by their real error.
+TEST(ChaosCheck, ALidarScanIsItsUnitByItsPacketsArrivalNotByAStampOffByPeriods) {
+  Input in = honest();
+  for (int u = 0; u < kScans; ++u) {
+    SampleRecord& s = in.samples[static_cast<std::size_t>(u)];
+    s.first_rx_ns = in.truths[0].parts[static_cast<std::size_t>(u) * kParts].tx_ns + 60'000;
+    if (u >= 20 && u < 45) s.acquisition_ns -= (45 - u) * 10'000'000;
+    if (u >= 45) s.acquisition_ns -= 5 * kPeriod;
+  }
+  const Result r = check(in);
+  const TopicResult& t = r.topics.at(kTopic);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("monitor_agrees")) << result_text(r);
+  EXPECT_EQ(t.published_twice, 0u);
+  EXPECT_EQ(t.unaccounted, 0u);
+  EXPECT_EQ(t.unmatched, 0u);
+  EXPECT_FALSE(r.invariants.at("stamps")) << "the stamps are wrong, and said so";
+  EXPECT_EQ(t.stamps_outside, 30u);
+  EXPECT_NEAR(t.stamp_error_max_ms, 500.0, 1e-9);
+  // Without the arrival (a record that has none) the stamp decides, as before.
+  for (auto& s : in.samples) s.first_rx_ns = 0;
+  EXPECT_FALSE(check(in).invariants.at("accounted"));
+}
+
+// Host time that happened twice (a clock step back): two scans' packets went out at the same host
+// times, so the arrival cannot tell them apart; the stamp decides, and a stamp in doubled time is
+// left out, as before.
+TEST(ChaosCheck, AnArrivalTwoUnitsShareIsDecidedByTheStamp) {
+  Input in = honest();
+  auto& parts = in.truths[0].parts;
+  for (std::uint32_t p = 0; p < kParts; ++p) parts[25 * kParts + p].tx_ns = parts[20 * kParts + p].tx_ns;  // 500 ms back
+  for (int u = 0; u < kScans; ++u)
+    in.samples[static_cast<std::size_t>(u)].first_rx_ns = parts[static_cast<std::size_t>(u) * kParts].tx_ns + 60'000;
+  const Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).published_complete, 50u);
+}
+
+// lidar.blind_sector: a sector stops sending at run time. Its first turn's gap is the same stream of
+// packets as a loss burst there (these models' packets carry no sequence), so a rig may count it
+// missing; the same arc the next turn is the sensor's FOV, and counting it is a phantom.
+TEST(ChaosCheck, ANewBlindArcMayBeCountedMissingOnceNotTheNextTurn) {
+  Input in = honest();
+  for (int u = 20; u < 25; ++u)
+    for (std::uint32_t p = 3; p < 7; ++p) drop_part(in, u, p, truth::Fate::kNotSent);
+  in.samples[20].missing_packets = 4;  // the first turn: no packet tells it from a loss
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  in.samples[21].missing_packets = 4;  // the second turn: the same arc again, not loss
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss"));
+  EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 4u);
+  // An arc that grows (the fault began inside the sector) is new again in the turn it grows.
+  in = honest();
+  for (std::uint32_t p = 6; p < 7; ++p) drop_part(in, 20, p, truth::Fate::kNotSent);
+  for (int u = 21; u < 25; ++u)
+    for (std::uint32_t p = 2; p < 7; ++p) drop_part(in, u, p, truth::Fate::kNotSent);
+  in.samples[20].missing_packets = 1;
+  in.samples[21].missing_packets = 5;
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  in.samples[20].missing_packets = 2;  // more than the turn lacked
+  EXPECT_FALSE(check(in).invariants.at("no_phantom_loss"));
+}
+
 // A V4L2 camera after a host clock step back: the rig holds its stamps and slews the step out (the
 // topic never goes back), so frames 20..44 are stamped 240..0 ms after their exposure, less 10 ms a
 // frame. Matched by stamp, every tenth lands on its predecessor's frame: "published twice" and
