@@ -64,9 +64,7 @@ void McapWriter::write_out(std::span<const std::span<const std::byte>> pieces) {
   stats_.file_bytes = offset_;
 }
 
-std::uint16_t McapWriter::add_schema(const std::string& name, const std::string& encoding, const std::string& data) {
-  if (schemas_.size() >= 0xfffe) throw McapError("too many schemas");
-  McapSchema s{static_cast<std::uint16_t>(schemas_.size() + 1), name, encoding, data};
+void McapWriter::write_schema_record(const McapSchema& s) {
   std::vector<std::byte> b;
   Out o(b);
   const auto at = o.begin_record(opcode::kSchema);
@@ -76,15 +74,9 @@ std::uint16_t McapWriter::add_schema(const std::string& name, const std::string&
   o.str(s.data);  // bytes: uint32 length + bytes, as a string
   o.end_record(at);
   write_out(b);
-  schemas_.push_back(std::move(s));
-  return schemas_.back().id;
 }
 
-std::uint16_t McapWriter::add_channel(std::uint16_t schema_id, const std::string& topic,
-                                      const std::string& message_encoding,
-                                      const std::map<std::string, std::string>& metadata) {
-  if (channels_.size() >= 0xfffe) throw McapError("too many channels");
-  McapChannel c{static_cast<std::uint16_t>(channels_.size() + 1), schema_id, topic, message_encoding, metadata};
+void McapWriter::write_channel_record(const McapChannel& c) {
   std::vector<std::byte> b;
   Out o(b);
   const auto at = o.begin_record(opcode::kChannel);
@@ -95,8 +87,38 @@ std::uint16_t McapWriter::add_channel(std::uint16_t schema_id, const std::string
   o.map(c.metadata);
   o.end_record(at);
   write_out(b);
-  channels_.push_back(std::move(c));
+}
+
+std::uint16_t McapWriter::add_schema(const std::string& name, const std::string& encoding, const std::string& data) {
+  if (schemas_.size() >= 0xfffe) throw McapError("too many schemas");
+  add_schema_as_is(McapSchema{static_cast<std::uint16_t>(schemas_.size() + 1), name, encoding, data});
+  return schemas_.back().id;
+}
+
+std::uint16_t McapWriter::add_channel(std::uint16_t schema_id, const std::string& topic,
+                                      const std::string& message_encoding,
+                                      const std::map<std::string, std::string>& metadata) {
+  if (channels_.size() >= 0xfffe) throw McapError("too many channels");
+  add_channel_as_is(McapChannel{static_cast<std::uint16_t>(channels_.size() + 1), schema_id, topic, message_encoding, metadata});
   return channels_.back().id;
+}
+
+void McapWriter::add_schema_as_is(const McapSchema& s) {
+  write_schema_record(s);
+  schemas_.push_back(s);
+}
+
+void McapWriter::add_channel_as_is(const McapChannel& c) {
+  write_channel_record(c);
+  channels_.push_back(c);
+}
+
+void McapWriter::count_message(std::uint16_t channel_id, std::uint64_t log_time) {
+  if (stats_.messages == 0) stats_.message_start = stats_.message_end = log_time;
+  stats_.message_start = std::min(stats_.message_start, log_time);
+  stats_.message_end = std::max(stats_.message_end, log_time);
+  ++stats_.messages;
+  ++channel_counts_[channel_id];
 }
 
 void McapWriter::write(std::uint16_t channel_id, std::uint32_t sequence, std::uint64_t log_time,
@@ -116,11 +138,7 @@ void McapWriter::write(std::uint16_t channel_id, std::uint32_t sequence, std::ui
   if (at == 0) chunk_start_ = chunk_end_ = log_time;
   chunk_start_ = std::min(chunk_start_, log_time);
   chunk_end_ = std::max(chunk_end_, log_time);
-  if (stats_.messages == 0) message_start_ = message_end_ = log_time;
-  message_start_ = std::min(message_start_, log_time);
-  message_end_ = std::max(message_end_, log_time);
-  ++stats_.messages;
-  ++channel_counts_[channel_id];
+  count_message(channel_id, log_time);
   stats_.uncompressed_bytes += chunk_.size() - at;
   if (chunk_.size() >= opt_.chunk_size) flush_chunk();
 }
@@ -135,16 +153,31 @@ void McapWriter::flush_chunk() {
   const std::span<const std::byte> records = raw ? std::span<const std::byte>(chunk_) : std::span<const std::byte>(compressed_);
   stats_.compress_ns += monotonic_now_ns() - t0;
 
-  // Chunk record: header fields, then the records' u64 length and bytes (written from compressed_).
+  write_chunk(chunk_start_, chunk_end_, chunk_.size(), crc, mcap_name(opt_.compression), records, chunk_index_);
+  chunk_.clear();
+  chunk_index_.clear();
+}
+
+void McapWriter::copy_chunk(ChunkCopy& c) {
+  flush_chunk();
+  for (const auto& [channel, entries] : c.index)
+    for (const auto& e : entries) count_message(channel, e.first);
+  stats_.uncompressed_bytes += c.uncompressed_size;
+  write_chunk(c.message_start, c.message_end, c.uncompressed_size, c.crc, c.compression, c.records, c.index);
+}
+
+void McapWriter::write_chunk(std::uint64_t start, std::uint64_t end, std::uint64_t uncompressed_size, std::uint32_t crc,
+                             std::string_view comp, std::span<const std::byte> records,
+                             std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>>& index) {
+  // Chunk record: header fields, then the records' u64 length and bytes (written from `records`).
   scratch_.clear();
   Out h(scratch_);
-  const std::string_view comp = mcap_name(opt_.compression);
   const std::uint64_t content = 8 + 8 + 8 + 4 + 4 + comp.size() + 8 + records.size();
   h.le(opcode::kChunk);
   h.le(content);
-  h.le(chunk_start_);
-  h.le(chunk_end_);
-  h.le(static_cast<std::uint64_t>(chunk_.size()));
+  h.le(start);
+  h.le(end);
+  h.le(uncompressed_size);
   h.le(crc);
   h.str(comp);
   h.le(static_cast<std::uint64_t>(records.size()));
@@ -154,7 +187,7 @@ void McapWriter::flush_chunk() {
 
   // Message Index records, one per channel, right after the chunk (in the same write).
   std::map<std::uint16_t, std::uint64_t> index_offsets;
-  for (auto& [channel, entries] : chunk_index_) {
+  for (auto& [channel, entries] : index) {
     std::stable_sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     index_offsets[channel] = chunk_offset + chunk_length + (scratch_.size() - header_size);
     Out m(scratch_);
@@ -174,8 +207,8 @@ void McapWriter::flush_chunk() {
 
   Out ci(chunk_indexes_);
   const auto at = ci.begin_record(opcode::kChunkIndex);
-  ci.le(chunk_start_);
-  ci.le(chunk_end_);
+  ci.le(start);
+  ci.le(end);
   ci.le(chunk_offset);
   ci.le(chunk_length);
   ci.le(static_cast<std::uint32_t>(index_offsets.size() * 10));
@@ -186,12 +219,9 @@ void McapWriter::flush_chunk() {
   ci.le(index_length);
   ci.str(comp);
   ci.le(static_cast<std::uint64_t>(records.size()));
-  ci.le(static_cast<std::uint64_t>(chunk_.size()));
+  ci.le(uncompressed_size);
   ci.end_record(at);
-
   ++stats_.chunks;
-  chunk_.clear();
-  chunk_index_.clear();
 }
 
 void McapWriter::close() {
@@ -242,8 +272,8 @@ void McapWriter::close() {
   o.le(std::uint32_t{0});  // attachments
   o.le(std::uint32_t{0});  // metadata
   o.le(static_cast<std::uint32_t>(stats_.chunks));
-  o.le(message_start_);
-  o.le(message_end_);
+  o.le(stats_.message_start);
+  o.le(stats_.message_end);
   o.le(static_cast<std::uint32_t>(channel_counts_.size() * 10));
   for (const auto& [id, n] : channel_counts_) {
     o.le(id);

@@ -39,9 +39,38 @@ void SplitWriter::open_next() {
   file_has_messages_ = false;
 }
 
+void SplitWriter::close_current() {
+  writer_->close();
+  const auto& done = writer_->stats();
+  closed_totals_.messages += done.messages;
+  closed_totals_.chunks += done.chunks;
+  closed_totals_.uncompressed_bytes += done.uncompressed_bytes;
+  closed_totals_.file_bytes += done.file_bytes;
+  closed_totals_.compress_ns += done.compress_ns;
+  closed_totals_.write_ns += done.write_ns;
+  if (!split_) return;
+  const Nanos t0 = monotonic_now_ns();
+  closed_files_.push_back({std::filesystem::path(writer_->path()).filename().string(), done.message_start,
+                           done.message_end, done.messages});
+  const auto& counts = writer_->channel_counts();
+  for (const auto& [key, id] : file_channel_)
+    if (const auto it = counts.find(id); it != counts.end()) topic_messages_[key] += it->second;
+  std::vector<BagTopicInfo> topics;
+  for (std::size_t key = 0; key < channels_.size(); ++key) {
+    if (topic_messages_[key] == 0) continue;  // a channel added, nothing of it in a complete file yet
+    const auto& c = channels_[key];
+    const auto qos = c.metadata.find("offered_qos_profiles");
+    topics.push_back({c.topic, c.schema_name, c.message_encoding, qos != c.metadata.end() ? qos->second : "",
+                      topic_messages_[key]});
+  }
+  write_bag_metadata(opt_.out, closed_files_, topics);
+  metadata_ns_ += monotonic_now_ns() - t0;
+}
+
 std::size_t SplitWriter::add_channel(ChannelSpec spec) {
   channels_.push_back(std::move(spec));
   sequence_.push_back(0);
+  topic_messages_.push_back(0);
   return channels_.size() - 1;
 }
 
@@ -52,14 +81,7 @@ void SplitWriter::write(std::size_t channel, std::uint64_t log_time, std::uint64
     const bool full_bytes = opt_.split_bytes > 0 && s.file_bytes + writer_->pending_bytes() >= opt_.split_bytes;
     const bool full_time = opt_.split_ns > 0 && log_time >= file_first_log_ + static_cast<std::uint64_t>(opt_.split_ns);
     if (full_bytes || full_time) {
-      writer_->close();
-      const auto& done = writer_->stats();
-      closed_totals_.messages += done.messages;
-      closed_totals_.chunks += done.chunks;
-      closed_totals_.uncompressed_bytes += done.uncompressed_bytes;
-      closed_totals_.file_bytes += done.file_bytes;
-      closed_totals_.compress_ns += done.compress_ns;
-      closed_totals_.write_ns += done.write_ns;
+      close_current();
       open_next();
     }
   }
@@ -79,12 +101,14 @@ void SplitWriter::write(std::size_t channel, std::uint64_t log_time, std::uint64
 }
 
 void SplitWriter::close() {
-  if (writer_) writer_->close();
+  if (!writer_ || closed_) return;
+  closed_ = true;
+  close_current();
 }
 
 McapWriterStats SplitWriter::totals() const {
   McapWriterStats t = closed_totals_;
-  if (writer_) {
+  if (writer_ && !closed_) {
     const auto& s = writer_->stats();
     t.messages += s.messages;
     t.chunks += s.chunks;

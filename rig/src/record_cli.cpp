@@ -2,10 +2,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "play.hpp"
 #include "recorder.hpp"
 #include "rig_commands.hpp"
+#include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/record/mcap_repair.hpp"
 #include "sensor_rig/record/mcap_types.hpp"
 
 namespace sensor_rig::rig {
@@ -15,13 +18,92 @@ std::map<std::string, dds::Transport> transports() {
   return {{"udp", dds::Transport::kUdp}, {"shm", dds::Transport::kShm}};
 }
 
+// `rig record repair IN [--out OUT]` (record/mcap_repair.hpp): the intact part of a damaged MCAP file
+// as a complete, indexed one. Without --out, IN is replaced and the original kept as IN.broken (a
+// name neither `rig play` nor rosbag2 takes for a recording file). Prints the damage found on stderr
+// and one JSON line on stdout. Returns 0 when all of IN up to its end (or a cut at its end: a killed
+// writer) is in the output, 1 when a damaged place cut off data after it (the output holds what came
+// before) or IN is not MCAP; bad usage throws UsageError (2).
+int run_repair(const std::string& in, const std::string& out) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_regular_file(in, ec)) throw cli::UsageError(in + ": no such file");
+  const bool in_place = out.empty();
+  if (!in_place && fs::exists(out, ec) && fs::equivalent(in, out, ec))
+    throw cli::UsageError("--out " + out + " is IN itself (leave --out away to replace IN, keeping IN.broken)");
+  const std::string broken = in + ".broken";
+  if (in_place && fs::exists(broken, ec))
+    throw cli::UsageError(broken + " exists (a repair before?): give --out");
+  const std::string target = in_place ? in + ".repairing" : out;
+
+  record::RepairResult r;
+  const Nanos t0 = monotonic_now_ns();
+  try {
+    r = record::repair_mcap(in, target);
+  } catch (const record::McapError& e) {
+    fs::remove(target, ec);
+    std::fprintf(stderr, "rig record repair: %s\n", e.what());
+    return cli::kRuntime;
+  }
+  const double seconds = static_cast<double>(monotonic_now_ns() - t0) / 1e9;
+  if (in_place) {
+    // The original first, so that a crash in between leaves both files, never neither.
+    fs::rename(in, broken, ec);
+    if (!ec) fs::rename(target, in, ec);
+    if (ec) {
+      std::fprintf(stderr, "rig record repair: cannot put the repaired file in place of %s: %s (it is %s)\n", in.c_str(),
+                   ec.message().c_str(), target.c_str());
+      return cli::kRuntime;
+    }
+  }
+  const bool lost_after = !r.damage.empty() && !r.cut;
+  if (!r.damage.empty())
+    std::fprintf(stderr, "rig record repair: %s: %s; kept %llu messages in %llu chunks, the %llu bytes before offset %llu%s\n",
+                 in.c_str(), r.damage.c_str(), static_cast<unsigned long long>(r.messages),
+                 static_cast<unsigned long long>(r.chunks), static_cast<unsigned long long>(r.stopped_at),
+                 static_cast<unsigned long long>(r.stopped_at),
+                 lost_after ? "; what follows the damage is not recovered" : "");
+  if (r.skipped_records > 0)
+    std::fprintf(stderr, "rig record repair: %llu Attachment/Metadata record(s) not carried over\n",
+                 static_cast<unsigned long long>(r.skipped_records));
+  nlohmann::json j = {{"in", in},
+                      {"out", in_place ? in : out},
+                      {"input_bytes", r.input_bytes},
+                      {"intact_bytes", r.stopped_at},
+                      {"output_bytes", r.output_bytes},
+                      {"messages", r.messages},
+                      {"chunks", r.chunks},
+                      {"schemas", r.schemas},
+                      {"channels", r.channels},
+                      {"had_summary", r.had_summary},
+                      {"cut", r.cut},
+                      {"damage", r.damage},
+                      {"seconds", seconds},
+                      {"mb_per_s", seconds > 0 ? static_cast<double>(r.stopped_at) / 1e6 / seconds : 0.0}};
+  if (in_place) j["original"] = broken;
+  std::printf("%s\n", j.dump().c_str());
+  std::fflush(stdout);
+  return lost_after ? cli::kRuntime : cli::kOk;
+}
+
+void add_repair(CLI::App& record, cli::Context& ctx) {
+  auto* cmd = record.add_subcommand(
+      "repair", "Make a complete, indexed MCAP file of what is intact in a damaged one (a recorder killed before its summary)");
+  auto in = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  cmd->add_option("IN", *in, "The damaged MCAP file")->required();
+  cmd->add_option("--out", *out, "Where to write it (default: IN itself, the original kept as IN.broken)");
+  cmd->callback([&ctx, in, out] { ctx.exit_code = run_repair(*in, *out); });
+}
+
 void add_record(CLI::App& app, cli::Context& ctx) {
   auto* cmd = app.add_subcommand("record", "Record topics into MCAP (profile ros2, ros2msg schemas, CDR as received)");
   auto o = std::make_shared<RecordOptions>();
   auto domain = std::make_shared<int>(0);
   auto compression = std::make_shared<std::string>("zstd");
   cmd->add_option("TOPIC", o->topics, "ROS topic names (default: every topic discovered)");
-  cmd->add_option("--out", o->out, "NAME.mcap, or a folder (created, must be empty) with --split-mb/--split-s")->required();
+  // Not ->required(): `rig record repair` has no --out of this command (checked in the callback).
+  cmd->add_option("--out", o->out, "NAME.mcap, or a folder (created, must be empty) with --split-mb/--split-s");
   cmd->add_option("--duration", o->duration_s, "Stop after S seconds (default: at SIGINT/SIGTERM)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--domain", *domain, "DDS domain id")->check(CLI::Range(0, 232));
   cmd->add_option("--dds-profile", o->dds.profile, "Cyclone XML profile (default: loopback)");
@@ -41,7 +123,10 @@ void add_record(CLI::App& app, cli::Context& ctx) {
   cmd->add_flag("!--no-progress", o->progress, "No progress line on stderr");
   cmd->add_option("--rt-priority", o->rt_priority, "SCHED_FIFO priority of the recorder's threads and its DDS threads (0: normal)")
       ->check(CLI::Range(0, 99));
-  cmd->callback([&ctx, o, domain, compression] {
+  add_repair(*cmd, ctx);
+  cmd->callback([&ctx, o, domain, compression, cmd] {
+    if (cmd->got_subcommand("repair")) return;
+    if (o->out.empty()) throw cli::UsageError("--out is required");
     namespace fs = std::filesystem;
     std::error_code ec;
     const bool split = o->split_mb > 0 || o->split_s > 0;

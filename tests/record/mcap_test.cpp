@@ -12,7 +12,10 @@
 
 #include "rig_process.hpp"
 #include "sensor_rig/msgs/ros2msg.hpp"
+#include <yaml-cpp/yaml.h>
+
 #include "sensor_rig/record/mcap_reader.hpp"
+#include "sensor_rig/record/mcap_repair.hpp"
 #include "sensor_rig/record/mcap_writer.hpp"
 #include "sensor_rig/record/split_writer.hpp"
 #include "test_data.hpp"
@@ -305,6 +308,202 @@ TEST(SplitWriter, SplitsByLogTime) {
     // Only the channels this file carries: /cam/a up to 2.4 s, /cam/b from 2.5 s.
     EXPECT_EQ(r.channels().size(), f == 2 ? 2u : 1u) << f;
   }
+}
+
+// tests/js/mcap_messages.mjs: every message as @mcap/core's indexed or stream reader has it.
+nlohmann::json node_messages(const std::string& file, const char* mode) {
+  const auto script = test::source_dir() / "tests/js/mcap_messages.mjs";
+  const auto [rc, out] = test::run("node " + script.string() + " " + file + " " + mode + " 2>&1");
+  auto j = nlohmann::json::parse(out, nullptr, false);
+  if (rc != 0 || j.is_discarded()) return nlohmann::json{{"error", "exit " + std::to_string(rc) + ": " + out}};
+  return j;
+}
+
+std::vector<char> read_all(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The repaired file, read by @mcap/core's indexed reader (it needs the summary, the chunk indexes and
+// the message indexes repair wrote), holds exactly the messages @mcap/core's stream reader takes from
+// the damaged input before the damage, byte for byte, and they are what was written.
+void expect_repaired_equals_intact_prefix(const std::string& damaged, const std::string& repaired, const Sent& sent,
+                                          const RepairResult& r) {
+  const auto truth = node_messages(damaged, "stream");
+  const auto got = node_messages(repaired, "indexed");
+  ASSERT_FALSE(truth.contains("error")) << truth.dump();
+  ASSERT_FALSE(got.contains("error")) << got.dump();
+  EXPECT_NE(truth["stopped"], "") << "the stream reader read the damaged file to its end";
+  ASSERT_EQ(got["count"], truth["count"]);
+  EXPECT_EQ(r.messages, truth["count"].get<std::uint64_t>());
+  EXPECT_EQ(got["statistics"]["message_count"], std::to_string(r.messages));
+  EXPECT_EQ(got["statistics"]["chunk_count"], r.chunks);
+  EXPECT_EQ(got["chunk_indexes"], r.chunks);
+  // The stream has each chunk's messages in record order, the indexed reader in log-time order:
+  // both are sequence order here (log time grows with the sequence).
+  for (std::size_t k = 0; k < got["messages"].size(); ++k) {
+    const auto& a = got["messages"][k];
+    EXPECT_EQ(a, truth["messages"][k]) << k;
+    const auto seq = a["sequence"].get<std::size_t>();
+    ASSERT_LT(seq, sent.cdr.size());
+    std::vector<std::byte> cdr = sent.cdr[seq];
+    EXPECT_EQ(a["fnv"], fnv1a(cdr)) << seq;
+  }
+}
+
+TEST(McapRepair, ACutFileBecomesCompleteWithEveryIntactChunk) {
+  for (const auto c : {Compression::kLz4, Compression::kZstd}) {
+    test::TempDir dir;
+    const std::string file = (dir.path / "t.mcap").string();
+    const Sent sent = write_file(file, c, 16 * 1024);
+    const auto all = read_all(file);
+    std::uint64_t last = 0;
+    for (int k = 1; k <= 5; ++k) {
+      const auto cut = all.size() * static_cast<std::size_t>(k) / 6 + 13;  // inside a record, not at its start
+      SCOPED_TRACE(std::string(mcap_name(c)) + " cut at " + std::to_string(cut));
+      const std::string part = (dir.path / ("cut" + std::to_string(k) + ".mcap")).string();
+      const std::string fixed = (dir.path / ("fixed" + std::to_string(k) + ".mcap")).string();
+      std::ofstream(part, std::ios::binary).write(all.data(), static_cast<std::streamsize>(cut));
+      const RepairResult r = repair_mcap(part, fixed);
+      EXPECT_TRUE(r.cut) << r.damage;
+      EXPECT_FALSE(r.had_summary);
+      EXPECT_NE(r.damage.find("runs past the end of the file (" + std::to_string(cut) + " bytes)"), std::string::npos) << r.damage;
+      EXPECT_NE(r.damage.find("at offset " + std::to_string(r.stopped_at)), std::string::npos) << r.damage;
+      EXPECT_LT(r.stopped_at, cut);
+      EXPECT_EQ(r.channels, 2u);
+      EXPECT_GE(r.messages, last);
+      last = r.messages;
+      expect_repaired_equals_intact_prefix(part, fixed, sent, r);
+      McapReader ours(fixed);
+      EXPECT_TRUE(ours.complete());
+      EXPECT_TRUE(ours.problems().empty());
+    }
+    EXPECT_GT(last, static_cast<std::uint64_t>(kN) * 3 / 4);
+  }
+}
+
+TEST(McapRepair, ACorruptChunkStopsThereNamingItsOffset) {
+  for (const auto c : {Compression::kNone, Compression::kZstd}) {
+    SCOPED_TRACE(std::string(mcap_name(c)));
+    test::TempDir dir;
+    const std::string file = (dir.path / "t.mcap").string();
+    const Sent sent = write_file(file, c, 16 * 1024);
+    const auto size = std::filesystem::file_size(file);
+    const auto flip = size / 2;
+    {
+      std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+      f.seekg(static_cast<std::streamoff>(flip));
+      char b = 0;
+      f.read(&b, 1);
+      f.seekp(static_cast<std::streamoff>(flip));
+      b = static_cast<char>(b ^ 0x5a);
+      f.write(&b, 1);
+    }
+    const std::string fixed = (dir.path / "fixed.mcap").string();
+    const RepairResult r = repair_mcap(file, fixed);
+    EXPECT_FALSE(r.cut);
+    EXPECT_TRUE(r.damage.find("CRC mismatch") != std::string::npos || r.damage.find("does not decompress") != std::string::npos)
+        << r.damage;
+    EXPECT_NE(r.damage.find("Chunk at offset " + std::to_string(r.stopped_at)), std::string::npos) << r.damage;
+    // The named chunk holds the flipped byte.
+    const auto all = read_all(file);
+    std::uint64_t len = 0;
+    for (int i = 0; i < 8; ++i) len |= static_cast<std::uint64_t>(static_cast<unsigned char>(all[r.stopped_at + 1 + static_cast<std::size_t>(i)])) << (8 * i);
+    EXPECT_EQ(all[r.stopped_at], 0x06);
+    EXPECT_LT(r.stopped_at, flip);
+    EXPECT_GE(r.stopped_at + 9 + len, flip);
+    expect_repaired_equals_intact_prefix(file, fixed, sent, r);
+  }
+}
+
+TEST(McapRepair, RefusesWhatIsNotMcapAndReadsACompleteFileWhole) {
+  test::TempDir dir;
+  const std::string out = (dir.path / "out.mcap").string();
+  try {
+    repair_mcap(dir.write("bad.mcap", "\x89MCAQ0\r\nxxxxxxxxxxxxxxxxxxxxxx"), out);
+    FAIL() << "accepted wrong magic";
+  } catch (const McapError& e) {
+    EXPECT_NE(std::string(e.what()).find("wrong magic at offset 0"), std::string::npos) << e.what();
+  }
+  const std::string file = (dir.path / "t.mcap").string();
+  write_file(file, Compression::kZstd);
+  const RepairResult r = repair_mcap(file, out);
+  EXPECT_TRUE(r.had_summary);
+  EXPECT_TRUE(r.damage.empty()) << r.damage;
+  EXPECT_EQ(r.messages, static_cast<std::uint64_t>(kN));
+  const auto a = node_messages(file, "indexed");
+  const auto b = node_messages(out, "indexed");
+  ASSERT_FALSE(b.contains("error")) << b.dump();
+  EXPECT_EQ(a["messages"], b["messages"]);
+  EXPECT_EQ(a["statistics"], b["statistics"]);
+}
+
+// A split folder's metadata.yaml, parsed by yaml-cpp: rosbag2's structure (version 5), and every
+// count and time equal to what @mcap/core reads in the files it names.
+TEST(SplitWriter, MetadataYamlIsRosbag2sAndMatchesEachFile) {
+  test::TempDir dir;
+  SplitOptions o;
+  o.out = (dir.path / "rec").string();
+  o.split_bytes = 40 * 1024;
+  o.mcap.chunk_size = 8 * 1024;
+  o.mcap.compression = Compression::kNone;  // sizes as written: several files
+  SplitWriter w(o);
+  const std::string qos = "- history: 1\n  depth: 5\n  reliability: 2\n";
+  const auto a = w.add_channel({"/cam/a", "sensor_msgs/msg/CompressedImage", "ros2msg",
+                                *msgs::ros2msg_schema("sensor_msgs/CompressedImage"), "cdr", {{"offered_qos_profiles", qos}}});
+  const auto b = w.add_channel({"/cam/b", "sensor_msgs/msg/CompressedImage", "ros2msg",
+                                *msgs::ros2msg_schema("sensor_msgs/CompressedImage"), "cdr", {{"offered_qos_profiles", qos}}});
+  for (int i = 0; i < kN; ++i) {
+    std::vector<std::byte> payload;
+    const auto cdr = compressed_image_cdr(i, payload);
+    const std::span<const std::byte> pieces[] = {cdr};
+    w.write(i % 3 == 0 ? a : b, 1'000'000'000ull + static_cast<std::uint64_t>(i) * 7'000'000, 0, pieces);
+  }
+  w.close();
+  ASSERT_GT(w.files().size(), 3u);
+
+  const YAML::Node root = YAML::LoadFile((dir.path / "rec" / "metadata.yaml").string());
+  const YAML::Node m = root["rosbag2_bagfile_information"];
+  ASSERT_TRUE(m.IsMap());
+  EXPECT_EQ(m["version"].as<int>(), 5);
+  EXPECT_EQ(m["storage_identifier"].as<std::string>(), "mcap");
+  EXPECT_EQ(m["compression_format"].as<std::string>(), "");
+  EXPECT_EQ(m["compression_mode"].as<std::string>(), "");
+  ASSERT_EQ(m["relative_file_paths"].size(), w.files().size());
+  ASSERT_EQ(m["files"].size(), w.files().size());
+  std::uint64_t total = 0, first = UINT64_MAX, last = 0;
+  std::map<std::string, std::uint64_t> per_topic;
+  for (std::size_t f = 0; f < w.files().size(); ++f) {
+    SCOPED_TRACE(w.files()[f]);
+    const std::string name = std::filesystem::path(w.files()[f]).filename().string();
+    EXPECT_EQ(m["relative_file_paths"][f].as<std::string>(), name);
+    const YAML::Node fi = m["files"][f];
+    EXPECT_EQ(fi["path"].as<std::string>(), name);
+    const auto j = node_messages(w.files()[f], "indexed");
+    ASSERT_FALSE(j.contains("error")) << j.dump();
+    EXPECT_EQ(fi["message_count"].as<std::uint64_t>(), j["count"].get<std::uint64_t>());
+    const std::uint64_t start = std::stoull(j["statistics"]["message_start"].get<std::string>());
+    const std::uint64_t end = std::stoull(j["statistics"]["message_end"].get<std::string>());
+    EXPECT_EQ(fi["starting_time"]["nanoseconds_since_epoch"].as<std::uint64_t>(), start);
+    EXPECT_EQ(fi["duration"]["nanoseconds"].as<std::uint64_t>(), end - start);
+    total += j["count"].get<std::uint64_t>();
+    first = std::min(first, start);
+    last = std::max(last, end);
+    for (const auto& [t, n] : j["per_topic"].items()) per_topic[t] += n.get<std::uint64_t>();
+  }
+  EXPECT_EQ(total, static_cast<std::uint64_t>(kN));
+  EXPECT_EQ(m["message_count"].as<std::uint64_t>(), total);
+  EXPECT_EQ(m["starting_time"]["nanoseconds_since_epoch"].as<std::uint64_t>(), first);
+  EXPECT_EQ(m["duration"]["nanoseconds"].as<std::uint64_t>(), last - first);
+  ASSERT_EQ(m["topics_with_message_count"].size(), 2u);
+  for (const auto& t : m["topics_with_message_count"]) {
+    const std::string name = t["topic_metadata"]["name"].as<std::string>();
+    EXPECT_EQ(t["topic_metadata"]["type"].as<std::string>(), "sensor_msgs/msg/CompressedImage");
+    EXPECT_EQ(t["topic_metadata"]["serialization_format"].as<std::string>(), "cdr");
+    EXPECT_EQ(t["topic_metadata"]["offered_qos_profiles"].as<std::string>(), qos);
+    EXPECT_EQ(t["message_count"].as<std::uint64_t>(), per_topic[name]) << name;
+  }
+  EXPECT_EQ(per_topic["/cam/a"], static_cast<std::uint64_t>(kN / 3));
 }
 
 }  // namespace

@@ -2,9 +2,17 @@
 // @mcap/core and decoded with @foxglove/rosmsg2-serialization (tests/js/mcap_dump.mjs), and every
 // sample must be there, byte-equal (FNV-1a of the payloads), with its stamps, source timestamp and
 // QoS, for each compression; a topic of a type the rig does not know is reported and skipped; a
-// SIGKILLed recorder leaves a readable prefix; a full disk stops the recording with the reason.
+// SIGKILLed recorder leaves a readable prefix; a full disk stops the recording with the reason. A
+// split recording's metadata.yaml (parsed by yaml-cpp) names each file with the counts @mcap/core
+// reads in it, after SIGINT and after SIGKILL; `rig record repair` makes the killed file a complete
+// indexed one that @mcap/core's indexed reader takes, with exactly what its stream reader finds
+// intact in the broken file.
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
+#include <filesystem>
+
+#include "dds_domain_lease.hpp"
 #include "record_support.hpp"
 #include "sensor_rig/dds/cdr_view.hpp"
 #include "sensor_rig/record/mcap_reader.hpp"
@@ -12,7 +20,8 @@
 namespace sensor_rig::rig {
 namespace {
 
-constexpr dds_domainid_t kDomain = 48;
+// Leased (tests/support/dds_domain_lease.hpp): no other test on the host shares it.
+const dds_domainid_t kDomain = static_cast<dds_domainid_t>(sensor_rig::test::lease_dds_domain());
 constexpr int kRounds = 30;
 
 std::string profile() { return (test::source_dir() / "config/cyclonedds/loopback.xml").string(); }
@@ -189,6 +198,188 @@ TEST(Record, BadUsageIsExit2) {
   test::RigChild c({"record", "--out", dir.path.string(), "--split-mb", "10"}, (dir.path / "o3").string(), (dir.path / "e3").string());
   EXPECT_EQ(c.wait(20'000), 2);  // not empty: o1, e1, ...
   EXPECT_NE(c.err().find("not an empty folder"), std::string::npos) << c.err();
+}
+
+// tests/js/mcap_messages.mjs: every message as @mcap/core's indexed or stream reader has it.
+nlohmann::json node_messages(const std::string& file, const char* mode) {
+  const auto script = test::source_dir() / "tests/js/mcap_messages.mjs";
+  const auto [rc, out] = test::run("node " + script.string() + " " + file + " " + mode + " 2>&1");
+  auto j = nlohmann::json::parse(out, nullptr, false);
+  if (rc != 0 || j.is_discarded()) return nlohmann::json{{"error", "exit " + std::to_string(rc) + ": " + out}};
+  return j;
+}
+
+std::vector<std::string> mcap_files_in(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".mcap") names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+    return a.size() != b.size() ? a.size() < b.size() : a < b;  // rec_2 before rec_10
+  });
+  return names;
+}
+
+// metadata.yaml's files: each one's count and times against @mcap/core's indexed reader; returns the
+// per-topic counts summed over them.
+std::map<std::string, std::uint64_t> check_metadata_files(const std::filesystem::path& dir, const YAML::Node& m,
+                                                         const std::vector<std::string>& expect_files) {
+  std::map<std::string, std::uint64_t> per_topic;
+  EXPECT_EQ(m["version"].as<int>(), 5);
+  EXPECT_EQ(m["storage_identifier"].as<std::string>(), "mcap");
+  EXPECT_EQ(m["compression_format"].as<std::string>(), "");
+  EXPECT_EQ(m["compression_mode"].as<std::string>(), "");
+  EXPECT_EQ(m["relative_file_paths"].as<std::vector<std::string>>(), expect_files);
+  if (m["files"].size() != expect_files.size()) {
+    ADD_FAILURE() << "files: " << m["files"].size() << " entries, " << expect_files.size() << " expected";
+    return per_topic;
+  }
+  std::uint64_t total = 0, first = UINT64_MAX, last = 0;
+  for (std::size_t f = 0; f < expect_files.size(); ++f) {
+    SCOPED_TRACE(expect_files[f]);
+    const YAML::Node fi = m["files"][f];
+    EXPECT_EQ(fi["path"].as<std::string>(), expect_files[f]);
+    const auto j = node_messages((dir / expect_files[f]).string(), "indexed");
+    if (j.contains("error")) {
+      ADD_FAILURE() << j.dump();
+      continue;
+    }
+    EXPECT_EQ(fi["message_count"].as<std::uint64_t>(), j["count"].get<std::uint64_t>());
+    const std::uint64_t start = std::stoull(j["statistics"]["message_start"].get<std::string>());
+    const std::uint64_t end = std::stoull(j["statistics"]["message_end"].get<std::string>());
+    EXPECT_EQ(fi["starting_time"]["nanoseconds_since_epoch"].as<std::uint64_t>(), start);
+    EXPECT_EQ(fi["duration"]["nanoseconds"].as<std::uint64_t>(), end - start);
+    total += j["count"].get<std::uint64_t>();
+    first = std::min(first, start);
+    last = std::max(last, end);
+    for (const auto& [t, n] : j["per_topic"].items()) per_topic[t] += n.get<std::uint64_t>();
+  }
+  EXPECT_EQ(m["message_count"].as<std::uint64_t>(), total);
+  EXPECT_EQ(m["starting_time"]["nanoseconds_since_epoch"].as<std::uint64_t>(), first);
+  EXPECT_EQ(m["duration"]["nanoseconds"].as<std::uint64_t>(), last - first);
+  for (const auto& t : m["topics_with_message_count"]) {
+    const std::string name = t["topic_metadata"]["name"].as<std::string>();
+    EXPECT_EQ(t["message_count"].as<std::uint64_t>(), per_topic[name]) << name;
+    EXPECT_EQ(t["topic_metadata"]["serialization_format"].as<std::string>(), "cdr");
+  }
+  EXPECT_EQ(m["topics_with_message_count"].size(), per_topic.size());
+  return per_topic;
+}
+
+TEST(Record, ASplitRecordingStoppedBySigintHasRosbag2sMetadataYaml) {
+  test::TempDir dir;
+  const auto folder = dir.path / "drive";
+  const std::string prefix = "/test/rec_meta/" + std::to_string(::getpid());
+  test::RigChild rec({"record", "--out", folder.string(), "--domain", std::to_string(kDomain), "--dds-profile",
+                      profile(), "--split-s", "1"},
+                     (dir.path / "out").string(), (dir.path / "err").string());
+  ASSERT_TRUE(rec.started());
+  dds::Participant p(dds::DomainConfig{kDomain, profile()});
+  test::KnownPublishers pubs(p, prefix);
+  ASSERT_TRUE(pubs.wait_for_readers(1)) << rec.err();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  constexpr int kN = 35;  // 100 ms apart: 3.5 s of log time, 4 files
+  for (int i = 0; i < kN; ++i) {
+    pubs.publish(i);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ASSERT_EQ(rec.signal_and_wait(SIGINT, 20'000), 0) << rec.err();
+
+  const auto files = mcap_files_in(folder);
+  ASSERT_GE(files.size(), 3u);
+  EXPECT_EQ(files[0], "drive_0.mcap");
+  const YAML::Node m = YAML::LoadFile((folder / "metadata.yaml").string())["rosbag2_bagfile_information"];
+  ASSERT_TRUE(m.IsMap());
+  const auto per_topic = check_metadata_files(folder, m, files);
+  const auto dump = test::mcap_dump((folder / files[0]).string());  // the channels' QoS and types, as @mcap/core has them
+  ASSERT_FALSE(dump.contains("error")) << dump.dump();
+  for (const auto& t : pubs.topics()) EXPECT_EQ(per_topic.at(t), static_cast<std::uint64_t>(kN)) << t;
+  for (const auto& t : m["topics_with_message_count"]) {
+    const std::string name = t["topic_metadata"]["name"].as<std::string>();
+    if (!dump["channels"].contains(name)) continue;
+    EXPECT_EQ(t["topic_metadata"]["type"].as<std::string>(), dump["channels"][name]["schema"]) << name;
+    EXPECT_EQ(t["topic_metadata"]["offered_qos_profiles"].as<std::string>(),
+              dump["channels"][name]["metadata"]["offered_qos_profiles"]) << name;
+  }
+}
+
+// SIGKILL mid-run: metadata.yaml lists every file closed before the kill (not the one being
+// written); `rig record repair` makes that one complete and indexed with every intact chunk.
+TEST(Record, AKilledSplitRecordingIsListedAndItsLastFileRepaired) {
+  test::TempDir dir;
+  const auto folder = dir.path / "drive";
+  const std::string prefix = "/test/rec_repair/" + std::to_string(::getpid());
+  test::RigChild rec({"record", prefix + "/points", "--out", folder.string(), "--domain", std::to_string(kDomain),
+                      "--dds-profile", profile(), "--split-s", "1", "--compression", "lz4", "--chunk-kb", "32"},
+                     (dir.path / "out").string(), (dir.path / "err").string());
+  dds::Participant p(dds::DomainConfig{kDomain, profile()});
+  test::KnownPublishers pubs(p, prefix);
+  ASSERT_TRUE(pubs.wait_for_points_reader(1)) << rec.err();
+  constexpr int kN = 100;
+  for (int i = 0; i < kN; ++i) {
+    pubs.publish(i, 1000);  // ~16 KB clouds: two per chunk; 25 ms apart: 2.5 s, 3 files
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_EQ(rec.signal_and_wait(SIGKILL, 5000), 128 + SIGKILL);
+
+  auto files = mcap_files_in(folder);
+  ASSERT_GE(files.size(), 2u);
+  const std::string broken = (folder / files.back()).string();
+  files.pop_back();
+  const YAML::Node m = YAML::LoadFile((folder / "metadata.yaml").string())["rosbag2_bagfile_information"];
+  ASSERT_TRUE(m.IsMap());
+  const auto listed = check_metadata_files(folder, m, files);  // every file but the killed one
+
+  const auto truth = node_messages(broken, "stream");  // what is intact in it, by @mcap/core's stream reader
+  ASSERT_FALSE(truth.contains("error")) << truth.dump();
+  EXPECT_NE(truth["stopped"], "");
+  EXPECT_TRUE(node_messages(broken, "indexed").contains("error"));  // no summary: refused
+  const std::string fixed = (dir.path / "fixed.mcap").string();
+  test::RigChild repair({"record", "repair", broken, "--out", fixed}, (dir.path / "rout").string(),
+                        (dir.path / "rerr").string());
+  ASSERT_EQ(repair.wait(60'000), 0) << repair.err();
+  // Chunks are written whole: the file ends at a record boundary (or inside one, cut by the kernel).
+  EXPECT_TRUE(repair.err().find("without DataEnd") != std::string::npos ||
+              repair.err().find("runs past the end of the file") != std::string::npos)
+      << repair.err();
+  const auto summary = repair.summary();
+  ASSERT_FALSE(summary.is_discarded()) << repair.out();
+  EXPECT_EQ(summary["messages"], truth["count"]);
+  EXPECT_EQ(summary["cut"], true);
+
+  const auto got = node_messages(fixed, "indexed");
+  ASSERT_FALSE(got.contains("error")) << got.dump();
+  ASSERT_EQ(got["count"], truth["count"]);
+  EXPECT_EQ(got["messages"], truth["messages"]);  // same messages, same bytes (FNV-1a of each)
+  const auto dump = test::mcap_dump(fixed);      // decoded: the clouds the test published
+  ASSERT_FALSE(dump.contains("error")) << dump.dump();
+  for (const auto& msg : dump["messages"]) {
+    const auto seq = msg["sequence"].get<std::size_t>();
+    ASSERT_LT(seq, pubs.truth[prefix + "/points"].size());
+    const auto& want = pubs.truth[prefix + "/points"][seq];
+    EXPECT_EQ(msg["width"], want.width) << seq;
+    EXPECT_EQ(msg["data_fnv"], want.fnv) << seq;
+  }
+  // Listed files + the repaired one: all but the chunk being filled at the kill (<= 32 KiB: 2 clouds).
+  const auto total = listed.count(prefix + "/points") ? listed.at(prefix + "/points") : 0;
+  EXPECT_GE(total + got["count"].get<std::uint64_t>(), static_cast<std::uint64_t>(kN - 3));
+
+  // Without --out: in place, the original kept beside it as IN.broken.
+  test::RigChild again({"record", "repair", broken}, (dir.path / "rout2").string(), (dir.path / "rerr2").string());
+  ASSERT_EQ(again.wait(60'000), 0) << again.err();
+  EXPECT_TRUE(std::filesystem::exists(broken + ".broken"));
+  EXPECT_EQ(node_messages(broken, "indexed")["messages"], truth["messages"]);
+}
+
+TEST(Record, RepairOfWhatIsNotMcapIsARuntimeError) {
+  test::TempDir dir;
+  const auto bad = dir.write("bad.mcap", "not an mcap file at all, not at all");
+  test::RigChild r({"record", "repair", bad, "--out", (dir.path / "o.mcap").string()}, (dir.path / "out").string(),
+                   (dir.path / "err").string());
+  EXPECT_EQ(r.wait(20'000), 1);
+  EXPECT_NE(r.err().find("wrong magic at offset 0"), std::string::npos) << r.err();
+  EXPECT_FALSE(std::filesystem::exists(dir.path / "o.mcap"));
 }
 
 }  // namespace

@@ -35,6 +35,17 @@ struct McapWriterStats {
   std::uint64_t file_bytes = 0;          // written to the file so far
   std::int64_t compress_ns = 0;          // time spent compressing and checksumming
   std::int64_t write_ns = 0;             // time spent in write(2)
+  std::uint64_t message_start = 0, message_end = 0;  // log times of the first and last message (ns)
+};
+
+// A chunk copied as it is from another file (`repair_mcap`): its records compressed as they were,
+// and where its messages lie in the uncompressed records, for its Message Index records.
+struct ChunkCopy {
+  std::uint64_t message_start = 0, message_end = 0, uncompressed_size = 0;
+  std::uint32_t crc = 0;
+  std::string compression;              // "", "lz4", "zstd"
+  std::span<const std::byte> records;   // as compressed in the source
+  std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> index;  // channel -> (log time, offset)
 };
 
 class McapWriter {
@@ -50,6 +61,11 @@ class McapWriter {
   std::uint16_t add_schema(const std::string& name, const std::string& encoding, const std::string& data);
   std::uint16_t add_channel(std::uint16_t schema_id, const std::string& topic, const std::string& message_encoding,
                             const std::map<std::string, std::string>& metadata);
+  // A schema / channel keeping its id (a copy of another file's; do not mix with the two above).
+  void add_schema_as_is(const McapSchema& s);
+  void add_channel_as_is(const McapChannel& c);
+  // Writes the chunk being filled, then `c` with Message Index records made from c.index.
+  void copy_chunk(ChunkCopy& c);
   // One message whose data is the concatenation of `pieces`. Writes the chunk when it is full.
   // Throws McapError on a write error (e.g. ENOSPC); the file then holds every chunk completed before.
   void write(std::uint16_t channel_id, std::uint32_t sequence, std::uint64_t log_time, std::uint64_t publish_time,
@@ -60,12 +76,21 @@ class McapWriter {
   void close();
 
   [[nodiscard]] const McapWriterStats& stats() const noexcept { return stats_; }
+  // Messages per channel id so far.
+  [[nodiscard]] const std::map<std::uint16_t, std::uint64_t>& channel_counts() const noexcept { return channel_counts_; }
   [[nodiscard]] const std::string& path() const noexcept { return path_; }
   // Bytes in the chunk being filled (not yet in the file).
   [[nodiscard]] std::size_t pending_bytes() const noexcept { return chunk_.size(); }
 
  private:
   void write_out(std::span<const std::span<const std::byte>> pieces);
+  void write_schema_record(const McapSchema& s);
+  void write_channel_record(const McapChannel& c);
+  // The Chunk record around `records` (compressed as `comp`), its Message Index records, its Chunk Index.
+  void write_chunk(std::uint64_t start, std::uint64_t end, std::uint64_t uncompressed_size, std::uint32_t crc,
+                   std::string_view comp, std::span<const std::byte> records,
+                   std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>>& index);
+  void count_message(std::uint16_t channel_id, std::uint64_t log_time);
   void write_out(std::span<const std::byte> b) {
     const std::span<const std::byte> one[] = {b};
     write_out(one);
@@ -86,7 +111,6 @@ class McapWriter {
   std::vector<std::byte> compressed_, scratch_;
   std::vector<std::byte> chunk_indexes_;  // ChunkIndex records for the summary, as written
   std::map<std::uint16_t, std::uint64_t> channel_counts_;
-  std::uint64_t message_start_ = 0, message_end_ = 0;
   McapWriterStats stats_;
 };
 

@@ -2,7 +2,9 @@
 // A recording as one MCAP file or, split by size or time, a folder of them (rosbag2's layout:
 // DIR/<name of DIR>_<N>.mcap from 0). Each file is complete on its own: a channel's Schema and
 // Channel records go into every file that carries its messages, and the file is closed properly
-// (summary, footer) before the next one starts.
+// (summary, footer) before the next one starts. A split folder also gets rosbag2's metadata.yaml
+// (record/bag_metadata.hpp), rewritten each time a file is closed: it lists every complete file, so
+// after a kill it still names all but the file being written.
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/record/bag_metadata.hpp"
 #include "sensor_rig/record/mcap_writer.hpp"
 
 namespace sensor_rig::record {
@@ -42,17 +45,22 @@ class SplitWriter {
   // One message; starts the next file first when the current one is full. Throws McapError.
   void write(std::size_t channel, std::uint64_t log_time, std::uint64_t publish_time,
              std::span<const std::span<const std::byte>> pieces);
-  // Closes the current file properly. Throws McapError.
+  // Closes the current file properly (and, split, writes metadata.yaml). Throws McapError.
   void close();
 
   [[nodiscard]] const std::vector<std::string>& files() const noexcept { return files_; }
   // Totals over every file so far (the current one's chunk in progress not in file_bytes).
   [[nodiscard]] McapWriterStats totals() const;
+  // Time spent writing metadata.yaml, all files (ns).
+  [[nodiscard]] std::int64_t metadata_ns() const noexcept { return metadata_ns_; }
 
  private:
   void open_next();
+  // The current file closed: its counts into the totals, metadata.yaml rewritten.
+  void close_current();
   SplitOptions opt_;
   bool split_ = false;
+  bool closed_ = false;
   std::vector<ChannelSpec> channels_;
   std::vector<std::uint32_t> sequence_;
   std::unique_ptr<McapWriter> writer_;
@@ -62,6 +70,9 @@ class SplitWriter {
   bool file_has_messages_ = false;
   std::vector<std::string> files_;
   McapWriterStats closed_totals_;
+  std::vector<BagFileInfo> closed_files_;
+  std::vector<std::uint64_t> topic_messages_;  // per channel key, closed files
+  std::int64_t metadata_ns_ = 0;
 };
 
 }  // namespace sensor_rig::record
