@@ -157,7 +157,7 @@ std::vector<std::string> injected_kinds() {
   std::vector<std::string> kinds{"lidar.reorder",       "lidar.duplicate_late", "lidar.loss_burst", "lidar.corrupt",   "lidar.second_sensor",
           "lidar.restart",       "lidar.stuck_azimuth",  "lidar.rpm_change", "lidar.blind_sector",
           "camera.never_answers", "camera.slow_open",   "camera.dies",      "camera.ptp",      "camera.exposure_change",
-          "camera.auto_exposure", "camera.packet_loss",
+          "camera.auto_exposure", "camera.packet_loss",   "camera.chunk_data", "camera.padded_rows",
           "v4l2.stamp_mode",     "v4l2.sequence_gap",    "v4l2.disconnect",
           "dbw.loss",            "dbw.bad_crc",          "dbw.stuck_counter", "dbw.override",  "dbw.ecu_fault",
           "dbw.bus_off",         "dbw.no_status",

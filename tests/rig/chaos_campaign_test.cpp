@@ -65,7 +65,7 @@ TEST(ChaosCampaign, BadCampaignsAreRefusedWithTheReason) {
   for (const auto& [spec, says] : std::vector<std::pair<std::string, std::string>>{
            {"lidar.reordr", "unknown fault kind 'lidar.reordr'"},
            {"lidar.reorder:speed=2", "takes no parameter 'speed'"},
-           {"camera.padded_rows", "no mock injects camera.padded_rows"}}) {
+           {"host.network_delay", "no mock injects host.network_delay"}}) {
     r = test::run_rig("chaos " + mock + " --duration 10 --faults '" + spec + "'");
     EXPECT_EQ(r.code, 2) << spec;
     EXPECT_NE(r.err.find(says), std::string::npos) << spec << ": " << r.err;
