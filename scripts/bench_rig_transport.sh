@@ -4,7 +4,10 @@
 # started: LIDAR mocks, GigE fakes, dbw processes, RouDi; the monitor apart) as % of one core, and
 # per topic the `dds` stage (DDS source timestamp -> monitor receive) p50/p99/max from a monitor
 # that uses the same transport.
-# Usage: scripts/bench_rig_transport.sh BUILD_DIR [SECONDS] [TRANSPORTS...]
+# Usage: scripts/bench_rig_transport.sh BUILD_DIR [SECONDS] [LEGS...]
+# A leg is a transport (udp, shm), run once each in the order given; TRANSPORT+record also runs
+# `rig record` (every topic, lz4, over that transport) beside the monitor for the whole window: the
+# rig's `dds` stage with and without a recorder, side by side (e.g. udp udp+record udp udp+record).
 # Environment: LIDARS_ONLY=1 runs the three LIDARs alone (no cameras, dbw, fusion, sync sets);
 # PHASE_DEG=N phase-locks every synthetic LIDAR to N degrees (their scans complete together),
 # PHASE_DEG=free lets them run free (each from whenever its mock starts);
@@ -15,20 +18,28 @@ set -euo pipefail
 build=${1:-build-release}
 secs=${2:-30}
 shift $(( $# > 2 ? 2 : $# ))
-transports=("${@:-udp}")
-[ $# -eq 0 ] && transports=(udp shm)
+legs=("${@:-udp}")
+[ $# -eq 0 ] && legs=(udp shm)
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=$(mktemp -d)
 domain=$((150 + $$ % 50))
 rig_pid=""
+rec_pid=""
 conf=""
 cleanup() {
+  [ -n "${rec_pid:-}" ] && kill -INT "$rec_pid" 2>/dev/null || true
   if [ -n "$rig_pid" ] && kill -0 "$rig_pid" 2>/dev/null; then kill -INT "$rig_pid"; sleep 3; kill -KILL "$rig_pid" 2>/dev/null || true; fi
   [ -n "$conf" ] && rm -f "$conf"
   rm -rf "$out"
 }
 trap cleanup EXIT
-for t in "${transports[@]}"; do
+rec_pid=""
+names=()
+for i in "${!legs[@]}"; do
+  leg=${legs[$i]}
+  t=${leg%+record}
+  name="${i}_${leg}"
+  names+=("$name")
   # Relative paths in a rig config resolve against its directory: the generated one sits in config/.
   conf="$root/config/.bench_transport_$$.yaml"
   sed -e "s/^    domain: 0$/    domain: $domain/" -e "s|^    profile: cyclonedds/loopback.xml.*|&\n    transport: $t|" \
@@ -57,15 +68,20 @@ PY
   fi
   # The monitor as a tuned subscriber of that rig: its thread and DDS threads at the rig's priority.
   mon_rt=(--rt-priority "$(python3 -c 'import sys, yaml; print(yaml.safe_load(open(sys.argv[1]))["rig"]["dds"].get("realtime_priority", 0))' "$conf")")
-  "$build/rig" up "$conf" --duration $((secs + 14)) 2>"$out/up_$t.log" &
+  "$build/rig" up "$conf" --duration $((secs + 14)) 2>"$out/up_$name.log" &
   rig_pid=$!
   sleep 8  # RouDi, fakes, streams, DDS matched
-  "$build/rig" monitor --domain "$domain" --transport "$t" "${mon_rt[@]}" --duration "$secs" --json --summary "$out/summary_$t.json" \
-    >/dev/null 2>"$out/monitor_$t.log" &
+  if [ "$leg" != "$t" ]; then
+    "$build/rig" record --domain "$domain" --transport "$t" --compression lz4 --duration "$secs" --out "$out/rec_$name.mcap" \
+      >"$out/record_$name.json" 2>"$out/record_$name.log" &
+    rec_pid=$!
+  fi
+  "$build/rig" monitor --domain "$domain" --transport "$t" "${mon_rt[@]}" --duration "$secs" --json --summary "$out/summary_$name.json" \
+    >/dev/null 2>"$out/monitor_$name.log" &
   mon_pid=$!
-  python3 - "$rig_pid" "$mon_pid" "$secs" "$out/cpu_$t.json" <<'PY'
+  python3 - "$rig_pid" "$mon_pid" "$secs" "$out/cpu_$name.json" "${rec_pid:-0}" <<'PY'
 import json, os, sys, time
-rig, mon, secs, dst = int(sys.argv[1]), int(sys.argv[2]), float(sys.argv[3]), sys.argv[4]
+rig, mon, secs, dst, rec = int(sys.argv[1]), int(sys.argv[2]), float(sys.argv[3]), sys.argv[4], int(sys.argv[5])
 hz = os.sysconf("SC_CLK_TCK")
 def stat(path):
     s = open(path).read()
@@ -85,7 +101,7 @@ def tree(root):
     return out
 def sample():
     procs = {}
-    for p in tree(rig) + [mon]:
+    for p in tree(rig) + [mon] + ([rec] if rec else []):
         try:
             comm, _, t = stat(f"/proc/{p}/stat"); procs[p] = (comm, t)
         except OSError:
@@ -96,41 +112,50 @@ t0, p0 = sample()
 time.sleep(max(1.0, secs - 4.0))
 t1, p1 = sample()
 dt = t1 - t0
-procs = [{"pid": p, "comm": c, "cpu_pct": 100.0 * (t - p0[p][1]) / hz / dt, "monitor": p == mon}
+procs = [{"pid": p, "comm": c, "cpu_pct": 100.0 * (t - p0[p][1]) / hz / dt, "monitor": p == mon, "recorder": p == rec}
          for p, (c, t) in p1.items() if p in p0]
 json.dump({"seconds": dt, "procs": procs}, open(dst, "w"))
 PY
   wait "$mon_pid" || true
-  wait "$rig_pid" || echo "rig up ($t) exited with $?; its log: $out/up_$t.log" >&2
+  if [ -n "$rec_pid" ]; then wait "$rec_pid" || echo "rig record ($name) exited with $?: $(tail -2 "$out/record_$name.log")" >&2; rec_pid=""; fi
+  wait "$rig_pid" || echo "rig up ($name) exited with $?; its log: $out/up_$name.log" >&2
   rig_pid=""
-  grep -E "shm:|error" "$out/up_$t.log" | sed "s/^/  [$t] /" >&2 || true
+  grep -E "shm:|error" "$out/up_$name.log" | sed "s/^/  [$name] /" >&2 || true
 done
-python3 - "$out" "$secs" "${transports[@]}" <<'PY'
+python3 - "$out" "$secs" "${names[@]}" <<'PY'
 import json, sys
 out, secs, ts = sys.argv[1], float(sys.argv[2]), sys.argv[3:]
 rows = {t: {r["topic"]: r for r in json.load(open(f"{out}/summary_{t}.json")) if "topic" in r} for t in ts}
 cpu = {t: json.load(open(f"{out}/cpu_{t}.json")) for t in ts}
-print(f"mock rig, {secs:.0f} s per transport; dds stage = source timestamp -> monitor receive (ms)")
-hdr = "".join(f" | {t + ' p50':>9} {'p99':>7} {'max':>7} {'recv':>5} {'lost':>4}" for t in ts)
+print(f"mock rig, {secs:.0f} s per leg; dds stage = source timestamp -> monitor receive (ms)")
+hdr = "".join(f" | {t + ' p50':>16} {'p99':>7} {'max':>7} {'recv':>5} {'lost':>4}" for t in ts)
 print(f"{'topic':46}{hdr}")
 for topic in sorted(set().union(*[set(r) for r in rows.values()])):
     line = f"{topic:46}"
     for t in ts:
         r = rows[t].get(topic)
         if r is None:
-            line += f" | {'-':>9} {'-':>7} {'-':>7} {'-':>5} {'-':>4}"
+            line += f" | {'-':>16} {'-':>7} {'-':>7} {'-':>5} {'-':>4}"
             continue
         d = r["latency_ms"].get("dds", {})
-        line += f" | {d.get('p50', float('nan')):9.3f} {d.get('p99', float('nan')):7.3f} {d.get('max', float('nan')):7.3f} {r['received']:5d} {r['lost']:4d}"
+        line += f" | {d.get('p50', float('nan')):16.3f} {d.get('p99', float('nan')):7.3f} {d.get('max', float('nan')):7.3f} {r['received']:5d} {r['lost']:4d}"
     print(line)
 for t in ts:
     procs = cpu[t]["procs"]
-    whole = sum(p["cpu_pct"] for p in procs if not p["monitor"])
+    whole = sum(p["cpu_pct"] for p in procs if not p["monitor"] and not p.get("recorder"))
     by = {}
     for p in procs:
-        if not p["monitor"]:
+        if not p["monitor"] and not p.get("recorder"):
             by[p["comm"]] = by.get(p["comm"], 0.0) + p["cpu_pct"]
     mon = sum(p["cpu_pct"] for p in procs if p["monitor"])
+    rec = sum(p["cpu_pct"] for p in procs if p.get("recorder"))
+    extra = ""
+    try:
+        r = [json.loads(l) for l in open(f"{out}/record_{t}.json") if l.startswith("{")][-1]
+        d = r.get("drops", {})
+        extra = f"; recorder {rec:.1f} %, {r.get('written', 0)} of {r.get('received', 0)} written, drops {sum(d.values())}"
+    except (OSError, IndexError, ValueError):
+        pass
     print(f"{t}: whole rig {whole:.1f} % of one core (" + ", ".join(f"{k} {v:.1f}" for k, v in sorted(by.items(), key=lambda kv: -kv[1]) if v >= 0.3)
-          + f"); monitor {mon:.1f} %")
+          + f"); monitor {mon:.1f} %" + extra)
 PY
