@@ -100,7 +100,14 @@ struct DecoderImpl {
   bool have_prev = false;
   bool window_open = false;  // between the window's start and the cut: points past the cut go to next()
   int prev_az = 0;
-  Nanos prev_stamp = 0;
+  Nanos prev_stamp = 0;  // the caller's
+  // The caller's mapping of sensor time may move while the sensor's clock goes on (a host
+  // CLOCK_REALTIME step: the mapping follows the host, a PTP-synced sensor does not): the stamps
+  // jump, the tail times do not. That is no time jump (it cost the scan across it and a dropped
+  // packet); the scans already begun stay on their line (stamps less line_shift) and the scan after
+  // the next cut moves onto the caller's. A time jump is both clocks jumping.
+  Nanos line_shift = 0;
+  Nanos prev_own = 0;  // the previous packet's stamp on its line
   detail::AzimuthFov fov;
   int prev_trailing_bad = 0;
   std::int64_t prev_sensor_us = 0;  // the previous packet's tail time of day (µs)
@@ -193,6 +200,7 @@ struct DecoderImpl {
     time_judge.reset();
     rejected_since_prev = 0;
     turning = false;
+    line_shift = 0;
   }
 
   // Ends the current scan; the hole of late packets was that scan's.
@@ -358,6 +366,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   std::uint32_t missing = 0;
   std::uint32_t slots = 0;  // packet slots between the previous good packet and this one
   const Nanos period_ns = static_cast<Nanos>(mi->group_period_ns) * groups;
+  Nanos own = stamp - line_shift;
+  // Scans end and none holds the old line's points: the caller's stamps from here on.
+  const auto to_caller_line = [&] {
+    line_shift = 0;
+    own = stamp;
+  };
   if (have_prev) {
     constexpr std::int64_t kDayUs = 86'400'000'000LL;
     std::int64_t dt_us = sensor_us - prev_sensor_us;
@@ -369,9 +383,15 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .groups_per_packet = groups,
                         .dt_ns = dt_us * 1000,
                         .packet_period_ns = period_ns};
-    const bool jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    const bool stamp_jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    const bool jumped = stamp_jumped && is_time_jump(0, in.dt_ns, cfg.max_packet_gap_ns);
+    if (stamp_jumped && !jumped) {  // the mapping moved, the sensor went on
+      line_shift += stamp - prev_stamp - in.dt_ns;
+      own = stamp - line_shift;
+      ++stats.mapping_steps;
+    }
     // A late packet steps back in time too: placed when within the reorder window.
-    const bool far_back = stamp < prev_stamp - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
+    const bool far_back = own < prev_own - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
     auto gap = detail::azimuth_gap(fov, in);
     if (gap.backwards) {
@@ -383,7 +403,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         return std::nullopt;
       }
       if (hole.holds(az[first_good]) && !far_back) {
-        place_late(p, az, fit, groups, n, mode, unit, stamp, packet.rx_ns);
+        place_late(p, az, fit, groups, n, mode, unit, own, packet.rx_ns);
         return std::nullopt;
       }
       scans.reject(PacketStatus::kOutOfOrder);
@@ -411,6 +431,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         // The lookahead scan (points already past the cut) will never be completed either.
         if (scans.current().scan.packets > 0) scans.merge(out, end(false));
         scans.drop_next();
+        to_caller_line();
         have_prev = false;
         have_seq = false;
         gap = {};
@@ -456,6 +477,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                                                         std::max(1.0, fit.step * groups))));
       scans.add_missing(take(detail::packets_on_arc(fov, emit_raw, a0, fit.step, groups)));
       scans.lose_scans(gap.turns + (az_crosses ? 1U : 0U) - 1U);
+      to_caller_line();
       have_prev = false;
       have_seq = false;
       missing = 0;
@@ -476,6 +498,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   }
 
   prev_stamp = stamp;
+  prev_own = own;
   prev_sensor_us = sensor_us;
   scans.begin_packet();
   // Packets lost across the cut: those past it are the next scan's (issue 26 item 3).
@@ -509,7 +532,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     if ((fit.bad >> g) & 1U) continue;
     const std::uint8_t* blk = p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size;
     const int a = az[g];
-    const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
+    const Nanos group_stamp = own + static_cast<Nanos>(mi->group_period_ns) * g;
     bool cut_here = false;
     if (have_prev) {
       const int step = az_step(prev_az, a);
@@ -532,6 +555,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     if (cut_here) {
       scans.merge(out, end(scans.current().from_cut));
       window_open = false;
+      if (line_shift != 0) {  // the scan on the old line is out: the next moves onto the caller's
+        PendingScan& next = scans.current();
+        if (next.started) next.scan.stamp += line_shift;
+        prev_own += line_shift;
+        to_caller_line();
+      }
       if (missing_next > 0) {
         scans.add_missing(missing_next);
         hole = {prev_az, az[first_good], detail::kTurn, missing_next};

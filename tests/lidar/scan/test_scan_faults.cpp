@@ -228,15 +228,47 @@ TEST_P(ScanFaults, SustainedClockStepIsStillAJump) {
   auto pkts = s_.pkts;
   const std::size_t at = pkts.size() / 2 + 5;
   for (std::size_t i = at; i < pkts.size(); ++i) pkts[i].stamp += 5'000'000'000LL;
-  // The Ouster judges its column times with the stamps (a step of the stamps alone is the mapping:
-  // test_lidar_ouster_synthetic AHostClockStep...): here the sensor's clock steps, its packets too.
-  if (mock::is_ouster_model(GetParam())) {
+  // The Ouster and Hesai judge their packets' own time with the stamps (a step of the stamps alone
+  // is the mapping: HostClockStepMovesTheStampsNotTheSensor): here the sensor's clock steps, its
+  // packets too.
+  if (mock::is_ouster_model(GetParam()) || std::string(GetParam()).rfind("Pandar", 0) == 0) {
     const Stream later = render(GetParam(), 1.0, 5'000'000'000LL);
     for (std::size_t i = at; i < pkts.size(); ++i) pkts[i].bytes = later.pkts[i].bytes;
   }
   const Decoded r = run(s_.options, pkts);
   EXPECT_EQ(r.st.time_jumps, 1U);
   EXPECT_EQ(status(r, PacketStatus::kBadTime), 1U) << "the first packet of the step is judged alone";
+}
+
+// A host CLOCK_REALTIME step back of 500 ms mid-scan (issue 26, the LIDAR campaign): the driver's
+// mapping follows the host, so the stamps step while the sensor's own clock (Ouster column times,
+// Hesai tail time) goes on. Not a time jump: no scan lost, no packet dropped, nothing missing; the
+// scan across the step keeps the stamp it began with, and a later scan takes the moved mapping.
+// Velodyne (µs since the hour mapped through GPRMC/PPS) keeps judging the stamps: skipped.
+TEST_P(ScanFaults, HostClockStepMovesTheStampsNotTheSensor) {
+  const std::string model = GetParam();
+  if (!mock::is_ouster_model(model) && model.rfind("Pandar", 0) != 0) GTEST_SKIP() << "judges the stamps";
+  auto pkts = s_.pkts;
+  const std::size_t start = scan_start_near(s_, s_.pkts.size() / 2);
+  const auto half_scan = static_cast<std::size_t>(s_.sensor->packets_per_second() / 20.0);
+  for (std::size_t i = start + half_scan; i < pkts.size(); ++i) pkts[i].stamp -= 500'000'000;
+  const Decoded r = run(s_.options, pkts);
+  EXPECT_EQ(r.st.time_jumps, 0U);
+  EXPECT_EQ(status(r, PacketStatus::kBadTime), 0U);
+  EXPECT_EQ(r.dropped(), 0U);
+  EXPECT_EQ(r.missing(), 0U);
+  EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
+  ASSERT_EQ(r.scans.size(), clean_.scans.size());
+  EXPECT_EQ(r.points(), clean_.points());
+  std::size_t across = 0;  // the scan across the step: the one that began nearest `start`
+  for (std::size_t k = 1; k < clean_.scans.size(); ++k)
+    if (std::llabs(clean_.scans[k].stamp - s_.pkts[start].stamp) < std::llabs(clean_.scans[across].stamp - s_.pkts[start].stamp))
+      across = k;
+  ASSERT_LT(across + 1, r.scans.size());
+  EXPECT_EQ(r.scans[across].stamp, clean_.scans[across].stamp) << "the scan across the step keeps the stamp it began with";
+  EXPECT_EQ(r.scans[across + 1].stamp, clean_.scans[across + 1].stamp - 500'000'000) << "the next: the moved mapping";
+  for (const auto& s : r.scans)
+    for (const auto& p : s.points) ASSERT_LT(p.t, 200'000'000U) << "points' t on one line";
 }
 
 // A sector the sensor stops sending for a while (its FOV setting changed, lidar.blind_sector): the
