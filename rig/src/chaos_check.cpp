@@ -134,7 +134,11 @@ class Checker {
   // (chaos_fused_check.cpp); its rate while no fault touched a LIDAR or the host, as any topic's.
   void check_fused_cloud(const std::vector<const SampleRecord*>& samples) {
     const JudgeContext ctx{[this](Nanos t) { return doubled(t); }, [this](Nanos t) { return at_s(t); },
-                           [this](const std::string& i, const std::string& topic, const std::string& w) { violation(i, topic, w); }};
+                           [this](const std::string& i, const std::string& topic, const std::string& w) { violation(i, topic, w); },
+                           [this](const std::string& topic, std::uint64_t seq) -> const UnitMatch* {
+                             const auto it = matched_.find({topic, seq});
+                             return it == matched_.end() ? nullptr : &it->second;
+                           }};
     check_fused(in_, ctx, r_);
     const auto e = in_.expected.find(kFusedCloudTopic);
     if (e != in_.expected.end()) check_isolation(kFusedCloudTopic, r_.topics[kFusedCloudTopic], samples, e->second.rate_hz, e->second.depends_on);
@@ -263,6 +267,7 @@ class Checker {
                                        " s matches no " + log.header.unit + " the device made");
         continue;
       }
+      matched_[{topic, s->seq}] = UnitMatch{u->rec.unit, u->rec.acq_ns, std::max(u->rec.acq_ns, u->first_intact_acq)};
       if (u->sample != nullptr) {
         ++t.published_twice;
         violation("accounted", topic, log.header.unit + " " + std::to_string(u->rec.unit) + " published twice (seq " +
@@ -534,6 +539,7 @@ class Checker {
   const Input& in_;
   const std::vector<Interval> doubled_;
   Result r_;
+  std::map<std::pair<std::string, std::uint64_t>, UnitMatch> matched_;  // (topic, seq) -> its truth unit
 };
 
 }  // namespace

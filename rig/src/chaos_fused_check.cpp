@@ -22,65 +22,13 @@ std::string fmt(double v) {
   return b;
 }
 
-// One scan as its mock made it: true first firing, and the first firing that arrived intact (a
-// scan whose first packets were lost may be stamped anywhere up to it, as the LIDAR topics).
-struct ScanTruth {
-  std::int64_t unit = 0;
-  Nanos acq = 0;
-  Nanos first_intact = 0;
-};
-
-// A fused LIDAR: its truth's scans by acquisition, its published scans (/rig/stamps) by seq.
+// A fused LIDAR: its scans' true first firings (the rotation boundary), its published scans
+// (/rig/stamps) by seq.
 struct Lidar {
   std::string topic, name;
-  std::vector<ScanTruth> units;
-  Nanos tolerance = 50'000'000;  // a published stamp belongs to the scan nearest it, within this
+  std::vector<Nanos> acqs;
   std::map<std::uint64_t, const SampleRecord*> by_seq;
 };
-
-std::vector<ScanTruth> scans_of(const truth::Log& log) {
-  std::vector<ScanTruth> out;
-  std::map<std::int64_t, std::size_t> index;
-  for (const auto& u : log.units) {
-    index[u.unit] = out.size();
-    out.push_back({u.unit, u.acq_ns, 0});
-  }
-  for (const auto& p : log.parts) {
-    if (!truth::delivered_intact(p.fate)) continue;
-    for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
-      const auto it = index.find(id);
-      if (it == index.end()) continue;
-      auto& s = out[it->second];
-      if (s.first_intact == 0 || p.acq_ns < s.first_intact) s.first_intact = p.acq_ns;
-    }
-  }
-  for (auto& s : out) s.first_intact = std::max(s.acq, s.first_intact);
-  std::sort(out.begin(), out.end(), [](const ScanTruth& a, const ScanTruth& b) { return a.acq < b.acq; });
-  return out;
-}
-
-Nanos half_median_gap(const std::vector<ScanTruth>& units) {
-  if (units.size() < 2) return 50'000'000;
-  std::vector<Nanos> gaps;
-  for (std::size_t i = 1; i < units.size(); ++i) gaps.push_back(units[i].acq - units[i - 1].acq);
-  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
-  return std::max<Nanos>(gaps[gaps.size() / 2] / 2, 1'000'000);
-}
-
-const ScanTruth* nearest(const std::vector<ScanTruth>& units, Nanos t, Nanos tolerance) {
-  auto it = std::lower_bound(units.begin(), units.end(), t, [](const ScanTruth& u, Nanos v) { return u.acq < v; });
-  const ScanTruth* best = nullptr;
-  Nanos best_d = tolerance + 1;
-  for (auto c : {it, it == units.begin() ? it : std::prev(it)}) {
-    if (c == units.end()) continue;
-    const Nanos d = std::llabs(c->acq - t);
-    if (d < best_d) {
-      best_d = d;
-      best = &*c;
-    }
-  }
-  return best;
-}
 
 // The rotation boundary of the truth: the LIDARs turn phase-locked at one period, each scan starts
 // at its LIDAR's phase (the circular mean of its true acquisitions mod the period); the boundary lies
@@ -90,10 +38,10 @@ const ScanTruth* nearest(const std::vector<ScanTruth>& units, Nanos t, Nanos tol
 Nanos rotation_boundary(const std::vector<Lidar>& lidars, Nanos period) {
   std::vector<Nanos> phases;
   for (const auto& l : lidars) {
-    if (l.units.empty()) continue;
+    if (l.acqs.empty()) continue;
     double sx = 0, sy = 0;
-    for (const auto& u : l.units) {
-      const double a = 2 * std::numbers::pi * static_cast<double>(floor_mod(u.acq, period)) / static_cast<double>(period);
+    for (const Nanos acq : l.acqs) {
+      const double a = 2 * std::numbers::pi * static_cast<double>(floor_mod(acq, period)) / static_cast<double>(period);
       sx += std::cos(a);
       sy += std::sin(a);
     }
@@ -134,6 +82,7 @@ class FusedJudge {
     for (const FusedSet& set : in_.fused.sets) judge_sweep(set);
     account_scans();
     unpaired_clouds();
+    report();
     if (!errors_.empty()) {
       std::sort(errors_.begin(), errors_.end());
       t_.stamp_error_p99_ms = errors_[std::min(errors_.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(errors_.size())))];
@@ -146,10 +95,27 @@ class FusedJudge {
   struct Member {
     const Lidar* lidar;
     const SampleRecord* scan;
-    const ScanTruth* truth;  // nullptr: its stamp names no scan the mock made (the LIDAR's `stamps` says so)
+    const UnitMatch* truth;  // the LIDAR judge's match; nullptr: none (outside the window, or no scan the mock made)
   };
 
-  void fail(const std::string& what) const { ctx_.violation("fused", kFusedCloudTopic, what); }
+  // Violations by kind: each kind reported once, its first sweep with the count of sweeps like it,
+  // so that the few examples of the verdict show every kind and how often.
+  void fail(const std::string& kind, const std::string& what) {
+    const auto it = std::find_if(kinds_.begin(), kinds_.end(), [&](const auto& k) { return k.kind == kind; });
+    if (it == kinds_.end()) kinds_.push_back({kind, what, 1});
+    else ++it->count;
+  }
+  void report() const {
+    for (const auto& k : kinds_)
+      ctx_.violation("fused", kFusedCloudTopic, k.count == 1 ? k.first : k.first + " (1 of " + std::to_string(k.count) + " such)");
+  }
+  // A member's stamp off its truth by more than the bound (the LIDAR's own `stamps` violation), said.
+  std::string own_stamp_error(const Member& m) const {
+    if (m.truth == nullptr) return {};
+    const Nanos own = m.scan->acquisition_ns - m.truth->acq;
+    if (ms(std::llabs(own)) <= in_.bounds.lidar_stamp_ms) return {};
+    return m.lidar->name + " seq " + std::to_string(m.scan->seq) + "'s own stamp is " + fmt(ms(own)) + " ms off its truth";
+  }
   bool in_window(Nanos x) const { return x >= in_.window_begin_ns && x < in_.window_end_ns && !ctx_.doubled(x); }
   std::int64_t rotation(Nanos acq) const { return floor_div(acq - boundary_, period_); }
 
@@ -159,8 +125,8 @@ class FusedJudge {
       l.topic = topic;
       l.name = name_of(topic);
       for (const auto& log : in_.truths)
-        if (log.header.topic == topic) l.units = scans_of(log);
-      l.tolerance = half_median_gap(l.units);
+        if (log.header.topic == topic)
+          for (const auto& u : log.units) l.acqs.push_back(u.acq_ns);
       lidar_of_[topic] = lidars_.size();
       lidars_.push_back(std::move(l));
     }
@@ -188,10 +154,10 @@ class FusedJudge {
     const SampleRecord* cloud = cit == clouds_.end() ? nullptr : cit->second;
     if (cloud == nullptr) {
       ++t_.unmatched;
-      fail(sweep + ": members published, no fused cloud stamped with its seq");
+      fail("no_cloud", sweep + ": members published, no fused cloud stamped with its seq");
     } else if (cloud->acquisition_ns != set.stamp) {
       ++t_.unmatched;
-      fail(sweep + ": the fused cloud is stamped at " + ctx_.at_s(cloud->acquisition_ns) + " s, its members at " +
+      fail("cloud_stamp", sweep + ": the fused cloud is stamped at " + ctx_.at_s(cloud->acquisition_ns) + " s, its members at " +
            ctx_.at_s(set.stamp) + " s");
       cloud = nullptr;
     }
@@ -209,13 +175,13 @@ class FusedJudge {
       if (s == nullptr) {
         ++t_.unmatched;
         all_published = false;
-        fail(sweep + ": member " + m.topic + " seq " + std::to_string(m.seq) + " stamped at " + ctx_.at_s(m.stamp) +
+        fail("unpublished", sweep + ": member " + m.topic + " seq " + std::to_string(m.seq) + " stamped at " + ctx_.at_s(m.stamp) +
              " s was never published");
         continue;
       }
       const Lidar& l = lidars_[li->second];
-      members.push_back({&l, s, nearest(l.units, s->acquisition_ns, l.tolerance)});
-      if (!topics.insert(m.topic).second) fail(sweep + " holds two scans of " + l.name);
+      members.push_back({&l, s, ctx_.truth_of(l.topic, s->seq)});
+      if (!topics.insert(m.topic).second) fail("two_scans", sweep + " holds two scans of " + l.name);
       packets += s->packets;
       dropped += s->dropped;
       missing += s->missing_packets;
@@ -229,9 +195,11 @@ class FusedJudge {
       if (earliest == nullptr || m.truth->acq < earliest->truth->acq) earliest = &m;
     }
     if (rotations.size() > 1) {
-      std::string what = sweep + " mixes rotations:";
+      std::string what = sweep + " mixes rotations:", why;
       for (const auto& [rot, m] : rotations) what += " " + scan_name(*m) + ";";
-      fail(what);
+      for (const auto& m : members)
+        if (const std::string e = own_stamp_error(m); !e.empty()) why += (why.empty() ? " its stamps put them in one: " : ", ") + e;
+      fail(why.empty() ? "mixes" : "mixes_by_stamps", what + why);
     }
     // Its stamp: the earliest member's (the fusion's rule), and so that scan's first firing (or up
     // to its first packet that arrived).
@@ -239,7 +207,7 @@ class FusedJudge {
       Nanos min_stamp = INT64_MAX;
       for (const auto& m : members) min_stamp = std::min(min_stamp, m.scan->acquisition_ns);
       if (min_stamp != set.stamp)
-        fail(sweep + ": stamped " + fmt(ms(set.stamp - min_stamp)) + " ms from its earliest member's stamp");
+        fail("stamp_rule", sweep + ": stamped " + fmt(ms(set.stamp - min_stamp)) + " ms from its earliest member's stamp");
     }
     if (earliest != nullptr) {
       const Nanos lo = earliest->truth->acq, hi = earliest->truth->first_intact;
@@ -249,11 +217,14 @@ class FusedJudge {
         ++t_.stamps_flagged;
       } else if (ms(err) > in_.bounds.lidar_stamp_ms) {
         ++t_.stamps_outside;
-        // A member's own stamp off its truth is the LIDAR's `stamps` violation, inherited: said so.
-        const Nanos own = earliest->scan->acquisition_ns - lo;
-        fail(sweep + ": stamp " + fmt(ms(set.stamp - lo)) + " ms from the true acquisition of its earliest member " +
-             scan_name(*earliest) + " (bound " + fmt(in_.bounds.lidar_stamp_ms) + " ms)" +
-             (ms(std::llabs(own)) > in_.bounds.lidar_stamp_ms ? "; inherited: that scan's own stamp is " + fmt(ms(own)) + " ms off" : ""));
+        // Stamped with a member's stamp that is off its own truth: the LIDAR's `stamps` violation, inherited.
+        std::string inherited;
+        for (const auto& m : members)
+          if (m.scan->acquisition_ns == set.stamp) inherited = own_stamp_error(m);
+        fail(inherited.empty() ? "stamp" : "stamp_inherited",
+             sweep + ": stamp " + fmt(ms(set.stamp - lo)) + " ms from the true acquisition of its earliest member " +
+                 scan_name(*earliest) + " (bound " + fmt(in_.bounds.lidar_stamp_ms) + " ms)" +
+                 (inherited.empty() ? "" : "; inherited: " + inherited));
       }
     }
     if (cloud == nullptr || !all_published) return;
@@ -262,7 +233,7 @@ class FusedJudge {
     const bool says_complete = cloud->missing_packets == 0 && cloud->dropped == 0;
     complete_[set.seq] = says_complete;
     if (cloud->packets != packets || cloud->dropped != dropped || cloud->missing_packets < missing)
-      fail(sweep + ": its stamps say packets " + std::to_string(cloud->packets) + ", dropped " + std::to_string(cloud->dropped) +
+      fail("stamps_disagree", sweep + ": its stamps say packets " + std::to_string(cloud->packets) + ", dropped " + std::to_string(cloud->dropped) +
            ", missing " + std::to_string(cloud->missing_packets) + "; its members' scans " + std::to_string(packets) + ", " +
            std::to_string(dropped) + ", " + std::to_string(missing));
     if (says_complete && members.size() < lidars_.size()) {
@@ -273,12 +244,12 @@ class FusedJudge {
         if (const SampleRecord* s = published_in(l, earliest); s != nullptr) absent += " (its scan seq " + std::to_string(s->seq) + " was published)";
       }
       t_.hidden_missing += lidars_.size() - members.size();
-      fail(sweep + " says complete (missing 0) with " + std::to_string(members.size()) + " of " + std::to_string(lidars_.size()) +
+      fail("complete_without", sweep + " says complete (missing 0) with " + std::to_string(members.size()) + " of " + std::to_string(lidars_.size()) +
            " LIDARs; absent: " + absent);
     }
     if (members.size() == lidars_.size() && cloud->missing_packets > missing) {
       t_.phantom_missing += cloud->missing_packets - missing;
-      fail(sweep + " holds every LIDAR and counts " + std::to_string(cloud->missing_packets) + " packets missing; its scans miss " +
+      fail("phantom", sweep + " holds every LIDAR and counts " + std::to_string(cloud->missing_packets) + " packets missing; its scans miss " +
            std::to_string(missing));
     }
   }
@@ -288,7 +259,7 @@ class FusedJudge {
     if (ref == nullptr || ref->truth == nullptr) return nullptr;
     const auto want = rotation(ref->truth->acq);
     for (const auto& [seq, s] : l.by_seq) {
-      const ScanTruth* u = nearest(l.units, s->acquisition_ns, l.tolerance);
+      const UnitMatch* u = ctx_.truth_of(l.topic, seq);
       if (u != nullptr && rotation(u->acq) == want) return s;
     }
     return nullptr;
@@ -322,7 +293,7 @@ class FusedJudge {
           ++t_.published_twice;
           std::string sweeps;
           for (const auto n : it->second) sweeps += (sweeps.empty() ? "" : " and ") + std::to_string(n);
-          ctx_.violation("fused", kFusedCloudTopic, lidars_[li].name + " seq " + std::to_string(seq) + " fused into sweeps " + sweeps);
+          fail("fused_twice", lidars_[li].name + " seq " + std::to_string(seq) + " fused into sweeps " + sweeps);
         }
         const auto c = complete_.find(it->second.front());
         ++(c != complete_.end() && c->second ? t_.published_complete : t_.published_incomplete);
@@ -330,7 +301,7 @@ class FusedJudge {
     t_.counted_lost = std::min(in_.fused.scans_dropped, not_fused);
     t_.unaccounted = not_fused - t_.counted_lost;
     if (t_.unaccounted > 0)
-      fail(std::to_string(t_.unaccounted) + " scans published by the LIDARs neither fused nor counted dropped by fusion (" +
+      fail("unaccounted", std::to_string(t_.unaccounted) + " scans published by the LIDARs neither fused nor counted dropped by fusion (" +
            std::to_string(in_.fused.scans_dropped) + " counted); first: " + first);
   }
 
@@ -339,7 +310,7 @@ class FusedJudge {
     for (const auto& [seq, s] : clouds_) {
       if (!in_window(s->acquisition_ns) || sets_.contains(seq)) continue;
       ++t_.unmatched;
-      fail("fused cloud seq " + std::to_string(seq) + " (stamped at " + ctx_.at_s(s->acquisition_ns) + " s) has no members on /rig/sets/fused");
+      fail("no_members", "fused cloud seq " + std::to_string(seq) + " (stamped at " + ctx_.at_s(s->acquisition_ns) + " s) has no members on /rig/sets/fused");
     }
   }
 
@@ -384,6 +355,11 @@ class FusedJudge {
   std::map<std::pair<std::size_t, std::uint64_t>, std::vector<std::uint64_t>> fused_in_;  // (lidar, seq) -> sweeps
   std::map<std::uint64_t, bool> complete_;                                       // sweep -> its stamps say complete
   std::vector<double> errors_;
+  struct Kind {
+    std::string kind, first;
+    std::uint64_t count = 0;
+  };
+  std::vector<Kind> kinds_;
 };
 
 }  // namespace

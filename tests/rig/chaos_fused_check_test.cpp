@@ -62,6 +62,7 @@ Input honest() {
       s.topic = topic_of(i);
       s.seq = seq_of(i, u);
       s.acquisition_ns = acq(i, u);
+      s.first_rx_ns = acq(i, u) + 100'000;  // its first packet (sent at its first firing): the LIDAR judge's match
       s.publish_ns = s.acquisition_ns + kPeriod + 5'000'000;
       s.received_ns = s.publish_ns + 1'000'000;
       s.packets = kParts;
@@ -134,6 +135,28 @@ TEST(ChaosFusedCheck, ASweepMixingRotationsIsCaught) {
   EXPECT_TRUE(held.all_held()) << result_text(held);
   EXPECT_EQ(held.topics.at(kFusedCloudTopic).counted_lost, 1u);
   EXPECT_EQ(held.topics.at(kFusedCloudTopic).published_incomplete, 2u);
+}
+
+// The campaign's case: after a host clock step back the left LIDAR's stamps are slewed 110 ms early
+// while the front's are true; by their stamps rotation 11 of the left belongs with rotation 10.
+TEST(ChaosFusedCheck, ASweepMixingRotationsByAMembersStampIsCaughtAndSaysWhy) {
+  Input in = honest();
+  const Nanos slewed = acq(1, 11) - 110'000'000;
+  for (auto& s : in.samples)
+    if (s.topic == topic_of(1) && s.seq == seq_of(1, 11)) s.acquisition_ns = slewed;
+  in.fused.sets[10].members[1] = FusedMember{topic_of(1), slewed, seq_of(1, 11)};
+  in.fused.sets[10].stamp = slewed;
+  cloud_of(in, 10).acquisition_ns = slewed;
+  in.fused.sets[11].members.erase(in.fused.sets[11].members.begin() + 1);
+  cloud_of(in, 11).packets = 2 * kParts;
+  cloud_of(in, 11).missing_packets = kParts;
+  in.fused.scans_dropped = 1;  // the left's rotation 10: late
+  const Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_FALSE(r.invariants.at("stamps")) << "the left topic's own stamp";
+  EXPECT_TRUE(example_says(r, "sweep 10 (stamped at 0.992 s) mixes rotations")) << result_text(r);
+  EXPECT_TRUE(example_says(r, "its stamps put them in one: left seq 1011's own stamp is -110.000 ms off its truth")) << result_text(r);
+  EXPECT_TRUE(example_says(r, "; inherited: left seq 1011's own stamp is -110.000 ms off its truth")) << result_text(r);
 }
 
 TEST(ChaosFusedCheck, AScanFusedTwiceIsCaught) {
