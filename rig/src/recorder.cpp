@@ -42,7 +42,7 @@ struct WriterShared {
   std::atomic<bool> failed{false};
   std::mutex mu;
   std::string error;
-  std::atomic<std::uint64_t> file_bytes{0}, files{0}, compress_ns{0}, write_ns{0}, chunks{0};
+  std::atomic<std::uint64_t> file_bytes{0}, files{0}, compress_ns{0}, write_ns{0}, chunks{0}, metadata_ns{0};
   std::vector<std::string> file_names;  // under mu
 };
 
@@ -55,6 +55,7 @@ void writer_loop(record::SplitWriter& out, RecordQueue& q, WriterShared& w) {
     w.write_ns = static_cast<std::uint64_t>(t.write_ns);
     w.chunks = t.chunks;
     w.files = out.files().size();
+    w.metadata_ns = static_cast<std::uint64_t>(out.metadata_ns());
   };
   const auto fail = [&](const std::string& why) {
     std::lock_guard lock(w.mu);
@@ -257,7 +258,8 @@ class Recorder {
     j["chunks"] = shared_.chunks.load();
     j["compression"] = std::string(record::mcap_name(opt_.compression).empty() ? "none" : record::mcap_name(opt_.compression));
     j["writer_ms"] = {{"compress", static_cast<double>(shared_.compress_ns.load()) / 1e6},
-                      {"write", static_cast<double>(shared_.write_ns.load()) / 1e6}};
+                      {"write", static_cast<double>(shared_.write_ns.load()) / 1e6},
+                      {"metadata", static_cast<double>(shared_.metadata_ns.load()) / 1e6}};
     j["drops"] = {{"dds_lost", s.dds_lost}, {"dds_rejected", s.dds_rejected}, {"malformed", s.malformed},
                   {"queue_full", s.queue}, {"disk", s.disk}};
     for (auto& t : topics_) {
