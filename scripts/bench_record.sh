@@ -4,12 +4,14 @@
 # Usage: scripts/bench_record.sh [SECONDS] [OUT_DIR]   (run under flock /tmp/rig-rt.lock: it starts
 # the mock rig, whose ports and addresses are fixed). Prints one line per run. CAMERAS=1920x1200 sets
 # every camera to that size (the issue's full-size rig); PLAY=0 skips the `rig play` runs; REC_RT=N
-# runs the recorder at SCHED_FIFO N (--rt-priority).
+# runs the recorder at SCHED_FIFO N (--rt-priority); COMPRESSIONS="lz4" records with those only
+# (default: none lz4 zstd); RIG=PATH runs that `rig` (its tools beside it) instead of build/rig.
 set -euo pipefail
 secs=${1:-30}
 out=${2:-$(mktemp -d /tmp/rig-bench-record-XXXXXX)}
 src=$(cd "$(dirname "$0")/.." && pwd)
-rig=$src/build/rig
+rig=${RIG:-$src/build/rig}
+read -r -a compressions <<< "${COMPRESSIONS:-none lz4 zstd}"
 domain=57
 cfg=$out/mock_rig.yaml
 # The mock rig on domain $domain; its relative paths made absolute for the copy.
@@ -19,11 +21,11 @@ if [ -n "${CAMERAS:-}" ]; then
   sed -i -e "s|^    width: [0-9]*|    width: ${CAMERAS%x*}|" -e "s|^    height: [0-9]*|    height: ${CAMERAS#*x}|" "$cfg"
 fi
 profile=$src/config/cyclonedds/loopback.xml
-"$rig" up "$cfg" --duration $((secs * 3 + 40)) > "$out/rig.log" 2>&1 &
+"$rig" up "$cfg" --duration $((secs * ${#compressions[@]} + 40)) > "$out/rig.log" 2>&1 &
 rig_pid=$!
 trap 'kill $rig_pid 2>/dev/null; wait $rig_pid 2>/dev/null || true' EXIT
 sleep 8  # the rig's processes up, cameras streaming
-for c in none lz4 zstd; do
+for c in "${compressions[@]}"; do
   /usr/bin/time -f "%e %U %S" -o "$out/time_$c" "$rig" record --out "$out/rec_$c.mcap" --domain $domain \
     --dds-profile "$profile" --compression $c --duration "$secs" --no-progress --rt-priority "${REC_RT:-0}" > "$out/summary_$c.json" 2> "$out/err_$c"
   read -r wall user sys < "$out/time_$c"
@@ -43,7 +45,7 @@ PY
 done
 # The rig stopped: `rig play` alone on the host, into a domain without subscribers (the DDS writes
 # still serialize every sample); lateness = when the timed thread woke minus the message's due time.
-kill $rig_pid 2>/dev/null; wait $rig_pid 2>/dev/null || true
+kill $rig_pid 2>/dev/null || true; wait $rig_pid 2>/dev/null || true
 [ "${PLAY:-1}" = 0 ] && exit 0
 sleep 3
 bench_play() {  # rate rt-priority
