@@ -1,0 +1,109 @@
+// `rig chaos` on the GigE cameras of the mock rig alone (config/mock_rig.yaml's free-running
+// cameras) under camera.chunk_data (both payload types) and camera.padded_rows (issue 25; issue 27
+// items 3 and 13): every frame the fakes made is published complete (chunk-data frames were all
+// dropped as incomplete), and the frames made under these faults are stamped within 1 ms of their
+// true exposure start, or no worse than the same cameras' frames without them (a chunked frame's
+// own exposure starved the clock mapping: stamps drifted to 3 ms). The `stamps` invariant itself is
+// not asked for: under load the mapping of fault-free GigE frames is off by up to ~1.4 ms on
+// this VM (issue 27's clock items, another change), which says nothing about chunks or padding.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/common/truth_record.hpp"
+
+#include "rig_cli.hpp"
+#include "rig_process.hpp"
+#include "test_data.hpp"
+
+namespace sensor_rig {
+namespace {
+
+std::string camera(const std::string& name, const std::string& address, int height) {
+  return "  - name: " + name + "\n    backend: aravis\n    device: " + address +
+         "\n    pixel_format: BayerRG8\n    width: 640\n    height: " + std::to_string(height) +
+         "\n    frame_rate: 10\n    mock: {kind: gige}\n";
+}
+
+TEST(ChaosCameraPayload, ChunksAndPaddedRowsHoldAccountedAndStamps) {
+  if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
+  test::TempDir dir;
+  const std::string src = test::source_dir().string();
+  const std::string config = dir.write("cameras.yaml", "rig:\n  name: cameras-only\n  dds: {domain: 0, profile: " + src +
+                                                           "/config/cyclonedds/loopback.xml}\n  diagnostics_period_ms: 1000\n"
+                                                           "cameras:\n" +
+                                                           camera("front_narrow", "127.0.0.2", 480) +
+                                                           camera("corner_front_right", "127.0.0.4", 400) +
+                                                           camera("corner_rear_left", "127.0.0.5", 400));
+  const std::string out = (dir.path / "campaign").string();
+  const auto run = test::run_rig("chaos " + config + " --duration 20 --seed 3 --json --out " + out + " --faults '"
+                                 "camera.chunk_data@2+12>front_narrow;camera.padded_rows:bytes=64@2+12>corner_front_right;"
+                                 "camera.chunk_data:payload=chunk@2+12>corner_rear_left;camera.padded_rows:bytes=32@4+6>corner_rear_left'");
+  ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
+  const auto last_nl = run.out.find_last_of('\n', run.out.size() - 2);
+  const auto j = nlohmann::json::parse(run.out.substr(last_nl == std::string::npos ? 0 : last_nl + 1), nullptr, false);
+  ASSERT_TRUE(j.is_object()) << run.out << "\n" << run.err;
+  EXPECT_EQ(j["faults"]["camera.chunk_data"], 2);
+  EXPECT_EQ(j["faults"]["camera.padded_rows"], 2);
+  for (const char* name : {"front_narrow", "corner_front_right", "corner_rear_left"}) {
+    const auto& t = j["topics"][std::string("/sensors/camera/") + name + "/image_raw"];
+    ASSERT_TRUE(t.is_object()) << name << "\n" << run.out;
+    EXPECT_GT(t["sent"].get<std::uint64_t>(), 150u) << name << ": 10 Hz for ~17 s judged";
+    EXPECT_EQ(t["published_complete"], t["sent"]) << name;
+    EXPECT_EQ(t["published_incomplete"], 0) << name;
+    EXPECT_EQ(t["counted_lost"], 0) << name;
+    EXPECT_EQ(t["unaccounted"], 0) << name;
+  }
+  for (const auto& [name, verdict] : j["invariants"].items())
+    if (name != "stamps") {
+      EXPECT_EQ(verdict, "held") << name << "\n" << run.err;
+    }
+  // Stamp error per published frame (the monitor's record against the truth), under the faults
+  // and without them, from 0.5 s of the campaign on (as the judge: the warm-up's first frames are
+  // stamped before the mapping locks). The faults begin at 2 s.
+  std::vector<double> faulted, clear;
+  std::map<std::string, std::map<std::uint64_t, std::pair<Nanos, bool>>> truth;  // camera -> frame id -> (acq, faulted)
+  for (const char* name : {"front_narrow", "corner_front_right", "corner_rear_left"}) {
+    const auto log = truth::read(out + "/truth/" + name + ".jsonl");
+    Nanos judged_from = 0;
+    for (const auto& f : log.faults) judged_from = judged_from == 0 ? f.at_ns - 1'500'000'000 : std::min(judged_from, f.at_ns - 1'500'000'000);
+    for (const auto& u : log.units) {
+      if (u.acq_ns < judged_from) continue;
+      bool in = false;
+      for (const auto& f : log.faults) in = in || (u.acq_ns >= f.at_ns && u.acq_ns <= f.until_ns);
+      truth["/sensors/camera/" + std::string(name) + "/image_raw"][static_cast<std::uint64_t>(u.unit & 0xffff)] = {u.acq_ns, in};
+    }
+  }
+  std::ifstream csv(out + "/monitor.csv");
+  std::string line;
+  std::getline(csv, line);  // topic,seq,acquisition_ns,...
+  while (std::getline(csv, line)) {
+    std::stringstream ss(line);
+    std::string topic, seq, acq;
+    std::getline(ss, topic, ',');
+    std::getline(ss, seq, ',');
+    std::getline(ss, acq, ',');
+    const auto cam = truth.find(topic);
+    if (cam == truth.end() || seq.empty() || acq.empty()) continue;
+    const auto unit = cam->second.find(std::stoull(seq));
+    if (unit == cam->second.end()) continue;
+    const double error_ms = std::abs(static_cast<double>(std::stoll(acq) - unit->second.first)) / 1e6;
+    (unit->second.second ? faulted : clear).push_back(error_ms);
+  }
+  ASSERT_GT(faulted.size(), 300u) << "frames under the faults";
+  ASSERT_GT(clear.size(), 100u) << "frames without them";
+  const double worst_faulted = *std::max_element(faulted.begin(), faulted.end());
+  const double worst_clear = *std::max_element(clear.begin(), clear.end());
+  std::printf("stamp error max: %.3f ms under chunks/padding (%zu frames), %.3f ms without (%zu frames)\n", worst_faulted,
+              faulted.size(), worst_clear, clear.size());
+  EXPECT_LT(worst_faulted, std::max(1.0, worst_clear + 0.3)) << "chunks or padding cost the stamps";
+}
+
+}  // namespace
+}  // namespace sensor_rig
