@@ -30,6 +30,9 @@ struct RecordTopic {
   bool reliable = true;
   // DDS thread:
   std::uint64_t received = 0, received_bytes = 0, queue_dropped = 0;
+  // Of those received, how many came in an iceoryx chunk (recorded from the chunk itself): the
+  // summary's proof that --transport shm took the shared-memory path, not the network.
+  std::uint64_t from_shared_memory = 0;
   // Writer thread (read by the DDS thread for progress):
   std::atomic<std::uint64_t> written{0}, disk_dropped{0}, queued{0};
   std::size_t channel = 0;  // writer thread only
@@ -191,6 +194,7 @@ class Recorder {
     while (t.reader->take(item.sample)) {
       ++t.received;
       t.received_bytes += item.sample.size();
+      if (item.sample.in_shared_memory()) ++t.from_shared_memory;
       // Over shm a queued sample holds its publisher's iceoryx chunk: bounded per topic too.
       if (opt_.dds.transport == dds::Transport::kShm && t.queued >= opt_.topic_queue) {
         ++t.queue_dropped;
@@ -266,7 +270,7 @@ class Recorder {
       j["topics"][t.ros_name] = {{"type", t.spec.schema_name}, {"received", t.received}, {"written", t.written.load()},
                                  {"dds_lost", t.reader->lost()}, {"dds_rejected", t.reader->rejected()},
                                  {"malformed", t.reader->malformed()}, {"queue_full", t.queue_dropped},
-                                 {"disk", t.disk_dropped.load()}};
+                                 {"disk", t.disk_dropped.load()}, {"shared_memory", t.from_shared_memory}};
     }
     for (const auto& [topic, why] : skipped_) j["skipped"][topic] = why;
     for (const auto& topic : raw_off_) j["raw_off"].push_back(topic);
