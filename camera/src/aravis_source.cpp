@@ -12,6 +12,8 @@
 
 #include "exposure_watcher.hpp"
 #include "gvsp_payload.hpp"
+#include "sensor_rig/common/log.hpp"
+#include "socket_buffer.hpp"
 
 namespace sensor_rig::camera {
 namespace {
@@ -156,6 +158,12 @@ void AravisSource::open() {
                           nullptr, GConnectFlags{});
     configure(*fresh, details);
     start_stream(*fresh);
+    if (fresh->gv) {  // the kernel caps Aravis' SO_RCVBUF silently: say what was granted, once
+      const auto sb = detail::check_socket_buffer(cfg_.socket_buffer_bytes, fresh->payload);
+      socket_granted_.store(sb.granted);
+      socket_needed_.store(sb.needed);
+      if (sb.short_of_frame() && !socket_warned_.exchange(true)) log::warn("camera", detail::socket_buffer_advice(cfg_.device, sb));
+    }
   } catch (...) {
     if (fresh->stream != nullptr) arv_stream_set_emit_signals(fresh->stream, FALSE);
     if (fresh->device != nullptr)
@@ -695,6 +703,8 @@ SourceStats AravisSource::stats() const {
   s.disconnects = disconnects_;
   s.missing_frames = missing_frames_;
   s.trigger_busy = trigger_lock_busy_;
+  s.socket_buffer_granted = socket_granted_.load();
+  s.socket_buffer_needed = socket_needed_.load();
   return s;
 }
 

@@ -98,7 +98,7 @@ CameraConfig parse_camera_config(const config::Node& n) {
   CameraConfig c;
   if (!n.expect_map()) return c;
   n.allow_keys({"name", "backend", "device", "pixel_format", "width", "height", "frame_rate", "calibration", "exposure_us",
-                "gain_db", "features", "trigger", "packet_size", "packet_delay_ns", "socket_buffer_bytes", "buffers",
+                "gain_db", "features", "trigger", "packet_size", "packet_delay_ns", "socket_buffer_bytes", "packet_socket", "buffers",
                 "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock", "outputs", "ptp", "stamp_at", "readout_us"});
   c.name = n.get_string("name");
   for (char ch : c.name)
@@ -171,6 +171,9 @@ CameraConfig parse_camera_config(const config::Node& n) {
   s.packet_delay_ns = n.get_int("packet_delay_ns", 0, 1'000'000'000, 0);
   // SPEC §8: below 4 MB most frames fail.
   s.socket_buffer_bytes = static_cast<int>(n.get_int("socket_buffer_bytes", 4 << 20, 1 << 30, 8 << 20));
+  // Aravis' packet socket (a kernel ring, CAP_NET_RAW): off by default, since it receives nothing
+  // from the fake as root (SPEC §8); a real camera may use it (issue 27 item 4).
+  s.packet_socket = n.get_bool("packet_socket", false);
   s.buffers = static_cast<int>(n.get_int("buffers", 2, 64, 4));
   c.calibration = n.get_path("calibration", "");
   c.info = camera::uncalibrated(s.width, s.height);

@@ -367,6 +367,12 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("underruns", st.underruns);
   s.add_number("trigger_busy", st.trigger_busy);
   s.add_number("missing_packets", st.missing_packets);
+  if (st.socket_buffer_granted > 0) {  // GigE: the kernel's grant against one frame (issue 27 item 4)
+    s.add_number("socket_buffer_granted", st.socket_buffer_granted);
+    s.add_number("socket_buffer_needed", st.socket_buffer_needed);
+    if (st.socket_buffer_granted < st.socket_buffer_needed)
+      s.add("socket_buffer", "too small for a frame: net.core.rmem_max or socket_buffer_bytes (the WARN at open says which)");
+  }
   s.add_number("resent_packets", st.resent_packets);
   s.add_number("lost_reports", impl_->lost_reports);
   s.add_number("reopens", impl_->reopens);

@@ -53,6 +53,10 @@ mock: {kind: gige, lost_packets_per_thousand: 2}
   EXPECT_FALSE(c.info.calibrated());
   EXPECT_EQ(c.info.width, 1920u);
   EXPECT_GE(c.source.socket_buffer_bytes, 4 << 20);
+  EXPECT_FALSE(c.source.packet_socket);  // off unless asked (issue 27 item 4)
+  EXPECT_TRUE(parse("name: a\nbackend: aravis\ndevice: 127.0.0.2\npixel_format: Mono8\nwidth: 64\nheight: 48\n"
+                    "frame_rate: 10\npacket_socket: true\n")
+                  .cfg.source.packet_socket);
   EXPECT_LT(c.watchdog(), 1000);
   // Issue 10: a frame must stay in the writer's history while a reader's repair of it runs (a
   // keep-last 1 writer dropped it at the next frame, 100 ms later, on a loaded host).

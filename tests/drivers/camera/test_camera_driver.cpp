@@ -231,6 +231,9 @@ TEST(CameraDriver, PtpLockedCameraStampsDeviceTimeAndReportsTheLock) {
   EXPECT_NE(value(st, "stamp_source"), "device_vehicle");
   EXPECT_EQ(value(st, "stamp_sync"), "unsynchronized");
   EXPECT_NE(value(st, "stamp_rejected"), "0");
+  // Issue 27 item 4: the stream socket's grant, against one 640x480 Bayer frame (x2).
+  EXPECT_GT(std::stoll("0" + value(st, "socket_buffer_granted")), 0);
+  EXPECT_EQ(value(st, "socket_buffer_needed"), "614400");
   EXPECT_EQ(st.level, dds::Level::kWarn);
   EXPECT_NE(st.message.find("timescale"), std::string::npos) << st.message;
   driver.stop();

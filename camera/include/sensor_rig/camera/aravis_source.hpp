@@ -98,6 +98,10 @@ class AravisSource final : public FrameSource {
   // round trips.
   std::shared_ptr<std::timed_mutex> gc_mutex_ = std::make_shared<std::timed_mutex>();  // shared with the exposure watcher
   std::atomic<std::uint64_t> trigger_lock_busy_{0};  // triggers refused: a GenICam access held the camera
+  // The stream socket's receive buffer as granted, and what one frame needs (issue 27 item 4).
+  std::atomic<std::int64_t> socket_granted_{0};
+  std::atomic<std::int64_t> socket_needed_{0};
+  std::atomic<bool> socket_warned_{false};  // the WARN once per source, not per reopen
   std::unique_ptr<State> st_;
   std::atomic<bool> control_lost_{false};
   std::atomic<bool> streaming_{false};

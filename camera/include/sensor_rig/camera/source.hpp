@@ -106,6 +106,10 @@ struct SourceStats {
   // Software triggers refused because another access to the camera (a GenICam read in a GVCP
   // timeout) held it past the trigger's wait: the trigger never queues behind it.
   std::uint64_t trigger_busy = 0;
+  // GigE: the stream socket's SO_RCVBUF as the kernel granted it (capped by net.core.rmem_max) and
+  // what one frame in flight needs; 0: not a UDP stream (issue 27 item 4).
+  std::int64_t socket_buffer_granted = 0;
+  std::int64_t socket_buffer_needed = 0;
   // Every frame made and not returned: what the driver reports as `counted_lost`.
   [[nodiscard]] std::uint64_t lost_frames() const noexcept { return incomplete + missing_frames; }
 };
