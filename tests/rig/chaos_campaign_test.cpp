@@ -157,5 +157,39 @@ TEST(ChaosCampaign, DriveByWireHoldsEveryInvariantUnderItsFaults) {
   EXPECT_EQ(run.code, 0) << run.err;
 }
 
+// The three mock LIDARs while the host's CLOCK_REALTIME is stepped back 500 ms for 5 s. The
+// Velodyne keeps its GPS time; the PTP-synced Ouster and Hesai disagree with the stepped host, their
+// stamps follow the host (mapped) and are held and slewed: up to 500 ms off the truth. Before, they
+// went out as synchronized ("stamps" broken: -100 ms ... -500 ms, unflagged); now the LIDAR node
+// flags the topic unsynchronized while its stamps knowingly differ from the sensor's time, and
+// every other invariant holds (issue 26).
+TEST(ChaosCampaign, AHostClockStepLeavesNoLidarStampOffUnflagged) {
+  if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
+  test::TempDir dir;
+  const std::string src = test::source_dir().string();
+  std::string rig = test::read_text(test::source_dir() / "config/mock_rig.yaml");
+  rig = rig.substr(0, rig.find("\nfusion:"));  // the three LIDARs: fusion, dbw and cameras apart
+  rig.replace(rig.find("profile: cyclonedds/"), std::string("profile: cyclonedds/").size(), "profile: " + src + "/config/cyclonedds/");
+  const std::string config = dir.write("lidars.yaml", rig + "\n");
+  const auto run = test::run_rig("chaos " + config + " --duration 15 --seed 1 --json --faults 'host.clock_step:ms=-500@3+5'");
+  ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
+  const auto last_nl = run.out.find_last_of('\n', run.out.size() - 2);
+  const auto j = nlohmann::json::parse(run.out.substr(last_nl == std::string::npos ? 0 : last_nl + 1), nullptr, false);
+  ASSERT_TRUE(j.is_object()) << run.out << "\n" << run.err;
+  EXPECT_EQ(j["faults"].value("host.clock_step", 0), 1) << run.err;
+  for (const std::string name : {"front", "left", "right"}) {
+    const auto& t = j["topics"]["/sensors/lidar/" + name + "/points"];
+    ASSERT_TRUE(t.is_object()) << name << "\n" << run.out;
+    EXPECT_GT(t["sent"].get<std::uint64_t>(), 100u) << name;
+    EXPECT_EQ(t["unaccounted"].get<std::uint64_t>(), 0u) << name;
+  }
+  // The GPS-timed Velodyne never left its truth; the two PTP sensors did, flagged.
+  EXPECT_EQ(j["topics"]["/sensors/lidar/front/points"]["stamps_flagged"].get<std::uint64_t>(), 0u);
+  EXPECT_GT(j["topics"]["/sensors/lidar/left/points"]["stamps_flagged"].get<std::uint64_t>(), 0u);
+  EXPECT_GT(j["topics"]["/sensors/lidar/right/points"]["stamps_flagged"].get<std::uint64_t>(), 0u);
+  for (const auto& [name, verdict] : j["invariants"].items()) EXPECT_EQ(verdict, "held") << name << "\n" << run.err;
+  EXPECT_EQ(run.code, 0) << run.err;
+}
+
 }  // namespace
 }  // namespace sensor_rig

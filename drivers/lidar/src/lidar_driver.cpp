@@ -107,6 +107,10 @@ dds::QosSpec raw_qos() {
 }
 
 // sensor_msgs/NavSatStatus and NavSatFix constants (ROS 2).
+// A scan stamp carrying more correction than this (rig chaos's LIDAR stamp bound, docs/faults.md)
+// no longer names its first firing: the topic is flagged unsynchronized, for kUnsyncHoldNs after.
+constexpr Nanos kStampFlagNs = 100'000;
+constexpr Nanos kUnsyncHoldNs = 2'000'000'000;
 constexpr std::int8_t kStatusNoFix = -1;
 constexpr std::int8_t kStatusFix = 0;
 constexpr std::uint16_t kServiceGps = 1;
@@ -250,6 +254,14 @@ struct LidarDriver::Impl {
   timesync::StamperStatus sync;
   timesync::ClockMapperStatus absolute_sync;
   timesync::AbsoluteSource absolute_source = timesync::AbsoluteSource::kNone;
+  // When the topic's stamps last knowingly differed from the sensor's time (CLOCK_MONOTONIC, 0 =
+  // never): a scan stamp carrying more than kStampFlagNs of a host step back's correction (held and
+  // slewed), or a sensor that was PTP/GPS-synced now disagreeing with the host (a host clock step:
+  // the stamps follow the mapped host clock, the sensor's own time says otherwise). /diagnostics
+  // says `stamp_sync: unsynchronized` until kUnsyncHoldNs after the last such scan (issue 26).
+  Nanos unsync_seen_mono_ns = 0;
+  bool unsync_slewed = false;          // the last reason: slewed (true) or sensor disagrees (false)
+  bool sensor_was_synced = false;      // the absolute path has taken the sensor's time as is
 
   Impl(const LidarConfig& c, const dds::Participant& p, dds::StampsWriter& s)
       : cfg(c),
@@ -453,11 +465,16 @@ struct LidarDriver::Impl {
     dds::SampleStamps st{scan.stamp, scan.first_rx_ns, scan.last_rx_ns, ready,        publish,
                     written,    scan.packets,     scan.dropped,     pc.row_step,  scan.missing_packets};
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
+    const bool slewed = cfg.time_source == timesync::TimeSource::kSensor && scan_monotonic.status().correction_ns > kStampFlagNs;
     for (auto* o : scan_observers) o->observe_scan(scan, written);
     notify_sweep(scan, sweep_stamp);
     std::lock_guard lock(mutex);
     if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
     stamp_monotonic = scan_monotonic.status();
+    if (slewed) {
+      unsync_seen_mono_ns = monotonic_now_ns();
+      unsync_slewed = true;
+    }
     last_points = scan.points.size();
     last_missing = scan.missing_packets;
     if (scan.missing_packets > 0) ++incomplete_scans;
@@ -521,6 +538,12 @@ struct LidarDriver::Impl {
       sync = stamper.hour_status(vehicle_now_ns());
       absolute_sync = stamper.absolute_status(vehicle_now_ns());
       absolute_source = stamper.absolute_source();
+      if (absolute_source == timesync::AbsoluteSource::kSensorSynced) {
+        sensor_was_synced = true;
+      } else if (sensor_was_synced && absolute_source != timesync::AbsoluteSource::kNone) {
+        unsync_seen_mono_ns = monotonic_now_ns();
+        unsync_slewed = false;
+      }
     }
   }
 };
@@ -573,6 +596,8 @@ dds::DriverStatus LidarDriver::status() const {
   s.hardware_id = c.model + "@" + (c.source == LidarSource::kPacket ? c.interface : c.host) + ":" + std::to_string(c.port);
   const Nanos age = impl_->published.last_ns() == 0 ? -1 : vehicle_now_ns() - impl_->published.last_ns();
   const lidar::RecorderStatus rec = impl_->recorder ? impl_->recorder->status() : lidar::RecorderStatus{};
+  const bool unsynchronized =
+      impl_->unsync_seen_mono_ns != 0 && monotonic_now_ns() - impl_->unsync_seen_mono_ns < kUnsyncHoldNs;
   if (impl_->published.samples() == 0) {
     s.level = dds::Level::kWarn;
     s.message = "waiting for packets";
@@ -588,6 +613,12 @@ dds::DriverStatus LidarDriver::status() const {
   } else if (rec.queue_dropped > 0) {
     s.level = dds::Level::kWarn;
     s.message = "record: " + std::to_string(rec.queue_dropped) + " packets dropped, the writer fell behind (disk too slow?)";
+  } else if (unsynchronized) {
+    s.level = dds::Level::kWarn;
+    s.message = impl_->unsync_slewed
+                    ? "unsynchronized: stamps slewed after a CLOCK_REALTIME step back (" +
+                          std::to_string(impl_->stamp_monotonic.correction_ns / 1'000'000) + " ms still added)"
+                    : std::string("unsynchronized: the sensor's synchronized clock and the host disagree (host clock stepped?): stamps follow the host");
   } else if (impl_->last_missing > 0) {
     s.level = dds::Level::kWarn;
     s.message = "last scan incomplete: " + std::to_string(impl_->last_missing) + " packets missing";
@@ -597,6 +628,7 @@ dds::DriverStatus LidarDriver::status() const {
   const auto& d = impl_->decoder_stats;
   const auto& u = impl_->udp_stats;
   s.add("topic", impl_->topic_name);
+  s.add("stamp_sync", unsynchronized ? "unsynchronized" : "ok");
   s.add_number("scans", impl_->published.samples());
   s.add("scan_rate_hz", std::to_string(impl_->published.rate_hz()));
   s.add_number("points_last_scan", impl_->last_points);
