@@ -334,7 +334,8 @@ TEST(ShmRigConfig, TransportWordIsValidated) {
 // and explicit ones validated where they are written: out of order, too small for a VLP-16's cloud.
 TEST(ShmRigConfig, MempoolsAreSizedFromTheConfigOrValidatedAtTheirKey) {
   test::TempDir dir;
-  const std::string lidar = "lidars:\n  - {name: front, model: VLP-16, port: 2399, position_port: 0}\n";
+  // A real VLP-16 said to turn at 600 rpm (not said, it is sized for its slowest, 300: twice this).
+  const std::string lidar = "lidars:\n  - {name: front, model: VLP-16, port: 2399, position_port: 0, rpm: 600}\n";
   const auto sized = dir.write("sized.yaml", "rig:\n  dds: {transport: shm, shm: {subscribers: 2}}\n" + lidar);
   auto [rc, out] = test::run(rig_bin() + " config check " + sized + " 2>&1");
   EXPECT_EQ(rc, 0) << out;
