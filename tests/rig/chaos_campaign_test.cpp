@@ -14,6 +14,7 @@
 #include <sstream>
 #include <string>
 
+#include "dds_domain_lease.hpp"
 #include "rig_cli.hpp"
 #include "rig_process.hpp"
 #include "test_data.hpp"
@@ -141,7 +142,10 @@ TEST(ChaosCampaign, DriveByWireHoldsEveryInvariantUnderItsFaults) {
   if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
   test::TempDir dir;
   const std::string src = test::source_dir().string();
-  const std::string config = dir.write("dbw.yaml", "rig:\n  name: dbw-only\n  dds: {domain: 0, profile: " + src +
+  // A domain of its own: on the whole rig's domain 0 a /vehicle/state writer of the campaign before
+  // (a process still in its DDS lease) was judged as this one's ("matches no can_frame").
+  const std::string domain = std::to_string(test::lease_dds_domain());
+  const std::string config = dir.write("dbw.yaml", "rig:\n  name: dbw-only\n  dds: {domain: " + domain + ", profile: " + src +
                                                       "/config/cyclonedds/loopback.xml}\n  diagnostics_period_ms: 500\n"
                                                       "dbw:\n  protocol: " + src + "/config/dbw/paravan_ref.yaml\n"
                                                       "  bus: " + (dir.path / "bus.sock").string() + "\n  mock_ecu: true\n"
@@ -176,6 +180,7 @@ TEST(ChaosCampaign, AHostClockStepLeavesNoLidarStampOffUnflagged) {
   std::string rig = test::read_text(test::source_dir() / "config/mock_rig.yaml");
   rig = rig.substr(0, rig.find("\nfusion:"));  // the three LIDARs: fusion, dbw and cameras apart
   rig.replace(rig.find("profile: cyclonedds/"), std::string("profile: cyclonedds/").size(), "profile: " + src + "/config/cyclonedds/");
+  rig.replace(rig.find("domain: 0"), std::string("domain: 0").size(), "domain: " + std::to_string(test::lease_dds_domain()));
   const std::string config = dir.write("lidars.yaml", rig + "\n");
   const auto run = test::run_rig("chaos " + config + " --duration 15 --seed 1 --json --faults 'host.clock_step:ms=-500@3+5'");
   ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
