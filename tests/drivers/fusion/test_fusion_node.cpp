@@ -253,9 +253,14 @@ TEST_F(FusionNodeDds, StoppedLidarCostsOneTimeoutAndIsCountedMissing) {
     hand_over(n, 1);
     ASSERT_TRUE(wait_clouds(static_cast<std::size_t>(n) + 1)) << "rotation " << n;
   }
-  for (int n = 4; n <= 5; ++n)  // back; its scan first, so that no sweep is closed before it came
+  // Back; its scan first, so that no sweep is closed before it came. Each rotation's cloud awaited
+  // before the next is handed over, as at 10 Hz: handed over back to back on a loaded host (a CI
+  // run, the dbw security tests beside it), rotations 4 and 5 queued at the node's inputs together
+  // and a sweep was cut by the next rotation's scan (7 clouds).
+  for (int n = 4; n <= 5; ++n) {
     for (std::size_t i : {2, 0, 1}) hand_over(n, i);
-  ASSERT_TRUE(wait_clouds(6));
+    ASSERT_TRUE(wait_clouds(static_cast<std::size_t>(n) + 1)) << "rotation " << n;
+  }
   ASSERT_EQ(seen_.size(), 6u);
   ASSERT_EQ(sets_seen_.size(), 6u);
   for (int n = 0; n < 6; ++n) {
