@@ -12,44 +12,15 @@
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 #include "sensor_rig/common/loopback_address.hpp"
 #include "chaos_files.hpp"
+#include "gige_fake_test.hpp"
 #include "next_frame.hpp"
 
 namespace sensor_rig::camera {
 namespace {
 
 constexpr Nanos kS = 1'000'000'000;
-std::string address() { return "127.0.0." + std::to_string(240 + ::getpid() % 10); }
 
-class GigeChaos : public ::testing::Test {
- protected:
-  void SetUp() override {
-    std::string why;
-    auto lease = LoopbackAddress::take(address(), why);
-    if (!lease) GTEST_SKIP() << why;
-    lease_.push_back(std::move(*lease));
-  }
-  // The fake on this test's address with the plan (none: no faults) and a truth record.
-  ChildProcess start(const std::vector<std::string>& specs) {
-    mock::GigeFakeOptions o;
-    o.address = address();
-    o.program = RIG_FAKE_GIGE_CAMERA;
-    o.chaos.device = "cam";
-    o.chaos.truth = folder_.truth();
-    if (!specs.empty()) o.chaos.plan = folder_.plan("cam", specs);
-    return mock::start_gige_fake(o);
-  }
-  static SourceConfig cfg() {
-    SourceConfig c;
-    c.device = address();
-    c.format = PixelFormat::kBayerRG8;
-    c.width = 320;
-    c.height = 200;
-    c.frame_rate = 20;
-    return c;
-  }
-  test::ChaosFolder folder_;
-  std::vector<LoopbackAddress> lease_;
-};
+class GigeChaos : public test::GigeFakeTest<240> {};
 
 Capture next_frame(FrameSource& s, int budget_ms = 3000) { return test::next_frame(s, budget_ms, true); }
 

@@ -16,40 +16,16 @@
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 #include "sensor_rig/common/loopback_address.hpp"
 #include "chaos_files.hpp"
+#include "gige_fake_test.hpp"
 #include "next_frame.hpp"
 
 namespace sensor_rig::camera {
 namespace {
 
-std::string address() { return "127.0.0." + std::to_string(230 + ::getpid() % 10); }
 constexpr int kFrames = 30;
 
-class GigePayload : public ::testing::Test {
+class GigePayload : public test::GigeFakeTest<230> {
  protected:
-  void SetUp() override {
-    std::string why;
-    auto lease = LoopbackAddress::take(address(), why);
-    if (!lease) GTEST_SKIP() << why;
-    lease_.push_back(std::move(*lease));
-  }
-  ChildProcess start(const std::vector<std::string>& specs) {
-    mock::GigeFakeOptions o;
-    o.address = address();
-    o.program = RIG_FAKE_GIGE_CAMERA;
-    o.chaos.device = "cam";
-    o.chaos.truth = folder_.truth();
-    if (!specs.empty()) o.chaos.plan = folder_.plan("cam", specs);
-    return mock::start_gige_fake(o);
-  }
-  static SourceConfig cfg() {
-    SourceConfig c;
-    c.device = address();
-    c.format = PixelFormat::kBayerRG8;
-    c.width = 320;
-    c.height = 200;
-    c.frame_rate = 20;
-    return c;
-  }
   struct Read {
     std::uint64_t seq = 0;
     Nanos chunk_timestamp_ns = 0, exposure_ns = 0;
@@ -85,8 +61,6 @@ class GigePayload : public ::testing::Test {
     for (const auto& u : truth::read(folder_.truth()).units) units[static_cast<std::uint64_t>(u.unit & 0xffff)] = u;
     return units;
   }
-  test::ChaosFolder folder_;
-  std::vector<LoopbackAddress> lease_;
 };
 
 // ChunkModeActive set through `features:` (payload type 0x4001, image + chunks), the exposure
