@@ -20,6 +20,24 @@ constexpr Nanos kSec = 1'000'000'000;
 constexpr Nanos kHour10 = 1'795'255'200'000'000'000;  // 2026-11-21 10:00:00 UTC
 constexpr Nanos kSpan = 1'327'104;                    // VLP-16 packet span
 
+// Issue 26 item 7: stamps held after a step back (or a raw stamp equal to the last) are 1 ns after
+// the last one, never equal to it: a topic's samples keep distinct stamps (the old code held at
+// the last stamp, and several samples in a row could share it).
+TEST(MonotonicStamps, HeldStampsStayDistinct) {
+  MonotonicStamps m(0.1);
+  EXPECT_EQ(m.apply(1000 * kMs), 1000 * kMs);
+  m.realtime_step(-500 * kMs);
+  const Nanos a = m.apply(600 * kMs);   // held: the step back
+  const Nanos b = m.apply(600 * kMs + 1);  // 1 ns of raw time: slewed by ceil(0.1) = 1 ns, held again
+  const Nanos c = m.apply(600 * kMs + 1);  // the same raw stamp again
+  EXPECT_EQ(a, 1000 * kMs + 1);
+  EXPECT_GT(b, a);
+  EXPECT_GT(c, b);
+  MonotonicStamps n(0.1);
+  EXPECT_EQ(n.apply(5 * kMs), 5 * kMs);
+  EXPECT_EQ(n.apply(5 * kMs), 5 * kMs + 1) << "an equal raw stamp is held 1 ns on";
+}
+
 TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
   MonotonicStamps m(0.1);
   EXPECT_EQ(m.apply(1000 * kMs), 1000 * kMs);
@@ -27,12 +45,12 @@ TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
   EXPECT_EQ(m.apply(2100 * kMs), 2100 * kMs);  // forward step: at once
   EXPECT_EQ(m.status().backward_steps, 0u);
   m.realtime_step(-1000 * kMs);                // the host's CLOCK_REALTIME went back 1 s
-  EXPECT_EQ(m.apply(1200 * kMs), 2100 * kMs);  // the mapping follows (+0.1 s elapsed): held
+  EXPECT_EQ(m.apply(1200 * kMs), 2100 * kMs + 1);  // the mapping follows (+0.1 s elapsed): held 1 ns on
   EXPECT_EQ(m.status().backward_steps, 1u);
-  EXPECT_EQ(m.status().correction_ns, 900 * kMs);
+  EXPECT_EQ(m.status().correction_ns, 900 * kMs + 1);
   EXPECT_EQ(m.status().last_backward_ns, 900 * kMs);
   // Then 0.9x real rate until the correction is gone (9 s for 0.9 s), never backwards.
-  Nanos last = 2100 * kMs, raw = 1200 * kMs;
+  Nanos last = 2100 * kMs + 1, raw = 1200 * kMs;
   for (int i = 0; i < 95; ++i) {
     raw += 100 * kMs;
     const Nanos out = m.apply(raw);
@@ -42,7 +60,7 @@ TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
   }
   EXPECT_EQ(m.status().correction_ns, 0);
   EXPECT_EQ(m.apply(raw + 100 * kMs), raw + 100 * kMs);
-  EXPECT_EQ(m.status().max_correction_ns, 900 * kMs);
+  EXPECT_EQ(m.status().max_correction_ns, 900 * kMs + 1);
   // A small backward wobble (a refit) is held, not counted as a step.
   (void)m.apply(raw + 99 * kMs);
   EXPECT_EQ(m.status().backward_steps, 1u);

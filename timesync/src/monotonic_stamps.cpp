@@ -40,7 +40,7 @@ Nanos MonotonicStamps::apply(Nanos raw) noexcept {
   Nanos& c = st_.correction_ns;
   if (d > 0 && c > 0) c -= std::min(c, static_cast<Nanos>(std::ceil(slew_ * static_cast<double>(d))));
   Nanos out = raw + c;
-  if (out < last_out_) {
+  if (out <= last_out_) {
     const Nanos back = last_out_ - out;
     if (back > threshold_) {
       // A host step back the mapping now follows (about its size: at least half): absorb it.
@@ -53,11 +53,12 @@ Nanos MonotonicStamps::apply(Nanos raw) noexcept {
       ++st_.backward_steps;
       st_.last_backward_ns = back;
     }
-    // Held at the last output; the difference is slewed out from here on.
+    // Held 1 ns after the last output (two samples of a topic never share a stamp: issue 26 item
+    // 7); the difference is slewed out from here on.
     ++st_.held;
-    c += back;
+    c += back + 1;
     st_.max_correction_ns = std::max(st_.max_correction_ns, c);
-    out = last_out_;
+    out = last_out_ + 1;
   }
   last_out_ = out;
   return out;

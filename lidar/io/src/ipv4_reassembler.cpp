@@ -72,7 +72,9 @@ Ipv4Reassembler::Ipv4Reassembler(const Ipv4ReassemblerConfig& config) : config_(
     throw std::invalid_argument("ipv4 reassembler: max_datagram_bytes must be in 68..65535");
   if (config.timeout_ns <= 0) throw std::invalid_argument("ipv4 reassembler: timeout must be > 0");
   if (config.max_fragments == 0) throw std::invalid_argument("ipv4 reassembler: max_fragments must be > 0");
+  if (config.remember_completed > 65536) throw std::invalid_argument("ipv4 reassembler: remember_completed must be <= 65536");
   entries_.resize(config.max_in_flight);
+  completed_.resize(config.remember_completed);
   for (auto& e : entries_) {  // all storage now: push() never allocates
     e.buffer.resize(config.max_datagram_bytes);
     e.ranges.reserve(config.max_fragments);
@@ -87,6 +89,15 @@ Ipv4Reassembler::Entry* Ipv4Reassembler::find(const Ipv4Header& h) noexcept {
   for (auto& e : entries_)
     if (e.state != State::kFree && e.id == h.id && e.src == h.src && e.dst == h.dst && e.proto == h.proto) return &e;
   return nullptr;
+}
+
+bool Ipv4Reassembler::completed_recently(const Ipv4Header& h, std::uint32_t end, Nanos age_ns) const noexcept {
+  for (const auto& c : completed_) {
+    if (c.at_ns >= 0 && c.id == h.id && c.src == h.src && c.dst == h.dst && c.proto == h.proto &&
+        age_ns - c.at_ns < config_.timeout_ns && end <= c.total_payload)
+      return true;
+  }
+  return false;
 }
 
 Ipv4Reassembler::Entry* Ipv4Reassembler::open(const Ipv4Header& h, Nanos rx_ns) noexcept {
@@ -127,7 +138,7 @@ bool Ipv4Reassembler::complete(const Entry& e) const noexcept {
   return have == e.total_payload;
 }
 
-ReassemblyResult Ipv4Reassembler::push(std::span<const std::byte> packet, Nanos rx_ns) noexcept {
+ReassemblyResult Ipv4Reassembler::push(std::span<const std::byte> packet, Nanos rx_ns, Nanos age_ns) noexcept {
   Ipv4Header h;
   if (!parse_ipv4_header(packet, h)) {
     ++counters_.dropped[static_cast<std::size_t>(ReassemblyDrop::kMalformed)];
@@ -139,15 +150,19 @@ ReassemblyResult Ipv4Reassembler::push(std::span<const std::byte> packet, Nanos 
   const Range r{h.offset_bytes, h.offset_bytes + len};
   Entry* e = find(h);
   if (e != nullptr && e->state == State::kDead) return {ReassemblyStatus::kDropped, {}, 0};  // counted already
+  if (e == nullptr && !completed_.empty() && completed_recently(h, r.end, age_ns)) {
+    ++counters_.duplicates;  // a copy of a fragment of a datagram already delivered
+    return {ReassemblyStatus::kIncomplete, {}, 0};
+  }
   // A fragment with no data, or a non-last one whose length is not a multiple of 8 (RFC 791).
   const bool malformed = len == 0 || (h.more_fragments && len % 8 != 0);
   if (r.end + kOutHeader > config_.max_datagram_bytes || malformed) {
     // Kept as a dead entry, so the datagram's other fragments are not counted again.
-    if (e == nullptr) e = open(h, rx_ns);
+    if (e == nullptr) e = open(h, age_ns);
     drop(*e, malformed ? ReassemblyDrop::kMalformed : ReassemblyDrop::kOversize);
     return {ReassemblyStatus::kDropped, {}, 0};
   }
-  if (e == nullptr) e = open(h, rx_ns);
+  if (e == nullptr) e = open(h, age_ns);
   if (!h.more_fragments) {  // the last fragment fixes the size; a second, different one contradicts it
     if (e->total_payload != 0 && e->total_payload != r.end) {
       drop(*e, ReassemblyDrop::kMalformed);
@@ -194,6 +209,10 @@ ReassemblyResult Ipv4Reassembler::push(std::span<const std::byte> packet, Nanos 
   put32(hdr + 16, e->dst);
   put16(hdr + 10, ipv4_header_checksum({hdr, kOutHeader}));  // a recording keeps this header
   e->state = State::kFree;
+  if (!completed_.empty()) {
+    completed_[completed_next_] = Completed{e->src, e->dst, e->id, e->proto, e->total_payload, age_ns};
+    completed_next_ = (completed_next_ + 1) % completed_.size();
+  }
   ++counters_.reassembled;
   return {ReassemblyStatus::kComplete, std::span<const std::byte>(e->buffer.data(), total), rx_ns};
 }

@@ -166,7 +166,9 @@ bool RingSource::deliver(const std::byte* frame, PacketSlot& slot) noexcept {
     ++stats_.missing_timestamps;
   }
   const std::span<const std::byte> ip(frame + h.tp_net, h.tp_snaplen);
-  const ReassemblyResult r = reassembler_.push(ip, rx);
+  // The timeout runs on CLOCK_MONOTONIC (the drain's time: a host clock step neither expires
+  // datagrams in flight nor keeps dead ones); the datagram keeps the kernel's stamp.
+  const ReassemblyResult r = reassembler_.push(ip, rx, drain_mono_ns_);
   if (r.status != ReassemblyStatus::kNotFragment && r.status != ReassemblyStatus::kComplete) return false;
   const UdpFrame f = parse_udp_frame(kLinktypeIpv4, r.datagram);
   // Non-first fragments of any datagram of the sensor pass the kernel filter: the port decides here.
@@ -220,9 +222,11 @@ RecvResult RingSource::receive(std::span<PacketSlot> out, int timeout_ms) noexce
   const Nanos start = monotonic_now_ns();
   if (start - last_stats_ns_ >= kStatsPeriodNs) refresh_kernel_stats();
   // A fragment that did not come within the timeout will not come: counted, its memory freed.
-  reassembler_.expire(vehicle_now_ns());
+  // Monotonic: on CLOCK_REALTIME a host step forward gave up every datagram in flight (issue 26).
+  reassembler_.expire(start);
   stats_.reassembly = reassembler_.counters();
   for (bool polled = false;; polled = true) {
+    drain_mono_ns_ = polled ? monotonic_now_ns() : start;
     const std::size_t n = drain(out);
     stats_.reassembly = reassembler_.counters();
     if (n > 0) return {n, RecvStatus::kOk, 0};

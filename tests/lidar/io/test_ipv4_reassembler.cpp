@@ -68,15 +68,17 @@ TEST(Ipv4Reassembler, InOrderReverseAndShuffled) {
   Case c;
   ASSERT_EQ(c.frags.size(), 7u);  // 9008 B of UDP in 1480 B pieces
   Ipv4Reassembler r;
-  EXPECT_EQ(push_all(r, c.frags), c.payload);
+  // One datagram a second: an IPv4 id is not used again within the timeout (RFC 6864), and a copy
+  // of a datagram just completed is a duplicate.
+  EXPECT_EQ(push_all(r, c.frags, 1000 * kMs), c.payload);
   auto rev = c.frags;
   std::reverse(rev.begin(), rev.end());
-  EXPECT_EQ(push_all(r, rev), c.payload);
+  EXPECT_EQ(push_all(r, rev, 2000 * kMs), c.payload);
   std::mt19937 rng(7);
   for (int k = 0; k < 5; ++k) {
     auto shuffled = c.frags;
     std::shuffle(shuffled.begin(), shuffled.end(), rng);
-    EXPECT_EQ(push_all(r, shuffled), c.payload);
+    EXPECT_EQ(push_all(r, shuffled, (3 + k) * 1000 * kMs), c.payload);
   }
   EXPECT_EQ(r.counters().reassembled, 7u);
   EXPECT_EQ(r.counters().dropped_total(), 0u);
@@ -130,6 +132,54 @@ TEST(Ipv4Reassembler, ExactDuplicateIsIgnored) {
   EXPECT_EQ(out, c.payload);
   EXPECT_EQ(r.counters().duplicates, 1u);
   EXPECT_EQ(r.counters().dropped_total(), 0u);
+}
+
+// Issue 26 item 7: a copy of a fragment that comes after its datagram completed is a duplicate,
+// not a datagram of its own that later expires as a `timeout` (the old code counted it so).
+TEST(Ipv4Reassembler, DuplicateAfterCompletionIsADuplicateNotATimeout) {
+  Case c;
+  Ipv4Reassembler r;
+  ASSERT_EQ(push_all(r, c.frags, 1000 * kMs), c.payload);
+  for (const std::size_t i : {std::size_t{0}, c.frags.size() / 2, c.frags.size() - 1})
+    EXPECT_NE(r.push(c.frags[i], 1010 * kMs).status, ReassemblyStatus::kComplete) << "fragment " << i;
+  EXPECT_EQ(r.in_flight(), 0u) << "no datagram opened for the copies";
+  r.expire(2000 * kMs);
+  EXPECT_EQ(r.counters().duplicates, 3u);
+  EXPECT_EQ(dropped(r, ReassemblyDrop::kTimeout), 0u);
+  EXPECT_EQ(r.counters().dropped_total(), 0u);
+  EXPECT_EQ(r.counters().reassembled, 1u);
+  // After the timeout the id is free again: the same fragments are a new datagram.
+  EXPECT_EQ(push_all(r, c.frags, 3000 * kMs), c.payload);
+  EXPECT_EQ(r.counters().reassembled, 2u);
+}
+
+// The timeout runs on the age clock (monotonic), not on the receive stamps (realtime): a host
+// clock step between two fragments neither gives the datagram up nor changes its stamp.
+TEST(Ipv4Reassembler, TimeoutRunsOnTheAgeClockNotTheStamps) {
+  Case c;
+  Ipv4ReassemblerConfig cfg;
+  cfg.timeout_ns = 50 * kMs;
+  Ipv4Reassembler r(cfg);
+  const Nanos rx0 = 5'000'000 * kMs, age0 = 100 * kMs;
+  ASSERT_EQ(r.push(c.frags[0], rx0, age0).status, ReassemblyStatus::kIncomplete);
+  const Nanos step = 1'000 * kMs;  // CLOCK_REALTIME stepped forward 1 s; 1 ms passed
+  EXPECT_EQ(r.expire(age0 + 1 * kMs), 0u);
+  Bytes out;
+  Nanos stamp = 0;
+  for (std::size_t i = 1; i < c.frags.size(); ++i) {
+    const auto res = r.push(c.frags[i], rx0 + step + static_cast<Nanos>(i), age0 + 2 * kMs);
+    if (res.status == ReassemblyStatus::kComplete) {
+      out = udp_payload(res.datagram);
+      stamp = res.rx_ns;
+    }
+  }
+  EXPECT_EQ(out, c.payload);
+  EXPECT_EQ(stamp, rx0 + step + static_cast<Nanos>(c.frags.size() - 1)) << "stamped by the kernel's clock";
+  EXPECT_EQ(r.counters().dropped_total(), 0u);
+  // An incomplete one expires timeout_ns after its first fragment on the age clock, whatever the stamps say.
+  ASSERT_EQ(r.push(c.frags[0], rx0 - step, age0 + 100 * kMs).status, ReassemblyStatus::kIncomplete);
+  EXPECT_EQ(r.expire(age0 + 149 * kMs), 0u);
+  EXPECT_EQ(r.expire(age0 + 150 * kMs), 1u);
 }
 
 TEST(Ipv4Reassembler, OverlapDropsTheDatagramOnce) {

@@ -4,7 +4,13 @@
 // Pure: IPv4 packets and their receive times in, whole datagrams out; no I/O, no clock.
 // Bounded: at most max_in_flight datagrams of at most max_datagram_bytes, storage allocated once.
 // Every datagram given up is counted once, by reason; its later fragments are swallowed until the
-// timeout (not counted again). Exact duplicate fragments are ignored (counted as duplicates).
+// timeout (not counted again). Exact duplicate fragments are ignored (counted as duplicates), also
+// when they come after their datagram completed (within the timeout; the last `remember_completed`
+// datagrams are remembered): before, such a copy opened a datagram of its own that expired as a
+// `timeout` (issue 26 item 7).
+// Two clocks: `rx_ns` (the kernel's receive stamp, CLOCK_REALTIME) is what a datagram is stamped
+// with; `age_ns` (CLOCK_MONOTONIC) is what the timeout is measured on, so a host clock step neither
+// gives up datagrams in flight (a step forward) nor keeps dead ones for the step's length (back).
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -20,6 +26,7 @@ struct Ipv4ReassemblerConfig {
   std::size_t max_datagram_bytes = 65535;  // whole datagram, IPv4 header included
   Nanos timeout_ns = 100'000'000;          // a datagram not complete this long after its first fragment
   std::size_t max_fragments = 64;          // per datagram (65535 B / 1480 B = 45 at a 1500 MTU)
+  std::size_t remember_completed = 256;    // completed datagrams whose late copies are told duplicates
 };
 
 enum class ReassemblyDrop : std::uint8_t {
@@ -74,9 +81,12 @@ class Ipv4Reassembler {
  public:
   explicit Ipv4Reassembler(const Ipv4ReassemblerConfig& config = {});  // throws std::invalid_argument
 
-  // One IPv4 packet as captured (from its IPv4 header; trailing link padding allowed).
-  ReassemblyResult push(std::span<const std::byte> packet, Nanos rx_ns) noexcept;
-  // Gives up datagrams whose first fragment came before now - timeout; returns how many.
+  // One IPv4 packet as captured (from its IPv4 header; trailing link padding allowed), received at
+  // `rx_ns` (the stamp a completed datagram gets) and `age_ns` (the clock the timeout runs on:
+  // monotonic; the two-argument form uses rx_ns for both).
+  ReassemblyResult push(std::span<const std::byte> packet, Nanos rx_ns, Nanos age_ns) noexcept;
+  ReassemblyResult push(std::span<const std::byte> packet, Nanos rx_ns) noexcept { return push(packet, rx_ns, rx_ns); }
+  // Gives up datagrams whose first fragment came (age clock) before now - timeout; returns how many.
   std::size_t expire(Nanos now) noexcept;
 
   [[nodiscard]] const ReassemblyCounters& counters() const noexcept { return counters_; }
@@ -93,19 +103,30 @@ class Ipv4Reassembler {
     std::uint32_t src = 0, dst = 0;
     std::uint16_t id = 0;
     std::uint8_t proto = 0;
-    Nanos first_rx_ns = 0;
+    Nanos first_rx_ns = 0;            // age clock
     std::uint32_t total_payload = 0;  // known once the last fragment (MF=0) came; 0 = unknown
     std::vector<Range> ranges;        // payload received, unsorted, disjoint
     std::vector<std::byte> buffer;    // 20-byte header + payload
   };
 
+  struct Completed {  // a datagram completed recently: its late fragment copies are duplicates
+    std::uint32_t src = 0, dst = 0;
+    std::uint16_t id = 0;
+    std::uint8_t proto = 0;
+    std::uint32_t total_payload = 0;
+    Nanos at_ns = -1;  // age clock; -1: none
+  };
+
   Entry* find(const Ipv4Header& h) noexcept;
+  [[nodiscard]] bool completed_recently(const Ipv4Header& h, std::uint32_t end, Nanos age_ns) const noexcept;
   Entry* open(const Ipv4Header& h, Nanos rx_ns) noexcept;
   void drop(Entry& e, ReassemblyDrop why) noexcept;
   [[nodiscard]] bool complete(const Entry& e) const noexcept;
 
   Ipv4ReassemblerConfig config_;
   std::vector<Entry> entries_;
+  std::vector<Completed> completed_;  // a ring, remember_completed long
+  std::size_t completed_next_ = 0;
   ReassemblyCounters counters_;
 };
 

@@ -3,7 +3,8 @@
 // (classic BPF filter, packet_filter.hpp) into blocks of a ring shared with this process; a block
 // comes to us when full or after the retire timeout, so one poll() wakes for many packets. The
 // receive stamp is the kernel's (tpacket3_hdr tp_sec/tp_nsec, CLOCK_REALTIME); fragments are
-// reassembled here (ipv4_reassembler.hpp); the ring's drops come from PACKET_STATISTICS.
+// reassembled here (ipv4_reassembler.hpp; their timeout on CLOCK_MONOTONIC); the ring's drops
+// come from PACKET_STATISTICS.
 // Same receive() contract as UdpSource, so the LIDAR driver uses either. One socket, one ring and
 // one filter per sensor, for both of its ports: sensors on one interface do not share a ring (a slow
 // consumer or a flooding sensor only fills its own ring, and each ring's drops are that sensor's
@@ -90,6 +91,7 @@ class RingSource {
   std::uint32_t packets_left_ = 0;      // in the block being read
   const std::byte* next_ = nullptr;     // next frame of the block being read; null = no block open
   Ipv4Reassembler reassembler_;
+  Nanos drain_mono_ns_ = 0;  // CLOCK_MONOTONIC of the drain: the reassembly timeout's clock
   Nanos last_stats_ns_ = 0;
   RingSourceStats stats_;
 };
