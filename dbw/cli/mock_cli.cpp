@@ -94,23 +94,23 @@ class PlannedFaults {
     ecu.set_observer([this](const mock::EmittedFrame& e) {
       if (e.role != "feedback") return;
       if (e.fate == mock::EmittedFrame::Fate::kDropped) {
-        record_unit(e, false);
+        record_unit(e, false, vehicle_now_ns());
       } else {
         pending_.push_back(e);
       }
     });
-    run.on_sent = [this, feedback](const can::Frame& f, bool heard) {
+    run.on_sent = [this, feedback](const can::Frame& f, bool heard, Nanos handed_ns) {
       if (pending_.empty() || !feedback->matches(f)) return;
-      record_unit(pending_.front(), heard);
+      record_unit(pending_.front(), heard, handed_ns);
       pending_.pop_front();
     };
   }
 
  private:
-  void record_unit(const mock::EmittedFrame& e, bool on_bus) {
+  // `veh`: when the frame was handed to the bus (taken before the send: the bridge's kernel receive
+  // stamp is that instant, whatever happens to this process after it), or made, for a dropped one.
+  void record_unit(const mock::EmittedFrame& e, bool on_bus, Nanos veh) {
     using F = mock::EmittedFrame::Fate;
-    // Handed to the bus within microseconds of the step that made it (mock_runner.cpp).
-    const Nanos veh = vehicle_now_ns();
     const auto id = static_cast<std::int64_t>(units_++);
     truth_->unit({id, veh, e.now, 1});
     truth::PartRecord p;

@@ -2,12 +2,15 @@
 // timeouts like a real ECU, and injects each fault.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <map>
+#include <thread>
 
 #include "dbw_test_data.hpp"
 #include "sensor_rig/dbw/can/transport.hpp"
 #include "sensor_rig/dbw/mock/mock_ecu.hpp"
+#include "sensor_rig/dbw/mock/mock_runner.hpp"
 
 namespace dbw = sensor_rig::dbw;
 namespace mock = sensor_rig::dbw::mock;
@@ -195,3 +198,51 @@ TEST(MockFaults, ParseSpecs) {
 }
 
 }  // namespace
+
+// The truth time of a frame the mock hands to the bus (`rig chaos` matches each /vehicle/state
+// sample to it by the bridge's kernel receive stamp) is taken before the send. A process stalled
+// between its send and the callback (descheduled on a loaded host, or SIGSTOPped by
+// host.stall_mock) put the truth 5-300 ms after the kernel's stamp: "matches no can_frame" in the
+// campaign. Here the bus stalls the sender 30 ms after each frame is queued to the peer.
+namespace {
+class StallingAfterSend final : public dbw::can::Transport {
+ public:
+  explicit StallingAfterSend(std::unique_ptr<dbw::can::Transport> inner) : inner_(std::move(inner)) {}
+  dbw::can::IoStatus send(const dbw::can::Frame& f) noexcept override {
+    const auto st = inner_->send(f);
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));  // queued to the peer, then descheduled
+    return st;
+  }
+  dbw::can::IoStatus receive(dbw::can::RxFrame& out, int timeout_ms) noexcept override { return inner_->receive(out, timeout_ms); }
+  [[nodiscard]] int poll_fd() const noexcept override { return inner_->poll_fd(); }
+  [[nodiscard]] std::string name() const override { return "stalling " + inner_->name(); }
+
+ private:
+  std::unique_ptr<dbw::can::Transport> inner_;
+};
+}  // namespace
+
+TEST_F(MockEcuTest, AFrameIsHandedToTheBusBeforeItsSendReturns) {
+  auto [ecu_end, peer] = dbw::can::make_socketpair();
+  StallingAfterSend bus(std::move(ecu_end));
+  mock::MockEcu ecu(p_, {});
+  std::vector<Nanos> handed;
+  mock::RunOptions o;
+  o.duration_s = 0.3;
+  o.on_sent = [&](const dbw::can::Frame&, bool heard, Nanos handed_ns) {
+    EXPECT_TRUE(heard);
+    handed.push_back(handed_ns);
+  };
+  (void)mock::run_mock(ecu, bus, o);
+  std::vector<Nanos> received;
+  dbw::can::RxFrame rx;
+  while (peer->receive(rx, 0) == dbw::can::IoStatus::kOk) received.push_back(rx.stamp);
+  ASSERT_GE(handed.size(), 3U) << "the ECU sends status frames on its own";
+  ASSERT_EQ(received.size(), handed.size());
+  for (std::size_t i = 0; i < handed.size(); ++i) {
+    // The kernel stamps the frame when it is queued: after the truth's time, and well before the
+    // 30 ms stall ends (the old truth, taken after the send, was >= 30 ms after the stamp).
+    EXPECT_LE(handed[i], received[i]) << "frame " << i;
+    EXPECT_LT(received[i] - handed[i], 10 * kMs) << "frame " << i;
+  }
+}

@@ -30,9 +30,10 @@ RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
     if (end > 0 && now >= end) break;
     if (now >= next_tick) {
       for (const auto& f : ecu.step(now)) {
+        const Nanos handed = vehicle_now_ns();
         const bool ok = bus.send(f) == can::IoStatus::kOk;
         if (!ok) ++r.send_failures;
-        if (o.on_sent) o.on_sent(f, ok && bus.last_send_heard());
+        if (o.on_sent) o.on_sent(f, ok && bus.last_send_heard(), handed);
         write_log(vehicle_now_ns(), f);
       }
       next_tick += tick;

@@ -18,8 +18,11 @@ struct RunOptions {
   int tick_ms = 1;
   bool print_state = false;  // one JSON line per second on stdout
   // Each frame the ECU made, once handed to the bus: whether another node heard it (Transport::
-  // last_send_heard; false also when the send failed). For the truth record of rig chaos.
-  std::function<void(const can::Frame&, bool heard)> on_sent;
+  // last_send_heard; false also when the send failed) and the vehicle time just before the send. For
+  // the truth record of rig chaos: the time is taken before the send, not after it, because a
+  // receiver's kernel stamp is the send's instant while this process may be descheduled (or
+  // SIGSTOPped by host.stall_mock) between the send and its callback.
+  std::function<void(const can::Frame&, bool heard, Nanos handed_ns)> on_sent;
 };
 
 struct RunResult {
