@@ -8,9 +8,11 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 #include "sensor_rig/common/unique_fd.hpp"
+#include "sensor_rig/record/mcap_reader.hpp"
 #include "sensor_rig/record/mcap_types.hpp"
 
 namespace sensor_rig::record {
@@ -107,6 +109,72 @@ void write_bag_metadata(const std::string& folder, const std::vector<BagFileInfo
     ::unlink(tmp.c_str());
     throw McapError("cannot rename " + tmp + " to " + path + ": " + why);
   }
+}
+
+long split_file_index(const std::string& file) {
+  namespace fs = std::filesystem;
+  const fs::path p(file);
+  std::string dir = p.parent_path().filename().string();
+  if (dir.empty() || dir == "." || dir == "..")
+    dir = fs::weakly_canonical(fs::absolute(p)).parent_path().filename().string();
+  const std::string name = p.filename().string();
+  const std::string prefix = dir + "_", suffix = ".mcap";
+  if (dir.empty() || name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+    return -1;
+  const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::stol(digits);
+}
+
+BagRefresh refresh_bag_metadata(const std::string& folder) {
+  namespace fs = std::filesystem;
+  std::vector<std::pair<long, fs::path>> candidates;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(folder, ec)) {
+    if (!e.is_regular_file(ec)) continue;
+    const long n = split_file_index(e.path().string());
+    if (n >= 0) candidates.emplace_back(n, e.path());
+  }
+  if (ec) throw McapError("cannot list " + folder + ": " + ec.message());
+  std::sort(candidates.begin(), candidates.end());
+
+  BagRefresh out;
+  std::vector<BagFileInfo> files;
+  std::vector<BagTopicInfo> topics;
+  std::map<std::string, std::size_t> topic_at;  // name -> index in topics
+  for (const auto& [n, path] : candidates) {
+    const std::string name = path.filename().string();
+    try {
+      McapReader r(path.string());
+      if (!r.complete() || !r.statistics()) {
+        out.skipped.push_back(name + ": " +
+                              (r.complete() ? std::string("no Statistics record in its summary")
+                                            : std::string("not complete (no summary: repair it first)")));
+        continue;
+      }
+      const McapStatistics& st = *r.statistics();
+      files.push_back({name, st.message_start, st.message_end, st.message_count});
+      out.listed.push_back(name);
+      for (const auto& [id, c] : r.channels()) {
+        const auto cnt = st.channel_message_counts.find(id);
+        if (cnt == st.channel_message_counts.end() || cnt->second == 0) continue;
+        auto at = topic_at.find(c.topic);
+        if (at == topic_at.end()) {
+          const auto schema = r.schemas().find(c.schema_id);
+          const auto qos = c.metadata.find("offered_qos_profiles");
+          topics.push_back({c.topic, schema != r.schemas().end() ? schema->second.name : "", c.message_encoding,
+                            qos != c.metadata.end() ? qos->second : "", 0});
+          at = topic_at.emplace(c.topic, topics.size() - 1).first;
+        }
+        topics[at->second].messages += cnt->second;
+      }
+    } catch (const McapError& e) {
+      out.skipped.push_back(name + ": " + e.what());
+    }
+  }
+  write_bag_metadata(folder, files, topics);
+  return out;
 }
 
 }  // namespace sensor_rig::record

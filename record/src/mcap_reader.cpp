@@ -166,6 +166,26 @@ void McapReader::read_summary(std::uint64_t start, std::uint64_t end) {
       const bool known = op == opcode::kSchema ? schemas_.count(id) != 0 : channels_.count(id) != 0;
       if (!known && !record_schema_or_channel(op, body))
         problem(pos, "malformed " + hex_op(op) + " record at offset " + std::to_string(pos));
+    } else if (op == opcode::kStatistics) {
+      In in({data_ + pos + kRecordHeader, len});
+      McapStatistics st;
+      st.message_count = in.le<std::uint64_t>();
+      in.le<std::uint16_t>();  // schema_count
+      in.le<std::uint32_t>();  // channel_count
+      in.le<std::uint32_t>();  // attachment_count
+      in.le<std::uint32_t>();  // metadata_count
+      in.le<std::uint32_t>();  // chunk_count
+      st.message_start = in.le<std::uint64_t>();
+      st.message_end = in.le<std::uint64_t>();
+      In counts(in.bytes(in.le<std::uint32_t>()));
+      while (counts.ok() && counts.left() >= 10) {
+        const auto id = counts.le<std::uint16_t>();
+        st.channel_message_counts[id] = counts.le<std::uint64_t>();
+      }
+      if (in.ok() && counts.ok() && counts.left() == 0)
+        statistics_ = std::move(st);
+      else
+        problem(pos, "malformed Statistics record at offset " + std::to_string(pos));
     }
     pos += kRecordHeader + len;
   }

@@ -8,6 +8,7 @@
 #include "recorder.hpp"
 #include "rig_commands.hpp"
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/record/bag_metadata.hpp"
 #include "sensor_rig/record/mcap_repair.hpp"
 #include "sensor_rig/record/mcap_types.hpp"
 
@@ -57,6 +58,7 @@ int run_repair(const std::string& in, const std::string& out) {
     }
   }
   const bool lost_after = !r.damage.empty() && !r.cut;
+  bool failed = lost_after;
   if (!r.damage.empty())
     std::fprintf(stderr, "rig record repair: %s: %s; kept %llu messages in %llu chunks, the %llu bytes before offset %llu%s\n",
                  in.c_str(), r.damage.c_str(), static_cast<unsigned long long>(r.messages),
@@ -81,9 +83,26 @@ int run_repair(const std::string& in, const std::string& out) {
                       {"seconds", seconds},
                       {"mb_per_s", seconds > 0 ? static_cast<double>(r.stopped_at) / 1e6 / seconds : 0.0}};
   if (in_place) j["original"] = broken;
+  // A file of a split recording (DIR/<DIR>_N.mcap): the folder's metadata.yaml names it now, with
+  // its counts and times, and the totals include it (record/bag_metadata.hpp).
+  const std::string placed = in_place ? in : out;
+  if (record::split_file_index(placed) >= 0) {
+    const std::string folder = fs::absolute(placed).parent_path().string();
+    try {
+      const auto refreshed = record::refresh_bag_metadata(folder);
+      for (const auto& s : refreshed.skipped)
+        std::fprintf(stderr, "rig record repair: %s/metadata.yaml: not listed: %s\n", folder.c_str(), s.c_str());
+      j["metadata"] = (fs::path(folder) / "metadata.yaml").string();
+      j["metadata_files"] = refreshed.listed;
+    } catch (const record::McapError& e) {
+      std::fprintf(stderr, "rig record repair: %s/metadata.yaml not updated: %s\n", folder.c_str(), e.what());
+      j["metadata_error"] = e.what();
+      failed = true;
+    }
+  }
   std::printf("%s\n", j.dump().c_str());
   std::fflush(stdout);
-  return lost_after ? cli::kRuntime : cli::kOk;
+  return failed ? cli::kRuntime : cli::kOk;
 }
 
 void add_repair(CLI::App& record, cli::Context& ctx) {

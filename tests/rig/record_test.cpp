@@ -370,6 +370,21 @@ TEST(Record, AKilledSplitRecordingIsListedAndItsLastFileRepaired) {
   ASSERT_EQ(again.wait(60'000), 0) << again.err();
   EXPECT_TRUE(std::filesystem::exists(broken + ".broken"));
   EXPECT_EQ(node_messages(broken, "indexed")["messages"], truth["messages"]);
+  // Repaired in its folder, the file is in metadata.yaml now: every file named, each with the count
+  // and times @mcap/core's indexed reader finds in it, the topics' counts and the totals over all.
+  const YAML::Node m2 = YAML::LoadFile((folder / "metadata.yaml").string())["rosbag2_bagfile_information"];
+  ASSERT_TRUE(m2.IsMap());
+  auto all = files;
+  all.push_back(std::filesystem::path(broken).filename().string());
+  const auto per_topic = check_metadata_files(folder, m2, all);
+  EXPECT_EQ(per_topic.at(prefix + "/points"), total + got["count"].get<std::uint64_t>());
+  const auto again_summary = again.summary();
+  EXPECT_EQ(again_summary["metadata_files"].get<std::vector<std::string>>(), all) << again.out();
+  const auto qos = test::mcap_dump(broken)["channels"][prefix + "/points"]["metadata"]["offered_qos_profiles"];
+  for (const auto& t : m2["topics_with_message_count"]) {
+    EXPECT_EQ(t["topic_metadata"]["type"].as<std::string>(), "sensor_msgs/msg/PointCloud2");
+    EXPECT_EQ(t["topic_metadata"]["offered_qos_profiles"].as<std::string>(), qos.get<std::string>());
+  }
 }
 
 TEST(Record, RepairOfWhatIsNotMcapIsARuntimeError) {

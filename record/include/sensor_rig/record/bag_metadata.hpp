@@ -37,4 +37,21 @@ std::string bag_metadata_yaml(const std::vector<BagFileInfo>& files, const std::
 void write_bag_metadata(const std::string& folder, const std::vector<BagFileInfo>& files,
                         const std::vector<BagTopicInfo>& topics);
 
+// A split recording's file: `DIR/<DIR>_N.mcap` (as SplitWriter names them); N, or -1 when `file` is not one.
+long split_file_index(const std::string& file);
+
+struct BagRefresh {
+  std::vector<std::string> listed;   // the files metadata.yaml now names, in N order
+  std::vector<std::string> skipped;  // "NAME: why" for each `<DIR>_N.mcap` left out (no summary: not repaired)
+};
+
+// Rewrites `folder/metadata.yaml` from the files themselves (after `rig record repair` of one of
+// them): every `<DIR>_N.mcap` in N order that is complete with a Statistics record in its summary,
+// its count and first/last log time from that record, the topics (name, schema name, message
+// encoding, the channel's offered_qos_profiles) with their counts summed over the files, in the order
+// they first appear; channels without messages are left out, as SplitWriter leaves them. A file that
+// is not complete (a killed writer's, not repaired) is skipped and named, as SplitWriter never lists
+// it. Throws McapError when metadata.yaml cannot be written.
+BagRefresh refresh_bag_metadata(const std::string& folder);
+
 }  // namespace sensor_rig::record

@@ -9,12 +9,20 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "sensor_rig/record/mcap_types.hpp"
 
 namespace sensor_rig::record {
+
+// The summary's Statistics record (when the file has one).
+struct McapStatistics {
+  std::uint64_t message_count = 0;
+  std::uint64_t message_start = 0, message_end = 0;  // log times, ns
+  std::map<std::uint16_t, std::uint64_t> channel_message_counts;
+};
 
 struct McapProblem {
   std::uint64_t offset = 0;  // byte offset in the file of the record at fault
@@ -38,6 +46,8 @@ class McapReader {
   [[nodiscard]] bool complete() const noexcept { return complete_; }
   [[nodiscard]] const std::vector<McapProblem>& problems() const noexcept { return problems_; }
   [[nodiscard]] std::size_t chunk_count() const noexcept { return chunk_count_; }
+  // The summary's Statistics record; nullopt when the file is incomplete or its summary has none.
+  [[nodiscard]] const std::optional<McapStatistics>& statistics() const noexcept { return statistics_; }
 
   // Every readable message: chunks and loose messages in file order, each chunk's messages by log
   // time. fn returns false to stop. Schema/Channel records met inside chunks are added to schemas()
@@ -63,6 +73,7 @@ class McapReader {
   std::map<std::uint16_t, McapChannel> channels_;
   std::vector<std::pair<std::uint8_t, std::uint64_t>> data_records_;  // (opcode, offset): chunks and messages
   std::size_t chunk_count_ = 0;
+  std::optional<McapStatistics> statistics_;
   std::vector<McapProblem> problems_;
 };
 
