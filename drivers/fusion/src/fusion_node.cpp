@@ -161,7 +161,10 @@ struct FusionNode::Impl {
   }
 
   void handle(InputScan& in) {
-    const auto place = matcher.push(in.source, in.stamp, in.arrival_ns);
+    // The scan's span (its latest point's time): a slower LIDAR's scan spans more than one rotation.
+    std::uint32_t span = 0;
+    for (const auto& pt : in.points) span = std::max(span, pt.t);
+    const auto place = matcher.push(in.source, in.stamp, in.arrival_ns, static_cast<Nanos>(span));
     expected_packets[in.source] = in.packets + in.missing_packets;
     if (!place.late) {
       auto& slot = slot_for(place.sweep);
@@ -193,7 +196,9 @@ struct FusionNode::Impl {
     for (std::size_t i = 0; i < slot.parts.size(); ++i) {
       const auto& p = slot.parts[i];
       if (!p.present) {
-        missing += expected_packets[i];
+        // An absent LIDAR's whole scan is missing, unless its scan of an earlier sweep spans this one
+        // (a slower LIDAR: covered, lacks nothing).
+        if (i >= closed.covered.size() || !closed.covered[i]) missing += expected_packets[i];
         continue;
       }
       msg::SetMember m{};
@@ -364,6 +369,7 @@ dds::DriverStatus FusionNode::status() const {
   s.add_number("late_scans", c.late_scans);
   s.add_number("repeated_scans", c.repeated_scans);
   s.add_number("clock_steps_back", c.clock_steps_back);
+  s.add_number("covered_by_slower", c.covered);
   s.add_number("dropped_backlog", m.dropped_backlog);
   s.add_number("points_last_sweep", m.last_points);
   s.add_number("lidars_last_sweep", m.last_sources);

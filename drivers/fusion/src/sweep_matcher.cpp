@@ -104,7 +104,7 @@ void SweepMatcher::place_boundary(bool anew) {
   }
 }
 
-SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns) {
+SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns, Nanos span_ns) {
   Placement out;
   if (source >= cfg_.sources) {
     ++counters_.late_scans;
@@ -113,6 +113,13 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
   }
   auto& src = sources_[source];
   src.alive = true;  // delivering, even if this scan comes too late
+  // The periods this scan spans: its span rounded; a scan short of its turn (lost packets) keeps
+  // the source's count while its stamps step by that many periods.
+  const Nanos p = cfg_.period_ns;
+  int k = span_ns > 0 ? static_cast<int>(std::clamp<Nanos>((span_ns + p / 2) / p, 1, kMaxRotations)) : 1;
+  if (k == 1 && src.seen && src.rotations > 1 && std::abs(stamp_ns - src.last_stamp - src.rotations * p) <= p / 4)
+    k = src.rotations;
+  const bool newest = !src.seen || stamp_ns > src.last_stamp;
   // A source's scans come in order: stamps that go back mean its clock stepped back, and the
   // rotations emitted on the old timeline say nothing about the new one.
   if (src.seen && stamp_ns < src.last_stamp - cfg_.period_ns / 2) {
@@ -124,6 +131,11 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
   place_boundary(false);
   const std::int64_t rotation = rotation_of(src, stamp_ns);
   src.last_stamp = stamp_ns;
+  if (newest) {
+    src.rotations = k;
+    src.last_rotation = rotation;
+    src.covers_until = std::max(rotation + 1, rotation_of(src, stamp_ns + k * p));
+  }
   if (std::find(emitted_.begin(), emitted_.end(), rotation) != emitted_.end()) {
     ++counters_.late_scans;
     out.late = true;
@@ -151,34 +163,62 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
   return out;
 }
 
-// Nothing more to wait for: each source is in, has moved on to a later sweep, or is dead.
-bool SweepMatcher::settled(const Sweep& s) const noexcept {
+// A source absent from sweep `s` whose newest scan began in an earlier rotation and spans this one.
+bool SweepMatcher::covered(std::size_t i, const Sweep& s) const noexcept {
+  const Source& src = sources_[i];
+  return !s.present[i] && src.seen && src.rotations > 1 && src.last_rotation < s.rotation && s.rotation < src.covers_until;
+}
+
+bool SweepMatcher::whole(const Sweep& s) const noexcept {
   for (std::size_t i = 0; i < sources_.size(); ++i)
-    if (!s.present[i] && sources_[i].alive && sources_[i].last_sweep <= s.id) return false;
+    if (!s.present[i] && !covered(i, s)) return false;
   return true;
 }
 
+// Nothing more to wait for: each source is in, covered, has moved on to a later sweep, or is dead.
+bool SweepMatcher::settled(const Sweep& s) const noexcept {
+  for (std::size_t i = 0; i < sources_.size(); ++i)
+    if (!s.present[i] && sources_[i].alive && sources_[i].last_sweep <= s.id && !covered(i, s)) return false;
+  return true;
+}
+
+// A slower source's scan is handed over (k - 1) periods after a one-period source's of its rotation.
+Nanos SweepMatcher::wait_ns(const Sweep& s) const noexcept {
+  int k = 1;
+  for (std::size_t i = 0; i < sources_.size(); ++i)
+    if (!s.present[i] && sources_[i].alive && sources_[i].last_sweep <= s.id && !covered(i, s)) k = std::max(k, sources_[i].rotations);
+  return cfg_.timeout_ns + (k - 1) * cfg_.period_ns;
+}
+
 ClosedSweep SweepMatcher::close_front(std::uint64_t& reason) {
+  std::vector<bool> cov(cfg_.sources, false);
+  for (std::size_t i = 0; i < cov.size(); ++i) cov[i] = covered(i, open_.front());
   Sweep s = std::move(open_.front());
   open_.pop_front();
   ++counters_.sweeps;
   ++reason;
-  for (std::size_t i = 0; i < s.present.size(); ++i)
-    if (!s.present[i]) ++counters_.missing[i];
+  bool complete = true;
+  for (std::size_t i = 0; i < s.present.size(); ++i) {
+    if (cov[i]) ++counters_.covered;
+    else if (!s.present[i]) {
+      ++counters_.missing[i];
+      complete = false;
+    }
+  }
   emitted_.push_back(s.rotation);
   if (emitted_.size() > kEmittedRemembered) emitted_.pop_front();
-  return ClosedSweep{s.id, s.count == cfg_.sources, std::move(s.present)};
+  return ClosedSweep{s.id, complete, std::move(s.present), std::move(cov)};
 }
 
 std::optional<ClosedSweep> SweepMatcher::ready(Nanos now_ns) {
   if (open_.empty()) return std::nullopt;
-  const auto timed_out = [&](const Sweep& s) { return now_ns - s.opened_at >= cfg_.timeout_ns; };
+  const auto timed_out = [&](const Sweep& s) { return now_ns - s.opened_at >= wait_ns(s); };
   // The newest sweep that may go out; every older one goes out before it.
   bool any = open_.size() > kMaxOpen;
   for (auto it = open_.rbegin(); !any && it != open_.rend(); ++it) any = settled(*it) || timed_out(*it);
   if (!any) return std::nullopt;
   const Sweep& f = open_.front();
-  if (f.count == cfg_.sources) return close_front(counters_.complete);
+  if (whole(f)) return close_front(counters_.complete);
   if (!settled(f) && timed_out(f)) {
     for (std::size_t i = 0; i < sources_.size(); ++i)  // waited for in vain: not waited for again
       if (!f.present[i] && sources_[i].last_sweep <= f.id) sources_[i].alive = false;
@@ -190,6 +230,6 @@ std::optional<ClosedSweep> SweepMatcher::ready(Nanos now_ns) {
   return close_front(moved_on ? counters_.partial_next_sweep : counters_.partial_dead);
 }
 
-Nanos SweepMatcher::deadline() const noexcept { return open_.empty() ? -1 : open_.front().opened_at + cfg_.timeout_ns; }
+Nanos SweepMatcher::deadline() const noexcept { return open_.empty() ? -1 : open_.front().opened_at + wait_ns(open_.front()); }
 
 }  // namespace sensor_rig::drivers

@@ -28,6 +28,8 @@ struct TrueScan {
   std::int64_t rotation = 0;  // the truth
   Nanos stamp = 0;            // what the LIDAR stamped (vehicle time: steps with the clock)
   Nanos arrival = 0;          // handed to the node (monotonic)
+  Nanos span = 0;             // its last point's time after its stamp (0: not told, one period)
+  std::int64_t rotations = 1;  // the truth: rotations of the rig's period it spans (2: 300 rpm beside 600)
 };
 
 struct Emitted {
@@ -70,9 +72,10 @@ class SimulatedRig {
       last[t.source] = t.arrival;
     }
     std::stable_sort(scans.begin(), scans.end(), [](const TrueScan& a, const TrueScan& b) { return a.arrival < b.arrival; });
+    fed_.insert(fed_.end(), scans.begin(), scans.end());
     for (const auto& t : scans) {
       advance(t.arrival);
-      const auto place = m_.push(t.source, t.stamp, t.arrival);
+      const auto place = m_.push(t.source, t.stamp, t.arrival, t.span);
       if (place.late)
         dropped_.push_back(t);
       else
@@ -95,7 +98,12 @@ class SimulatedRig {
         sources.insert(t.source);
       }
       EXPECT_EQ(sources.size(), e.scans.size());
-      EXPECT_EQ(e.complete, sources.size() == sources_) << "rotation " << e.scans[0].rotation;
+      // Complete exactly when every source is in, or its scan that began in an earlier rotation
+      // spans this one (a slower LIDAR: nothing of that time is missing).
+      std::size_t covered = 0;
+      for (std::uint32_t src = 0; src < sources_; ++src)
+        if (!sources.contains(src) && spanned_by_earlier(src, e.scans[0].rotation)) ++covered;
+      EXPECT_EQ(e.complete, sources.size() + covered == sources_) << "rotation " << e.scans[0].rotation;
       seen += e.scans.size();
     }
     EXPECT_EQ(seen, fed);
@@ -117,8 +125,15 @@ class SimulatedRig {
     return e->at - last;
   }
 
+  // A scan of `source` that began before rotation n spans it.
+  [[nodiscard]] bool spanned_by_earlier(std::uint32_t source, std::int64_t n) const {
+    return std::any_of(fed_.begin(), fed_.end(),
+                       [&](const TrueScan& t) { return t.source == source && t.rotation < n && n < t.rotation + t.rotations; });
+  }
+
   SweepMatcher m_;
   std::uint32_t sources_;
+  std::vector<TrueScan> fed_;
   std::map<std::uint64_t, std::vector<TrueScan>> open_;
   std::vector<Emitted> emitted_;
   std::vector<TrueScan> dropped_;
@@ -325,6 +340,73 @@ TEST(SweepMatcher, JitterAcrossEqualGapsKeepsTheBoundary) {
   EXPECT_GE(complete, 58u);  // the first and the last rotation may be cut by the grouping
   EXPECT_EQ(groupings.size(), 1u);
   EXPECT_EQ(run.m_.counters().partial_timeout + run.m_.counters().partial_next_sweep, run.emitted_.size() - complete);
+}
+
+// Mixed rpm: LIDAR 1 turns at 300 rpm beside two at 600 (issue 26): its scan spans two rotations
+// of the period, is stamped at its first firing and handed over two periods later. `from`: the
+// rotation it slows down at (600 rpm before); `phase`: where its slow scans begin.
+std::vector<TrueScan> mixed_rpm_scans(std::int64_t from, std::int64_t last, Nanos phase) {
+  auto scans = rig_scans(kPhases, 0, last);
+  erase_scans(scans, 1, from, last);
+  for (std::int64_t n = from; n + 2 <= last; n += 2) {
+    const Nanos stamp = n * kPeriod + phase;
+    scans.push_back({1, n, stamp, stamp + 2 * kPeriod + 2 * kMs, 2 * kPeriod - kMs, 2});
+  }
+  for (auto& t : scans)
+    if (t.rotations == 1 && t.span == 0) t.span = kPeriod - kMs;  // the node tells every scan's span
+  return scans;
+}
+
+// Before: the 300 rpm LIDAR never made the fused cloud (every other sweep waited for it in vain and
+// declared it dead; its next scan came after its sweep was written: dropped as late). Now each of
+// its scans joins the sweep of the rotation it began in, which waits for it; the sweep of the
+// rotation its scan also spans lacks nothing and goes out without waiting.
+TEST(SweepMatcher, SlowerLidarJoinsTheRotationItsScanBeganIn) {
+  for (const Nanos phase : {20 * kMs, 37 * kMs}) {
+    SCOPED_TRACE("phase " + std::to_string(phase / kMs) + " ms");
+    const auto scans = mixed_rpm_scans(10, 40, phase);
+    SimulatedRig run(3);
+    run.feed(scans);
+    run.expect_truth(scans.size());
+    EXPECT_TRUE(run.dropped_.empty()) << run.dropped_.size() << " scans dropped, first of LIDAR " << run.dropped_[0].source;
+    std::size_t slow_fused = 0;
+    for (std::int64_t n = 0; n < 40; ++n) {
+      const Emitted* e = run.sweep_of(n);
+      ASSERT_NE(e, nullptr) << n;
+      EXPECT_TRUE(e->complete) << "rotation " << n;
+      EXPECT_EQ(run.wait_of(n), 0) << "rotation " << n << " waited past its last scan";
+      for (const auto& t : e->scans) slow_fused += t.source == 1 && t.rotations == 2 ? 1 : 0;
+    }
+    EXPECT_EQ(slow_fused, 15u) << "every 300 rpm scan in a sweep";
+    EXPECT_EQ(run.m_.counters().missing, (std::vector<std::uint64_t>{0, 0, 0}));
+    EXPECT_EQ(run.m_.counters().covered, 15u);
+  }
+}
+
+// A slow scan short of its turn (its last packets lost: it spans 1.3 periods) is still a slow
+// scan while the LIDAR's stamps step by two periods; a slow LIDAR that stops costs one wait
+// (timeout + one period), then no sweep waits for it, and its sweeps say what they lack.
+TEST(SweepMatcher, SlowerLidarShortScanAndStop) {
+  auto scans = mixed_rpm_scans(0, 40, 20 * kMs);
+  for (auto& t : scans)
+    if (t.source == 1 && t.rotation == 10) t.span = 130 * kMs;
+  erase_scans(scans, 1, 30, 40);
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  EXPECT_TRUE(run.dropped_.empty());
+  for (std::int64_t n = 0; n < 30; ++n) EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+  // Rotation 30 waited for its slow scan until the timeout and one period more, then no longer.
+  EXPECT_EQ(run.sweep_of(30)->at, 30 * kPeriod + kDelivery + kTimeout + kPeriod);
+  EXPECT_FALSE(run.sweep_of(30)->complete);
+  // Rotations 31 and 32, whole but for it by then, go out at that moment; no later one waits.
+  EXPECT_EQ(run.sweep_of(31)->at, run.sweep_of(30)->at);
+  EXPECT_EQ(run.sweep_of(32)->at, run.sweep_of(30)->at);
+  for (std::int64_t n = 31; n < 40; ++n) EXPECT_FALSE(run.sweep_of(n)->complete) << n;
+  for (std::int64_t n = 33; n < 40; ++n) {
+    EXPECT_EQ(run.wait_of(n), 0) << n;
+    EXPECT_FALSE(run.sweep_of(n)->complete) << n;
+  }
 }
 
 TEST(SweepMatcher, UnknownSourceIsDroppedAndConfigChecked) {

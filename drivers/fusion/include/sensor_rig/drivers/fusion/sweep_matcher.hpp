@@ -15,6 +15,17 @@
 // arrived. A source that a sweep waited for until the timeout is dead until it delivers again, so
 // a stopped LIDAR costs one timeout and no later sweep waits for it. A source's stamps going back
 // (a clock step back) start a new timeline: its scans are not late for that.
+//
+// A slower LIDAR (300 rpm beside 600 rpm: its scan spans k = 2 rotations of the period) is matched
+// by its own rotation: its scan joins the sweep of the rotation it began in (its stamp, its first
+// firing), and that sweep waits for it up to timeout + (k - 1) periods (the scan is handed over k
+// periods after its stamp, not one). The sweeps of the rotations that scan also spans do not wait
+// for it and lack nothing: it is `covered` there (its points for that time are in the sweep where its
+// scan began; they say complete without it). k comes from the scan's span (its last point's time,
+// rounded to whole periods); a scan that lacks part of its turn keeps the source's k while its
+// stamps still step by k periods. Before, a 300 rpm LIDAR never made the fused cloud: every other
+// sweep waited for it in vain, declared it dead, and its next scan came after its sweep was written.
+
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -40,14 +51,16 @@ struct SweepCounters {
   std::uint64_t repeated_scans = 0;      // a second scan of one source in one rotation
   std::uint64_t clock_steps_back = 0;    // a source's stamps went back (a new timeline)
   std::uint64_t phase_steps = 0;         // a source's phase jumped (a clock step, or its own phase changed)
+  std::uint64_t covered = 0;             // sources absent from a sweep whose rotation their last (slower) scan spans
   std::vector<std::uint64_t> missing;    // per source: emitted sweeps without its scan
 };
 
 // A sweep to emit: the scans pushed with this id, in the order they came.
 struct ClosedSweep {
   std::uint64_t id = 0;
-  bool complete = false;
+  bool complete = false;      // every source present or covered
   std::vector<bool> present;  // per source
+  std::vector<bool> covered;  // per source: absent, its scan of an earlier sweep spans this rotation (not missing)
 };
 
 class SweepMatcher {
@@ -58,8 +71,9 @@ class SweepMatcher {
     bool late = false;        // dropped: late, repeated or an unknown source
     std::uint64_t sweep = 0;  // else: the sweep it joined (ClosedSweep::id)
   };
-  // `arrival_ns` on a clock that does not step (monotonic). Then call ready() until it returns none.
-  Placement push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns);
+  // `arrival_ns` on a clock that does not step (monotonic); `span_ns` the scan's duration (its last
+  // point's time after its stamp; 0 = unknown: one period). Then call ready() until it returns none.
+  Placement push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns, Nanos span_ns = 0);
   // The next sweep to emit now, oldest first, or none.
   std::optional<ClosedSweep> ready(Nanos now_ns);
   // Arrival deadline of the oldest open sweep (call ready() then), or -1 when none is open.
@@ -80,6 +94,9 @@ class SweepMatcher {
     Nanos offset = 0;  // its timeline stepped by this, and not every live source's has yet
     int offset_scans = 0;
     std::uint64_t last_sweep = 0;  // id of the sweep its last scan joined (0: none)
+    int rotations = 1;             // periods one of its scans spans (2: a 300 rpm LIDAR beside 600 rpm)
+    std::int64_t last_rotation = 0;   // rotation of its newest scan
+    std::int64_t covers_until = 0;    // that scan spans the rotations before this one (exclusive)
   };
   struct Sweep {
     std::uint64_t id = 0;
@@ -93,6 +110,10 @@ class SweepMatcher {
   void track_phase(Source& src, Nanos stamp);
   void place_boundary(bool anew);
   [[nodiscard]] bool settled(const Sweep& s) const noexcept;
+  [[nodiscard]] bool covered(std::size_t source, const Sweep& s) const noexcept;
+  [[nodiscard]] Nanos wait_ns(const Sweep& s) const noexcept;  // timeout + a slower absent source's extra periods
+  [[nodiscard]] bool whole(const Sweep& s) const noexcept;     // every source present or covered
+  static constexpr int kMaxRotations = 4;  // 150 rpm beside 600
   ClosedSweep close_front(std::uint64_t& reason);
 
   SweepMatcherConfig cfg_;
