@@ -50,6 +50,9 @@ class PacketStamper {
 
   // |device - vehicle| below this: the device clock is synchronised (PTP/GPS) and taken as is.
   static constexpr Nanos kSyncedWithinNs = 1'000'000;
+  // While the mapper converges: how far the receive times may lag a synced device's clock (the
+  // least delay seen so far, which scheduling inflates) before the device is taken for free-running.
+  static constexpr Nanos kConvergingDelayNs = 10'000'000;
 
  private:
   Nanos stamp_absolute(std::int64_t device_ns, Nanos host_stamp) noexcept;
