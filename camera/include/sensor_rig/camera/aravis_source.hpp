@@ -1,5 +1,6 @@
 #pragma once
-// GigE Vision (and any Aravis device) as a FrameSource. Open by device id, serial, IP or MAC;
+// GigE Vision (and any Aravis device) as a FrameSource. Open by device id, serial, IP or MAC (an IP
+// is probed with one GVCP read outside every lock, then opened by address without discovery);
 // acquisition stopped first (a live device its last controller left acquiring), then features
 // applied in a defined order (pixel format, ROI, frame rate, exposure with
 // ExposureTime/ExposureTimeAbs tolerance, gain, named features, trigger), GigE packet size and
@@ -90,6 +91,7 @@ class AravisSource final : public FrameSource {
 
   SourceConfig cfg_;
   AravisDeviceOpener opener_;
+  bool network_ = false;  // the default opener: an address is probed (GVCP) before the open lock
   // Camera control (open/close/trigger) from two threads. Timed: trigger() waits for either lock
   // at most kTriggerLockWaitMs (see trigger()).
   mutable std::timed_mutex mutex_;
@@ -131,7 +133,9 @@ class AravisSource final : public FrameSource {
   std::atomic<Nanos> last_exposure_ns_{0};              // the latest it read
 };
 
-// Aravis' own open by name, falling back to a serial-number match in the device list.
+// The network's device: an IPv4 address is probed (one GVCP READREG, 3 x 100 ms) and opened by
+// address (no discovery; a camera that does not answer throws after the probe); any other name by
+// Aravis' own open, falling back to a serial-number match in the device list.
 void* open_aravis_network_device(const std::string& device);
 
 }  // namespace sensor_rig::camera
