@@ -27,8 +27,22 @@ std::string fmt(double v) {
 struct Lidar {
   std::string topic, name;
   std::vector<Nanos> acqs;
+  std::vector<std::pair<Nanos, std::uint32_t>> units;  // (true first firing, packets a whole scan has), by time
+  std::uint32_t usual_parts = 0;                        // the median: one rotation's packets
   std::map<std::uint64_t, const SampleRecord*> by_seq;
 };
+
+// How long after its start a fault keeps its device from delivering (as chaos_check.cpp's fault_span_s).
+double stop_span_s(const faults::FaultEvent& e) {
+  double span = e.duration_s;
+  if (e.kind == "host.kill_mock") span += e.number("restart_s", 1.0);
+  if (e.kind == "host.stall_mock") span += e.number("ms", 300.0) * 1e-3;
+  return span;
+}
+// The faults that stop a LIDAR and let it return: after them the fused cloud must be whole again.
+bool stops_a_lidar(const faults::FaultEvent& e) {
+  return e.kind == "lidar.restart" || e.kind == "host.kill_mock" || e.kind == "host.stall_mock";
+}
 
 // The rotation boundary of the truth: the LIDARs turn phase-locked at one period, each scan starts
 // at its LIDAR's phase (the circular mean of its true acquisitions mod the period); the boundary lies
@@ -88,6 +102,7 @@ class FusedJudge {
       t_.stamp_error_p99_ms = errors_[std::min(errors_.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(errors_.size())))];
       t_.stamp_error_max_ms = errors_.back();
     }
+    check_recovery();
     check_monitor();
   }
 
@@ -126,7 +141,17 @@ class FusedJudge {
       l.name = name_of(topic);
       for (const auto& log : in_.truths)
         if (log.header.topic == topic)
-          for (const auto& u : log.units) l.acqs.push_back(u.acq_ns);
+          for (const auto& u : log.units) {
+            l.acqs.push_back(u.acq_ns);
+            l.units.emplace_back(u.acq_ns, u.parts);
+          }
+      std::sort(l.units.begin(), l.units.end());
+      if (!l.units.empty()) {
+        std::vector<std::uint32_t> parts;
+        for (const auto& u : l.units) parts.push_back(u.second);
+        std::nth_element(parts.begin(), parts.begin() + static_cast<std::ptrdiff_t>(parts.size() / 2), parts.end());
+        l.usual_parts = parts[parts.size() / 2];
+      }
       lidar_of_[topic] = lidars_.size();
       lidars_.push_back(std::move(l));
     }
@@ -236,14 +261,20 @@ class FusedJudge {
       fail("stamps_disagree", sweep + ": its stamps say packets " + std::to_string(cloud->packets) + ", dropped " + std::to_string(cloud->dropped) +
            ", missing " + std::to_string(cloud->missing_packets) + "; its members' scans " + std::to_string(packets) + ", " +
            std::to_string(dropped) + ", " + std::to_string(missing));
-    if (says_complete && members.size() < lidars_.size()) {
+    // Absent but covered: a slower LIDAR's scan that began in an earlier rotation spans this one.
+    std::size_t covered = 0;
+    if (earliest != nullptr)
+      for (const auto& l : lidars_)
+        if (!topics.contains(l.topic) && covered_by_slower(l, rotation(earliest->truth->acq))) ++covered;
+    if (says_complete && members.size() + covered == lidars_.size()) whole_.emplace_back(set.stamp, set.seq);
+    if (says_complete && members.size() + covered < lidars_.size()) {
       std::string absent;
       for (const auto& l : lidars_) {
         if (topics.contains(l.topic)) continue;
         absent += (absent.empty() ? "" : ", ") + l.name;
         if (const SampleRecord* s = published_in(l, earliest); s != nullptr) absent += " (its scan seq " + std::to_string(s->seq) + " was published)";
       }
-      t_.hidden_missing += lidars_.size() - members.size();
+      t_.hidden_missing += lidars_.size() - members.size() - covered;
       fail("complete_without", sweep + " says complete (missing 0) with " + std::to_string(members.size()) + " of " + std::to_string(lidars_.size()) +
            " LIDARs; absent: " + absent);
     }
@@ -251,6 +282,57 @@ class FusedJudge {
       t_.phantom_missing += cloud->missing_packets - missing;
       fail("phantom", sweep + " holds every LIDAR and counts " + std::to_string(cloud->missing_packets) + " packets missing; its scans miss " +
            std::to_string(missing));
+    }
+  }
+
+  // LIDAR `l` began no scan in rotation n, and its scan that began in an earlier rotation spans it
+  // (a slower LIDAR: k = its packets over one rotation's, spanning k periods; the fusion's rule,
+  // drivers/README.md "A slower LIDAR"). A LIDAR that stopped is not covered.
+  bool covered_by_slower(const Lidar& l, std::int64_t n) const {
+    if (l.usual_parts == 0) return false;
+    const Nanos start = boundary_ + n * period_;
+    auto it = std::lower_bound(l.units.begin(), l.units.end(), std::make_pair(start, std::uint32_t{0}));
+    if (it != l.units.end() && it->first < start + period_) return false;  // it began one in n
+    if (it == l.units.begin()) return false;
+    const auto& [acq, parts] = *std::prev(it);
+    const auto k = std::max<std::int64_t>(1, std::llround(static_cast<double>(parts) / l.usual_parts));
+    return rotation(acq) < n && n < rotation(acq + k * period_);
+  }
+
+  // After a LIDAR stops and returns (lidar.restart, a killed or stalled mock), the fused cloud is
+  // whole again within the LIDAR's recovery bound plus the rotations the matcher may take to place a
+  // returned LIDAR's phase (its own phase after 3 scans: 4 periods): a sweep stamped after the
+  // fault's end that says complete and holds every LIDAR (or covers a slower one's). Judged when no
+  // other fault touches a fused LIDAR (or the host) meanwhile.
+  void check_recovery() {
+    const Nanos bound = static_cast<Nanos>(in_.bounds.lidar_recovery_s * 1e9) + 4 * period_;
+    auto fused_device = [&](const faults::FaultEvent& e) {
+      if (e.device.empty()) return e.device_class() == faults::DeviceClass::kHost;
+      for (const auto& l : lidars_) {
+        const auto x = in_.expected.find(l.topic);
+        if (e.device == (x != in_.expected.end() && !x->second.device.empty() ? x->second.device : l.name)) return true;
+      }
+      return false;
+    };
+    auto begin_of = [&](const faults::FaultEvent& e) { return in_.epoch_vehicle_ns + static_cast<Nanos>(e.at_s * 1e9); };
+    auto end_of = [&](const faults::FaultEvent& e) { return in_.epoch_vehicle_ns + static_cast<Nanos>((e.at_s + stop_span_s(e)) * 1e9); };
+    std::sort(whole_.begin(), whole_.end());
+    for (const auto& e : in_.events) {
+      if (!stops_a_lidar(e) || e.device.empty() || !fused_device(e)) continue;
+      const Nanos end = end_of(e), deadline = end + bound;
+      if (end < in_.window_begin_ns || deadline >= in_.window_end_ns) continue;
+      const bool overlapped = std::any_of(in_.events.begin(), in_.events.end(), [&](const faults::FaultEvent& o) {
+        return &o != &e && fused_device(o) && begin_of(o) < deadline && end_of(o) > begin_of(e);
+      });
+      if (overlapped) continue;
+      const auto it = std::lower_bound(whole_.begin(), whole_.end(), std::make_pair(end, std::uint64_t{0}));
+      if (it == whole_.end() || it->first > deadline) {
+        ctx_.violation("recovery", kFusedCloudTopic, e.kind + " on " + e.device + " ended at " + ctx_.at_s(end) +
+                                                         " s: no fused sweep whole again (complete, every LIDAR) within " +
+                                                         fmt(static_cast<double>(bound) * 1e-9) + " s");
+        continue;
+      }
+      t_.recovery_max_s = std::max(t_.recovery_max_s, static_cast<double>(it->first - end) * 1e-9);
     }
   }
 
@@ -354,6 +436,7 @@ class FusedJudge {
   std::set<std::uint64_t> sets_;                                                 // seqs of the members sets
   std::map<std::pair<std::size_t, std::uint64_t>, std::vector<std::uint64_t>> fused_in_;  // (lidar, seq) -> sweeps
   std::map<std::uint64_t, bool> complete_;                                       // sweep -> its stamps say complete
+  std::vector<std::pair<Nanos, std::uint64_t>> whole_;                           // (stamp, seq) of sweeps complete with every LIDAR
   std::vector<double> errors_;
   struct Kind {
     std::string kind, first;

@@ -217,6 +217,98 @@ TEST(ChaosFusedCheck, AFusedStampOffTheEarliestScanOrACloudWithoutMembersIsCaugh
   EXPECT_TRUE(example_says(r, "fused cloud seq 7 (stamped at 0.700 s) has no members")) << result_text(r);
 }
 
+// Drops LIDAR `lidar`'s scans of rotations [from, to) from its truth and its published scans (it
+// made none: stopped, or turning slower).
+void remove_scans(Input& in, std::size_t lidar, int from, int to) {
+  auto& log = in.truths[lidar];
+  std::erase_if(log.units, [&](const truth::UnitRecord& u) { return u.unit >= from && u.unit < to; });
+  std::erase_if(log.parts, [&](const truth::PartRecord& p) { return p.unit >= from && p.unit < to; });
+  std::erase_if(in.samples, [&](const SampleRecord& x) {
+    return x.topic == topic_of(lidar) && x.seq >= seq_of(lidar, from) && x.seq < seq_of(lidar, to);
+  });
+  in.monitor[topic_of(lidar)].received -= static_cast<std::uint64_t>(to - from);
+}
+
+// Sweep `u` without `lidar`'s scan; its stamps count its whole scan missing (honest), or nothing.
+void without(Input& in, int u, std::size_t lidar, bool count_missing = true) {
+  auto& members = in.fused.sets[static_cast<std::size_t>(u)].members;
+  std::erase_if(members, [&](const FusedMember& m) { return m.topic == topic_of(lidar); });
+  auto& c = cloud_of(in, static_cast<std::uint64_t>(u));
+  c.packets -= kParts;
+  c.missing_packets = count_missing ? kParts : 0;
+  if (lidar == 0) c.acquisition_ns = in.fused.sets[static_cast<std::size_t>(u)].stamp = acq(1, u);  // the earliest left
+}
+
+// The left LIDAR restarts at 0.5 s (silent 0.3 s). Honest: the sweeps it missed say so, and it is
+// fused again from its first scan back. Planted: the fusion never takes it back (its scans counted
+// dropped, every sweep after says the left scan is missing: no other invariant sees a lie); the
+// old judge held this (no recovery check of the fused cloud).
+TEST(ChaosFusedCheck, AFusedCloudThatStaysPartialAfterALidarReturnsIsCaught) {
+  Input in = honest();
+  in.events.push_back(faults::FaultEvent{1, "lidar.restart", "left", 0.5, 0.3, {}});
+  in.truths[1].faults.push_back(truth::FaultRecord{1, "lidar.restart", kT0 + 500'000'000, kT0 + 800'000'000, 5, ""});
+  remove_scans(in, 1, 5, 8);
+  for (int u = 5; u < 8; ++u) without(in, u, 1);
+  Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_LE(r.topics.at(kFusedCloudTopic).recovery_max_s, 0.01);
+  for (int u = 8; u < kRotations; ++u) without(in, u, 1);
+  in.fused.scans_dropped = kRotations - 8;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("recovery")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("fused")) << result_text(r);
+  bool said = false;
+  for (const auto& e : r.examples)
+    said |= e.invariant == "recovery" && e.topic == kFusedCloudTopic &&
+            e.what == "lidar.restart on left ended at 0.800 s: no fused sweep whole again (complete, every LIDAR) within 1.400 s";
+  EXPECT_TRUE(said) << result_text(r);
+  // Whole again at 2.0 s (1.2 s after): within the bound, held.
+  for (int u = 20; u < kRotations; ++u) {
+    in.fused.sets[static_cast<std::size_t>(u)].members.insert(in.fused.sets[static_cast<std::size_t>(u)].members.begin() + 1, member(1, u));
+    cloud_of(in, static_cast<std::uint64_t>(u)).packets += kParts;
+    cloud_of(in, static_cast<std::uint64_t>(u)).missing_packets = 0;
+  }
+  in.fused.scans_dropped = 20 - 8;
+  r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_NEAR(r.topics.at(kFusedCloudTopic).recovery_max_s, 1.2, 0.01);
+}
+
+// The left LIDAR at 300 rpm for rotations 10..19: each of its scans spans two rotations (twice the
+// packets). The sweeps of the rotations its scans began in hold them; the others lack nothing and
+// say complete without it (the fusion's rule for a slower LIDAR): held. The same sweeps saying
+// complete while the left LIDAR had stopped (its scan of one rotation only) are caught.
+TEST(ChaosFusedCheck, ASlowerLidarCoversTheRotationsItsScanSpansAStoppedOneDoesNot) {
+  Input slow = honest(), stopped = honest();
+  for (Input* in : {&slow, &stopped}) {
+    in->events.push_back(faults::FaultEvent{2, "lidar.rpm_change", "left", 1.0, 1.0, {{"rpm", "300"}}});
+    in->truths[1].faults.push_back(truth::FaultRecord{2, "lidar.rpm_change", kT0 + 1'000'000'000, kT0 + 2'000'000'000, 10, ""});
+    for (int u = 11; u < 20; u += 2) {
+      remove_scans(*in, 1, u, u + 1);
+      without(*in, u, 1, false);
+    }
+  }
+  for (auto& unit : slow.truths[1].units)
+    if (unit.unit >= 10 && unit.unit < 20) unit.parts = 2 * kParts;  // a whole scan: two rotations of packets
+  slow.truths[1].parts.clear();  // the parts again, each unit's packets at the same rate
+  std::uint64_t seq = 0;
+  for (const auto& unit : slow.truths[1].units)
+    for (std::uint32_t q = 0; q < unit.parts; ++q) {
+      const Nanos t = unit.acq_ns + q * (kPeriod / kParts);
+      slow.truths[1].parts.push_back(truth::PartRecord{seq++, unit.unit, t, 0, t, truth::Fate::kSent, 0});
+    }
+  for (auto& x : slow.samples)
+    if (x.topic == topic_of(1) && x.seq >= seq_of(1, 10) && x.seq < seq_of(1, 20)) x.packets = 2 * kParts;
+  for (int u = 10; u < 20; u += 2) cloud_of(slow, static_cast<std::uint64_t>(u)).packets += kParts;
+  Result r = check(slow);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).hidden_missing, 0u);
+  r = check(stopped);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "sweep 11 (stamped at 1.100 s) says complete (missing 0) with 2 of 3 LIDARs; absent: left")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).hidden_missing, 5u);
+}
+
 TEST(ChaosFusedCheck, NotJudgedWithoutFusion) {
   Input in = honest();
   in.fused = FusedInput{};
