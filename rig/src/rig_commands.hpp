@@ -1,6 +1,7 @@
 #pragma once
 // Every area's register function; the list is the whole `rig` command tree.
 #include "sensor_rig/common/cli.hpp"
+#include "can_recording_log.hpp"
 #include "lidar_recording_stream.hpp"
 
 namespace sensor_rig {
@@ -30,6 +31,7 @@ inline void register_all_commands(CLI::App& app, cli::Context& ctx) {
   drivers::register_lidar_cli(app, ctx);  // lidar decode (source -> timesync -> decoder -> PCD)
 #endif
 #ifdef RIG_HAVE_DBW
+  dbw::can::register_frame_log_kind("mcap", rig::open_can_recording);  // CAN transport mcap:FILE[@RATE] (read by record/)
   dbw::register_cli(app, ctx);      // can ..., mock paravan
   drivers::register_dbw_cli(app, ctx);  // dbw bridge|send (the DDS node)
 #endif

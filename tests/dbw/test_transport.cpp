@@ -8,6 +8,7 @@
 #include <fstream>
 #include <atomic>
 #include <chrono>
+#include <stdexcept>
 #include <thread>
 
 #include "sensor_rig/dbw/can/candump.hpp"
@@ -201,7 +202,8 @@ TEST(Transport, OptionalSocketOptionTheKernelRefusesIsCountedNotFatal) {
 }
 
 TEST(Transport, BadSpecsThrowClearErrors) {
-  for (const char* s : {"", "can0", "bogus:x", "fd:abc", "fd:", "candump:/nonexistent/log", "candump:/tmp/x@fast"}) {
+  for (const char* s : {"", "can0", "bogus:x", "fd:abc", "fd:", "candump:/nonexistent/log", "candump:/tmp/x@fast",
+                        "candump:/tmp/x@-1", "candump:/tmp/x@1,", "candump:/tmp/x@1,soon", "nokind:/tmp/x@1"}) {
     EXPECT_THROW((void)can::open_transport(s), can::TransportError) << s;
   }
 }
@@ -239,7 +241,67 @@ TEST(Transport, ReplayKeepsRecordedTiming) {
   while (fast->receive(rx, 1000) == can::IoStatus::kOk) ++n;
   EXPECT_EQ(n, 3);
   EXPECT_LT(sensor_rig::monotonic_now_ns() - f0, 30'000'000);
+
+  // @RATE,DELAY_S: the first frame DELAY_S after the first receive(), the others at their spacing.
+  auto late = can::open_transport("candump:" + path + "@1,0.2");
+  const auto l0 = sensor_rig::monotonic_now_ns();
+  EXPECT_EQ(late->receive(rx, 5), can::IoStatus::kTimeout);
+  ASSERT_EQ(late->receive(rx, 1000), can::IoStatus::kOk);
+  EXPECT_EQ(rx.frame.id, 0x10U);
+  EXPECT_GE(sensor_rig::monotonic_now_ns() - l0, 199'000'000);
+  ASSERT_EQ(late->receive(rx, 1000), can::IoStatus::kOk);
+  EXPECT_GE(sensor_rig::monotonic_now_ns() - l0, 259'000'000);
   fs::remove(path);
+}
+
+// A log kind registered from above (the rig registers mcap:): KIND:FILE[@RATE[,DELAY_S]] replays
+// its frames at their recorded timing, stamped with their recorded receive times; its own default delay.
+class ListLog final : public can::FrameLog {
+ public:
+  explicit ListLog(const std::string& file) : file_(file) {}
+  bool next(can::LoggedFrame& out) override {
+    if (i_ == 3) return false;
+    out.stamp = 5'000'000'000LL + static_cast<sensor_rig::Nanos>(i_) * 20'000'000;
+    out.frame = frame(static_cast<std::uint32_t>(0x20 + i_), 1);
+    ++i_;
+    return true;
+  }
+  [[nodiscard]] std::uint64_t malformed() const override { return file_ == "bad" ? 2 : 0; }
+  [[nodiscard]] sensor_rig::Nanos default_delay_ns() const override { return 30'000'000; }
+
+ private:
+  std::string file_;
+  int i_ = 0;
+};
+
+TEST(Transport, RegisteredLogKindReplaysItsFrames) {
+  can::register_frame_log_kind("listlog", [](const std::string& f) -> std::unique_ptr<can::FrameLog> {
+    if (f == "missing") throw std::runtime_error("no such log");
+    return std::make_unique<ListLog>(f);
+  });
+  try {
+    (void)can::open_transport("listlog:missing");
+    ADD_FAILURE() << "opened";
+  } catch (const can::TransportError& e) {
+    EXPECT_NE(std::string(e.what()).find("listlog:missing: no such log"), std::string::npos) << e.what();
+  }
+  auto t = can::open_transport("listlog:bad");
+  EXPECT_EQ(t->name(), "listlog:bad");
+  can::RxFrame rx;
+  const auto t0 = sensor_rig::monotonic_now_ns();
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_EQ(t->receive(rx, 1000), can::IoStatus::kOk) << i;
+    EXPECT_EQ(rx.frame.id, 0x20U + static_cast<unsigned>(i));
+    EXPECT_EQ(rx.stamp, 5'000'000'000LL + i * 20'000'000LL);
+    EXPECT_GE(sensor_rig::monotonic_now_ns() - t0, 29'000'000 + i * 20'000'000LL) << i;  // default delay 30 ms
+  }
+  EXPECT_EQ(t->receive(rx, 10), can::IoStatus::kClosed);
+  EXPECT_EQ(t->stats().rx_dropped, 2U);
+  auto fast = can::open_transport("listlog:x@0,0");
+  const auto f0 = sensor_rig::monotonic_now_ns();
+  while (fast->receive(rx, 1000) == can::IoStatus::kOk) {
+  }
+  EXPECT_LT(sensor_rig::monotonic_now_ns() - f0, 20'000'000);
 }
 
 }  // namespace

@@ -57,6 +57,9 @@ function summarize(schemaName, m) {
     case "sensor_rig_msgs/msg/CanFrame":
       return { ...s, id: m.id, is_extended: m.is_extended, is_rtr: m.is_rtr, is_error: m.is_error, is_fd: m.is_fd,
                data: Array.from(m.data) };
+    case "sensor_rig_msgs/msg/VehicleState":
+      return { ...s, speed: m.speed, wheels: [m.wheel_speed_fl, m.wheel_speed_fr, m.wheel_speed_rl, m.wheel_speed_rr],
+               steering_angle: m.steering_angle, yaw_rate: m.yaw_rate, gear: m.gear };
     case "sensor_rig_msgs/msg/SourceStamps":
       return { ...s, stamps_topic: m.topic, seq: String(m.seq), publish_ns: String(m.publish_ns) };
     default:

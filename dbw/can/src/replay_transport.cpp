@@ -1,15 +1,30 @@
-// candump -L replay at recorded timing: receive() hands out the log's frames when their time
-// (relative to the first frame, divided by the rate) has come. Sent frames are counted and dropped.
+// Replay at recorded timing: receive() hands out the log's frames when their time (relative to
+// the first frame, divided by the rate) has come. Sent frames are counted and dropped.
 #include "replay_transport.hpp"
 
 #include <poll.h>
 
+#include "sensor_rig/common/log.hpp"
+
 namespace sensor_rig::dbw::can {
 
-ReplayTransport::ReplayTransport(const std::string& path, double rate) : path_(path), rate_(rate), in_(path) {
+CandumpFrameLog::CandumpFrameLog(const std::string& path) : in_(path) {
   if (!in_) throw TransportError("candump:" + path + ": cannot open");
-  if (!(rate >= 0.0)) throw TransportError("candump: rate must be >= 0");
   reader_ = std::make_unique<CandumpReader>(in_);
+}
+
+bool CandumpFrameLog::next(LoggedFrame& out) {
+  LogRecord r;
+  if (!reader_->next(r)) return false;
+  out.stamp = r.stamp;
+  out.frame = r.frame;
+  return true;
+}
+
+ReplayTransport::ReplayTransport(std::unique_ptr<FrameLog> log, std::string name, double rate, Nanos delay_ns)
+    : log_(std::move(log)), name_(std::move(name)), rate_(rate), delay_ns_(delay_ns) {
+  if (!(rate >= 0.0)) throw TransportError(name_ + ": rate must be >= 0");
+  if (delay_ns < 0) throw TransportError(name_ + ": delay must be >= 0");
 }
 
 IoStatus ReplayTransport::send(const Frame& /*f*/) noexcept {
@@ -19,18 +34,23 @@ IoStatus ReplayTransport::send(const Frame& /*f*/) noexcept {
 
 IoStatus ReplayTransport::receive(RxFrame& out, int timeout_ms) noexcept {
   if (!pending_) {
-    if (!reader_->next(next_)) {
-      stats_.rx_dropped = reader_->malformed();
+    if (ended_ || !log_->next(next_)) {
+      stats_.rx_dropped = log_->malformed();
+      if (!ended_) {
+        const std::string why = log_->error();
+        if (!why.empty()) log::error("can", name_ + ": " + why);
+      }
+      ended_ = true;
       return IoStatus::kClosed;
     }
     pending_ = true;
     if (first_log_ns_ < 0) {
       first_log_ns_ = next_.stamp;
-      start_mono_ns_ = monotonic_now_ns();
+      start_mono_ns_ = monotonic_now_ns() + delay_ns_;
     }
   }
-  if (rate_ > 0.0) {
-    const auto offset = static_cast<Nanos>(static_cast<double>(next_.stamp - first_log_ns_) / rate_);
+  if (rate_ > 0.0 || delay_ns_ > 0) {
+    const auto offset = rate_ > 0.0 ? static_cast<Nanos>(static_cast<double>(next_.stamp - first_log_ns_) / rate_) : 0;
     const Nanos due = start_mono_ns_ + offset;
     const Nanos now = monotonic_now_ns();
     if (due > now) {
@@ -46,7 +66,6 @@ IoStatus ReplayTransport::receive(RxFrame& out, int timeout_ms) noexcept {
   pending_ = false;
   out.frame = next_.frame;
   out.stamp = next_.stamp;
-  iface_ = next_.iface;
   ++stats_.received;
   if (out.frame.error) note_error_frame(out.frame);
   return IoStatus::kOk;

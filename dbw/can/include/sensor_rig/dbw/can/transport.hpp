@@ -119,8 +119,35 @@ class Transport {
 //   unix:PATH                connect to a bus socket (SOCK_SEQPACKET) another process listens on
 //   unix-listen:PATH         be the bus: accept any number of peers; what one peer sends reaches the owner and all others
 //   fd:N                     an inherited SOCK_SEQPACKET descriptor (one end of a socketpair)
-//   candump:FILE[@RATE]      replay a candump -L log at recorded timing (RATE: speed factor, 0 = as fast as possible)
+//   candump:FILE[@RATE[,DELAY_S]]  replay a candump -L log at recorded timing (RATE: speed factor, 0 = as fast as
+//                            possible; DELAY_S: the first frame that long after the first receive(), default 0)
+//   KIND:FILE[@RATE[,DELAY_S]]  replay frames from a log of a kind registered below (the `rig` executable
+//                            registers `mcap`: the raw CAN channel of a `rig record --raw` file)
 std::unique_ptr<Transport> open_transport(std::string_view spec);
+
+// A recorded sequence of received frames, in order, for the replay transports: candump logs here,
+// other formats from the layers above (an MCAP raw channel is read in rig/, which dbw/ sits below).
+struct LoggedFrame {
+  Nanos stamp = 0;  // when it was received (CLOCK_REALTIME): the replayed frame's receive stamp
+  Frame frame;
+};
+class FrameLog {
+ public:
+  virtual ~FrameLog() = default;
+  // The next frame; false at the end (or at the first place that cannot be read).
+  virtual bool next(LoggedFrame& out) = 0;
+  // Records that could not be read as frames (skipped); what stopped the log early, if anything.
+  [[nodiscard]] virtual std::uint64_t malformed() const = 0;
+  [[nodiscard]] virtual std::string error() const { return {}; }
+  // How long after the transport opens its first frame is due unless the spec says (`@RATE,DELAY_S`):
+  // time for the replaying process's subscribers to match its writers before the drive starts.
+  [[nodiscard]] virtual Nanos default_delay_ns() const { return 0; }
+};
+// Opens FILE as a FrameLog; throws TransportError (or std::runtime_error) with the reason.
+using FrameLogOpener = std::unique_ptr<FrameLog> (*)(const std::string& file);
+// Makes `KIND:FILE[@RATE]` a replay transport reading FILE through `open` (at recorded timing, as
+// candump:). Call before opening transports (at program start); a later call for KIND replaces it.
+void register_frame_log_kind(const std::string& kind, FrameLogOpener open);
 
 // Two connected in-process ends (socketpair AF_UNIX SOCK_SEQPACKET).
 std::pair<std::unique_ptr<Transport>, std::unique_ptr<Transport>> make_socketpair();

@@ -1,0 +1,60 @@
+#pragma once
+// The CAN transport `mcap:FILE[@RATE]` (dbw/can registers the kind, the `rig` executable gives it
+// this reader: dbw/ sits below record/): the raw CAN channel of a `rig record --raw` file
+// (sensor_rig_msgs/msg/CanFrame on /vehicle/can/frames, docs/recording.md "Raw channels") as the
+// frames a bridge receives, each at its recorded kernel receive time and stamped with it, so a drive
+// recorded on the car replays through `rig dbw bridge --transport mcap:drive.mcap` on the desk.
+// A reader thread decompresses and decodes up to 64 Ki frames ahead. A damaged file (cut, corrupt
+// chunk, undecodable message) replays what is intact; error() names each place by its byte offset.
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "sensor_rig/dbw/can/transport.hpp"
+
+namespace sensor_rig::record {
+class McapReader;
+}
+
+namespace sensor_rig::rig {
+
+inline constexpr const char* kCanFramesTopic = "/vehicle/can/frames";
+
+class McapCanLog final : public dbw::can::FrameLog {
+ public:
+  // The CanFrame channel /vehicle/can/frames, or the file's only CanFrame channel. Throws
+  // std::runtime_error when the file is not MCAP or has no such channel (naming those it has).
+  explicit McapCanLog(const std::string& path);
+  ~McapCanLog() override;
+  McapCanLog(const McapCanLog&) = delete;
+  McapCanLog& operator=(const McapCanLog&) = delete;
+
+  bool next(dbw::can::LoggedFrame& out) override;
+  [[nodiscard]] std::uint64_t malformed() const override;
+  [[nodiscard]] std::string error() const override;
+  // 1 s, as `rig play --delay` and a LIDAR's mock {kind: mcap}: the bridge's readers match first.
+  [[nodiscard]] Nanos default_delay_ns() const override { return 1'000'000'000; }
+  [[nodiscard]] const std::string& topic() const noexcept { return topic_; }
+
+ private:
+  void produce();
+
+  std::string path_, topic_;
+  std::unique_ptr<record::McapReader> reader_;
+  std::thread thread_;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<dbw::can::LoggedFrame> queue_;  // under mu_
+  bool done_ = false, stop_ = false;         // under mu_
+  std::uint64_t malformed_ = 0;              // under mu_
+  std::string problems_;                     // under mu_
+};
+
+// The opener registered as the CAN transport kind `mcap` (dbw::can::register_frame_log_kind).
+std::unique_ptr<dbw::can::FrameLog> open_can_recording(const std::string& path);
+
+}  // namespace sensor_rig::rig
