@@ -58,6 +58,7 @@ struct AravisSource::State {
   ArvDevice* device = nullptr;  // borrowed from camera
   ArvStream* stream = nullptr;
   bool gv = false;
+  std::string address;  // a GigE camera's IPv4 address (close() asks it whether it still answers)
   std::unique_ptr<BufferPool> pool;
   std::vector<ArvBuffer*> buffers;  // owned by the stream once pushed
   std::size_t payload = 0;

@@ -44,6 +44,15 @@ ArvDevice* open_gv_device(const std::string& interface_address, const std::strin
   if (d == nullptr) throw CameraError("aravis " + device + ": " + (err != nullptr ? take_error(err) : std::string("bad address")));
   return d;
 }
+// The camera's IPv4 address as its GigE device has it ("" when not known).
+std::string device_address(ArvDevice* device) {
+  GSocketAddress* sa = arv_gv_device_get_device_address(ARV_GV_DEVICE(device));  // the device's
+  if (sa == nullptr || !G_IS_INET_SOCKET_ADDRESS(sa)) return {};
+  gchar* text = g_inet_address_to_string(g_inet_socket_address_get_address(G_INET_SOCKET_ADDRESS(sa)));
+  std::string out = text != nullptr ? text : "";
+  g_free(text);
+  return detail::is_ipv4_address(out) ? out : std::string();
+}
 }  // namespace
 
 void* open_aravis_network_device(const std::string& device) {
@@ -96,6 +105,7 @@ void AravisSource::open() {
     }
     fresh->device = arv_camera_get_device(fresh->camera);
     fresh->gv = arv_camera_is_gv_device(fresh->camera) != FALSE;
+    if (fresh->gv) fresh->address = device_address(fresh->device);
     g_signal_connect_data(fresh->device, "control-lost", reinterpret_cast<GCallback>(&detail::on_control_lost), &control_lost_,
                           nullptr, GConnectFlags{});
     configure(*fresh, details);
@@ -314,6 +324,13 @@ void AravisSource::fold_stats() noexcept {
 
 void AravisSource::close() noexcept {
   streaming_.store(false);  // triggers refuse from here on, without waiting for this close
+  // A GigE camera that stopped answering and is not known lost yet (the rig stopped within the
+  // watchdog's wait after a cable was pulled): 2 x 100 ms of GVCP say so, and nothing below waits
+  // for its GVCP timeouts (the exposure read, AcquisitionStop, the stream's and the control
+  // channel's release took 12.5 s: issue 27 item 1, camera_isolation_test).
+  if (open_.load() && !control_lost_.load() && !st_->address.empty() &&
+      !detail::answers_gvcp(st_->address, detail::GvcpProbe{2, 100}))
+    control_lost_.store(true);
   if (exposure_) {  // a read on a dead camera takes seconds: not waited for
     if (control_lost_.load()) exposure_->abandon();
     exposure_.reset();

@@ -96,4 +96,13 @@ std::string probe_gvcp(const std::string& address, const GvcpProbe& how) {
                     " ms)" + refused);
 }
 
+bool answers_gvcp(const std::string& address, const GvcpProbe& how) noexcept {
+  try {
+    (void)probe_gvcp(address, how);
+    return true;
+  } catch (...) {
+    return false;
+  }
+}
+
 }  // namespace sensor_rig::camera::detail

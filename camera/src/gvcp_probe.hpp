@@ -20,6 +20,9 @@ struct GvcpProbe {
 // throws CameraError naming the address and what happened (no answer, refused) otherwise.
 std::string probe_gvcp(const std::string& address, const GvcpProbe& how = {});
 
+// Whether the camera at `address` answers a READREG within the probe's tries (never throws).
+bool answers_gvcp(const std::string& address, const GvcpProbe& how) noexcept;
+
 // True when `device` is a dotted IPv4 address (opened by address: no discovery).
 bool is_ipv4_address(const std::string& device) noexcept;
 

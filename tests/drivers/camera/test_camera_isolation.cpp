@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <atomic>
 #include <set>
 #include <string>
@@ -112,6 +113,8 @@ TEST_F(CameraIsolation, ADeadCameraHoldsNoLockAnotherCamerasOpenNeedsAndStopsWit
   retry.join();
   dead.close();
   const Nanos stopped_in = monotonic_now_ns() - stop_from;
+  std::printf("open %.3f s at most, dead attempt %.3f s at most, stopped in %.3f s\n", static_cast<double>(longest_open) * 1e-9,
+              static_cast<double>(longest_attempt.load()) * 1e-9, static_cast<double>(stopped_in) * 1e-9);
   EXPECT_GE(attempts.load(), 2);
   EXPECT_LT(longest_open, 1 * kS) << "the healthy camera's open waited behind the dead one's";
   EXPECT_LT(longest_attempt.load(), 1 * kS) << "one open attempt on the dead camera";
@@ -214,6 +217,33 @@ TEST_F(CameraIsolation, AStereoMemberThatNeverAnswersCostsItsPartnerNoFrame) {
   EXPECT_LT(dead_stopped_in, 1 * kS);
   EXPECT_NE(value(dead_status, "last_error").find("does not answer"), std::string::npos) << value(dead_status, "last_error");
   EXPECT_EQ(value(dead_status, "frames"), "0");
+}
+
+// A camera that dies mid-stream and is stopped before its watchdog gave up on it (a rig stopped
+// right after a cable was pulled): the stop does not wait for the dead camera's GVCP timeouts.
+TEST_F(CameraIsolation, ACameraThatDiedMidStreamStopsWithin1s) {
+  auto fake = start(0, {"camera.dies@1.5+20"});
+  const Nanos epoch = folder_[0].epoch();
+  dds::DomainConfig dc;
+  dc.domain_id = static_cast<dds_domainid_t>(test::lease_dds_domain());
+  dds::Participant p(dc);
+  dds::StampsWriter stamps(p);
+  CameraConfig c;
+  c.name = "died_" + std::to_string(::getpid());
+  c.frame_id = "camera_" + c.name;
+  c.source = cfg(0);
+  c.info = camera::uncalibrated(320, 200);
+  CameraDriver driver(c, p, stamps);
+  driver.start();
+  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + value(driver.status(), "frames")) >= 5; }, 5000));
+  // Dead from 1.5 s; 0.2 s later, within the watchdog's 0.5 s: stopped while still "streaming".
+  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 1700 * kMs; }, 5000));
+  const Nanos from = monotonic_now_ns();
+  driver.stop();
+  const Nanos stopped_in = monotonic_now_ns() - from;
+  fake.stop(1000);
+  std::printf("stopped in %.3f s\n", static_cast<double>(stopped_in) * 1e-9);
+  EXPECT_LT(stopped_in, 1 * kS);
 }
 
 // A 1 Hz camera (in-process Aravis fake): the watchdog follows the period (three of them), so the
