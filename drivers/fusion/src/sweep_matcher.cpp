@@ -113,11 +113,20 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
   }
   auto& src = sources_[source];
   src.alive = true;  // delivering, even if this scan comes too late
-  // The periods this scan spans: its span rounded; a scan short of its turn (lost packets) keeps
-  // the source's count while its stamps step by that many periods.
+  // The periods this scan spans (k). Its span must be a whole number of periods (within P/8, at
+  // most kMaxRotations) and its stamp step from the source's previous scan agree: k periods, or
+  // one period where the source just slowed down. A span that is neither (a clock step inside the
+  // scan: the campaign's -500 ms host steps made 600 ms spans) says nothing. A scan short of its
+  // turn (lost packets) keeps the source's k while its stamps step by that many periods.
   const Nanos p = cfg_.period_ns;
-  int k = span_ns > 0 ? static_cast<int>(std::clamp<Nanos>((span_ns + p / 2) / p, 1, kMaxRotations)) : 1;
-  if (k == 1 && src.seen && src.rotations > 1 && std::abs(stamp_ns - src.last_stamp - src.rotations * p) <= p / 4)
+  const Nanos delta = src.seen ? stamp_ns - src.last_stamp : -1;
+  const auto near = [&](Nanos a, Nanos b, Nanos tol) { return std::abs(a - b) <= tol; };
+  const Nanos whole = span_ns > 0 ? (span_ns + p / 2) / p : 0;
+  int k = 1;
+  if (whole >= 2 && whole <= kMaxRotations && near(span_ns, whole * p, p / 8) &&
+      (delta < 0 || near(delta, whole * p, p / 4) || (src.rotations == 1 && near(delta, p, p / 4))))
+    k = static_cast<int>(whole);
+  else if (src.seen && src.rotations > 1 && near(delta, src.rotations * p, p / 4) && (whole == 0 || whole <= src.rotations))
     k = src.rotations;
   const bool newest = !src.seen || stamp_ns > src.last_stamp;
   // A source's scans come in order: stamps that go back mean its clock stepped back, and the
