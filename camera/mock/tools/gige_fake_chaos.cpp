@@ -3,8 +3,11 @@
 #include <dlfcn.h>
 #include <gio/gio.h>
 
+#include <time.h>
+
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstring>
 
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
@@ -43,7 +46,7 @@ std::string detail_of(const faults::FaultEvent& e) {
 void set_gige_fake_chaos(GigeFakeChaos* chaos) { g_chaos.store(chaos, std::memory_order_release); }
 
 GigeFakeChaos::GigeFakeChaos(const Options& o)
-    : schedule_(o.args.plan, o.args.device), lost_ratio_(o.lost_per_thousand / 1000.0) {
+    : schedule_(o.args.plan, o.args.device), lost_ratio_(o.lost_per_thousand / 1000.0), link_mbps_(o.link_mbps) {
   if (!o.args.truth.empty())
     truth_ = std::make_unique<CameraTruth>(o.args.truth, o.args.device, "camera", "rig-fake-gige-camera (Aravis ArvGvFakeCamera)", kClock);
 }
@@ -147,6 +150,28 @@ std::uint32_t GigeFakeChaos::on_fill(ArvFakeCamera* cam, ArvBuffer* buffer, std:
   return step.us;
 }
 
+void GigeFakeChaos::restamp(ArvBuffer* buffer, Nanos late_ns) {
+  if (late_ns <= 0) return;
+  frame_.acq += late_ns;
+  frame_.dev += late_ns;
+  shape_.chunk_timestamp = static_cast<std::uint64_t>(frame_.dev);
+  arv_buffer_set_timestamp(buffer, static_cast<guint64>(frame_.dev));
+}
+
+void GigeFakeChaos::pace(GSocket* socket, std::size_t bytes) {
+  if (!(link_mbps_ > 0) || !is_stream(socket)) return;
+  // On the wire a datagram also carries its IP/UDP headers (28) and Ethernet's header, FCS, preamble
+  // and gap (38).
+  constexpr std::size_t kFraming = 28 + 38;
+  constexpr Nanos kPaceStepNs = 50'000;
+  const Nanos now = monotonic_now_ns();
+  link_free_mono_ = std::max(link_free_mono_, now) + static_cast<Nanos>(static_cast<double>(bytes + kFraming) * 8e3 / link_mbps_);
+  if (link_free_mono_ - now < kPaceStepNs) return;
+  const timespec until{static_cast<time_t>(link_free_mono_ / 1'000'000'000), static_cast<long>(link_free_mono_ % 1'000'000'000)};
+  while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
+  }
+}
+
 bool GigeFakeChaos::on_send(GSocket* socket, const void* data, std::size_t size) {
   const double t = schedule_.now_s();
   const std::uint64_t silent = silenced_by(t);
@@ -233,10 +258,16 @@ extern "C" gssize g_socket_send_to(GSocket* socket, GSocketAddress* address, con
   // A send that fails is the fake's to ignore (it only logs them): no GError for the many datagrams.
   const bool reshaped = chaos->reshape(socket, buffer, size, [&](const std::uint8_t* d, std::size_t n) {
     if (chaos->on_send(socket, d, n)) real(socket, address, reinterpret_cast<const gchar*>(d), n, cancellable, nullptr);
+    chaos->pace(socket, n);
   });
   if (reshaped) return static_cast<gssize>(size);
-  if (!chaos->on_send(socket, buffer, size)) return static_cast<gssize>(size);  // lost on the way
-  return real(socket, address, buffer, size, cancellable, error);
+  if (!chaos->on_send(socket, buffer, size)) {  // lost on the way (after it took its time on the link)
+    chaos->pace(socket, size);
+    return static_cast<gssize>(size);
+  }
+  const gssize sent = real(socket, address, buffer, size, cancellable, error);
+  chaos->pace(socket, size);
+  return sent;
 }
 
 extern "C" gssize g_socket_receive_message(GSocket* socket, GSocketAddress** address, GInputVector* vectors, gint num_vectors,

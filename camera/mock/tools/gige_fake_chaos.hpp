@@ -25,6 +25,7 @@ class GigeFakeChaos {
   struct Options {
     ChaosArgs args;
     double lost_per_thousand = 0;  // -r: random GVSP loss, recorded (fate dropped, no fault)
+    double link_mbps = 1000;       // --link-mbps: the stream's packets leave at this rate (0: back to back)
   };
   explicit GigeFakeChaos(const Options& o);  // throws std::runtime_error (plan, truth file)
 
@@ -36,12 +37,22 @@ class GigeFakeChaos {
 
   // The fake's thread. on_fill: returns the exposure to wait (us) and sets the reported stamp.
   std::uint32_t on_fill(ArvFakeCamera* cam, ArvBuffer* buffer, std::uint32_t exposure_us);
+  // The fake's thread got to its exposure's end `late_ns` after it (held off a core): the exposure is
+  // taken to have begun that much later, in the buffer's stamp, the chunk and the truth alike, so that
+  // its leader still leaves at the end of the exposure it reports (a camera's does; the rig maps its
+  // clock by that).
+  void restamp(ArvBuffer* buffer, Nanos late_ns);
   bool on_send(GSocket* socket, const void* data, std::size_t size);  // false: do not send
   // Before on_send: a stream datagram of a frame with padded rows or chunks (camera.padded_rows,
   // camera.chunk_data, or ChunkModeActive set by the rig) is rewritten (gvsp_reshaper.hpp); `emit`
   // gets each datagram to send instead. false: send this one as it is.
   bool reshape(GSocket* socket, const void* data, std::size_t size, const GvspReshaper::Emit& emit);
   bool on_receive(ArvFakeCamera* cam);                                // false: ignore the datagram
+  // After a stream datagram of `bytes` (sent or lost): waits while the link is busy with what was
+  // sent before (GigE: 1 Gb/s), in steps of kPaceStepNs. Sent back to back, a frame's ~190 packets
+  // held a core for ~1 ms at SCHED_FIFO; three fakes on one frame instant held off the rig's
+  // receiving threads (normal priority) from their leaders by 0.7-2 ms every frame (issue 27).
+  void pace(GSocket* socket, std::size_t bytes);
   void finish();  // at exit: a camera still dead has its silence recorded
 
  private:
@@ -77,6 +88,8 @@ class GigeFakeChaos {
   GSocket* gvcp_ = nullptr;
   GvspFrameShape shape_;  // of the frame being sent
   GvspReshaper reshaper_;
+  double link_mbps_ = 0;
+  Nanos link_free_mono_ = 0;  // when the link has sent every datagram so far (CLOCK_MONOTONIC)
 };
 
 // The instance the interposed GLib functions call (null: pass everything through), and the fake

@@ -16,9 +16,11 @@
 // Timing as a real camera's: the stock fake stamps a frame (g_get_real_time, the leader's timestamp)
 // and sends it after its slow pattern generator, never waiting for the exposure, while a real
 // camera's leader leaves after exposure + readout, which is what the rig's clock mapping assumes
-// (first packet = exposure start + exposure time). So the fill callback here waits until stamp +
-// ExposureTime, then copies a precomputed ramp (memcpy, shifted per frame): the leader leaves at
-// exposure end.
+// (first packet = exposure start + exposure time). So the fill callback here copies a precomputed
+// ramp (memcpy, shifted per frame), then waits until stamp + ExposureTime: the leader leaves at
+// exposure end (a thread held off its core restamps the frame by its lateness, expose_then_fill).
+// And a camera's packets leave at its link's rate (--link-mbps), not back to back (gige_fake_chaos
+// pace()).
 #include <arv.h>
 #include <poll.h>
 #include <pthread.h>
@@ -40,6 +42,7 @@
 
 #include "gige_fake_chaos.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/thread_priority.hpp"
 
 namespace {
@@ -74,16 +77,27 @@ struct FillContext {
 
 // Runs in arv_fake_camera_fill_buffer after the frame's stamp is set, before the leader is sent.
 // The stamp is the exposure start (the truth's acq); chaos may change the exposure and what the
-// camera reports as its timestamp (PTP).
+// camera reports as its timestamp (PTP). The image is copied first (the fake's cost, not the
+// camera's timing), then the thread waits for the exposure's end, on CLOCK_MONOTONIC (a host clock
+// step does not stretch an exposure). A thread that got there late (a loaded host held it off its
+// core: 1.5 ms p50 in the whole-rig campaign, up to 4 ms) restamps the frame by that much: the
+// exposure began later, and the leader still leaves at the end of the exposure the camera reports,
+// as a camera's does and the rig's clock mapping takes it (issue 27: otherwise the mapping carries
+// the fake's lateness as a bias the truth does not have).
 void expose_then_fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 /*gain*/, ArvPixelFormat /*format*/) {
   auto* ctx = static_cast<FillContext*>(data);
-  const guint64 exposure_start_ns = arv_buffer_get_timestamp(buffer);
+  const auto exposure_start_ns = static_cast<sensor_rig::Nanos>(arv_buffer_get_timestamp(buffer));
   const guint32 exposure_us = ctx->chaos->on_fill(ctx->camera, buffer, exposure_time_us);
-  const guint64 exposure_end_ns = exposure_start_ns + guint64{exposure_us} * 1000;
-  const timespec until{static_cast<time_t>(exposure_end_ns / 1'000'000'000), static_cast<long>(exposure_end_ns % 1'000'000'000)};
-  while (::clock_nanosleep(CLOCK_REALTIME, TIMER_ABSTIME, &until, nullptr) == EINTR) {
-  }
   ctx->pattern.fill(buffer, arv_fake_camera_get_payload(ctx->camera));
+  const sensor_rig::Nanos exposure_end_ns = exposure_start_ns + sensor_rig::Nanos{exposure_us} * 1000;
+  const sensor_rig::Nanos left = exposure_end_ns - sensor_rig::vehicle_now_ns();
+  if (left > 0) {
+    const sensor_rig::Nanos mono = sensor_rig::monotonic_now_ns() + left;
+    const timespec until{static_cast<time_t>(mono / 1'000'000'000), static_cast<long>(mono % 1'000'000'000)};
+    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
+    }
+  }
+  ctx->chaos->restamp(buffer, sensor_rig::vehicle_now_ns() - exposure_end_ns);
 }
 
 bool trigger_pending(ArvFakeCamera* cam) {
@@ -105,10 +119,12 @@ timespec until_next_grid_point(ArvFakeCamera* cam, bool triggered) {
 int usage(const char* self, int status) {
   std::fprintf(status == 0 ? stdout : stderr,
                "usage: %s -i ADDRESS [-s SERIAL] [-g GENICAM.xml] [-r LOST_PER_THOUSAND] [--trigger-hz HZ]\n"
-               "          [--realtime-priority N] [--fault-plan FILE] [--device NAME] [--truth FILE] [--gev-ieee1588]\n"
+               "          [--realtime-priority N] [--link-mbps MBPS] [--fault-plan FILE] [--device NAME] [--truth FILE]\n"
+               "          [--gev-ieee1588]\n"
                "Aravis GigE fake camera (as arv-fake-gv-camera-0.8) whose software-triggered frames are exposed\n"
                "within ~1/HZ of the trigger (default %.0f Hz) without a busy loop. --realtime-priority: every\n"
-               "thread SCHED_FIFO N where permitted (a warning if not). --fault-plan/--device: the camera.* faults of\n"
+               "thread SCHED_FIFO N where permitted (a warning if not). --link-mbps: the stream's packets leave at\n"
+               "this link rate, as from a camera (default 1000; 0: back to back). --fault-plan/--device: the camera.* faults of\n"
                "that camera (default: RIG_CHAOS_DIR's plan when --device is given); --truth: its truth record (default\n"
                "RIG_CHAOS_DIR/truth/NAME.jsonl); --gev-ieee1588: PTP features by their GevIEEE1588 names. Stops on\n"
                "SIGINT/SIGTERM.\n",
@@ -196,6 +212,7 @@ int main(int argc, char** argv) {
   mock::ChaosArgs chaos_args;
   bool gev_ieee1588 = false;
   double lost_per_thousand = 0;
+  double link_mbps = 1000;
   int realtime_priority = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -212,6 +229,7 @@ int main(int argc, char** argv) {
     else if (a == "-r" || a == "--gvsp-lost-ratio") lost_per_thousand = std::atof(v);
     else if (a == "--trigger-hz") g_grid_hz = std::atof(v);
     else if (a == "--realtime-priority") realtime_priority = std::atoi(v);
+    else if (a == "--link-mbps") link_mbps = std::atof(v);
     else if (a == "--fault-plan") chaos_args.plan = v;
     else if (a == "--device") chaos_args.device = v;
     else if (a == "--truth") chaos_args.truth = v;
@@ -221,7 +239,7 @@ int main(int argc, char** argv) {
     }
   }
   if (address.empty() || !(g_grid_hz >= 1 && g_grid_hz <= 1e6) || lost_per_thousand < 0 || realtime_priority < 0 ||
-      realtime_priority > 99)
+      realtime_priority > 99 || !(link_mbps >= 0 && link_mbps <= 100'000))
     return usage(argv[0], 2);
   if (!chaos_args.device.empty()) {  // a campaign's folder names what was not given
     const auto env = mock::chaos_from_env(chaos_args.device);
@@ -231,7 +249,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<mock::GigeFakeChaos> chaos;
   Fake fake;
   try {
-    chaos = std::make_unique<mock::GigeFakeChaos>(mock::GigeFakeChaos::Options{chaos_args, lost_per_thousand});
+    chaos = std::make_unique<mock::GigeFakeChaos>(mock::GigeFakeChaos::Options{chaos_args, lost_per_thousand, link_mbps});
     // Chunk mode and row padding always (ChunkModeActive through the rig's features:, the
     // camera.chunk_data / camera.padded_rows faults); PTP features only under camera.ptp.
     fake.genicam_xml = mock::chaos_chunk_genicam_xml(chaos->needs_ptp_features() ? mock::chaos_ptp_genicam_xml(gev_ieee1588)
