@@ -368,7 +368,7 @@ TEST_P(FrozenAzimuth, NoShortScansTurnsCountedLostPacketsDroppedOnce) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, FrozenAzimuth, ::testing::Values("VLP-32C", "Pandar40P"), [](const auto& p) {
+INSTANTIATE_TEST_SUITE_P(Models, FrozenAzimuth, ::testing::Values("VLP-32C", "VLP-16", "Pandar40P", "PandarXT32", "OS-LEGACY"), [](const auto& p) {
   std::string n = p.param;
   for (auto& c : n)
     if (c == '-') c = '_';
