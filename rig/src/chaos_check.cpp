@@ -151,9 +151,12 @@ class Checker {
   // inject what it planned proves nothing.
   void count_faults() {
     std::map<std::string, std::set<std::uint64_t>> recorded;  // device -> fault ids
+    std::set<std::pair<std::string, std::uint64_t>> host_counted;  // a host fault once, however many mocks record it too
     for (const auto& log : in_.truths)
       for (const auto& f : log.faults) {
-        ++r_.faults[f.kind];
+        const auto* kind = faults::find_kind(f.kind);
+        if (kind == nullptr || kind->device_class != faults::DeviceClass::kHost || host_counted.insert({f.kind, f.id}).second)
+          ++r_.faults[f.kind];
         recorded[log.header.device].insert(f.id);
       }
     // A device's mock killed (host.kill_mock) for the whole of a fault could not inject it: not a lie.

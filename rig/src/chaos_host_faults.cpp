@@ -53,6 +53,14 @@ void HostFaults::begin(const faults::FaultEvent& e) {
     } catch (const std::exception& ex) {
       log::warn("chaos", std::string("host.clock_step not injected: ") + ex.what());
     }
+  } else if (e.kind == "host.network_delay") {
+    // Held back in the mocks that send the rig's network traffic: each LIDAR mock holds every
+    // datagram ms (order kept) while the fault lasts, from the same plan, and records it per packet
+    // (lidar/mock/README.md). Not loopback shaping: sch_netem is not in every kernel the rig runs on
+    // (docs/faults.md "host.network_delay"), and nothing on the host is changed, so nothing is left
+    // to undo after the fault, a failed campaign or a kill (the mocks die with rig up).
+    truth_.fault({e.id, e.kind, veh, veh + span, -1,
+                  "ms=" + std::to_string(static_cast<long long>(e.number("ms", 50))) + ", via=lidar mocks (datagrams held, order kept)"});
   } else {
     return;  // a mock's, or rig up's
   }

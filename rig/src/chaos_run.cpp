@@ -161,7 +161,7 @@ std::vector<std::string> injected_kinds() {
           "v4l2.stamp_mode",     "v4l2.sequence_gap",    "v4l2.disconnect",
           "dbw.loss",            "dbw.bad_crc",          "dbw.stuck_counter", "dbw.override",  "dbw.ecu_fault",
           "dbw.bus_off",         "dbw.no_status",
-          "host.cpu_hog",        "host.kill_mock",       "host.stall_mock"};
+          "host.cpu_hog",        "host.kill_mock",       "host.stall_mock",     "host.network_delay"};
   // Stepping the clock needs CAP_SYS_TIME: without it the kind is not offered.
   if (ClockStep::not_permitted().empty()) kinds.push_back("host.clock_step");
   return kinds;

@@ -6,6 +6,11 @@
 // fixes them: the test fails on any other broken invariant (a regression) and prints the listed ones
 // that broke and those that held (a fix lands with its entry removed from the list).
 #include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cstdint>
+#include <thread>
 
 #include <fstream>
 #include <map>
@@ -71,8 +76,7 @@ TEST(ChaosCampaign, BadCampaignsAreRefusedWithTheReason) {
   const std::string mock = (test::source_dir() / "config/mock_rig.yaml").string();
   for (const auto& [spec, says] : std::vector<std::pair<std::string, std::string>>{
            {"lidar.reordr", "unknown fault kind 'lidar.reordr'"},
-           {"lidar.reorder:speed=2", "takes no parameter 'speed'"},
-           {"host.network_delay", "no mock injects host.network_delay"}}) {
+           {"lidar.reorder:speed=2", "takes no parameter 'speed'"}}) {
     r = test::run_rig("chaos " + mock + " --duration 10 --faults '" + spec + "'");
     EXPECT_EQ(r.code, 2) << spec;
     EXPECT_NE(r.err.find(says), std::string::npos) << spec << ": " << r.err;
@@ -199,6 +203,101 @@ TEST(ChaosCampaign, AHostClockStepLeavesNoLidarStampOffUnflagged) {
   EXPECT_GT(j["topics"]["/sensors/lidar/left/points"]["stamps_flagged"].get<std::uint64_t>(), 0u);
   EXPECT_GT(j["topics"]["/sensors/lidar/right/points"]["stamps_flagged"].get<std::uint64_t>(), 0u);
   for (const auto& [name, verdict] : j["invariants"].items()) EXPECT_EQ(verdict, "held") << name << "\n" << run.err;
+  EXPECT_EQ(run.code, 0) << run.err;
+}
+
+// host.network_delay (issue 25): the three mock LIDARs' datagrams held back 50 ms for 4 s. The rig's
+// arrival stamps move by the delay; the GPS-timed Velodyne's stamps must not (its truth within
+// 0.1 ms); the PTP sensors' mapped stamps follow the arrivals and are flagged unsynchronized; every
+// invariant holds. The host truth records the fault with its parameters. The host is as before (lo's
+// qdiscs), also after a campaign SIGKILLed during the fault: nothing of it keeps holding packets.
+TEST(ChaosCampaign, AHostNetworkDelayMovesArrivalsNotSensorStamps) {
+  if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
+  test::TempDir dir;
+  const std::string src = test::source_dir().string();
+  const auto lidars = [&](const std::string& name) {
+    std::string rig = test::read_text(test::source_dir() / "config/mock_rig.yaml");
+    rig = rig.substr(0, rig.find("\nfusion:"));  // the three LIDARs: fusion, dbw and cameras apart
+    rig.replace(rig.find("profile: cyclonedds/"), std::string("profile: cyclonedds/").size(), "profile: " + src + "/config/cyclonedds/");
+    rig.replace(rig.find("domain: 0"), std::string("domain: 0").size(), "domain: " + std::to_string(test::lease_dds_domain()));
+    return dir.write(name, rig + "\n");
+  };
+  const auto qdiscs = [] { return test::run("tc qdisc show dev lo 2>&1").second; };
+  const std::string before = qdiscs();
+
+  // Killed (SIGKILL) while the fault holds the packets: its rig up and mocks end (no process of the
+  // campaign is left), so nothing holds packets any more, and the host's loopback is untouched.
+  {
+    const std::string out = (dir.path / "killed").string();
+    const std::string cmd = test::rig_bin_or_empty() + " chaos " + lidars("killed.yaml") +
+                            " --duration 30 --seed 2 --faults 'host.network_delay:ms=50@0.5+20' --out " + out +
+                            " >/dev/null 2>" + (dir.path / "killed.err").string() + " & echo $!";
+    const auto [rc, pid_text] = test::run(cmd);
+    ASSERT_EQ(rc, 0);
+    const pid_t pid = static_cast<pid_t>(std::stol(pid_text));
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    const auto begun = [&] { return test::read_text(std::filesystem::path(out) / "truth/host.jsonl").find("host.network_delay") != std::string::npos; };
+    while (!begun() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    ASSERT_TRUE(begun()) << test::read_text(dir.path / "killed.err");
+    ASSERT_EQ(::kill(pid, SIGKILL), 0);
+    // Every process of the campaign names its folder (--out, --truth): none may be left. The last
+    // character in brackets, so the pattern does not match the shell that runs pgrep.
+    const std::string pattern = out.substr(0, out.size() - 1) + "[" + out.back() + "]";
+    const auto alive = [&] { return test::run("pgrep -f -- '" + pattern + "' 2>/dev/null").second; };
+    const auto gone_by = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (!alive().empty() && std::chrono::steady_clock::now() < gone_by) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_EQ(alive(), "") << "processes of the killed campaign still run (they would hold packets)";
+    EXPECT_EQ(qdiscs(), before);
+  }
+
+  const std::string out = (dir.path / "campaign").string();
+  const auto run = test::run_rig("chaos " + lidars("lidars.yaml") +
+                                 " --duration 12 --seed 1 --json --faults 'host.network_delay:ms=50@3+4' --out " + out);
+  EXPECT_EQ(qdiscs(), before);
+  ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
+  const auto last_nl = run.out.find_last_of('\n', run.out.size() - 2);
+  const auto j = nlohmann::json::parse(run.out.substr(last_nl == std::string::npos ? 0 : last_nl + 1), nullptr, false);
+  ASSERT_TRUE(j.is_object()) << run.out << "\n" << run.err;
+  EXPECT_EQ(j["faults"].value("host.network_delay", 0), 1) << run.err;
+  for (const auto& [name, verdict] : j["invariants"].items()) EXPECT_EQ(verdict, "held") << name << "\n" << run.err;
+  // The Velodyne's stamps are its GPS time: the delay does not move them.
+  EXPECT_LT(j["topics"]["/sensors/lidar/front/points"]["stamp_error_max_ms"].get<double>(), 0.1);
+
+  // The host's truth: the fault with its parameters, when it began and ended.
+  std::int64_t at = 0, until = 0;
+  std::ifstream host(out + "/truth/host.jsonl");
+  for (std::string line; std::getline(host, line);) {
+    const auto f = nlohmann::json::parse(line, nullptr, false);
+    if (f.value("kind", "") != "host.network_delay") continue;
+    at = f["at"].get<std::int64_t>();
+    until = f["until"].get<std::int64_t>();
+    EXPECT_NE(f["detail"].get<std::string>().find("ms=50"), std::string::npos) << line;
+  }
+  ASSERT_GT(at, 0) << "no host.network_delay in the host's truth record";
+  EXPECT_NEAR(static_cast<double>(until - at), 4e9, 1e6);
+  // The rig's arrival stamps moved by the delay while it lasted, and only then: the Velodyne's first
+  // packet arrives just after its scan's first firing, during the fault 50 ms after.
+  std::uint64_t during = 0, outside = 0;
+  std::ifstream csv(out + "/monitor.csv");
+  std::string line;
+  std::getline(csv, line);  // header: topic,seq,acquisition_ns,first_rx_ns,...
+  while (std::getline(csv, line)) {
+    if (line.rfind("/sensors/lidar/front/points,", 0) != 0) continue;
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) c.push_back(x);
+    const std::int64_t acq = std::stoll(c[2]), rx = std::stoll(c[3]);
+    const double late_ms = static_cast<double>(rx - acq) * 1e-6;
+    if (acq > at + 200'000'000 && acq < until - 200'000'000) {
+      ++during;
+      EXPECT_GT(late_ms, 45.0) << "seq " << c[1];
+    } else if (acq < at - 500'000'000 || acq > until + 500'000'000) {
+      ++outside;
+      EXPECT_LT(late_ms, 20.0) << "seq " << c[1];
+    }
+  }
+  EXPECT_GE(during, 30u);
+  EXPECT_GE(outside, 30u);
   EXPECT_EQ(run.code, 0) << run.err;
 }
 

@@ -383,6 +383,40 @@ TEST(ChaosCheck, APlannedFaultNoMockRecordedIsReported) {
   EXPECT_EQ(r.faults.at("lidar.reorder"), 1u);
 }
 
+// host.network_delay (50 ms on units 20..29): the mock holds its packets, so its truth's sends and
+// the rig's arrivals are 50 ms after the firings. A sensor stamp that stays on the firing holds every
+// invariant; a stamp that follows the arrival is caught (50 ms off), unless the rig flagged it; the
+// fault counts once though the host and the LIDAR mock both record it.
+TEST(ChaosCheck, ANetworkDelayMovesArrivalsAndAStampThatFollowsThemIsCaught) {
+  constexpr Nanos kDelay = 50'000'000;
+  Input in = honest();
+  const auto held = [](std::int64_t unit) { return unit >= 20 && unit < 30; };
+  for (auto& p : in.truths[0].parts)
+    if (held(p.unit)) p.tx_ns += kDelay;
+  for (auto& s : in.samples) s.first_rx_ns = s.acquisition_ns + (held(static_cast<std::int64_t>(s.seq)) ? kDelay : 0) + 100'000;
+  in.events.push_back(faults::FaultEvent{5, "host.network_delay", "", 2.0, 1.0, {{"ms", "50"}}});
+  const Nanos at = kT0 + 20 * kPeriod, until = kT0 + 30 * kPeriod;
+  in.truths[0].faults.push_back(truth::FaultRecord{5, "host.network_delay", at, until, 20, "ms=50"});
+  in.truths.push_back(truth::Log{});
+  in.truths.back().header.device = "host";
+  in.truths.back().faults.push_back(truth::FaultRecord{5, "host.network_delay", at, until, -1, "ms=50, via=lidar mocks"});
+  Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.faults.at("host.network_delay"), 1u);
+  EXPECT_LT(r.topics.at(kTopic).stamp_error_max_ms, 0.1);
+  // A rig that stamps the arrival instead of the sensor's time.
+  for (auto& s : in.samples)
+    if (held(static_cast<std::int64_t>(s.seq))) s.acquisition_ns = s.first_rx_ns;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("stamps"));
+  EXPECT_NEAR(r.topics.at(kTopic).stamp_error_max_ms, 50.1, 1e-6);
+  EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u) << "each scan still matched by its arrival: " << result_text(r);
+  in.unsynchronized[kTopic] = {{at, until + kDelay + kPeriod}};
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).stamps_flagged, 10u);
+}
+
 TEST(ChaosCheck, TheJsonLineHasTheContractsKeys) {
   const auto j = nlohmann::json::parse(result_json(check(honest())));
   for (const char* k : {"faults", "topics", "invariants"}) EXPECT_TRUE(j.contains(k)) << k;
