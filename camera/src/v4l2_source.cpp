@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+
+#include "sensor_rig/common/log.hpp"
 
 namespace sensor_rig::camera {
 namespace {
@@ -17,6 +20,16 @@ constexpr double kAssumedExposureUs = 10'000.0;
 Nanos timeval_ns(const timeval& tv) {
   return static_cast<Nanos>(tv.tv_sec) * 1'000'000'000 + static_cast<Nanos>(tv.tv_usec) * 1000;
 }
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+// A buffer is at least this old at its dequeue only when the consumer fell behind by every buffer;
+// a stamp older than that (or after the dequeue) is not on the clock it is taken to be on.
+constexpr Nanos kStampSlackNs = 1'000'000'000;
 
 }  // namespace
 
@@ -45,6 +58,7 @@ void V4l2Source::open() {
   if (fd < 0) fail("open", fd);
   fd_ = fd;
   have_sequence_ = false;
+  stamp_warned_ = false;
   v4l2_capability cap{};
   if (const int rc = dev_->ioctl(fd_, VIDIOC_QUERYCAP, &cap); rc < 0) fail("VIDIOC_QUERYCAP", rc);
   const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
@@ -95,9 +109,21 @@ void V4l2Source::set_rate_and_controls() {
   if (prc < 0 && prc != -ENOTTY) fail("VIDIOC_S_PARM", prc);
   // The interval the driver granted (it may round or refuse the asked rate): the readout model's period.
   const auto& tpf = p.parm.capture.timeperframe;
-  period_ns_ = prc == 0 && tpf.denominator > 0 && tpf.numerator > 0
-                   ? static_cast<Nanos>(1e9 * tpf.numerator / tpf.denominator)
-                   : static_cast<Nanos>(1e9 / std::max(cfg_.frame_rate, 1.0));
+  const bool granted = prc == 0 && tpf.denominator > 0 && tpf.numerator > 0;
+  period_ns_ = granted ? static_cast<Nanos>(1e9 * tpf.numerator / tpf.denominator)
+                       : static_cast<Nanos>(1e9 / std::max(cfg_.frame_rate, 1.0));
+  granted_rate_hz_ = granted ? static_cast<double>(tpf.denominator) / tpf.numerator : cfg_.frame_rate;
+  // UVC devices offer a few discrete intervals and round to one; others refuse the rate and keep
+  // theirs: the camera then runs at a rate nobody configured (the watchdog, the sync sets, the
+  // readout model all assume the asked one).
+  if (!granted)
+    log::warn("camera", "v4l2 " + cfg_.device + ": the frame rate cannot be set or read (VIDIOC_S_PARM " +
+                            (prc < 0 ? std::string(std::strerror(-prc)) : std::string("gave no interval")) + "): " +
+                            fixed(cfg_.frame_rate, 3) + " Hz assumed");
+  else if (std::fabs(granted_rate_hz_ - cfg_.frame_rate) > 0.005 * cfg_.frame_rate)
+    log::warn("camera", "v4l2 " + cfg_.device + ": frame rate " + fixed(cfg_.frame_rate, 3) + " Hz asked, " +
+                            fixed(granted_rate_hz_, 3) + " Hz granted (interval " + std::to_string(tpf.numerator) + "/" +
+                            std::to_string(tpf.denominator) + " s): set frame_rate to one the device offers (v4l2-ctl --list-formats-ext)");
   exposure_us_ = 0.0;
   if (cfg_.exposure_us > 0) {
     v4l2_control manual{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL};
@@ -110,16 +136,78 @@ void V4l2Source::set_rate_and_controls() {
   // What the device has (its own, or the rounded one set): read back where it answers.
   v4l2_control g{V4L2_CID_EXPOSURE_ABSOLUTE, 0};
   if (dev_->ioctl(fd_, VIDIOC_G_CTRL, &g) == 0 && g.value > 0) exposure_us_ = static_cast<double>(g.value) * 100.0;
-  if (cfg_.gain_db >= 0) {
-    v4l2_control c{V4L2_CID_GAIN, static_cast<std::int32_t>(std::lround(cfg_.gain_db))};
-    if (const int rc = dev_->ioctl(fd_, VIDIOC_S_CTRL, &c); rc < 0) fail("gain (V4L2_CID_GAIN)", rc);
-  }
+  gain_db_ = -1.0;
+  if (cfg_.gain_db >= 0) set_gain();
+}
+
+// V4L2_CID_GAIN is in the driver's own units (a register code, 1/16 steps, 0.1 dB...): gain_db is
+// converted with the configured units per dB from the control's minimum (0 dB), on its step, and
+// refused beyond its maximum; it was written as raw units (3 dB -> 3).
+void V4l2Source::set_gain() {
+  v4l2_queryctrl q{};
+  q.id = V4L2_CID_GAIN;
+  if (const int rc = dev_->ioctl(fd_, VIDIOC_QUERYCTRL, &q); rc < 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED) != 0)
+    fail("gain (V4L2_CID_GAIN): the device has no gain control", rc < 0 ? rc : 0);
+  if (!(cfg_.v4l2_gain_units_per_db > 0))
+    fail("gain_db needs gain_units_per_db: V4L2_CID_GAIN has no unit (this device: " + std::to_string(q.minimum) + ".." +
+             std::to_string(q.maximum) + ", default " + std::to_string(q.default_value) + ")",
+         0);
+  const double per_db = cfg_.v4l2_gain_units_per_db;
+  const double step = q.step > 0 ? static_cast<double>(q.step) : 1.0;
+  const double units = std::round(cfg_.gain_db * per_db / step) * step;
+  const double raw = static_cast<double>(q.minimum) + units;
+  if (raw > static_cast<double>(q.maximum))
+    fail("gain_db " + fixed(cfg_.gain_db, 2) + " beyond the device's maximum of " +
+             fixed(static_cast<double>(q.maximum - q.minimum) / per_db, 2) + " dB (V4L2_CID_GAIN " + std::to_string(q.minimum) +
+             ".." + std::to_string(q.maximum) + " at " + fixed(per_db, 3) + " per dB)",
+         0);
+  v4l2_control c{V4L2_CID_GAIN, static_cast<std::int32_t>(raw)};
+  if (const int rc = dev_->ioctl(fd_, VIDIOC_S_CTRL, &c); rc < 0) fail("gain (V4L2_CID_GAIN)", rc);
+  v4l2_control g{V4L2_CID_GAIN, 0};
+  const std::int32_t applied = dev_->ioctl(fd_, VIDIOC_G_CTRL, &g) == 0 ? g.value : c.value;
+  gain_db_ = static_cast<double>(applied - q.minimum) / per_db;
 }
 
 Nanos V4l2Source::eof_offset_ns() const noexcept {
   const double exposure = exposure_us_ > 0 ? exposure_us_ : kAssumedExposureUs;
   const Nanos readout = cfg_.readout_us > 0 ? static_cast<Nanos>(cfg_.readout_us * 1000.0) : period_ns_ / 2;
   return static_cast<Nanos>(exposure * 1000.0) + readout;
+}
+
+// The buffer's timestamp on CLOCK_MONOTONIC. The flag says which clock it is on: MONOTONIC (every
+// capture driver since Linux 3.9); UNKNOWN (older drivers: gettimeofday, CLOCK_REALTIME) or COPY
+// (the producer's stamp). One not on CLOCK_MONOTONIC was taken as if it were: a CLOCK_REALTIME stamp
+// became an exposure start decades off. Now a stamp that is not MONOTONIC is taken as CLOCK_REALTIME
+// where that is plausible (at most kStampSlackNs + the buffers' span before the dequeue), and any
+// stamp plausible on neither clock (after its dequeue, or older) is replaced by the dequeue time:
+// the frame's end (an end-of-frame stamp, which the caller moves back by exposure + readout).
+// Counted; warned once per open.
+Nanos V4l2Source::buffer_stamp_mono(const v4l2_buffer& b, Nanos real, Nanos mono, bool& eof) noexcept {
+  const Nanos raw = timeval_ns(b.timestamp);
+  const Nanos window = kStampSlackNs + period_ns_ * static_cast<Nanos>(buffers_.size());
+  const auto plausible = [&](Nanos t) { return t <= mono && t >= mono - window; };
+  const std::uint32_t type = b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK;
+  Nanos t = raw;
+  std::string why;
+  if (type != V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC) {
+    ++stamp_checks_.not_monotonic;
+    why = std::string("buffer timestamps not on CLOCK_MONOTONIC (") +
+          (type == V4L2_BUF_FLAG_TIMESTAMP_COPY ? "COPY" : type == V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN ? "UNKNOWN" : "?") +
+          "): taken as CLOCK_REALTIME where plausible";
+    if (!plausible(raw) && plausible(raw - (real - mono))) t = raw - (real - mono);
+  }
+  if (!plausible(t)) {
+    ++stamp_checks_.replaced;
+    why += std::string(why.empty() ? "" : "; ") + "a buffer stamped " + fixed(static_cast<double>(mono - t) * 1e-6, 1) +
+           " ms before its dequeue: the dequeue time taken as its end of frame";
+    t = mono;
+    eof = true;
+  }
+  if (!why.empty() && !stamp_warned_) {
+    stamp_warned_ = true;
+    log::warn("camera", "v4l2 " + cfg_.device + ": " + why);
+  }
+  return t;
 }
 
 void V4l2Source::start_streaming() {
@@ -224,12 +312,13 @@ Capture V4l2Source::next(int timeout_ms) {
   m.step = step_;
   m.format = cfg_.format;
   m.domain = TimeDomain::kMonotonic;
-  m.device_ns = timeval_ns(b.timestamp);
   // An end-of-frame stamp: the exposure started exposure + readout earlier (not a whole period).
-  const bool eof = cfg_.v4l2_stamp == "end" ||
-                   (cfg_.v4l2_stamp == "auto" && (b.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_EOF);
+  bool eof = cfg_.v4l2_stamp == "end" ||
+             (cfg_.v4l2_stamp == "auto" && (b.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_EOF);
+  const Nanos stamp = buffer_stamp_mono(b, real, mono, eof);
+  m.device_ns = stamp;
   if (eof) m.device_ns -= eof_offset_ns();
-  m.first_rx_ns = real - (mono - timeval_ns(b.timestamp));
+  m.first_rx_ns = real - (mono - stamp);
   m.complete_ns = real;
   m.complete_mono_ns = mono;
   ++stats_.completed;

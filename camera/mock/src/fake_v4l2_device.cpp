@@ -169,15 +169,43 @@ int FakeV4l2Device::ioctl_locked(unsigned long request, void* arg) {
       const auto& t = p->parm.capture.timeperframe;
       if (t.numerator == 0 || t.denominator == 0) return -EINVAL;
       rate_hz_ = std::min(opt_.max_rate_hz, static_cast<double>(t.denominator) / t.numerator);
+      if (!opt_.frame_rates.empty()) {  // the nearest it offers
+        const double want = rate_hz_;
+        rate_hz_ = *std::min_element(opt_.frame_rates.begin(), opt_.frame_rates.end(),
+                                     [&](double a, double b) { return std::fabs(a - want) < std::fabs(b - want); });
+      }
       p->parm.capture.timeperframe.numerator = 1000;
       p->parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(std::lround(rate_hz_ * 1000));
       return 0;
     }
     case VIDIOC_S_CTRL: {
       auto* c = static_cast<v4l2_control*>(arg);
-      if (c->id == V4L2_CID_EXPOSURE_ABSOLUTE) counters_.exposure_100us = static_cast<std::uint32_t>(c->value);
-      else if (c->id == V4L2_CID_GAIN) counters_.gain = c->value;
-      else if (c->id != V4L2_CID_EXPOSURE_AUTO) return -EINVAL;
+      if (c->id == V4L2_CID_EXPOSURE_ABSOLUTE) {
+        counters_.exposure_100us = static_cast<std::uint32_t>(c->value);
+      } else if (c->id == V4L2_CID_GAIN) {
+        if (c->value < opt_.gain_min || c->value > opt_.gain_max) return -ERANGE;
+        counters_.gain = c->value;
+      } else if (c->id != V4L2_CID_EXPOSURE_AUTO) {
+        return -EINVAL;
+      }
+      return 0;
+    }
+    case VIDIOC_G_CTRL: {
+      auto* c = static_cast<v4l2_control*>(arg);
+      if (c->id == V4L2_CID_EXPOSURE_ABSOLUTE && counters_.exposure_100us > 0) c->value = static_cast<std::int32_t>(counters_.exposure_100us);
+      else if (c->id == V4L2_CID_GAIN) c->value = counters_.gain >= 0 ? counters_.gain : opt_.gain_default;
+      else return -EINVAL;
+      return 0;
+    }
+    case VIDIOC_QUERYCTRL: {
+      auto* q = static_cast<v4l2_queryctrl*>(arg);
+      if (q->id != V4L2_CID_GAIN) return -EINVAL;
+      q->type = V4L2_CTRL_TYPE_INTEGER;
+      q->minimum = opt_.gain_min;
+      q->maximum = opt_.gain_max;
+      q->step = opt_.gain_step;
+      q->default_value = opt_.gain_default;
+      q->flags = 0;
       return 0;
     }
     case VIDIOC_REQBUFS: {
@@ -223,9 +251,10 @@ int FakeV4l2Device::ioctl_locked(unsigned long request, void* arg) {
       b->bytesused = oldest->bytesused;
       b->sequence = oldest->sequence;
       b->field = V4L2_FIELD_NONE;
-      b->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | oldest->stamp_source;
-      b->timestamp.tv_sec = static_cast<time_t>(oldest->stamp_mono / 1'000'000'000);
-      b->timestamp.tv_usec = static_cast<suseconds_t>((oldest->stamp_mono % 1'000'000'000) / 1000);
+      b->flags = opt_.timestamp_type | oldest->stamp_source;
+      const Nanos stamp = oldest->stamp_mono + oldest->mono_to_stamp_clock;
+      b->timestamp.tv_sec = static_cast<time_t>(stamp / 1'000'000'000);
+      b->timestamp.tv_usec = static_cast<suseconds_t>((stamp % 1'000'000'000) / 1000);
       return 0;
     }
     case VIDIOC_STREAMON:
@@ -253,6 +282,7 @@ bool FakeV4l2Device::fill_one(Nanos due) {
     std::memcpy(b.mem.data(), &seq, std::min<std::size_t>(sizeof seq, sizeimage_));
     b.sequence = seq;
     b.stamp_mono = due;
+    b.mono_to_stamp_clock = opt_.realtime_stamps ? vehicle_now_ns() - monotonic_now_ns() : 0;
     b.stamp_source = V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
     Nanos exposure_start = due;
     const auto* mode = schedule_.active("v4l2.stamp_mode", schedule_.seconds(due));
@@ -263,7 +293,7 @@ bool FakeV4l2Device::fill_one(Nanos due) {
       exposure_start = due - exposure - static_cast<Nanos>(0.5e9 / rate_hz_);
     }
     if (mode != nullptr) fault_line(*mode, seq, "buffer timestamps: " + mode->text("mode", "eof"));
-    record(seq, exposure_start, due, truth::Fate::kSent, 0);
+    record(seq, exposure_start, due + b.mono_to_stamp_clock, truth::Fate::kSent, 0);
     b.bytesused = short_every_ != 0 && (seq + 1) % short_every_ == 0 ? sizeimage_ / 2 : sizeimage_;
     b.filled = true;
     ++counters_.frames;

@@ -99,7 +99,8 @@ CameraConfig parse_camera_config(const config::Node& n) {
   if (!n.expect_map()) return c;
   n.allow_keys({"name", "backend", "device", "pixel_format", "width", "height", "frame_rate", "calibration", "exposure_us",
                 "gain_db", "features", "trigger", "packet_size", "packet_delay_ns", "socket_buffer_bytes", "packet_socket", "buffers",
-                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock", "outputs", "ptp", "stamp_at", "readout_us"});
+                "frame_id", "realtime_priority", "watchdog_ms", "qos", "mock", "outputs", "ptp", "stamp_at", "readout_us",
+                "gain_units_per_db"});
   c.name = n.get_string("name");
   for (char ch : c.name)
     if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) {
@@ -198,6 +199,13 @@ CameraConfig parse_camera_config(const config::Node& n) {
   if (s.backend != "v4l2")
     for (const char* k : {"stamp_at", "readout_us"})
       if (n.has(k)) n.fail(k, "only for the v4l2 backend (a GigE camera reports its exposure start)");
+  // V4L2_CID_GAIN has no unit: gain_db is converted with the driver's units per dB (from its minimum).
+  s.v4l2_gain_units_per_db = n.get_double("gain_units_per_db", 0.0, 1e6, 0.0);
+  if (s.backend != "v4l2" && n.has("gain_units_per_db"))
+    n.fail("gain_units_per_db", "only for the v4l2 backend (GenICam Gain is in dB)");
+  if (s.backend == "v4l2" && s.gain_db >= 0 && !(s.v4l2_gain_units_per_db > 0))
+    n.fail("gain_db", "a V4L2 camera's gain has no unit: give gain_units_per_db (the driver's V4L2_CID_GAIN units per dB, "
+                      "from its minimum as 0 dB)");
   if (auto q = n.child("qos")) c.qos = dds::QosSpec::from_config(*q, c.qos);
   if (auto m = n.child("mock")) c.mock = parse_mock(*m);
   if (auto o = n.child("outputs")) c.outputs = parse_outputs(*o, s.format);

@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <set>
+#include <string>
 
 #include "sensor_rig/camera/mock/fake_v4l2_device.hpp"
 #include "sensor_rig/camera/v4l2_source.hpp"
@@ -30,12 +31,13 @@ TEST(V4l2Fake, NegotiatesStreamsAndStampsEveryFrame) {
   SourceConfig cfg = yuyv(1280, 720, 50);
   cfg.exposure_us = 5000;
   cfg.gain_db = 3;
+  cfg.v4l2_gain_units_per_db = 10;  // the fake's V4L2_CID_GAIN: 0..480 in 0.1 dB
   V4l2Source src(cfg, dev);
   src.open();
   ASSERT_TRUE(src.is_open());
   EXPECT_DOUBLE_EQ(dev->counters().rate_hz, 50.0);
   EXPECT_EQ(dev->counters().exposure_100us, 50u);
-  EXPECT_EQ(dev->counters().gain, 3);
+  EXPECT_EQ(dev->counters().gain, 30);
   Nanos last = 0;
   std::uint64_t last_seq = 0;
   const Nanos t0 = monotonic_now_ns();
@@ -176,6 +178,130 @@ TEST(V4l2Fake, ShortBuffersAreCountedAndNeverReturned) {
   }
   EXPECT_GE(incomplete, 5);
   EXPECT_EQ(src.stats().incomplete, static_cast<std::uint64_t>(incomplete));
+}
+
+}  // namespace
+}  // namespace sensor_rig::camera
+
+namespace sensor_rig::camera {
+namespace {
+
+// Issue 27 item 10: gain_db was written to V4L2_CID_GAIN as raw units (3 dB -> 3), a control
+// without a unit of its own. Converted with the configured units per dB from the control's minimum
+// (0 dB), on its step; beyond its maximum, or without the unit, refused at open.
+TEST(V4l2Fake, GainDbIsConvertedWithTheDriversUnitsNotWrittenRaw) {
+  mock::FakeV4l2Options o;
+  o.gain_min = 16;   // a sensor whose gain code is 16ths of unity: 16 = 0 dB
+  o.gain_max = 255;
+  o.gain_step = 2;
+  auto dev = std::make_shared<mock::FakeV4l2Device>(o);
+  SourceConfig cfg = yuyv();
+  cfg.gain_db = 6.1;
+  cfg.v4l2_gain_units_per_db = 8;  // 48.8 units: 48 on its step of 2
+  V4l2Source src(cfg, dev);
+  src.open();
+  EXPECT_EQ(dev->counters().gain, 16 + 48);
+  EXPECT_DOUBLE_EQ(src.gain_db(), 6.0);  // read back: what the device really has
+  src.close();
+
+  cfg.gain_db = 40;  // 16 + 320 > 255
+  V4l2Source too_much(cfg, dev);
+  try {
+    too_much.open();
+    ADD_FAILURE() << "40 dB opened";
+  } catch (const CameraError& e) {
+    EXPECT_NE(std::string(e.what()).find("beyond the device's maximum of 29.88 dB"), std::string::npos) << e.what();
+  }
+  cfg.gain_db = 3;
+  cfg.v4l2_gain_units_per_db = 0;
+  V4l2Source no_unit(cfg, dev);
+  try {
+    no_unit.open();
+    ADD_FAILURE() << "gain_db without a unit opened";
+  } catch (const CameraError& e) {
+    EXPECT_NE(std::string(e.what()).find("gain_units_per_db"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(dev->counters().gain, 64);  // neither wrote anything
+}
+
+// Item 10: below 50 us the exposure rounds to 1 (100 us, V4L2_CID_EXPOSURE_ABSOLUTE's unit), not 0
+// (which drivers take as "as short as possible" or refuse), and the stamp model uses what was set.
+TEST(V4l2Fake, ExposureBelow50UsIsWrittenAsTheShortestUnitNotZero) {
+  auto dev = std::make_shared<mock::FakeV4l2Device>();
+  SourceConfig cfg = yuyv();
+  cfg.exposure_us = 30;
+  V4l2Source src(cfg, dev);
+  src.open();
+  EXPECT_EQ(dev->counters().exposure_100us, 1u);
+  EXPECT_DOUBLE_EQ(src.exposure_us(), 100.0);
+}
+
+// Item 10: the frame interval the device granted is checked. A UVC device offering 15 and 30 Hz
+// grants 15 for 20 asked: warned with both figures, reported, and used by the readout model.
+TEST(V4l2Fake, AGrantedFrameRateOtherThanTheAskedIsWarnedAndUsed) {
+  mock::FakeV4l2Options o;
+  o.frame_rates = {15.0, 30.0};
+  auto dev = std::make_shared<mock::FakeV4l2Device>(o);
+  V4l2Source src(yuyv(640, 480, 20), dev);
+  testing::internal::CaptureStderr();
+  src.open();
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("frame rate 20.000 Hz asked, 15.000 Hz granted"), std::string::npos) << err;
+  EXPECT_DOUBLE_EQ(src.granted_frame_rate(), 15.0);
+  EXPECT_EQ(src.eof_offset_ns(), 10'000'000 + 33'333'333);  // 10 ms assumed + half the granted period
+  // The rate it grants is the rate it runs at: 6 frames take ~5 periods of 66.7 ms, not of 50 ms.
+  ASSERT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+  const Nanos t0 = monotonic_now_ns();
+  for (int i = 0; i < 5; ++i) ASSERT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+  EXPECT_GT(static_cast<double>(monotonic_now_ns() - t0) * 1e-6, 5 * 66.7 - 10);
+  src.close();
+
+  // Granted as asked: no warning.
+  V4l2Source ok(yuyv(640, 480, 30), dev);
+  testing::internal::CaptureStderr();
+  ok.open();
+  EXPECT_EQ(testing::internal::GetCapturedStderr().find("granted"), std::string::npos);
+  EXPECT_DOUBLE_EQ(ok.granted_frame_rate(), 30.0);
+}
+
+// Item 10: the buffers' timestamp clock is checked. A driver of the gettimeofday era (flag UNKNOWN,
+// CLOCK_REALTIME stamps) gave exposure starts decades off on the CLOCK_MONOTONIC scale (taken as
+// monotonic); now converted. A driver that says MONOTONIC and is not: the stamp is implausible
+// (after its dequeue), replaced by the dequeue time less exposure and readout. Counted, warned once.
+TEST(V4l2Fake, BufferStampsNotOnClockMonotonicAreConvertedOrReplaced) {
+  for (const bool says_monotonic : {false, true}) {
+    SCOPED_TRACE(says_monotonic ? "flag MONOTONIC, CLOCK_REALTIME stamps" : "flag UNKNOWN, CLOCK_REALTIME stamps");
+    mock::FakeV4l2Options o;
+    o.realtime_stamps = true;
+    o.timestamp_type = says_monotonic ? V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC : V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN;
+    auto dev = std::make_shared<mock::FakeV4l2Device>(o);
+    SourceConfig cfg = yuyv(640, 480, 50);
+    cfg.exposure_us = 2000;
+    V4l2Source src(cfg, dev);
+    testing::internal::CaptureStderr();
+    src.open();
+    std::string err;
+    for (int i = 0; i < 5; ++i) {
+      auto c = next_frame(src);
+      ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
+      if (i == 0) err = testing::internal::GetCapturedStderr();
+      const auto& m = c.frame.meta();
+      // The fake makes a frame ready at its exposure start: dequeued within a few ms of it.
+      EXPECT_LE(m.device_ns, m.complete_mono_ns);
+      const Nanos bound = says_monotonic ? src.eof_offset_ns() + 20'000'000 : 20'000'000;
+      EXPECT_LT(m.complete_mono_ns - m.device_ns, bound) << "frame " << i;
+      EXPECT_LE(m.first_rx_ns, m.complete_ns);
+    }
+    EXPECT_NE(err.find(says_monotonic ? "before its dequeue" : "not on CLOCK_MONOTONIC (UNKNOWN)"), std::string::npos) << err;
+    EXPECT_EQ(src.stamp_checks().not_monotonic, says_monotonic ? 0u : 5u);
+    EXPECT_EQ(src.stamp_checks().replaced, says_monotonic ? 5u : 0u);
+  }
+  // The usual driver: nothing counted, the stamp as it is.
+  auto dev = std::make_shared<mock::FakeV4l2Device>();
+  V4l2Source src(yuyv(), dev);
+  src.open();
+  for (int i = 0; i < 3; ++i) ASSERT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+  EXPECT_EQ(src.stamp_checks().not_monotonic + src.stamp_checks().replaced, 0u);
 }
 
 }  // namespace

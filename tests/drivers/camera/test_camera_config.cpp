@@ -208,3 +208,27 @@ TEST(CameraConfig, MockRigCamerasParseAndFrontNarrowHasItsOutputs) {
 
 }  // namespace
 }  // namespace sensor_rig::drivers
+
+namespace sensor_rig::drivers {
+namespace {
+
+// Issue 27 item 10: a V4L2 camera's gain_db needs the driver's unit (V4L2_CID_GAIN has none); it
+// was written as raw units. Without gain_units_per_db: an error at the key, not a wrong gain.
+TEST(CameraConfig, AV4l2GainNeedsTheDriversUnitsPerDb) {
+  const std::string usb = "name: usb\nbackend: v4l2\ndevice: /dev/video0\npixel_format: YUYV\nwidth: 640\nheight: 480\n";
+  auto p = parse(usb + "gain_db: 6\n");
+  EXPECT_NE(p.problems.find("cams.yaml:7:"), std::string::npos) << p.problems;
+  EXPECT_NE(p.problems.find("gain_db: a V4L2 camera's gain has no unit: give gain_units_per_db"), std::string::npos) << p.problems;
+  p = parse(usb + "gain_db: 6\ngain_units_per_db: 10\n");
+  EXPECT_EQ(p.problems, "");
+  EXPECT_DOUBLE_EQ(p.cfg.source.gain_db, 6.0);
+  EXPECT_DOUBLE_EQ(p.cfg.source.v4l2_gain_units_per_db, 10.0);
+  p = parse(usb + "gain_units_per_db: 10\n");  // the unit alone: the gain left as the device has it
+  EXPECT_EQ(p.problems, "");
+  p = parse("name: gige\nbackend: aravis\ndevice: 127.0.0.2\npixel_format: BayerRG8\nwidth: 640\nheight: 400\ngain_db: 6\n"
+            "gain_units_per_db: 10\n");
+  EXPECT_NE(p.problems.find("gain_units_per_db: only for the v4l2 backend"), std::string::npos) << p.problems;
+}
+
+}  // namespace
+}  // namespace sensor_rig::drivers

@@ -60,6 +60,9 @@ struct SourceConfig {
   // the granted frame period (a rolling shutter reads out over most of a frame at 10-30 Hz).
   std::string v4l2_stamp = "auto";     // auto | start | end
   double readout_us = 0.0;
+  // V4L2_CID_GAIN has no unit (each driver its own): gain_db is written as the control's minimum
+  // (0 dB) + gain_db x this many units per dB; 0 = not given (gain_db is then refused on V4L2).
+  double v4l2_gain_units_per_db = 0.0;
 };
 
 // The PTP state a source reports (diagnostics).

@@ -3,7 +3,11 @@
 // (S_PARM), controls (exposure, gain), mmap streaming with a bounded ring of buffers. A frame's
 // data is the mmap buffer itself; dropping the Frame queues the buffer again (no copy).
 // Timestamps: the driver's CLOCK_MONOTONIC buffer time, with CLOCK_REALTIME and CLOCK_MONOTONIC
-// sampled together at every dequeue, so the driver maps each frame with a fresh offset.
+// sampled together at every dequeue, so the driver maps each frame with a fresh offset. The
+// buffer's timestamp type is checked (a stamp not on CLOCK_MONOTONIC is converted or replaced,
+// counted and warned), and so is the frame interval the device granted.
+#include <linux/videodev2.h>
+
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -29,6 +33,19 @@ class V4l2Source final : public FrameSource {
   [[nodiscard]] double exposure_us() const override { return exposure_us_; }
   // End-of-frame stamp -> exposure start: exposure + readout (ns).
   [[nodiscard]] Nanos eof_offset_ns() const noexcept;
+  // The frame rate the device granted (VIDIOC_S_PARM read back; the asked one when it cannot tell),
+  // warned at open when it differs from the configured one by more than 0.5 %.
+  [[nodiscard]] double granted_frame_rate() const noexcept { return granted_rate_hz_; }
+  // The gain written, in dB (V4L2_CID_GAIN read back, converted); < 0: not set.
+  [[nodiscard]] double gain_db() const noexcept { return gain_db_; }
+  // Buffer timestamps not on CLOCK_MONOTONIC (the flag says UNKNOWN or COPY; old drivers stamped
+  // with gettimeofday) and, of all frames, those whose stamp was implausible (after the dequeue,
+  // or older than the buffers can hold) and replaced by the dequeue time - exposure - readout.
+  struct StampChecks {
+    std::uint64_t not_monotonic = 0;  // flag not MONOTONIC: taken as CLOCK_REALTIME where plausible
+    std::uint64_t replaced = 0;       // no plausible clock: the dequeue time, back by exposure + readout
+  };
+  [[nodiscard]] const StampChecks& stamp_checks() const noexcept { return stamp_checks_; }
 
  private:
   struct Mapped {
@@ -37,6 +54,9 @@ class V4l2Source final : public FrameSource {
   };
   void negotiate_format();
   void set_rate_and_controls();
+  void set_gain();
+  // eof: in, whether the stamp is the frame's end; out, also true for a stamp replaced by the dequeue.
+  Nanos buffer_stamp_mono(const v4l2_buffer& b, Nanos real, Nanos mono, bool& eof) noexcept;
   void start_streaming();
   void requeue(std::uint32_t index) noexcept;
   [[noreturn]] void fail(const std::string& what, int rc);
@@ -51,6 +71,10 @@ class V4l2Source final : public FrameSource {
   SourceStats stats_;
   double exposure_us_ = 0.0;     // set or read back at open; 0: unknown (auto)
   Nanos period_ns_ = 0;          // the frame interval the device granted (S_PARM read back)
+  double granted_rate_hz_ = 0.0;
+  double gain_db_ = -1.0;
+  StampChecks stamp_checks_;
+  bool stamp_warned_ = false;    // one warning per open about the buffers' timestamp clock
   std::uint32_t last_sequence_ = 0;
   bool have_sequence_ = false;   // within one open: a reopened device may restart its sequence
 };

@@ -6,6 +6,8 @@
 // effect at the next frame: stall (no frames), disconnect (ENODEV until reconnect), short buffers.
 // Under a campaign (FakeV4l2Options::chaos) it takes the plan's v4l2.* faults by time and writes its
 // truth record: a unit and a part line per frame slot (unit = the V4L2 sequence), a fault line each.
+#include <linux/videodev2.h>
+
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -30,7 +32,15 @@ struct FakeV4l2Options {
   std::string path = "/dev/video0";
   std::vector<FakeV4l2Format> formats;  // empty: YUYV, GREY, RGGB, RGB3 at 640x480, 1280x720, 1920x1200
   double max_rate_hz = 60.0;
+  // The rates it offers, as UVC devices do (S_PARM grants the nearest); empty: any up to max_rate_hz.
+  std::vector<double> frame_rates;
   std::uint32_t max_buffers = 8;
+  // The buffers' timestamp type flag (V4L2_BUF_FLAG_TIMESTAMP_*): MONOTONIC as drivers since 3.9;
+  // UNKNOWN with realtime_stamps as older ones (gettimeofday).
+  std::uint32_t timestamp_type = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+  bool realtime_stamps = false;  // buffer timestamps on CLOCK_REALTIME instead of CLOCK_MONOTONIC
+  // V4L2_CID_GAIN's range (VIDIOC_QUERYCTRL) in the device's own units.
+  std::int32_t gain_min = 0, gain_max = 480, gain_step = 1, gain_default = 0;
   ChaosArgs chaos;  // v4l2.stamp_mode, v4l2.sequence_gap, v4l2.disconnect of chaos.device; its truth
 };
 
@@ -39,7 +49,7 @@ struct FakeV4l2Counters {
   std::uint64_t dropped = 0;        // frames due while no buffer was queued
   std::uint64_t opens = 0;
   std::uint32_t exposure_100us = 0;  // last V4L2_CID_EXPOSURE_ABSOLUTE
-  std::int32_t gain = -1;
+  std::int32_t gain = -1;           // last V4L2_CID_GAIN, raw
   double rate_hz = 0.0;              // negotiated
 };
 
@@ -69,6 +79,7 @@ class FakeV4l2Device final : public V4l2Device {
     std::uint32_t bytesused = 0;
     std::uint32_t sequence = 0;
     Nanos stamp_mono = 0;
+    Nanos mono_to_stamp_clock = 0;   // realtime_stamps: CLOCK_REALTIME - CLOCK_MONOTONIC when filled
     std::uint32_t stamp_source = 0;  // V4L2_BUF_FLAG_TSTAMP_SRC_SOE or _EOF
   };
   int ioctl_locked(unsigned long request, void* arg);
