@@ -3,6 +3,7 @@
 // itself): host.cpu_hog (busy threads at normal priority, as a runaway process of the PU would be)
 // and host.clock_step (CLOCK_REALTIME stepped, and stepped back when the fault ends), begun at the
 // plan's times from a thread of their own, each recorded in the host's truth record as it begins.
+// host.network_delay is recorded here too (its parameters); the LIDAR mocks hold their datagrams.
 #include <atomic>
 #include <memory>
 #include <string>
