@@ -180,7 +180,7 @@ std::vector<faults::Device> devices_of(const RigConfig& cfg) {
   std::vector<faults::Device> d;
   for (const auto& l : cfg.lidars)
     if (l.mock.kind != LidarMockConfig::Kind::kNone) d.push_back({l.name, DeviceClass::kLidar, true});
-  // The in-process Aravis fakes write no truth and take no faults (camera/README.md): not judged.
+  // The in-process Aravis fakes take no faults (camera/README.md); their truth is judged all the same.
   for (const auto& c : cfg.cameras)
     if (c.mock.kind == drivers::CameraMockConfig::Kind::kGige || c.mock.kind == drivers::CameraMockConfig::Kind::kV4l2Fake)
       d.push_back({c.name, c.source.backend == "v4l2" ? DeviceClass::kV4l2 : DeviceClass::kCamera, false});
@@ -266,7 +266,7 @@ int run(const Options& o) {
   const auto devices = devices_of(cfg);
   for (const auto& c : cfg.cameras)
     if (c.mock.kind == drivers::CameraMockConfig::Kind::kAravisInProcess)
-      std::fprintf(stderr, "chaos: camera '%s' (in-process Aravis fake) writes no truth: not judged, no faults\n", c.name.c_str());
+      std::fprintf(stderr, "chaos: camera '%s' (in-process Aravis fake) takes no faults: judged against its truth only\n", c.name.c_str());
   faults::Plan plan;
   try {
     plan.events = make_plan(o, devices, cfg);

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <stdexcept>
@@ -28,8 +29,114 @@ void sleep_ms(int ms) {
 
 }  // namespace
 
-AravisDeviceOpener inprocess_fake_opener() {
-  return [](const std::string& device) -> void* {
+namespace {
+
+constexpr const char* kInprocessClock =
+    "camera timestamp ns: CLOCK_REALTIME (UTC, microseconds) when the fake fills the frame: its exposure start";
+
+// An in-process fake's truth record under rig chaos: one per camera for the whole run (a watchdog
+// reopen makes a new fake device, whose frame ids start again at 1: a reboot of the units).
+struct InprocessTruth {
+  InprocessTruth(const ChaosArgs& chaos)
+      : truth(chaos.truth, chaos.device, "camera", "in-process Aravis fake (ArvFakeDevice)", kInprocessClock) {}
+  CameraTruth truth;
+  std::mutex mutex;  // units: one fill at a time per device, but a reopen's new device may overlap the old
+  FrameUnits units;
+  bool opened_before = false;
+};
+
+// What one fake device's fill callback needs; freed with the device (g_object_set_data_full).
+// `painter`: a second fake camera whose own fill paints the image. A fill callback cannot set the
+// buffer's received size (private in Aravis 0.8: only the fake's built-in pattern sets it, and a
+// frame without it is incomplete), so the painter's arv_fake_camera_fill_buffer does, with the
+// device camera's geometry, and the frame's id and stamps are put back.
+struct FillContext {
+  FillContext(std::shared_ptr<InprocessTruth> t, ArvFakeCamera* cam) : truth(std::move(t)), camera(cam), painter(arv_fake_camera_new("RIGTRUTHPAINT")) {}
+  ~FillContext() {
+    if (painter != nullptr) g_object_unref(painter);
+  }
+  FillContext(const FillContext&) = delete;
+  FillContext& operator=(const FillContext&) = delete;
+  std::shared_ptr<InprocessTruth> truth;
+  ArvFakeCamera* camera = nullptr;
+  ArvFakeCamera* painter = nullptr;
+};
+
+void paint(FillContext& ctx, ArvBuffer* buffer) {
+  for (const guint32 reg : {ARV_FAKE_CAMERA_REGISTER_WIDTH, ARV_FAKE_CAMERA_REGISTER_HEIGHT, ARV_FAKE_CAMERA_REGISTER_X_OFFSET,
+                            ARV_FAKE_CAMERA_REGISTER_Y_OFFSET, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT,
+                            ARV_FAKE_CAMERA_REGISTER_EXPOSURE_TIME_US, ARV_FAKE_CAMERA_REGISTER_GAIN_RAW}) {
+    guint32 v = 0;
+    if (arv_fake_camera_read_register(ctx.camera, reg, &v)) arv_fake_camera_write_register(ctx.painter, reg, v);
+  }
+  const guint64 frame_id = arv_buffer_get_frame_id(buffer);
+  const guint64 stamp = arv_buffer_get_timestamp(buffer), system_stamp = arv_buffer_get_system_timestamp(buffer);
+  arv_fake_camera_fill_buffer(ctx.painter, buffer, nullptr);
+  arv_buffer_set_frame_id(buffer, frame_id);
+  arv_buffer_set_timestamp(buffer, stamp);
+  arv_buffer_set_system_timestamp(buffer, system_stamp);
+}
+
+// Replaces the fake's fill (arv_fake_camera_fill_buffer calls it after setting the frame's id and
+// timestamp, before the stream hands the buffer on). One model for every Aravis fake (as
+// rig-fake-gige-camera): the timestamp is the exposure start, and the frame leaves when its
+// exposure ends, so the thread waits for that on CLOCK_MONOTONIC (a host clock step does not
+// stretch an exposure), and says it arrived then. Painting later than the exposure's end (a loaded host) moves the exposure
+// and the stamp later by as much: the frame still leaves at its exposure's end. The frame is
+// recorded as made and sent (no network: an in-process frame is lost only where the rig loses it,
+// or never made when the stream has no free buffer, which Aravis counts as an underrun).
+void fill_and_record(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 /*gain*/, ArvPixelFormat /*format*/) {
+  auto* ctx = static_cast<FillContext*>(data);
+  auto acq = static_cast<Nanos>(arv_buffer_get_timestamp(buffer));
+  const guint64 frame_id = arv_buffer_get_frame_id(buffer);
+  paint(*ctx, buffer);
+  const Nanos exposure = Nanos{exposure_time_us} * 1000;
+  const Nanos left = acq + exposure - vehicle_now_ns();
+  if (left > 0) {
+    const Nanos mono = monotonic_now_ns() + left;
+    const timespec until{static_cast<time_t>(mono / 1'000'000'000), static_cast<long>(mono % 1'000'000'000)};
+    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
+    }
+  } else {
+    acq -= left;  // late by -left: the exposure began that much later
+    arv_buffer_set_timestamp(buffer, static_cast<guint64>(acq));
+  }
+  // The host's receive time (what Aravis's GigE stream writes at the leader's arrival; the fake had
+  // it equal to the timestamp, a frame arriving as its exposure began): the frame leaves now.
+  arv_buffer_set_system_timestamp(buffer, static_cast<guint64>(vehicle_now_ns()));
+  InprocessTruth& t = *ctx->truth;
+  std::int64_t unit = 0;
+  {
+    std::lock_guard lock(t.mutex);
+    unit = t.units.unit(frame_id);
+  }
+  t.truth.frame(unit, acq, acq, vehicle_now_ns(), truth::Fate::kSent, 0, exposure);
+  t.truth.flush();  // on disk before the rig can publish the frame (a killed rig leaves no frame the truth lacks)
+}
+
+void record_truth_of(ArvDevice* d, const std::shared_ptr<InprocessTruth>& truth) {
+  ArvFakeCamera* cam = arv_fake_device_get_fake_camera(ARV_FAKE_DEVICE(d));
+  if (cam == nullptr) throw CameraError("aravis fake: no fake camera behind the device");
+  {
+    std::lock_guard lock(truth->mutex);
+    if (truth->opened_before) truth->units.reboot();  // frame ids start again at 1
+    truth->opened_before = true;
+  }
+  auto* ctx = new FillContext(truth, cam);
+  if (ctx->painter == nullptr) {
+    delete ctx;
+    throw CameraError("aravis fake: arv_fake_camera_new failed");
+  }
+  g_object_set_data_full(G_OBJECT(d), "sensor-rig-truth", ctx, [](gpointer p) { delete static_cast<FillContext*>(p); });
+  arv_fake_camera_set_fill_pattern(cam, fill_and_record, ctx);
+}
+
+}  // namespace
+
+AravisDeviceOpener inprocess_fake_opener(const ChaosArgs& chaos) {
+  // The truth file is created once, at the first open (not per reopen: that would truncate it).
+  std::shared_ptr<InprocessTruth> truth = chaos.truth.empty() ? nullptr : std::make_shared<InprocessTruth>(chaos);
+  return [truth](const std::string& device) -> void* {
     const std::string prefix = kFakePrefix;
     if (device.rfind(prefix, 0) != 0) return open_aravis_network_device(device);
     // Aravis loads the fake's GenICam XML lazily into a static without a lock: two cameras
@@ -42,6 +149,14 @@ AravisDeviceOpener inprocess_fake_opener() {
       std::string msg = err != nullptr ? err->message : "unknown error";
       if (err != nullptr) g_error_free(err);
       throw CameraError("aravis " + device + ": " + msg);
+    }
+    if (truth != nullptr) {
+      try {
+        record_truth_of(d, truth);
+      } catch (...) {
+        g_object_unref(d);
+        throw;
+      }
     }
     return d;
   };

@@ -14,7 +14,10 @@ std::unique_ptr<camera::FrameSource> make_camera_source(const CameraConfig& cfg)
     case K::kAravisInProcess:
       // The fake's serial number register holds at most 15 characters (longer: no GenICam data).
       s.device = std::string(camera::mock::kFakePrefix) + cfg.name.substr(0, 15);
-      return std::make_unique<camera::AravisSource>(s, camera::mock::inprocess_fake_opener());
+      // Under `rig chaos` (RIG_CHAOS_DIR): its truth record (it takes no faults).
+      return std::make_unique<camera::AravisSource>(
+          s, camera::mock::inprocess_fake_opener(faults::chaos_plan_path().empty() ? camera::mock::ChaosArgs{}
+                                                                                  : camera::mock::chaos_from_env(cfg.name)));
     case K::kV4l2Fake: {
       camera::mock::FakeV4l2Options o;
       o.path = s.device;

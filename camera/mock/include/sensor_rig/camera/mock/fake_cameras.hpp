@@ -26,7 +26,10 @@ inline constexpr const char* kTriggerFollowingFake = "rig-fake-gige-camera";
 // Opens "fake:<serial>" in process, anything else through the network. Aravis 0.8.26's in-process
 // fake ignores TriggerSoftware (arvfakestream.c: a frame at every step of its trigger grid in
 // trigger mode), so its grid is left at 25 Hz: a finer one would only stream faster.
-AravisDeviceOpener inprocess_fake_opener();
+// `chaos.truth` set (rig chaos): each frame the fake makes is written to that truth record (unit =
+// frame id, acq = its timestamp, the exposure start; camera/README.md "Mocks: faults"); the fake
+// takes no faults. Throws std::runtime_error when the truth file cannot be created.
+AravisDeviceOpener inprocess_fake_opener(const ChaosArgs& chaos = {});
 
 
 struct GigeFakeOptions {
