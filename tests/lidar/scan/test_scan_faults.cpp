@@ -298,6 +298,37 @@ TEST_P(ScanFaults, BlindSectorIsLearnedAfterOneTurn) {
   EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
 }
 
+// A learned blind sector and, in one turn, a loss burst elsewhere (lidar.blind_sector with a
+// lidar.loss_burst): the burst is counted, and the sector stays learned; before, the burst's gap
+// took the blind arc's place and the next turn counted the sector missing again (rig chaos,
+// OS-LEGACY seed 3: 16 phantom packets).
+TEST_P(ScanFaults, LossBurstBesideALearnedBlindSectorLeavesItLearned) {
+  std::vector<Pkt> pkts;
+  const Nanos t0 = s_.pkts.front().stamp;
+  std::uint32_t burst = 0;
+  for (const auto& p : s_.pkts) {
+    const Nanos t = p.stamp - t0;
+    if (t >= 250'000'000 && t < 950'000'000 && p.rotor_deg >= 90.0 && p.rotor_deg < 180.0) continue;
+    if (t >= 550'000'000 && t < 650'000'000 && p.rotor_deg >= 250.0 && burst < 3) {
+      ++burst;
+      continue;
+    }
+    pkts.push_back(p);
+  }
+  ASSERT_EQ(burst, 3U);
+  const Decoded r = run(s_.options, pkts);
+  EXPECT_EQ(r.scans.size(), clean_.scans.size());
+  std::size_t incomplete = 0, with_burst = 0;
+  std::string per_scan;
+  for (const auto& sc : r.scans) {
+    incomplete += sc.missing_packets > 0 ? 1 : 0;
+    with_burst += sc.missing_packets == 3 ? 1 : 0;
+    per_scan += std::to_string(sc.missing_packets) + " ";
+  }
+  EXPECT_EQ(incomplete, 2U) << per_scan << "the blind sector's first turn, and the burst";
+  EXPECT_EQ(with_burst, 1U) << per_scan;
+}
+
 // The same three packets lost every third turn (lidar.loss_burst repeated): each time a loss, never
 // a blind sector (the sector sent in the turns between; a gap that narrow was never unlearned, and
 // the chaos campaign's bursts at the cut every 0.35 s went uncounted).

@@ -203,36 +203,82 @@ inline std::uint32_t packets_on_arc(const AzimuthFov& fov, int from, int to, dou
 // same gap two turns in a row is that, not loss, until a packet comes from inside it again. The
 // first turn of a new blind sector cannot be told from a loss burst: it is counted missing.
 // Positions are the vendor's (0.01° with wrap = kTurn, or packet slots with wrap = 0).
+// Learned arcs (up to kArcs) are kept apart from the candidate: another gap in the same turn (a
+// loss burst elsewhere) is a new candidate and leaves a learned arc learned. Before, one slot held
+// both, and a loss burst beside a learned blind sector made the next turn count the sector missing
+// again (rig chaos, OS-LEGACY: 16 phantom packets).
 struct BlindArc {
-  long from = 0, to = 0, margin = 0;
-  bool candidate = false, learned = false;
+  struct Arc {
+    long from = 0, to = 0, margin = 0;
+    bool on = false;
+  };
+  static constexpr int kArcs = 2;  // seen() lists them
+  Arc arcs[kArcs];  // learned
+  Arc cand;         // a gap seen once
+  int next = 0;     // the learned slot a new arc takes when both are on
+  bool candidate = false, learned = false;  // any candidate / any learned arc (kept for callers)
+
+  static long dist(long x, long y, long wrap) noexcept {
+    long d = x > y ? x - y : y - x;
+    return wrap > 0 && d > wrap / 2 ? wrap - d : d;
+  }
   // A gap from `a` to `b` (tol: how far its ends may move from turn to turn; inner: how far inside
   // its ends a packet must lie to be one the gap lacked: a packet's width where the packet grid
-  // shifts from turn to turn, 0 for packet slots): true when it is the blind arc. `inner` must
+  // shifts from turn to turn, 0 for packet slots): true when it is a blind arc. `inner` must
   // leave room inside a gap of two packets, or a loss burst there would never be unlearned and the
   // next burst at the same place (lidar.loss_burst at_cut) would pass for a blind sector.
   bool is_blind(long a, long b, long tol, long wrap, long inner) noexcept {
-    const auto dist = [&](long x, long y) {
-      long d = x > y ? x - y : y - x;
-      return wrap > 0 && d > wrap / 2 ? wrap - d : d;
-    };
-    const bool same = candidate && dist(a, from) <= tol && dist(b, to) <= tol;
-    from = a;  // its ends move by up to a packet each turn: follow them
-    to = b;
-    margin = inner;
-    candidate = true;
-    learned = same;
-    return same;
-  }
-  // A packet at `at`: from inside the blind arc, the sector sends again.
-  void seen(long at, long wrap) noexcept {
-    if (!candidate) return;
-    long d = at - from, span = to - from;
-    if (wrap > 0) {
-      d = ((d % wrap) + wrap) % wrap;
-      span = ((span % wrap) + wrap) % wrap;
+    for (Arc& arc : arcs) {
+      if (arc.on && dist(a, arc.from, wrap) <= tol && dist(b, arc.to, wrap) <= tol) {
+        arc.from = a;  // its ends move by up to a packet each turn: follow them
+        arc.to = b;
+        arc.margin = inner;
+        return true;
+      }
     }
-    if (d > margin && d < span - margin) candidate = learned = false;
+    if (cand.on && dist(a, cand.from, wrap) <= tol && dist(b, cand.to, wrap) <= tol) {
+      Arc* slot = nullptr;
+      for (Arc& arc : arcs)
+        if (!arc.on && slot == nullptr) slot = &arc;
+      if (slot == nullptr) {
+        slot = &arcs[next];
+        next = (next + 1) % kArcs;
+      }
+      *slot = Arc{a, b, inner, true};
+      cand.on = false;
+      refresh();
+      return true;
+    }
+    cand = Arc{a, b, inner, true};
+    refresh();
+    return false;
+  }
+  // A packet at `at`: from inside a blind arc (or the candidate), the sector sends again.
+  void seen(long at, long wrap) noexcept {
+    if (!candidate && !learned) return;
+    const auto inside = [&](const Arc& arc) {
+      long d = at - arc.from, span = arc.to - arc.from;
+      if (wrap > 0) {
+        d = ((d % wrap) + wrap) % wrap;
+        span = ((span % wrap) + wrap) % wrap;
+      }
+      return d > arc.margin && d < span - arc.margin;
+    };
+    bool changed = false;
+    for (Arc* arc : {&arcs[0], &arcs[1], &cand}) {
+      if (arc->on && inside(*arc)) {
+        arc->on = false;
+        changed = true;
+      }
+    }
+    if (changed) refresh();
+  }
+
+ private:
+  void refresh() noexcept {
+    candidate = cand.on;
+    learned = false;
+    for (const Arc& arc : arcs) learned = learned || arc.on;
   }
 };
 
