@@ -16,6 +16,7 @@ PACKAGES=(
   python3
   liblz4-dev libzstd-dev        # MCAP chunk compression (rig record / play)
   libboost-dev                 # Boost.Beast/Asio, header-only: rig view's WebSocket server (view/)
+  iproute2                     # tc: rig chaos host.network_delay by netem on lo (kernels with sch_netem)
 )
 
 missing=()

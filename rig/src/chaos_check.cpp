@@ -81,7 +81,8 @@ double fault_span_s(const faults::FaultEvent& e) {
 
 // The event touches this device: aimed at it, at a device it depends on, or at the whole host.
 bool touches(const faults::FaultEvent& e, const std::string& device, const std::vector<std::string>& depends_on) {
-  if (e.device.empty()) return e.device_class() == faults::DeviceClass::kHost;
+  // "lo": host.network_delay by netem on the loopback (rig chaos gives it no mock), the whole host's.
+  if (e.device.empty() || e.device == "lo") return e.device_class() == faults::DeviceClass::kHost;
   if (e.device == device) return true;
   return std::find(depends_on.begin(), depends_on.end(), e.device) != depends_on.end();
 }
@@ -104,9 +105,27 @@ std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths
   return out;
 }
 
+// Loopback delays by netem (host.network_delay "via=netem"): a part sent then arrives `delay` after
+// its send in the truth (the mock hands it to the socket; the kernel holds it). The LIDAR mocks'
+// own hold needs none: their truth's send is the held one.
+struct HeldInterval {
+  Nanos begin, end, delay;
+};
+std::vector<HeldInterval> netem_delays(const std::vector<truth::Log>& truths) {
+  std::vector<HeldInterval> out;
+  for (const auto& log : truths)
+    for (const auto& f : log.faults) {
+      if (f.kind != "host.network_delay" || f.detail.find("via=netem") == std::string::npos) continue;
+      const auto pos = f.detail.find("ms=");
+      if (pos == std::string::npos) continue;
+      out.push_back({f.at_ns, f.until_ns, static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6)});
+    }
+  return out;
+}
+
 class Checker {
  public:
-  explicit Checker(const Input& in) : in_(in), doubled_(doubled_vehicle_time(in.truths)) {}
+  explicit Checker(const Input& in) : in_(in), doubled_(doubled_vehicle_time(in.truths)), held_(netem_delays(in.truths)) {}
 
   Result run() {
     for (const auto& name : kInvariants) r_.invariants[name] = true;
@@ -259,7 +278,7 @@ class Checker {
     const bool by_arrival = t.device_class == "lidar";
     std::map<const SampleRecord*, Nanos> judged_at;  // the acquisition each sample is counted at
     for (const SampleRecord* s : samples) {
-      UnitTruth* u = by_arrival ? arrival(units, *s, tolerance) : nullptr;
+      UnitTruth* u = by_arrival ? arrival(units, *s, tolerance, held_) : nullptr;
       if (u != nullptr ? !in_window(u->rec.acq_ns) : !in_window(s->acquisition_ns)) continue;
       if (u == nullptr && by_frame_id && flagged(topic, s->acquisition_ns)) u = same_frame(units, *s);
       if (u == nullptr) u = nearest(units, s->acquisition_ns, tolerance);
@@ -375,12 +394,20 @@ class Checker {
   // The unit whose first part went out last before the sample's first packet arrived, within
   // `tolerance`. Host time that happened twice (a clock step back) gives two units sent at the same
   // host time: of those, the one whose acquisition is nearest the stamp (they are the step apart).
-  static UnitTruth* arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance) {
+  // A unit sent while netem held the loopback arrives its delay later (held).
+  static UnitTruth* arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance,
+                            const std::vector<HeldInterval>& held) {
     if (s.first_rx_ns == 0) return nullptr;
+    const auto after_send = [&](const UnitTruth& u) {
+      Nanos d = 0;
+      for (const auto& h : held)
+        if (u.first_tx >= h.begin && u.first_tx < h.end) d = h.delay;
+      return s.first_rx_ns - u.first_tx - d;
+    };
     UnitTruth* best = nullptr;
     Nanos best_after = 0;
     for (auto& u : units) {
-      const Nanos after = s.first_rx_ns - u.first_tx;
+      const Nanos after = after_send(u);
       if (u.first_tx == 0 || after < -kArrivalSlack || after > tolerance) continue;
       if (best == nullptr || after < best_after) {
         best = &u;
@@ -389,7 +416,7 @@ class Checker {
     }
     if (best == nullptr) return nullptr;
     for (auto& u : units) {
-      const Nanos after = s.first_rx_ns - u.first_tx;
+      const Nanos after = after_send(u);
       if (&u == best || u.first_tx == 0 || std::llabs(after - best_after) > kArrivalSlack) continue;
       if (std::llabs(u.rec.acq_ns - s.acquisition_ns) < std::llabs(best->rec.acq_ns - s.acquisition_ns)) best = &u;
     }
@@ -541,6 +568,7 @@ class Checker {
 
   const Input& in_;
   const std::vector<Interval> doubled_;
+  const std::vector<HeldInterval> held_;
   Result r_;
   std::map<std::pair<std::string, std::uint64_t>, UnitMatch> matched_;  // (topic, seq) -> its truth unit
 };

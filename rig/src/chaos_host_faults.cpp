@@ -3,14 +3,17 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 
 #include "sensor_rig/common/log.hpp"
 
 namespace sensor_rig::rig::chaos {
 
-HostFaults::HostFaults(std::vector<faults::FaultEvent> events, Nanos epoch_mono, const std::string& truth_path)
+HostFaults::HostFaults(std::vector<faults::FaultEvent> events, Nanos epoch_mono, const std::string& truth_path,
+                       std::vector<int> loopback_ports)
     : events_(std::move(events)), epoch_mono_(epoch_mono),
-      truth_(truth_path, truth::Header{"host", "host", "", "", "", "CLOCK_REALTIME"}) {}
+      truth_(truth_path, truth::Header{"host", "host", "", "", "", "CLOCK_REALTIME"}),
+      loopback_ports_(std::move(loopback_ports)) {}
 
 void HostFaults::start() { thread_ = std::thread([this] { run(); }); }
 
@@ -20,6 +23,7 @@ void HostFaults::stop() {
   for (auto& t : hogs_) t.join();
   hogs_.clear();
   steps_.clear();
+  delays_.clear();
 }
 
 void HostFaults::run() {
@@ -28,8 +32,9 @@ void HostFaults::run() {
     const Nanos now = monotonic_now_ns();
     // Steps whose fault has ended go back first.
     for (auto it = steps_.begin(); it != steps_.end();) it = it->undo_mono <= now ? steps_.erase(it) : std::next(it);
+    for (auto it = delays_.begin(); it != delays_.end();) it = it->undo_mono <= now ? delays_.erase(it) : std::next(it);
     for (; next < events_.size() && at_mono(events_[next].at_s) <= now; ++next) begin(events_[next]);
-    if (next == events_.size() && steps_.empty()) return;
+    if (next == events_.size() && steps_.empty() && delays_.empty()) return;
     ::usleep(2'000);
   }
 }
@@ -54,13 +59,28 @@ void HostFaults::begin(const faults::FaultEvent& e) {
       log::warn("chaos", std::string("host.clock_step not injected: ") + ex.what());
     }
   } else if (e.kind == "host.network_delay") {
-    // Held back in the mocks that send the rig's network traffic: each LIDAR mock holds every
-    // datagram ms (order kept) while the fault lasts, from the same plan, and records it per packet
-    // (lidar/mock/README.md). Not loopback shaping: sch_netem is not in every kernel the rig runs on
-    // (docs/faults.md "host.network_delay"), and nothing on the host is changed, so nothing is left
-    // to undo after the fault, a failed campaign or a kill (the mocks die with rig up).
-    truth_.fault({e.id, e.kind, veh, veh + span, -1,
-                  "ms=" + std::to_string(static_cast<long long>(e.number("ms", 50))) + ", via=lidar mocks (datagrams held, order kept)"});
+    const double ms = e.number("ms", 50), jitter = e.number("jitter_ms", 0);
+    char params[64];
+    std::snprintf(params, sizeof params, "ms=%g, jitter_ms=%g", ms, jitter);
+    if (e.device == "lo") {
+      // netem on the host's loopback for the rig's UDP ports, removed when the fault ends.
+      std::string ports;
+      for (const int p : loopback_ports_) ports += (ports.empty() ? "" : " ") + std::to_string(p);
+      try {
+        delays_.push_back({monotonic_now_ns() + span, std::make_unique<LoopbackDelay>(ms, jitter, loopback_ports_)});
+        truth_.fault({e.id, e.kind, veh, veh + span, -1, std::string(params) + ", via=netem on lo, udp ports " + ports});
+      } catch (const std::exception& ex) {
+        log::warn("chaos", std::string("host.network_delay not injected: ") + ex.what());
+      }
+    } else {
+      // Held back in the mocks that send the rig's network traffic: each LIDAR mock holds every
+      // datagram ms (order kept, no jitter) while the fault lasts, from the same plan, and records it
+      // per packet (lidar/mock/README.md). Nothing on the host is changed, so nothing is left to undo
+      // after the fault, a failed campaign or a kill (the mocks die with rig up).
+      truth_.fault({e.id, e.kind, veh, veh + span, -1,
+                    std::string(params) + ", via=lidar mocks (datagrams held, order kept" +
+                        (jitter > 0 ? std::string("; jitter not applied") : std::string{}) + ")"});
+    }
   } else {
     return;  // a mock's, or rig up's
   }

@@ -14,6 +14,7 @@
 
 #include "chaos_diagnostics.hpp"
 #include "chaos_host_faults.hpp"
+#include "network_delay.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/errors.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -276,6 +277,21 @@ int run(const Options& o) {
   }
   // A campaign killed while the clock was stepped left its step: undo it before anything else.
   for (const auto& line : ClockStep::sweep()) log::warn("chaos", line);
+  // ... and a netem delay it left on lo.
+  for (const auto& line : LoopbackDelay::sweep()) log::warn("chaos", line);
+  // host.network_delay: netem on lo where the kernel has it (the host's event, device "lo", which no
+  // mock takes), else the LIDAR mocks hold their datagrams (the event stays every process's).
+  std::vector<int> lidar_ports;
+  for (const auto& l : cfg.lidars)
+    for (const int p : {l.port, l.position_port})
+      if (p > 0) lidar_ports.push_back(p);
+  if (std::any_of(plan.events.begin(), plan.events.end(), [](const auto& e) { return e.kind == "host.network_delay"; })) {
+    const std::string why = LoopbackDelay::unavailable();
+    for (auto& e : plan.events)
+      if (e.kind == "host.network_delay" && why.empty()) e.device = "lo";
+    std::fprintf(stderr, "chaos: host.network_delay %s\n",
+                 why.empty() ? "by netem on lo" : ("held in the LIDAR mocks (no netem on lo: " + why + ")").c_str());
+  }
   CampaignDir dir(o.out_dir);
   const std::string exe = self_executable();
   // t = 0 of the plan: after the warm-up, on the clock every process shares and no step moves.
@@ -303,7 +319,7 @@ int run(const Options& o) {
   mon_opt.log_file = (dir.path() / "logs" / "monitor.log").string();
   ChildProcess monitor(mon_argv, mon_opt);
   DiagnosticsLog diagnostics(cfg.dds);  // when the rig said a topic's stamps were unsynchronized
-  HostFaults host(plan.events, plan.epoch_mono_ns, (dir.path() / "truth" / "host.jsonl").string());
+  HostFaults host(plan.events, plan.epoch_mono_ns, (dir.path() / "truth" / "host.jsonl").string(), lidar_ports);
   host.start();
 
   std::vector<MonitorLine> monitor_lines;

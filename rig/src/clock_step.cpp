@@ -36,6 +36,15 @@ std::atomic<int> g_counter{0};
 
 }  // namespace
 
+bool process_running(long pid) {
+  if (pid <= 0 || (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)) return false;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return true;  // no /proc: kill() said it exists
+  const auto paren = line.rfind(')');
+  return paren == std::string::npos || paren + 2 >= line.size() || line[paren + 2] != 'Z';
+}
+
 std::string ClockStep::not_permitted() {
   __user_cap_header_struct header{_LINUX_CAPABILITY_VERSION_3, 0};
   __user_cap_data_struct data[2]{};
@@ -76,7 +85,7 @@ std::vector<std::string> ClockStep::sweep() {
     const std::string name = e.path().filename().string();
     if (name.rfind("clock-step-", 0) != 0) continue;
     const long pid = std::strtol(name.c_str() + 11, nullptr, 10);
-    if (pid <= 0 || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // its owner runs
+    if (pid <= 0 || process_running(pid)) continue;  // its owner runs
     Nanos step = 0;
     std::ifstream(e.path()) >> step;
     if (step != 0 && step_clock(-step))

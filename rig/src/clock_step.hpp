@@ -11,6 +11,10 @@
 
 namespace sensor_rig::rig {
 
+// Whether `pid` is a running process (not gone, not a zombie its parent has not reaped yet: a
+// SIGKILLed campaign's pid stays a zombie until init reaps it). The host faults' sweeps use it.
+bool process_running(long pid);
+
 class ClockStep {
  public:
   // Empty when this process may step the clock, else why not.

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <thread>
+#include <tuple>
 
 #include <filesystem>
 #include <fstream>
@@ -21,6 +22,7 @@
 #include <string>
 
 #include "dds_domain_lease.hpp"
+#include "fake_tc.hpp"
 #include "rig_cli.hpp"
 #include "rig_process.hpp"
 #include "test_data.hpp"
@@ -343,6 +345,81 @@ TEST(ChaosCampaign, InProcessAravisFakesAreJudgedAgainstTheirTruth) {
   }
   for (const auto& [inv, verdict] : j["invariants"].items()) EXPECT_EQ(verdict, "held") << inv << "\n" << run.err;
   EXPECT_EQ(run.code, 0) << run.err;
+}
+
+// host.network_delay by netem on lo, where the kernel has it: here through a stand-in tc ($RIG_TC,
+// tests/rig/fake_tc.hpp; this CI kernel has no sch_netem). A campaign SIGKILLed while its delay
+// stands leaves the qdisc and its record; the next campaign removes it before it starts, shapes the
+// LIDARs' ports for its own fault (the mocks then hold nothing: the event is the host's, device "lo")
+// and removes it when the fault ends; the host truth says so with the parameters.
+TEST(ChaosCampaign, ANetemDelayIsRemovedWhenTheFaultEndsAndAfterAKill) {
+  if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
+  test::TempDir dir;
+  const std::string src = test::source_dir().string();
+  const auto lidars = [&](const std::string& name) {
+    std::string rig = test::read_text(test::source_dir() / "config/mock_rig.yaml");
+    rig = rig.substr(0, rig.find("\nfusion:"));
+    rig.replace(rig.find("profile: cyclonedds/"), std::string("profile: cyclonedds/").size(), "profile: " + src + "/config/cyclonedds/");
+    rig.replace(rig.find("domain: 0"), std::string("domain: 0").size(), "domain: " + std::to_string(test::lease_dds_domain()));
+    return dir.write(name, rig + "\n");
+  };
+  const std::string tc = dir.write("tc", test::kFakeTc);
+  std::filesystem::permissions(tc, std::filesystem::perms::owner_all);
+  const auto state = dir.path / "lo.state", log = dir.path / "tc.log", run_dir = dir.path / "run";
+  const std::string env = "RIG_TC=" + tc + " FAKE_TC_STATE=" + state.string() + " FAKE_TC_LOG=" + log.string() +
+                          " RIG_STATE_DIR=" + run_dir.string() + " ";
+  {
+    const std::string out = (dir.path / "killed").string();
+    const auto [rc, pid_text] = test::run(env + test::rig_bin_or_empty() + " chaos " + lidars("killed.yaml") +
+                                          " --duration 30 --faults 'host.network_delay:ms=50:jitter_ms=5@0.5+20' --out " + out +
+                                          " >/dev/null 2>" + (dir.path / "killed.err").string() + " & echo $!");
+    ASSERT_EQ(rc, 0);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!std::filesystem::exists(state) && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    ASSERT_TRUE(std::filesystem::exists(state)) << test::read_text(dir.path / "killed.err");
+    ASSERT_EQ(::kill(static_cast<pid_t>(std::stol(pid_text)), SIGKILL), 0);
+    // Its rig up and mocks end (they would send to the next campaign's ports).
+    const std::string pattern = out.substr(0, out.size() - 1) + "[" + out.back() + "]";
+    const auto gone_by = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (!test::run("pgrep -f -- '" + pattern + "' 2>/dev/null").second.empty() && std::chrono::steady_clock::now() < gone_by)
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_NE(test::read_text(state).find("delay 50.000ms 5.000ms"), std::string::npos) << test::read_text(state);
+  std::filesystem::remove(log);
+
+  const std::string out = (dir.path / "campaign").string();
+  struct {
+    int code;
+    std::string out, err;
+  } run;
+  std::tie(run.code, run.out) = test::run(env + test::rig_bin_or_empty() + " chaos " + lidars("lidars.yaml") +
+                                          " --duration 8 --seed 1 --json --faults 'host.network_delay:ms=40@1+3' --out " + out +
+                                          " 2>" + (dir.path / "campaign.err").string());
+  run.err = test::read_text(dir.path / "campaign.err");
+  ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
+  EXPECT_NE(run.err.find("removed the netem delay on lo: a campaign (pid"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("host.network_delay by netem on lo"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(state)) << "lo's qdisc left: " << test::read_text(state);
+  EXPECT_FALSE(std::filesystem::exists(run_dir) && !std::filesystem::is_empty(run_dir));
+  std::vector<std::string> calls;
+  std::istringstream in(test::read_text(log));
+  for (std::string l; std::getline(in, l);)
+    if (l != "qdisc show dev lo") calls.push_back(l);
+  // The sweep of the killed campaign's, then this campaign's own: made, then removed.
+  ASSERT_GE(calls.size(), 7u) << test::read_text(log);
+  EXPECT_EQ(calls[0], "qdisc del dev lo root handle 1:");
+  EXPECT_EQ(calls[calls.size() - 2], "filter del dev lo parent 1: prio 1");
+  EXPECT_EQ(calls.back(), "qdisc del dev lo root handle 1:");
+  EXPECT_NE(test::read_text(log).find("netem delay 40.000ms\n"), std::string::npos) << test::read_text(log);
+  for (const char* port : {" dport 2368 ", " dport 8308 ", " dport 7502 ", " dport 7503 ", " dport 2369 "})
+    EXPECT_NE(test::read_text(log).find(port), std::string::npos) << port << "\n" << test::read_text(log);
+  const std::string host = test::read_text(std::filesystem::path(out) / "truth/host.jsonl");
+  EXPECT_NE(host.find("ms=40, jitter_ms=0, via=netem on lo"), std::string::npos) << host;
+  // The event is the host's: no LIDAR mock held a packet for it (their truths record no such fault).
+  for (const char* name : {"front", "left", "right"})
+    EXPECT_EQ(test::read_text(std::filesystem::path(out) / "truth" / (std::string(name) + ".jsonl")).find("host.network_delay"),
+              std::string::npos) << name;
 }
 
 }  // namespace

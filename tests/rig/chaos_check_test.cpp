@@ -417,6 +417,38 @@ TEST(ChaosCheck, ANetworkDelayMovesArrivalsAndAStampThatFollowsThemIsCaught) {
   EXPECT_EQ(r.topics.at(kTopic).stamps_flagged, 10u);
 }
 
+// host.network_delay by netem on lo (60 ms on units 20..29): the mock's truth has the sends before the
+// kernel held them, the rig's arrivals are 60 ms later. Stamps that follow the arrival (a mapped
+// clock), flagged unsynchronized: each scan is still its own unit, matched by its arrival less the
+// delay the host's truth records; read without the delay, each would name the next scan (by the
+// stamp, 40 ms from it): published twice, and the scan itself unaccounted.
+TEST(ChaosCheck, ANetemDelayIsTakenOffTheArrivalsOfTheUnitsSentDuringIt) {
+  constexpr Nanos kDelay = 60'000'000;
+  Input in = honest();
+  const auto held = [](std::int64_t unit) { return unit >= 20 && unit < 30; };
+  for (auto& s : in.samples) {
+    const bool h = held(static_cast<std::int64_t>(s.seq));
+    s.first_rx_ns = s.acquisition_ns + (h ? kDelay : 0) + 100'000;
+    if (h) s.acquisition_ns += kDelay;  // mapped: follows the arrival
+  }
+  const Nanos at = kT0 + 20 * kPeriod, until = kT0 + 30 * kPeriod;
+  in.unsynchronized[kTopic] = {{at, until + kDelay + kPeriod}};
+  in.events.push_back(faults::FaultEvent{5, "host.network_delay", "lo", 2.0, 1.0, {{"ms", "60"}, {"jitter_ms", "0"}}});
+  in.truths.push_back(truth::Log{});
+  in.truths.back().header.device = "host";
+  in.truths.back().faults.push_back(
+      truth::FaultRecord{5, "host.network_delay", at, until, -1, "ms=60, jitter_ms=0, via=netem on lo, udp ports 2368"});
+  Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).stamps_flagged, 10u);
+  EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
+  // The same record from the LIDAR mocks' hold (their sends are the held ones): no delay taken off.
+  in.truths.back().faults.back().detail = "ms=60, jitter_ms=0, via=lidar mocks (datagrams held, order kept)";
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("accounted"));
+  EXPECT_GT(r.topics.at(kTopic).published_twice, 0u) << result_text(r);
+}
+
 TEST(ChaosCheck, TheJsonLineHasTheContractsKeys) {
   const auto j = nlohmann::json::parse(result_json(check(honest())));
   for (const char* k : {"faults", "topics", "invariants"}) EXPECT_TRUE(j.contains(k)) << k;
