@@ -126,7 +126,8 @@ TEST(ChaosCameraPayload, ChunksAndPaddedRowsHoldAccountedAndStamps) {
 // packets back to back, holding the rig's receiving threads (normal priority) off their leaders by
 // 0.6-2 ms every frame, and a fake held off its core sent its leader up to 4 ms after the exposure
 // it reported; the mapping (leader = exposure start + exposure, lower envelope) carried both as a
-// bias. The fake now paces its packets at its link's rate and reports the exposure it really had.
+// bias. The fake now sends its leader alone (its receiver takes it before the data) and reports
+// the exposure its leader follows.
 TEST(ChaosCameraStamps, FreeRunningGigeCamerasOnOneFrameInstantAreStampedWithin1Ms) {
   if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
   test::TempDir dir;

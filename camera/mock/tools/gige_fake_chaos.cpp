@@ -20,7 +20,8 @@ constexpr guint16 kGvcpPort = 3956;
 // GVSP (standard header): packet type (2), block id (2), packet infos (4, content type in the top byte).
 constexpr std::size_t kGvspHeader = 8;
 constexpr std::uint8_t kLeader = 1, kTrailer = 2;
-constexpr double kSlowOpenLateS = 5;  // the fake starts up to this long after the campaign's epoch
+constexpr double kSlowOpenLateS = 5;
+constexpr Nanos kLeaderGapNs = 100'000;  // the leader goes out alone: its receiver takes it before the data  // the fake starts up to this long after the campaign's epoch
 
 constexpr const char* kClock =
     "camera timestamp ns: the fake's CLOCK_REALTIME (UTC) at exposure start; with PtpEnable its PTP clock "
@@ -158,16 +159,23 @@ void GigeFakeChaos::restamp(ArvBuffer* buffer, Nanos late_ns) {
   arv_buffer_set_timestamp(buffer, static_cast<guint64>(frame_.dev));
 }
 
-void GigeFakeChaos::pace(GSocket* socket, std::size_t bytes) {
-  if (!(link_mbps_ > 0) || !is_stream(socket)) return;
-  // On the wire a datagram also carries its IP/UDP headers (28) and Ethernet's header, FCS, preamble
-  // and gap (38).
-  constexpr std::size_t kFraming = 28 + 38;
-  constexpr Nanos kPaceStepNs = 50'000;
+void GigeFakeChaos::pace(GSocket* socket, const void* data, std::size_t bytes) {
+  if (!is_stream(socket)) return;
+  std::uint8_t type = 0;
+  if (bytes >= kGvspHeader) std::memcpy(&type, static_cast<const std::uint8_t*>(data) + 4, 1);
   const Nanos now = monotonic_now_ns();
-  link_free_mono_ = std::max(link_free_mono_, now) + static_cast<Nanos>(static_cast<double>(bytes + kFraming) * 8e3 / link_mbps_);
-  if (link_free_mono_ - now < kPaceStepNs) return;
-  const timespec until{static_cast<time_t>(link_free_mono_ / 1'000'000'000), static_cast<long>(link_free_mono_ % 1'000'000'000)};
+  Nanos until_ns = now;
+  if ((type & 0x7f) == kLeader) until_ns = now + kLeaderGapNs;
+  if (link_mbps_ > 0) {
+    // On the wire a datagram also carries its IP/UDP headers (28) and Ethernet's header, FCS,
+    // preamble and gap (38).
+    constexpr std::size_t kFraming = 28 + 38;
+    constexpr Nanos kPaceStepNs = 50'000;
+    link_free_mono_ = std::max(link_free_mono_, now) + static_cast<Nanos>(static_cast<double>(bytes + kFraming) * 8e3 / link_mbps_);
+    if (link_free_mono_ - now >= kPaceStepNs) until_ns = std::max(until_ns, link_free_mono_);
+  }
+  if (until_ns <= now) return;
+  const timespec until{static_cast<time_t>(until_ns / 1'000'000'000), static_cast<long>(until_ns % 1'000'000'000)};
   while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
   }
 }
@@ -258,15 +266,15 @@ extern "C" gssize g_socket_send_to(GSocket* socket, GSocketAddress* address, con
   // A send that fails is the fake's to ignore (it only logs them): no GError for the many datagrams.
   const bool reshaped = chaos->reshape(socket, buffer, size, [&](const std::uint8_t* d, std::size_t n) {
     if (chaos->on_send(socket, d, n)) real(socket, address, reinterpret_cast<const gchar*>(d), n, cancellable, nullptr);
-    chaos->pace(socket, n);
+    chaos->pace(socket, d, n);
   });
   if (reshaped) return static_cast<gssize>(size);
   if (!chaos->on_send(socket, buffer, size)) {  // lost on the way (after it took its time on the link)
-    chaos->pace(socket, size);
+    chaos->pace(socket, buffer, size);
     return static_cast<gssize>(size);
   }
   const gssize sent = real(socket, address, buffer, size, cancellable, error);
-  chaos->pace(socket, size);
+  chaos->pace(socket, buffer, size);
   return sent;
 }
 

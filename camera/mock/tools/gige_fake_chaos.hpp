@@ -25,7 +25,7 @@ class GigeFakeChaos {
   struct Options {
     ChaosArgs args;
     double lost_per_thousand = 0;  // -r: random GVSP loss, recorded (fate dropped, no fault)
-    double link_mbps = 1000;       // --link-mbps: the stream's packets leave at this rate (0: back to back)
+    double link_mbps = 0;          // --link-mbps: the stream's packets leave at this rate (0: as fast as sent)
   };
   explicit GigeFakeChaos(const Options& o);  // throws std::runtime_error (plan, truth file)
 
@@ -48,11 +48,14 @@ class GigeFakeChaos {
   // gets each datagram to send instead. false: send this one as it is.
   bool reshape(GSocket* socket, const void* data, std::size_t size, const GvspReshaper::Emit& emit);
   bool on_receive(ArvFakeCamera* cam);                                // false: ignore the datagram
-  // After a stream datagram of `bytes` (sent or lost): waits while the link is busy with what was
-  // sent before (GigE: 1 Gb/s), in steps of kPaceStepNs. Sent back to back, a frame's ~190 packets
-  // held a core for ~1 ms at SCHED_FIFO; three fakes on one frame instant held off the rig's
-  // receiving threads (normal priority) from their leaders by 0.7-2 ms every frame (issue 27).
-  void pace(GSocket* socket, std::size_t bytes);
+  // After a stream datagram (sent or lost): after a frame's leader the fake pauses kLeaderGapNs, so
+  // that the leader goes out alone and its receiver takes it before the data; with --link-mbps it
+  // also waits while the link is busy with what was sent before. Sent back to back, three fakes on
+  // one frame instant (SCHED_FIFO 1: ~190 packets each) held the rig's receiving threads (normal
+  // priority) off their leaders by 0.6-2 ms every frame (issue 27). Pacing every packet at 1 Gb/s
+  // fixed that too, but spread a LIDAR-triggered fake's sending over the stereo pair's trigger
+  // instant (their trigger -> exposure p99 0.45 -> 0.8-1.2 ms): off by default.
+  void pace(GSocket* socket, const void* data, std::size_t bytes);
   void finish();  // at exit: a camera still dead has its silence recorded
 
  private:

@@ -19,8 +19,8 @@
 // (first packet = exposure start + exposure time). So the fill callback here copies a precomputed
 // ramp (memcpy, shifted per frame), then waits until stamp + ExposureTime: the leader leaves at
 // exposure end (a thread held off its core restamps the frame by its lateness, expose_then_fill).
-// And a camera's packets leave at its link's rate (--link-mbps), not back to back (gige_fake_chaos
-// pace()).
+// And the leader goes out alone (a pause after it), so that its receiver takes it before the data
+// (gige_fake_chaos pace(); --link-mbps paces every packet at a link's rate).
 #include <arv.h>
 #include <poll.h>
 #include <pthread.h>
@@ -124,7 +124,7 @@ int usage(const char* self, int status) {
                "Aravis GigE fake camera (as arv-fake-gv-camera-0.8) whose software-triggered frames are exposed\n"
                "within ~1/HZ of the trigger (default %.0f Hz) without a busy loop. --realtime-priority: every\n"
                "thread SCHED_FIFO N where permitted (a warning if not). --link-mbps: the stream's packets leave at\n"
-               "this link rate, as from a camera (default 1000; 0: back to back). --fault-plan/--device: the camera.* faults of\n"
+               "this link rate (default 0: as fast as sent; the leader always alone first). --fault-plan/--device: the camera.* faults of\n"
                "that camera (default: RIG_CHAOS_DIR's plan when --device is given); --truth: its truth record (default\n"
                "RIG_CHAOS_DIR/truth/NAME.jsonl); --gev-ieee1588: PTP features by their GevIEEE1588 names. Stops on\n"
                "SIGINT/SIGTERM.\n",
@@ -212,7 +212,7 @@ int main(int argc, char** argv) {
   mock::ChaosArgs chaos_args;
   bool gev_ieee1588 = false;
   double lost_per_thousand = 0;
-  double link_mbps = 1000;
+  double link_mbps = 0;
   int realtime_priority = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
