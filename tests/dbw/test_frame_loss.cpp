@@ -112,6 +112,38 @@ TEST(FrameLossCounter, ASilenceIsNotALossAndAWrappedGapIsNotGuessed) {
   EXPECT_EQ(rx.counter.lost() - lost_mid, 4u) << "3 lost + the one refused for its jump (max_delta 1)";
 }
 
+// A frozen counter for half a second on a loaded host: frames alternately on time and 6 ms late
+// (gaps of 16 and 4 ms). Counted per silence, each 16 ms gap (1.6 periods) was a frame lost that
+// was only late; over the run, the frames that arrived fill the room the run had: only the frames
+// really lost (every seventh here) are counted beside the refused ones. (Over the run the bound is
+// on the two ends: the good frames before and after it late by less than half a period apart.)
+TEST(FrameLossCounter, AFrozenRunWithJitterCountsOnlyTheFramesReallyLost) {
+  for (const bool lose_some : {false, true}) {
+    SCOPED_TRACE(lose_some ? "every seventh frozen frame lost" : "none lost");
+    const auto c = p01();
+    s::E2eSender sender(c);
+    Receiver rx(c);
+    std::uint64_t made = 0;
+    Nanos t = 0;
+    auto send = [&](bool deliver, Nanos late) {
+      std::array<std::uint8_t, 8> d{};
+      ASSERT_TRUE(sender.protect(d));
+      ++made;
+      t += 10 * kMs;
+      if (deliver) rx.on(d, t + late);
+    };
+    for (int i = 0; i < 30; ++i) send(true, 0);  // the period learned
+    const std::uint8_t frozen_at = sender.next_counter();
+    for (int i = 0; i < 50; ++i) {
+      sender.set_counter(frozen_at);  // the ECU's counter stands still
+      send(!(lose_some && i % 7 == 3), i % 2 == 1 ? 6 * kMs : 0);
+    }
+    for (int i = 0; i < 10; ++i) send(true, 0);  // the counter moves on
+    EXPECT_EQ(rx.taken + rx.counter.lost(), made) << "taken " << rx.taken << ", counted " << rx.counter.lost();
+    EXPECT_EQ(rx.counter.gaps_unknown(), 0u);
+  }
+}
+
 TEST(FrameLossCounter, AMessageWithoutCounterIsNotCountable) {
   dbw::FrameLossCounter none(s::E2eConfig{});
   EXPECT_FALSE(none.countable());

@@ -5,25 +5,29 @@
 
 namespace sensor_rig::dbw {
 
+// While the counter is frozen it cannot show a loss; the message's period can. Counted once, over
+// the whole run from the last good frame to this one: the frames the span had room for at the
+// learned period, less every frame that arrived meanwhile (each refused one already counted). Per
+// silence instead, a frame 6 ms late followed by one 6 ms early (a loaded host) counted a frame lost
+// that was jitter (rig chaos: "the rig counted 162 can_frames lost, 161 were not published"). Never
+// guessed across a silence of more than half a counter turn (a stalled ECU: frames never sent).
+std::uint64_t FrameLossCounter::missing_while_frozen(Nanos now) const noexcept {
+  if (period_ns_ <= 0 || static_cast<double>(longest_silence_) / period_ns_ >= safety::counter_modulus(c_.profile) / 2.0) return 0;
+  const auto room = std::llround(static_cast<double>(now - last_good_arrival_) / period_ns_) - 1;
+  return room > static_cast<long long>(arrivals_since_good_) ? static_cast<std::uint64_t>(room) - arrivals_since_good_ : 0;
+}
+
 void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E2eStatus st, Nanos now) noexcept {
   using safety::E2eStatus;
   if (!countable()) return;
   const Nanos silence = have_last_ ? now - last_arrival_ : 0;
   longest_silence_ = std::max(longest_silence_, silence);
   last_arrival_ = now;
-  // While the counter is frozen it cannot show a loss; the message's period can: frames missing from
-  // the silence before this one (never guessed across more than half a counter turn: a stalled ECU).
-  std::uint64_t missing_by_time = 0;
-  if (period_ns_ > 0) {
-    const double periods = static_cast<double>(silence) / period_ns_;
-    if (periods < safety::counter_modulus(c_.profile) / 2.0 && periods >= 1.5)
-      missing_by_time = static_cast<std::uint64_t>(std::llround(periods)) - 1;
-  }
   const bool after_frozen = last_repeated_;
   last_repeated_ = st == E2eStatus::kRepeated;
-  if (st == E2eStatus::kRepeated) lost_ += missing_by_time;
   const int modulus = safety::counter_modulus(c_.profile);
   if (!safety::is_ok(st)) {
+    ++arrivals_since_good_;
     ++lost_;
     refused_since_ = true;
     // The value it carried (readable unless the layout is wrong): a position on the counter that is
@@ -43,7 +47,7 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
     // Frames a silence between two arrivals had room for, at the learned period.
     const double room = period_ns_ > 0 ? static_cast<double>(longest_silence_) / period_ns_ - 1.0 : 0.0;
     if (skipped == 0 && after_frozen) {
-      lost_ += missing_by_time;  // the first good frame after a frozen run: only time can tell
+      lost_ += missing_while_frozen(now);  // the first good frame after a frozen run: only time can tell
     } else if (on_bus > 0 && room > modulus / 2.0) {
       ++gaps_unknown_;  // a restart or a wrapped counter: not guessed
     } else {
@@ -55,6 +59,8 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
       period_ns_ = period_ns_ == 0 ? static_cast<double>(elapsed) : 0.9 * period_ns_ + 0.1 * static_cast<double>(elapsed);
   }
   have_last_ = true;
+  last_good_arrival_ = now;
+  arrivals_since_good_ = 0;
   last_counter_ = counter;
   longest_silence_ = 0;
   refused_values_ = 0;

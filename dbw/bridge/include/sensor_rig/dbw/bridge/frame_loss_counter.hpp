@@ -9,8 +9,8 @@
 // refused frames in between carried. A counter of N values cannot tell k lost frames from k + N, nor a
 // loss from an ECU that was silent (bus-off, restart: frames never sent are not lost): a jump across a
 // silence with room for more than half a counter turn is counted as `gaps_unknown`, never guessed.
-// A frozen counter (the same value repeated) cannot show a loss either: while it is frozen, frames
-// missing from a silence are counted from the message's learned period instead.
+// A frozen counter (the same value repeated) cannot show a loss either: the frames a frozen run had
+// room for at the message's learned period, less those that arrived, are counted when it ends.
 #include <cstdint>
 #include <span>
 
@@ -34,8 +34,12 @@ class FrameLossCounter {
   [[nodiscard]] bool countable() const noexcept { return c_.profile != safety::E2eProfile::kNone; }
 
  private:
+  [[nodiscard]] std::uint64_t missing_while_frozen(Nanos now) const noexcept;
+
   safety::E2eConfig c_;
   bool have_last_ = false;
+  Nanos last_good_arrival_ = 0;
+  std::uint64_t arrivals_since_good_ = 0;  // frames of the message (all refused) since the last good one
   std::uint8_t last_counter_ = 0;      // of the last good frame
   Nanos last_arrival_ = 0;             // of any frame of the message
   Nanos longest_silence_ = 0;          // between arrivals since the last good frame
