@@ -223,6 +223,23 @@ class Checker {
       units.emplace_back();
       units.back().rec = u;
     }
+    // Parts of a unit whose own line is missing: its mock was killed (host.kill_mock) after sending
+    // them and before writing the unit (a LIDAR writes a scan's line when the scan ends). The unit
+    // was made all the same; without it the rig's count of that cut scan as lost was phantom loss.
+    std::set<std::int64_t> without_line;
+    for (const auto& p : log.parts) {
+      for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
+        if (const auto it = index.find(id); it != index.end()) {
+          UnitTruth& u = units[it->second];
+          if (without_line.contains(id) && p.acq_ns < u.rec.acq_ns) u.rec.acq_ns = p.acq_ns;  // its first part
+          continue;
+        }
+        without_line.insert(id);
+        index[id] = units.size();
+        units.emplace_back();
+        units.back().rec = truth::UnitRecord{id, p.acq_ns, p.dev_ns, 0, 0};
+      }
+    }
     for (const auto& p : log.parts) {
       if (p.fate == truth::Fate::kNotSent) {
         if (const auto it = index.find(p.unit); it != index.end()) ++units[it->second].not_sent;

@@ -81,6 +81,29 @@ TEST(ChaosCheck, AScanNeitherPublishedNorCountedIsUnaccounted) {
   EXPECT_EQ(r.topics.at(kTopic).counted_lost, 1u);
 }
 
+// A mock killed (host.kill_mock) after sending scan 30's first packets and before writing its line:
+// its parts are in the truth, the scan's own line is not. The rig cut that scan short and counted it
+// lost: an honest count of a scan that was made, not a phantom (before, the judge knew no scan 30 and
+// broke no_phantom_loss by exactly one scan per kill). Counting a scan of which not a packet was made
+// is still a phantom.
+TEST(ChaosCheck, AScanWhoseMockWasKilledBeforeItsLineWasMade) {
+  Input in = honest();
+  auto& log = in.truths[0];
+  log.units.erase(log.units.begin() + 30);
+  log.parts.erase(log.parts.begin() + 30 * kParts + 4, log.parts.begin() + 31 * kParts);  // 4 packets sent, then killed
+  in.samples.erase(in.samples.begin() + 30);
+  in.counted_lost[kTopic] = 1;
+  in.monitor[kTopic] = MonitorTotals{kScans - 1, 1};
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).sent, 50u);
+  // Not one packet of scan 30 made: counting it lost is a phantom.
+  log.parts.erase(log.parts.begin() + 30 * kParts, log.parts.begin() + 30 * kParts + 4);
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss")) << result_text(r);
+}
+
 TEST(ChaosCheck, ARigThatHidesALossIsCaught) {
   Input in = honest();
   drop_part(in, 12, 3);
