@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -338,6 +339,13 @@ int run(const Options& o) {
   }
   for (auto& l : monitor.read_lines()) monitor_lines.push_back({monotonic_now_ns(), std::move(l)});
   host.stop();
+  {
+    // The monitor's once-a-second lines as the judge read them (t_s: when, on the plan's clock), for
+    // whoever checks a verdict on counted losses by hand.
+    std::ofstream lines(dir.path() / "logs" / "monitor_lines.jsonl");
+    for (const auto& l : monitor_lines)
+      lines << nlohmann::json{{"t_s", static_cast<double>(l.mono_ns - plan.epoch_mono_ns) * 1e-9}, {"line", l.text}}.dump() << '\n';
+  }
   if (shutdown_requested()) {
     std::fprintf(stderr, "chaos: interrupted, no verdict\n");
     return 1;

@@ -47,6 +47,8 @@ class FrameLossCounter {
   bool refused_since_ = false;
   bool last_repeated_ = false;         // the last frame repeated its predecessor's counter
   double period_ns_ = 0;               // the message's period, learned from consecutive good frames
+  double interval_sum_ns_ = 0;         // ... as their mean interval
+  std::uint64_t intervals_ = 0;
   std::uint64_t lost_ = 0;
   std::uint64_t gaps_unknown_ = 0;
 };
