@@ -34,8 +34,11 @@ namespace {
 const std::map<std::pair<std::string, std::string>, std::string> kKnownBroken = {
     {{"accounted", "lidar"}, "26"},       {{"no_phantom_loss", "lidar"}, "26"}, {{"stamps", "lidar"}, "26"},
     {{"monitor_agrees", "lidar"}, "26"},  {{"accounted", "camera"}, "27"},      {{"stamps", "camera"}, "27"},
-    {{"isolation", "camera"}, "27"},      {{"recovery", "camera"}, "27"},       {{"monitor_agrees", "camera"}, "27"},
-    {{"recovery", "lidar"}, "26"},        {{"isolation", "lidar"}, "26"},
+    {{"monitor_agrees", "camera"}, "27"}, {{"recovery", "lidar"}, "26"},        {{"isolation", "lidar"}, "26"},
+    // Since issue 27 item 1 (a dead camera holds no lock another camera's open or a trigger needs)
+    // camera isolation and recovery held in most whole-rig runs, but isolation broke in 1 of 3 on
+    // 2026-11-28 (not yet explained): still listed.
+    {{"isolation", "camera"}, "27"},      {{"recovery", "camera"}, "27"},
     // The fused cloud's sweeps stamped with a LIDAR scan whose own stamp is off (inherited).
     {{"fused", "lidar"}, "26"},
     // The drive-by-wire feedback in the whole-rig campaign (seed 25, since camera.chunk_data and
@@ -113,14 +116,9 @@ TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
   }
   const auto& topics = j["topics"];
   EXPECT_EQ(topics.size(), 12u) << "3 LIDARs, the fused cloud, 7 cameras and /vehicle/state";
-  // A camera that never answers also silences its trigger partner today (issue 27 item 1): while that
-  // defect is open, a camera made no frame is only a failure when no camera was planned dead.
+  // A camera that never answers no longer silences its trigger partner (issue 27 item 1).
   for (const auto& [topic, t] : topics.items()) {
     if (silent.contains(t.value("device", ""))) continue;
-    if (!silent.empty() && class_of(topic) == "camera" && t["sent"].get<std::uint64_t>() == 0) {
-      std::printf("known defect (issue 27): %s made no frame beside a dead camera\n", topic.c_str());
-      continue;
-    }
     EXPECT_GT(t["sent"].get<std::uint64_t>(), 0u) << topic;
   }
 
@@ -137,8 +135,9 @@ TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
   }
   for (const auto& [known, issue] : kKnownBroken)
     if (!broken.contains(known)) std::printf("held this run (issue %s): %s on %s\n", issue.c_str(), known.first.c_str(), known.second.c_str());
-  // A rig that does not stop after the campaign: issue 27 item 1 (a camera's stop on a dead camera).
-  if (j.contains("campaign_errors")) std::printf("campaign errors (issue 27): %s\n", j["campaign_errors"].dump().c_str());
+  // Whatever went wrong around the campaign itself (a rig that did not stop in time, a mock that did
+  // not start), printed for whoever reads the log.
+  if (j.contains("campaign_errors")) std::printf("campaign errors: %s\n", j["campaign_errors"].dump().c_str());
 }
 
 // Drive-by-wire alone, every dbw kind and the mock-process faults at fixed times: each feedback frame
