@@ -1,19 +1,16 @@
 #pragma once
 // host.clock_step under `rig chaos`: CLOCK_REALTIME (the vehicle time base) stepped under the rig's
 // processes, as an NTP or PTP servo steps a PU's clock, and stepped back by the same amount when the
-// fault ends, so the host keeps its time. Each step is recorded under $RIG_STATE_DIR (default
-// /run/sensor-rig) before it is made; a campaign killed before it stepped back leaves its record, and
-// the next campaign undoes the step (sweep). Needs CAP_SYS_TIME (root).
+// fault ends, so the host keeps its time. Each step is a HostChangeRecord before it is made; a
+// campaign killed before it stepped back leaves its record, and the next campaign undoes the step
+// (sweep). Needs CAP_SYS_TIME (root).
 #include <string>
 #include <vector>
 
+#include "host_change_record.hpp"
 #include "sensor_rig/common/clock.hpp"
 
 namespace sensor_rig::rig {
-
-// Whether `pid` is a running process (not gone, not a zombie its parent has not reaped yet: a
-// SIGKILLed campaign's pid stays a zombie until init reaps it). The host faults' sweeps use it.
-bool process_running(long pid);
 
 class ClockStep {
  public:
@@ -30,7 +27,7 @@ class ClockStep {
 
  private:
   Nanos step_ns_;
-  std::string record_;
+  HostChangeRecord record_;
 };
 
 }  // namespace sensor_rig::rig

@@ -1,29 +1,18 @@
 #include "network_delay.hpp"
 
-#include "clock_step.hpp"
 
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
 #include <mutex>
 #include <stdexcept>
 
 namespace sensor_rig::rig {
 namespace {
-
-namespace fs = std::filesystem;
-
-fs::path state_dir() {
-  const char* dir = std::getenv("RIG_STATE_DIR");
-  return dir != nullptr && *dir != '\0' ? fs::path(dir) : fs::path("/run/sensor-rig");
-}
 
 std::string tc_binary() {
   const char* tc = std::getenv("RIG_TC");
@@ -70,8 +59,6 @@ std::string shape(double ms, double jitter_ms, const std::vector<int>& ports) {
   return {};
 }
 
-std::atomic<int> g_counter{0};
-
 }  // namespace
 
 std::string LoopbackDelay::unavailable() {
@@ -94,18 +81,10 @@ std::string LoopbackDelay::unavailable() {
   return why;
 }
 
-LoopbackDelay::LoopbackDelay(double ms, double jitter_ms, const std::vector<int>& udp_ports) : hold_ms_(ms + jitter_ms) {
-  std::error_code ec;
-  fs::create_directories(state_dir(), ec);
-  record_ = (state_dir() / ("net-delay-" + std::to_string(::getpid()) + "-" + std::to_string(g_counter++))).string();
-  {
-    std::ofstream out(record_, std::ios::trunc);
-    out << "lo\n";
-    if (!out) throw std::runtime_error("cannot record the loopback shaping in " + record_);
-  }
+LoopbackDelay::LoopbackDelay(double ms, double jitter_ms, const std::vector<int>& udp_ports)
+    : hold_ms_(ms + jitter_ms), record_("net-delay", "lo\n") {
   if (const std::string why = shape(ms, jitter_ms, udp_ports); !why.empty()) {
-    fs::remove(record_, ec);
-    fs::remove(state_dir(), ec);
+    record_.remove();
     throw std::runtime_error(why);
   }
 }
@@ -116,26 +95,18 @@ LoopbackDelay::~LoopbackDelay() {
   tc("filter del dev lo parent 1: prio 1");
   ::usleep(static_cast<useconds_t>((hold_ms_ + 20.0) * 1000.0));
   tc(std::string("qdisc del ") + kRoot);
-  std::error_code ec;
-  fs::remove(record_, ec);
-  fs::remove(state_dir(), ec);  // fails, harmlessly, while it holds anything else
+  record_.remove();
 }
 
 std::vector<std::string> LoopbackDelay::sweep() {
   std::vector<std::string> undone;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(state_dir(), ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.rfind("net-delay-", 0) != 0) continue;
-    const long pid = std::strtol(name.c_str() + 10, nullptr, 10);
-    if (pid <= 0 || process_running(pid)) continue;  // its owner runs
+  for (const auto& o : HostChangeRecord::orphans("net-delay")) {
     const auto [rc, said] = tc(std::string("qdisc del ") + kRoot);
-    undone.push_back(rc == 0 ? "removed the netem delay on lo: a campaign (pid " + std::to_string(pid) +
+    undone.push_back(rc == 0 ? "removed the netem delay on lo: a campaign (pid " + std::to_string(o.pid) +
                                    ") ended without removing it"
-                             : "a campaign (pid " + std::to_string(pid) + ") left a netem delay record; tc qdisc del: " + said);
-    fs::remove(e.path(), ec);
+                             : "a campaign (pid " + std::to_string(o.pid) + ") left a netem delay record; tc qdisc del: " + said);
+    HostChangeRecord::remove_orphan(o);
   }
-  fs::remove(state_dir(), ec);
   return undone;
 }
 

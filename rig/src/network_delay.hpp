@@ -7,13 +7,15 @@
 //   tc qdisc add dev lo parent 1:3 handle 30: netem delay MSms [JITTERms]
 //   tc filter add dev lo parent 1: protocol ip prio 1 u32 match ip protocol 17 0xff match ip dport P 0xffff flowid 1:3
 // and when the fault ends `tc filter del dev lo parent 1: prio 1` (new packets pass at once), a wait for
-// what netem holds, then `tc qdisc del dev lo root handle 1:`. As host.clock_step, each shaping is
-// recorded under $RIG_STATE_DIR (default /run/sensor-rig) before it is made; a campaign killed while
-// it stood leaves its record, and the next campaign removes the qdisc (sweep). `tc` is $RIG_TC when
+// what netem holds, then `tc qdisc del dev lo root handle 1:`. As host.clock_step, each shaping is a
+// HostChangeRecord before it is made; a campaign killed while it stood leaves its record, and the
+// next campaign removes the qdisc (sweep). `tc` is $RIG_TC when
 // set. Where the kernel has no sch_netem (this CI machine's: CONFIG_NET_SCH_NETEM not set) the LIDAR
 // mocks hold their datagrams instead (docs/faults.md "host.network_delay").
 #include <string>
 #include <vector>
+
+#include "host_change_record.hpp"
 
 namespace sensor_rig::rig {
 
@@ -34,7 +36,7 @@ class LoopbackDelay {
 
  private:
   double hold_ms_;
-  std::string record_;
+  HostChangeRecord record_;
 };
 
 }  // namespace sensor_rig::rig

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <thread>
@@ -20,6 +21,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "dds_domain_lease.hpp"
 #include "fake_tc.hpp"
@@ -279,7 +281,9 @@ TEST(ChaosCampaign, AHostNetworkDelayMovesArrivalsNotSensorStamps) {
   EXPECT_NEAR(static_cast<double>(until - at), 4e9, 1e6);
   // The rig's arrival stamps moved by the delay while it lasted, and only then: the Velodyne's first
   // packet arrives just after its scan's first firing, during the fault 50 ms after.
-  std::uint64_t during = 0, outside = 0;
+  // Judged by medians and a share: one scan's first packet can wait tens of ms for a loaded host's
+  // scheduler (28.8 ms once in a full suite run), which is not the delay.
+  std::vector<double> during, outside;
   std::ifstream csv(out + "/monitor.csv");
   std::string line;
   std::getline(csv, line);  // header: topic,seq,acquisition_ns,first_rx_ns,...
@@ -291,15 +295,23 @@ TEST(ChaosCampaign, AHostNetworkDelayMovesArrivalsNotSensorStamps) {
     const std::int64_t acq = std::stoll(c[2]), rx = std::stoll(c[3]);
     const double late_ms = static_cast<double>(rx - acq) * 1e-6;
     if (acq > at + 200'000'000 && acq < until - 200'000'000) {
-      ++during;
-      EXPECT_GT(late_ms, 45.0) << "seq " << c[1];
+      during.push_back(late_ms);
+      EXPECT_GT(late_ms, 45.0) << "seq " << c[1];  // never earlier than the delay
     } else if (acq < at - 500'000'000 || acq > until + 500'000'000) {
-      ++outside;
-      EXPECT_LT(late_ms, 20.0) << "seq " << c[1];
+      outside.push_back(late_ms);
     }
   }
-  EXPECT_GE(during, 30u);
-  EXPECT_GE(outside, 30u);
+  ASSERT_GE(during.size(), 30u);
+  ASSERT_GE(outside.size(), 30u);
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  EXPECT_GT(median(during), 45.0);
+  EXPECT_LT(median(outside), 10.0);
+  const auto late_outside = std::count_if(outside.begin(), outside.end(), [](double ms) { return ms >= 20.0; });
+  EXPECT_LE(late_outside * 10, static_cast<std::ptrdiff_t>(outside.size())) << late_outside << " of " << outside.size()
+                                                                              << " scans outside the fault came >= 20 ms late";
   EXPECT_EQ(run.code, 0) << run.err;
 }
 
@@ -374,9 +386,13 @@ TEST(ChaosCampaign, ANetemDelayIsRemovedWhenTheFaultEndsAndAfterAKill) {
                                           " >/dev/null 2>" + (dir.path / "killed.err").string() + " & echo $!");
     ASSERT_EQ(rc, 0);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (!std::filesystem::exists(state) && std::chrono::steady_clock::now() < deadline)
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    ASSERT_TRUE(std::filesystem::exists(state)) << test::read_text(dir.path / "killed.err");
+    // Killed once its delay stands (the state file exists earlier: the start's probe of lo makes and
+    // removes a shaping; a kill then left nothing to sweep, and the test failed 1 run in 2).
+    const auto delayed = [&] {
+      return std::filesystem::exists(state) && test::read_text(state).find("delay 50.000ms") != std::string::npos;
+    };
+    while (!delayed() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    ASSERT_TRUE(delayed()) << test::read_text(dir.path / "killed.err");
     ASSERT_EQ(::kill(static_cast<pid_t>(std::stol(pid_text)), SIGKILL), 0);
     // Its rig up and mocks end (they would send to the next campaign's ports).
     const std::string pattern = out.substr(0, out.size() - 1) + "[" + out.back() + "]";
