@@ -6,19 +6,12 @@
 // recorded on the car replays through `rig dbw bridge --transport mcap:drive.mcap` on the desk.
 // A reader thread decompresses and decodes up to 64 Ki frames ahead. A damaged file (cut, corrupt
 // chunk, undecodable message) replays what is intact; error() names each place by its byte offset.
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <memory>
-#include <mutex>
 #include <string>
-#include <thread>
 
+#include "mcap_channel_pump.hpp"
 #include "sensor_rig/dbw/can/transport.hpp"
-
-namespace sensor_rig::record {
-class McapReader;
-}
 
 namespace sensor_rig::rig {
 
@@ -29,29 +22,16 @@ class McapCanLog final : public dbw::can::FrameLog {
   // The CanFrame channel /vehicle/can/frames, or the file's only CanFrame channel. Throws
   // std::runtime_error when the file is not MCAP or has no such channel (naming those it has).
   explicit McapCanLog(const std::string& path);
-  ~McapCanLog() override;
-  McapCanLog(const McapCanLog&) = delete;
-  McapCanLog& operator=(const McapCanLog&) = delete;
 
   bool next(dbw::can::LoggedFrame& out) override;
   [[nodiscard]] std::uint64_t malformed() const override;
   [[nodiscard]] std::string error() const override;
   // 1 s, as `rig play --delay` and a LIDAR's mock {kind: mcap}: the bridge's readers match first.
   [[nodiscard]] Nanos default_delay_ns() const override { return 1'000'000'000; }
-  [[nodiscard]] const std::string& topic() const noexcept { return topic_; }
+  [[nodiscard]] const std::string& topic() const noexcept { return pump_.topic(); }
 
  private:
-  void produce();
-
-  std::string path_, topic_;
-  std::unique_ptr<record::McapReader> reader_;
-  std::thread thread_;
-  mutable std::mutex mu_;
-  std::condition_variable cv_;
-  std::deque<dbw::can::LoggedFrame> queue_;  // under mu_
-  bool done_ = false, stop_ = false;         // under mu_
-  std::uint64_t malformed_ = 0;              // under mu_
-  std::string problems_;                     // under mu_
+  McapChannelPump<dds::CanFrameView, dbw::can::LoggedFrame> pump_;
 };
 
 // The opener registered as the CAN transport kind `mcap` (dbw::can::register_frame_log_kind).

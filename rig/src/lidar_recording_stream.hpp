@@ -5,20 +5,13 @@
 // data_port) marked as position packets. A reader thread decompresses and decodes up to 32 MiB
 // ahead, so the paced sender only pops. A damaged file (cut, corrupt chunk, undecodable message)
 // plays what is intact; error() then names each place by its byte offset.
-#include <condition_variable>
-#include <cstddef>
-#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "mcap_channel_pump.hpp"
 #include "sensor_rig/lidar/mock/replay.hpp"
-
-namespace sensor_rig::record {
-class McapReader;
-}
 
 namespace sensor_rig::rig {
 
@@ -26,10 +19,7 @@ class McapPacketStream final : public lidar::mock::PacketStream {
  public:
   // Throws std::runtime_error when the file is not MCAP or has no LidarPackets channel `topic`
   // (the message names the LidarPackets channels it has).
-  McapPacketStream(std::string path, std::string topic);
-  ~McapPacketStream() override;
-  McapPacketStream(const McapPacketStream&) = delete;
-  McapPacketStream& operator=(const McapPacketStream&) = delete;
+  McapPacketStream(const std::string& path, const std::string& topic);
 
   std::optional<lidar::mock::StreamPacket> next() override;
   bool rewind() override;
@@ -43,21 +33,12 @@ class McapPacketStream final : public lidar::mock::PacketStream {
     bool position = false;
     std::vector<std::byte> bytes;
   };
-  void start();
-  void stop();
-  void produce();
+  std::string decode(const dds::LidarPacketsView& view, const std::function<bool(Packet&&)>& push);
 
-  std::string path_, topic_;
-  std::unique_ptr<record::McapReader> reader_;
-  std::thread thread_;
-  mutable std::mutex mu_;
-  std::condition_variable cv_;
-  std::deque<Packet> queue_;     // under mu_
-  std::size_t queued_bytes_ = 0;  // under mu_
-  bool done_ = false, stop_ = false;  // under mu_
-  std::string problems_;          // under mu_: the reader's problems and undecodable messages
-  std::string model_;             // under mu_
-  Packet current_;                // what next() returned last
+  mutable std::mutex model_mu_;
+  std::string model_;  // under model_mu_
+  Packet current_;     // what next() returned last
+  McapChannelPump<dds::LidarPacketsView, Packet> pump_;  // last: its thread stops before the above go
 };
 
 // The opener `rig lidar replay --mcap` and mock {kind: mcap} use (lidar::mock::RecordingOpener).
