@@ -68,7 +68,8 @@ test-asan: setup
 
 # The drive-by-wire bridge's threads under ThreadSanitizer: only the dbw tests that run threads
 # (transports, the node's DDS/CAN/publisher threads in one process), built alone in build-tsan.
-TSAN_FLAGS = -fsanitize=thread -g -O1
+# Line tables only (-g1), as in the ASan stage: TSan's reports still name file:line.
+TSAN_FLAGS = -fsanitize=thread -g1 -O1
 test-tsan: setup
 	mkdir -p $(BUILD)
 	$(STAGE) "configure (TSan)" -- cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_BENCH=OFF \

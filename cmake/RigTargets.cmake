@@ -97,6 +97,12 @@ function(rig_test name)
   if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
     set(_gcc12_test_flags -Wno-array-bounds -Wno-stringop-overflow -Wno-stringop-overread)
   endif()
+  # The tests' own code at -Og in the optimized configurations: it drives the rig (sockets, mocks,
+  # assertions) and does no work that needs -O3, while -O3 was most of a test file's compile after
+  # the PCH (test_camera_isolation.cpp: 7.7 s at -O3, 5.5 s at -Og). The libraries and the rig they
+  # test keep the configuration's level. GCC's -Wmaybe-uninitialized is unreliable at -Og (its
+  # documented false positives), so tests leave it out there; -O3 builds of the libraries keep it.
+  list(APPEND _gcc12_test_flags $<$<CONFIG:Release,RelWithDebInfo>:-Og> $<$<CONFIG:Release,RelWithDebInfo>:-Wno-maybe-uninitialized>)
   set(_rig_test_defaults RIG_DEFAULT_SOURCE_DIR="${CMAKE_SOURCE_DIR}" RIG_DEFAULT_BIN="${CMAKE_BINARY_DIR}/rig"
       RIG_DEFAULT_TEST_DATA="${RIG_TEST_DATA}")
   if(NOT TARGET rig_test_pch)
