@@ -17,6 +17,9 @@ std::int64_t floor_div(Nanos a, Nanos p) noexcept { return (a - floor_mod(a, p))
 // a - b on the circle of one period, in [-p/2, p/2).
 Nanos signed_circular(Nanos d, Nanos p) noexcept { return floor_mod(d + p / 2, p) - p / 2; }
 
+// In [-2p, 2p) reduced to [-p, p): an offset keeps its sign, which says the rotation a step went to.
+Nanos wrap_offset(Nanos d, Nanos p) noexcept { return floor_mod(d + p, 2 * p) - p; }
+
 Nanos circular_distance(Nanos a, Nanos b, Nanos p) noexcept {
   const Nanos d = floor_mod(a - b, p);
   return std::min(d, p - d);
@@ -46,20 +49,22 @@ std::int64_t SweepMatcher::rotation_of(const Source& src, Nanos stamp) const noe
 // of the vehicle clock reaches the sources one scan after another: until every live source has
 // shown it, the ones that stepped keep their offset (their scans then match each other's, never
 // an unstepped scan of another rotation); then the boundary moves by the step.
-void SweepMatcher::track_phase(Source& src, Nanos stamp) {
+void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span) {
   const Nanos p = cfg_.period_ns, tolerance = p / 8;
   const Nanos phase = floor_mod(stamp, p);
   if (!src.seen) {
-    src = Source{.seen = true, .alive = true, .last_stamp = stamp, .phase = phase};
+    src = Source{.seen = true, .alive = true, .last_stamp = stamp, .last_arrival = arrival, .last_span = span, .phase = phase};
     return;
   }
-  const Nanos jump = signed_circular(phase - src.phase, p);
+  const Nanos jump = timeline_step(src, stamp, arrival, span);
   src.phase = phase;
+  src.last_arrival = arrival;
+  src.last_span = span;
   if (std::abs(jump) > tolerance) {
     ++counters_.phase_steps;
-    src.offset = signed_circular(src.offset + jump, p);
+    src.offset = wrap_offset(src.offset + jump, p);
     src.offset_scans = 0;
-    if (std::abs(src.offset) <= tolerance) src.offset = 0;  // caught up with a step the others made
+    if (std::abs(signed_circular(src.offset, p)) <= tolerance) src.offset = 0;  // caught up with a step the others made
   }
   if (src.offset == 0) return;
   const Nanos step = src.offset;
@@ -76,6 +81,32 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp) {
     for (auto& s : sources_) s.offset = 0;
     place_boundary(true);
   }
+}
+
+// How far the source's timeline stepped since its last scan. The phase says it only modulo P, and a
+// step near P/2 reads +P/2 or -P/2 by a few microseconds: the two put the scan in rotations one
+// apart (the stamps of a PTP LIDAR slewed 50 ms late snapping back: that LIDAR's next scan fused
+// with the others' rotation N+1 and called complete, the one before it dropped as late). Of the
+// two readings, one may be impossible: a scan never begins before its predecessor's turn is over.
+// When both are possible, the arrival clock (it does not step) tells them apart: a scan is handed
+// over at its end, the periods that passed after its predecessor's, so the reading whose stamp
+// advance is clearly nearer the arrival advance wins; else the phase's own. Scans shorter than a
+// turn (a LIDAR above the rig's rpm) follow each other by less than a period: the phase's stands.
+Nanos SweepMatcher::timeline_step(const Source& src, Nanos stamp, Nanos arrival, Nanos span) const noexcept {
+  const Nanos p = cfg_.period_ns, slack = p / 8;
+  const Nanos advance = stamp - src.last_stamp, elapsed = arrival - src.last_arrival;
+  const Nanos by_phase = signed_circular(advance, p);
+  const auto short_of_a_turn = [&](Nanos s) { return s > 0 && s < p - 2 * slack; };
+  if (std::abs(by_phase) <= slack || short_of_a_turn(span) || short_of_a_turn(src.last_span)) return by_phase;
+  const Nanos other = by_phase > 0 ? by_phase - p : by_phase + p;
+  const auto possible = [&](Nanos step) { return advance - step >= p - slack; };
+  // A scan is handed over at its end: a longer one (a slower LIDAR's) later by the difference.
+  const auto turn = [&](Nanos s) { return s > 0 ? s : p; };
+  const Nanos longer = turn(span) - turn(src.last_span);
+  const auto error = [&](Nanos step) { return std::abs(advance - step + longer - elapsed); };
+  if (!possible(other)) return by_phase;
+  if (!possible(by_phase)) return other;
+  return error(other) <= p / 4 && error(other) + slack < error(by_phase) ? other : by_phase;
 }
 
 // The boundary goes into the middle of the widest gap between the sources' phases. It stays where it
@@ -136,7 +167,7 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
     emitted_.clear();
   }
   // The phase first, so that a source's first scan never lies on the boundary.
-  track_phase(src, stamp_ns);
+  track_phase(src, stamp_ns, arrival_ns, span_ns);
   place_boundary(false);
   const std::int64_t rotation = rotation_of(src, stamp_ns);
   src.last_stamp = stamp_ns;

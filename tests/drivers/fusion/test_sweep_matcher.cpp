@@ -317,6 +317,32 @@ TEST(SweepMatcher, OwnPhaseChangeOfOneLidar) {
   }
 }
 
+// Two PTP LIDARs whose stamps run half a rotation late for a while (the rig's mapped stamps after a
+// host.network_delay or a clock step's slew; their data and arrivals keep the rig's rotation), then
+// snap back, beside a GPS-timed one that stays true. A step of P/2 reads +P/2 or -P/2 by a few
+// microseconds: the rig chaos campaigns (whole rig seed 1; LIDARs seed 3) fused the Pandar's (or
+// the Ouster's) rotation N with the others' N+1 and called the sweep complete, its scan of N
+// dropped as late. Every sweep must hold one rotation, whole, with nothing dropped.
+TEST(SweepMatcher, StampsHalfARotationLateAndBackKeepTheirRotation) {
+  const std::vector<Nanos> phases{0, 0, -900'000};  // the campaign's VLP-32C, OS-LEGACY, Pandar40P
+  for (const Nanos late : {50 * kMs - 45'000, 50 * kMs, 50 * kMs + 45'000}) {
+    SCOPED_TRACE("stamps late by " + std::to_string(late) + " ns");
+    auto scans = rig_scans(phases, 0, 40);
+    for (auto& t : scans) {
+      t.span = kPeriod - kMs;
+      if (t.source != 0 && t.rotation >= 10 && t.rotation < 25) t.stamp += late;
+    }
+    SimulatedRig run(3);
+    run.feed(scans);
+    run.expect_truth(scans.size());
+    EXPECT_TRUE(run.dropped_.empty());
+    for (std::int64_t n = 0; n < 40; ++n) {
+      ASSERT_NE(run.sweep_of(n), nullptr) << n;
+      EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+    }
+  }
+}
+
 // Phases that split the rotation into nearly equal gaps and jitter by 1-2 ms: any of the three
 // groupings is one rotation of the rig, but it must stay the same one (a boundary that moved back
 // and forth would split and mix sweeps).

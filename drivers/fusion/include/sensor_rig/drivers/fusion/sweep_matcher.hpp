@@ -90,8 +90,10 @@ class SweepMatcher {
     bool seen = false;
     bool alive = true;  // until a sweep waited for it in vain
     Nanos last_stamp = 0;
+    Nanos last_arrival = 0;
+    Nanos last_span = 0;  // of its last scan (0: not told)
     Nanos phase = 0;   // last stamp mod period
-    Nanos offset = 0;  // its timeline stepped by this, and not every live source's has yet
+    Nanos offset = 0;  // its timeline stepped by this, not yet every live source's ([-P, P): the sign is the rotation)
     int offset_scans = 0;
     std::uint64_t last_sweep = 0;  // id of the sweep its last scan joined (0: none)
     int rotations = 1;             // periods one of its scans spans (2: a 300 rpm LIDAR beside 600 rpm)
@@ -107,7 +109,8 @@ class SweepMatcher {
   };
 
   [[nodiscard]] std::int64_t rotation_of(const Source& src, Nanos stamp) const noexcept;
-  void track_phase(Source& src, Nanos stamp);
+  void track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span);
+  [[nodiscard]] Nanos timeline_step(const Source& src, Nanos stamp, Nanos arrival, Nanos span) const noexcept;
   void place_boundary(bool anew);
   [[nodiscard]] bool settled(const Sweep& s) const noexcept;
   [[nodiscard]] bool covered(std::size_t source, const Sweep& s) const noexcept;
