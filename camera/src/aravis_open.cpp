@@ -5,7 +5,9 @@
 #include <arv.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -26,6 +28,10 @@ using detail::unref;
 // together): one open at a time in the process. Held only while Aravis builds the device (its XML)
 // of a camera that just answered the GVCP probe: never through a dead camera's GVCP timeouts.
 namespace {
+// How long close() waits for a trigger's GVCP write in flight on a camera that still answered its
+// probe (a healthy write takes well under a millisecond).
+constexpr int kCloseTriggerWaitMs = 200;
+
 std::mutex& aravis_open_mutex() {
   static std::mutex m;
   return m;
@@ -125,8 +131,10 @@ void AravisSource::open() {
     throw;
   }
   {
+    // A GenICam lock of its own: a trigger still in a GVCP write to the previous connection (a
+    // camera that died, ~2.4 s of Aravis retries) holds that one's, not this one's.
     std::lock_guard lock(mutex_);
-    std::lock_guard gl(*gc_mutex_);
+    gc_mutex_ = std::make_shared<std::timed_mutex>();
     st_ = std::move(fresh);
     details_ = details;
   }
@@ -344,6 +352,10 @@ void AravisSource::close() noexcept {
   // CCP read of a restarted camera that nobody controls yet is "control-lost", which must reach
   // neither the next connection's flag nor a destroyed source (camera/README.md "Reopening").
   g_signal_handlers_disconnect_matched(st_->device, G_SIGNAL_MATCH_DATA, 0, 0, nullptr, nullptr, &control_lost_);
+  // A trigger's GVCP write may be in flight (trigger() holds only the GenICam lock for it): a
+  // camera that still answers ends it within a few ms; one whose write is in its retries is lost.
+  std::unique_lock gl(*gc_mutex_, std::defer_lock);
+  if (!control_lost_.load() && !gl.try_lock_for(std::chrono::milliseconds(kCloseTriggerWaitMs))) control_lost_.store(true);
   const bool lost = control_lost_.load();
   if (!lost) arv_camera_stop_acquisition(st_->camera, nullptr);
   fold_stats();

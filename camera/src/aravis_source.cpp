@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 
 #include "aravis_internal.hpp"
@@ -86,15 +87,30 @@ bool AravisSource::trigger() {
   // under a millisecond (measured: no trigger waited > 0.2 ms in 340 calls beside the per-frame
   // exposure read, sync_sets_test under load), so a longer one means the shot is lost anyway.
   const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(kTriggerLockWaitMs);
-  std::unique_lock lock(mutex_, until);
-  std::unique_lock gl(*gc_mutex_, std::defer_lock);
-  if (!lock.owns_lock() || !gl.try_lock_until(until)) {
-    trigger_lock_busy_.fetch_add(1);
-    return false;
+  ArvCamera* camera = nullptr;
+  std::shared_ptr<std::timed_mutex> gc;  // this connection's GenICam lock (open() installs a new one)
+  {
+    std::unique_lock lock(mutex_, until);
+    if (!lock.owns_lock()) {
+      trigger_lock_busy_.fetch_add(1);
+      return false;
+    }
+    if (st_->camera == nullptr || control_lost_.load()) return false;
+    gc = gc_mutex_;
+    if (!gc->try_lock_until(until)) {
+      trigger_lock_busy_.fetch_add(1);
+      return false;
+    }
+    camera = static_cast<ArvCamera*>(g_object_ref(st_->camera));
   }
-  if (st_->camera == nullptr || control_lost_.load()) return false;
+  // The GVCP write runs without mutex_ and touches nothing of this source: on a camera that died
+  // Aravis retries it ~2.4 s, and neither close() nor the trigger source's stop waits for that
+  // (issue 27 item 1). The camera reference keeps the connection alive for the call; close()
+  // takes the GenICam lock before it talks to a camera that still answers.
   GError* err = nullptr;
-  arv_camera_software_trigger(st_->camera, &err);
+  arv_camera_software_trigger(camera, &err);
+  g_object_unref(camera);
+  gc->unlock();
   if (err == nullptr) return true;
   g_error_free(err);
   return false;

@@ -43,7 +43,9 @@ struct CameraDriver::Impl {
   CameraConfig cfg;
   std::string image_topic_name;
   std::string info_topic_name;
-  std::unique_ptr<camera::FrameSource> src;
+  // Shared with the trigger's call: a call in flight that the trigger source left (a camera that
+  // died in a GVCP write) keeps the source alive until it returns (issue 27 item 1).
+  std::shared_ptr<camera::FrameSource> src;
   dds::Topic<msg::Image> image_topic;
   dds::Writer<msg::Image> image_writer;
   dds::Topic<msg::CameraInfo> info_topic;
@@ -278,7 +280,11 @@ CameraDriver::CameraDriver(const CameraConfig& cfg, const dds::Participant& part
 CameraDriver::CameraDriver(const CameraConfig& cfg, std::unique_ptr<camera::FrameSource> source,
                            const dds::Participant& participant, dds::StampsWriter& stamps, TriggerSource* trigger)
     : impl_(std::make_unique<Impl>(cfg, std::move(source), participant, stamps, trigger)) {
-  if (trigger != nullptr) impl_->trigger_member = trigger->add([src = impl_->src.get()] { return src->trigger(); });
+  if (trigger != nullptr)
+    impl_->trigger_member = trigger->add([src = std::weak_ptr<camera::FrameSource>(impl_->src)] {
+      const auto s = src.lock();
+      return s && s->trigger();
+    });
 }
 
 CameraDriver::~CameraDriver() { stop(); }

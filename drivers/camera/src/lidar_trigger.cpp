@@ -11,6 +11,7 @@
 #include <cstring>
 #include <optional>
 
+#include "member_call.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/thread_priority.hpp"
 
@@ -28,6 +29,9 @@ constexpr std::size_t kKeepTicks = 32;     // ~3 s at 10 Hz: the frames of a tic
 constexpr Nanos kMemberDeadlineNs = 25'000'000;
 // A member still busy with an older shot when this one was aimed skips it rather than fire late.
 constexpr Nanos kStaleShotNs = 1'000'000;
+// How long stop() waits for a member's call in flight before it leaves it (a healthy call: < 1 ms;
+// a camera that died in a software trigger's GVCP write holds it ~2.4 s).
+constexpr Nanos kStopGraceNs = 100'000'000;
 
 void sleep_until(clockid_t clock, Nanos t) {
   const timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
@@ -106,7 +110,8 @@ void LidarTrigger::start(int realtime_priority) {
   }
   started_ns_.store(vehicle_now_ns());
   for (std::size_t i = 0; i < members_.size(); ++i) {
-    members_[i].thread = std::thread([this, i, generation] { run_member(i, generation); });
+    members_[i].call = std::make_shared<MemberCall>(members_[i].trigger);
+    members_[i].thread = std::thread([this, i, generation, call = members_[i].call] { run_member(i, generation, *call); });
     (void)pthread_setname_np(members_[i].thread.native_handle(), ("trg" + std::to_string(i) + ":" + name_).substr(0, 15).c_str());
     set_fifo(members_[i].thread, realtime_priority, name_);
   }
@@ -123,8 +128,10 @@ void LidarTrigger::stop() {
     shot_.closing = true;
   }
   shot_cv_.notify_all();
+  std::vector<FiringThread> threads;  // a call hung on a dead camera is left, not waited for
   for (auto& m : members_)
-    if (m.thread.joinable()) m.thread.join();
+    if (m.call) threads.push_back({&m.thread, m.call.get()});
+  join_or_leave(threads, kStopGraceNs);
 }
 
 Nanos LidarTrigger::tick_before(Nanos t, std::size_t member) const {
@@ -186,7 +193,7 @@ void LidarTrigger::settle(Nanos newest) noexcept {
   }
 }
 
-void LidarTrigger::run_member(std::size_t i, std::uint64_t seen) {
+void LidarTrigger::run_member(std::size_t i, std::uint64_t seen, MemberCall& call) {
   for (;;) {
     Nanos aim = 0;
     bool fire_it = false;  // not skipped as stale (see below)
@@ -209,7 +216,9 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen) {
     if (fire_it) {
       spin_until_monotonic(aim);
       called = vehicle_now_ns();
-      accepted = members_[i].trigger();
+      const auto answer = call.call();
+      if (!answer) return;  // left by stop() during (or before) the call: this trigger may be gone
+      accepted = *answer;
     }
     bool late = false;  // the trigger thread gave up waiting for this call
     {

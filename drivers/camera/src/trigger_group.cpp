@@ -4,9 +4,16 @@
 
 #include <algorithm>
 
+#include "member_call.hpp"
 #include "sensor_rig/common/percentile.hpp"
 
 namespace sensor_rig::drivers {
+namespace {
+
+// How long stop() waits for a member's call in flight before it leaves it (a healthy call: < 1 ms).
+constexpr Nanos kStopGraceNs = 100'000'000;
+
+}  // namespace
 
 void ErrorHistory::add(Nanos e) {
   if (ring_.size() < kKeep) {
@@ -43,7 +50,10 @@ void TriggerGroup::start() {
     std::lock_guard lock(calls_mutex_);
     closing_ = false;
   }
-  for (std::size_t i = 0; i < members_.size(); ++i) members_[i].thread = std::thread([this, i] { run_member(i); });
+  for (std::size_t i = 0; i < members_.size(); ++i) {
+    members_[i].call = std::make_shared<MemberCall>(members_[i].trigger);
+    members_[i].thread = std::thread([this, i, call = members_[i].call] { run_member(i, *call); });
+  }
   thread_ = std::thread([this] { run(); });
 }
 
@@ -55,8 +65,11 @@ void TriggerGroup::stop() {
     closing_ = true;
   }
   calls_cv_.notify_all();
-  for (auto& m : members_)  // a call in flight is waited for (at most one per member)
-    if (m.thread.joinable()) m.thread.join();
+  // A call in flight on a camera that died (its GVCP write in Aravis' retries) is not waited for.
+  std::vector<FiringThread> threads;
+  for (auto& m : members_)
+    if (m.call) threads.push_back({&m.thread, m.call.get()});
+  join_or_leave(threads, kStopGraceNs);
 }
 
 std::uint64_t TriggerGroup::skipped(std::size_t member) const {
@@ -64,7 +77,7 @@ std::uint64_t TriggerGroup::skipped(std::size_t member) const {
   return member < members_.size() ? members_[member].skipped : 0;
 }
 
-void TriggerGroup::run_member(std::size_t i) {
+void TriggerGroup::run_member(std::size_t i, MemberCall& call) {
   std::unique_lock lock(calls_mutex_);
   for (;;) {
     calls_cv_.wait(lock, [&] { return members_[i].pending || closing_; });
@@ -72,7 +85,8 @@ void TriggerGroup::run_member(std::size_t i) {
     members_[i].pending = false;
     members_[i].busy = true;
     lock.unlock();
-    (void)members_[i].trigger();  // a closed camera refuses: its driver reports that
+    // A closed camera refuses: its driver reports that. Left by stop(): this group may be gone.
+    if (!call.call()) return;
     lock.lock();
     members_[i].busy = false;
   }

@@ -241,6 +241,77 @@ TEST_F(CameraIsolation, AStereoMemberThatNeverAnswersCostsItsPartnerNoFrame) {
   EXPECT_EQ(value(dead_status, "frames"), "0");
 }
 
+// A stereo member that dies mid-stream with a software trigger in flight (Aravis retries the GVCP
+// write for ~2.4 s): its partner takes every tick while the call hangs, and the group's stop and
+// the dead camera's own stop do not wait for that call. Before, both waited for it (the group
+// joined the member's thread; the camera's close waited for the trigger's lock).
+TEST_F(CameraIsolation, ATriggerInFlightWhenItsCameraDiesHoldsNeitherItsPartnerNorTheStop) {
+  auto live_fake = start(0, {});
+  auto dead_fake = start(1, {"camera.dies@1.5+20"});
+  const Nanos epoch = folder_[1].epoch();
+  dds::DomainConfig dc;
+  dc.domain_id = static_cast<dds_domainid_t>(test::lease_dds_domain());
+  dds::Participant p(dc);
+  dds::StampsWriter stamps(p);
+  TriggerGroup group("stereo", 10.0);
+  std::vector<std::unique_ptr<CameraDriver>> drivers;
+  for (int k : {0, 1}) {
+    CameraConfig c;
+    c.name = std::string(k == 0 ? "inflight_left_" : "inflight_right_") + std::to_string(::getpid());
+    c.frame_id = "camera_" + c.name;
+    c.source = cfg(k);
+    c.source.frame_rate = 10;
+    c.source.trigger = camera::TriggerMode::kSoftware;
+    c.trigger_group = "stereo";
+    c.info = camera::uncalibrated(320, 200);
+    drivers.push_back(std::make_unique<CameraDriver>(c, p, stamps, &group));
+  }
+  CameraDriver& live = *drivers[0];
+  CameraDriver& dead = *drivers[1];
+  constexpr std::size_t kDeadMember = 1;
+  const auto frames_now = [&] { return std::stoull("0" + value(live.status(), "frames")); };
+  for (auto& d : drivers) d->start();
+  group.start();
+  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + value(dead.status(), "frames")) >= 3; }, 5000)) << dead.status().message;
+  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 1500 * kMs; }, 5000));
+  // The first tick after the death is in its call once a later tick finds it busy.
+  ASSERT_TRUE(test::wait_for([&] { return group.skipped(kDeadMember) >= 1; }, 3000)) << "no trigger call hung on the dead camera";
+  const std::uint64_t ticks0 = group.ticks();
+  const std::uint64_t frames0 = frames_now();
+  const Nanos from_vehicle = vehicle_now_ns();
+  // ~0.8 s into the call, well before Aravis gives up on it: the stop must not wait for it.
+  ASSERT_TRUE(test::wait_for([&] { return group.skipped(kDeadMember) >= 7; }, 3000));
+  const std::uint64_t ticks = group.ticks() - ticks0;
+  const Nanos to_vehicle = vehicle_now_ns();
+  // The group and the dead camera stopped at once, each timed: either may wait for the call.
+  std::atomic<Nanos> group_stopped_in{0};
+  std::thread group_stopper([&] {
+    const Nanos from = monotonic_now_ns();
+    group.stop();
+    group_stopped_in.store(monotonic_now_ns() - from);
+  });
+  const Nanos dead_from = monotonic_now_ns();
+  dead.stop();
+  const Nanos dead_stopped_in = monotonic_now_ns() - dead_from;
+  group_stopper.join();
+  // The last tick's frame is on its way: counted once it is published (or not at all in 0.5 s).
+  (void)test::wait_for([&] { return frames_now() - frames0 >= ticks; }, 500);
+  const std::uint64_t frames = frames_now() - frames0;
+  live.stop();
+  live_fake.stop(1000);
+  dead_fake.stop(1000);
+  std::size_t sent = 0;  // the live camera's frames exposed while the dead one's call hung
+  for (const auto& part : truth::read(folder_[0].truth()).parts)
+    sent += part.fate == truth::Fate::kSent && part.acq_ns >= from_vehicle && part.acq_ns < to_vehicle ? 1 : 0;
+  std::printf("ticks %llu while the call hung: the live camera sent %zu, published %llu; group stopped in %.3f s, the dead camera in %.3f s\n",
+              static_cast<unsigned long long>(ticks), sent, static_cast<unsigned long long>(frames),
+              static_cast<double>(group_stopped_in.load()) * 1e-9, static_cast<double>(dead_stopped_in) * 1e-9);
+  EXPECT_LT(group_stopped_in.load(), 1 * kS) << "the group's stop waited for the hung call";
+  EXPECT_LT(dead_stopped_in, 1 * kS) << "the dead camera's stop waited for the hung call";
+  EXPECT_GE(sent + 1, ticks) << "the partner lost ticks while the dead member's call hung";
+  EXPECT_GE(frames + 1, ticks) << "published " << frames << " of " << ticks << " ticks";
+}
+
 // A camera that dies mid-stream and is stopped before its watchdog gave up on it (a rig stopped
 // right after a cable was pulled): the stop does not wait for the dead camera's GVCP timeouts.
 TEST_F(CameraIsolation, ACameraThatDiedMidStreamStopsWithin1s) {

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <span>
 #include <string>
@@ -26,6 +27,8 @@
 #include "sensor_rig/timesync/sweep_phase.hpp"
 
 namespace sensor_rig::drivers {
+
+class MemberCall;  // a member's call that stop() may leave in flight (src/member_call.hpp)
 
 // p50/p99/max of an ErrorHistory, in ns.
 struct ErrorFigure {
@@ -93,6 +96,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
  private:
   struct Member {
     std::function<bool()> trigger;  // set before start(), called by its firing thread only
+    std::shared_ptr<MemberCall> call;  // made by start(), owned with its firing thread
     std::thread thread;             // its firing thread
     // Under mutex_:
     RecentTicks exposures;          // its frame stamps
@@ -126,7 +130,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
     bool settled = false;           // the samples covered it (measured or given up)
   };
   void run();
-  void run_member(std::size_t i, std::uint64_t seen);  // seen: the shots armed before it started
+  void run_member(std::size_t i, std::uint64_t seen, MemberCall& call);  // seen: the shots armed before it started
   void fire(Nanos target, Nanos aim);
   // A member's call that returned after its shot's deadline: refused, or its tick recorded now.
   void settle_late_call(std::size_t i, std::uint64_t generation, Nanos called, bool accepted);

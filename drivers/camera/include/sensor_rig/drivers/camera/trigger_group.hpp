@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -16,6 +17,8 @@
 #include "sensor_rig/dds/driver_status.hpp"
 
 namespace sensor_rig::drivers {
+
+class MemberCall;  // a member's call that stop() may leave in flight (src/member_call.hpp)
 
 // The last ticks (exposure starts) a trigger source fired, for matching a frame to its tick. Not
 // synchronized: the source guards it with its own mutex.
@@ -109,13 +112,14 @@ class TriggerGroup : public TriggerSource {
   // item 1; they were called one after another).
   struct Member {
     std::function<bool()> trigger;
+    std::shared_ptr<MemberCall> call;  // made by start(), owned with its thread
     std::thread thread;
     bool pending = false;  // under calls_mutex_: a tick to call
     bool busy = false;     // in its call
     std::uint64_t skipped = 0;
   };
   void run();
-  void run_member(std::size_t i);
+  void run_member(std::size_t i, MemberCall& call);
   std::string name_;
   double rate_hz_;
   std::vector<Member> members_;
