@@ -256,6 +256,32 @@ TEST(ChaosCheck, AnArrivalTwoUnitsShareIsDecidedByTheStamp) {
   EXPECT_EQ(r.topics.at(kTopic).published_complete, 50u);
 }
 
+// A host clock step back: scans 20-24 were made in vehicle time that then happened again, so no
+// sample is matched to them; two of them were not published and the rig counted both. Its count is
+// held against the doubled time by number: an honest count, not a phantom (before: "the rig counted
+// 2 scans lost, 0 were not published", as a frozen CAN counter across a step in the whole-rig
+// campaign). Counting three is a phantom; counting none leaves two unaccounted.
+TEST(ChaosCheck, LossesInTimeTheHostClockReadTwiceAreHeldByNumber) {
+  Input in = honest();
+  in.truths[0].faults.push_back(truth::FaultRecord{1, "host.clock_step", kT0 + 25 * kPeriod, kT0 + 30 * kPeriod, -1, "ms=-500"});
+  in.samples.erase(in.samples.begin() + 21, in.samples.begin() + 23);
+  in.monitor[kTopic] = MonitorTotals{kScans - 2, 0};
+  in.counted_lost[kTopic] = 2;
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("monitor_agrees")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).sent, 45u) << "the five scans in doubled time are not judged one by one";
+  EXPECT_EQ(r.topics.at(kTopic).counted_lost, 0u);
+  in.counted_lost[kTopic] = 3;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  in.counted_lost[kTopic] = 0;
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  EXPECT_FALSE(r.invariants.at("accounted")) << "two scans lost in doubled time, none counted";
+}
+
 // lidar.blind_sector: a sector stops sending at run time. Its first turn's gap is the same stream of
 // packets as a loss burst there (these models' packets carry no sequence), so a rig may count it
 // missing; the same arc the next turn is the sensor's FOV, and counting it is a phantom.
