@@ -27,8 +27,7 @@ std::string fmt(double v) {
 struct Lidar {
   std::string topic, name;
   std::vector<Nanos> acqs;
-  std::vector<std::pair<Nanos, std::uint32_t>> units;  // (true first firing, packets a whole scan has), by time
-  std::uint32_t usual_parts = 0;                        // the median: one rotation's packets
+  std::vector<std::pair<Nanos, Nanos>> units;  // (true first firing, its last packet's first firing after it), by time
   std::map<std::uint64_t, const SampleRecord*> by_seq;
 };
 
@@ -139,19 +138,20 @@ class FusedJudge {
       Lidar l;
       l.topic = topic;
       l.name = name_of(topic);
-      for (const auto& log : in_.truths)
-        if (log.header.topic == topic)
-          for (const auto& u : log.units) {
-            l.acqs.push_back(u.acq_ns);
-            l.units.emplace_back(u.acq_ns, u.parts);
-          }
-      std::sort(l.units.begin(), l.units.end());
-      if (!l.units.empty()) {
-        std::vector<std::uint32_t> parts;
-        for (const auto& u : l.units) parts.push_back(u.second);
-        std::nth_element(parts.begin(), parts.begin() + static_cast<std::ptrdiff_t>(parts.size() / 2), parts.end());
-        l.usual_parts = parts[parts.size() / 2];
+      for (const auto& log : in_.truths) {
+        if (log.header.topic != topic) continue;
+        std::map<std::int64_t, Nanos> last_firing;  // per unit: its latest packet's (every part made, sent or not)
+        for (const auto& p : log.parts) {
+          Nanos& last = last_firing[p.unit];
+          last = std::max(last, p.acq_ns);
+        }
+        for (const auto& u : log.units) {
+          l.acqs.push_back(u.acq_ns);
+          const auto it = last_firing.find(u.unit);
+          l.units.emplace_back(u.acq_ns, it == last_firing.end() ? 0 : std::max<Nanos>(0, it->second - u.acq_ns));
+        }
       }
+      std::sort(l.units.begin(), l.units.end());
       lidar_of_[topic] = lidars_.size();
       lidars_.push_back(std::move(l));
     }
@@ -286,16 +286,18 @@ class FusedJudge {
   }
 
   // LIDAR `l` began no scan in rotation n, and its scan that began in an earlier rotation spans it
-  // (a slower LIDAR: k = its packets over one rotation's, spanning k periods; the fusion's rule,
-  // drivers/README.md "A slower LIDAR"). A LIDAR that stopped is not covered.
+  // (a slower LIDAR: its scan spans k periods, k its last packet's firing after its first in whole
+  // periods; the fusion's rule, drivers/README.md "A slower LIDAR"). A LIDAR that stopped is not
+  // covered. k was a scan's packets over the LIDAR's median scan's: a LIDAR at 300 rpm throughout
+  // (its median a slow scan) had k = 1, and every sweep its scans covered read "says complete
+  // with 2 of 3 LIDARs".
   bool covered_by_slower(const Lidar& l, std::int64_t n) const {
-    if (l.usual_parts == 0) return false;
     const Nanos start = boundary_ + n * period_;
-    auto it = std::lower_bound(l.units.begin(), l.units.end(), std::make_pair(start, std::uint32_t{0}));
+    auto it = std::lower_bound(l.units.begin(), l.units.end(), std::make_pair(start, Nanos{0}));
     if (it != l.units.end() && it->first < start + period_) return false;  // it began one in n
     if (it == l.units.begin()) return false;
-    const auto& [acq, parts] = *std::prev(it);
-    const auto k = std::max<std::int64_t>(1, std::llround(static_cast<double>(parts) / l.usual_parts));
+    const auto& [acq, span] = *std::prev(it);
+    const auto k = std::max<std::int64_t>(1, (span + period_ / 2) / period_);
     return rotation(acq) < n && n < rotation(acq + k * period_);
   }
 
