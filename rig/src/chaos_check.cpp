@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <set>
 
 #include "chaos_fused_check.hpp"
@@ -301,8 +302,17 @@ class Checker {
     const auto in_doubled_window = [&](Nanos acq) { return acq >= in_.window_begin_ns && acq < in_.window_end_ns && doubled(acq); };
     std::uint64_t doubled_made = 0, doubled_samples = 0;
     for (const UnitTruth& u : units) doubled_made += u.produced > 0 && in_doubled_window(u.rec.acq_ns) ? 1U : 0U;
+    // The unit the previous seq was matched to by arrival: a LIDAR publishes its scans in order.
+    const SampleRecord* previous = nullptr;
+    std::int64_t previous_unit = std::numeric_limits<std::int64_t>::min();
     for (const SampleRecord* s : samples) {
-      UnitTruth* u = by_arrival ? arrival(units, *s, tolerance, held_) : nullptr;
+      const bool in_order = previous != nullptr && s->seq > previous->seq;
+      UnitTruth* u = by_arrival ? arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min())
+                                : nullptr;
+      if (u != nullptr) {
+        previous = s;
+        previous_unit = u->rec.unit;
+      }
       if (in_doubled_window(u != nullptr ? u->rec.acq_ns : s->acquisition_ns)) ++doubled_samples;
       if (u != nullptr ? !in_window(u->rec.acq_ns) : !in_window(s->acquisition_ns)) continue;
       if (u == nullptr && by_frame_id && flagged(topic, s->acquisition_ns)) u = same_frame(units, *s);
@@ -426,10 +436,14 @@ class Checker {
 
   // The unit whose first part went out last before the sample's first packet arrived, within
   // `tolerance`. Host time that happened twice (a clock step back) gives two units sent at the same
-  // host time: of those, the one whose acquisition is nearest the stamp (they are the step apart).
+  // host time: of those, the first after `after_unit` (the unit of the sample's previous seq: scans
+  // are published in order), else the one whose acquisition is nearest the stamp (they are the
+  // step apart). Nearest the stamp alone failed where the stamps were slewed late after an earlier
+  // step: both scans sent at one host time went to the later unit ("scan 1099511627821 published
+  // twice (seq 305 and 310)", the earlier unit unaccounted; whole rig: "monitor_agrees off by +3").
   // A unit sent while netem held the loopback arrives its delay later (held).
   static UnitTruth* arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance,
-                            const std::vector<HeldInterval>& held) {
+                            const std::vector<HeldInterval>& held, std::int64_t after_unit) {
     if (s.first_rx_ns == 0) return nullptr;
     const auto after_send = [&](const UnitTruth& u) {
       Nanos d = 0;
@@ -451,7 +465,14 @@ class Checker {
     for (auto& u : units) {
       const Nanos after = after_send(u);
       if (&u == best || u.first_tx == 0 || std::llabs(after - best_after) > kArrivalSlack) continue;
-      if (std::llabs(u.rec.acq_ns - s.acquisition_ns) < std::llabs(best->rec.acq_ns - s.acquisition_ns)) best = &u;
+      const bool u_next = u.rec.unit > after_unit, best_next = best->rec.unit > after_unit;
+      if (u_next != best_next) {
+        if (u_next) best = &u;
+        continue;
+      }
+      const bool by_order = u_next && after_unit != std::numeric_limits<std::int64_t>::min();
+      const bool nearer_stamp = std::llabs(u.rec.acq_ns - s.acquisition_ns) < std::llabs(best->rec.acq_ns - s.acquisition_ns);
+      if (by_order ? u.rec.unit < best->rec.unit : nearer_stamp) best = &u;
     }
     return best;
   }
