@@ -45,7 +45,7 @@ std::string decode(const dds::CanFrameView& view, const std::function<bool(dbw::
 }  // namespace
 
 McapCanLog::McapCanLog(const std::string& path)
-    : pump_(path, can_channel(), decode, [](const dbw::can::LoggedFrame&) -> std::size_t { return 1; }) {}
+    : pump_(recording_files(path), can_channel(), decode, [](const dbw::can::LoggedFrame&) -> std::size_t { return 1; }) {}
 
 bool McapCanLog::next(dbw::can::LoggedFrame& out) {
   auto f = pump_.next();

@@ -3,7 +3,8 @@
 // this reader: dbw/ sits below record/): the raw CAN channel of a `rig record --raw` file
 // (sensor_rig_msgs/msg/CanFrame on /vehicle/can/frames, docs/recording.md "Raw channels") as the
 // frames a bridge receives, each at its recorded kernel receive time and stamped with it, so a drive
-// recorded on the car replays through `rig dbw bridge --transport mcap:drive.mcap` on the desk.
+// recorded on the car replays through `rig dbw bridge --transport mcap:drive.mcap` on the desk. A
+// split recording's folder (`mcap:drive/`) is one stream: its files in metadata.yaml's order.
 // A reader thread decompresses and decodes up to 64 Ki frames ahead. A damaged file (cut, corrupt
 // chunk, undecodable message) replays what is intact; error() names each place by its byte offset.
 #include <cstdint>
@@ -19,8 +20,9 @@ inline constexpr const char* kCanFramesTopic = "/vehicle/can/frames";
 
 class McapCanLog final : public dbw::can::FrameLog {
  public:
-  // The CanFrame channel /vehicle/can/frames, or the file's only CanFrame channel. Throws
-  // std::runtime_error when the file is not MCAP or has no such channel (naming those it has).
+  // The CanFrame channel /vehicle/can/frames, or the file's only CanFrame channel (of a folder: its
+  // first file's, then that topic in the others). Throws std::runtime_error when the (first) file is
+  // not MCAP or has no such channel (naming those it has).
   explicit McapCanLog(const std::string& path);
 
   bool next(dbw::can::LoggedFrame& out) override;

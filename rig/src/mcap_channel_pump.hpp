@@ -1,9 +1,10 @@
 #pragma once
 // One raw channel of a `rig record --raw` recording, read ahead on a thread of its own: the replays
 // (McapCanLog: CAN frames; McapPacketStream: LIDAR datagrams) only pop what it decoded. The thread
-// walks the file's messages of the channel (channels declared inside later chunks too), decodes each
-// CDR sample into items and queues them up to `ahead` (in the items' cost: frames, bytes). A damaged
-// file (cut, corrupt chunk, undecodable message) gives what is intact; error() names each place.
+// walks the channel's messages file after file (a split recording's files as one stream; channels
+// declared inside later chunks too), decodes each CDR sample into items and queues them up to
+// `ahead` (in the items' cost: frames, bytes). A damaged file (cut, corrupt chunk, undecodable
+// message, a later file that does not open) gives what is intact; error() names each place.
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
@@ -41,8 +42,8 @@ class McapChannelFile {
   [[nodiscard]] const std::string& topic() const noexcept { return topic_; }
   // The channel's messages in file order; fn returns false to stop.
   void for_each(const std::function<bool(const record::McapMessage&)>& fn);
-  // The reader's problems (damaged places), "; "-joined.
-  [[nodiscard]] std::string problems() const;
+  // The reader's problems (damaged places), each after `where`, "; "-joined.
+  [[nodiscard]] std::string problems(const std::string& where) const;
 
  private:
   [[nodiscard]] bool ours(std::uint16_t channel_id) const;
@@ -54,6 +55,12 @@ class McapChannelFile {
 // "; "-joins b to a.
 void append_problem(std::string& a, const std::string& b);
 
+// The files of a split recording's folder (`rig record --split-*`): those its metadata.yaml lists, in
+// its order, then any `<DIR>_N.mcap` it does not list in N order (a killed recorder's last file, or
+// all of them when it died in the first). A path that is not a folder is the one file. Throws
+// std::runtime_error for a folder with no recording file.
+std::vector<std::string> recording_files(const std::string& path);
+
 template <class View, class Item>
 class McapChannelPump {
  public:
@@ -63,15 +70,17 @@ class McapChannelPump {
   using Decode = std::function<std::string(const View&, const Push&)>;
   using Cost = std::function<std::size_t(const Item&)>;
 
-  McapChannelPump(const std::string& path, McapChannelSpec spec, Decode decode, Cost cost)
-      : spec_(std::move(spec)), file_(path, spec_), decode_(std::move(decode)), cost_(std::move(cost)) {
+  // The files in order (one at least); the first is opened here, the others by the thread.
+  McapChannelPump(std::vector<std::string> files, McapChannelSpec spec, Decode decode, Cost cost)
+      : spec_(std::move(spec)), files_(std::move(files)), first_(files_.at(0), spec_), decode_(std::move(decode)),
+        cost_(std::move(cost)) {
     start();
   }
   ~McapChannelPump() { stop(); }
   McapChannelPump(const McapChannelPump&) = delete;
   McapChannelPump& operator=(const McapChannelPump&) = delete;
 
-  [[nodiscard]] const std::string& topic() const noexcept { return file_.topic(); }
+  [[nodiscard]] const std::string& topic() const noexcept { return first_.topic(); }
 
   // The next item; nullopt at the end.
   std::optional<Item> next() {
@@ -136,29 +145,46 @@ class McapChannelPump {
     };
     const std::string sample = spec_.schema.substr(spec_.schema.rfind('/') + 1);
     View view;
-    std::string skipped;
-    file_.for_each([&](const record::McapMessage& m) {
-      const auto body = dds::cdr_body(m.data);
-      const dds::CdrStatus st = body ? dds::parse_cdr(*body, view) : dds::CdrStatus::kBadEncapsulation;
-      const std::string why = st == dds::CdrStatus::kOk ? decode_(view, push) : dds::to_string(st);
-      std::lock_guard lock(mu_);
-      if (!why.empty()) {
-        if (undecodable_++ == 0)
-          skipped = "message " + std::to_string(m.sequence) + " of " + file_.topic() + " is not a " + sample +
-                    " sample (" + why + "): skipped";
+    std::string damaged, skipped;
+    bool going = true;
+    for (std::size_t i = 0; i < files_.size() && going; ++i) {
+      // Several files: each place names its file. A later file is opened here, and one without
+      // the channel (a split file of a time nothing was on it) is no damage.
+      const std::string where = files_.size() > 1 ? files_[i] + ": " : "";
+      std::optional<McapChannelFile> later;
+      if (i > 0) {
+        try {
+          later.emplace(files_[i], McapChannelSpec{spec_.schema, [&](const auto&) { return topic(); }, {}, spec_.log_tag, 0});
+        } catch (const std::exception& e) {
+          append_problem(damaged, e.what());
+          continue;
+        }
       }
-      return !stop_;
-    });
+      McapChannelFile& file = later ? *later : first_;
+      file.for_each([&](const record::McapMessage& m) {
+        const auto body = dds::cdr_body(m.data);
+        const dds::CdrStatus st = body ? dds::parse_cdr(*body, view) : dds::CdrStatus::kBadEncapsulation;
+        const std::string why = st == dds::CdrStatus::kOk ? decode_(view, push) : dds::to_string(st);
+        std::lock_guard lock(mu_);
+        if (!why.empty() && undecodable_++ == 0)
+          skipped = where + "message " + std::to_string(m.sequence) + " of " + topic() + " is not a " + sample +
+                    " sample (" + why + "): skipped";
+        going = !stop_;
+        return going;
+      });
+      append_problem(damaged, file.problems(where));
+    }
     std::lock_guard lock(mu_);
     if (undecodable_ > 1) skipped += " (" + std::to_string(undecodable_) + " such messages)";
-    append_problem(problems_, file_.problems());
+    append_problem(problems_, damaged);
     append_problem(problems_, skipped);
     done_ = true;
     cv_.notify_all();
   }
 
   const McapChannelSpec spec_;
-  McapChannelFile file_;  // read by the thread only while it runs
+  const std::vector<std::string> files_;
+  McapChannelFile first_;  // opened first: its channel names the topic; read by the thread only while it runs
   const Decode decode_;
   const Cost cost_;
   std::thread thread_;
