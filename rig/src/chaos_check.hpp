@@ -73,6 +73,10 @@ struct Input {
   FusedInput fused;
   Nanos window_begin_ns = 0;  // units are judged when their acquisition is in [begin, end)
   Nanos window_end_ns = 0;
+  // How far the window of `counted_lost` may lie from [begin, end): the count is the difference of
+  // two once-a-second monitor lines, each behind the losses it covers by up to the rig's diagnostics
+  // period. Units not published within this of an edge may be in the count or not.
+  Nanos count_edge_ns = 0;
   Bounds bounds;
 };
 

@@ -378,6 +378,7 @@ int run(const Options& o) {
   in.window_begin_ns = epoch_vehicle + kLead;
   in.window_end_ns = epoch_vehicle + window_ns;
   in.monitor = monitor_totals(monitor_lines, plan.epoch_mono_ns + kLead, plan.epoch_mono_ns + window_ns, in.counted_lost);
+  in.count_edge_ns = 1'000'000'000 + static_cast<Nanos>(cfg.diagnostics_period_ms) * 1'000'000;  // a line, a period
   in.expected = expectations_of(cfg);
   in.unsynchronized = diagnostics.unsynchronized();
   if (cfg.fusion.enabled) {

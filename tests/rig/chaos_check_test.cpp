@@ -305,6 +305,35 @@ TEST(ChaosCheck, LossesInTimeTheHostClockReadTwiceAreHeldByNumber) {
   EXPECT_FALSE(r.invariants.at("accounted")) << "two scans lost in doubled time, none counted";
 }
 
+// The rig's count of losses is read from once-a-second monitor lines, each behind by a diagnostics
+// period: its window's edges are the units' give or take `count_edge_ns`. Scan 48, 200 ms before
+// the end, not published: the count may have it or not (before, a dbw.bad_crc second across the
+// end broke `accounted`, "11 frames neither published nor counted", in 1 of 2 whole-rig runs). Away
+// from the edges every loss must be counted, and a count above every loss near the window is phantom.
+TEST(ChaosCheck, TheCountsWindowMayMissOrTakeTheLossesNearItsEdgesOnly) {
+  Input in = honest();
+  in.count_edge_ns = 1'000'000'000;
+  in.samples.erase(in.samples.begin() + 48);
+  in.monitor[kTopic] = MonitorTotals{kScans - 1, 0};
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);  // counted 0: the count's window ended before it
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  in.counted_lost[kTopic] = 1;
+  in.monitor[kTopic] = MonitorTotals{kScans - 1, 1};
+  r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  in.counted_lost[kTopic] = 2;
+  EXPECT_FALSE(check(in).invariants.at("no_phantom_loss")) << "one scan not published near the window, two counted";
+  // A scan in the middle (2.5 s from both edges) not published and not counted: unaccounted.
+  in = honest();
+  in.count_edge_ns = 1'000'000'000;
+  in.samples.erase(in.samples.begin() + 25);
+  in.monitor[kTopic] = MonitorTotals{kScans - 1, 0};
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).unaccounted, 1u);
+}
+
 // lidar.blind_sector: a sector stops sending at run time. Its first turn's gap is the same stream of
 // packets as a loss burst there (these models' packets carry no sequence), so a rig may count it
 // missing; the same arc the next turn is the sensor's FOV, and counting it is a phantom.
