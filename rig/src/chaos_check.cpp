@@ -49,6 +49,13 @@ struct UnitTruth {
   // missing is the honest reading; the same arc a second turn in a row is the sensor's, not loss.
   std::uint32_t not_sent = 0;
   std::uint32_t new_blind = 0;
+  // A unit whose mock was killed before its line was written (host.kill_mock mid-scan): the parts
+  // it never made the rig may count missing (nothing in the stream tells a kill from a loss), up to
+  // a whole unit's parts. Its acquisition is known only to lie in its first part, which may be the
+  // previous unit's last packet across the cut: up to its own first part (`own_first_acq`).
+  bool has_line = true;
+  Nanos own_first_acq = 0;
+  std::uint32_t never_made = 0;
   const SampleRecord* sample = nullptr;
 };
 
@@ -233,12 +240,15 @@ class Checker {
         if (const auto it = index.find(id); it != index.end()) {
           UnitTruth& u = units[it->second];
           if (without_line.contains(id) && p.acq_ns < u.rec.acq_ns) u.rec.acq_ns = p.acq_ns;  // its first part
+          if (without_line.contains(id) && id == p.unit && (u.own_first_acq == 0 || p.acq_ns < u.own_first_acq)) u.own_first_acq = p.acq_ns;
           continue;
         }
         without_line.insert(id);
         index[id] = units.size();
         units.emplace_back();
         units.back().rec = truth::UnitRecord{id, p.acq_ns, p.dev_ns, 0, 0};
+        units.back().has_line = false;
+        if (id == p.unit) units.back().own_first_acq = p.acq_ns;
       }
     }
     for (const auto& p : log.parts) {
@@ -266,6 +276,9 @@ class Checker {
     }
     for (auto& u : units)
       for (const Nanos tx : u.delayed_tx) u.late += tx > u.last_tx ? 1U : 0U;
+    const std::uint32_t whole = median_parts(units);
+    for (auto& u : units)
+      if (!u.has_line && u.produced < whole) u.never_made = whole - u.produced;
     // A device that writes no parts (one part per unit is implied): the unit itself was produced.
     if (log.parts.empty())
       for (auto& u : units) {
@@ -355,7 +368,7 @@ class Checker {
       const SampleRecord& s = *u.sample;
       // The stamp: the unit's first firing, or (its first parts lost) anywhere up to the first part that
       // arrived: a rig may extrapolate or stamp what it got.
-      const Nanos lo = u.rec.acq_ns, hi = std::max(lo, u.first_intact_acq);
+      const Nanos lo = u.rec.acq_ns, hi = std::max({lo, u.first_intact_acq, u.own_first_acq});
       const Nanos err = s.acquisition_ns < lo ? lo - s.acquisition_ns : s.acquisition_ns > hi ? s.acquisition_ns - hi : 0;
       errors.push_back(ms(err));
       if (ms(err) > bound && flagged(topic, s.acquisition_ns)) {
@@ -373,15 +386,16 @@ class Checker {
                                           log.header.unit + " " + std::to_string(u.rec.unit) + " lost, " +
                                           std::to_string(reported) + " counted");
       }
-      if (s.missing_packets > u.lost + u.damaged + u.late + u.new_blind) {
-        t.phantom_missing += s.missing_packets - (u.lost + u.damaged + u.late + u.new_blind);
+      if (s.missing_packets > u.lost + u.damaged + u.late + u.new_blind + u.never_made) {
+        t.phantom_missing += s.missing_packets - (u.lost + u.damaged + u.late + u.new_blind + u.never_made);
         violation("no_phantom_loss", topic, "seq " + std::to_string(s.seq) + ": " + std::to_string(s.missing_packets) +
                                                 " packets counted missing, " + std::to_string(u.lost + u.damaged) +
                                                 " lost or damaged" +
                                                 (u.late > 0 ? ", " + std::to_string(u.late) + " reordered past its end" : "") +
                                                 (u.not_sent > 0 ? ", " + std::to_string(u.not_sent) + " not sent" +
                                                                       (u.new_blind > 0 ? " (a new blind arc)" : " (the previous turn's blind arc)")
-                                                                : ""));
+                                                                : "") +
+                                                (u.never_made > 0 ? ", " + std::to_string(u.never_made) + " never made (its mock killed)" : ""));
       }
       const bool incomplete = s.missing_packets > 0 || s.dropped > 0 || u.lost > 0;
       ++(incomplete ? t.published_incomplete : t.published_complete);
@@ -496,6 +510,16 @@ class Checker {
       if (by_order ? u.rec.unit < best->rec.unit : nearer_stamp) best = &u;
     }
     return best;
+  }
+
+  // A whole unit's parts: the median over the units whose line says how many they had.
+  static std::uint32_t median_parts(const std::vector<UnitTruth>& units) {
+    std::vector<std::uint32_t> parts;
+    for (const auto& u : units)
+      if (u.has_line && u.rec.parts > 0) parts.push_back(u.rec.parts);
+    if (parts.empty()) return 0;
+    std::nth_element(parts.begin(), parts.begin() + static_cast<std::ptrdiff_t>(parts.size() / 2), parts.end());
+    return parts[parts.size() / 2];
   }
 
   static Nanos match_tolerance(const std::vector<UnitTruth>& units) {

@@ -104,6 +104,34 @@ TEST(ChaosCheck, AScanWhoseMockWasKilledBeforeItsLineWasMade) {
   EXPECT_FALSE(r.invariants.at("no_phantom_loss")) << result_text(r);
 }
 
+// host.kill_mock mid-scan, the killed scan published: its first packet was the previous scan's last
+// (across the cut), so its true first firing lies somewhere in that packet, and the rest of it was
+// never made. A rig that stamps the cut inside the packet and counts the never-made packets missing
+// is honest (nothing in the stream tells a kill from a loss); more than a whole scan's is a phantom.
+// LIDAR campaign seed 7 (front, killed at 20.6 s): "seq 233: stamp 0.221 ms from the true
+// acquisition of scan 234" and "63 packets counted missing, 0 lost or damaged" against a rig that
+// was right (its stamp 100.03 ms after scan 233's, the straddling packet's first firing 0.22 ms before).
+TEST(ChaosCheck, AScanCutByAKilledMockIsStampedInsideItsFirstPacketAndMayCountTheRestMissing) {
+  Input in = honest();
+  auto& log = in.truths[0];
+  log.units.erase(log.units.begin() + 30);
+  log.parts.erase(log.parts.begin() + 30 * kParts + 4, log.parts.begin() + 31 * kParts);  // 4 packets sent, then killed
+  log.parts[29 * kParts + kParts - 1].unit_last = 30;  // scan 29's last packet holds scan 30's first firings
+  in.samples[30].acquisition_ns = kT0 + 30 * kPeriod - 4'000'000;  // the cut, inside that packet (10 ms long)
+  in.samples[30].missing_packets = 5;                               // 10 of a whole scan, 5 made
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  // A stamp before that packet's first firing is off; more missing than the scan lacked is a phantom.
+  in.samples[30].acquisition_ns = kT0 + 30 * kPeriod - 14'000'000;
+  in.samples[30].missing_packets = 6;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("stamps"));
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss"));
+  EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 1u);
+}
+
 TEST(ChaosCheck, ARigThatHidesALossIsCaught) {
   Input in = honest();
   drop_part(in, 12, 3);
