@@ -42,6 +42,10 @@ struct UnitTruth {
   // inside the unit makes a later part's send read earlier.
   Nanos first_tx = 0;
   Nanos first_sent_acq = 0;
+  // The same for its first part sent in its turn as rendered: where its first parts were corrupted
+  // (lidar.stuck_azimuth, lidar.corrupt), the rig drops them and its scan begins at this one.
+  Nanos first_intact_tx = 0;
+  Nanos first_intact_sent_acq = 0;
   // Parts the device did not send (a blind sector, a restart), and of those the ones a rig may count
   // missing: a blind arc new this turn (the previous unit lacked none, or a different number).
   // Nothing in a LIDAR's packets tells the first turn of a new blind sector from a loss burst at the
@@ -272,6 +276,11 @@ class Checker {
             u.first_sent_acq = p.acq_ns;
           }
         if (truth::delivered_intact(p.fate) && (u.first_intact_acq == 0 || p.acq_ns < u.first_intact_acq)) u.first_intact_acq = p.acq_ns;
+        if (truth::delivered_intact(p.fate) && p.fate != truth::Fate::kDelayed && p.tx_ns != 0 &&
+            (u.first_intact_tx == 0 || p.acq_ns < u.first_intact_sent_acq)) {
+          u.first_intact_tx = p.tx_ns;
+          u.first_intact_sent_acq = p.acq_ns;
+        }
       }
     }
     for (auto& u : units)
@@ -476,15 +485,24 @@ class Checker {
   // step apart). Nearest the stamp alone failed where the stamps were slewed late after an earlier
   // step: both scans sent at one host time went to the later unit ("scan 1099511627821 published
   // twice (seq 305 and 310)", the earlier unit unaccounted; whole rig: "monitor_agrees off by +3").
-  // A unit sent while netem held the loopback arrives its delay later (held).
+  // A unit sent while netem held the loopback arrives its delay later (held). A unit whose first
+  // parts were damaged is also the one whose first intact part went out last before the arrival
+  // (LIDAR campaign seed 25: the Ouster's first 40 packets of a scan stuck in azimuth, dropped by the
+  // rig; its sample's first packet came 64 ms after the scan's first send, past half a period, so the
+  // stamp named the next scan: "published twice (seq 165 and 166)").
   static UnitTruth* arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance,
                             const std::vector<HeldInterval>& held, std::int64_t after_unit) {
     if (s.first_rx_ns == 0) return nullptr;
-    const auto after_send = [&](const UnitTruth& u) {
+    const auto since = [&](Nanos tx) {
       Nanos d = 0;
       for (const auto& h : held)
-        if (u.first_tx >= h.begin && u.first_tx < h.end) d = h.delay;
-      return s.first_rx_ns - u.first_tx - d;
+        if (tx >= h.begin && tx < h.end) d = h.delay;
+      return s.first_rx_ns - tx - d;
+    };
+    const auto after_send = [&](const UnitTruth& u) {
+      const Nanos first = since(u.first_tx);
+      if ((first >= -kArrivalSlack && first <= tolerance) || u.first_intact_tx == 0 || u.first_intact_tx == u.first_tx) return first;
+      return since(u.first_intact_tx);
     };
     UnitTruth* best = nullptr;
     Nanos best_after = 0;

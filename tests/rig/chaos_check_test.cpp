@@ -307,6 +307,26 @@ TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheNextScanInOrderWhenTheStampsAreS
   EXPECT_FALSE(r.invariants.at("stamps")) << "the stamps are 300 ms late, and said so";
 }
 
+// lidar.stuck_azimuth ending inside a scan: its first 6 packets were sent with a frozen azimuth and
+// dropped by the rig, which stamped the scan at the first packet it kept (allowed: "what it got").
+// That packet came 60 ms after the scan's first send, past half a period: matched by the stamp, the
+// sample named the next scan, "published twice", as the Ouster's seq 165/166 in the LIDAR campaign
+// seed 25. It is its scan by its first intact packet's arrival.
+TEST(ChaosCheck, AScanWhoseFirstPacketsWereDamagedIsItsUnitByItsFirstIntactPacketsArrival) {
+  Input in = honest();
+  auto& parts = in.truths[0].parts;
+  for (std::uint32_t p = 0; p < 6; ++p) drop_part(in, 20, p, truth::Fate::kCorrupted);
+  for (int u = 0; u < kScans; ++u)
+    in.samples[static_cast<std::size_t>(u)].first_rx_ns = parts[static_cast<std::size_t>(u) * kParts + (u == 20 ? 6 : 0)].tx_ns + 60'000;
+  in.samples[20].acquisition_ns = parts[20 * kParts + 6].acq_ns;
+  in.samples[20].dropped = 6;
+  const Result r = check(in);
+  const TopicResult& t = r.topics.at(kTopic);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(t.published_twice, 0u);
+  EXPECT_EQ(t.published_incomplete, 1u);
+}
+
 // A host clock step back: scans 20-24 were made in vehicle time that then happened again, so no
 // sample is matched to them; two of them were not published and the rig counted both. Its count is
 // held against the doubled time by number: an honest count, not a phantom (before: "the rig counted
