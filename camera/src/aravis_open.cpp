@@ -7,8 +7,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 
 #include "aravis_internal.hpp"
@@ -31,6 +33,19 @@ namespace {
 // How long close() waits for a trigger's GVCP write in flight on a camera that still answered its
 // probe (a healthy write takes well under a millisecond).
 constexpr int kCloseTriggerWaitMs = 200;
+
+// The cameras this process has open, by vendor, model and serial: the same camera given twice (by
+// address and by serial, or by two addresses) passed the config's check, which compares the
+// strings, and the second open stopped the first one's acquisition (issue 27 item 13).
+struct OpenCamera {
+  const void* owner;
+  std::string device;
+};
+std::mutex open_cameras_mutex;
+std::map<std::string, OpenCamera>& open_cameras() {
+  static std::map<std::string, OpenCamera> m;
+  return m;
+}
 
 std::mutex& aravis_open_mutex() {
   static std::mutex m;
@@ -123,6 +138,7 @@ void AravisSource::open() {
       if (sb.short_of_frame() && !socket_warned_.exchange(true)) log::warn("camera", detail::socket_buffer_advice(cfg_.device, sb));
     }
   } catch (...) {
+    release_identity();
     if (fresh->stream != nullptr) arv_stream_set_emit_signals(fresh->stream, FALSE);
     if (fresh->device != nullptr)
       g_signal_handlers_disconnect_matched(fresh->device, G_SIGNAL_MATCH_DATA, 0, 0, nullptr, nullptr, &control_lost_);
@@ -148,6 +164,26 @@ void AravisSource::open() {
     exposure_ = std::make_unique<detail::ExposureWatcher>(st_->device, exposure_read_feature_, gc_mutex_);
   if (cfg_.ptp.enable) ptp_thread_ = std::thread([this] { status_loop(); });
 }
+void AravisSource::claim_identity(const AravisDetails& details) {
+  if (details.serial.empty()) return;  // nothing to tell two cameras apart by
+  const std::string identity = details.vendor + "/" + details.model + "/" + details.serial;
+  std::lock_guard lock(open_cameras_mutex);
+  auto [it, fresh] = open_cameras().try_emplace(identity, OpenCamera{this, cfg_.device});
+  if (!fresh && it->second.owner != this)
+    throw CameraError("aravis " + cfg_.device + ": the same camera (" + details.vendor + " " + details.model + ", serial " +
+                      details.serial + ") is already open as device '" + it->second.device +
+                      "': one camera in two config entries; the second is refused");
+  claimed_ = identity;
+}
+
+void AravisSource::release_identity() noexcept {
+  if (claimed_.empty()) return;
+  std::lock_guard lock(open_cameras_mutex);
+  const auto it = open_cameras().find(claimed_);
+  if (it != open_cameras().end() && it->second.owner == this) open_cameras().erase(it);
+  claimed_.clear();
+}
+
 void AravisSource::configure(State& st, AravisDetails& details) {
   ArvCamera* cam = st.camera;
   ArvDevice* dev = st.device;
@@ -159,6 +195,7 @@ void AravisSource::configure(State& st, AravisDetails& details) {
   if (const char* v = arv_camera_get_vendor_name(cam, nullptr)) details.vendor = v;
   if (const char* v = arv_camera_get_model_name(cam, nullptr)) details.model = v;
   if (const char* v = arv_camera_get_device_serial_number(cam, nullptr)) details.serial = v;
+  claim_identity(details);  // before anything is written: a second open must not stop the first's stream
   // 0. stopped: a device its last controller left acquiring (our own handle released after
   // mark_lost(), a crashed process) keeps its stream going to that controller's old port, and
   // many cameras lock format and ROI while acquiring (camera/README.md "Reopening a live camera").
@@ -347,6 +384,7 @@ void AravisSource::close() noexcept {
   ptp_locked_.store(false);
   std::lock_guard lock(mutex_);
   open_.store(false);
+  release_identity();
   if (st_->camera == nullptr) return;
   // The device's heartbeat thread outlives this close by seconds on the release thread below: a
   // CCP read of a restarted camera that nobody controls yet is "control-lost", which must reach

@@ -339,6 +339,41 @@ TEST_F(CameraIsolation, ACameraThatDiedMidStreamStopsWithin1s) {
   EXPECT_LT(stopped_in, 1 * kS);
 }
 
+// One camera given twice, by its address and by its serial (the config's check compares the strings):
+// the second open is refused with an error that names the first, before it writes anything, so the
+// first camera's stream goes on (issue 27 item 13). Before, the second open took the camera over
+// and stopped the first one's acquisition.
+TEST_F(CameraIsolation, TheSameCameraByAddressAndBySerialIsRefusedTheSecondTime) {
+  auto fake = start(0, {});
+  camera::AravisSource by_address(cfg(0));
+  auto c = cfg(0);
+  c.device = "RIG";
+  for (char ch : addr(0)) c.device += ch == '.' ? '_' : ch;  // the fake's serial (start_gige_fake)
+  camera::AravisSource by_serial(c);
+  by_address.open();
+  const auto frames_within = [&](Nanos ns) {
+    std::size_t n = 0;
+    const Nanos until = monotonic_now_ns() + ns;
+    while (monotonic_now_ns() < until)
+      if (by_address.next(50).status == camera::CaptureStatus::kFrame) ++n;
+    return n;
+  };
+  ASSERT_GE(frames_within(500 * kMs), 3u);
+  std::string error;
+  try {
+    by_serial.open();
+  } catch (const camera::CameraError& e) {
+    error = e.what();
+  }
+  std::printf("second open: %s\n", error.empty() ? "(opened)" : error.c_str());
+  EXPECT_NE(error.find("same camera"), std::string::npos) << error;
+  EXPECT_NE(error.find(addr(0)), std::string::npos) << "the error names the first entry: " << error;
+  EXPECT_FALSE(by_serial.is_open());
+  EXPECT_GE(frames_within(1000 * kMs), 10u) << "the first camera's stream after the second open";
+  by_address.close();
+  fake.stop(1000);
+}
+
 // A 1 Hz camera (in-process Aravis fake): the watchdog follows the period (three of them), so the
 // camera is not reopened before every frame (with the 800 ms cap it was: 11 reopens in 12 frames).
 TEST(CameraWatchdog, AOneHertzCameraIsNotReopened) {

@@ -77,6 +77,10 @@ class AravisSource final : public FrameSource {
  private:
   struct State;
   void configure(State& st, AravisDetails& details);
+  // The camera's vendor/model/serial, held while open: a second source on the same camera (another
+  // address or its serial) is refused with a CameraError (issue 27 item 13).
+  void claim_identity(const AravisDetails& details);
+  void release_identity() noexcept;
   void set_line_trigger(_ArvCamera* cam);
   void start_stream(State& st);
   void fold_stats() noexcept;
@@ -119,6 +123,7 @@ class AravisSource final : public FrameSource {
   std::atomic<std::uint64_t> missing_frames_{0};  // block-id gaps (count_missing_frames)
   std::uint64_t last_frame_id_ = 0;               // capture thread: the last popped frame's id, 0: none
   AravisDetails details_;
+  std::string claimed_;  // the identity claim_identity() holds; "" when none (open()/close() thread)
   // PTP: the state (under ptp_mutex_), the lock flag next() reads, the status thread.
   mutable std::mutex ptp_mutex_;
   PtpState ptp_;
