@@ -345,6 +345,10 @@ class Checker {
         // rig's count of losses is read at the window's edges give or take count_edge_ns (below).
         if (u == nullptr) u = nearest(units, s->acquisition_ns, tolerance);
         if (u != nullptr && u->sample == nullptr && !in_window(u->rec.acq_ns) && near_edge(u->rec.acq_ns)) u->sample = s;
+        // The monitor's check counts it at its unit too: a stamp slewed late after a clock step
+        // back lies past the doubled time its scan was made in, and counted there it was a sample
+        // of no unit (LIDAR campaign seed 7: "monitor: received 286 ... the device made 284").
+        if (u != nullptr) judged_at[s] = u->rec.acq_ns;
         continue;
       }
       if (u == nullptr && by_frame_id && flagged(topic, s->acquisition_ns)) u = same_frame(units, *s);

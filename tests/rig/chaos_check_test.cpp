@@ -327,6 +327,24 @@ TEST(ChaosCheck, AScanWhoseFirstPacketsWereDamagedIsItsUnitByItsFirstIntactPacke
   EXPECT_EQ(t.published_incomplete, 1u);
 }
 
+// The same doubled time, the scans made in it published with stamps slewed 450 ms late (a PTP LIDAR's
+// after the step). Matched by arrival to scans 20-24, they are left out of the monitor's check with
+// their scans; counted at their stamps they were five samples of no unit the device made while the
+// monitor watched (LIDAR campaign seed 7: left "received 286 + counted 1 = 287; the device made 284").
+TEST(ChaosCheck, SamplesOfScansMadeInDoubledTimeAreLeftOutOfTheMonitorsCheckWithTheirScans) {
+  Input in = honest();
+  in.truths[0].faults.push_back(truth::FaultRecord{1, "host.clock_step", kT0 + 25 * kPeriod, kT0 + 30 * kPeriod, -1, "ms=-500"});
+  for (int u = 0; u < kScans; ++u) {
+    SampleRecord& s = in.samples[static_cast<std::size_t>(u)];
+    s.first_rx_ns = in.truths[0].parts[static_cast<std::size_t>(u) * kParts].tx_ns + 60'000;
+    if (u >= 20 && u < 25) s.acquisition_ns += 450'000'000;
+  }
+  const Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("monitor_agrees")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).monitor_expected, 45u);
+}
+
 // A host clock step back: scans 20-24 were made in vehicle time that then happened again, so no
 // sample is matched to them; two of them were not published and the rig counted both. Its count is
 // held against the doubled time by number: an honest count, not a phantom (before: "the rig counted
