@@ -70,6 +70,8 @@ void add(ReplayFaults& out, const faults::FaultEvent& e, Nanos at_mono, const Re
   } else if (e.kind == "host.network_delay") {
     auto f = net(NK::kDelay);
     f.delay_ns = static_cast<Nanos>(e.number("ms", 50) * 1e6);
+    f.jitter_ns = static_cast<Nanos>(e.number("jitter_ms", 0) * 1e6);
+    if (f.delay_ns < 0 || f.jitter_ns < 0) throw std::invalid_argument("host.network_delay: ms and jitter_ms must be >= 0");
     out.network.push_back(f);
   } else if (e.kind == "lidar.restart") {
     sensor(SK::kRestart);

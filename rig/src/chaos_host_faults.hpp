@@ -4,7 +4,8 @@
 // and host.clock_step (CLOCK_REALTIME stepped, and stepped back when the fault ends), begun at the
 // plan's times from a thread of their own, each recorded in the host's truth record as it begins.
 // host.network_delay: netem on lo (network_delay.hpp) when the plan gives it to the host (device
-// "lo"), else recorded here with its parameters while the LIDAR mocks hold their datagrams.
+// "lo"), else recorded here with its parameters while the LIDAR mocks hold their datagrams (± the
+// jitter, in order).
 #include <atomic>
 #include <memory>
 #include <string>

@@ -3,9 +3,9 @@
 // replay --fault`): lidar.reorder (one packet n positions or ms late), lidar.duplicate_late (a copy
 // n packets later), lidar.loss_burst (N consecutive data packets; at_cut=1: half before the scan
 // cut, half after), lidar.corrupt (one packet with one field changed, packet_fields.hpp) and
-// host.network_delay (every packet held back ms while it lasts). Each decision is reported per
-// tagged packet (the truth record's fates). Pure: packets and their schedule offsets in, packets
-// out; no clock, no I/O. The rate-based faults stay in fault_injector.hpp.
+// host.network_delay (every packet held back ms ± jitter_ms while it lasts, in order). Each decision
+// is reported per tagged packet (the truth record's fates). Pure: packets and their schedule offsets
+// in, packets out; no clock, no I/O. The rate-based faults stay in fault_injector.hpp.
 #include <cstdint>
 #include <random>
 #include <span>
@@ -30,6 +30,7 @@ struct NetFault {
   FieldBytes field;      // corrupt
   bool random_byte = false;
   Nanos delay_ns = 0;    // network_delay
+  Nanos jitter_ns = 0;   // network_delay: each packet's hold within delay_ns ± this (never below 0), in order
 };
 
 struct NetPacket {
@@ -66,6 +67,14 @@ class ScheduledFaults {
     int after = 0;          // data packets still to pass before it
     Nanos release_ns = -1;  // or: released by the first packet at/after this offset
   };
+  // A jittered delay's hold: it walks between targets drawn uniformly from [delay - jitter, delay +
+  // jitter], falling by at most half the time between two packets, so no packet overtakes another
+  // (independent draws per packet would, and kept in order they would all wait for the longest).
+  struct HoldWalk {
+    bool started = false;
+    Nanos hold = 0, target = 0, last_in = 0;
+  };
+  Nanos hold_for(std::size_t fault, Nanos offset);
   void decide(std::int64_t tag, truth::Fate fate, std::uint64_t fault);
   std::span<std::byte> keep(std::span<const std::byte> bytes);
   void release(Nanos offset, bool force);
@@ -73,6 +82,9 @@ class ScheduledFaults {
   std::vector<NetFault> faults_;
   std::vector<bool> done_;
   std::mt19937_64 rng_;
+  std::mt19937_64 jitter_rng_;  // its own: a jitter changes no other fault's draws for a seed
+  std::vector<HoldWalk> walks_;
+  Nanos held_until_ = 0;  // the latest held packet's due offset: none after it leaves before it
   std::vector<Held> held_;
   std::vector<NetPacket> out_;
   std::vector<std::vector<std::byte>> store_;  // bytes of this call's copies (stable until the next call)
