@@ -345,6 +345,25 @@ TEST(ChaosCheck, SamplesOfScansMadeInDoubledTimeAreLeftOutOfTheMonitorsCheckWith
   EXPECT_EQ(r.topics.at(kTopic).monitor_expected, 45u);
 }
 
+// Shared host times again, scans 25-29 sent 1.005 ms before scans 20-24 at the same host time (just
+// past the 1 ms the two reads of the clock may differ by), their samples' first packets 10 us after
+// their own sends and so 995 us "before" the older scans' (LIDAR campaign seed 11, the Ouster's scans
+// 176/181). Nearest the arrival, sample 25 named scan 20: "published twice", scan 25 unaccounted.
+// Scans are published in order: the unit after the previous sample's goes first.
+TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheNextScanInOrderBeyondTheReadSlack) {
+  Input in = honest();
+  auto& parts = in.truths[0].parts;
+  for (std::uint32_t p = 0; p < kParts; ++p)
+    for (int u = 25; u < 30; ++u)
+      parts[static_cast<std::size_t>(u) * kParts + p].tx_ns = parts[static_cast<std::size_t>(u - 5) * kParts + p].tx_ns - 1'005'000;
+  for (int u = 0; u < kScans; ++u)
+    in.samples[static_cast<std::size_t>(u)].first_rx_ns = parts[static_cast<std::size_t>(u) * kParts].tx_ns + 10'000;
+  const Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
+  EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
+}
+
 // A host clock step back: scans 20-24 were made in vehicle time that then happened again, so no
 // sample is matched to them; two of them were not published and the rig counted both. Its count is
 // held against the doubled time by number: an honest count, not a phantom (before: "the rig counted
