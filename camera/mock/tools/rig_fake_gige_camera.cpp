@@ -37,6 +37,7 @@
 #include <fstream>
 #include <memory>
 #include <stdexcept>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -134,16 +135,46 @@ int usage(const char* self, int status) {
 
 }  // namespace
 
+// Set by g_poll on the fake's thread: its next g_get_real_time call (the check that ends the loop's
+// poll window) is told the window is over.
+thread_local bool t_end_window = false;
+
 // libaravis's fake stream thread calls g_poll through the PLT: this definition is the one it gets.
 extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
   static_assert(sizeof(GPollFD) == sizeof(pollfd));
   auto* pfds = reinterpret_cast<pollfd*>(fds);
   ArvFakeCamera* cam = g_camera.load(std::memory_order_acquire);
+  // Until it has sent its first frame the stock loop polls in windows of 100 ms that end only by
+  // the clock, and fires a trigger at a window's end: a stream's first frame came 0-100 ms after
+  // its trigger (the rig stamped it with that tick: the whole-rig campaign's stereo frame 41 ms
+  // "early" after a camera.slow_open reboot). A pending trigger of an acquiring camera ends the
+  // window now, as a camera exposes on its trigger.
+  // A trigger outside acquisition is ignored (SFNC's acquisition model), not kept for its start:
+  // Aravis retries a write through a camera.slow_open's silence, and the rebooted camera got the
+  // previous connection's TriggerSoftware and fired it as the new stream began.
+  if (cam != nullptr && arv_fake_camera_get_acquisition_status(cam) == 0 && trigger_pending(cam))
+    arv_fake_camera_write_register(cam, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, 0);
+  if (timeout > 0 && cam != nullptr && arv_fake_camera_get_acquisition_status(cam) != 0 &&
+      arv_fake_camera_is_in_software_trigger_mode(cam) && trigger_pending(cam)) {
+    t_end_window = true;
+    return 0;
+  }
   if (timeout != 0 || cam == nullptr) return ::poll(pfds, nfds, timeout);
   const bool triggered = arv_fake_camera_is_in_software_trigger_mode(cam);
   if (triggered && !trigger_pending(cam)) return ::poll(pfds, nfds, kIdleWaitMs);  // woken by the trigger's packet
   const timespec wait = until_next_grid_point(cam, triggered);
   return ::ppoll(pfds, nfds, &wait, nullptr);
+}
+
+// The loop's window check after g_poll ended a window (above): past it. Every other call is GLib's.
+extern "C" gint64 g_get_real_time() {
+  if (t_end_window) {
+    t_end_window = false;
+    return std::numeric_limits<gint64>::max() / 2;
+  }
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<gint64>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
 }
 
 namespace {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <atomic>
+#include <mutex>
 #include <set>
 #include <string>
 #include <thread>
@@ -372,6 +373,74 @@ TEST_F(CameraIsolation, TheSameCameraByAddressAndBySerialIsRefusedTheSecondTime)
   EXPECT_GE(frames_within(1000 * kMs), 10u) << "the first camera's stream after the second open";
   by_address.close();
   fake.stop(1000);
+}
+
+// Every frame of a software-triggered GigE fake is exposed at a trigger the rig sent it (by the
+// fake's truth), also the first one of a stream (the first open, and the reopen after a
+// camera.slow_open reboot). Before, Aravis' stock fake loop fired a trigger only at the end of its
+// 100 ms poll window until it had sent a frame: a stream's first frame came 16-95 ms after its
+// trigger, and the rig stamped it with that tick (the whole-rig campaign's stereo frame 41 ms
+// "early"). 10 ms: a loaded host holds a fill off its core by a few ms, never this much.
+TEST_F(CameraIsolation, AStreamsFirstFrameIsExposedAtItsTrigger) {
+  auto fake = start(0, {"camera.slow_open:s=1@2"});
+  const Nanos epoch = folder_[0].epoch();
+  dds::DomainConfig dc;
+  dc.domain_id = static_cast<dds_domainid_t>(test::lease_dds_domain());
+  dds::Participant p(dc);
+  dds::StampsWriter stamps(p);
+  TriggerGroup group("stale", 10.0);
+  struct Recorded : TriggerSource {  // the group, with every accepted call's time kept
+    TriggerGroup& g;
+    std::mutex m;
+    std::vector<Nanos> accepted;
+    explicit Recorded(TriggerGroup& gg) : g(gg) {}
+    std::size_t add(std::function<bool()> f) override {
+      return g.add([this, f] {
+        const Nanos at = vehicle_now_ns();
+        const bool r = f();
+        std::lock_guard l(m);
+        if (r) accepted.push_back(at);
+        return r;
+      });
+    }
+    Nanos tick_before(Nanos t, std::size_t member) const override { return g.tick_before(t, member); }
+  } recorded(group);
+  CameraConfig c;
+  c.name = "stale_" + std::to_string(::getpid());
+  c.frame_id = "camera_" + c.name;
+  c.source = cfg(0);
+  c.source.frame_rate = 10;
+  c.source.trigger = camera::TriggerMode::kSoftware;
+  c.trigger_group = "stale";
+  c.info = camera::uncalibrated(320, 200);
+  auto driver = std::make_unique<CameraDriver>(c, p, stamps, &recorded);
+  driver->start();
+  group.start();
+  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 5 * kS; }, 10000));
+  group.stop();
+  const auto st = driver->status();
+  driver->stop();
+  driver.reset();
+  fake.stop(1000);
+  EXPECT_EQ(value(st, "reopens"), "1") << st.message;
+  std::vector<Nanos> calls;
+  {
+    std::lock_guard l(recorded.m);
+    calls = recorded.accepted;
+  }
+  const Nanos reboot = vehicle_now_ns() - (monotonic_now_ns() - epoch) + 2 * kS;
+  std::size_t before = 0, after = 0;
+  for (const auto& part : truth::read(folder_[0].truth()).parts) {
+    if (part.fate != truth::Fate::kSent) continue;
+    ++(part.acq_ns < reboot ? before : after);
+    Nanos nearest = kS;  // since the latest accepted call at or before the exposure
+    for (const Nanos call : calls)
+      if (call <= part.acq_ns + kMs) nearest = std::min(nearest, std::abs(part.acq_ns - call));
+    EXPECT_LT(nearest, 10 * kMs) << "frame " << part.unit << " exposed " << static_cast<double>(nearest) * 1e-6
+                                << " ms after the rig's latest trigger";
+  }
+  EXPECT_GE(before, 5u) << "frames of the first stream";
+  EXPECT_GE(after, 10u) << "frames of the reopened stream";
 }
 
 // A 1 Hz camera (in-process Aravis fake): the watchdog follows the period (three of them), so the
