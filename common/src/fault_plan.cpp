@@ -60,7 +60,7 @@ constexpr std::array<KindInfo, 33> kKinds{{
     {"host.kill_mock", DC::kHost, "restart_s=1", 0, "a mock device process killed (SIGKILL), restarted restart_s later"},
     {"host.stall_mock", DC::kHost, "ms=300", 0, "a mock device process stopped (SIGSTOP) for ms"},
     {"host.network_delay", DC::kHost, "ms=50,jitter_ms=0", 1,
-     "the rig's LIDAR traffic held back by ms (netem on lo: +-jitter_ms; else in the LIDAR mocks, no jitter)"},
+     "the rig's LIDAR traffic held back by ms +-jitter_ms (netem on lo, may reorder; else in the LIDAR mocks, in order)"},
 }};
 
 std::map<std::string, std::string> default_params(const KindInfo& k) {
