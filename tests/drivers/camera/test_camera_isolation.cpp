@@ -56,6 +56,20 @@ class CameraIsolation : public ::testing::Test {
     if (!specs.empty()) o.chaos.plan = folder_[k].plan(o.chaos.device, specs);
     return camera::mock::start_gige_fake(o);
   }
+  // A driver of fake k named `prefix` + pid; in a trigger group: software-triggered at 10 Hz.
+  static CameraConfig driver_cfg(int k, const std::string& prefix, const std::string& group = "") {
+    CameraConfig c;
+    c.name = prefix + std::to_string(::getpid());
+    c.frame_id = "camera_" + c.name;
+    c.source = cfg(k);
+    if (!group.empty()) {
+      c.source.frame_rate = 10;
+      c.source.trigger = camera::TriggerMode::kSoftware;
+      c.trigger_group = group;
+    }
+    c.info = camera::uncalibrated(320, 200);
+    return c;
+  }
   static camera::SourceConfig cfg(int k) {
     camera::SourceConfig c;
     c.device = addr(k);
@@ -193,15 +207,7 @@ TEST_F(CameraIsolation, AStereoMemberThatNeverAnswersCostsItsPartnerNoFrame) {
   TriggerGroup group("stereo", 10.0);
   std::vector<std::unique_ptr<CameraDriver>> drivers;
   for (int k : {1, 0}) {  // the dead one first: it opens first, as in `rig up`'s config order
-    CameraConfig c;
-    c.name = std::string(k == 0 ? "iso_left_" : "iso_right_") + std::to_string(::getpid());
-    c.frame_id = "camera_" + c.name;
-    c.source = cfg(k);
-    c.source.frame_rate = 10;
-    c.source.trigger = camera::TriggerMode::kSoftware;
-    c.trigger_group = "stereo";
-    c.info = camera::uncalibrated(320, 200);
-    drivers.push_back(std::make_unique<CameraDriver>(c, p, stamps, &group));
+    drivers.push_back(std::make_unique<CameraDriver>(driver_cfg(k, k == 0 ? "iso_left_" : "iso_right_", "stereo"), p, stamps, &group));
   }
   CameraDriver& dead = *drivers[0];
   CameraDriver& live = *drivers[1];
@@ -257,15 +263,7 @@ TEST_F(CameraIsolation, ATriggerInFlightWhenItsCameraDiesHoldsNeitherItsPartnerN
   TriggerGroup group("stereo", 10.0);
   std::vector<std::unique_ptr<CameraDriver>> drivers;
   for (int k : {0, 1}) {
-    CameraConfig c;
-    c.name = std::string(k == 0 ? "inflight_left_" : "inflight_right_") + std::to_string(::getpid());
-    c.frame_id = "camera_" + c.name;
-    c.source = cfg(k);
-    c.source.frame_rate = 10;
-    c.source.trigger = camera::TriggerMode::kSoftware;
-    c.trigger_group = "stereo";
-    c.info = camera::uncalibrated(320, 200);
-    drivers.push_back(std::make_unique<CameraDriver>(c, p, stamps, &group));
+    drivers.push_back(std::make_unique<CameraDriver>(driver_cfg(k, k == 0 ? "inflight_left_" : "inflight_right_", "stereo"), p, stamps, &group));
   }
   CameraDriver& live = *drivers[0];
   CameraDriver& dead = *drivers[1];
@@ -322,12 +320,7 @@ TEST_F(CameraIsolation, ACameraThatDiedMidStreamStopsWithin1s) {
   dc.domain_id = static_cast<dds_domainid_t>(test::lease_dds_domain());
   dds::Participant p(dc);
   dds::StampsWriter stamps(p);
-  CameraConfig c;
-  c.name = "died_" + std::to_string(::getpid());
-  c.frame_id = "camera_" + c.name;
-  c.source = cfg(0);
-  c.info = camera::uncalibrated(320, 200);
-  CameraDriver driver(c, p, stamps);
+  CameraDriver driver(driver_cfg(0, "died_"), p, stamps);
   driver.start();
   ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + value(driver.status(), "frames")) >= 5; }, 5000));
   // Dead from 1.5 s; 0.2 s later, within the watchdog's 0.5 s: stopped while still "streaming".
@@ -405,15 +398,7 @@ TEST_F(CameraIsolation, AStreamsFirstFrameIsExposedAtItsTrigger) {
     }
     Nanos tick_before(Nanos t, std::size_t member) const override { return g.tick_before(t, member); }
   } recorded(group);
-  CameraConfig c;
-  c.name = "stale_" + std::to_string(::getpid());
-  c.frame_id = "camera_" + c.name;
-  c.source = cfg(0);
-  c.source.frame_rate = 10;
-  c.source.trigger = camera::TriggerMode::kSoftware;
-  c.trigger_group = "stale";
-  c.info = camera::uncalibrated(320, 200);
-  auto driver = std::make_unique<CameraDriver>(c, p, stamps, &recorded);
+  auto driver = std::make_unique<CameraDriver>(driver_cfg(0, "stale_", "stale"), p, stamps, &recorded);
   driver->start();
   group.start();
   ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 5 * kS; }, 10000));
