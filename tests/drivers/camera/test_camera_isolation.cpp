@@ -373,7 +373,8 @@ TEST_F(CameraIsolation, TheSameCameraByAddressAndBySerialIsRefusedTheSecondTime)
 // camera.slow_open reboot). Before, Aravis' stock fake loop fired a trigger only at the end of its
 // 100 ms poll window until it had sent a frame: a stream's first frame came 16-95 ms after its
 // trigger, and the rig stamped it with that tick (the whole-rig campaign's stereo frame 41 ms
-// "early"). 10 ms: a loaded host holds a fill off its core by a few ms, never this much.
+// "early"). 15 ms: on a loaded host (the suite at -j2) a fake's fill came 10.1 ms after the call,
+// once; the old loop's first frames were 0-100 ms late (16-95 ms seen).
 TEST_F(CameraIsolation, AStreamsFirstFrameIsExposedAtItsTrigger) {
   auto fake = start(0, {"camera.slow_open:s=1@2"});
   const Nanos epoch = folder_[0].epoch();
@@ -421,7 +422,7 @@ TEST_F(CameraIsolation, AStreamsFirstFrameIsExposedAtItsTrigger) {
     Nanos nearest = kS;  // since the latest accepted call at or before the exposure
     for (const Nanos call : calls)
       if (call <= part.acq_ns + kMs) nearest = std::min(nearest, std::abs(part.acq_ns - call));
-    EXPECT_LT(nearest, 10 * kMs) << "frame " << part.unit << " exposed " << static_cast<double>(nearest) * 1e-6
+    EXPECT_LT(nearest, 15 * kMs) << "frame " << part.unit << " exposed " << static_cast<double>(nearest) * 1e-6
                                 << " ms after the rig's latest trigger";
   }
   EXPECT_GE(before, 5u) << "frames of the first stream";

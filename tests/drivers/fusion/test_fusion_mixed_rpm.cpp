@@ -71,19 +71,27 @@ TEST(FusionMixedRpm, EverySlowScanIsFusedInTheRotationItBeganInAgainstTheTruth) 
   std::ifstream sets(out + "/fused_sets.jsonl");
   ASSERT_TRUE(sets.good()) << "no fused_sets.jsonl in " << out;
   std::set<std::uint64_t> front_seqs;
+  // Counted between the first and the last sweep with a front scan: the file also holds the
+  // warm-up's and the tail's sweeps, where the slow LIDAR may start later or stop sooner than the
+  // others (a fresh clone's suite: 37 front scans in 79 sweeps, 39.5 +- 2 expected of the file).
   std::uint64_t sweeps = 0, with_front = 0;
+  std::int64_t first = -1, last = -1;
   for (std::string line; std::getline(sets, line);) {
     const auto s = nlohmann::json::parse(line, nullptr, false);
     if (!s.is_object()) continue;
-    ++sweeps;
     for (const auto& m : s["members"])
       if (m["topic"] == kFront) {
         ++with_front;
+        if (first < 0) first = static_cast<std::int64_t>(sweeps);
+        last = static_cast<std::int64_t>(sweeps);
         EXPECT_TRUE(front_seqs.insert(m["seq"].get<std::uint64_t>()).second) << "front seq " << m["seq"] << " fused twice";
       }
+    ++sweeps;
   }
   EXPECT_GE(sweeps, 40u);
-  EXPECT_NEAR(static_cast<double>(with_front), static_cast<double>(sweeps) / 2, 2.0) << sweeps << " sweeps";
+  ASSERT_GE(first, 0) << "no sweep with a front scan";
+  const double span = static_cast<double>(last - first + 1);  // sweeps from the first front scan's to the last's
+  EXPECT_NEAR(static_cast<double>(with_front), (span + 1) / 2, 1.0) << with_front << " front scans in " << span << " sweeps";
   EXPECT_EQ(run.code, 0) << run.err;
 }
 
