@@ -7,65 +7,17 @@
 #include <limits>
 #include <set>
 
+#include "chaos_count.hpp"
 #include "chaos_fused_check.hpp"
+#include "chaos_unit_match.hpp"
+#include "chaos_units.hpp"
 
 namespace sensor_rig::rig::chaos {
 namespace {
 
 constexpr std::size_t kExamplesPerInvariant = 5;
-constexpr Nanos kSecond = 1'000'000'000;
-// A blind arc's ends move by up to a packet each turn (the packet grid is not locked to the turn):
-// the same arc in two turns differs by at most this many parts.
-constexpr std::uint32_t kBlindArcJitter = 2;
-// A part's send and its arrival are read from the same host clock (CLOCK_REALTIME): the arrival is
-// after the send, allowing this for the order of the two reads.
-constexpr Nanos kArrivalSlack = 1'000'000;
-
 Nanos seconds_ns(double s) { return static_cast<Nanos>(std::llround(s * 1e9)); }
 double ms(Nanos ns) { return static_cast<double>(ns) * 1e-6; }
-
-// One unit of the truth with what became of its parts.
-struct UnitTruth {
-  truth::UnitRecord rec;
-  std::uint32_t produced = 0;  // parts the device produced (everything but not_sent)
-  std::uint32_t lost = 0;      // dropped on the way
-  std::uint32_t damaged = 0;   // corrupted or truncated
-  // Parts reordered (delayed) past every other part of their unit: the rig may have published the
-  // unit before they came (a scan ends at its last packet or the next scan's first), so it may count
-  // them missing: the sample lacks them. A late packet is placed or counted, but not in the past.
-  std::uint32_t late = 0;
-  Nanos last_tx = 0;           // the latest send of its parts that were not delayed
-  std::vector<Nanos> delayed_tx;
-  Nanos first_intact_acq = 0;  // the earliest part that arrived as rendered (0 = none)
-  // The send of its first-fired part that went out in its turn (not delayed, not dropped): a scan's
-  // first packet arrives just after it. Its first part, not its earliest send: a clock step back
-  // inside the unit makes a later part's send read earlier.
-  Nanos first_tx = 0;
-  Nanos first_sent_acq = 0;
-  // The same for its first part sent in its turn as rendered: where its first parts were corrupted
-  // (lidar.stuck_azimuth, lidar.corrupt), the rig drops them and its scan begins at this one.
-  Nanos first_intact_tx = 0;
-  Nanos first_intact_sent_acq = 0;
-  // Parts the device did not send (a blind sector, a restart), and of those the ones a rig may count
-  // missing: a blind arc new this turn (the previous unit lacked none, or a different number).
-  // Nothing in a LIDAR's packets tells the first turn of a new blind sector from a loss burst at the
-  // same place (no packet sequence on these models: the received stream is the same), so counting it
-  // missing is the honest reading; the same arc a second turn in a row is the sensor's, not loss.
-  std::uint32_t not_sent = 0;
-  std::uint32_t new_blind = 0;
-  // A unit whose mock was killed before its line was written (host.kill_mock mid-scan): the parts
-  // it never made the rig may count missing (nothing in the stream tells a kill from a loss), up to
-  // a whole unit's parts. Its acquisition is known only to lie in its first part, which may be the
-  // previous unit's last packet across the cut: up to its own first part (`own_first_acq`).
-  bool has_line = true;
-  Nanos own_first_acq = 0;
-  std::uint32_t never_made = 0;
-  const SampleRecord* sample = nullptr;
-};
-
-struct Interval {
-  Nanos begin, end;
-};
 
 bool is_camera(const std::string& cls) { return cls == "camera" || cls == "v4l2"; }
 
@@ -97,42 +49,6 @@ bool touches(const faults::FaultEvent& e, const std::string& device, const std::
   if (e.device.empty() || e.device == "lo") return e.device_class() == faults::DeviceClass::kHost;
   if (e.device == device) return true;
   return std::find(depends_on.begin(), depends_on.end(), e.device) != depends_on.end();
-}
-
-// Vehicle time that happened twice: a clock step back (or the return of a step forward) makes the
-// host's CLOCK_REALTIME read the same values again. A stamp in such a range names two instants, so
-// units and samples there are left out of the stamp-matched counts rather than matched by luck.
-std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths) {
-  std::vector<Interval> out;
-  for (const auto& log : truths)
-    for (const auto& f : log.faults) {
-      if (f.kind != "host.clock_step") continue;
-      const auto pos = f.detail.find("ms=");
-      if (pos == std::string::npos) continue;
-      const Nanos by = static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6);
-      // `at` was read before the step; the step is undone at `until` (in the clock as it was).
-      if (by < 0) out.push_back({f.at_ns + by, f.at_ns});
-      if (by > 0) out.push_back({f.until_ns, f.until_ns + by});
-    }
-  return out;
-}
-
-// Loopback delays by netem (host.network_delay "via=netem"): a part sent then arrives `delay` after
-// its send in the truth (the mock hands it to the socket; the kernel holds it). The LIDAR mocks'
-// own hold needs none: their truth's send is the held one.
-struct HeldInterval {
-  Nanos begin, end, delay;
-};
-std::vector<HeldInterval> netem_delays(const std::vector<truth::Log>& truths) {
-  std::vector<HeldInterval> out;
-  for (const auto& log : truths)
-    for (const auto& f : log.faults) {
-      if (f.kind != "host.network_delay" || f.detail.find("via=netem") == std::string::npos) continue;
-      const auto pos = f.detail.find("ms=");
-      if (pos == std::string::npos) continue;
-      out.push_back({f.at_ns, f.until_ns, static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6)});
-    }
-  return out;
 }
 
 class Checker {
@@ -227,80 +143,7 @@ class Checker {
     const std::vector<std::string> depends = exp_it != in_.expected.end() ? depends_of(exp_it->second) : std::vector<std::string>{};
 
     // Units in time order, with their parts' fates.
-    std::vector<UnitTruth> units;
-    units.reserve(log.units.size());
-    std::map<std::int64_t, std::size_t> index;
-    for (const auto& u : log.units) {
-      index[u.unit] = units.size();
-      units.emplace_back();
-      units.back().rec = u;
-    }
-    // Parts of a unit whose own line is missing: its mock was killed (host.kill_mock) after sending
-    // them and before writing the unit (a LIDAR writes a scan's line when the scan ends). The unit
-    // was made all the same; without it the rig's count of that cut scan as lost was phantom loss.
-    std::set<std::int64_t> without_line;
-    for (const auto& p : log.parts) {
-      for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
-        if (const auto it = index.find(id); it != index.end()) {
-          UnitTruth& u = units[it->second];
-          if (without_line.contains(id) && p.acq_ns < u.rec.acq_ns) u.rec.acq_ns = p.acq_ns;  // its first part
-          if (without_line.contains(id) && id == p.unit && (u.own_first_acq == 0 || p.acq_ns < u.own_first_acq)) u.own_first_acq = p.acq_ns;
-          continue;
-        }
-        without_line.insert(id);
-        index[id] = units.size();
-        units.emplace_back();
-        units.back().rec = truth::UnitRecord{id, p.acq_ns, p.dev_ns, 0, 0};
-        units.back().has_line = false;
-        if (id == p.unit) units.back().own_first_acq = p.acq_ns;
-      }
-    }
-    for (const auto& p : log.parts) {
-      if (p.fate == truth::Fate::kNotSent) {
-        if (const auto it = index.find(p.unit); it != index.end()) ++units[it->second].not_sent;
-        continue;
-      }
-      // A packet across a scan cut has data in (and is counted by) every unit it touches.
-      for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
-        const auto it = index.find(id);
-        if (it == index.end()) continue;
-        UnitTruth& u = units[it->second];
-        ++u.produced;
-        if (p.fate == truth::Fate::kDropped) ++u.lost;
-        if (p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated) ++u.damaged;
-        if (p.fate == truth::Fate::kDelayed) u.delayed_tx.push_back(p.tx_ns);
-        else u.last_tx = std::max(u.last_tx, p.tx_ns);
-        if (truth::delivered_intact(p.fate) || p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated)
-          if (p.tx_ns != 0 && (u.first_tx == 0 || p.acq_ns < u.first_sent_acq)) {
-            u.first_tx = p.tx_ns;
-            u.first_sent_acq = p.acq_ns;
-          }
-        if (truth::delivered_intact(p.fate) && (u.first_intact_acq == 0 || p.acq_ns < u.first_intact_acq)) u.first_intact_acq = p.acq_ns;
-        if (truth::delivered_intact(p.fate) && p.fate != truth::Fate::kDelayed && p.tx_ns != 0 &&
-            (u.first_intact_tx == 0 || p.acq_ns < u.first_intact_sent_acq)) {
-          u.first_intact_tx = p.tx_ns;
-          u.first_intact_sent_acq = p.acq_ns;
-        }
-      }
-    }
-    for (auto& u : units)
-      for (const Nanos tx : u.delayed_tx) u.late += tx > u.last_tx ? 1U : 0U;
-    const std::uint32_t whole = median_parts(units);
-    for (auto& u : units)
-      if (!u.has_line && u.produced < whole) u.never_made = whole - u.produced;
-    // A device that writes no parts (one part per unit is implied): the unit itself was produced.
-    if (log.parts.empty())
-      for (auto& u : units) {
-        u.produced = 1;
-        u.first_intact_acq = u.rec.acq_ns;
-      }
-    std::sort(units.begin(), units.end(), [](const UnitTruth& a, const UnitTruth& b) { return a.rec.acq_ns < b.rec.acq_ns; });
-    for (std::size_t i = 0; i < units.size(); ++i) {
-      const std::uint32_t before = i > 0 ? units[i - 1].not_sent : 0;
-      const std::uint32_t now = units[i].not_sent;
-      if (now > 0 && (before == 0 || now > before + kBlindArcJitter || before > now + kBlindArcJitter)) units[i].new_blind = now;
-    }
-
+    std::vector<UnitTruth> units = units_of(log);
     const Nanos tolerance = match_tolerance(units);
     const double bound = stamp_bound_ms(t.device_class, in_.bounds);
     std::vector<double> errors;
@@ -333,7 +176,7 @@ class Checker {
     std::int64_t previous_unit = std::numeric_limits<std::int64_t>::min();
     for (const SampleRecord* s : samples) {
       const bool in_order = previous != nullptr && s->seq > previous->seq;
-      UnitTruth* u = by_arrival ? arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min())
+      UnitTruth* u = by_arrival ? unit_by_arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min())
                                 : nullptr;
       if (u != nullptr) {
         previous = s;
@@ -343,7 +186,7 @@ class Checker {
       if (u != nullptr ? !in_window(u->rec.acq_ns) : !in_window(s->acquisition_ns)) {
         // Just outside the window: matched only to tell which units there were published, since the
         // rig's count of losses is read at the window's edges give or take count_edge_ns (below).
-        if (u == nullptr) u = nearest(units, s->acquisition_ns, tolerance);
+        if (u == nullptr) u = unit_nearest(units, s->acquisition_ns, tolerance);
         if (u != nullptr && u->sample == nullptr && !in_window(u->rec.acq_ns) && near_edge(u->rec.acq_ns)) u->sample = s;
         // The monitor's check counts it at its unit too: a stamp slewed late after a clock step
         // back lies past the doubled time its scan was made in, and counted there it was a sample
@@ -351,8 +194,8 @@ class Checker {
         if (u != nullptr) judged_at[s] = u->rec.acq_ns;
         continue;
       }
-      if (u == nullptr && by_frame_id && flagged(topic, s->acquisition_ns)) u = same_frame(units, *s);
-      if (u == nullptr) u = nearest(units, s->acquisition_ns, tolerance);
+      if (u == nullptr && by_frame_id && flagged(topic, s->acquisition_ns)) u = unit_by_frame_id(units, *s);
+      if (u == nullptr) u = unit_nearest(units, s->acquisition_ns, tolerance);
       judged_at[s] = u != nullptr ? u->rec.acq_ns : s->acquisition_ns;
       if (u == nullptr) {
         ++t.unmatched;
@@ -414,32 +257,27 @@ class Checker {
       ++(incomplete ? t.published_incomplete : t.published_complete);
     }
     // The rig's count covers the units made in doubled time too: held against those not published
-    // there by number (`doubled_lost`), and against each judged unit by identity.
-    const auto counted = in_.counted_lost.find(topic);
-    std::uint64_t rig_counted = counted == in_.counted_lost.end() ? 0 : counted->second;
-    const std::uint64_t doubled_lost = doubled_made > doubled_samples ? doubled_made - doubled_samples : 0;
-    const std::string besides = doubled_lost > 0 ? " (" + std::to_string(doubled_lost) + " of them made while the host clock read a time twice)" : "";
-    // The count is the difference of two once-a-second monitor lines, each behind the losses it
-    // covers by up to a diagnostics period: its window's edges are the units' give or take
-    // count_edge_ns. An honest count lies between the losses inside the window shrunk by that and
-    // those inside it grown by that (a dbw.bad_crc second across the end: 11 of its 100 frames
-    // were "neither published nor counted" when held against the window itself).
-    std::uint64_t edge_in = 0, edge_out = 0;  // not published near the edges: inside / outside the window
+    // there by number, and against each judged unit by identity (chaos_count.hpp).
+    CountFacts facts;
+    if (const auto counted = in_.counted_lost.find(topic); counted != in_.counted_lost.end()) facts.rig_counted = counted->second;
+    facts.not_published = not_published;
+    facts.doubled_made = doubled_made;
+    facts.doubled_samples = doubled_samples;
+    // A dbw.bad_crc second across the window's end: 11 of its 100 frames were "neither published nor
+    // counted" when held against the window itself.
     for (const UnitTruth& u : units) {
       if (u.produced == 0 || u.sample != nullptr || !near_edge(u.rec.acq_ns)) continue;
-      ++(in_window(u.rec.acq_ns) ? edge_in : edge_out);
+      ++(in_window(u.rec.acq_ns) ? facts.edge_in : facts.edge_out);
     }
-    const std::uint64_t least = not_published - edge_in + doubled_lost, most = not_published + edge_out + doubled_lost;
-    if (rig_counted > most) {
-      violation("no_phantom_loss", topic, "the rig counted " + std::to_string(rig_counted) + " " + log.header.unit + "s lost, " +
-                                              std::to_string(most) + " were not published" + besides);
-      rig_counted = most;
-    }
-    const std::uint64_t unaccounted_all = least > rig_counted ? least - rig_counted : 0;
-    // The judged units' share (`sent` leaves doubled time out): what the count leaves open is theirs
-    // first, so that sent = complete + incomplete + counted + unaccounted.
-    t.unaccounted = std::min(not_published, unaccounted_all);
-    t.counted_lost = not_published - t.unaccounted;
+    const CountVerdict count = reconcile_count(facts);
+    const std::string besides =
+        count.doubled_lost > 0 ? " (" + std::to_string(count.doubled_lost) + " of them made while the host clock read a time twice)" : "";
+    if (count.over_counted)
+      violation("no_phantom_loss", topic, "the rig counted " + std::to_string(facts.rig_counted) + " " + log.header.unit + "s lost, " +
+                                              std::to_string(count.most) + " were not published" + besides);
+    const std::uint64_t unaccounted_all = count.unaccounted_all;
+    t.unaccounted = count.unaccounted;
+    t.counted_lost = count.counted_lost;
     if (unaccounted_all > 0) {
       std::string first = "in the time the host clock read twice";
       for (const UnitTruth& u : units)
@@ -480,109 +318,6 @@ class Checker {
     std::string out;
     for (const auto& k : kinds) out += (out.empty() ? " (faults: " : ", ") + k;
     return out.empty() ? out : out + ")";
-  }
-
-  // The unit whose first part went out last before the sample's first packet arrived, within
-  // `tolerance`. Host time that happened twice (a clock step back) gives two units sent at the same
-  // host time: of those, the first after `after_unit` (the unit of the sample's previous seq: scans
-  // are published in order), else the one whose acquisition is nearest the stamp (they are the
-  // step apart). Nearest the stamp alone failed where the stamps were slewed late after an earlier
-  // step: both scans sent at one host time went to the later unit ("scan 1099511627821 published
-  // twice (seq 305 and 310)", the earlier unit unaccounted; whole rig: "monitor_agrees off by +3").
-  // A unit sent while netem held the loopback arrives its delay later (held). A unit whose first
-  // parts were damaged is also the one whose first intact part went out last before the arrival
-  // (LIDAR campaign seed 25: the Ouster's first 40 packets of a scan stuck in azimuth, dropped by the
-  // rig; its sample's first packet came 64 ms after the scan's first send, past half a period, so the
-  // stamp named the next scan: "published twice (seq 165 and 166)").
-  static UnitTruth* arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance,
-                            const std::vector<HeldInterval>& held, std::int64_t after_unit) {
-    if (s.first_rx_ns == 0) return nullptr;
-    const auto since = [&](Nanos tx) {
-      Nanos d = 0;
-      for (const auto& h : held)
-        if (tx >= h.begin && tx < h.end) d = h.delay;
-      return s.first_rx_ns - tx - d;
-    };
-    const auto after_send = [&](const UnitTruth& u) {
-      const Nanos first = since(u.first_tx);
-      if ((first >= -kArrivalSlack && first <= tolerance) || u.first_intact_tx == 0 || u.first_intact_tx == u.first_tx) return first;
-      return since(u.first_intact_tx);
-    };
-    // Of the units sent within the tolerance before the arrival, one after `after_unit` first: two
-    // scans sent at one host time (a step back) need not be within kArrivalSlack of each other (LIDAR
-    // campaign seed 11: the Ouster's scan 181 sent 1.005 ms before scan 176's first send, its sample
-    // 10 us after 181's, 995 us before 176's went to 176; scan 181 "neither published nor counted",
-    // and the monitor one short).
-    const auto is_next = [&](const UnitTruth& u) { return u.rec.unit > after_unit; };
-    UnitTruth* best = nullptr;
-    Nanos best_after = 0;
-    for (auto& u : units) {
-      const Nanos after = after_send(u);
-      if (u.first_tx == 0 || after < -kArrivalSlack || after > tolerance) continue;
-      if (best == nullptr || (is_next(u) && !is_next(*best)) || (is_next(u) == is_next(*best) && after < best_after)) {
-        best = &u;
-        best_after = after;
-      }
-    }
-    if (best == nullptr) return nullptr;
-    for (auto& u : units) {
-      const Nanos after = after_send(u);
-      if (&u == best || u.first_tx == 0 || std::llabs(after - best_after) > kArrivalSlack) continue;
-      const bool u_next = u.rec.unit > after_unit, best_next = best->rec.unit > after_unit;
-      if (u_next != best_next) {
-        if (u_next) best = &u;
-        continue;
-      }
-      const bool by_order = u_next && after_unit != std::numeric_limits<std::int64_t>::min();
-      const bool nearer_stamp = std::llabs(u.rec.acq_ns - s.acquisition_ns) < std::llabs(best->rec.acq_ns - s.acquisition_ns);
-      if (by_order ? u.rec.unit < best->rec.unit : nearer_stamp) best = &u;
-    }
-    return best;
-  }
-
-  // A whole unit's parts: the median over the units whose line says how many they had.
-  static std::uint32_t median_parts(const std::vector<UnitTruth>& units) {
-    std::vector<std::uint32_t> parts;
-    for (const auto& u : units)
-      if (u.has_line && u.rec.parts > 0) parts.push_back(u.rec.parts);
-    if (parts.empty()) return 0;
-    std::nth_element(parts.begin(), parts.begin() + static_cast<std::ptrdiff_t>(parts.size() / 2), parts.end());
-    return parts[parts.size() / 2];
-  }
-
-  static Nanos match_tolerance(const std::vector<UnitTruth>& units) {
-    if (units.size() < 2) return kSecond / 20;
-    std::vector<Nanos> gaps;
-    for (std::size_t i = 1; i < units.size(); ++i) gaps.push_back(units[i].rec.acq_ns - units[i - 1].rec.acq_ns);
-    std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
-    return std::max<Nanos>(gaps[gaps.size() / 2] / 2, 1'000'000);
-  }
-
-  // The unit with the sample's frame id (a camera's 16-bit GVSP block id, a V4L2 sequence: the low
-  // 16 bits of the truth's unit) nearest its first packet's arrival, within 1 s.
-  static UnitTruth* same_frame(std::vector<UnitTruth>& units, const SampleRecord& s) {
-    if (s.first_rx_ns == 0) return nullptr;
-    UnitTruth* best = nullptr;
-    for (auto& u : units) {
-      if ((static_cast<std::uint64_t>(u.rec.unit) & 0xffff) != (s.seq & 0xffff)) continue;
-      if (best == nullptr || std::llabs(u.rec.acq_ns - s.first_rx_ns) < std::llabs(best->rec.acq_ns - s.first_rx_ns)) best = &u;
-    }
-    return best != nullptr && std::llabs(best->rec.acq_ns - s.first_rx_ns) <= kSecond ? best : nullptr;
-  }
-
-  static UnitTruth* nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance) {
-    auto it = std::lower_bound(units.begin(), units.end(), t, [](const UnitTruth& u, Nanos v) { return u.rec.acq_ns < v; });
-    UnitTruth* best = nullptr;
-    Nanos best_d = tolerance + 1;
-    for (auto c : {it, it == units.begin() ? it : std::prev(it)}) {
-      if (c == units.end()) continue;
-      const Nanos d = std::llabs(c->rec.acq_ns - t);
-      if (d < best_d) {
-        best_d = d;
-        best = &*c;
-      }
-    }
-    return best_d <= tolerance ? best : nullptr;
   }
 
   // Intervals of the window in which a fault (its own, a device it depends on, the host's) touched it.

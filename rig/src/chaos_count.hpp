@@ -1,0 +1,34 @@
+#pragma once
+// The rig's own count of lost units (counted_lost) held against the units it did not publish
+// (chaos_check.cpp). The count can be matched to units by number only: it is the difference of two
+// once-a-second monitor lines, and in vehicle time the host clock read twice its units have no
+// stamp that names them alone.
+#include <cstdint>
+
+namespace sensor_rig::rig::chaos {
+
+struct CountFacts {
+  std::uint64_t rig_counted = 0;    // units the rig counted lost in the window
+  std::uint64_t not_published = 0;  // judged units (in the window, not in doubled time) not published
+  // Units not published within count_edge_ns of the window's edges, inside / outside it: the count's
+  // window lies from the judged one by up to that (each monitor line is up to a diagnostics period
+  // behind the losses it covers), so those may be in the count or not.
+  std::uint64_t edge_in = 0, edge_out = 0;
+  // Units made in vehicle time the host clock read twice (a step back), and samples published there.
+  std::uint64_t doubled_made = 0, doubled_samples = 0;
+};
+
+struct CountVerdict {
+  std::uint64_t doubled_lost = 0;     // units of doubled time not published: the count may cover them
+  std::uint64_t most = 0;             // the most an honest count can be
+  bool over_counted = false;          // the rig counted more than `most`: phantom loss
+  std::uint64_t unaccounted_all = 0;  // losses neither published nor counted (doubled time's included)
+  std::uint64_t unaccounted = 0;      // of the judged units: sent = published + counted_lost + unaccounted
+  std::uint64_t counted_lost = 0;     // of the judged units
+};
+
+// An honest count lies in [not_published - edge_in + doubled_lost, not_published + edge_out +
+// doubled_lost]; below it the rest is unaccounted (judged units first), above it phantom.
+CountVerdict reconcile_count(const CountFacts& f);
+
+}  // namespace sensor_rig::rig::chaos

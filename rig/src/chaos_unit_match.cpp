@@ -1,0 +1,99 @@
+#include "chaos_unit_match.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <iterator>
+#include <limits>
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+// A part's send and its arrival are read from the same host clock (CLOCK_REALTIME): the arrival is
+// after the send, allowing this for the order of the two reads.
+constexpr Nanos kArrivalSlack = 1'000'000;
+
+}  // namespace
+
+// Host time that happened twice (a clock step back) gives two units sent at the same
+// host time: of those, the first after `after_unit` (the unit of the sample's previous seq: scans
+// are published in order), else the one whose acquisition is nearest the stamp (they are the
+// step apart). Nearest the stamp alone failed where the stamps were slewed late after an earlier
+// step: both scans sent at one host time went to the later unit ("scan 1099511627821 published
+// twice (seq 305 and 310)", the earlier unit unaccounted; whole rig: "monitor_agrees off by +3").
+// A unit sent while netem held the loopback arrives its delay later (held). A unit whose first
+// parts were damaged is also the one whose first intact part went out last before the arrival
+// (LIDAR campaign seed 25: the Ouster's first 40 packets of a scan stuck in azimuth, dropped by the
+// rig; its sample's first packet came 64 ms after the scan's first send, past half a period, so the
+// stamp named the next scan: "published twice (seq 165 and 166)").
+UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance,
+                           const std::vector<HeldInterval>& held, std::int64_t after_unit) {
+  if (s.first_rx_ns == 0) return nullptr;
+  const auto since = [&](Nanos tx) {
+    Nanos d = 0;
+    for (const auto& h : held)
+      if (tx >= h.begin && tx < h.end) d = h.delay;
+    return s.first_rx_ns - tx - d;
+  };
+  const auto after_send = [&](const UnitTruth& u) {
+    const Nanos first = since(u.first_tx);
+    if ((first >= -kArrivalSlack && first <= tolerance) || u.first_intact_tx == 0 || u.first_intact_tx == u.first_tx) return first;
+    return since(u.first_intact_tx);
+  };
+  // Of the units sent within the tolerance before the arrival, one after `after_unit` first: two
+  // scans sent at one host time (a step back) need not be within kArrivalSlack of each other (LIDAR
+  // campaign seed 11: the Ouster's scan 181 sent 1.005 ms before scan 176's first send, its sample
+  // 10 us after 181's, 995 us before 176's went to 176; scan 181 "neither published nor counted",
+  // and the monitor one short).
+  const auto is_next = [&](const UnitTruth& u) { return u.rec.unit > after_unit; };
+  UnitTruth* best = nullptr;
+  Nanos best_after = 0;
+  for (auto& u : units) {
+    const Nanos after = after_send(u);
+    if (u.first_tx == 0 || after < -kArrivalSlack || after > tolerance) continue;
+    if (best == nullptr || (is_next(u) && !is_next(*best)) || (is_next(u) == is_next(*best) && after < best_after)) {
+      best = &u;
+      best_after = after;
+    }
+  }
+  if (best == nullptr) return nullptr;
+  for (auto& u : units) {
+    const Nanos after = after_send(u);
+    if (&u == best || u.first_tx == 0 || std::llabs(after - best_after) > kArrivalSlack) continue;
+    const bool u_next = u.rec.unit > after_unit, best_next = best->rec.unit > after_unit;
+    if (u_next != best_next) {
+      if (u_next) best = &u;
+      continue;
+    }
+    const bool by_order = u_next && after_unit != std::numeric_limits<std::int64_t>::min();
+    const bool nearer_stamp = std::llabs(u.rec.acq_ns - s.acquisition_ns) < std::llabs(best->rec.acq_ns - s.acquisition_ns);
+    if (by_order ? u.rec.unit < best->rec.unit : nearer_stamp) best = &u;
+  }
+  return best;
+}
+
+UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s) {
+  if (s.first_rx_ns == 0) return nullptr;
+  UnitTruth* best = nullptr;
+  for (auto& u : units) {
+    if ((static_cast<std::uint64_t>(u.rec.unit) & 0xffff) != (s.seq & 0xffff)) continue;
+    if (best == nullptr || std::llabs(u.rec.acq_ns - s.first_rx_ns) < std::llabs(best->rec.acq_ns - s.first_rx_ns)) best = &u;
+  }
+  return best != nullptr && std::llabs(best->rec.acq_ns - s.first_rx_ns) <= kSecond ? best : nullptr;
+}
+
+UnitTruth* unit_nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance) {
+  auto it = std::lower_bound(units.begin(), units.end(), t, [](const UnitTruth& u, Nanos v) { return u.rec.acq_ns < v; });
+  UnitTruth* best = nullptr;
+  Nanos best_d = tolerance + 1;
+  for (auto c : {it, it == units.begin() ? it : std::prev(it)}) {
+    if (c == units.end()) continue;
+    const Nanos d = std::llabs(c->rec.acq_ns - t);
+    if (d < best_d) {
+      best_d = d;
+      best = &*c;
+    }
+  }
+  return best_d <= tolerance ? best : nullptr;
+}
+
+}  // namespace sensor_rig::rig::chaos

@@ -1,0 +1,26 @@
+#pragma once
+// Which unit of a device's truth a published sample is (chaos_check.cpp): a LIDAR scan by its
+// first packet's arrival, a flagged camera frame by its frame id, anything else by its stamp.
+// Each returns nullptr where no unit qualifies; the caller decides what that means.
+#include <cstdint>
+#include <vector>
+
+#include "chaos_units.hpp"
+
+namespace sensor_rig::rig::chaos {
+
+// The unit whose first part was sent last before the sample's first packet arrived, within
+// `tolerance`; of units sent at one host time (a clock step back), the first after `after_unit`
+// (the unit of the sample's previous seq: scans are published in order). nullptr: no arrival
+// in the record, or no unit sent within the tolerance before it.
+UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance,
+                           const std::vector<HeldInterval>& held, std::int64_t after_unit);
+
+// The unit with the sample's frame id (a camera's 16-bit GVSP block id, a V4L2 sequence: the low
+// 16 bits of the truth's unit) nearest its first packet's arrival, within 1 s.
+UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s);
+
+// The unit whose acquisition is nearest `t`, within `tolerance` (units in acquisition order).
+UnitTruth* unit_nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance);
+
+}  // namespace sensor_rig::rig::chaos

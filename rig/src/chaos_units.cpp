@@ -1,0 +1,140 @@
+#include "chaos_units.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <map>
+#include <set>
+#include <string>
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+// A blind arc's ends move by up to a packet each turn (the packet grid is not locked to the turn):
+// the same arc in two turns differs by at most this many parts.
+constexpr std::uint32_t kBlindArcJitter = 2;
+
+// A whole unit's parts: the median over the units whose line says how many they had.
+std::uint32_t median_parts(const std::vector<UnitTruth>& units) {
+  std::vector<std::uint32_t> parts;
+  for (const auto& u : units)
+    if (u.has_line && u.rec.parts > 0) parts.push_back(u.rec.parts);
+  if (parts.empty()) return 0;
+  std::nth_element(parts.begin(), parts.begin() + static_cast<std::ptrdiff_t>(parts.size() / 2), parts.end());
+  return parts[parts.size() / 2];
+}
+
+}  // namespace
+
+std::vector<UnitTruth> units_of(const truth::Log& log) {
+  std::vector<UnitTruth> units;
+  units.reserve(log.units.size());
+  std::map<std::int64_t, std::size_t> index;
+  for (const auto& u : log.units) {
+    index[u.unit] = units.size();
+    units.emplace_back();
+    units.back().rec = u;
+  }
+  // Parts of a unit whose own line is missing: its mock was killed (host.kill_mock) after sending
+  // them and before writing the unit (a LIDAR writes a scan's line when the scan ends). The unit
+  // was made all the same; without it the rig's count of that cut scan as lost was phantom loss.
+  std::set<std::int64_t> without_line;
+  for (const auto& p : log.parts) {
+    for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
+      if (const auto it = index.find(id); it != index.end()) {
+        UnitTruth& u = units[it->second];
+        if (without_line.contains(id) && p.acq_ns < u.rec.acq_ns) u.rec.acq_ns = p.acq_ns;  // its first part
+        if (without_line.contains(id) && id == p.unit && (u.own_first_acq == 0 || p.acq_ns < u.own_first_acq)) u.own_first_acq = p.acq_ns;
+        continue;
+      }
+      without_line.insert(id);
+      index[id] = units.size();
+      units.emplace_back();
+      units.back().rec = truth::UnitRecord{id, p.acq_ns, p.dev_ns, 0, 0};
+      units.back().has_line = false;
+      if (id == p.unit) units.back().own_first_acq = p.acq_ns;
+    }
+  }
+  for (const auto& p : log.parts) {
+    if (p.fate == truth::Fate::kNotSent) {
+      if (const auto it = index.find(p.unit); it != index.end()) ++units[it->second].not_sent;
+      continue;
+    }
+    // A packet across a scan cut has data in (and is counted by) every unit it touches.
+    for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
+      const auto it = index.find(id);
+      if (it == index.end()) continue;
+      UnitTruth& u = units[it->second];
+      ++u.produced;
+      if (p.fate == truth::Fate::kDropped) ++u.lost;
+      if (p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated) ++u.damaged;
+      if (p.fate == truth::Fate::kDelayed) u.delayed_tx.push_back(p.tx_ns);
+      else u.last_tx = std::max(u.last_tx, p.tx_ns);
+      if (truth::delivered_intact(p.fate) || p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated)
+        if (p.tx_ns != 0 && (u.first_tx == 0 || p.acq_ns < u.first_sent_acq)) {
+          u.first_tx = p.tx_ns;
+          u.first_sent_acq = p.acq_ns;
+        }
+      if (truth::delivered_intact(p.fate) && (u.first_intact_acq == 0 || p.acq_ns < u.first_intact_acq)) u.first_intact_acq = p.acq_ns;
+      if (truth::delivered_intact(p.fate) && p.fate != truth::Fate::kDelayed && p.tx_ns != 0 &&
+          (u.first_intact_tx == 0 || p.acq_ns < u.first_intact_sent_acq)) {
+        u.first_intact_tx = p.tx_ns;
+        u.first_intact_sent_acq = p.acq_ns;
+      }
+    }
+  }
+  for (auto& u : units)
+    for (const Nanos tx : u.delayed_tx) u.late += tx > u.last_tx ? 1U : 0U;
+  const std::uint32_t whole = median_parts(units);
+  for (auto& u : units)
+    if (!u.has_line && u.produced < whole) u.never_made = whole - u.produced;
+  // A device that writes no parts (one part per unit is implied): the unit itself was produced.
+  if (log.parts.empty())
+    for (auto& u : units) {
+      u.produced = 1;
+      u.first_intact_acq = u.rec.acq_ns;
+    }
+  std::sort(units.begin(), units.end(), [](const UnitTruth& a, const UnitTruth& b) { return a.rec.acq_ns < b.rec.acq_ns; });
+  for (std::size_t i = 0; i < units.size(); ++i) {
+    const std::uint32_t before = i > 0 ? units[i - 1].not_sent : 0;
+    const std::uint32_t now = units[i].not_sent;
+    if (now > 0 && (before == 0 || now > before + kBlindArcJitter || before > now + kBlindArcJitter)) units[i].new_blind = now;
+  }
+  return units;
+}
+
+Nanos match_tolerance(const std::vector<UnitTruth>& units) {
+  if (units.size() < 2) return kSecond / 20;
+  std::vector<Nanos> gaps;
+  for (std::size_t i = 1; i < units.size(); ++i) gaps.push_back(units[i].rec.acq_ns - units[i - 1].rec.acq_ns);
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+  return std::max<Nanos>(gaps[gaps.size() / 2] / 2, 1'000'000);
+}
+
+std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths) {
+  std::vector<Interval> out;
+  for (const auto& log : truths)
+    for (const auto& f : log.faults) {
+      if (f.kind != "host.clock_step") continue;
+      const auto pos = f.detail.find("ms=");
+      if (pos == std::string::npos) continue;
+      const Nanos by = static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6);
+      // `at` was read before the step; the step is undone at `until` (in the clock as it was).
+      if (by < 0) out.push_back({f.at_ns + by, f.at_ns});
+      if (by > 0) out.push_back({f.until_ns, f.until_ns + by});
+    }
+  return out;
+}
+
+std::vector<HeldInterval> netem_delays(const std::vector<truth::Log>& truths) {
+  std::vector<HeldInterval> out;
+  for (const auto& log : truths)
+    for (const auto& f : log.faults) {
+      if (f.kind != "host.network_delay" || f.detail.find("via=netem") == std::string::npos) continue;
+      const auto pos = f.detail.find("ms=");
+      if (pos == std::string::npos) continue;
+      out.push_back({f.at_ns, f.until_ns, static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6)});
+    }
+  return out;
+}
+
+}  // namespace sensor_rig::rig::chaos

@@ -1,0 +1,64 @@
+// The judge's reconciliation of the rig's own loss count (rig/src/chaos_count.hpp): by number, with
+// the count's window edges and vehicle time read twice allowed for, and nothing else.
+#include <gtest/gtest.h>
+
+#include "chaos_count.hpp"
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+CountFacts facts(std::uint64_t rig_counted, std::uint64_t not_published) {
+  CountFacts f;
+  f.rig_counted = rig_counted;
+  f.not_published = not_published;
+  return f;
+}
+
+TEST(ChaosCount, AnExactCountLeavesNothingUnaccounted) {
+  const auto v = reconcile_count(facts(10, 10));
+  EXPECT_FALSE(v.over_counted);
+  EXPECT_EQ(v.unaccounted_all, 0U);
+  EXPECT_EQ(v.counted_lost, 10U);
+}
+
+TEST(ChaosCount, LossesTheRigDidNotCountAreUnaccounted) {
+  const auto v = reconcile_count(facts(7, 10));
+  EXPECT_EQ(v.unaccounted_all, 3U);
+  EXPECT_EQ(v.unaccounted, 3U);
+  EXPECT_EQ(v.counted_lost, 7U);
+}
+
+TEST(ChaosCount, LossesNearTheEdgesMayBeInTheCountOrNotOnlyThose) {
+  auto f = facts(8, 10);
+  f.edge_in = 2;  // two of the ten lie within count_edge_ns inside the window's edges
+  EXPECT_EQ(reconcile_count(f).unaccounted_all, 0U);
+  f.rig_counted = 7;  // a third one missing from the count is not the edges'
+  EXPECT_EQ(reconcile_count(f).unaccounted_all, 1U);
+  f = facts(12, 10);
+  f.edge_out = 2;  // two just outside the window may be in the count
+  EXPECT_FALSE(reconcile_count(f).over_counted);
+  f.rig_counted = 13;
+  const auto v = reconcile_count(f);
+  EXPECT_TRUE(v.over_counted);
+  EXPECT_EQ(v.most, 12U);
+  EXPECT_EQ(v.unaccounted_all, 0U);  // an over-count is phantom loss, not also a shortfall
+}
+
+TEST(ChaosCount, UnitsOfTimeReadTwiceAreHeldByNumberAndNotChargedToJudgedUnits) {
+  auto f = facts(3, 0);
+  f.doubled_made = 5;
+  f.doubled_samples = 2;  // three units of the doubled second were not published: the count may cover them
+  auto v = reconcile_count(f);
+  EXPECT_EQ(v.doubled_lost, 3U);
+  EXPECT_FALSE(v.over_counted);
+  EXPECT_EQ(v.unaccounted_all, 0U);
+  f.rig_counted = 2;
+  v = reconcile_count(f);
+  EXPECT_EQ(v.unaccounted_all, 1U);
+  EXPECT_EQ(v.unaccounted, 0U);  // no judged unit is missing: sent = published + counted + unaccounted holds
+  f.rig_counted = 4;
+  EXPECT_TRUE(reconcile_count(f).over_counted);
+}
+
+}  // namespace
+}  // namespace sensor_rig::rig::chaos
