@@ -259,7 +259,12 @@ int FakeV4l2Device::ioctl_locked(unsigned long request, void* arg) {
     }
     case VIDIOC_STREAMON:
       if (buffers_.empty()) return -EINVAL;
+      if (streaming_) return 0;
       streaming_ = true;
+      // Drivers number a stream's frames from 0 (vb2 drivers, uvcvideo): frames lost at its very
+      // start show in the first buffer's sequence. The truth's unit keeps the stream's ordinal
+      // above the 32-bit sequence, so units stay unique and increasing.
+      if (streams_++ > 0) sequence_ = 0;
       next_due_ = monotonic_now_ns();
       return 0;
     case VIDIOC_STREAMOFF:
@@ -355,32 +360,60 @@ void FakeV4l2Device::record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, t
   if (truth_ == nullptr) return;
   const Nanos to_vehicle = vehicle_now_ns() - monotonic_now_ns();
   // The buffer's timestamp is a timeval: what the device says is whole microseconds.
-  truth_->frame(seq, acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns(), fate, fault);
+  const std::int64_t stream = streams_ > 0 ? static_cast<std::int64_t>(streams_ - 1) : 0;
+  truth_->frame(stream * (std::int64_t{1} << 32) + seq, acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns(), fate, fault);
 }
 
 void FakeV4l2Device::fault_line(const faults::FaultEvent& e, std::int64_t unit, const std::string& detail) {
   if (truth_ != nullptr) truth_->fault(e, schedule_.vehicle_ns(e.at_s), schedule_.vehicle_ns(e.at_s + e.duration_s), unit, detail);
 }
 
+// Every v4l2.disconnect whose start has passed is recorded, once, whenever the fake first hears of
+// it: one that begins while the device is already gone (two overlapping) extends the absence, one
+// that began and ended while nobody called (the device closed, the rig between reopens) was an
+// absence nobody saw. Both were in no truth record (the 10-minute campaign's faults_injected).
 void FakeV4l2Device::apply_faults_locked() {
   if (schedule_.events().empty()) return;
   const Nanos now = monotonic_now_ns();
-  const auto* e = schedule_.active("v4l2.disconnect", schedule_.seconds(now));
-  if (e != nullptr && !fault_disconnected_) {
+  const double t = schedule_.seconds(now);
+  const auto* active = schedule_.active("v4l2.disconnect", t);
+  if (active != nullptr && !fault_disconnected_) {
     fault_disconnected_ = true;
     disconnected_at_ = streaming_ ? now : 0;  // a device not streaming misses no frame
-    disconnect_fault_ = e->id;
-    fault_line(*e, sequence_, "the device is gone (ENODEV), then returns");
-  } else if (e == nullptr && fault_disconnected_) {
-    // It returns. The frames its clock would have had meanwhile were never made: not_sent, and its
-    // sequence counts them (a plugged-back device's own numbering is not modelled).
-    fault_disconnected_ = false;
-    if (disconnected_at_ > 0) {
-      const auto period = static_cast<Nanos>(1e9 / rate_hz_);
-      for (Nanos slot = disconnected_at_; slot < now; slot += period) record(sequence_++, slot, slot, truth::Fate::kNotSent, disconnect_fault_);
-    }
-    streaming_ = false;  // what was streaming is gone with the device
+    disconnect_fault_ = active->id;
+    disconnects_seen_.insert(active->id);
+    fault_line(*active, sequence_, "the device is gone (ENODEV), then returns");
   }
+  for (const auto& e : schedule_.events()) {
+    if (e.kind != "v4l2.disconnect" || e.at_s > t || !disconnects_seen_.insert(e.id).second) continue;
+    if (e.active_at(t)) {
+      fault_line(e, sequence_, "the device is gone (ENODEV) already (fault " + std::to_string(disconnect_fault_) +
+                                   "): gone until this one ends too");
+      continue;
+    }
+    // Over before anything was asked of the device: gone for that time all the same (an open would
+    // have failed). A stream running through it (its consumer not polling) is lost with the device.
+    fault_line(e, sequence_, "the device was gone (ENODEV) and back before anything was asked of it");
+    if (!fault_disconnected_ && streaming_) {
+      fault_disconnected_ = true;
+      disconnected_at_ = std::max(schedule_.mono_ns(e.at_s), next_due_);  // the slots not made yet
+      disconnect_fault_ = e.id;
+      end_disconnect_locked(schedule_.mono_ns(e.at_s + e.duration_s));
+    }
+  }
+  if (active == nullptr && fault_disconnected_) end_disconnect_locked(now);
+}
+
+// It returns. The frames its clock would have had meanwhile were never made: not_sent, numbered on
+// from the lost stream (the next STREAMON numbers from 0 again, as drivers do).
+void FakeV4l2Device::end_disconnect_locked(Nanos until) {
+  fault_disconnected_ = false;
+  if (disconnected_at_ > 0) {
+    const auto period = static_cast<Nanos>(1e9 / rate_hz_);
+    for (Nanos slot = disconnected_at_; slot < until; slot += period) record(sequence_++, slot, slot, truth::Fate::kNotSent, disconnect_fault_);
+  }
+  disconnected_at_ = 0;
+  streaming_ = false;  // what was streaming is gone with the device
 }
 
 }  // namespace sensor_rig::camera::mock

@@ -1,8 +1,11 @@
 // The fake V4L2 device under a campaign: its truth record against what V4l2Source reads, and the
 // v4l2.* faults (camera/README.md "Mocks: faults and truth").
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <map>
+#include <set>
+#include <vector>
 #include <string>
 
 #include "sensor_rig/camera/mock/fake_v4l2_device.hpp"
@@ -127,6 +130,105 @@ TEST(V4l2Chaos, DisconnectThenReturn) {
   const auto not_sent = test::count_fate(log, truth::Fate::kNotSent);
   EXPECT_GE(not_sent, 20u);  // 0.5 s at 50 Hz
   EXPECT_LE(not_sent, 30u);
+}
+
+// Reads until the device is gone, then reopens every 20 ms until it is back: a camera driver's
+// loop around a v4l2.disconnect (without its backoff). Returns the sequences read.
+std::vector<std::uint32_t> read_through_a_disconnect(V4l2Source& src, Nanos until) {
+  std::vector<std::uint32_t> seqs;
+  bool open = true;
+  while (monotonic_now_ns() < until) {
+    if (!open) {
+      try {
+        src.open();
+        open = true;
+      } catch (const CameraError&) {
+        usleep(20'000);
+      }
+      continue;
+    }
+    auto c = src.next(50);
+    if (c.status == CaptureStatus::kFrame) seqs.push_back(static_cast<std::uint32_t>(c.frame.meta().seq));
+    if (c.status == CaptureStatus::kDisconnected) {
+      src.close();
+      open = false;
+    }
+  }
+  return seqs;
+}
+
+// Issue 27 (10-minute campaign): a v4l2.sequence_gap planned while the device was gone fires at
+// the first slots of the stream after the reopen. The device's frames dropped there must be
+// counted: the truth's dropped frames = V4l2Source's missing_frames. Old code: the gap came before
+// the stream's first buffer and the sequence was held only within one open: 0 counted of 3.
+TEST(V4l2Chaos, AGapAtAStreamsStartIsCounted) {
+  test::ChaosFolder folder;
+  std::uint64_t missing = 0;
+  std::vector<std::uint32_t> seqs;
+  {
+    auto dev = device(folder, {"v4l2.disconnect@0.2+0.4", "v4l2.sequence_gap:n=3@0.4"});
+    V4l2Source src(yuyv(), dev);
+    src.open();
+    seqs = read_through_a_disconnect(src, folder.epoch() + 1 * kS);
+    missing = src.stats().missing_frames;
+    src.close();
+  }
+  const auto log = truth::read(folder.truth());
+  ASSERT_EQ(log.faults.size(), 2u);
+  EXPECT_EQ(test::count_fate(log, truth::Fate::kDropped), 3u);
+  EXPECT_EQ(missing, test::count_fate(log, truth::Fate::kDropped)) << "the device dropped them, the rig must count them";
+  // Every frame read is a unit of the truth with its sequence in the low bits, each read once.
+  std::set<std::int64_t> sent;
+  for (const auto& p : log.parts)
+    if (p.fate == truth::Fate::kSent) sent.insert(p.unit);
+  EXPECT_EQ(seqs.size(), sent.size());
+  EXPECT_GE(seqs.size(), 20u);  // ~10 before the disconnect, ~17 after it at 50 Hz
+}
+
+// The same when the gap is planned before the device's first stream (the rig opening late).
+TEST(V4l2Chaos, AGapBeforeTheFirstStreamIsCounted) {
+  test::ChaosFolder folder;
+  std::uint64_t missing = 0;
+  {
+    auto dev = device(folder, {"v4l2.sequence_gap:n=2@0"});
+    usleep(100'000);
+    V4l2Source src(yuyv(), dev);
+    src.open();
+    for (int i = 0; i < 5; ++i) ASSERT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+    missing = src.stats().missing_frames;
+    src.close();
+  }
+  const auto log = truth::read(folder.truth());
+  EXPECT_EQ(test::count_fate(log, truth::Fate::kDropped), 2u);
+  EXPECT_EQ(missing, 2u);
+}
+
+// Issue 27 (10-minute campaign, faults_injected): every v4l2.disconnect is in the truth, also one
+// that begins while the device is already gone (here inside another) and one that begins and ends
+// while nothing is asked of the device (closed between two streams). Old fake: only the disconnect
+// that took the device away had a fault line.
+TEST(V4l2Chaos, EveryDisconnectIsRecordedAlsoWhileTheDeviceIsAway) {
+  test::ChaosFolder folder;
+  {
+    auto dev = device(folder, {"v4l2.disconnect@0.1+0.4", "v4l2.disconnect@0.2+0.5", "v4l2.disconnect@0.3+0.1",
+                               "v4l2.disconnect@1.0+0.1"});
+    V4l2Source src(yuyv(), dev);
+    src.open();
+    read_through_a_disconnect(src, folder.epoch() + 9 * kS / 10);
+    src.close();  // nothing asked of the device from 0.9 s to 1.2 s
+    while (monotonic_now_ns() < folder.epoch() + 12 * kS / 10) usleep(10'000);
+    src.open();
+    EXPECT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+    src.close();
+  }
+  const auto log = truth::read(folder.truth());
+  std::set<std::uint64_t> ids;
+  for (const auto& f : log.faults) ids.insert(f.id);
+  EXPECT_EQ(ids, (std::set<std::uint64_t>{1, 2, 3, 4}));
+  // The absence lasted from the first's start to the second's end (0.1..0.7 s at 50 Hz: ~30 slots).
+  const auto not_sent = test::count_fate(log, truth::Fate::kNotSent);
+  EXPECT_GE(not_sent, 27u);
+  EXPECT_LE(not_sent, 33u);
 }
 
 // End-of-frame stamps: the buffer says EOF, and the truth's exposure start lies exposure (4 ms) +

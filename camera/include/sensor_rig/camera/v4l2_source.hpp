@@ -76,7 +76,7 @@ class V4l2Source final : public FrameSource {
   StampChecks stamp_checks_;
   bool stamp_warned_ = false;    // one warning per open about the buffers' timestamp clock
   std::uint32_t last_sequence_ = 0;
-  bool have_sequence_ = false;   // within one open: a reopened device may restart its sequence
+  bool have_sequence_ = false;   // within one open: a stream's sequence restarts at 0 (its first counts the frames lost since STREAMON)
 };
 
 }  // namespace sensor_rig::camera

@@ -7,6 +7,7 @@
 // (CLOCK_REALTIME ns), and "dev" what the camera itself says. The fakes' model of a frame: its
 // exposure starts at the stamp the fake takes (Aravis: g_get_real_time at fill, the fake V4L2
 // device: its frame slot), so that instant is the truth the rig's header.stamp must match.
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -41,6 +42,7 @@ class CameraSchedule {
   CameraSchedule(const faults::Plan& plan, const std::string& device);
 
   [[nodiscard]] double seconds(Nanos mono_ns) const noexcept { return static_cast<double>(mono_ns - epoch_mono_ns_) * 1e-9; }
+  [[nodiscard]] Nanos mono_ns(double t_s) const noexcept { return epoch_mono_ns_ + static_cast<Nanos>(std::llround(t_s * 1e9)); }
   [[nodiscard]] double now_s() const noexcept { return seconds(monotonic_now_ns()); }
   // The first event of `kind` active at t (camera.never_answers: from its start to the end of the run).
   [[nodiscard]] const faults::FaultEvent* active(std::string_view kind, double t_s) const noexcept;

@@ -5,7 +5,8 @@
 // CLOCK_MONOTONIC at exposure start (V4L2_BUF_FLAG_TSTAMP_SRC_SOE). Faults, thread-safe, taking
 // effect at the next frame: stall (no frames), disconnect (ENODEV until reconnect), short buffers.
 // Under a campaign (FakeV4l2Options::chaos) it takes the plan's v4l2.* faults by time and writes its
-// truth record: a unit and a part line per frame slot (unit = the V4L2 sequence), a fault line each.
+// truth record: a unit and a part line per frame slot, a fault line each. Unit = the stream's
+// ordinal (its STREAMON, from 0) x 2^32 + the V4L2 sequence, which restarts at 0 with each stream.
 #include <linux/videodev2.h>
 
 #include <cstdint>
@@ -86,6 +87,8 @@ class FakeV4l2Device final : public V4l2Device {
   bool fill_one(Nanos due);  // with mutex_ held
   // With mutex_ held: begins and ends the plan's faults at this instant (disconnect, its fault lines).
   void apply_faults_locked();
+  // With mutex_ held: the device returns at `until` (CLOCK_MONOTONIC); its stream is gone.
+  void end_disconnect_locked(Nanos until);
   [[nodiscard]] bool gone() const noexcept { return disconnected_ || fault_disconnected_; }
   // With mutex_ held: one frame slot's truth (unit = its sequence).
   void record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, truth::Fate fate, std::uint64_t fault);
@@ -104,7 +107,8 @@ class FakeV4l2Device final : public V4l2Device {
   double rate_hz_ = 30.0;
   bool streaming_ = false;
   Nanos next_due_ = 0;
-  std::uint32_t sequence_ = 0;
+  std::uint32_t sequence_ = 0;  // the V4L2 sequence: 0 at each STREAMON
+  std::uint64_t streams_ = 0;   // STREAMONs so far: the truth unit's high 32 bits (its ordinal)
   std::vector<Buffer> buffers_;
   std::deque<std::uint32_t> queue_;  // queued buffers in QBUF order (filled FIFO, as drivers do)
   FakeV4l2Counters counters_;
@@ -117,6 +121,7 @@ class FakeV4l2Device final : public V4l2Device {
   std::uint32_t gap_left_ = 0;        // slots a sequence gap still skips
   std::uint64_t gap_fault_ = 0;
   std::set<std::uint64_t> gaps_done_;
+  std::set<std::uint64_t> disconnects_seen_;  // v4l2.disconnect events with their fault line written
 };
 
 }  // namespace sensor_rig::camera::mock
