@@ -1,8 +1,10 @@
 // `rig lidar replay`: a mock LIDAR (SPEC §7). Sends a capture's UDP payloads (--pcap), a
-// recording's raw LIDAR channel (--mcap, read by the opener the rig registers) or a synthetic sensor's packets (--synthetic MODEL, any of the seven models) to HOST:PORT at their own timing, scaled by
-// --rate, optionally looping, with injected network faults. Position packets (port 8308 in a
-// capture; GPRMC + PPS from the synthetic sensor) go to --position-port on the same host when
-// given, else they are skipped. Ends with one summary line on stderr (and --json on stdout).
+// recording's raw LIDAR channel (--mcap FILE or a split recording's FOLDER, read by the opener the
+// rig registers) or a synthetic sensor's packets (--synthetic MODEL, any of the seven models) to
+// HOST:PORT at their own timing, scaled by --rate, optionally looping, with injected network faults.
+// Position packets (port 8308 in a capture; GPRMC + PPS from the synthetic sensor) go to
+// --position-port on the same host when given, else they are skipped. Ends with one summary line on
+// stderr (and --json on stdout).
 // --fault-plan / --fault: the fault vocabulary's events of --device; --truth: what it really did.
 
 #include <cmath>
@@ -34,7 +36,7 @@ namespace {
 
 struct ReplayCliOptions {
   std::string pcap;
-  std::string mcap;        // a recording's raw channel (rig record --raw)
+  std::string mcap;        // a recording's raw channel (rig record --raw): a file or a split folder
   std::string mcap_topic;  // its topic, /sensors/lidar/NAME/packets
   mock::RecordingOpener open_recording;  // what reads it (the rig's, see register_replay_command)
   double delay_s = 0;      // the first packet this long after the start (subscribers match meanwhile)
@@ -224,7 +226,7 @@ std::string json_line(const mock::ReplayStats& s) {
 
 int run_replay_command(const ReplayCliOptions& o) {
   const int sources = int{!o.pcap.empty()} + int{!o.mcap.empty()} + int{!o.synthetic.empty()};
-  if (sources != 1) throw cli::UsageError("give exactly one of --pcap FILE, --mcap FILE or --synthetic MODEL");
+  if (sources != 1) throw cli::UsageError("give exactly one of --pcap FILE, --mcap FILE|FOLDER or --synthetic MODEL");
   if (!o.mcap.empty() && o.mcap_topic.empty()) throw cli::UsageError("--mcap needs --mcap-topic /sensors/lidar/NAME/packets");
   if (o.mcap.empty() && !o.mcap_topic.empty()) throw cli::UsageError("--mcap-topic applies to --mcap");
   if (!(o.rate > 0.0 && std::isfinite(o.rate))) throw cli::UsageError("--rate must be > 0");
@@ -306,8 +308,10 @@ void register_replay_command(CLI::App& lidar, cli::Context& ctx, mock::Recording
   auto* synth = cmd->add_option("--synthetic", opts->synthetic,
                                 "render a synthetic sensor instead: " + mock::synthetic_model_names());
   pcap->excludes(synth);
-  auto* mcap = cmd->add_option("--mcap", opts->mcap, "a recording's raw LIDAR channel (rig record --raw) to replay")
-                   ->check(CLI::ExistingFile);
+  auto* mcap = cmd->add_option("--mcap", opts->mcap,
+                               "a recording's raw LIDAR channel (rig record --raw) to replay: its file, or the folder "
+                               "of a split recording (--split-*: its files in metadata.yaml's order, as one stream)")
+                   ->check(CLI::ExistingPath);
   mcap->excludes(pcap)->excludes(synth);
   cmd->add_option("--mcap-topic", opts->mcap_topic, "with --mcap: the raw channel, /sensors/lidar/NAME/packets");
   cmd->add_option("--delay", opts->delay_s, "send the first packet S seconds after the start (a replayed drive: "

@@ -26,7 +26,7 @@ McapChannelSpec lidar_channel(const std::string& topic) {
 }  // namespace
 
 McapPacketStream::McapPacketStream(const std::string& path, const std::string& topic)
-    : pump_({path}, lidar_channel(topic), [this](const auto& view, const auto& push) { return decode(view, push); },
+    : pump_(recording_files(path), lidar_channel(topic), [this](const auto& view, const auto& push) { return decode(view, push); },
             [](const Packet& p) { return p.bytes.size(); }) {}
 
 std::string McapPacketStream::decode(const dds::LidarPacketsView& view, const std::function<bool(Packet&&)>& push) {

@@ -2,9 +2,11 @@
 // `rig lidar replay --mcap FILE --mcap-topic TOPIC`: a LIDAR's raw channel recorded by `rig record
 // --raw` (sensor_rig_msgs/msg/LidarPackets, docs/recording.md "Raw channels") as a packet stream,
 // each datagram at its recorded kernel receive time, the second port's (dst_port != the recorded
-// data_port) marked as position packets. A reader thread decompresses and decodes up to 32 MiB
-// ahead, so the paced sender only pops. A damaged file (cut, corrupt chunk, undecodable message)
-// plays what is intact; error() then names each place by its byte offset.
+// data_port) marked as position packets. A split recording's folder (`--mcap drive/`) is one stream:
+// its files in metadata.yaml's order (recording_files(), as the CAN replay reads them). A reader
+// thread decompresses and decodes up to 32 MiB ahead, so the paced sender only pops. A damaged file
+// (cut, corrupt chunk, undecodable message) plays what is intact; error() then names each place by
+// its byte offset (in a folder, after its file's path).
 #include <memory>
 #include <mutex>
 #include <string>
@@ -17,8 +19,9 @@ namespace sensor_rig::rig {
 
 class McapPacketStream final : public lidar::mock::PacketStream {
  public:
-  // Throws std::runtime_error when the file is not MCAP or has no LidarPackets channel `topic`
-  // (the message names the LidarPackets channels it has).
+  // `path`: a file, or a split recording's folder. Throws std::runtime_error when the (first) file
+  // is not MCAP or has no LidarPackets channel `topic` (the message names the LidarPackets channels
+  // it has), or the folder holds no recording.
   McapPacketStream(const std::string& path, const std::string& topic);
 
   std::optional<lidar::mock::StreamPacket> next() override;

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <span>
 #include <sstream>
 #include <thread>
 #include <utility>
@@ -32,8 +33,16 @@ constexpr Nanos kScanNs = 100'000'000;  // 600 rpm
 
 std::string profile() { return (test::source_dir() / "config/cyclonedds/loopback.xml").string(); }
 
+// FNV-1a, 64 bits, over a payload.
+std::uint64_t fnv64(std::span<const std::byte> bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (const auto b : bytes) h = (h ^ std::to_integer<std::uint64_t>(b)) * 0x100000001b3ull;
+  return h;
+}
+
 struct Recorded {
   std::map<Nanos, std::uint32_t> scans;  // stamp -> points
+  std::map<Nanos, std::uint64_t> clouds;  // stamp -> FNV-1a of the cloud's data bytes
   std::uint64_t packets = 0, data_packets = 0, position_packets = 0, batches = 0;
   Nanos first_rx = 0, last_rx = 0;
   std::multiset<std::uint32_t> batch_fnv;  // per message: FNV-1a over its packets' payloads
@@ -51,7 +60,9 @@ Recorded read_recording(const std::string& file, const std::string& lidar) {
     const auto body = dds::cdr_body(m.data);
     if (!body) return true;
     if (topic == "/sensors/lidar/" + lidar + "/points" && dds::parse_cdr(*body, cloud) == dds::CdrStatus::kOk) {
-      r.scans[static_cast<Nanos>(cloud.header.sec) * 1'000'000'000 + cloud.header.nanosec] = cloud.width;
+      const Nanos stamp = static_cast<Nanos>(cloud.header.sec) * 1'000'000'000 + cloud.header.nanosec;
+      r.scans[stamp] = cloud.width;
+      r.clouds[stamp] = fnv64(cloud.data);
     } else if (topic == "/sensors/lidar/" + lidar + "/packets" && dds::parse_cdr(*body, raw) == dds::CdrStatus::kOk) {
       ++r.batches;
       std::uint32_t fnv = 0x811c9dc5u;
@@ -100,6 +111,17 @@ class RawReplay : public ::testing::Test {
     while (c.err().find(line) == std::string::npos && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     return c.err().find(line) != std::string::npos;
+  }
+
+  // A split recording's files, `<DIR>_N.mcap` in N order.
+  static std::vector<std::string> split_files(const std::string& folder) {
+    std::vector<std::pair<long, std::string>> n;
+    for (const auto& e : std::filesystem::directory_iterator(folder))
+      if (const long i = record::split_file_index(e.path().string()); i >= 0) n.emplace_back(i, e.path().string());
+    std::sort(n.begin(), n.end());
+    std::vector<std::string> files;
+    for (auto& [i, f] : n) files.push_back(f);
+    return files;
   }
 
   test::TempDir dir_;
@@ -229,6 +251,191 @@ TEST_F(RawReplay, ScansReplayedThroughTheDriverEqualTheLiveOnes) {
     EXPECT_NE(replay.err().find("recording ended early"), std::string::npos) << replay.err();
     EXPECT_NE(replay.err().find(says), std::string::npos) << replay.err();
   }
+}
+
+// A LIDAR run recorded as a split folder (issue 29): `rig up` with the synthetic VLP-32C while `rig
+// record` takes its raw channel and its scans, a file every 0.8 s; then `rig up` with mock {kind:
+// mcap, file: FOLDER} replays the folder through the same driver (`rig lidar replay --mcap FOLDER`,
+// at rate 2 after 1 s) while another recorder takes the scans. The live scans are those the live
+// driver published, as our reader reads them from each file.
+class LidarSplitReplay : public RawReplay {
+ protected:
+  struct Run {
+    std::string folder;
+    std::vector<std::string> files;  // in N order
+    std::vector<Recorded> parts;     // each file
+    Recorded all;                    // the scans of every file
+  };
+
+  Run record_split(double seconds) {
+    Run run{(dir_.path / "live").string(), {}, {}, {}};
+    test::RigChild up({"up", config("live.yaml", "{kind: synthetic, rpm: 600}"), "--duration", "60"},
+                      (dir_.path / "up_live.out").string(), (dir_.path / "up_live.err").string());
+    EXPECT_TRUE(up.started());
+    test::RigChild rec = record({"/sensors/lidar/raw29/packets", "/sensors/lidar/raw29/points", "--split-s", "0.8",
+                                 "--chunk-kb", "64"}, run.folder, seconds);
+    EXPECT_EQ(rec.wait(60'000), 0) << rec.err();
+    up.signal_and_wait(SIGINT, 20'000);
+    run.files = split_files(run.folder);
+    read(run);
+    return run;
+  }
+
+  // Each file as our reader reads it now (after a cut: what is intact).
+  static void read(Run& run) {
+    run.parts.clear();
+    run.all = {};
+    for (const auto& f : run.files) {
+      run.parts.push_back(read_recording(f, "raw29"));
+      const Recorded& p = run.parts.back();
+      run.all.scans.insert(p.scans.begin(), p.scans.end());
+      run.all.clouds.insert(p.clouds.begin(), p.clouds.end());
+      run.all.data_packets += p.data_packets;
+      run.all.position_packets += p.position_packets;
+    }
+  }
+
+  // The folder replayed through the driver: the scans its driver published. `err`: the replaying
+  // `rig up`'s stderr, the mock's with it.
+  Recorded replay(const std::string& folder, std::string& err) {
+    const std::string out = (dir_.path / "replayed.mcap").string();
+    test::RigChild rec = record({"/sensors/lidar/raw29/points"}, out, 60.0);
+    EXPECT_TRUE(rec.started());
+    test::RigChild up({"up", config("replay.yaml", "{kind: mcap, file: " + folder + ", delay: 1, rate: 2}"), "--duration",
+                       "60"}, (dir_.path / "up_replay.out").string(), (dir_.path / "up_replay.err").string());
+    // The mock's summary line: the recording's last packet is sent (or `rig up` ended: refused).
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (up.err().find("replay: sent ") == std::string::npos && up.poll() < 0 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the last scans through DDS to the recorder
+    up.signal_and_wait(SIGINT, 20'000);
+    EXPECT_EQ(rec.signal_and_wait(SIGINT, 20'000), 0) << rec.err();
+    err = up.err();
+    return read_recording(out, "raw29");
+  }
+
+  // The mock's datagrams sent, data and position, from its summary line.
+  static std::pair<std::uint64_t, std::uint64_t> sent(const std::string& err) {
+    unsigned long long data = 0, position = 0;
+    const auto at = err.find("replay: sent ");
+    if (at == std::string::npos || std::sscanf(err.c_str() + at, "replay: sent %*[0-9] datagrams (data %llu, position %llu)",
+                                               &data, &position) != 2)
+      ADD_FAILURE() << "no summary line: " << err;
+    return {data, position};
+  }
+
+  // Times no packet was recorded in between (a cut file's lost tail up to the next file's first
+  // packet): from one file's last packet to the next's, when more than 5 ms apart (~1500 packets a
+  // second, so no seam of an intact recording).
+  static std::vector<std::pair<Nanos, Nanos>> gaps(const Run& run) {
+    std::vector<std::pair<Nanos, Nanos>> g;
+    for (std::size_t i = 0; i + 1 < run.parts.size(); ++i)
+      if (run.parts[i + 1].first_rx - run.parts[i].last_rx > 5'000'000) g.emplace_back(run.parts[i].last_rx, run.parts[i + 1].first_rx);
+    return g;
+  }
+
+  // Each live scan wholly inside the recording and clear of its gaps (5 ms around: the packets' way
+  // from firing to receipt) must come out of the replay with the same stamp and the same cloud,
+  // byte for byte; the replay has no other scan clear of the gaps in that window (none split, made
+  // up or doubled). Returns the live scans checked.
+  static std::vector<Nanos> expect_scans_replayed(const Run& live, const Recorded& replayed) {
+    const auto g = gaps(live);
+    const Nanos first_rx = live.parts.front().first_rx, last_rx = live.parts.back().last_rx;
+    const auto clear = [&](Nanos stamp) {
+      return std::all_of(g.begin(), g.end(), [&](const auto& gap) {
+        return stamp + kScanNs + 5'000'000 < gap.first || stamp - 5'000'000 > gap.second;
+      });
+    };
+    std::vector<Nanos> checked;
+    for (const auto& [stamp, points] : live.all.scans)
+      if (stamp >= first_rx && stamp + kScanNs <= last_rx && clear(stamp)) checked.push_back(stamp);
+    EXPECT_GE(checked.size(), 15u) << "live scans " << live.all.scans.size();
+    if (checked.empty()) return checked;
+    std::size_t equal = 0;
+    for (const Nanos stamp : checked) {
+      const auto it = replayed.clouds.find(stamp);
+      if (it == replayed.clouds.end()) {
+        ADD_FAILURE() << "live scan " << stamp << " (" << live.all.scans.at(stamp) << " points) not replayed";
+      } else if (it->second != live.all.clouds.at(stamp) || replayed.scans.at(stamp) != live.all.scans.at(stamp)) {
+        ADD_FAILURE() << "scan " << stamp << ": replayed " << replayed.scans.at(stamp) << " points, live "
+                      << live.all.scans.at(stamp) << "; or their bytes differ";
+      } else {
+        ++equal;
+      }
+    }
+    for (const auto& [stamp, points] : replayed.scans) {
+      const bool in_window = stamp >= checked.front() && stamp <= checked.back() && clear(stamp);
+      EXPECT_TRUE(!in_window || std::binary_search(checked.begin(), checked.end(), stamp))
+          << "replayed scan " << stamp << " was not live";
+    }
+    std::set<std::uint64_t> distinct;
+    for (const Nanos stamp : checked) distinct.insert(live.all.clouds.at(stamp));
+    std::printf("live: %zu scans in %zu files, %zu checked (%zu distinct clouds), %zu gaps; replay: %zu scans, %zu equal\n",
+                live.all.scans.size(), live.files.size(), checked.size(), distinct.size(), g.size(),
+                replayed.scans.size(), equal);
+    return checked;
+  }
+
+  // The checked scans whose packets lie in two files.
+  static std::size_t across_seams(const Run& live, const std::vector<Nanos>& checked) {
+    std::size_t n = 0;
+    for (const Nanos stamp : checked)
+      for (std::size_t i = 0; i + 1 < live.parts.size(); ++i)
+        if (live.parts[i].last_rx > stamp && live.parts[i].last_rx < stamp + kScanNs) {
+          ++n;
+          break;
+        }
+    return n;
+  }
+};
+
+// `mock: {kind: mcap, file: FOLDER}`: the split recording replays as one stream, every scan equal
+// to the live one across the seams, and every recorded packet sent.
+TEST_F(LidarSplitReplay, SplitRecordingFolderReplaysEveryScanAsLive) {
+  const Run live = record_split(2.5);
+  ASSERT_GE(live.files.size(), 3u) << "a file every 0.8 s for 2.5 s";
+  ASSERT_TRUE(gaps(live).empty()) << "the live recording lost packets at a seam";
+  std::string err;
+  const Recorded replayed = replay(live.folder, err);
+  const auto checked = expect_scans_replayed(live, replayed);
+  EXPECT_GE(across_seams(live, checked), live.files.size() - 1) << "each seam inside a checked scan";
+  const auto [data, position] = sent(err);
+  EXPECT_EQ(data, live.all.data_packets);
+  EXPECT_EQ(position, live.all.position_packets);
+  EXPECT_EQ(err.find("ended early"), std::string::npos) << err;
+  std::printf("%zu scans across seams; sent %llu data + %llu position packets\n", across_seams(live, checked),
+              static_cast<unsigned long long>(data), static_cast<unsigned long long>(position));
+}
+
+// The same with its second file cut to two thirds: the mock names the cut file and the offset, and
+// every scan of what is intact (the cut file's first part, the files after it) replays as live.
+TEST_F(LidarSplitReplay, SplitRecordingWithACutFileReplaysTheIntactScans) {
+  Run live = record_split(2.5);
+  ASSERT_GE(live.files.size(), 3u) << "a file every 0.8 s for 2.5 s";
+  const std::string cut = live.files[1];
+  std::filesystem::resize_file(cut, std::filesystem::file_size(cut) * 2 / 3);
+  read(live);
+  ASSERT_FALSE(live.parts[1].problems.empty());
+  ASSERT_EQ(gaps(live).size(), 1u);
+  std::string err;
+  const Recorded replayed = replay(live.folder, err);
+  const auto checked = expect_scans_replayed(live, replayed);
+  const auto within = [&](std::size_t file) {
+    return std::count_if(checked.begin(), checked.end(), [&](Nanos stamp) {
+      return stamp >= live.parts[file].first_rx && stamp + kScanNs <= live.parts[file].last_rx;
+    });
+  };
+  EXPECT_GT(within(1), 0) << "no intact scan of the cut file checked";
+  EXPECT_GT(within(2), 0) << "no scan of the file after the cut checked";
+  const auto [data, position] = sent(err);
+  EXPECT_EQ(data, live.all.data_packets) << "the intact packets";
+  EXPECT_EQ(position, live.all.position_packets);
+  const auto at = err.find("recording ended early: ");
+  ASSERT_NE(at, std::string::npos) << err;
+  const auto named = err.find(cut + ": ", at);
+  EXPECT_NE(named, std::string::npos) << err;
+  EXPECT_NE(err.find("offset", named), std::string::npos) << err;
+  std::printf("%s\n", err.substr(at, err.find('\n', at) - at).c_str());
 }
 
 // The CAN bus's raw channel: the mock ECU logs every frame on the bus (candump -L); the frames the
@@ -433,17 +640,6 @@ class CanDriveReplay : public RawReplay {
     d.files = extra.empty() ? std::vector<std::string>{out} : split_files(out);
     read_drive(d.files, d.states, d.frames);
     return d;
-  }
-
-  // A split recording's files, `<DIR>_N.mcap` in N order.
-  static std::vector<std::string> split_files(const std::string& folder) {
-    std::vector<std::pair<long, std::string>> n;
-    for (const auto& e : std::filesystem::directory_iterator(folder))
-      if (const long i = record::split_file_index(e.path().string()); i >= 0) n.emplace_back(i, e.path().string());
-    std::sort(n.begin(), n.end());
-    std::vector<std::string> files;
-    for (auto& [i, f] : n) files.push_back(f);
-    return files;
   }
 };
 

@@ -12,6 +12,17 @@
 namespace sensor_rig::drivers {
 namespace {
 
+// A split recording's folder (`rig record --split-*`): metadata.yaml or MCAP files in it. Checked
+// roughly here; the replay (rig/src/mcap_channel_pump.hpp recording_files()) orders its files and
+// names what is wrong with one.
+bool is_split_recording(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(path, ec)) return false;
+  for (const auto& e : std::filesystem::directory_iterator(path, ec))
+    if (e.path().filename() == "metadata.yaml" || e.path().extension() == ".mcap") return true;
+  return false;
+}
+
 LidarMockConfig parse_mock(const config::Node& n) {
   n.allow_keys({"kind", "pcap", "file", "topic", "delay", "rate", "loop", "rpm", "phase_deg", "drop_rate", "corrupt_rate"});
   LidarMockConfig m;
@@ -26,9 +37,13 @@ LidarMockConfig parse_mock(const config::Node& n) {
   if (!m.pcap.empty() && !std::filesystem::exists(m.pcap)) n.fail("pcap", "file not found: " + m.pcap);
   if (!m.pcap.empty() && mcap) n.fail("pcap", "an mcap mock reads file: (a recording), not pcap:");
   m.file = n.get_path("file", "");
-  if (mcap && m.file.empty()) n.fail("kind", "an mcap mock needs file: a recording made with rig record --raw");
+  if (mcap && m.file.empty())
+    n.fail("kind", "an mcap mock needs file: a recording made with rig record --raw (its file or split folder)");
   if (!mcap && n.has("file")) n.fail("file", "only used with kind: mcap");
-  if (!m.file.empty() && !std::filesystem::is_regular_file(m.file)) n.fail("file", "file not found: " + m.file);
+  if (!m.file.empty() && !std::filesystem::is_regular_file(m.file) && !is_split_recording(m.file))
+    n.fail("file", std::filesystem::is_directory(m.file)
+                       ? "'" + m.file + "' is a folder without a split recording (no metadata.yaml, no .mcap file)"
+                       : "file not found: " + m.file);
   if (n.has("topic")) {
     m.topic = n.get_string("topic");
     if (!mcap) n.fail("topic", "only used with kind: mcap");
