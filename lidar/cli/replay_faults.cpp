@@ -16,9 +16,28 @@ std::string detail_of(const faults::FaultEvent& e) {
   return d;
 }
 
+// The kinds that act once, on one packet (or one burst) at the first data packet at or after their time.
+bool one_shot(const std::string& kind) {
+  return kind == "lidar.reorder" || kind == "lidar.duplicate_late" || kind == "lidar.loss_burst" || kind == "lidar.corrupt";
+}
+
+// `planned`: a campaign plan's event (absolute times, shared by every run of this mock); a --fault
+// spec's times count from this run's start.
 void add(ReplayFaults& out, const faults::FaultEvent& e, Nanos at_mono, const ReplayFaultInput& in,
-         const std::optional<mock::PacketFields>& fields) {
+         const std::optional<mock::PacketFields>& fields, bool planned) {
   const Nanos dur = static_cast<Nanos>(e.duration_s * 1e9);
+  // A plan's fault whose time came before this run began belongs to the run that was alive then (a
+  // mock restarted after host.kill_mock reads the same plan): a one-shot one, or one already over, is
+  // not this run's to inject (a restarted mock fired its predecessor's loss bursts again); one still
+  // on is injected for what is left of it. The truth record says which (truth_stream.hpp).
+  const bool before_start = planned && at_mono < in.start_mono_ns;
+  const bool over = before_start && (one_shot(e.kind) || dur <= 0 || at_mono + dur <= in.start_mono_ns);
+  if (over) {
+    if (e.kind.rfind("lidar.", 0) != 0 && e.kind != "host.network_delay") return;  // not the mock's
+    const Nanos v_from = at_mono + in.mono_to_vehicle_ns;
+    out.notes.push_back(mock::FaultNote{e.id, e.kind, v_from, v_from + dur, detail_of(e), true, false});
+    return;
+  }
   const Nanos v_from = at_mono + in.mono_to_vehicle_ns, v_until = v_from + dur;
   const Nanos o_from = at_mono - in.first_deadline_mono_ns, o_until = o_from + dur;
   using SK = mock::SensorFault::Kind;
@@ -86,7 +105,7 @@ void add(ReplayFaults& out, const faults::FaultEvent& e, Nanos at_mono, const Re
   } else {
     return;  // the host's other faults are the campaign's (rig chaos), not the mock's
   }
-  out.notes.push_back(mock::FaultNote{e.id, e.kind, v_from, v_until, detail_of(e)});
+  out.notes.push_back(mock::FaultNote{e.id, e.kind, v_from, v_until, detail_of(e), before_start, before_start});
 }
 
 }  // namespace
@@ -97,7 +116,7 @@ ReplayFaults replay_faults(const ReplayFaultInput& in, const std::optional<mock:
     if (!in.plan_path.empty()) {
       const faults::Plan plan = faults::read_plan(in.plan_path);
       for (const auto& e : plan.for_device(in.device))
-        add(out, e, plan.epoch_mono_ns + static_cast<Nanos>(e.at_s * 1e9), in, fields);
+        add(out, e, plan.epoch_mono_ns + static_cast<Nanos>(e.at_s * 1e9), in, fields, true);
     }
     std::vector<faults::FaultSpec> specs;
     for (const auto& s : in.specs) {
@@ -111,7 +130,7 @@ ReplayFaults replay_faults(const ReplayFaultInput& in, const std::optional<mock:
     for (auto e : faults::expand(specs, devices, in.horizon_s)) {
       if (e.device != in.device) continue;  // aimed at another device
       e.id += kSpecIdBase;
-      add(out, e, in.start_mono_ns + static_cast<Nanos>(e.at_s * 1e9), in, fields);
+      add(out, e, in.start_mono_ns + static_cast<Nanos>(e.at_s * 1e9), in, fields, false);
     }
   } catch (const std::invalid_argument& e) {
     throw cli::UsageError(e.what());

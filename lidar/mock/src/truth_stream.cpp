@@ -1,7 +1,15 @@
 // The mock LIDAR's truth record (see truth_stream.hpp).
 #include "sensor_rig/lidar/mock/truth_stream.hpp"
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <set>
 
 namespace sensor_rig::lidar::mock {
 namespace {
@@ -25,17 +33,60 @@ int severity(truth::Fate f) noexcept {
   return 0;
 }
 
+// The fault ids whose lines a truth record already holds (an earlier run of a restarted mock wrote
+// them). A chunked scan for line starts `{"f":`: a ten-minute record of a VLP-32C is ~100 MB.
+std::set<std::uint64_t> recorded_fault_ids(const std::string& path) {
+  // Beside the sender, not before it: ~65 ms for 100 MB here, the restarted run's first packets
+  // would leave that late. And at normal priority: the mock's SCHED_FIFO is for its sends.
+  sched_param normal{};
+  (void)pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal);
+  std::set<std::uint64_t> ids;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return ids;
+  static constexpr char kNeedle[] = "\n{\"f\":";
+  constexpr std::size_t kNeedleLen = sizeof kNeedle - 1;
+  constexpr std::size_t kChunk = 1 << 20, kKeep = 32;  // kKeep: a needle and its id across a chunk's end
+  std::vector<char> buf(kChunk + kKeep + 1);
+  std::size_t have = 0;
+  while (true) {
+    const std::size_t n = std::fread(buf.data() + have, 1, kChunk, f);
+    have += n;
+    buf[have] = '\0';
+    const bool last = n == 0;
+    const char* end = buf.data() + have;
+    const char* p = buf.data();
+    while (true) {
+      const char* hit = static_cast<const char*>(::memmem(p, static_cast<std::size_t>(end - p), kNeedle, kNeedleLen));
+      if (hit == nullptr || (!last && end - hit < static_cast<std::ptrdiff_t>(kKeep))) {
+        p = hit != nullptr ? hit : std::max(p, end - static_cast<std::ptrdiff_t>(kNeedleLen - 1));
+        break;
+      }
+      ids.insert(std::strtoull(hit + kNeedleLen, nullptr, 10));
+      p = hit + kNeedleLen;
+    }
+    if (last) break;
+    have = static_cast<std::size_t>(end - p);  // the unsearched tail goes first in the next chunk
+    std::memmove(buf.data(), p, have);
+  }
+  std::fclose(f);
+  return ids;
+}
+
 }  // namespace
 
 TruthStream::TruthStream(std::unique_ptr<FaultySensor> sensor, std::unique_ptr<truth::Writer> writer,
                          std::vector<FaultNote> faults)
     : sensor_(std::move(sensor)), writer_(std::move(writer)), faults_(std::move(faults)), noted_(faults_.size(), false),
-      ring_(kRing) {}
+      ring_(kRing) {
+  read_earlier_runs();
+}
 
 TruthStream::TruthStream(std::unique_ptr<PacketStream> capture, std::unique_ptr<truth::Writer> writer,
                          std::vector<FaultNote> faults)
     : capture_(std::move(capture)), writer_(std::move(writer)), faults_(std::move(faults)), noted_(faults_.size(), false),
-      ring_(kRing) {}
+      ring_(kRing) {
+  read_earlier_runs();
+}
 
 TruthStream::~TruthStream() { finish(); }
 
@@ -52,10 +103,39 @@ void TruthStream::put(Pending& p) {
 
 void TruthStream::note_fault(std::uint64_t id, std::int64_t unit) {
   for (std::size_t i = 0; i < faults_.size(); ++i) {
-    if (faults_[i].id != id || noted_[i]) continue;
+    if (faults_[i].id != id) continue;
+    if (faults_[i].before_start) settle_earlier_runs(true);  // a resumed fault: is its line an earlier run's?
+    if (noted_[i]) continue;
     noted_[i] = true;
-    if (writer_) writer_->fault({id, faults_[i].kind, faults_[i].at_ns, faults_[i].until_ns, unit, faults_[i].detail});
+    if (!writer_) continue;
+    writer_->fault({id, faults_[i].kind, faults_[i].at_ns, faults_[i].until_ns, unit, faults_[i].detail});
+    writer_->flush();  // a few a minute: on disk before a kill (the next run's read_earlier_runs reads it)
   }
+}
+
+void TruthStream::read_earlier_runs() {
+  if (!writer_ || std::none_of(faults_.begin(), faults_.end(), [](const FaultNote& f) { return f.before_start; })) return;
+  // Our header is the record's last line so far, and this run writes no line of a before_start
+  // fault until the scan is in (settle_earlier_runs): every such line it finds is an earlier run's.
+  earlier_ = std::async(std::launch::async, recorded_fault_ids, writer_->path());
+}
+
+void TruthStream::settle_earlier_runs(bool wait) {
+  if (!earlier_.valid() || (!wait && earlier_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)) return;
+  const std::set<std::uint64_t> earlier = earlier_.get();
+  for (std::size_t i = 0; i < faults_.size(); ++i) {
+    const FaultNote& f = faults_[i];
+    if (!f.before_start) continue;
+    if (earlier.contains(f.id)) {
+      noted_[i] = true;  // the run alive at its time injected it (its line and parts say how)
+    } else if (!f.resumed) {
+      noted_[i] = true;
+      writer_->fault({f.id, f.kind, f.at_ns, f.until_ns, -1,
+                      "not injected: its time came before this run of the mock began and no earlier run acted on it "
+                      "(the mock was not running, or was killed first)" + (f.detail.empty() ? std::string() : "; " + f.detail)});
+    }
+  }
+  writer_->flush();
 }
 
 void TruthStream::write_units() {
@@ -68,6 +148,7 @@ void TruthStream::write_units() {
 }
 
 std::optional<StreamPacket> TruthStream::next() {
+  settle_earlier_runs(false);
   if (capture_) {
     auto p = capture_->next();
     if (!p || p->position) return p;
@@ -136,6 +217,7 @@ void TruthStream::finish() {
     sensor_->units().finish();
     write_units();
   }
+  settle_earlier_runs(true);
   for (std::size_t i = 0; i < faults_.size(); ++i)
     if (!noted_[i]) note_fault(faults_[i].id, -1);
   if (writer_) writer_->flush();
