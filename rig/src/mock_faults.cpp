@@ -3,6 +3,8 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
+
 #include "sensor_rig/common/log.hpp"
 
 namespace sensor_rig::rig {
@@ -16,6 +18,17 @@ MockFaults::MockFaults(const faults::Plan& plan, std::vector<MockProcess>& mocks
       truth_(truth_path, truth::Header{"host", "host", "rig up", "", "", "CLOCK_REALTIME"}) {
   for (const auto& e : plan.events)
     if (e.kind == "host.kill_mock" || e.kind == "host.stall_mock") events_.push_back(e);
+  for (const auto& e : events_) {  // events_ is complete: its addresses hold
+    const Nanos at = epoch_mono_ + static_cast<Nanos>(e.at_s * 1e9);
+    if (e.kind == "host.kill_mock") {
+      actions_.push_back({at, Action::Kind::kKill, &e});
+      actions_.push_back({at + static_cast<Nanos>(e.number("restart_s", 1) * 1e9), Action::Kind::kRestart, &e});
+    } else {
+      actions_.push_back({at, Action::Kind::kStop, &e});
+      actions_.push_back({at + static_cast<Nanos>(e.number("ms", 300) * 1e6), Action::Kind::kContinue, &e});
+    }
+  }
+  std::stable_sort(actions_.begin(), actions_.end(), [](const Action& a, const Action& b) { return a.mono < b.mono; });
   thread_ = std::thread([this] { run(); });
 }
 
@@ -30,51 +43,62 @@ bool MockFaults::sleep_until(Nanos mono) {
 }
 
 void MockFaults::run() {
-  for (const auto& e : events_) {
-    if (!sleep_until(epoch_mono_ + static_cast<Nanos>(e.at_s * 1e9))) return;
-    apply(e);
-  }
+  std::size_t next = 0;
+  for (; next < actions_.size() && sleep_until(actions_[next].mono); ++next) apply(actions_[next]);
+  // Stopping: never leave a stopped process behind (a restart that is not due is not made).
+  for (; next < actions_.size(); ++next)
+    if (actions_[next].kind == Action::Kind::kContinue) apply(actions_[next]);
   // This thread stays until the rig stops: the mocks it restarted have it as their parent thread, and
   // PR_SET_PDEATHSIG (ChildProcess) sends them SIGTERM when that thread ends. Returning here stopped
   // every restarted mock after the campaign's last kill or stall (the mock ECU left the bus for good).
   while (!stop_) ::usleep(20'000);
 }
 
-void MockFaults::apply(const faults::FaultEvent& e) {
-  const Nanos at = vehicle_now_ns();
-  MockProcess* m = nullptr;
+MockProcess* MockFaults::mock_of(const faults::FaultEvent& e) {
   for (auto& p : mocks_)
-    if (p.device == e.device) m = &p;
-  if (m == nullptr) {
-    log::warn("chaos", e.kind + ": no mock process plays device '" + e.device + "'");
-    return;
-  }
-  if (e.kind == "host.stall_mock") {
-    const Nanos pause = static_cast<Nanos>(e.number("ms", 300) * 1e6);
-    {
-      std::lock_guard lock(mutex_);
-      m->child.signal(SIGSTOP);
-    }
-    truth_.fault({e.id, e.kind, at, at + pause, -1, e.device + " stopped " + std::to_string(pause / 1'000'000) + " ms"});
-    truth_.flush();
-    sleep_until(monotonic_now_ns() + pause);
-    std::lock_guard lock(mutex_);
-    m->child.signal(SIGCONT);  // also when stopping: never leave a stopped process behind
-    return;
-  }
-  const Nanos restart = static_cast<Nanos>(e.number("restart_s", 1) * 1e9);
-  {
-    std::lock_guard lock(mutex_);
-    m->child.signal(SIGKILL);
-    m->child.wait_exit(2000);
-  }
-  truth_.fault({e.id, e.kind, at, at + restart, -1, e.device + " killed, restarted after " + std::to_string(restart / 1'000'000) + " ms"});
-  truth_.flush();
-  log::info("chaos", "host.kill_mock: killed the mock of " + e.device);
-  if (!sleep_until(monotonic_now_ns() + restart)) return;
+    if (p.device == e.device) return &p;
+  return nullptr;
+}
+
+void MockFaults::apply(const Action& a) {
+  const faults::FaultEvent& e = *a.event;
+  const Nanos at = vehicle_now_ns();
   std::lock_guard lock(mutex_);
-  m->child = ChildProcess(m->argv, m->options);
-  log::info("chaos", "host.kill_mock: restarted the mock of " + e.device + ": pid " + std::to_string(m->child.pid()));
+  MockProcess* m = mock_of(e);
+  if (m == nullptr) {
+    if (a.kind == Action::Kind::kKill || a.kind == Action::Kind::kStop)
+      log::warn("chaos", e.kind + ": no mock process plays device '" + e.device + "'");
+    return;
+  }
+  switch (a.kind) {
+    case Action::Kind::kStop: {
+      const Nanos pause = static_cast<Nanos>(e.number("ms", 300) * 1e6);
+      const bool alive = m->child.running();  // not while a kill's restart is pending
+      m->child.signal(SIGSTOP);
+      truth_.fault({e.id, e.kind, at, at + pause, -1,
+                    e.device + (alive ? " stopped " : " not running (killed): not stopped ") + std::to_string(pause / 1'000'000) + " ms"});
+      truth_.flush();
+      return;
+    }
+    case Action::Kind::kContinue: m->child.signal(SIGCONT); return;
+    case Action::Kind::kKill: {
+      const Nanos restart = static_cast<Nanos>(e.number("restart_s", 1) * 1e9);
+      const bool alive = m->child.running();
+      m->child.signal(SIGKILL);
+      m->child.wait_exit(2000);
+      truth_.fault({e.id, e.kind, at, at + restart, -1,
+                    e.device + (alive ? " killed" : " not running (an earlier kill's restart pending)") + ", restarted after " +
+                        std::to_string(restart / 1'000'000) + " ms"});
+      truth_.flush();
+      log::info("chaos", "host.kill_mock: killed the mock of " + e.device);
+      return;
+    }
+    case Action::Kind::kRestart:
+      if (m->child.running()) return;  // two kills of one mock overlapped: the first restart made it
+      m->child = ChildProcess(m->argv, m->options);
+      log::info("chaos", "host.kill_mock: restarted the mock of " + e.device + ": pid " + std::to_string(m->child.pid()));
+      return;
+  }
 }
 
 }  // namespace sensor_rig::rig

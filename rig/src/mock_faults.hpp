@@ -3,6 +3,7 @@
 // owns its mocks, so it kills (SIGKILL) and restarts, or stops (SIGSTOP) and continues them at the
 // plan's times, and records each in the truth record DIR/truth/host_mocks.jsonl.
 #include <atomic>
+#include <cstdint>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -30,11 +31,21 @@ class MockFaults {
   MockFaults& operator=(const MockFaults&) = delete;
 
  private:
+  // One signal at its time: a kill's restart or a stall's continue is an action of its own, so that
+  // an event never waits for another's (a stall 0.5 s into another mock's 1 s restart came 0.5 s
+  // late when each event slept through its own span).
+  struct Action {
+    Nanos mono = 0;
+    enum class Kind : std::uint8_t { kKill, kRestart, kStop, kContinue } kind = Kind::kKill;
+    const faults::FaultEvent* event = nullptr;
+  };
   void run();
   bool sleep_until(Nanos mono);  // false when stopping
-  void apply(const faults::FaultEvent& e);
+  void apply(const Action& a);
+  MockProcess* mock_of(const faults::FaultEvent& e);
 
   std::vector<faults::FaultEvent> events_;
+  std::vector<Action> actions_;  // by time
   Nanos epoch_mono_;
   Nanos epoch_vehicle_;
   std::vector<MockProcess>& mocks_;

@@ -8,9 +8,11 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <set>
+#include <thread>
 
 #include "mock_faults.hpp"
 #include "rig_cli.hpp"
@@ -166,6 +168,51 @@ TEST(MockRestart, ARestartedLidarMockFiresEachOneShotFaultOnceAndRecordsTheOneTh
   run2.insert(run2.begin(), after(run1.back(), run2_first->dev_ns / 1000) - std::llround(period_us));
   EXPECT_EQ(holes(run2, period_us), 3) << "packets the restarted run lost at the socket, 3 planned (fault 4)";
   fs::remove_all(dir);
+}
+
+
+// The process state the kernel reports (/proc/PID/stat's third field): 'T' stopped, 'S' sleeping.
+char state_of(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  std::getline(in, line);
+  const auto close = line.rfind(')');
+  return close == std::string::npos || close + 2 >= line.size() ? '?' : line[close + 2];
+}
+
+// Each event at its own time: another mock's restart pending does not hold it back (the old loop
+// slept through each event's span: this stall came when the kill's restart was done, 0.8 s late).
+TEST(MockRestart, AStallDuringAnotherMocksRestartComesAtItsTime) {
+  faults::Plan plan;
+  plan.epoch_mono_ns = monotonic_now_ns() + 100 * kMs;
+  plan.events = {faults::FaultEvent{1, "host.kill_mock", "a", 0.0, 0.0, {{"restart_s", "1"}}},
+                 faults::FaultEvent{2, "host.stall_mock", "b", 0.2, 0.0, {{"ms", "400"}}}};
+  const std::vector<std::string> argv{"/bin/sleep", "30"};
+  std::vector<MockProcess> mocks;
+  mocks.push_back(MockProcess{"a", argv, ChildOptions{}, ChildProcess(argv, ChildOptions{})});
+  mocks.push_back(MockProcess{"b", argv, ChildOptions{}, ChildProcess(argv, ChildOptions{})});
+  const pid_t a0 = mocks[0].child.pid(), b = mocks[1].child.pid();
+  std::mutex mutex;
+  const fs::path truth = fs::temp_directory_path() / ("rig_mock_stall_" + std::to_string(::getpid()) + ".jsonl");
+  const auto at = [&](double s) { std::this_thread::sleep_for(std::chrono::nanoseconds(plan.epoch_mono_ns + static_cast<Nanos>(s * 1e9) - monotonic_now_ns())); };
+  char b_in_stall = '?', b_after = '?';
+  pid_t a_restarted = 0;
+  {
+    MockFaults faults(plan, mocks, mutex, truth.string());
+    at(0.4);
+    b_in_stall = state_of(b);
+    at(0.8);
+    b_after = state_of(b);
+    at(1.2);
+    std::lock_guard lock(mutex);
+    a_restarted = mocks[0].child.running() ? mocks[0].child.pid() : 0;
+  }
+  for (auto& m : mocks) m.child.stop(100);
+  fs::remove(truth);
+  EXPECT_EQ(b_in_stall, 'T') << "b is not stopped 0.2 s into its stall";
+  EXPECT_NE(b_after, 'T') << "b still stopped 0.2 s after its stall";
+  EXPECT_NE(a_restarted, 0) << "a not restarted";
+  EXPECT_NE(a_restarted, a0);
 }
 
 }  // namespace
