@@ -571,6 +571,8 @@ dds::DriverStatus LidarDriver::status() const {
   // Scans the driver knows it lost (discarded partial scans, whole turns unseen): the monitor's
   // counted_lost (issue 26 item 10). Never the scans of a silent sensor: it made none.
   s.add_number("scans_lost", d.scans_lost);
+  // Gaps the sensor was silent (off, restarting, cut off): a new stream followed, nothing counted lost.
+  s.add_number("silences", d.silences);
   s.add_number("foreign_packets", impl_->foreign_packets);
   if (impl_->ring) {
     add_ring_counters(s, impl_->ring_stats);

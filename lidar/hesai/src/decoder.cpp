@@ -9,6 +9,7 @@
 
 #include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
+#include "sensor_rig/lidar/stream_gap.hpp"
 #include "sensor_rig/lidar/hesai/packet.hpp"
 
 namespace sensor_rig::lidar::hesai {
@@ -118,6 +119,8 @@ struct DecoderImpl {
   bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
   detail::BlindArc blind;  // a sector the sensor stopped sending (learned, not loss)
   std::uint32_t rejected_since_prev = 0;  // packets dropped (bad time / azimuth) since the last good one
+  StreamGap gaps;           // when the sensor was last heard (a silence is no loss)
+  double turning_step = 0;  // azimuth per group of the last turning packet (0.01°): the turn's length
 
   explicit DecoderImpl(DecoderConfig config)
       : cfg(std::move(config)), mi(&model_info(cfg.model)), scans(scan_options(cfg), stats) {
@@ -207,6 +210,24 @@ struct DecoderImpl {
   std::optional<Scan> end(bool complete) noexcept {
     hole.open = 0;
     return scans.end_scan(complete);
+  }
+
+  // A silence before this packet (stream_gap.hpp): the scans in progress (and the lookahead past
+  // the cut) end as partial, continuity and the UDP sequence start over at this packet; a first
+  // group within a packet after the cut begins a whole scan.
+  void new_stream(std::optional<Scan>& out, int first_az, double group_step, int groups) noexcept {
+    ++stats.silences;
+    scans.merge(out, end(false));
+    if (scans.current().scan.packets > 0) scans.merge(out, end(false));
+    scans.drop_next();
+    restart();
+    const double packet_arc = group_step * groups;
+    scans.current().from_cut = packet_arc > 0.5 && detail::turn_step(emit_raw, first_az) < packet_arc;
+  }
+  // One turn of the sensor (ns) from the last turning packet's azimuth rate; 0: not known yet.
+  [[nodiscard]] Nanos turn_ns() const noexcept {
+    if (turning_step < 0.5) return 0;
+    return static_cast<Nanos>(detail::kTurn / turning_step * static_cast<double>(mi->group_period_ns));
   }
 
   void put_group(const std::uint8_t* blk, int a, Nanos group_stamp, bool overlap, int n, std::uint8_t mode, float unit);
@@ -372,10 +393,24 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     line_shift = 0;
     own = stamp;
   };
+  constexpr std::int64_t kDayUs = 86'400'000'000LL;
+  std::int64_t dt_us = sensor_us - prev_sensor_us;
+  if (dt_us < -kDayUs / 2) dt_us += kDayUs;
+  // Nothing heard for turns while the sensor's time moved on: silent, unless its UDP sequence went
+  // on as its time did (then its packets were sent: a loss, counted below). Judged first: nothing
+  // before a silence is this packet's order or loss (a restart's sequence begins again).
+  if (const Nanos quiet = gaps.quiet_ns(packet.rx_ns); have_prev && quiet > kSilenceTurns * period_ns) {
+    const IdsAcrossGap ids =
+        has_seq && have_seq
+            ? ids_across_gap(prev_seq, seq, 0xFFFF'FFFFU,
+                             std::llround(static_cast<double>(dt_us) * 1000.0 / static_cast<double>(period_ns)))
+            : IdsAcrossGap::kNone;
+    if (is_silence(quiet, turn_ns(), sensor_continues(dt_us * 1000, period_ns), ids)) {
+      new_stream(out, az[first_good], fit.step, groups);
+      to_caller_line();
+    }
+  }
   if (have_prev) {
-    constexpr std::int64_t kDayUs = 86'400'000'000LL;
-    std::int64_t dt_us = sensor_us - prev_sensor_us;
-    if (dt_us < -kDayUs / 2) dt_us += kDayUs;
     detail::GapInput in{.prev_az = prev_az,
                         .groups_since_prev = prev_trailing_bad + first_good + 1,
                         .first_az = az[first_good],
@@ -491,6 +526,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   }
   rejected_since_prev = 0;
   turning = fit.step >= 0.5;
+  if (turning) turning_step = fit.step;
   blind.seen(az[first_good], detail::kTurn);
   if (has_seq) {
     prev_seq = have_seq && slots + 1 != seq - prev_seq ? prev_seq + slots + 1 : seq;

@@ -11,6 +11,7 @@
 #include "sensor_rig/lidar/ouster/packet.hpp"
 #include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
+#include "sensor_rig/lidar/stream_gap.hpp"
 #include "pixel_reader.hpp"
 #include "profile_table.hpp"
 #include "xyz_lut.hpp"
@@ -153,6 +154,7 @@ struct DecoderImpl {
   TimeJudge time_judge;
   detail::BlindArc blind;  // packet slots the sensor stopped sending (learned, not loss)
   std::uint32_t rejected_since_prev = 0;  // packets dropped for their time since the last good one
+  StreamGap gaps;  // when the sensor was last heard (a silence is no loss)
 
   // Packet slots strictly between slot `from` and slot `to` of one frame (to > from) that hold
   // columns of the column window (the sensor's FOV: only those can be missing).
@@ -267,6 +269,28 @@ struct DecoderImpl {
     hole.open = 0;
     return scans.end_scan(complete);
   }
+
+  // A silence before this packet (stream_gap.hpp): the scan in progress ends as partial, frame
+  // and packet continuity start over at this packet (a frame from its first column is whole).
+  std::optional<Scan> new_stream() noexcept {
+    ++stats.silences;
+    std::optional<Scan> out = end(false);
+    restart();
+    return out;
+  }
+  [[nodiscard]] Nanos frame_ns() const noexcept {
+    return static_cast<Nanos>(static_cast<double>(cfg.metadata.columns_per_frame) * cfg.metadata.column_period_ns());
+  }
+  // Whole frames the column times say passed beyond the `ahead` (0 or 1) frames of the measurement
+  // ids from packet slot `prev_slot` to `slot`, `dt` ns later.
+  [[nodiscard]] long extra_frames(long prev_slot, long slot, long ahead, std::int64_t dt) const noexcept {
+    const double col_ns = cfg.metadata.column_period_ns();
+    const double expected = static_cast<double>((ahead * packets_per_frame + slot - prev_slot) *
+                                                static_cast<long>(layout.columns_per_packet)) *
+                            col_ns;
+    const double frame = static_cast<double>(cfg.metadata.columns_per_frame) * col_ns;
+    return frame > 0.0 ? std::max(0L, std::lround((static_cast<double>(dt) - expected) / frame)) : 0;
+  }
 };
 
 std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) noexcept {
@@ -348,12 +372,26 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       damaged = true;
   }
 
+  std::optional<Scan> out;
+  const std::uint32_t fid = frame_id_at(p, layout);
+  const long cpp = static_cast<long>(layout.columns_per_packet);
+  const long slot = base >= 0 ? base / cpp : 0;
+  // Nothing heard for frames while the column times moved on: silent, unless the frame id went on
+  // as the times did (then its frames were sent: a loss, counted below). Judged first: nothing
+  // before a silence is this packet's order or loss (a restart's frame ids begin again).
+  if (const Nanos quiet = gaps.quiet_ns(packet.rx_ns);
+      n_valid > 0 && have_base && have_fid && quiet > kSilenceTurns * span_ns) {
+    const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
+    const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
+    const long ahead = slot > prev_slot ? 0 : 1;
+    const IdsAcrossGap ids = dt > 0 ? ids_across_gap(prev_fid, fid, 0xFFFFU, ahead + extra_frames(prev_slot, slot, ahead, dt))
+                                    : IdsAcrossGap::kRestarted;
+    if (is_silence(quiet, frame_ns(), sensor_continues(dt, span_ns), ids)) out = new_stream();
+  }
   // The packet on the current scan's line (unsigned: a corrupt column time wraps, as the ids' do).
   // A packet without column times (0) has only the caller's stamp.
   const bool on_line = have_offset && first_ts != 0;
   const Nanos own = on_line ? static_cast<Nanos>(first_ts + static_cast<std::uint64_t>(scan_offset)) : stamp;
-  std::optional<Scan> out;
-  const std::uint32_t fid = frame_id_at(p, layout);
   // Order and duplicates are judged before the time (issue 26 item 1): a late packet is placed in
   // the hole it left or counted, never the end of its scan. Then one packet whose time jumps while
   // its measurement ids continue the previous packet's is corrupt (item 2); a sustained step ends
@@ -362,8 +400,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // that starts (ids wrap) with the frame id unchanged is a new frame if its time is later (a
   // corrupted frame id), else a late packet. Lost packets: the window's packet slots skipped, plus
   // whole frames the column times say were skipped.
-  const long cpp = static_cast<long>(layout.columns_per_packet);
-  const long slot = base >= 0 ? base / cpp : 0;
   bool late = false;
   if (n_valid > 0 && have_base && have_fid) {
     const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
@@ -419,15 +455,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   if (n_valid > 0 && have_base && have_fid && !late) {
     const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
     const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
-    const double col_ns = m.column_period_ns();
     const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
     if (dt <= 0) {  // a jump back in time (sensor restart, a looping replay): continuity starts over
       ++stats.implausible_steps;
     } else {
       // Whole frames lost in between: the column times say more than the ids do.
-      const double expected = static_cast<double>((ahead * packets_per_frame + slot - prev_slot) * cpp) * col_ns;
-      const double frame_ns = static_cast<double>(m.columns_per_frame) * col_ns;
-      const long extra = frame_ns > 0.0 ? std::max(0L, std::lround((static_cast<double>(dt) - expected) / frame_ns)) : 0;
+      const long extra = extra_frames(prev_slot, slot, ahead, dt);
       if (ahead == 0 && extra == 0) {
         if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
         new_frame = false;

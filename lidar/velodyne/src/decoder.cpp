@@ -17,6 +17,7 @@
 #include "angle_table.hpp"
 #include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
+#include "sensor_rig/lidar/stream_gap.hpp"
 
 namespace sensor_rig::lidar::velodyne {
 namespace {
@@ -105,6 +106,8 @@ struct DecoderImpl {
   bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
   detail::BlindArc blind;  // a sector the sensor stopped sending (learned, not loss)
   std::uint32_t rejected_since_prev = 0;  // packets dropped (bad time / azimuth) since the last good one
+  StreamGap gaps;           // when the sensor was last heard (a silence is no loss)
+  double turning_step = 0;  // azimuth per group of the last turning packet (0.01°): the turn's length
 
   explicit DecoderImpl(DecoderConfig config)
       : cfg(std::move(config)), info(&model_info(cfg.model)), scans(scan_options(cfg), stats) {
@@ -316,6 +319,22 @@ struct DecoderImpl {
     rejected_since_prev = 0;
     turning = false;
   }
+
+  // A silence before this packet (stream_gap.hpp): the scan in progress ends as partial, continuity
+  // starts over at this packet; a first group within a packet after the cut begins a whole scan.
+  std::optional<Scan> new_stream(int first_az, double group_step, int groups) noexcept {
+    ++stats.silences;
+    std::optional<Scan> out = end(false);
+    restart();
+    const double packet_arc = group_step * groups;
+    scans.current().from_cut = packet_arc > 0.5 && detail::turn_step(cut, first_az) < packet_arc;
+    return out;
+  }
+  // One turn of the sensor (ns) from the last turning packet's azimuth rate; 0: not known yet.
+  [[nodiscard]] Nanos turn_ns(Nanos packet_period_ns, int groups) const noexcept {
+    if (turning_step < 0.5) return 0;
+    return static_cast<Nanos>(kAzimuthCount / turning_step * static_cast<double>(packet_period_ns) / groups);
+  }
 };
 
 std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) noexcept {
@@ -360,10 +379,15 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   std::optional<Scan> out;
   detail::GapResult gap{};
   const Nanos period_ns = static_cast<Nanos>(block_ns) * groups;
+  constexpr std::int64_t kHourUs = 3'600'000'000LL;
+  std::int64_t dt_us = static_cast<std::int64_t>(sensor_us) - prev_sensor_us;
+  if (dt_us < -kHourUs / 2) dt_us += kHourUs;
+  // Nothing heard for turns while the sensor's time moved on: it was silent, not a loss (no ids
+  // to say otherwise). Judged first: nothing before a silence is this packet's order or loss.
+  if (const Nanos quiet = gaps.quiet_ns(packet.rx_ns); have_prev && quiet > kSilenceTurns * period_ns &&
+      is_silence(quiet, turn_ns(period_ns, groups), sensor_continues(dt_us * 1000, period_ns), IdsAcrossGap::kNone))
+    out = new_stream(na[first_good], fit.step, groups);
   if (have_prev) {
-    constexpr std::int64_t kHourUs = 3'600'000'000LL;
-    std::int64_t dt_us = static_cast<std::int64_t>(sensor_us) - prev_sensor_us;
-    if (dt_us < -kHourUs / 2) dt_us += kHourUs;
     detail::GapInput in{.prev_az = prev_az,
                         .groups_since_prev = prev_trailing_bad + first_good + 1,
                         .first_az = na[first_good],
@@ -455,6 +479,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   }
   rejected_since_prev = 0;
   turning = fit.step >= 0.5;
+  if (turning) turning_step = fit.step;
   blind.seen(na[first_good], detail::kTurn);
 
   prev_stamp = stamp;

@@ -38,6 +38,9 @@ struct ScanStats {
   // Scans the decoder knows it lost (issue 26): partial scans discarded, and whole turns the sensor
   // time says passed while every packet was lost or rejected (stuck azimuth, loss bursts).
   std::uint64_t scans_lost = 0;
+  // Silences (stream_gap.hpp): nothing heard for turns and the sensor's time or numbering moved on
+  // or began again; a new stream followed, its turns not counted lost (the sensor made none).
+  std::uint64_t silences = 0;
   [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
 };
 

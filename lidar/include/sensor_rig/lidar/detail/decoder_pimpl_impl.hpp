@@ -5,10 +5,12 @@
 //   PacketStatus check(std::span<const std::byte>) const noexcept     the packet's checks
 //   std::optional<Scan> decode(const PacketView&, Nanos) noexcept     a checked packet into scans
 //   void restart() noexcept                          forgets the stream (flush)
-//   members cfg (Config), stats (Stats, a ScanStats), last (PacketStatus), scans (ScanAssembler)
+//   members cfg (Config), stats (Stats, a ScanStats), last (PacketStatus), scans (ScanAssembler),
+//   gaps (StreamGap: told of every packet pushed, kept or rejected, after its decode)
 #include <utility>
 
 #include "sensor_rig/lidar/decoder_pimpl.hpp"
+#include "sensor_rig/lidar/stream_gap.hpp"
 
 namespace sensor_rig::lidar {
 
@@ -25,12 +27,15 @@ template <class Impl, class Config, class Stats>
 std::optional<Scan> DecoderPimpl<Impl, Config, Stats>::push(PacketView packet, Nanos packet_stamp) noexcept {
   Impl& d = *impl_;
   d.last = d.check(packet.data);
-  if (!d.scans.accept(d.last)) return std::nullopt;
-  return d.decode(packet, packet_stamp);
+  std::optional<Scan> out;
+  if (d.scans.accept(d.last)) out = d.decode(packet, packet_stamp);
+  d.gaps.heard(packet.rx_ns);  // after: decode judged the gap before this packet
+  return out;
 }
 template <class Impl, class Config, class Stats>
 std::optional<Scan> DecoderPimpl<Impl, Config, Stats>::flush() noexcept {
   impl_->restart();
+  impl_->gaps.forget();
   return impl_->scans.flush();
 }
 template <class Impl, class Config, class Stats>

@@ -1,0 +1,202 @@
+// Issue 26: a silent sensor's turns are not lost scans; lost packets' turns are (stream_gap.hpp).
+// Synthetic sensors' genuine packets through the registry's decoders, received when they were sent
+// (the kernel receive time follows the sensor's clock, as on the rig), held against the sensor's
+// own truth: the scans it made (UnitTracker, the cut the decoders use). Each scan made is
+// published or counted lost, none more (`rig chaos`: the rig counts no more scans lost than were
+// not published, and leaves none unaccounted).
+//   - Silence: the sensor stops for 0.5 s or 1.5 s (a killed mock) and a new one starts with its
+//     counters and frame ids from 0 and the rotor elsewhere (its clock goes on: vehicle time).
+//     Old decoders counted the silent turns as lost (0.5 s: 5 scans), and past max_packet_gap
+//     (1.5 s) dropped the restarted sensor's first packets as out of order or of a bad time.
+//   - A loss burst of the same sensor-time length: packets sent and lost. Where the sensor numbers
+//     them (Hesai UDP sequence, Ouster frame id) nothing arrives and they are still counted; without
+//     numbering, the host heard the sensor all along (every packet damaged on the way).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
+#include "sensor_rig/lidar/mock/synthetic_hesai.hpp"
+#include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
+#include "sensor_rig/lidar/mock/unit_tracker.hpp"
+#include "sensor_rig/lidar/scan_decoder.hpp"
+
+namespace sensor_rig::lidar {
+namespace {
+
+constexpr Nanos kT0 = 1'700'000'000'000'000'000LL;
+
+struct Model {
+  const char* name;
+  bool numbered;  // the sensor numbers its packets (a burst of loss can arrive as nothing at all)
+  std::function<std::unique_ptr<mock::SyntheticSensor>(Nanos start, double rotor_deg)> make;
+  DecoderOptions options;
+};
+
+Model model(const char* name) {
+  Model m;
+  m.name = name;
+  const std::string n = name;
+  if (n == "Pandar40P+seq") {  // the optional UDP sequence of a Pandar40P
+    m.numbered = true;
+    m.make = [](Nanos start, double rotor_deg) -> std::unique_ptr<mock::SyntheticSensor> {
+      mock::SyntheticHesaiConfig c;
+      c.start_ns = start;
+      c.start_azimuth_deg = rotor_deg;
+      c.udp_sequence = true;
+      return std::make_unique<mock::SyntheticHesai>(c, mock::Scene::standard());
+    };
+    m.options.model = "Pandar40P";
+    return m;
+  }
+  m.numbered = n == "PandarXT32" || mock::is_ouster_model(n);
+  m.make = [n](Nanos start, double rotor_deg) {
+    mock::SyntheticOptions o;
+    o.model = n;
+    o.ouster_imu_period_ns = 0;
+    o.start_ns = start;
+    o.start_rotor_deg = rotor_deg;
+    return mock::make_synthetic_sensor(o, mock::Scene::standard());
+  };
+  m.options.model = n;
+  if (mock::is_ouster_model(n)) {
+    mock::SyntheticOptions o;
+    o.model = n;
+    m.options.metadata_text = mock::metadata_json(mock::synthetic_ouster_metadata(o));
+    m.options.metadata_name = "synthetic";
+  }
+  return m;
+}
+
+struct Pkt {
+  std::vector<std::byte> bytes;
+  Nanos stamp = 0;  // first firing (what the driver's stamper gives)
+  Nanos rx = 0;     // kernel receive time: shortly after the packet is sent
+};
+
+// What a sensor sent (and the receiver got) and the scans it made.
+struct Recorded {
+  std::vector<Pkt> pkts;
+  std::vector<mock::ClosedUnit> units;  // made and closed before the run's end (mid-turn)
+};
+
+enum class Fault { kNone, kSilence, kLossBurst };
+
+// 2.45 s of a sensor; from 0.65 s on (mid-turn), `gap_s` of `fault`: silent then a new sensor
+// (counters from 0, the rotor 2° behind where it fell silent: a restarted Pandar40P's first packets
+// were taken for late ones), or its packets lost (nothing received where the sensor numbers its
+// packets, else every one damaged on the way: 64 bytes).
+Recorded record(const Model& m, Fault fault, double gap_s) {
+  Recorded r;
+  auto sensor = m.make(kT0, 0.0);
+  mock::UnitTracker tracker(sensor->unit_rule());
+  const Nanos from = kT0 + 650'000'000, until = from + static_cast<Nanos>(gap_s * 1e9);
+  bool restarted = false;
+  double last_rotor_deg = 0.0;
+  for (;;) {
+    mock::SyntheticPacket p = sensor->next();
+    if (!p.truth.data) continue;
+    if (p.time_ns >= kT0 + 2'450'000'000) break;
+    if (fault == Fault::kSilence && !restarted && p.time_ns >= from) {
+      restarted = true;
+      sensor = m.make(until, std::fmod(last_rotor_deg + 358.0, 360.0));
+      tracker.restart();
+      continue;
+    }
+    last_rotor_deg = p.truth.rotor_deg;
+    const bool lost = fault == Fault::kLossBurst && p.time_ns >= from && p.time_ns < until;
+    (void)tracker.add(p.truth, true);
+    if (lost && m.numbered) continue;
+    Pkt k{{p.bytes.begin(), p.bytes.end()}, p.truth.acq_ns, p.time_ns + 20'000};
+    if (lost) k.bytes.resize(64);
+    r.pkts.push_back(std::move(k));
+  }
+  r.units = tracker.closed();
+  return r;
+}
+
+struct Decoded {
+  std::vector<Scan> scans;
+  DecoderCounters st;
+};
+
+Decoded decode(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
+  const auto dec = make_decoder(o);
+  Decoded d;
+  for (const auto& p : pkts)
+    if (auto s = dec->push(PacketView{p.bytes, p.rx, 0}, p.stamp)) d.scans.push_back(std::move(*s));
+  d.st = dec->counters();
+  return d;
+}
+
+// Every scan made is published (each once: the scan made last before its stamp, give or take
+// 1 ms; a scan whose first packets were lost is stamped at its first that came) or counted lost;
+// none counted more.
+void expect_accounted(const Recorded& run, const Decoded& d, const std::string& what) {
+  std::vector<bool> taken(run.units.size(), false);
+  for (const Scan& s : d.scans) {
+    std::size_t best = run.units.size();
+    for (std::size_t u = 0; u < run.units.size(); ++u)
+      if (run.units[u].acq_ns <= s.stamp + 1'000'000 &&
+          (best == run.units.size() || run.units[u].acq_ns > run.units[best].acq_ns))
+        best = u;
+    ASSERT_TRUE(best < run.units.size() && !taken[best])
+        << what << ": scan seq " << s.seq << " at " << static_cast<double>(s.stamp - kT0) / 1e9
+        << " s is no scan the sensor made (or one published twice)";
+    taken[best] = true;
+  }
+  EXPECT_EQ(d.scans.size() + d.st.scans_lost, run.units.size())
+      << what << ": " << d.scans.size() << " published + " << d.st.scans_lost << " counted lost, the sensor made "
+      << run.units.size();
+}
+
+class StreamGap : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(StreamGap, ASilentSensorsTurnsAreNotLostScansAndItsRestartDropsNothing) {
+  const Model m = model(GetParam());
+  const Recorded clean = record(m, Fault::kNone, 0.0);
+  const Decoded c = decode(m.options, clean.pkts);
+  expect_accounted(clean, c, "no fault");  // the test's own premise
+  ASSERT_EQ(c.st.silences, 0U);
+  for (const double gap_s : {0.5, 1.5}) {
+    const std::string what = std::to_string(gap_s) + " s silent";
+    const Recorded run = record(m, Fault::kSilence, gap_s);
+    const Decoded d = decode(m.options, run.pkts);
+    expect_accounted(run, d, what);
+    EXPECT_EQ(d.st.silences, 1U) << what;
+    EXPECT_EQ(d.st.dropped(), 0U) << what << ": every packet sent was valid (out of order: "
+                                  << d.st.by_status[static_cast<std::size_t>(PacketStatus::kOutOfOrder)]
+                                  << ", bad time: " << d.st.by_status[static_cast<std::size_t>(PacketStatus::kBadTime)]
+                                  << ")";
+    for (const Scan& s : d.scans)
+      EXPECT_EQ(s.missing_packets, 0U) << what << ": nothing was lost (seq " << s.seq << ")";
+  }
+}
+
+TEST_P(StreamGap, ALossBurstOfTheSameLengthIsCountedScanByScan) {
+  const Model m = model(GetParam());
+  const Recorded run = record(m, Fault::kLossBurst, 0.5);
+  const Decoded d = decode(m.options, run.pkts);
+  expect_accounted(run, d, "0.5 s of packets lost");
+  EXPECT_EQ(d.st.silences, 0U);
+  EXPECT_GE(d.st.scans_lost, 4U) << "the turns inside the burst";
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, StreamGap,
+                         ::testing::Values("VLP-16", "VLP-32C", "Pandar40P", "Pandar40P+seq", "PandarXT32",
+                                           "OS-LEGACY"),
+                         [](const auto& p) {
+                           std::string n = p.param;
+                           for (auto& ch : n)
+                             if (ch == '-' || ch == '+') ch = '_';
+                           return n;
+                         });
+
+}  // namespace
+}  // namespace sensor_rig::lidar
