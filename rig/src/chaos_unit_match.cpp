@@ -44,13 +44,23 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
   // campaign seed 11: the Ouster's scan 181 sent 1.005 ms before scan 176's first send, its sample
   // 10 us after 181's, 995 us before 176's went to 176; scan 181 "neither published nor counted",
   // and the monitor one short).
+  // Then one sent before the arrival (the slack is for a tie, not for a send after it): the host
+  // stalled 2.9 ms between the truth's send of the Ouster's scan 76 and its packet's arrival, and
+  // scan 81, sent at the same host time after a -500 ms step, went out 0.47 ms "after" it: nearest
+  // the arrival, seq 76 named scan 81 (ChaosCampaign.AHostClockStep..., 1 run in 5: "scan 81
+  // published twice (seq 76 and 81)", scan 76 unaccounted, monitor_agrees off by one).
   const auto is_next = [&](const UnitTruth& u) { return u.rec.unit > after_unit; };
+  const auto better = [&](const UnitTruth& u, Nanos after, const UnitTruth& b, Nanos b_after) {
+    if (is_next(u) != is_next(b)) return is_next(u);
+    if ((after >= 0) != (b_after >= 0)) return after >= 0;
+    return after < b_after;
+  };
   UnitTruth* best = nullptr;
   Nanos best_after = 0;
   for (auto& u : units) {
     const Nanos after = after_send(u);
     if (u.first_tx == 0 || after < -kArrivalSlack || after > tolerance) continue;
-    if (best == nullptr || (is_next(u) && !is_next(*best)) || (is_next(u) == is_next(*best) && after < best_after)) {
+    if (best == nullptr || better(u, after, *best, best_after)) {
       best = &u;
       best_after = after;
     }

@@ -345,6 +345,26 @@ TEST(ChaosCheck, SamplesOfScansMadeInDoubledTimeAreLeftOutOfTheMonitorsCheckWith
   EXPECT_EQ(r.topics.at(kTopic).monitor_expected, 45u);
 }
 
+// Shared host times, the older scans' first packets arriving 2.9 ms after their sends (the host
+// stalled between the truth's read of the clock and the send), the newer scans sent 0.47 ms after
+// those arrivals: ChaosCampaign.AHostClockStepLeavesNoLidarStampOffUnflagged, 1 run in 5, the
+// Ouster's seq 76 (first packet 2.867 ms after scan 76's send, 0.470 ms before scan 81's) named scan
+// 81: "scan 81 published twice (seq 76 and 81)". An arrival comes after its send.
+TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheScanSentBeforeIt) {
+  Input in = honest();
+  auto& parts = in.truths[0].parts;
+  for (std::uint32_t p = 0; p < kParts; ++p)
+    for (int u = 25; u < 30; ++u)
+      parts[static_cast<std::size_t>(u) * kParts + p].tx_ns = parts[static_cast<std::size_t>(u - 5) * kParts + p].tx_ns + 3'337'000;
+  for (int u = 0; u < kScans; ++u)
+    in.samples[static_cast<std::size_t>(u)].first_rx_ns =
+        parts[static_cast<std::size_t>(u) * kParts].tx_ns + (u >= 20 && u < 25 ? 2'867'000 : 10'000);
+  const Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
+  EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
+}
+
 // Shared host times again, scans 25-29 sent 1.005 ms before scans 20-24 at the same host time (just
 // past the 1 ms the two reads of the clock may differ by), their samples' first packets 10 us after
 // their own sends and so 995 us "before" the older scans' (LIDAR campaign seed 11, the Ouster's scans
