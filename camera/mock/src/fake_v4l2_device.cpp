@@ -297,7 +297,7 @@ bool FakeV4l2Device::fill_one(Nanos due) {
       const Nanos exposure = counters_.exposure_100us > 0 ? Nanos{counters_.exposure_100us} * 100'000 : kDefaultExposureNs;
       exposure_start = due - exposure - static_cast<Nanos>(0.5e9 / rate_hz_);
     }
-    if (mode != nullptr) fault_line(*mode, seq, "buffer timestamps: " + mode->text("mode", "eof"));
+    if (mode != nullptr) fault_line(*mode, unit_of(seq), "buffer timestamps: " + mode->text("mode", "eof"));
     record(seq, exposure_start, due + b.mono_to_stamp_clock, truth::Fate::kSent, 0);
     b.bytesused = short_every_ != 0 && (seq + 1) % short_every_ == 0 ? sizeimage_ / 2 : sizeimage_;
     b.filled = true;
@@ -332,7 +332,14 @@ int FakeV4l2Device::poll(int fd, int timeout_ms) {
               if (e.kind == "v4l2.sequence_gap" && schedule_.seconds(due) >= e.at_s && gaps_done_.insert(e.id).second) {
                 gap_left_ = static_cast<std::uint32_t>(std::max(0.0, e.number("n", 3)));
                 gap_fault_ = e.id;
-                fault_line(e, sequence_, "the device skips " + std::to_string(gap_left_) + " frames (sequence jumps)");
+                // Planned while the device made no frames (gone, closed, not streaming): it drops
+                // the stream's next ones, and its line says when that was.
+                const double late_s = schedule_.seconds(due) - e.at_s;
+                const bool late = late_s > 1.5 / rate_hz_;
+                fault_line(e, unit_of(sequence_),
+                           "the device skips " + std::to_string(gap_left_) + " frames (sequence jumps)" +
+                               (late ? "; planned " + std::to_string(late_s) + " s earlier, while it made no frames" : ""),
+                           late ? schedule_.seconds(due) : -1.0);
                 break;
               }
           if (gap_left_ > 0) {  // the device drops this slot's frame itself: its sequence moves on
@@ -360,12 +367,18 @@ void FakeV4l2Device::record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, t
   if (truth_ == nullptr) return;
   const Nanos to_vehicle = vehicle_now_ns() - monotonic_now_ns();
   // The buffer's timestamp is a timeval: what the device says is whole microseconds.
-  const std::int64_t stream = streams_ > 0 ? static_cast<std::int64_t>(streams_ - 1) : 0;
-  truth_->frame(stream * (std::int64_t{1} << 32) + seq, acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns(), fate, fault);
+  truth_->frame(unit_of(seq), acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns(), fate, fault);
 }
 
-void FakeV4l2Device::fault_line(const faults::FaultEvent& e, std::int64_t unit, const std::string& detail) {
-  if (truth_ != nullptr) truth_->fault(e, schedule_.vehicle_ns(e.at_s), schedule_.vehicle_ns(e.at_s + e.duration_s), unit, detail);
+std::int64_t FakeV4l2Device::unit_of(std::uint32_t seq) const noexcept {
+  const std::int64_t stream = streams_ > 0 ? static_cast<std::int64_t>(streams_ - 1) : 0;
+  return stream * (std::int64_t{1} << 32) + seq;
+}
+
+void FakeV4l2Device::fault_line(const faults::FaultEvent& e, std::int64_t unit, const std::string& detail, double at_s) {
+  if (truth_ == nullptr) return;
+  const double from = at_s >= 0 ? at_s : e.at_s;
+  truth_->fault(e, schedule_.vehicle_ns(from), schedule_.vehicle_ns(std::max(from, e.at_s + e.duration_s)), unit, detail);
 }
 
 // Every v4l2.disconnect whose start has passed is recorded, once, whenever the fake first hears of
@@ -381,19 +394,22 @@ void FakeV4l2Device::apply_faults_locked() {
     fault_disconnected_ = true;
     disconnected_at_ = streaming_ ? now : 0;  // a device not streaming misses no frame
     disconnect_fault_ = active->id;
+    disconnect_until_s_ = active->at_s + active->duration_s;
     disconnects_seen_.insert(active->id);
-    fault_line(*active, sequence_, "the device is gone (ENODEV), then returns");
+    fault_line(*active, unit_of(sequence_), "the device is gone (ENODEV), then returns");
   }
   for (const auto& e : schedule_.events()) {
     if (e.kind != "v4l2.disconnect" || e.at_s > t || !disconnects_seen_.insert(e.id).second) continue;
     if (e.active_at(t)) {
-      fault_line(e, sequence_, "the device is gone (ENODEV) already (fault " + std::to_string(disconnect_fault_) +
+      disconnect_until_s_ = std::max(disconnect_until_s_, e.at_s + e.duration_s);
+      fault_line(e, unit_of(sequence_), "the device is gone (ENODEV) already (fault " + std::to_string(disconnect_fault_) +
                                    "): gone until this one ends too");
       continue;
     }
     // Over before anything was asked of the device: gone for that time all the same (an open would
     // have failed). A stream running through it (its consumer not polling) is lost with the device.
-    fault_line(e, sequence_, "the device was gone (ENODEV) and back before anything was asked of it");
+    fault_line(e, unit_of(sequence_), "the device was gone (ENODEV) and back before anything was asked of it");
+    if (fault_disconnected_ && e.at_s <= disconnect_until_s_) disconnect_until_s_ = std::max(disconnect_until_s_, e.at_s + e.duration_s);
     if (!fault_disconnected_ && streaming_) {
       fault_disconnected_ = true;
       disconnected_at_ = std::max(schedule_.mono_ns(e.at_s), next_due_);  // the slots not made yet
@@ -401,7 +417,9 @@ void FakeV4l2Device::apply_faults_locked() {
       end_disconnect_locked(schedule_.mono_ns(e.at_s + e.duration_s));
     }
   }
-  if (active == nullptr && fault_disconnected_) end_disconnect_locked(now);
+  // Back at the end of its last disconnect (the first call after it may come seconds later: the
+  // slots between were a returned device's, not streaming, and made nothing).
+  if (active == nullptr && fault_disconnected_) end_disconnect_locked(std::min(now, schedule_.mono_ns(disconnect_until_s_)));
 }
 
 // It returns. The frames its clock would have had meanwhile were never made: not_sent, numbered on

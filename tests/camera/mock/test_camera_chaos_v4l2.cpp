@@ -183,6 +183,41 @@ TEST(V4l2Chaos, AGapAtAStreamsStartIsCounted) {
     if (p.fate == truth::Fate::kSent) sent.insert(p.unit);
   EXPECT_EQ(seqs.size(), sent.size());
   EXPECT_GE(seqs.size(), 20u);  // ~10 before the disconnect, ~17 after it at 50 Hz
+  // The gap's line says when the device dropped them (the reopened stream's start), not its plan.
+  Nanos first_dropped = 0;
+  for (const auto& p : log.parts)
+    if (p.fate == truth::Fate::kDropped && first_dropped == 0) first_dropped = p.acq_ns;
+  for (const auto& f : log.faults)
+    if (f.kind == "v4l2.sequence_gap") {
+      EXPECT_NEAR(static_cast<double>(f.at_ns - first_dropped), 0.0, 20e6);
+    }
+}
+
+// A device back at its disconnect's end made nothing while nobody opened it: the slots after that
+// end are no frames of it. Old fake: not_sent slots up to the first call after the end (here the
+// reopen at 0.8 s: ~35 slots for a 0.2 s disconnect).
+TEST(V4l2Chaos, ADisconnectsNotSentSlotsEndWithIt) {
+  test::ChaosFolder folder;
+  {
+    auto dev = device(folder, {"v4l2.disconnect@0.1+0.2"});
+    V4l2Source src(yuyv(), dev);
+    src.open();
+    read_through_a_disconnect(src, folder.epoch() + 2 * kS / 10);  // gone at 0.1 s: closed
+    src.close();
+    while (monotonic_now_ns() < folder.epoch() + 8 * kS / 10) usleep(10'000);
+    src.open();
+    EXPECT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+    src.close();
+  }
+  const auto log = truth::read(folder.truth());
+  ASSERT_EQ(log.faults.size(), 1u);
+  const auto not_sent = test::count_fate(log, truth::Fate::kNotSent);
+  EXPECT_GE(not_sent, 9u);  // 0.2 s at 50 Hz
+  EXPECT_LE(not_sent, 11u);
+  for (const auto& p : log.parts)
+    if (p.fate == truth::Fate::kNotSent) {
+      EXPECT_LE(p.acq_ns, log.faults[0].until_ns);
+    }
 }
 
 // The same when the gap is planned before the device's first stream (the rig opening late).

@@ -54,6 +54,31 @@ std::string value(const dds::DriverStatus& s, const std::string& key) {
   return {};
 }
 
+// A USB camera plugged back after 2 s streams again within a quarter second: a V4L2 open of a
+// missing device fails at once, so its retries need no GigE backoff (0.25 s doubling to 2 s: the
+// reopen came 1.75 s after the device was back; the campaign's v4l2.disconnect, 1.8 s).
+TEST(CameraDriver, AV4l2DevicePluggedBackStreamsWithinAQuarterSecond) {
+  dds::Participant p;
+  dds::StampsWriter stamps(p);
+  const auto cfg = v4l2_cfg(unique("drv_v4l2_back"));
+  camera::mock::FakeV4l2Options fo;
+  fo.formats = {{camera::fourcc('Y', 'U', 'Y', 'V'), 640, 480}};
+  auto dev = std::make_shared<camera::mock::FakeV4l2Device>(fo);
+  CameraDriver driver(cfg, std::make_unique<camera::V4l2Source>(cfg.source, dev), p, stamps);
+  driver.start();
+  ASSERT_TRUE(wait_for([&] { return dev->counters().frames >= 3; }, 3000));
+  dev->disconnect();
+  usleep(2'000'000);
+  const auto opens = dev->counters().opens;
+  dev->reconnect();
+  const Nanos back = monotonic_now_ns();
+  ASSERT_TRUE(wait_for([&] { return dev->counters().opens > opens; }, 3000));
+  const double reopened_ms = static_cast<double>(monotonic_now_ns() - back) * 1e-6;
+  std::printf("reopened %.0f ms after the device was back\n", reopened_ms);
+  EXPECT_LT(reopened_ms, 300.0);
+  driver.stop();
+}
+
 TEST(CameraDriver, PublishesRosLayoutImageAndCameraInfoAndSurvivesDeviceLoss) {
   dds::Participant p;
   dds::StampsWriter stamps(p);

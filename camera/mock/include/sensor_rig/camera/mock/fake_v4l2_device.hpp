@@ -92,7 +92,9 @@ class FakeV4l2Device final : public V4l2Device {
   [[nodiscard]] bool gone() const noexcept { return disconnected_ || fault_disconnected_; }
   // With mutex_ held: one frame slot's truth (unit = its sequence).
   void record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, truth::Fate fate, std::uint64_t fault);
-  void fault_line(const faults::FaultEvent& e, std::int64_t unit, const std::string& detail);
+  // at_s >= 0: when it really began (plan seconds), where that is not its planned time.
+  void fault_line(const faults::FaultEvent& e, std::int64_t unit, const std::string& detail, double at_s = -1.0);
+  [[nodiscard]] std::int64_t unit_of(std::uint32_t seq) const noexcept;  // the truth's unit of this stream's seq
 
   FakeV4l2Options opt_;
   mutable std::mutex mutex_;
@@ -118,6 +120,7 @@ class FakeV4l2Device final : public V4l2Device {
   bool fault_disconnected_ = false;
   Nanos disconnected_at_ = 0;         // CLOCK_MONOTONIC
   std::uint64_t disconnect_fault_ = 0;
+  double disconnect_until_s_ = 0;     // plan time: the end of the latest disconnect of this absence
   std::uint32_t gap_left_ = 0;        // slots a sequence gap still skips
   std::uint64_t gap_fault_ = 0;
   std::set<std::uint64_t> gaps_done_;
