@@ -20,9 +20,9 @@ inline constexpr const char* kCanFramesTopic = "/vehicle/can/frames";
 
 class McapCanLog final : public dbw::can::FrameLog {
  public:
-  // The CanFrame channel /vehicle/can/frames, or the file's only CanFrame channel (of a folder: its
-  // first file's, then that topic in the others). Throws std::runtime_error when the (first) file is
-  // not MCAP or has no such channel (naming those it has).
+  // The CanFrame channel /vehicle/can/frames, or the file's only CanFrame channel (of a folder: the
+  // first file's that has one, then that topic in the others). Throws std::runtime_error when the
+  // file is not MCAP or no file has such a channel (naming those the first has).
   explicit McapCanLog(const std::string& path);
 
   bool next(dbw::can::LoggedFrame& out) override;

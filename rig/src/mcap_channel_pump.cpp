@@ -42,7 +42,7 @@ McapChannelFile::McapChannelFile(const std::string& path, const McapChannelSpec&
     topics = topics_of(*reader_, schema_);
     topic_ = spec.pick(topics);
   }
-  if (topic_.empty()) throw std::runtime_error(path + ": " + spec.none(topics));
+  if (topic_.empty()) throw McapNoChannel(path + ": " + spec.none(topics));
   for (const auto& p : reader_->problems()) log::warn(spec.log_tag, path + ": " + p.what);
 }
 
@@ -89,6 +89,22 @@ std::vector<std::string> recording_files(const std::string& path) {
   if (listed.empty()) throw std::runtime_error(path + ": a folder without a split recording (no metadata.yaml, no " +
                                                fs::path(path).filename().string() + "_N.mcap)");
   return listed;
+}
+
+FirstChannelFile open_first_channel_file(const std::vector<std::string>& files, const McapChannelSpec& spec) {
+  std::string damaged, first_error;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    try {
+      return FirstChannelFile{i, McapChannelFile(files[i], spec), damaged};
+    } catch (const McapNoChannel& e) {
+      if (first_error.empty()) first_error = e.what();
+    } catch (const std::exception& e) {
+      if (first_error.empty()) first_error = e.what();
+      append_problem(damaged, e.what());
+    }
+  }
+  if (files.size() > 1) first_error += " (nor in the recording's " + std::to_string(files.size() - 1) + " other files)";
+  throw std::runtime_error(first_error);
 }
 
 }  // namespace sensor_rig::rig

@@ -4,7 +4,7 @@
 // walks the channel's messages file after file (a split recording's files as one stream; channels
 // declared inside later chunks too), decodes each CDR sample into items and queues them up to
 // `ahead` (in the items' cost: frames, bytes). A damaged file (cut, corrupt chunk, undecodable
-// message, a later file that does not open) gives what is intact; error() names each place.
+// message, a file of a folder that does not open) gives what is intact; error() names each place.
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
@@ -13,6 +13,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <utility>
@@ -34,10 +35,16 @@ struct McapChannelSpec {
   std::size_t ahead = 0;  // what the reader thread queues at most, in the items' cost
 };
 
+// Thrown when a file opens but has no channel the spec picks (the text names the file and why).
+class McapNoChannel : public std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 // A file opened and its channel found (in the summary, else in the chunks).
 class McapChannelFile {
  public:
-  // Throws std::runtime_error when the file is not MCAP or has no channel the spec picks.
+  // Throws std::runtime_error when the file is not MCAP, McapNoChannel when it has no channel the
+  // spec picks.
   McapChannelFile(const std::string& path, const McapChannelSpec& spec);
   [[nodiscard]] const std::string& topic() const noexcept { return topic_; }
   // The channel's messages in file order; fn returns false to stop.
@@ -61,6 +68,17 @@ void append_problem(std::string& a, const std::string& b);
 // std::runtime_error for a folder with no recording file.
 std::vector<std::string> recording_files(const std::string& path);
 
+// The first of a recording's files that holds the channel. A split recording's first files may
+// hold none of it (a channel is written into a file with its first message: a LIDAR that came up
+// after the first split): those are skipped, and those that do not open are named in `damaged`.
+struct FirstChannelFile {
+  std::size_t index = 0;
+  McapChannelFile file;
+  std::string damaged;
+};
+// Throws the first file's error when no file holds the channel.
+FirstChannelFile open_first_channel_file(const std::vector<std::string>& files, const McapChannelSpec& spec);
+
 template <class View, class Item>
 class McapChannelPump {
  public:
@@ -70,17 +88,18 @@ class McapChannelPump {
   using Decode = std::function<std::string(const View&, const Push&)>;
   using Cost = std::function<std::size_t(const Item&)>;
 
-  // The files in order (one at least); the first is opened here, the others by the thread.
+  // The files in order (one at least); the first holding the channel is opened here (its topic is
+  // the channel's in the others), the later ones by the thread.
   McapChannelPump(std::vector<std::string> files, McapChannelSpec spec, Decode decode, Cost cost)
-      : spec_(std::move(spec)), files_(std::move(files)), first_(files_.at(0), spec_), decode_(std::move(decode)),
-        cost_(std::move(cost)) {
+      : spec_(std::move(spec)), files_(std::move(files)), first_(open_first_channel_file(files_, spec_)),
+        decode_(std::move(decode)), cost_(std::move(cost)) {
     start();
   }
   ~McapChannelPump() { stop(); }
   McapChannelPump(const McapChannelPump&) = delete;
   McapChannelPump& operator=(const McapChannelPump&) = delete;
 
-  [[nodiscard]] const std::string& topic() const noexcept { return first_.topic(); }
+  [[nodiscard]] const std::string& topic() const noexcept { return first_.file.topic(); }
 
   // The next item; nullopt at the end.
   std::optional<Item> next() {
@@ -145,14 +164,14 @@ class McapChannelPump {
     };
     const std::string sample = spec_.schema.substr(spec_.schema.rfind('/') + 1);
     View view;
-    std::string damaged, skipped;
+    std::string damaged = first_.damaged, skipped;
     bool going = true;
-    for (std::size_t i = 0; i < files_.size() && going; ++i) {
+    for (std::size_t i = first_.index; i < files_.size() && going; ++i) {
       // Several files: each place names its file. A later file is opened here, and one without
       // the channel (a split file of a time nothing was on it) is no damage.
       const std::string where = files_.size() > 1 ? files_[i] + ": " : "";
       std::optional<McapChannelFile> later;
-      if (i > 0) {
+      if (i > first_.index) {
         try {
           later.emplace(files_[i], McapChannelSpec{spec_.schema, [&](const auto&) { return topic(); }, {}, spec_.log_tag, 0});
         } catch (const std::exception& e) {
@@ -160,7 +179,7 @@ class McapChannelPump {
           continue;
         }
       }
-      McapChannelFile& file = later ? *later : first_;
+      McapChannelFile& file = later ? *later : first_.file;
       file.for_each([&](const record::McapMessage& m) {
         const auto body = dds::cdr_body(m.data);
         const dds::CdrStatus st = body ? dds::parse_cdr(*body, view) : dds::CdrStatus::kBadEncapsulation;
@@ -184,7 +203,7 @@ class McapChannelPump {
 
   const McapChannelSpec spec_;
   const std::vector<std::string> files_;
-  McapChannelFile first_;  // opened first: its channel names the topic; read by the thread only while it runs
+  FirstChannelFile first_;  // opened first: its channel names the topic; read by the thread only while it runs
   const Decode decode_;
   const Cost cost_;
   std::thread thread_;
