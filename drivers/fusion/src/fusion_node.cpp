@@ -28,6 +28,7 @@ struct InputScan {
   Nanos arrival_ns = 0;  // handed to this node (monotonic: the matcher's deadlines must not step)
   std::uint64_t seq = 0;  // the scan's seq on /rig/stamps: its identity in the sweep's members
   std::uint32_t packets = 0, dropped = 0, missing_packets = 0;
+  bool stamp_unsynchronized = false;  // its LIDAR's topic was flagged as it went out
   std::vector<lidar::PointXYZIRT> points;
 };
 
@@ -51,6 +52,11 @@ SweepMatcherConfig matcher_config(const FusionConfig& c, std::size_t sources) {
           static_cast<Nanos>(c.timeout_ms) * 1'000'000};
 }
 
+// The fused stamp is a member's and every point's time is re-based on it: a sweep with a member
+// whose LIDAR flagged its stamps flags the fused topic's (`stamp_sync: unsynchronized`), for as
+// long after as the LIDAR nodes hold their flag.
+constexpr Nanos kUnsyncHoldNs = 2'000'000'000;
+
 // Scans waiting for the node's thread beyond this many per LIDAR are dropped (oldest first).
 constexpr std::size_t kMaxQueuedPerSource = 3;
 
@@ -68,7 +74,9 @@ struct FusionNode::Impl {
   struct Input final : ScanObserver {
     Impl* node = nullptr;
     std::uint32_t source = 0;
-    void observe_scan(const lidar::Scan& scan, Nanos written_ns) override { node->enqueue(source, scan, written_ns); }
+    void observe_scan(const lidar::Scan& scan, Nanos written_ns, bool stamp_unsynchronized) override {
+      node->enqueue(source, scan, written_ns, stamp_unsynchronized);
+    }
   };
 
   FusionConfig cfg;
@@ -103,6 +111,8 @@ struct FusionNode::Impl {
   std::vector<ScanFilterCounters> filter_counters;
   std::size_t last_points = 0;
   std::size_t last_sources = 0;
+  Nanos unsync_seen_mono_ns = 0;  // the last sweep with a flagged member (CLOCK_MONOTONIC; 0 = never)
+  std::string unsync_member;      // its flagged LIDAR
   std::string last_error;
 
   Impl(const FusionConfig& c, const std::vector<LidarConfig>& lidars, const dds::Participant& p, dds::StampsWriter& s)
@@ -120,9 +130,9 @@ struct FusionNode::Impl {
     }
   }
 
-  void enqueue(std::uint32_t source, const lidar::Scan& scan, Nanos written_ns) {
+  void enqueue(std::uint32_t source, const lidar::Scan& scan, Nanos written_ns, bool stamp_unsynchronized) {
     InputScan in{source, scan.stamp, scan.first_rx_ns, written_ns, monotonic_now_ns(), scan.seq,
-                 scan.packets, scan.dropped, scan.missing_packets, {}};
+                 scan.packets, scan.dropped, scan.missing_packets, stamp_unsynchronized, {}};
     {
       std::lock_guard lock(mutex);
       if (!spare.empty()) {
@@ -192,6 +202,7 @@ struct FusionNode::Impl {
     Nanos stamp = INT64_MAX, first_rx = INT64_MAX, last_written = 0;
     std::size_t sources = 0;
     std::uint32_t packets = 0, dropped = 0, missing = 0;
+    const std::string* flagged = nullptr;  // a member whose stamps its LIDAR flagged
     members.clear();
     for (std::size_t i = 0; i < slot.parts.size(); ++i) {
       const auto& p = slot.parts[i];
@@ -212,6 +223,7 @@ struct FusionNode::Impl {
       packets += p.meta.packets;
       dropped += p.meta.dropped;
       missing += p.meta.missing_packets;
+      if (p.meta.stamp_unsynchronized) flagged = &names[i];
       ++sources;
     }
     if (sources != 0) {
@@ -223,6 +235,11 @@ struct FusionNode::Impl {
             slot.fused[k].t = static_cast<std::uint32_t>(std::min<std::uint64_t>(slot.fused[k].t + offset, UINT32_MAX));
       }
       write(slot.fused, stamp, first_rx, last_written, packets, dropped, missing, sources);
+      if (flagged != nullptr) {
+        std::lock_guard lock(mutex);
+        unsync_seen_mono_ns = monotonic_now_ns();
+        unsync_member = *flagged;
+      }
     }
     for (auto& p : slot.parts) p.present = false;
     slot.fused.clear();  // capacity kept: a later sweep fills it again
@@ -343,6 +360,7 @@ dds::DriverStatus FusionNode::status() const {
   s.hardware_id = m.cfg.frame_id;
   const auto& c = m.sweep_counters;
   const Nanos age = m.published.last_ns() == 0 ? -1 : vehicle_now_ns() - m.published.last_ns();
+  const bool unsynchronized = m.unsync_seen_mono_ns != 0 && monotonic_now_ns() - m.unsync_seen_mono_ns < kUnsyncHoldNs;
   if (m.published.samples() == 0) {
     s.level = dds::Level::kWarn;
     s.message = "waiting for scans";
@@ -352,6 +370,9 @@ dds::DriverStatus FusionNode::status() const {
   } else if (!m.last_error.empty()) {
     s.level = dds::Level::kWarn;
     s.message = m.last_error;
+  } else if (unsynchronized) {
+    s.level = dds::Level::kWarn;
+    s.message = "unsynchronized: a sweep holds a scan of " + m.unsync_member + " whose stamps its node flagged";
   } else if (m.last_sources < m.names.size()) {
     s.level = dds::Level::kWarn;
     s.message = "last sweep partial: " + std::to_string(m.last_sources) + " of " + std::to_string(m.names.size()) + " lidars";
@@ -360,6 +381,7 @@ dds::DriverStatus FusionNode::status() const {
   }
   s.add("topic", kFusedTopic);
   s.add("frame_id", m.cfg.frame_id);
+  s.add("stamp_sync", unsynchronized ? "unsynchronized" : "ok");
   s.add_number("sweeps", m.published.samples());
   s.add("sweep_rate_hz", std::to_string(m.published.rate_hz()));
   s.add_number("complete_sweeps", c.complete);

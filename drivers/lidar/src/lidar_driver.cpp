@@ -391,7 +391,9 @@ struct LidarDriver::Impl {
                     written,    scan.packets,     scan.dropped,     pc.row_step,  scan.missing_packets};
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
     const bool slewed = cfg.time_source == timesync::TimeSource::kSensor && scan_monotonic.status().correction_ns > kStampFlagNs;
-    for (auto* o : scan_observers) o->observe_scan(scan, written);
+    // As /diagnostics says it while this scan goes out (unsync_seen_mono_ns: this thread writes it).
+    const bool flagged = slewed || (unsync_seen_mono_ns != 0 && monotonic_now_ns() - unsync_seen_mono_ns < kUnsyncHoldNs);
+    for (auto* o : scan_observers) o->observe_scan(scan, written, flagged);
     notify_sweep(scan, sweep_stamp);
     std::lock_guard lock(mutex);
     if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();

@@ -156,9 +156,9 @@ TEST_F(FusionNodeDds, ThreeLidarsBecomeOneCloudInBaseLink) {
   ASSERT_TRUE(sets_.wait_for_writers(1, test::kDiscoveryMs));
   const Nanos t0 = vehicle_now_ns();
   // Phases 0, 30, 60 ms; each scan handed over "after its write".
-  node.input(1)->observe_scan(scan(t0 + 30'000'000, 5, 3, 10, 41), t0 + 130'000'000);
-  node.input(0)->observe_scan(scan(t0, 10, 2, 10, 7), t0 + 100'000'000);
-  node.input(2)->observe_scan(scan(t0 + 60'000'000, 7, 4, 10, 1234), t0 + 160'000'000);
+  node.input(1)->observe_scan(scan(t0 + 30'000'000, 5, 3, 10, 41), t0 + 130'000'000, false);
+  node.input(0)->observe_scan(scan(t0, 10, 2, 10, 7), t0 + 100'000'000, false);
+  node.input(2)->observe_scan(scan(t0 + 60'000'000, 7, 4, 10, 1234), t0 + 160'000'000, false);
   ASSERT_TRUE(wait_clouds(1));
   const auto& f = seen_[0];
   EXPECT_EQ(f.frame, "base_link");
@@ -210,7 +210,7 @@ TEST_F(FusionNodeDds, DeadLidarSweepGoesOutAsSubsetAfterTimeout) {
   ASSERT_TRUE(fused_.wait_for_writers(1, test::kDiscoveryMs));
   const Nanos t0 = vehicle_now_ns();
   const Nanos handed = vehicle_now_ns();
-  node.input(0)->observe_scan(scan(t0, 3, 5), handed);
+  node.input(0)->observe_scan(scan(t0, 3, 5), handed, false);
   ASSERT_TRUE(wait_clouds(1));
   const Nanos waited = vehicle_now_ns() - handed;
   EXPECT_GE(waited, 290'000'000);  // the timeout (300 ms) after the sweep opened
@@ -241,7 +241,7 @@ TEST_F(FusionNodeDds, StoppedLidarCostsOneTimeoutAndIsCountedMissing) {
   std::uint64_t seq[3] = {100, 200, 300};        // each LIDAR's own /rig/stamps seq
   const auto hand_over = [&](int n, std::size_t i) {
     const Nanos stamp = t0 + n * 100'000'000LL + phase[i];
-    node.input(i)->observe_scan(scan(stamp, 5, 2, i == 2 ? 12 : 10, seq[i]), stamp + 100'000'000);
+    node.input(i)->observe_scan(scan(stamp, 5, 2, i == 2 ? 12 : 10, seq[i]), stamp + 100'000'000, false);
     auto& s = sent[static_cast<std::size_t>(n)];
     s.push_back({topics[i], stamp, seq[i]++});
     std::sort(s.begin(), s.end(), [](const MemberSeen& a, const MemberSeen& b) { return a.topic < b.topic; });
@@ -285,6 +285,34 @@ TEST_F(FusionNodeDds, StoppedLidarCostsOneTimeoutAndIsCountedMissing) {
   EXPECT_EQ(status_value(st, "partial_dead"), "2");
   EXPECT_EQ(status_value(st, "missing_right"), "3");
   EXPECT_EQ(status_value(st, "late_scans"), "0");
+}
+
+// The fused stamp is a member's: a sweep holding a scan whose LIDAR flagged its stamps (a host clock
+// step: slewed, or the sensor's synced clock disagreeing) says so on the fused topic too; sweeps of
+// unflagged scans do not.
+TEST_F(FusionNodeDds, ASweepWithAFlaggedMemberFlagsTheFusedStamps) {
+  const std::vector<LidarConfig> lidars{lidar("front", {}), lidar("left", {.yaw_deg = 90})};
+  FusionNode node(cfg(), lidars, pub_, stamps_writer_);
+  node.start();
+  ASSERT_TRUE(fused_.wait_for_writers(1, test::kDiscoveryMs));
+  const Nanos t0 = vehicle_now_ns();
+  const auto rotation = [&](int n, bool left_flagged) {
+    const Nanos stamp = t0 + n * 100'000'000LL;
+    node.input(0)->observe_scan(scan(stamp, 5, 2, 10, static_cast<std::uint64_t>(n)), stamp + 100'000'000, false);
+    node.input(1)->observe_scan(scan(stamp + 30'000'000, 5, 2, 10, static_cast<std::uint64_t>(100 + n)), stamp + 130'000'000,
+                                left_flagged);
+  };
+  rotation(0, false);
+  ASSERT_TRUE(wait_clouds(1));
+  ASSERT_TRUE(wait_for([&] { return status_value(node.status(), "complete_sweeps") == "1"; }, 2000));
+  EXPECT_EQ(status_value(node.status(), "stamp_sync"), "ok");
+  rotation(1, true);
+  ASSERT_TRUE(wait_clouds(2));
+  ASSERT_TRUE(wait_for([&] { return status_value(node.status(), "complete_sweeps") == "2"; }, 2000));
+  const auto st = node.status();
+  EXPECT_EQ(status_value(st, "stamp_sync"), "unsynchronized");
+  EXPECT_EQ(st.level, dds::Level::kWarn);
+  EXPECT_NE(st.message.find("left"), std::string::npos) << st.message;
 }
 
 }  // namespace

@@ -11,8 +11,10 @@ namespace sensor_rig::drivers {
 class ScanObserver {
  public:
   virtual ~ScanObserver() = default;
-  // `written_ns`: vehicle time the scan's write returned (it is on the wire).
-  virtual void observe_scan(const lidar::Scan& scan, Nanos written_ns) = 0;
+  // `written_ns`: vehicle time the scan's write returned (it is on the wire). `stamp_unsynchronized`:
+  // the LIDAR's topic was flagged `stamp_sync: unsynchronized` as this scan went out (its stamp may
+  // not name its first firing): whatever takes its stamp over inherits the warning.
+  virtual void observe_scan(const lidar::Scan& scan, Nanos written_ns, bool stamp_unsynchronized) = 0;
 
  protected:
   ScanObserver() = default;
