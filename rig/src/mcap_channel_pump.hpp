@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "recording_files.hpp"
 #include "sensor_rig/dds/cdr_view.hpp"
 #include "sensor_rig/record/mcap_reader.hpp"
 
@@ -61,12 +62,6 @@ class McapChannelFile {
 
 // "; "-joins b to a.
 void append_problem(std::string& a, const std::string& b);
-
-// The files of a split recording's folder (`rig record --split-*`): those its metadata.yaml lists, in
-// its order, then any `<DIR>_N.mcap` it does not list in N order (a killed recorder's last file, or
-// all of them when it died in the first). A path that is not a folder is the one file. Throws
-// std::runtime_error for a folder with no recording file.
-std::vector<std::string> recording_files(const std::string& path);
 
 // The first of a recording's files that holds the channel. A split recording's first files may
 // hold none of it (a channel is written into a file with its first message: a LIDAR that came up

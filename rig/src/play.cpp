@@ -16,6 +16,7 @@
 #include <set>
 
 #include "qos_profiles.hpp"
+#include "recording_files.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/percentile.hpp"
 #include "sensor_rig/common/shutdown.hpp"
@@ -27,29 +28,6 @@
 
 namespace sensor_rig::rig {
 namespace {
-
-// The files of a recording: PATH itself, or PATH/*.mcap in the order of their number suffix.
-std::vector<std::string> recording_files(const std::string& path) {
-  namespace fs = std::filesystem;
-  if (!fs::is_directory(path)) return {path};
-  std::vector<std::pair<long, std::string>> files;
-  for (const auto& e : fs::directory_iterator(path)) {
-    if (e.path().extension() != ".mcap") continue;
-    const std::string stem = e.path().stem().string();
-    const auto us = stem.rfind('_');
-    long n = 0;
-    try {
-      n = us == std::string::npos ? 0 : std::stol(stem.substr(us + 1));
-    } catch (const std::exception&) {
-    }
-    files.emplace_back(n, e.path().string());
-  }
-  std::sort(files.begin(), files.end());
-  std::vector<std::string> out;
-  for (auto& f : files) out.push_back(f.second);
-  if (out.empty()) throw cli::UsageError(path + ": a folder without .mcap files");
-  return out;
-}
 
 // Whether two ros2msg schemas describe the same fields (names, types, arrays), dependencies included.
 std::string schema_difference(const std::string& name, const std::string& theirs, const std::string& ours) {
@@ -90,7 +68,12 @@ struct Pending {
 }  // namespace
 
 int run_play(const PlayOptions& o) {
-  const auto files = recording_files(o.path);
+  std::vector<std::string> files;
+  try {
+    files = recording_files(o.path);
+  } catch (const std::runtime_error& e) {  // a folder without a recording
+    throw cli::UsageError(e.what());
+  }
   dds::Participant participant(o.dds);
   std::map<std::string, PlayTopic> topics;     // by ROS name
   std::map<std::string, std::string> refused;  // topic -> why
@@ -245,7 +228,11 @@ void add_play(CLI::App& app, cli::Context& ctx) {
   auto* cmd = app.add_subcommand("play", "Publish a recording's topics again at its timing");
   auto o = std::make_shared<PlayOptions>();
   auto domain = std::make_shared<int>(0);
-  cmd->add_option("PATH", o->path, "NAME.mcap, or a folder of split files")->required()->check(CLI::ExistingPath);
+  cmd->add_option("PATH", o->path,
+                  "NAME.mcap, or a split recording's folder (its files in metadata.yaml's order, then unlisted "
+                  "FOLDER_N.mcap)")
+      ->required()
+      ->check(CLI::ExistingPath);
   cmd->add_option("--rate", o->rate, "Speed factor")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_flag("--loop", o->loop, "Play again from the start at the end");
   cmd->add_option("--start", o->start_s, "Skip the first S seconds")->check(CLI::NonNegativeNumber);

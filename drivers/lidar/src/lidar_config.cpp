@@ -13,8 +13,8 @@ namespace sensor_rig::drivers {
 namespace {
 
 // A split recording's folder (`rig record --split-*`): metadata.yaml or MCAP files in it. Checked
-// roughly here; the replay (rig/src/mcap_channel_pump.hpp recording_files()) orders its files and
-// names what is wrong with one.
+// roughly here; the replay (rig/src/recording_files.hpp) orders its files and names what is wrong
+// with one.
 bool is_split_recording(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_directory(path, ec)) return false;
