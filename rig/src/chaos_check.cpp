@@ -101,10 +101,12 @@ class Checker {
     std::set<std::pair<std::string, std::uint64_t>> host_counted;  // a host fault once, however many mocks record it too
     for (const auto& log : in_.truths)
       for (const auto& f : log.faults) {
+        recorded[log.header.device].insert(f.id);
+        // In the record with why it was not (truth::kNotInjected): accounted for, not counted injected.
+        if (!truth::injected(f)) continue;
         const auto* kind = faults::find_kind(f.kind);
         if (kind == nullptr || kind->device_class != faults::DeviceClass::kHost || host_counted.insert({f.kind, f.id}).second)
           ++r_.faults[f.kind];
-        recorded[log.header.device].insert(f.id);
       }
     // A device's mock killed (host.kill_mock) for the whole of a fault could not inject it: not a lie.
     auto while_dead = [&](const faults::FaultEvent& e) {

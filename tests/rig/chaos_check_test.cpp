@@ -587,6 +587,12 @@ TEST(ChaosCheck, APlannedFaultNoMockRecordedIsReported) {
   in.events.back().at_s = 4.4;  // it outlasts the dead time: it must be there
   EXPECT_FALSE(check(in).invariants.at("faults_injected"));
   EXPECT_EQ(r.faults.at("lidar.reorder"), 1u);
+  // A restarted mock's line for a fault that fell while it was dead: in the record, not injected.
+  in.events.push_back(faults::FaultEvent{10, "lidar.loss_burst", "front", 5.0, 0.0, {{"n", "10"}}});
+  in.truths[0].faults.push_back(truth::FaultRecord{10, "lidar.loss_burst", kT0 + 5'000'000'000LL, kT0 + 5'000'000'000LL, -1,
+                                                   std::string(truth::kNotInjected) + "its time came before this run began"});
+  r = check(in);
+  EXPECT_EQ(r.faults.count("lidar.loss_burst"), 0u) << result_text(r);
 }
 
 // host.network_delay (50 ms on units 20..29): the mock holds its packets, so its truth's sends and

@@ -131,8 +131,9 @@ void TruthStream::settle_earlier_runs(bool wait) {
     } else if (!f.resumed) {
       noted_[i] = true;
       writer_->fault({f.id, f.kind, f.at_ns, f.until_ns, -1,
-                      "not injected: its time came before this run of the mock began and no earlier run acted on it "
-                      "(the mock was not running, or was killed first)" + (f.detail.empty() ? std::string() : "; " + f.detail)});
+                      std::string(truth::kNotInjected) +
+                          "its time came before this run of the mock began and no earlier run acted on it "
+                          "(the mock was not running, or was killed first)" + (f.detail.empty() ? std::string() : "; " + f.detail)});
     }
   }
   writer_->flush();

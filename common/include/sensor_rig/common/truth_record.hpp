@@ -80,6 +80,11 @@ struct FaultRecord {
   std::string detail;
 };
 
+// A planned fault a mock did not inject says so: its line's detail begins with this, then why (a
+// restarted mock's fault whose time fell while it was dead). It is in the record, not injected.
+inline constexpr std::string_view kNotInjected = "not injected: ";
+[[nodiscard]] inline bool injected(const FaultRecord& f) { return !f.detail.starts_with(kNotInjected); }
+
 class Writer {
  public:
   // Appends (a restarted mock continues its device's record after a new header). Throws
