@@ -94,6 +94,7 @@ struct TopicResult {
   std::uint64_t unmatched = 0;             // published samples that match no unit the device made
   std::uint64_t stamps_outside = 0;        // stamp error beyond the bound, the topic not flagged
   std::uint64_t stamps_flagged = 0;        // beyond the bound while the rig flagged it unsynchronized
+  std::uint64_t mixes_flagged = 0;         // fused sweeps mixing rotations by member stamps the rig flagged
   double stamp_error_p99_ms = 0;
   double stamp_error_max_ms = 0;
   double healthy_rate_share = 1.0;         // delivered / expected while no fault touched the device

@@ -222,9 +222,20 @@ class FusedJudge {
     if (rotations.size() > 1) {
       std::string what = sweep + " mixes rotations:", why;
       for (const auto& [rot, m] : rotations) what += " " + scan_name(*m) + ";";
+      // Put in one by members' stamps off their truth, each flagged by its LIDAR, and the fused
+      // cloud flagged as it went out: the rig's own warning that these sweeps' times are not to be
+      // trusted, as a flagged stamp is (the matcher has nothing but the stamps to go by).
+      bool warned = topic_flagged(kFusedCloudTopic, set.stamp);
       for (const auto& m : members)
-        if (const std::string e = own_stamp_error(m); !e.empty()) why += (why.empty() ? " its stamps put them in one: " : ", ") + e;
-      fail(why.empty() ? "mixes" : "mixes_by_stamps", what + why);
+        if (const std::string e = own_stamp_error(m); !e.empty()) {
+          why += (why.empty() ? " its stamps put them in one: " : ", ") + e;
+          warned = warned && topic_flagged(m.lidar->topic, m.scan->acquisition_ns);
+        }
+      if (!why.empty() && warned) {
+        ++t_.mixes_flagged;
+      } else {
+        fail(why.empty() ? "mixes" : "mixes_by_stamps", what + why);
+      }
     }
     // Its stamp: the earliest member's (the fusion's rule), and so that scan's first firing (or up
     // to its first packet that arrived).
@@ -349,14 +360,13 @@ class FusedJudge {
     return nullptr;
   }
 
+  bool topic_flagged(const std::string& topic, Nanos t) const {
+    const auto it = in_.unsynchronized.find(topic);
+    return it != in_.unsynchronized.end() &&
+           std::any_of(it->second.begin(), it->second.end(), [t](const auto& iv) { return t >= iv.first && t < iv.second; });
+  }
   bool flagged(const std::vector<Member>& members, Nanos t) const {
-    for (const auto& m : members) {
-      const auto it = in_.unsynchronized.find(m.lidar->topic);
-      if (it == in_.unsynchronized.end()) continue;
-      if (std::any_of(it->second.begin(), it->second.end(), [t](const auto& iv) { return t >= iv.first && t < iv.second; }))
-        return true;
-    }
-    return false;
+    return std::any_of(members.begin(), members.end(), [&](const Member& m) { return topic_flagged(m.lidar->topic, t); });
   }
 
   // Every scan a fused LIDAR published in the window: in exactly one sweep, or counted dropped.

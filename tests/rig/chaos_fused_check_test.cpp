@@ -159,6 +159,31 @@ TEST(ChaosFusedCheck, ASweepMixingRotationsByAMembersStampIsCaughtAndSaysWhy) {
   EXPECT_TRUE(example_says(r, "; inherited: left seq 1011's own stamp is -110.000 ms off its truth")) << result_text(r);
 }
 
+// The same sweep while the rig said so: the left LIDAR flagged its stamps and the fused cloud its
+// own (a flagged member's sweep, fusion_node). The mix follows stamps the rig warned of: counted
+// (mixes_flagged), not a violation. The left's flag alone is not enough: the fused topic must say it.
+TEST(ChaosFusedCheck, ASweepMixingRotationsByStampsTheRigFlaggedIsItsOwnWarning) {
+  Input in = honest();
+  const Nanos slewed = acq(1, 11) - 110'000'000;
+  for (auto& s : in.samples)
+    if (s.topic == topic_of(1) && s.seq == seq_of(1, 11)) s.acquisition_ns = slewed;
+  in.fused.sets[10].members[1] = FusedMember{topic_of(1), slewed, seq_of(1, 11)};
+  in.fused.sets[10].stamp = slewed;
+  cloud_of(in, 10).acquisition_ns = slewed;
+  in.fused.sets[11].members.erase(in.fused.sets[11].members.begin() + 1);
+  cloud_of(in, 11).packets = 2 * kParts;
+  cloud_of(in, 11).missing_packets = kParts;
+  in.fused.scans_dropped = 1;
+  in.unsynchronized[topic_of(1)] = {{slewed - 1'000'000, acq(1, 12)}};
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused")) << "the fused topic said nothing";
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  in.unsynchronized[kFusedCloudTopic] = {{slewed - 1'000'000, acq(0, 12)}};
+  r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).mixes_flagged, 1u);
+}
+
 TEST(ChaosFusedCheck, AScanFusedTwiceIsCaught) {
   Input in = honest();
   // Sweep 12 published twice (a second set and cloud, seq 30, the same scans).
