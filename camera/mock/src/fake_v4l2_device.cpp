@@ -310,6 +310,35 @@ bool FakeV4l2Device::fill_one(Nanos due) {
   return false;
 }
 
+// One frame slot at `due`: a sequence gap's drop, a queued buffer filled, or a frame dropped for
+// want of one.
+void FakeV4l2Device::make_slot_locked(Nanos due) {
+  if (gap_left_ == 0)
+    for (const auto& e : schedule_.events())
+      if (e.kind == "v4l2.sequence_gap" && schedule_.seconds(due) >= e.at_s && gaps_done_.insert(e.id).second) {
+        gap_left_ = static_cast<std::uint32_t>(std::max(0.0, e.number("n", 3)));
+        gap_fault_ = e.id;
+        // Planned while the device made no frames (gone, closed, not streaming): it drops the
+        // stream's next ones, and its line says when that was.
+        const double late_s = schedule_.seconds(due) - e.at_s;
+        const bool late = late_s > 1.5 / rate_hz_;
+        fault_line(e, unit_of(sequence_),
+                   "the device skips " + std::to_string(gap_left_) + " frames (sequence jumps)" +
+                       (late ? "; planned " + std::to_string(late_s) + " s earlier, while it made no frames" : ""),
+                   late ? schedule_.seconds(due) : -1.0);
+        break;
+      }
+  if (gap_left_ > 0) {  // the device drops this slot's frame itself: its sequence moves on
+    // A frame made and lost in the device or its driver (what a real sequence gap is: uvcvideo
+    // counts the frames it drops), so `dropped`, a loss the rig must count (its `missing_frames`),
+    // not `not_sent` (issue 27 item 5).
+    --gap_left_;
+    record(sequence_++, due, due, truth::Fate::kDropped, gap_fault_);
+    return;
+  }
+  (void)fill_one(due);
+}
+
 int FakeV4l2Device::poll(int fd, int timeout_ms) {
   const Nanos deadline = monotonic_now_ns() + static_cast<Nanos>(timeout_ms) * 1'000'000;
   for (;;) {
@@ -319,42 +348,21 @@ int FakeV4l2Device::poll(int fd, int timeout_ms) {
       if (fd != fd_) return -EBADF;
       apply_faults_locked();
       if (gone()) return -ENODEV;
-      for (const auto& b : buffers_)
-        if (b.filled) return 1;
       const Nanos now = monotonic_now_ns();
       if (streaming_ && !stalled_) {
-        if (now >= next_due_) {
+        // Every slot due by now is made, also those a late consumer missed (a capture thread that
+        // waited on something): its queued buffers filled at their slots, the rest dropped for
+        // want of one, as a device's. (One slot per poll, resynced to now, made the device run at
+        // the consumer's pace and its truth silent about the frames it would have made.)
+        while (now >= next_due_) {
           const Nanos due = next_due_;
           next_due_ += static_cast<Nanos>(1e9 / rate_hz_);
-          if (next_due_ < now) next_due_ = now;  // a late consumer does not get a burst
-          if (gap_left_ == 0)
-            for (const auto& e : schedule_.events())
-              if (e.kind == "v4l2.sequence_gap" && schedule_.seconds(due) >= e.at_s && gaps_done_.insert(e.id).second) {
-                gap_left_ = static_cast<std::uint32_t>(std::max(0.0, e.number("n", 3)));
-                gap_fault_ = e.id;
-                // Planned while the device made no frames (gone, closed, not streaming): it drops
-                // the stream's next ones, and its line says when that was.
-                const double late_s = schedule_.seconds(due) - e.at_s;
-                const bool late = late_s > 1.5 / rate_hz_;
-                fault_line(e, unit_of(sequence_),
-                           "the device skips " + std::to_string(gap_left_) + " frames (sequence jumps)" +
-                               (late ? "; planned " + std::to_string(late_s) + " s earlier, while it made no frames" : ""),
-                           late ? schedule_.seconds(due) : -1.0);
-                break;
-              }
-          if (gap_left_ > 0) {  // the device drops this slot's frame itself: its sequence moves on
-            // A frame made and lost in the device or its driver (what a real sequence gap is:
-            // uvcvideo counts the frames it drops), so `dropped`, a loss the rig must count (its
-            // `missing_frames`), not `not_sent` (issue 27 item 5).
-            --gap_left_;
-            record(sequence_++, due, due, truth::Fate::kDropped, gap_fault_);
-            continue;
-          }
-          if (fill_one(due)) return 1;
-          continue;
+          make_slot_locked(due);
         }
         wake = std::min(wake, next_due_);
       }
+      for (const auto& b : buffers_)
+        if (b.filled) return 1;
       if (now >= deadline) return 0;
       // Faults must take effect quickly: never sleep more than 10 ms at once.
       wake = std::min(wake, now + 10'000'000);

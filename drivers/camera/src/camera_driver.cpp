@@ -13,6 +13,7 @@
 #include "sensor_rig/dds/publish_stats.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/frame_clock.hpp"
+#include "sensor_rig/drivers/camera/publish_queue.hpp"
 #include "sensor_rig/timesync/host_clock.hpp"
 #include "image_outputs.hpp"
 
@@ -30,6 +31,9 @@ constexpr Nanos kReopenMaxNs = 2'000'000'000;
 constexpr Nanos kReopenMaxV4l2Ns = kReopenFirstNs;
 // A device stamp rejected this recently flags the topic unsynchronized in /diagnostics.
 constexpr Nanos kUnsyncHoldNs = 2'000'000'000;
+// Frames between capture and their write: one being written, this many waiting (a slow subscriber
+// costs these frames, counted, not the capture thread's time). Each holds a source buffer.
+constexpr std::size_t kPublishQueueDepth = 2;
 
 // What a rejected device stamp's error suggests: TAI taken as UTC or the other way round is a
 // wrong `timescale` (detected, not applied), anything else a clock that is not the PU's.
@@ -44,6 +48,13 @@ std::string stamp_fix(Nanos error_ns, const camera::PtpConfig& ptp) {
 }  // namespace
 
 struct CameraDriver::Impl {
+  // A captured frame, stamped, on its way to the publishing thread.
+  struct PublishJob {
+    camera::Frame frame;
+    FrameStamp stamp;
+    Nanos ready_ns = 0;  // when the capture thread had it
+  };
+
   CameraConfig cfg;
   std::string image_topic_name;
   std::string info_topic_name;
@@ -62,6 +73,9 @@ struct CameraDriver::Impl {
   std::unique_ptr<ImageOutputs> outputs;  // image_color / compressed on their own thread; null: none
   std::thread thread;
   std::atomic<bool> stop_flag{false};
+  // Captured frames to their writes; held frames hold source buffers: drained before every close.
+  PublishQueue<PublishJob> publisher;
+  std::uint64_t queue_dropped_reported = 0;  // the publishing thread's: drops told in SampleStamps
 
   mutable std::mutex mutex;  // counters shared with status(); written by the driver thread
   dds::PublishStats published;  // image_raw: frames, rate, write failures
@@ -97,7 +111,8 @@ struct CameraDriver::Impl {
         trigger(t),
         clock(static_cast<Nanos>(c.source.exposure_us * 1000.0)),
         d(c.info.d),
-        outputs(c.outputs.any() ? std::make_unique<ImageOutputs>(c, p, st) : nullptr) {}
+        outputs(c.outputs.any() ? std::make_unique<ImageOutputs>(c, p, st) : nullptr),
+        publisher(("pub:" + c.name).substr(0, 15), kPublishQueueDepth, [this](PublishJob& j) { publish(j); }) {}
 
   msg::CameraInfo camera_info(const msg::Time& stamp) {
     msg::CameraInfo ci{};
@@ -115,7 +130,10 @@ struct CameraDriver::Impl {
     return ci;
   }
 
-  void publish(camera::Frame& f) {
+  // On the capture thread: the stamp (the clock and the trigger matching keep frame order), then
+  // the hand-off; the write is the publishing thread's (issue 27 item 13: a slow reliable
+  // subscriber blocked the capture thread up to 50 ms a frame).
+  void capture(camera::Frame& f) {
     const Nanos ready = vehicle_now_ns();
     const auto& m = f.meta();
     const Nanos tick = trigger != nullptr ? trigger->tick_before(clock.trigger_reference(m), trigger_member) : 0;
@@ -123,6 +141,20 @@ struct CameraDriver::Impl {
     // The camera's own exposure start of a triggered frame: the trigger's phase figure includes
     // the camera's trigger -> exposure delay where the device reports it.
     if (tick > 0 && st.device_exposure_ns > 0) trigger->exposed(trigger_member, tick, st.device_exposure_ns);
+    {
+      std::lock_guard lock(mutex);
+      if (st.slewed) slewed_seen_mono_ns = monotonic_now_ns();
+      stamp_source = st.source;
+      last_frame_host_ns = ready;
+      last_frame_mono_ns = monotonic_now_ns();  // the watchdog watches the device, not the writer
+    }
+    publisher.push(PublishJob{std::move(f), st, ready});
+  }
+
+  void publish(PublishJob& job) {
+    const camera::Frame& f = job.frame;
+    const auto& st = job.stamp;
+    const auto& m = f.meta();
     msg::Image img{};
     img.header.stamp = msg::to_time(st.vehicle_ns);
     img.header.frame_id = const_cast<char*>(cfg.frame_id.c_str());
@@ -146,17 +178,17 @@ struct CameraDriver::Impl {
       dropped = incomplete_since_publish;
       incomplete_since_publish = 0;
     }
-    dds::SampleStamps s{st.vehicle_ns, m.first_rx_ns, m.complete_ns, ready, publish, written,
+    // Frames the queue dropped since the last published one: lost between capture and the writer.
+    const std::uint64_t queue_dropped = publisher.dropped();
+    dropped += queue_dropped - queue_dropped_reported;
+    queue_dropped_reported = queue_dropped;
+    dds::SampleStamps s{st.vehicle_ns, m.first_rx_ns, m.complete_ns, job.ready_ns, publish, written,
                         m.packets, static_cast<std::uint32_t>(dropped), img.data._length};
     stamps.write(image_topic_name, img.header.stamp, img.header.frame_id, m.seq, s);
     // A copy into the worker's queue (never waits for the worker); the raw frame is already out.
     if (outputs) outputs->offer(m, st.vehicle_ns, f.data());
     std::lock_guard lock(mutex);
     if (!published.count(rc, publish)) last_error = "dds write: " + rc.message();
-    if (st.slewed) slewed_seen_mono_ns = monotonic_now_ns();
-    stamp_source = st.source;
-    last_frame_host_ns = publish;
-    last_frame_mono_ns = monotonic_now_ns();
   }
 
   void set_state(const std::string& s, const std::string& err = {}) {
@@ -186,6 +218,7 @@ struct CameraDriver::Impl {
 
   void lose(const std::string& why) {
     src->mark_lost();
+    publisher.drain();  // the queued frames hold the source's buffers
     src->close();
     log::warn("camera", cfg.name + ": " + why + "; reopening");
     std::lock_guard lock(mutex);
@@ -224,7 +257,7 @@ struct CameraDriver::Impl {
         case camera::CaptureStatus::kFrame:
           // Before the stamp: a step before this frame's dequeue is known when it is mapped.
           clock.realtime_step(realtime_steps.observe(vehicle_now_ns(), monotonic_now_ns()));
-          publish(c.frame);
+          capture(c.frame);
           break;
         case camera::CaptureStatus::kIncomplete: {
           // The camera is sending (a lossy link drops packets): not the silence the watchdog is
@@ -273,6 +306,7 @@ struct CameraDriver::Impl {
       if (clock.rejected().count != rejected.count) rejected_seen_mono_ns = monotonic_now_ns();
       rejected = clock.rejected();
     }
+    publisher.drain();
     src->close();
   }
 };
@@ -298,6 +332,8 @@ std::string CameraDriver::topic() const { return impl_->image_topic_name; }
 
 void CameraDriver::start() {
   if (impl_->outputs) impl_->outputs->start();
+  impl_->publisher.start();
+  make_realtime(impl_->publisher.thread(), impl_->cfg.realtime_priority, "camera publisher " + impl_->cfg.name);
   impl_->thread = std::thread([this] { impl_->run(); });
   (void)pthread_setname_np(impl_->thread.native_handle(), ("cam:" + impl_->cfg.name).substr(0, 15).c_str());
   make_realtime(impl_->thread, impl_->cfg.realtime_priority, "camera " + impl_->cfg.name);
@@ -310,6 +346,7 @@ void CameraDriver::stop() {
   impl_->stop_flag.store(true);
   if (!impl_->thread.joinable()) return;
   impl_->thread.join();
+  impl_->publisher.stop();
   if (impl_->outputs) impl_->outputs->stop();
   const auto st = status();
   std::string line = impl_->cfg.name + ":";
@@ -368,7 +405,10 @@ dds::DriverStatus CameraDriver::status() const {
   // Frames the camera made that never reached the rig (id / sequence gaps), and every frame made and
   // not published: the cumulative count `rig monitor` and `rig chaos` read (issue 27 item 5).
   s.add_number("missing_frames", st.missing_frames);
-  s.add_number("counted_lost", st.lost_frames());
+  // Frames dropped between capture and the writer (a writer slower than the camera) are in it too.
+  const std::uint64_t publish_dropped = impl_->publisher.dropped();
+  s.add_number("counted_lost", st.lost_frames() + publish_dropped);
+  s.add_number("publish_dropped", publish_dropped);
   // Where incomplete frames went, by the stream's buffer status (rig monitor: drops by stage).
   s.add_number("incomplete_timeout", st.incomplete_timeout);
   s.add_number("incomplete_missing_packets", st.incomplete_missing_packets);

@@ -79,6 +79,51 @@ TEST(CameraDriver, AV4l2DevicePluggedBackStreamsWithinAQuarterSecond) {
   driver.stop();
 }
 
+// Issue 27 item 13: a slow reliable subscriber (keep-all, room for one sample, never taking) makes
+// each write wait max_blocking_ms (100 ms here) for an ack. On the capture thread that wait held
+// the device's buffers: at 20 Hz it dequeued one frame per 100 ms, its 8 buffers filled and the
+// device dropped frames for want of one (the fake's count: frames due with no buffer queued). Now
+// the writes wait on their own thread: the device loses nothing, and every frame it made is
+// published or counted lost by the driver (publish_dropped in counted_lost).
+TEST(CameraDriver, ASlowReliableSubscriberDoesNotStallCapture) {
+  dds::Participant p;
+  dds::StampsWriter stamps(p);
+  auto cfg = v4l2_cfg(unique("drv_slow_sub"));
+  cfg.qos.reliability = dds::QosSpec::Reliability::kReliable;
+  cfg.qos.depth = 0;  // keep all: a write waits for room
+  cfg.qos.max_blocking_ms = 100;
+  camera::mock::FakeV4l2Options fo;
+  fo.formats = {{camera::fourcc('Y', 'U', 'Y', 'V'), 640, 480}};
+  auto dev = std::make_shared<camera::mock::FakeV4l2Device>(fo);
+  dds::Topic<msg::Image> it(p, "/sensors/camera/" + cfg.name + "/image_raw", cfg.qos);
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+  dds_qset_resource_limits(q, 1, 1, 1);
+  const dds_entity_t slow = dds_create_reader(p.handle(), it.handle(), q, nullptr);
+  dds_delete_qos(q);
+  ASSERT_GT(slow, 0);
+  CameraDriver driver(cfg, std::make_unique<camera::V4l2Source>(cfg.source, dev), p, stamps);
+  driver.start();
+  ASSERT_TRUE(wait_for([&] { return dev->counters().frames >= 2; }, 3000));
+  usleep(2'000'000);
+  driver.stop();
+  const auto c = dev->counters();
+  const auto st = driver.status();
+  const auto published = std::stoull(value(st, "frames"));
+  const auto counted = std::stoull(value(st, "counted_lost"));
+  std::printf("device: %llu frames made, %llu dropped for want of a buffer; driver: %llu published, %llu counted lost (%s by the queue)\n",
+              static_cast<unsigned long long>(c.frames), static_cast<unsigned long long>(c.dropped),
+              static_cast<unsigned long long>(published), static_cast<unsigned long long>(counted), value(st, "publish_dropped").c_str());
+  EXPECT_EQ(c.dropped, 0u) << "the device lost frames: the capture thread waited on the subscriber";
+  EXPECT_GE(published, 3u);
+  // Made = published + counted, but for the frames still in the device's buffers at the stop.
+  const auto made = c.frames + c.dropped;
+  EXPECT_LE(published + counted, made);
+  EXPECT_GE(published + counted + 8, made);
+  dds_delete(slow);
+}
+
 TEST(CameraDriver, PublishesRosLayoutImageAndCameraInfoAndSurvivesDeviceLoss) {
   dds::Participant p;
   dds::StampsWriter stamps(p);

@@ -85,6 +85,7 @@ class FakeV4l2Device final : public V4l2Device {
   };
   int ioctl_locked(unsigned long request, void* arg);
   bool fill_one(Nanos due);  // with mutex_ held
+  void make_slot_locked(Nanos due);
   // With mutex_ held: begins and ends the plan's faults at this instant (disconnect, its fault lines).
   void apply_faults_locked();
   // With mutex_ held: the device returns at `until` (CLOCK_MONOTONIC); its stream is gone.
