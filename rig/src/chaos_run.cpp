@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <deque>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -351,16 +352,30 @@ int run(const Options& o) {
     return 1;
   }
   // A rig that does not stop, or ends badly, after a campaign is a finding too: said, and judged anyway.
+  // Its log's last lines go to stderr with it: a campaign run by a test keeps no folder when it ends.
+  const auto say_log_tail = [](const std::string& path) {
+    std::ifstream log(path);
+    std::deque<std::string> tail;
+    for (std::string line; std::getline(log, line);) {
+      tail.push_back(std::move(line));
+      if (tail.size() > 20) tail.pop_front();
+    }
+    std::fprintf(stderr, "chaos: the last %zu lines of %s:\n", tail.size(), path.c_str());
+    for (const auto& line : tail) std::fprintf(stderr, "  | %s\n", line.c_str());
+  };
   std::vector<std::string> campaign_errors;
   if (!up.wait_exit(20'000)) {
     campaign_errors.push_back("rig up did not stop within 20 s of its --duration (killed; see " + up_opt.log_file + ")");
     up.stop();
   } else if (up.exit_status() != 0) {
     campaign_errors.push_back("rig up ended with status " + std::to_string(up.exit_status()) + " (see " + up_opt.log_file + ")");
+    say_log_tail(up_opt.log_file);
   }
-  if (monitor.exit_status() != 0)
+  if (monitor.exit_status() != 0) {
     campaign_errors.push_back("rig monitor ended with status " + std::to_string(monitor.exit_status()) + " (see " +
                               mon_opt.log_file + ")");
+    say_log_tail(mon_opt.log_file);
+  }
   Input in;
   try {
     in.truths = read_truths(dir.path() / "truth");
