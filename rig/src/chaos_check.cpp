@@ -155,9 +155,12 @@ class Checker {
                                (acq >= in_.window_end_ns - in_.count_edge_ns && acq < in_.window_end_ns + in_.count_edge_ns));
     };
 
-    // Each published sample to the unit nearest its stamp. A camera frame whose stamp the rig flagged
-    // (slewed after a host clock step back: later than its exposure by up to the step) is its unit by
-    // frame id instead, where the stamp would name a neighbour (issue 27: V4L2 frames "published twice").
+    // Each published sample to its unit by identity where the record has it, else to the unit nearest
+    // its stamp. A camera frame is its unit by frame id (the GVSP block id, the V4L2 sequence: the
+    // truth unit's low 16 bits) nearest its arrival: after a host clock step back its stamp is held
+    // and slewed up to the step late, before and while the rig flags it, and by the stamp it named a
+    // neighbour (issue 27: V4L2 frames "published twice", then 11-24 "neither published nor counted"
+    // after each -500 ms step, and its doubled-time samples counted at their slewed stamps).
     // A LIDAR scan is its unit by its first packet's arrival (the unit whose first part was sent
     // last before it, within half a period; truth sends and receptions are one host clock): a stamp
     // off by more than half a period (a mapping that followed a host clock step) would name a
@@ -178,9 +181,10 @@ class Checker {
     std::int64_t previous_unit = std::numeric_limits<std::int64_t>::min();
     for (const SampleRecord* s : samples) {
       const bool in_order = previous != nullptr && s->seq > previous->seq;
-      UnitTruth* u = by_arrival ? unit_by_arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min())
-                                : nullptr;
-      if (u != nullptr) {
+      UnitTruth* u = by_arrival    ? unit_by_arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min())
+                     : by_frame_id ? unit_by_frame_id(units, *s)
+                                   : nullptr;
+      if (u != nullptr && by_arrival) {
         previous = s;
         previous_unit = u->rec.unit;
       }
@@ -196,7 +200,6 @@ class Checker {
         if (u != nullptr) judged_at[s] = u->rec.acq_ns;
         continue;
       }
-      if (u == nullptr && by_frame_id && flagged(topic, s->acquisition_ns)) u = unit_by_frame_id(units, *s);
       if (u == nullptr) u = unit_nearest(units, s->acquisition_ns, tolerance);
       judged_at[s] = u != nullptr ? u->rec.acq_ns : s->acquisition_ns;
       if (u == nullptr) {
