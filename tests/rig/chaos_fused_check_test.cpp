@@ -139,7 +139,7 @@ TEST(ChaosFusedCheck, ASweepMixingRotationsIsCaught) {
 
 // The campaign's case: after a host clock step back the left LIDAR's stamps are slewed 110 ms early
 // while the front's are true; by their stamps rotation 11 of the left belongs with rotation 10.
-TEST(ChaosFusedCheck, ASweepMixingRotationsByAMembersStampIsCaughtAndSaysWhy) {
+Input left_slewed_into_the_previous_rotation() {
   Input in = honest();
   const Nanos slewed = acq(1, 11) - 110'000'000;
   for (auto& s : in.samples)
@@ -151,6 +151,11 @@ TEST(ChaosFusedCheck, ASweepMixingRotationsByAMembersStampIsCaughtAndSaysWhy) {
   cloud_of(in, 11).packets = 2 * kParts;
   cloud_of(in, 11).missing_packets = kParts;
   in.fused.scans_dropped = 1;  // the left's rotation 10: late
+  return in;
+}
+
+TEST(ChaosFusedCheck, ASweepMixingRotationsByAMembersStampIsCaughtAndSaysWhy) {
+  Input in = left_slewed_into_the_previous_rotation();
   const Result r = check(in);
   EXPECT_FALSE(r.invariants.at("fused"));
   EXPECT_FALSE(r.invariants.at("stamps")) << "the left topic's own stamp";
@@ -163,17 +168,8 @@ TEST(ChaosFusedCheck, ASweepMixingRotationsByAMembersStampIsCaughtAndSaysWhy) {
 // own (a flagged member's sweep, fusion_node). The mix follows stamps the rig warned of: counted
 // (mixes_flagged), not a violation. The left's flag alone is not enough: the fused topic must say it.
 TEST(ChaosFusedCheck, ASweepMixingRotationsByStampsTheRigFlaggedIsItsOwnWarning) {
-  Input in = honest();
+  Input in = left_slewed_into_the_previous_rotation();
   const Nanos slewed = acq(1, 11) - 110'000'000;
-  for (auto& s : in.samples)
-    if (s.topic == topic_of(1) && s.seq == seq_of(1, 11)) s.acquisition_ns = slewed;
-  in.fused.sets[10].members[1] = FusedMember{topic_of(1), slewed, seq_of(1, 11)};
-  in.fused.sets[10].stamp = slewed;
-  cloud_of(in, 10).acquisition_ns = slewed;
-  in.fused.sets[11].members.erase(in.fused.sets[11].members.begin() + 1);
-  cloud_of(in, 11).packets = 2 * kParts;
-  cloud_of(in, 11).missing_packets = kParts;
-  in.fused.scans_dropped = 1;
   in.unsynchronized[topic_of(1)] = {{slewed - 1'000'000, acq(1, 12)}};
   Result r = check(in);
   EXPECT_FALSE(r.invariants.at("fused")) << "the fused topic said nothing";
