@@ -47,11 +47,6 @@ std::map<std::string, OpenCamera>& open_cameras() {
   return m;
 }
 
-std::mutex& aravis_open_mutex() {
-  static std::mutex m;
-  return m;
-}
-
 // A camera at an address that answered the probe, opened by address: no discovery, no
 // arv_open_device (whose camera_locate and device-list update ran under Aravis' system mutex:
 // ~2.5 s for a dead address, measured with Aravis 0.8.26 on loopback).
@@ -116,7 +111,7 @@ void AravisSource::open() {
       // does not answer): a dead camera's attempts never hold the lock the other cameras' opens need.
       std::string iface;
       if (network_ && detail::is_ipv4_address(cfg_.device)) iface = detail::probe_gvcp(cfg_.device);
-      std::lock_guard one_open_at_a_time(aravis_open_mutex());  // GenICam XML parsing only
+      std::lock_guard one_open_at_a_time(detail::genicam_parse_mutex());  // GenICam XML parsing only
       auto* device = !iface.empty() ? open_gv_device(iface, cfg_.device)
                                     : static_cast<ArvDevice*>(opener_(cfg_.device));  // throws CameraError
       GError* err = nullptr;

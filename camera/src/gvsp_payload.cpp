@@ -112,7 +112,10 @@ void ChunkReader::reset() {
 ChunkReader::Values ChunkReader::read(ArvCamera* camera, ArvBuffer* buffer) {
   Values v;
   if (!arv_buffer_has_chunks(buffer) || (!has_timestamp_ && !has_exposure_)) return v;
-  if (parser_ == nullptr) parser_ = arv_camera_create_chunk_parser(camera);
+  if (parser_ == nullptr) {
+    std::lock_guard one_parse_at_a_time(genicam_parse_mutex());
+    parser_ = arv_camera_create_chunk_parser(camera);
+  }
   if (parser_ == nullptr) {
     has_timestamp_ = has_exposure_ = false;
     return v;
@@ -143,6 +146,11 @@ ChunkReader::Values ChunkReader::read(ArvCamera* camera, ArvBuffer* buffer) {
     }
   }
   return v;
+}
+
+std::mutex& genicam_parse_mutex() {
+  static std::mutex m;
+  return m;
 }
 
 }  // namespace sensor_rig::camera::detail

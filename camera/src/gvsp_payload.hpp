@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <mutex>
 #include <string>
 
 #include "sensor_rig/camera/pixel_format.hpp"
@@ -32,6 +33,12 @@ std::size_t first_chunk_bytes(const std::uint8_t* data, std::size_t size);
 
 // GevTimestampTickFrequency where the device has it (a GVCP read: at open only), else 0.
 std::uint64_t timestamp_tick_hz(ArvDevice* device);
+
+// Aravis' GenICam XML parsing (a camera's open, a chunk parser) is not safe from two threads at
+// once: two capture threads making their chunk parsers together corrupted the heap ("malloc():
+// unaligned tcache chunk detected" in arv_gc_new, rig chaos with chunk data on two cameras at the
+// same second, 1 run in ~16). Every such parse holds this.
+std::mutex& genicam_parse_mutex();
 
 // Per-frame chunk values through the camera's own GenICam chunk features (ChunkTimestamp in device
 // ticks, ChunkExposureTime in us): the parser is made from the device's XML once, at the first
