@@ -54,6 +54,8 @@ GigeFakeChaos::GigeFakeChaos(const Options& o)
 
 void GigeFakeChaos::booted(ArvFakeCamera* cam) {
   gvsp_ = nullptr;
+  // A camera.dies that ended is over once the camera (re)started (tick()); one still due holds.
+  if (schedule_.active("camera.dies", schedule_.now_s()) == nullptr) dies_.store(0, std::memory_order_release);
   if (answered_.exchange(0) > 0 || frame_.unit >= 0) units_.reboot();  // frame ids start again at 1
   frame_ = {};
   if (cam == nullptr) return;
@@ -126,8 +128,12 @@ bool GigeFakeChaos::tick() {
   const auto* dead = schedule_.active("camera.dies", t);
   if (dead != nullptr) {
     dies_.store(dead->id, std::memory_order_release);
-  } else if (dies_.exchange(0) != 0) {
-    reboot = true;  // it returns as from a power cycle: fresh registers, no controller, ids from 1
+  } else if (dies_.load(std::memory_order_acquire) != 0) {
+    // It returns as from a power cycle: fresh registers, no controller, ids from 1. Silent until
+    // the restart is done (booted() ends the silence): the stream thread of the acquisition it
+    // died in runs until the restart joins it, and sent one more frame to the old stream, recorded
+    // "sent" (rig chaos: "neither published nor counted lost", 12-90 ms after each fault's end).
+    reboot = true;
   }
   return reboot;
 }

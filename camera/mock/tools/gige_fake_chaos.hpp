@@ -70,7 +70,7 @@ class GigeFakeChaos {
   std::mt19937_64 rng_{0x5eed};
 
   // Main thread -> fake thread.
-  std::atomic<std::uint64_t> dies_{0};          // the camera.dies event it is dead by
+  std::atomic<std::uint64_t> dies_{0};          // the camera.dies event it is dead by, until it rebooted
   std::atomic<std::uint64_t> slow_{0};          // the camera.slow_open event it is slow by
   std::atomic<double> slow_after_s_{0};
   std::atomic<std::int64_t> slow_first_rx_{0};  // mono ns of the first attempt, 0 = none yet
