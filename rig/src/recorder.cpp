@@ -12,11 +12,13 @@
 #include <thread>
 
 #include "qos_profiles.hpp"
+#include "record_gaps.hpp"
 #include "record_queue.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/common/thread_priority.hpp"
 #include "sensor_rig/dds/discovery.hpp"
+#include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/dds/topic.hpp"
 #include "sensor_rig/dds/waitset.hpp"
 #include "sensor_rig/record/split_writer.hpp"
@@ -33,6 +35,10 @@ struct RecordTopic {
   // Of those received, how many came in an iceoryx chunk (recorded from the chunk itself): the
   // summary's proof that --transport shm took the shared-memory path, not the network.
   std::uint64_t from_shared_memory = 0;
+  // Announced on /rig/stamps (published from counting_since on, vehicle ns) and never received
+  // (record_gaps.hpp): what DDS lost without saying.
+  std::uint64_t missed = 0;
+  Nanos counting_since = 0;
   // Writer thread (read by the DDS thread for progress):
   std::atomic<std::uint64_t> written{0}, disk_dropped{0}, queued{0};
   std::size_t channel = 0;  // writer thread only
@@ -121,6 +127,7 @@ class Recorder {
     const Nanos start = monotonic_now_ns();
     const Nanos end = opt_.duration_s > 0 ? start + static_cast<Nanos>(opt_.duration_s * 1e9) : INT64_MAX;
     Nanos next_progress = start + 1'000'000'000;
+    Nanos next_expire = start + kExpirePeriodNs;
     std::vector<std::int64_t> tags;
     while (!shutdown_requested() && !shared_.failed && monotonic_now_ns() < end) {
       waitset_.wait(tags, 50'000'000);
@@ -128,12 +135,18 @@ class Recorder {
         if (tag < 0) discover();
         else take(topics_[static_cast<std::size_t>(tag)]);
       }
+      if (const Nanos now = monotonic_now_ns(); now >= next_expire) {
+        expire(now, kAnnouncedTimeoutNs);
+        next_expire = now + kExpirePeriodNs;
+      }
       if (const Nanos now = monotonic_now_ns(); now >= next_progress) {
         if (opt_.progress) progress(now - start);
         next_progress += 1'000'000'000;
       }
     }
     for (auto& t : topics_) take(t);  // what arrived before the stop
+    // Announced a while before the stop and still not here: missed (the newest may be on the way).
+    expire(monotonic_now_ns(), kAnnouncedAtStopNs);
     queue_.close();
     writer.join();
     for (auto& t : topics_) t.reader->update_status();
@@ -147,6 +160,36 @@ class Recorder {
   }
 
  private:
+  static constexpr Nanos kExpirePeriodNs = 100'000'000;
+  static constexpr Nanos kAnnouncedTimeoutNs = 1'000'000'000;  // as rig monitor's default loss timeout
+  static constexpr Nanos kAnnouncedAtStopNs = 200'000'000;
+  static constexpr Nanos kMatchDelayNs = 500'000'000;  // a new reader takes this long to match its writers
+
+  void expire(Nanos now, Nanos timeout_ns) {
+    announced_.expire(now, timeout_ns, [&](const std::string& topic) {
+      if (auto it = known_.find(topic); it != known_.end() && it->second != nullptr) ++it->second->missed;
+    });
+  }
+
+  // Each sample's header stamp, and /rig/stamps' announcements of samples of recorded topics.
+  void note(const RecordTopic& t, const dds::RawSample& s) {
+    const auto first = s.first();
+    const auto order = record_cdr::order_of(first);
+    if (!order) return;
+    const auto body = s.in_shared_memory() ? s.second() : first.subspan(4);
+    const Nanos now = monotonic_now_ns();
+    if (t.ros_name != dds::kStampsTopic) {
+      if (const auto stamp = record_cdr::header_stamp(body, *order)) announced_.on_data(t.ros_name, *stamp, now);
+      return;
+    }
+    const auto a = record_cdr::source_stamps(body, *order);
+    if (!a) return;
+    const auto it = known_.find(std::string(a->topic));
+    // Samples written before this recorder's reader of the topic matched are not ours to miss.
+    if (it == known_.end() || it->second == nullptr || a->publish_ns < it->second->counting_since) return;
+    announced_.on_announced(it->first, a->stamp, now);
+  }
+
   void discover() {
     for (const auto& pub : discovery_.take()) {
       if (!pub.alive || pub.topic.rfind("rt/", 0) != 0) continue;
@@ -181,6 +224,7 @@ class Recorder {
       RecordTopic& t = topics_.emplace_back();
       t.ros_name = ros;
       t.reliable = pub.reliability == dds::QosSpec::Reliability::kReliable;
+      t.counting_since = vehicle_now_ns() + kMatchDelayNs;
       t.spec = {ros, type->schema_name, "ros2msg", type->schema, "cdr", {{"offered_qos_profiles", offered_qos_profiles({offered})}}};
       t.reader = std::make_unique<dds::RawReader>(participant_, pub.topic, *type, q);
       waitset_.attach_reader(t.reader->handle(), static_cast<std::int64_t>(topics_.size() - 1));
@@ -194,6 +238,7 @@ class Recorder {
     while (t.reader->take(item.sample)) {
       ++t.received;
       t.received_bytes += item.sample.size();
+      note(t, item.sample);
       if (item.sample.in_shared_memory()) ++t.from_shared_memory;
       // Over shm a queued sample holds its publisher's iceoryx chunk: bounded per topic too.
       if (opt_.dds.transport == dds::Transport::kShm && t.queued >= opt_.topic_queue) {
@@ -211,7 +256,8 @@ class Recorder {
   }
 
   struct Totals {
-    std::uint64_t received = 0, bytes = 0, written = 0, dds_lost = 0, dds_rejected = 0, malformed = 0, queue = 0, disk = 0;
+    std::uint64_t received = 0, bytes = 0, written = 0, dds_lost = 0, dds_rejected = 0, malformed = 0, queue = 0, disk = 0,
+                  missed = 0;
   };
   Totals totals() {
     Totals s;
@@ -220,6 +266,7 @@ class Recorder {
       s.bytes += t.received_bytes;
       s.written += t.written;
       s.dds_lost += t.reader->lost();
+      s.missed += t.missed;
       s.dds_rejected += t.reader->rejected();
       s.malformed += t.reader->malformed();
       s.queue += t.queue_dropped;
@@ -241,7 +288,7 @@ class Recorder {
                  " file(s) %.1f MB  queue %.1f MB  drops: dds %" PRIu64 " queue %" PRIu64 " disk %" PRIu64 "\n",
                  static_cast<double>(elapsed) / 1e9, topics_.size(), rate, mbs_in, mbs_out, shared_.files.load(),
                  static_cast<double>(file_bytes) / 1e6, static_cast<double>(queue_.bytes()) / 1e6,
-                 s.dds_lost + s.dds_rejected + s.malformed, s.queue, s.disk);
+                 s.dds_lost + s.dds_rejected + s.malformed + s.missed, s.queue, s.disk);
     last_ = s;
     last_elapsed_ = elapsed;
     last_file_bytes_ = file_bytes;
@@ -264,12 +311,12 @@ class Recorder {
     j["writer_ms"] = {{"compress", static_cast<double>(shared_.compress_ns.load()) / 1e6},
                       {"write", static_cast<double>(shared_.write_ns.load()) / 1e6},
                       {"metadata", static_cast<double>(shared_.metadata_ns.load()) / 1e6}};
-    j["drops"] = {{"dds_lost", s.dds_lost}, {"dds_rejected", s.dds_rejected}, {"malformed", s.malformed},
+    j["drops"] = {{"dds_lost", s.dds_lost}, {"dds_rejected", s.dds_rejected}, {"malformed", s.malformed}, {"missed", s.missed},
                   {"queue_full", s.queue}, {"disk", s.disk}};
     for (auto& t : topics_) {
       j["topics"][t.ros_name] = {{"type", t.spec.schema_name}, {"received", t.received}, {"written", t.written.load()},
                                  {"dds_lost", t.reader->lost()}, {"dds_rejected", t.reader->rejected()},
-                                 {"malformed", t.reader->malformed()}, {"queue_full", t.queue_dropped},
+                                 {"malformed", t.reader->malformed()}, {"missed", t.missed}, {"queue_full", t.queue_dropped},
                                  {"disk", t.disk_dropped.load()}, {"shared_memory", t.from_shared_memory}};
     }
     for (const auto& [topic, why] : skipped_) j["skipped"][topic] = why;
@@ -291,7 +338,8 @@ class Recorder {
   std::deque<RecordTopic> topics_;  // stable addresses: queued items point at their topic
   std::map<std::string, RecordTopic*> known_;  // nullptr: skipped
   std::map<std::string, std::string> skipped_;
-  std::set<std::string> raw_off_;  // raw channels seen and not recorded (no --raw)
+  std::set<std::string> raw_off_;
+  AnnouncedSamples announced_;  // raw channels seen and not recorded (no --raw)
   Totals last_;
   Nanos last_elapsed_ = 0;
   std::uint64_t last_file_bytes_ = 0;

@@ -3,7 +3,8 @@
 // bytes as received (dds/raw_topic.hpp) and no decode. Two threads: this one takes samples from
 // DDS and queues them (no copy: over shm the queue holds the iceoryx chunks themselves); a writer
 // thread copies each into the chunk being filled, compresses and writes (record/split_writer.hpp).
-// Nothing is dropped silently: DDS's lost/rejected samples, samples the queue had no room for (the
+// Nothing is dropped silently: DDS's lost/rejected samples, samples announced on /rig/stamps that
+// never came (record_gaps.hpp: Cyclone does not report those), samples the queue had no room for (the
 // writer thread behind: its compress/write time split tells which), and samples a failed file could
 // not take are counted per topic, shown once a second on stderr and in the summary at the end.
 #include <cstdint>

@@ -1,0 +1,308 @@
+// Issue 29, "Message counts match what the monitor received": the mock rig (`rig up`: a synthetic
+// VLP-16, a fake-V4L2 camera and a GigE-fake camera), `rig record` and `rig monitor --record` as a
+// user runs them, each its own process, over the same window. The file is read by @mcap/core and
+// decoded by @foxglove/rosmsg2-serialization (tests/js/mcap_dump.mjs); the monitor's CSV has a row
+// per sample the drivers announced on /rig/stamps (received or lost). Per data topic, over the
+// monitor's window (from its first to its last row, by the DDS source timestamp, which the drivers
+// give the sample and its stamps alike and the file keeps as publish time), the file must hold
+// exactly the samples the monitor received, each by its source timestamp, and every sample the
+// recorded /rig/stamps announced. The rig is stopped before the recorder and the monitor, so both
+// have seen everything it wrote. A second test stops the recorder (SIGSTOP) for 2.5 s inside the
+// window: the same comparison must report the samples it missed (what makes the first able to fail),
+// and the recorder must have counted each /rig/stamps told it of (its summary's "missed").
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "../rig/record_support.hpp"
+#include "dds_domain_lease.hpp"
+
+namespace sensor_rig::rig {
+namespace {
+
+std::string profile() { return (test::source_dir() / "config/cyclonedds/loopback.xml").string(); }
+
+// One monitor CSV row: the columns this test needs, by the header's names.
+struct MonitorRow {
+  std::string topic;
+  Nanos publish_ns = 0;
+  bool received = false;
+};
+
+std::vector<MonitorRow> read_monitor_csv(const std::string& path) {
+  std::vector<MonitorRow> rows;
+  std::istringstream in(test::read_file(path));
+  std::string line;
+  if (!std::getline(in, line)) return rows;
+  std::map<std::string, std::size_t> col;
+  {
+    std::istringstream h(line);
+    std::size_t i = 0;
+    for (std::string name; std::getline(h, name, ',');) col[name] = i++;
+  }
+  if (!col.count("topic") || !col.count("publish_ns") || !col.count("received_ns")) {
+    ADD_FAILURE() << path << ": unexpected header " << line;
+    return rows;
+  }
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::istringstream l(line);
+    for (std::string x; std::getline(l, x, ',');) f.push_back(x);
+    f.resize(std::max(f.size(), col.size()));
+    MonitorRow r;
+    r.topic = f[col["topic"]];
+    r.publish_ns = f[col["publish_ns"]].empty() ? 0 : std::stoll(f[col["publish_ns"]]);
+    r.received = !f[col["received_ns"]].empty() && f[col["received_ns"]] != "0";
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+// One topic over the monitor's window [first row, last row] by source timestamp.
+struct Compared {
+  Nanos from = 0, to = 0;
+  std::size_t rows = 0;                   // the monitor's rows: every sample it was told of
+  std::set<Nanos> monitor_received;       // rows it received
+  std::set<Nanos> in_file;                // the file's messages of the topic in the window
+  std::set<Nanos> announced;              // the file's /rig/stamps for the topic in the window
+  std::vector<Nanos> not_in_file() const {  // received by the monitor or announced, not recorded
+    std::vector<Nanos> r;
+    for (const Nanos t : monitor_received)
+      if (!in_file.count(t)) r.push_back(t);
+    for (const Nanos t : announced)
+      if (!in_file.count(t) && !monitor_received.count(t)) r.push_back(t);
+    return r;
+  }
+  std::vector<Nanos> not_received() const {  // recorded, the monitor did not receive
+    std::vector<Nanos> r;
+    for (const Nanos t : in_file)
+      if (!monitor_received.count(t)) r.push_back(t);
+    return r;
+  }
+};
+
+std::map<std::string, Compared> compare(const std::vector<MonitorRow>& rows, const nlohmann::json& dump) {
+  std::map<std::string, Compared> by_topic;
+  for (const auto& r : rows) {
+    Compared& c = by_topic[r.topic];
+    c.from = c.rows == 0 ? r.publish_ns : std::min(c.from, r.publish_ns);
+    c.to = std::max(c.to, r.publish_ns);
+    ++c.rows;
+    if (r.received) c.monitor_received.insert(r.publish_ns);
+  }
+  for (const auto& m : dump["messages"]) {
+    const std::string topic = m["topic"];
+    if (topic == "/rig/stamps") {
+      auto it = by_topic.find(m["stamps_topic"].get<std::string>());
+      const Nanos pub = std::stoll(m["publish_ns"].get<std::string>());
+      if (it != by_topic.end() && pub >= it->second.from && pub <= it->second.to) it->second.announced.insert(pub);
+      continue;
+    }
+    auto it = by_topic.find(topic);
+    if (it == by_topic.end()) continue;
+    const Nanos pub = std::stoll(m["publish_time"].get<std::string>());
+    if (pub >= it->second.from && pub <= it->second.to) {
+      EXPECT_TRUE(it->second.in_file.insert(pub).second) << topic << ": two messages published at " << pub;
+    }
+  }
+  return by_topic;
+}
+
+// This process's child whose command line holds `needle` (RigChild does not say its pid); -1 if none.
+pid_t child_with(const std::string& needle) {
+  for (const auto& e : std::filesystem::directory_iterator("/proc")) {
+    const pid_t pid = static_cast<pid_t>(std::atoi(e.path().filename().c_str()));
+    if (pid <= 0) continue;
+    const std::string stat = test::read_file(e.path() / "stat");
+    const auto rp = stat.rfind(')');
+    if (rp == std::string::npos) continue;
+    char state = 0;
+    int ppid = 0;
+    if (std::sscanf(stat.c_str() + rp + 1, " %c %d", &state, &ppid) != 2 || ppid != ::getpid()) continue;
+    std::string cmd = test::read_file(e.path() / "cmdline");
+    for (auto& c : cmd)
+      if (c == '\0') c = ' ';
+    if (cmd.find(needle) != std::string::npos) return pid;
+  }
+  return -1;
+}
+
+std::string list(const std::vector<Nanos>& v) {
+  std::string s;
+  for (const Nanos t : v) s += " " + std::to_string(t);
+  return s;
+}
+
+class RecordAgainstMonitor : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::filesystem::exists(test::source_dir() / "tests/js/node_modules/@mcap/core"))
+      GTEST_FAIL() << "no tests/js/node_modules/@mcap/core (run scripts/setup.sh: npm ci in tests/js)";
+    domain_ = test::lease_dds_domain();
+    const int p = static_cast<int>(::getpid());
+    tag_ = "cnt" + std::to_string(p);
+    // A loopback address of this test process's own for the GigE fake (rig up adds it to lo and
+    // removes it; without the right to, it runs the fake in process).
+    const std::string gige_addr = "127.4." + std::to_string(p / 250 % 250) + "." + std::to_string(1 + p % 250);
+    config_ = dir_.write(
+        "rig.yaml",
+        "rig:\n  name: record-counts\n  dds: {domain: " + std::to_string(domain_) + ", profile: " + profile() +
+            "}\n  diagnostics_period_ms: 500\nlidars:\n  - name: " + tag_ + "\n    model: VLP-16\n    port: " +
+            std::to_string(test::free_udp_port()) +
+            "\n    position_port: 0\n    realtime_priority: 0\n    mock: {kind: synthetic, rpm: 600}\ncameras:\n"
+            "  - {name: " + tag_ + "_usb, backend: v4l2, device: /dev/video0, pixel_format: YUYV, width: 320, height: 240,"
+            " frame_rate: 10, mock: {kind: v4l2-fake}}\n"
+            "  - {name: " + tag_ + "_gige, backend: aravis, device: " + gige_addr +
+            ", pixel_format: BayerRG8, width: 320, height: 240, frame_rate: 10, mock: {kind: gige}}\n");
+    topics_ = {"/sensors/lidar/" + tag_ + "/points", "/sensors/camera/" + tag_ + "_usb/image_raw",
+               "/sensors/camera/" + tag_ + "_gige/image_raw"};
+  }
+
+  std::string path(const std::string& name) const { return (dir_.path / name).string(); }
+
+  // The recorder's newest progress line's topic count (0 before the first).
+  static int topics_recorded(const test::RigChild& rec) {
+    const std::string err = rec.err();
+    const auto at = err.rfind(" topics ");
+    if (at == std::string::npos) return 0;
+    const auto start = err.find_last_of(' ', at - 1);
+    return std::atoi(err.c_str() + start + 1);
+  }
+
+  struct Run {
+    nlohmann::json dump, rec_summary, monitor_summary;
+    std::vector<MonitorRow> rows;
+    std::string logs;
+  };
+
+  // rig up, then the recorder (every topic), then the monitor (the three data topics) once the
+  // recorder has subscribed all seven topics; `during` runs 1 s into the monitor's window, which
+  // goes on `after_ms` after it. The rig stops first; then the monitor and the recorder (SIGINT).
+  Run run(const std::function<void(test::RigChild& rec)>& during, int after_ms) {
+    Run r;
+    test::RigChild up({"up", config_}, path("up.out"), path("up.err"));
+    const std::string file = path("rec.mcap");
+    test::RigChild rec({"record", "--out", file, "--domain", std::to_string(domain_), "--dds-profile", profile()},
+                       path("rec.out"), path("rec.err"));
+    const auto tail = [](const std::string& text) { return text.size() > 3000 ? text.substr(text.size() - 3000) : text; };
+    const auto logs = [&, tail] {
+      return "--- rig up:\n" + tail(test::read_file(path("up.err"))) + "\n--- rig record:\n" + tail(rec.err()) +
+             "\n--- rig monitor:\n" + tail(test::read_file(path("mon.err"))) + tail(test::read_file(path("monitor.json")));
+    };
+    // points, two image_raw, two camera_info, /rig/stamps, /diagnostics
+    const Nanos deadline = monotonic_now_ns() + Nanos{test::kDiscoveryMs} * 1'000'000;
+    while (topics_recorded(rec) < 7 && monotonic_now_ns() < deadline && up.poll() < 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (topics_recorded(rec) < 7) {
+      ADD_FAILURE() << "the recorder did not subscribe the rig's 7 topics\n" << logs();
+      return r;
+    }
+    std::vector<std::string> mon_args{"monitor", "--domain", std::to_string(domain_), "--dds-profile", profile(),
+                                      "--record", path("monitor.csv"), "--summary", path("monitor.json")};
+    mon_args.insert(mon_args.end(), topics_.begin(), topics_.end());
+    test::RigChild mon(mon_args, path("mon.out"), path("mon.err"));
+    // The monitor counts from 0.5 s after it discovers a topic: a window of ~3.5 s, ~35 samples a topic.
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    during(rec);
+    std::this_thread::sleep_for(std::chrono::milliseconds(after_ms));
+    EXPECT_EQ(up.signal_and_wait(SIGINT, 15'000), 0) << logs();
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    EXPECT_EQ(mon.signal_and_wait(SIGINT, 15'000), 0) << mon.err();
+    EXPECT_EQ(rec.signal_and_wait(SIGINT, 20'000), 0) << logs();
+    r.logs = logs();
+    r.rec_summary = rec.summary();
+    r.monitor_summary = nlohmann::json::parse(test::read_file(path("monitor.json")), nullptr, false);
+    r.rows = read_monitor_csv(path("monitor.csv"));
+    r.dump = test::mcap_dump(file);
+    return r;
+  }
+
+  test::TempDir dir_;
+  int domain_ = 0;
+  std::string tag_, config_;
+  std::vector<std::string> topics_;
+};
+
+TEST_F(RecordAgainstMonitor, TheFileHoldsExactlyWhatTheMonitorReceived) {
+  const Run r = run([](test::RigChild&) {}, 2500);
+  ASSERT_FALSE(r.dump.contains("error")) << r.dump.dump() << r.logs;
+  ASSERT_FALSE(r.rec_summary.is_discarded()) << r.logs;
+  EXPECT_EQ(r.dump["stream_complete"], true);
+  EXPECT_EQ(r.dump["undecodable"], 0);
+  const auto by_topic = compare(r.rows, r.dump);
+  for (const auto& t : topics_) {
+    SCOPED_TRACE(t);
+    ASSERT_EQ(by_topic.count(t), 1u) << "no monitor rows\n" << r.logs;
+    const Compared& c = by_topic.at(t);
+    // ~3.5 s at 10 Hz; a floor for a loaded host.
+    EXPECT_GE(c.monitor_received.size(), 20u);
+    EXPECT_EQ(c.in_file.size(), c.monitor_received.size())
+        << "recorded " << c.in_file.size() << ", the monitor received " << c.monitor_received.size() << " of "
+        << c.rows << " announced";
+    EXPECT_TRUE(c.not_in_file().empty()) << "not recorded (source timestamps):" << list(c.not_in_file());
+    EXPECT_TRUE(c.not_received().empty()) << "recorded, not received by the monitor:" << list(c.not_received());
+    // The monitor was told of every sample (its rows) and the file has their stamps too.
+    EXPECT_EQ(c.announced.size(), c.rows);
+    EXPECT_EQ(c.monitor_received.size(), c.rows) << "the monitor lost samples";
+    // The recorder's own account: everything it took is in the file, nothing dropped.
+    const auto& s = r.rec_summary["topics"][t];
+    EXPECT_EQ(s["received"], s["written"]) << s.dump();
+    EXPECT_EQ(r.dump["channels"][t]["count"], s["written"]) << s.dump();
+  }
+  for (const auto& [cause, n] : r.rec_summary["drops"].items()) EXPECT_EQ(n, 0) << cause << " " << r.rec_summary.dump();
+  ASSERT_TRUE(r.monitor_summary.is_array()) << test::read_file(path("monitor.json"));
+  for (const auto& s : r.monitor_summary) {
+    if (!s.contains("topic")) continue;
+    EXPECT_EQ(s["lost"], 0) << s.dump();
+    // It received (whole run, from its match) at least what its rows say.
+    const auto c = by_topic.find(s["topic"].get<std::string>());
+    ASSERT_NE(c, by_topic.end()) << s.dump();
+    EXPECT_GE(s["received"].get<std::size_t>(), c->second.monitor_received.size()) << s.dump();
+  }
+}
+
+// The comparison above against a recorder that misses samples: stopped (SIGSTOP) for 2.5 s, its
+// DDS threads too, while the drivers' writers keep 2 samples each for it. What it missed must be
+// named, by source timestamp, against the monitor and the recorded /rig/stamps.
+TEST_F(RecordAgainstMonitor, ARecorderThatMissesSamplesIsCaught) {
+  const Run r = run([&](test::RigChild&) {
+    const pid_t rec = child_with(" record --out " + path("rec.mcap"));
+    ASSERT_GT(rec, 0);
+    ASSERT_EQ(::kill(rec, SIGSTOP), 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+    ASSERT_EQ(::kill(rec, SIGCONT), 0);
+  }, 1000);
+  ASSERT_FALSE(r.dump.contains("error")) << r.dump.dump() << r.logs;
+  const auto by_topic = compare(r.rows, r.dump);
+  for (const auto& t : topics_) {
+    SCOPED_TRACE(t);
+    ASSERT_EQ(by_topic.count(t), 1u) << "no monitor rows\n" << r.logs;
+    const Compared& c = by_topic.at(t);
+    EXPECT_GE(c.monitor_received.size(), 20u);
+    // 2.5 s at 10 Hz is 25 samples; only the writer's last 2 and what the socket held come late.
+    EXPECT_GE(c.not_in_file().size(), 5u) << "recorded " << c.in_file.size() << " of " << c.monitor_received.size();
+    EXPECT_LT(c.in_file.size(), c.monitor_received.size());
+    // Never silent: the recorder counts each it was told of as missed (announced on /rig/stamps, which
+    // it records: the announcements in the file without their sample). /rig/stamps' own writer keeps
+    // 64 samples, so a long stop loses announcements too: what the monitor alone saw is not counted.
+    const auto& s = r.rec_summary["topics"][t];
+    std::size_t announced_missing = 0;
+    for (const Nanos a : c.announced) announced_missing += c.in_file.count(a) == 0 ? 1 : 0;
+    EXPECT_EQ(s["missed"], announced_missing) << s.dump();
+    EXPECT_GE(announced_missing, 5u);
+    EXPECT_EQ(s["received"], s["written"]) << s.dump();
+    std::cout << t << ": " << c.monitor_received.size() << " received by the monitor, " << c.in_file.size()
+              << " recorded, " << c.not_in_file().size() << " missing; the recorder reports " << s.dump() << "\n";
+  }
+  EXPECT_EQ(r.rec_summary["drops"]["queue_full"], 0);
+  EXPECT_EQ(r.rec_summary["drops"]["disk"], 0);
+}
+
+}  // namespace
+}  // namespace sensor_rig::rig
