@@ -530,6 +530,38 @@ TEST(ChaosCheck, AStarvedHealthyDeviceBreaksIsolation) {
   EXPECT_TRUE(r.invariants.at("isolation")) << result_text(r);
 }
 
+// A camera's own fault keeps it from being "healthy" until it is back (within its recovery bound),
+// not for a fixed settle: how soon it is back is `recovery`'s to judge. Camera-only rig chaos broke
+// isolation on cameras the driver reopened 1.1-2.5 s after their own camera.dies / camera.slow_open
+// ended (seed 8 corner_rear_left 72.6 %, recovery held); the truth had no frame in that time.
+TEST(ChaosCheck, ACamerasOwnFaultLastsForIsolationUntilItIsBack) {
+  Input in = honest();
+  in.truths[0].header.device_class = "camera";
+  // camera.dies from 0.5 to 1.5 s; no frame is made until the driver reopened it at 3.0 s.
+  for (int u = 5; u < 30; ++u)
+    for (std::uint32_t p = 0; p < kParts; ++p) drop_part(in, u, p, truth::Fate::kNotSent);
+  in.samples.erase(in.samples.begin() + 5, in.samples.begin() + 30);
+  in.monitor[kTopic] = MonitorTotals{kScans - 25, 0};
+  in.events.push_back(faults::FaultEvent{1, "camera.dies", "front", 0.5, 1.0, {}});
+  in.truths[0].faults.push_back(truth::FaultRecord{1, "camera.dies", kT0 + 5 * kPeriod, kT0 + 15 * kPeriod, -1, ""});
+  Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_NEAR(r.topics.at(kTopic).healthy_rate_share, 1.0, 0.05);
+  // The old judge: healthy again 1 s after the end (2.5 s), 23 frames of 28 expected (82 %).
+  // The same silence with the fault on another camera: this one was starved, isolation breaks.
+  in.events[0].device = "rear";
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("isolation")) << result_text(r);
+  // Its own fault, and a later silence no fault explains (4.0-5.0 s): still broken.
+  in.events[0].device = "front";
+  in.samples.erase(in.samples.end() - 10, in.samples.end());
+  in.monitor[kTopic] = MonitorTotals{kScans - 35, 10};
+  in.counted_lost[kTopic] = 10;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("isolation")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+}
+
 TEST(ChaosCheck, RecoveryIsTheFirstCompleteScanAfterTheFault) {
   Input in = honest();
   // lidar.stuck_azimuth from 1.0 to 1.5 s; the rig publishes nothing from 1.0 s until 2.8 s.
