@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "dbw_commands.hpp"
+#include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/dbw/can/log_decode.hpp"
 #include "sensor_rig/dbw/can/transport.hpp"

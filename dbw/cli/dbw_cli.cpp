@@ -1,4 +1,5 @@
 #include "dbw_commands.hpp"
+#include "sensor_rig/common/cli.hpp"
 
 namespace sensor_rig::dbw {
 void register_cli(CLI::App& app, cli::Context& ctx) {

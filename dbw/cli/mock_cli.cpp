@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "sensor_rig/common/fault_plan.hpp"
+#include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/common/truth_record.hpp"
 #include "sensor_rig/dbw/bridge/defaults.hpp"

@@ -2,6 +2,7 @@
 #include <utility>
 
 #include "lidar_commands.hpp"
+#include "sensor_rig/common/cli.hpp"
 
 namespace sensor_rig::lidar {
 void register_cli(CLI::App& app, cli::Context& ctx, mock::RecordingOpener open_recording) {

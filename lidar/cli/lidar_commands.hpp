@@ -1,5 +1,5 @@
 #pragma once
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 #include "sensor_rig/lidar/mock/replay.hpp"
 
 namespace sensor_rig::lidar {

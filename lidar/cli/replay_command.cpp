@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "lidar_commands.hpp"
+#include "sensor_rig/common/cli.hpp"
 #include "replay_faults.hpp"
 #include "sensor_rig/lidar/decoder_files.hpp"
 #include "sensor_rig/lidar/return_selection.hpp"

@@ -3,7 +3,7 @@
 
 #include <stdexcept>
 
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 
 namespace sensor_rig::lidar {
 namespace {

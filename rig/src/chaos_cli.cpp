@@ -3,6 +3,7 @@
 #include <string>
 
 #include "chaos_run.hpp"
+#include "sensor_rig/common/cli.hpp"
 #include "rig_commands.hpp"
 #include "sensor_rig/common/fault_plan.hpp"
 

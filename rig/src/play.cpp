@@ -1,4 +1,5 @@
 #include "play.hpp"
+#include "sensor_rig/common/cli.hpp"
 
 #include <time.h>
 

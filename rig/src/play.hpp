@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 #include "sensor_rig/dds/participant.hpp"
 
 namespace sensor_rig::rig {

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "play.hpp"
+#include "sensor_rig/common/cli.hpp"
 #include "recorder.hpp"
 #include "rig_commands.hpp"
 #include "sensor_rig/common/clock.hpp"

@@ -1,6 +1,6 @@
 #pragma once
 // Every area's register function; the list is the whole `rig` command tree.
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 #include "can_recording_log.hpp"
 #include "lidar_recording_stream.hpp"
 

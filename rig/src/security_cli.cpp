@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rig_commands.hpp"
+#include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/dds/security.hpp"
 #include "sensor_rig/dds/security_init.hpp"
 

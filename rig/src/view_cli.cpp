@@ -8,6 +8,7 @@
 #include <system_error>
 
 #include "rig_commands.hpp"
+#include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/log.hpp"
 #include "sensor_rig/common/shutdown.hpp"

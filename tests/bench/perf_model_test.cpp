@@ -13,7 +13,7 @@
 #include "sensor_rig/bench/perf/records.hpp"
 #include "sensor_rig/bench/perf/roudi.hpp"
 #include "sensor_rig/bench/perf/stats.hpp"
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 
 namespace sensor_rig::bench::perf {
 namespace {

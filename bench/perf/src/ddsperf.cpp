@@ -13,7 +13,7 @@
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/bench/perf/roudi.hpp"
 #include "sensor_rig/bench/perf/runner.hpp"
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 
 namespace sensor_rig::bench::perf {

@@ -11,7 +11,7 @@
 #include "sensor_rig/bench/perf/report.hpp"
 #include "sensor_rig/bench/perf/roudi.hpp"
 #include "sensor_rig/bench/perf/runner.hpp"
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 

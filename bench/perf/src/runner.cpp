@@ -16,7 +16,7 @@
 #include "sensor_rig/bench/perf/node.hpp"
 #include "sensor_rig/bench/perf/roudi.hpp"
 #include "sensor_rig/common/child_process.hpp"
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 

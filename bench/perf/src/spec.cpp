@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "sensor_rig/common/cli.hpp"
+#include "sensor_rig/common/cli_context.hpp"
 
 namespace sensor_rig::bench::perf {
 namespace {
