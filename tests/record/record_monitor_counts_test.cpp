@@ -1,7 +1,7 @@
 // Issue 29, "Message counts match what the monitor received": the mock rig (`rig up`: a synthetic
 // VLP-16, a fake-V4L2 camera and a GigE-fake camera), `rig record` and `rig monitor --record` as a
 // user runs them, each its own process, over the same window. The file is read by @mcap/core and
-// decoded by @foxglove/rosmsg2-serialization (tests/js/mcap_dump.mjs); the monitor's CSV has a row
+// decoded by @foxglove/rosmsg2-serialization (tests/js/mcap_stamps.mjs); the monitor's CSV has a row
 // per sample the drivers announced on /rig/stamps (received or lost). Per data topic, over the
 // monitor's window (from its first to its last row, by the DDS source timestamp, which the drivers
 // give the sample and its stamps alike and the file keeps as publish time), the file must hold
@@ -133,6 +133,16 @@ pid_t child_with(const std::string& needle) {
   return -1;
 }
 
+// tests/js/mcap_stamps.mjs over `file`: each message's topic, times and header stamp, /rig/stamps'
+// decoded (@mcap/core's indexed reader, @foxglove/rosmsg2-serialization).
+nlohmann::json mcap_stamps(const std::string& file) {
+  const auto script = test::source_dir() / "tests/js/mcap_stamps.mjs";
+  const auto [rc, out] = test::run("node " + script.string() + " " + file + " 2>&1");
+  auto j = nlohmann::json::parse(out, nullptr, false);
+  if (rc != 0 || j.is_discarded()) return nlohmann::json{{"error", "exit " + std::to_string(rc) + ": " + out.substr(0, 2000)}};
+  return j;
+}
+
 std::string list(const std::vector<Nanos>& v) {
   std::string s;
   for (const Nanos t : v) s += " " + std::to_string(t);
@@ -188,7 +198,9 @@ class RecordAgainstMonitor : public ::testing::Test {
     Run r;
     test::RigChild up({"up", config_}, path("up.out"), path("up.err"));
     const std::string file = path("rec.mcap");
-    test::RigChild rec({"record", "--out", file, "--domain", std::to_string(domain_), "--dds-profile", profile()},
+    // lz4: @mcap/core's reader (JavaScript) takes ~1 s for the ~40 MB instead of ~4 s with zstd's.
+    test::RigChild rec({"record", "--out", file, "--domain", std::to_string(domain_), "--dds-profile", profile(),
+                        "--compression", "lz4"},
                        path("rec.out"), path("rec.err"));
     const auto tail = [](const std::string& text) { return text.size() > 3000 ? text.substr(text.size() - 3000) : text; };
     const auto logs = [&, tail] {
@@ -219,7 +231,7 @@ class RecordAgainstMonitor : public ::testing::Test {
     r.rec_summary = rec.summary();
     r.monitor_summary = nlohmann::json::parse(test::read_file(path("monitor.json")), nullptr, false);
     r.rows = read_monitor_csv(path("monitor.csv"));
-    r.dump = test::mcap_dump(file);
+    r.dump = mcap_stamps(file);
     return r;
   }
 
@@ -233,7 +245,6 @@ TEST_F(RecordAgainstMonitor, TheFileHoldsExactlyWhatTheMonitorReceived) {
   const Run r = run([](test::RigChild&) {}, 2500);
   ASSERT_FALSE(r.dump.contains("error")) << r.dump.dump() << r.logs;
   ASSERT_FALSE(r.rec_summary.is_discarded()) << r.logs;
-  EXPECT_EQ(r.dump["stream_complete"], true);
   EXPECT_EQ(r.dump["undecodable"], 0);
   const auto by_topic = compare(r.rows, r.dump);
   for (const auto& t : topics_) {

@@ -1,0 +1,73 @@
+// The stamps of every message of an MCAP file, as @mcap/core's indexed reader has them, decoded by
+// @foxglove/rosmsg2-serialization with the schemas in the file: for counting messages against
+// another account (rig monitor's), where mcap_dump.mjs's checksum of every payload is not needed.
+//   node mcap_stamps.mjs FILE
+// Prints one JSON object: {"channels": {TOPIC: {schema, count}}, "messages": [{"topic", "log_time",
+// "publish_time", "stamp_ns" (header stamp, when the message has a header), and for
+// sensor_rig_msgs/msg/SourceStamps "stamps_topic", "publish_ns"}], "undecodable"}; times are decimal
+// strings (ns). Exit 1 and {"error"} when the reader refuses the file.
+import { open } from "node:fs/promises";
+import { McapIndexedReader } from "@mcap/core";
+import { parse } from "@foxglove/rosmsg";
+import { MessageReader } from "@foxglove/rosmsg2-serialization";
+import { decompress as zstdDecompress } from "fzstd";
+import lz4 from "lz4js";
+
+const decompressHandlers = {
+  zstd: (buf, size) => zstdDecompress(buf, new Uint8Array(Number(size))),
+  lz4: (buf, size) => {
+    const out = lz4.decompress(buf, Number(size));
+    return out.length === Number(size) ? out : out.subarray(0, Number(size));
+  },
+};
+
+const stampNs = (h) => (h && h.stamp ? String(BigInt(h.stamp.sec) * 1000000000n + BigInt(h.stamp.nanosec)) : undefined);
+
+async function main() {
+  const handle = await open(process.argv[2], "r");
+  const size = (await handle.stat()).size;
+  const readable = {
+    size: async () => BigInt(size),
+    read: async (offset, length) => {
+      const buf = new Uint8Array(Number(length));
+      await handle.read(buf, 0, Number(length), Number(offset));
+      return buf;
+    },
+  };
+  const reader = await McapIndexedReader.Initialize({ readable, decompressHandlers });
+  const decoders = new Map();
+  const channels = {};
+  for (const [id, ch] of reader.channelsById) {
+    const schema = reader.schemasById.get(ch.schemaId);
+    channels[ch.topic] = { schema: schema?.name, count: 0 };
+    if (schema && schema.encoding === "ros2msg" && ch.messageEncoding === "cdr")
+      decoders.set(id, { reader: new MessageReader(parse(new TextDecoder().decode(schema.data), { ros2: true })),
+                         schema: schema.name, topic: ch.topic });
+  }
+  const messages = [];
+  let undecodable = 0;
+  for await (const msg of reader.readMessages()) {
+    const d = decoders.get(msg.channelId);
+    const topic = reader.channelsById.get(msg.channelId).topic;
+    channels[topic].count++;
+    const m = { topic, log_time: String(msg.logTime), publish_time: String(msg.publishTime) };
+    if (!d) {
+      undecodable++;
+    } else {
+      const decoded = d.reader.readMessage(msg.data);
+      m.stamp_ns = stampNs(decoded.header);
+      if (d.schema === "sensor_rig_msgs/msg/SourceStamps") {
+        m.stamps_topic = decoded.topic;
+        m.publish_ns = String(decoded.publish_ns);
+      }
+    }
+    messages.push(m);
+  }
+  await handle.close();
+  console.log(JSON.stringify({ channels, messages, undecodable }));
+}
+
+main().catch((e) => {
+  console.log(JSON.stringify({ error: String(e && e.message ? e.message : e) }));
+  process.exit(1);
+});
