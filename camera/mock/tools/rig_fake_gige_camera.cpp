@@ -272,6 +272,14 @@ int main(int argc, char** argv) {
   if (address.empty() || !(g_grid_hz >= 1 && g_grid_hz <= 1e6) || lost_per_thousand < 0 || realtime_priority < 0 ||
       realtime_priority > 99 || !(link_mbps >= 0 && link_mbps <= 100'000))
     return usage(argv[0], 2);
+  // Aravis refuses a serial of 16 characters or more (the GigE Vision register holds 16 with its
+  // NUL) and then runs the GVCP thread on no camera at all: every read "assertion
+  // 'ARV_IS_FAKE_CAMERA (camera)' failed", a device that answers and never streams.
+  if (serial.size() >= mock::kGigeSerialCapacity) {
+    std::fprintf(stderr, "rig-fake-gige-camera: serial '%s' is %zu characters; at most %zu\n", serial.c_str(), serial.size(),
+                 mock::kGigeSerialCapacity - 1);
+    return 2;
+  }
   if (!chaos_args.device.empty()) {  // a campaign's folder names what was not given
     const auto env = mock::chaos_from_env(chaos_args.device);
     if (chaos_args.plan.empty()) chaos_args.plan = env.plan;

@@ -6,6 +6,7 @@
 //   is per address), the real network path; its 127.0.0.x address is a LoopbackAddress lease
 //   (common/loopback_address.hpp: added to `lo` where permitted, removed when the last holder ends).
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -45,6 +46,11 @@ struct GigeFakeOptions {
   ChaosArgs chaos;
 };
 
+// A GigE Vision device's serial register holds 16 bytes with the NUL; Aravis' fakes refuse longer.
+inline constexpr std::size_t kGigeSerialCapacity = 16;
+// The serial of a fake on `address` when none is given: "RIG" and the IPv4 address in hex (11
+// characters); throws std::runtime_error for an address that is not IPv4.
+std::string gige_fake_serial(const std::string& address);
 // argv of the fake process.
 std::vector<std::string> gige_fake_command(const GigeFakeOptions& o);
 // Starts the fake and waits (bounded) until its GVCP port answers; throws std::runtime_error.
