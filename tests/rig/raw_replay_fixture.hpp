@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <span>
@@ -16,6 +17,8 @@
 
 #include "dds_domain_lease.hpp"
 #include "record_support.hpp"
+#include "sensor_rig/common/fault_plan.hpp"
+#include "sensor_rig/common/truth_record.hpp"
 #include "sensor_rig/dds/cdr_view.hpp"
 #include "sensor_rig/record/bag_metadata.hpp"
 #include "sensor_rig/record/mcap_reader.hpp"
@@ -42,6 +45,9 @@ struct Recorded {
   std::map<Nanos, std::uint32_t> clouds;  // stamp -> FNV-1a of the cloud's data bytes
   std::uint64_t packets = 0, data_packets = 0, position_packets = 0, batches = 0;
   Nanos first_rx = 0, last_rx = 0;
+  // Each VLP data packet in file order: its own time (µs since the hour, the 4 bytes before its
+  // last 2: the mock's truth record names a packet by it) and its receipt.
+  std::vector<std::pair<std::uint32_t, Nanos>> data;
   std::multiset<std::uint32_t> batch_fnv;  // per message: FNV-1a over its packets' payloads
   std::vector<record::McapProblem> problems;
 };
@@ -69,6 +75,11 @@ inline Recorded read_recording(const std::string& file, const std::string& lidar
         r.last_rx = std::max(r.last_rx, rx);
         ++r.packets;
         ++(p.dst_port == raw.data_port ? r.data_packets : r.position_packets);
+        if (p.dst_port == raw.data_port && p.data.size() == kVlp32cPacket) {
+          std::uint32_t us = 0;
+          for (std::size_t i = 0; i < 4; ++i) us |= std::to_integer<std::uint32_t>(p.data[kVlp32cPacket - 6 + i]) << (8 * i);
+          r.data.emplace_back(us, rx);
+        }
         for (const auto b : p.data) fnv = (fnv ^ std::to_integer<std::uint32_t>(b)) * 0x01000193u;
       }
       r.batch_fnv.insert(fnv);

@@ -5,7 +5,9 @@
 // (sensor time, GPRMC hour, no clock correction: the packets' own) and the same point count, and
 // the replay has no other scan in that window. The raw channel is also read by @mcap/core
 // (tests/js/mcap_dump.mjs); a cut and a corrupted recording replay what is intact and say where not.
-// A split recording's folder replays as one stream (LidarSplitReplay; CanDriveReplay for the CAN bus).
+// A split recording's folder replays as one stream (LidarSplitReplay; CanDriveReplay for the CAN bus);
+// what its files lost is held against the live mock's truth record (a packet sent and not recorded),
+// never against time without packets (the mock, SCHED_FIFO or not, pauses >5 ms on a loaded host).
 #include "raw_replay_fixture.hpp"
 
 namespace sensor_rig::rig {
@@ -142,27 +144,51 @@ TEST_F(RawReplay, ScansReplayedThroughTheDriverEqualTheLiveOnes) {
 // record` takes its raw channel and its scans, a file every 0.8 s; then `rig up` with mock {kind:
 // mcap, file: FOLDER} replays the folder through the same driver (`rig lidar replay --mcap FOLDER`,
 // at rate 2 after 1 s) while another recorder takes the scans. The live scans are those the live
-// driver published, as our reader reads them from each file.
+// driver published, as our reader reads them from each file. What the live mock sent is its truth
+// record's: every data packet, named by its own time, with its send time.
 class LidarSplitReplay : public RawReplay {
  protected:
+  struct Sent {
+    std::uint64_t seq = 0;  // the mock's, in sending order
+    Nanos due = 0, tx = 0;  // when its time came, when it was handed to the socket (vehicle ns)
+  };
   struct Run {
     std::string folder;
     std::vector<std::string> files;  // in N order
     std::vector<Recorded> parts;     // each file
     Recorded all;                    // the scans of every file
+    std::map<std::uint32_t, Sent> sent;  // the live mock's data packets on the wire, by their µs since the hour
   };
 
-  Run record_split(double seconds) {
-    Run run{(dir_.path / "live").string(), {}, {}, {}};
+  // The live run under a fault plan without faults (RIG_CHAOS_DIR): its mock writes its truth record.
+  // Recorded until a fourth file has 0.2 s: three whole files however long `rig up` and the recorder
+  // took to start on this host (a fixed --duration 2.5 left 2 s of packets or less under load).
+  Run record_split() {
+    Run run{(dir_.path / "live").string(), {}, {}, {}, {}};
+    const auto chaos = dir_.path / "chaos";
+    std::filesystem::create_directories(chaos);
+    faults::write_plan((chaos / "plan.jsonl").string(), faults::Plan{});
+    ::setenv("RIG_CHAOS_DIR", chaos.c_str(), 1);
     test::RigChild up({"up", config("live.yaml", "{kind: synthetic, rpm: 600}"), "--duration", "60"},
                       (dir_.path / "up_live.out").string(), (dir_.path / "up_live.err").string());
+    ::unsetenv("RIG_CHAOS_DIR");
     EXPECT_TRUE(up.started());
     test::RigChild rec = record({"/sensors/lidar/raw29/packets", "/sensors/lidar/raw29/points", "--split-s", "0.8",
-                                 "--chunk-kb", "64"}, run.folder, seconds);
-    EXPECT_EQ(rec.wait(60'000), 0) << rec.err();
-    up.signal_and_wait(SIGINT, 20'000);
+                                 "--chunk-kb", "64"}, run.folder, 60.0);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while ((!std::filesystem::exists(run.folder) || split_files(run.folder).size() < 4) && rec.poll() < 0 &&
+           std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    EXPECT_EQ(rec.signal_and_wait(SIGINT, 20'000), 0) << rec.err();
+    up.signal_and_wait(SIGINT, 20'000);  // the mock ends with it: its record is complete
     run.files = split_files(run.folder);
     read(run);
+    for (const auto& p : truth::read((chaos / "truth" / "raw29.jsonl").string()).parts)
+      if (p.tx_ns > 0 && truth::delivered_intact(p.fate))
+        run.sent[static_cast<std::uint32_t>(p.dev_ns / 1000)] = {p.seq, p.acq_ns, p.tx_ns};
+    expect_truth_names_every_packet(run);
+    std::printf("%s\n", describe(run).c_str());
     return run;
   }
 
@@ -220,17 +246,19 @@ class LidarSplitReplay : public RawReplay {
     return read_recording(out, "raw29");
   }
 
-  // `file` rewritten without `topic`'s channel and messages.
-  static void drop_channel(const std::string& file, const std::string& topic) {
+  // `file` rewritten without `topic`'s channel and messages, or (`which` given) without those of
+  // its messages `which` picks.
+  static void drop_channel(const std::string& file, const std::string& topic,
+                           const std::function<bool(const record::McapMessage&)>& which = {}) {
     const std::string rewritten = file + ".new";
     {
       record::McapReader r(file);
       record::McapWriter w(rewritten, {});
       for (const auto& [id, schema] : r.schemas()) w.add_schema_as_is(schema);
       for (const auto& [id, channel] : r.channels())
-        if (channel.topic != topic) w.add_channel_as_is(channel);
+        if (channel.topic != topic || which) w.add_channel_as_is(channel);
       r.for_each_message([&](const record::McapMessage& m) {
-        if (r.channels().at(m.channel_id).topic == topic) return true;
+        if (r.channels().at(m.channel_id).topic == topic && (!which || which(m))) return true;
         const std::span<const std::byte> pieces[1] = {m.data};
         w.write(m.channel_id, m.sequence, m.log_time, m.publish_time, pieces);
         return true;
@@ -250,19 +278,105 @@ class LidarSplitReplay : public RawReplay {
     return {data, position};
   }
 
-  // Times no packet was recorded in between (a cut file's lost tail up to the next file's first
-  // packet): from one file's last packet to the next's, when more than 5 ms apart (~1500 packets a
-  // second, so no seam of an intact recording).
-  // Files without packets are left out.
+  // Every recorded data packet is one the mock sent (its truth record is whole), and none is in the
+  // recording twice.
+  static void expect_truth_names_every_packet(const Run& run) {
+    std::set<std::uint32_t> seen;
+    std::size_t unknown = 0, twice = 0;
+    for (const auto& p : run.parts)
+      for (const auto& [us, rx] : p.data) {
+        unknown += run.sent.count(us) == 0;
+        twice += !seen.insert(us).second;
+      }
+    EXPECT_GT(run.sent.size(), 1000u) << "the mock's truth record";
+    EXPECT_EQ(unknown, 0u) << "recorded packets the mock's truth record does not name";
+    EXPECT_EQ(twice, 0u) << "packets recorded twice";
+  }
+
+  // Runs of data packets the mock sent and no file holds, between the first and the last one the
+  // files hold (a cut file's lost tail): how many, and the receipts of the recorded packets either
+  // side. Ground truth, not time: the mock may send nothing for a while (late on a loaded host),
+  // which loses nothing; one packet missing is a loss.
+  struct Loss {
+    std::uint64_t packets = 0;
+    Nanos from = 0, to = 0;
+  };
+  static std::vector<Loss> losses(const Run& run) {
+    std::map<std::uint64_t, Nanos> recorded;  // seq -> receipt
+    for (const auto& p : run.parts)
+      for (const auto& [us, rx] : p.data)
+        if (const auto it = run.sent.find(us); it != run.sent.end()) recorded.emplace(it->second.seq, rx);
+    std::vector<std::uint64_t> sent;
+    for (const auto& [us, s] : run.sent) sent.push_back(s.seq);
+    std::sort(sent.begin(), sent.end());
+    std::vector<Loss> l;
+    if (recorded.empty()) return l;
+    Nanos last = 0;
+    bool in_loss = false;
+    for (const std::uint64_t seq : sent) {
+      if (seq < recorded.begin()->first || seq > recorded.rbegin()->first) continue;
+      if (const auto it = recorded.find(seq); it != recorded.end()) {
+        if (in_loss) l.back().to = it->second;
+        in_loss = false;
+        last = it->second;
+      } else {
+        if (!in_loss) l.push_back({0, last, 0});
+        in_loss = true;
+        ++l.back().packets;
+      }
+    }
+    return l;
+  }
+
+  // The times the recording lost packets the mock sent (losses()), from the last recorded packet
+  // before to the first after.
   static std::vector<std::pair<Nanos, Nanos>> gaps(const Run& run) {
     std::vector<std::pair<Nanos, Nanos>> g;
+    for (const auto& l : losses(run)) g.emplace_back(l.from, l.to);
+    return g;
+  }
+
+  // What the mock sent, what the files hold, where the files meet and what was lost: a test's line,
+  // and a failure's explanation. A seam's time without packets is the mock's (it sent none then)
+  // when nothing was lost.
+  static std::string describe(const Run& run) {
+    Nanos late = 0;
+    for (const auto& [us, s] : run.sent) late = std::max(late, s.tx - s.due);
+    std::ostringstream o;
+    o << "mock: " << run.sent.size() << " data packets sent (at most " << static_cast<double>(late) / 1e6
+      << " ms late); files: " << run.files.size() << ", data packets";
     const Recorded* before = nullptr;
     for (const auto& p : run.parts) {
-      if (p.packets == 0) continue;
-      if (before != nullptr && p.first_rx - before->last_rx > 5'000'000) g.emplace_back(before->last_rx, p.first_rx);
-      before = &p;
+      o << " " << p.data.size();
+      if (before != nullptr && !p.data.empty() && !before->data.empty())
+        o << " (seam " << static_cast<double>(p.data.front().second - before->data.back().second) / 1e6 << " ms)";
+      if (!p.data.empty()) before = &p;
     }
-    return g;
+    // The mock's pauses while recorded: more than 5 ms without a packet sent (what a seam without
+    // packets that long was taken for: a loss).
+    Nanos first = INT64_MAX, last = 0;
+    for (const auto& p : run.parts) {
+      if (p.data.empty()) continue;
+      first = std::min(first, p.data.front().second);
+      last = std::max(last, p.data.back().second);
+    }
+    std::vector<Nanos> tx;
+    for (const auto& [us, s] : run.sent)
+      if (s.tx >= first && s.tx <= last) tx.push_back(s.tx);
+    std::sort(tx.begin(), tx.end());
+    std::size_t pauses = 0;
+    Nanos paused = 0;
+    for (std::size_t i = 1; i < tx.size(); ++i)
+      if (tx[i] - tx[i - 1] > 5'000'000) {
+        ++pauses;
+        paused += tx[i] - tx[i - 1];
+      }
+    o << "; mock pauses over 5 ms: " << pauses << " (" << static_cast<double>(paused) / 1e6 << " ms)";
+    const auto l = losses(run);
+    o << "; lost: " << l.size();
+    for (const auto& x : l)
+      o << " [" << x.packets << " packets between " << x.from << " and " << x.to << "]";
+    return o.str();
   }
 
   // Each live scan wholly inside the recorded packets and clear of its gaps (5 ms around: the packets' way
@@ -324,9 +438,9 @@ class LidarSplitReplay : public RawReplay {
 // `mock: {kind: mcap, file: FOLDER}`: the split recording replays as one stream, every scan equal
 // to the live one across the seams, and every recorded packet sent.
 TEST_F(LidarSplitReplay, SplitRecordingFolderReplaysEveryScanAsLive) {
-  const Run live = record_split(2.5);
-  ASSERT_GE(live.files.size(), 3u) << "a file every 0.8 s for 2.5 s";
-  ASSERT_TRUE(gaps(live).empty()) << "the live recording lost packets at a seam";
+  const Run live = record_split();
+  ASSERT_GE(live.files.size(), 4u) << "a file every 0.8 s";
+  ASSERT_TRUE(gaps(live).empty()) << "the live recording lost packets the mock sent: " << describe(live);
   expect_mcap_core_reads_the_same(live, 1);  // a file between two seams
   std::string err;
   const Recorded replayed = replay(live.folder, err);
@@ -350,13 +464,42 @@ TEST_F(LidarSplitReplay, SplitRecordingFolderReplaysEveryScanAsLive) {
 // The same with its second file cut to two thirds: the mock names the cut file and the offset, and
 // every scan of what is intact (the cut file's first part, the files after it) replays as live.
 TEST_F(LidarSplitReplay, SplitRecordingWithACutFileReplaysTheIntactScans) {
-  Run live = record_split(2.5);
-  ASSERT_GE(live.files.size(), 3u) << "a file every 0.8 s for 2.5 s";
+  Run live = record_split();
+  ASSERT_GE(live.files.size(), 4u) << "a file every 0.8 s";
+  ASSERT_TRUE(gaps(live).empty()) << "the live recording lost packets the mock sent: " << describe(live);
   const std::string cut = live.files[1];
+  const std::size_t whole = live.parts[1].data.size();
   std::filesystem::resize_file(cut, std::filesystem::file_size(cut) * 2 / 3);
   read(live);
   ASSERT_FALSE(live.parts[1].problems.empty());
-  ASSERT_EQ(gaps(live).size(), 1u);
+  // One loss, the cut file's tail: its packets, up to the next file's first.
+  const auto lost = losses(live);
+  ASSERT_EQ(lost.size(), 1u) << describe(live);
+  EXPECT_EQ(lost[0].packets, whole - live.parts[1].data.size()) << describe(live);
+  ASSERT_FALSE(live.parts[2].data.empty());
+  EXPECT_EQ(lost[0].to, live.parts[2].data.front().second) << describe(live);
+  {
+    // The same count finds one message of data packets missing (a copy of file 2 without its 100th
+    // or the next that has data): a loss inside a file, and shorter than a seam's 5 ms.
+    Run one = live;
+    const std::string copy = (dir_.path / "one_less.mcap").string();
+    std::filesystem::copy_file(live.files[2], copy);
+    int n = 0;
+    bool dropped = false;
+    drop_channel(copy, "/sensors/lidar/raw29/packets", [&](const record::McapMessage& m) {
+      if (dropped || ++n < 100) return false;
+      dds::LidarPacketsView v;
+      const auto body = dds::cdr_body(m.data);
+      dropped = body && dds::parse_cdr(*body, v) == dds::CdrStatus::kOk && !v.packets.empty() &&
+                v.packets.front().dst_port == v.data_port;
+      return dropped;
+    });
+    one.parts[2] = read_recording(copy, "raw29");
+    const auto l = losses(one);
+    ASSERT_EQ(l.size(), 2u) << describe(one);
+    EXPECT_EQ(l[1].packets, live.parts[2].data.size() - one.parts[2].data.size());
+    EXPECT_GT(l[1].packets, 0u);
+  }
   std::string err;
   const Recorded replayed = replay(live.folder, err);
   const auto checked = expect_scans_replayed(live, replayed);
@@ -383,8 +526,8 @@ TEST_F(LidarSplitReplay, SplitRecordingWithACutFileReplaysTheIntactScans) {
 // it): the replay begins at the first file that has it, every scan of the files after it replays as
 // live, and nothing is called damaged.
 TEST_F(LidarSplitReplay, SplitRecordingWhoseFirstFileLacksTheChannelReplaysFromTheNext) {
-  Run live = record_split(2.5);
-  ASSERT_GE(live.files.size(), 3u) << "a file every 0.8 s for 2.5 s";
+  Run live = record_split();
+  ASSERT_GE(live.files.size(), 4u) << "a file every 0.8 s";
   drop_channel(live.files[0], "/sensors/lidar/raw29/packets");
   read(live);
   ASSERT_EQ(live.parts[0].packets, 0u);
