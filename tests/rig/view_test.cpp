@@ -25,6 +25,7 @@
 
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/dds/roudi.hpp"
+#include "rig_process.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "view_client.hpp"
 #include "wait.hpp"
@@ -36,18 +37,6 @@ using nlohmann::json;
 constexpr dds_domainid_t kDomain = 33;
 const std::string kCloud = "/test/view/points";
 const std::string kImage = "/test/view/image_raw";
-
-int free_tcp_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof a;
-  const bool ok = fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0;
-  if (fd >= 0) ::close(fd);
-  return ok ? ntohs(a.sin_port) : 0;
-}
 
 struct Sent {
   std::size_t len = 0;
@@ -153,7 +142,7 @@ class Publishers {
 // `rig view` in its own process, its JSON stats lines collected.
 class RigView {
  public:
-  explicit RigView(const std::string& transport = "udp") : port_(free_tcp_port()) {
+  explicit RigView(const std::string& transport = "udp") : port_(test::free_tcp_port()) {
     ChildOptions o;
     o.pipe_stdio = true;
     proc_ = ChildProcess({std::getenv("RIG_BIN") != nullptr ? std::getenv("RIG_BIN") : RIG_DEFAULT_BIN, "view",

@@ -18,9 +18,10 @@ namespace sensor_rig::test {
 
 inline std::filesystem::path test_data() { return data_dir(); }
 
-// A UDP port the kernel just handed out (free at the time of the call).
-inline int free_udp_port() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+// A port of `type` (SOCK_DGRAM, SOCK_STREAM) on loopback the kernel just handed out (free at the
+// time of the call).
+inline int free_loopback_port(int type) {
+  const int fd = ::socket(AF_INET, type, 0);
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
@@ -28,9 +29,11 @@ inline int free_udp_port() {
   const bool ok = fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
                   ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0;
   if (fd >= 0) ::close(fd);
-  if (!ok) throw std::runtime_error("free_udp_port: no UDP port on loopback");
+  if (!ok) throw std::runtime_error("no free port on loopback");
   return ntohs(a.sin_port);
 }
+inline int free_udp_port() { return free_loopback_port(SOCK_DGRAM); }
+inline int free_tcp_port() { return free_loopback_port(SOCK_STREAM); }
 
 // A fresh temporary directory, removed by the destructor.
 struct TempDir {

@@ -14,13 +14,9 @@
 
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/clock.hpp"
+#include "test_data.hpp"
 
 namespace sensor_rig::test {
-
-inline std::filesystem::path source_dir() {
-  const char* s = std::getenv("RIG_SOURCE_DIR");
-  return s != nullptr && *s != '\0' ? std::filesystem::path(s) : std::filesystem::path(RIG_DEFAULT_SOURCE_DIR);
-}
 
 // Empty when the client can run, else what is missing.
 inline std::string view_client_missing() {

@@ -23,6 +23,7 @@
 #include <thread>
 
 #include "dds_domain_lease.hpp"
+#include "rig_process.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "view_client.hpp"
 #include "wait.hpp"
@@ -52,18 +53,6 @@ std::pair<int, std::string> run(const std::string& cmd) {
   for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) out.append(buf, n);
   const int st = ::pclose(f);
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
-
-int free_port(int type) {
-  const int fd = ::socket(AF_INET, type, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof a;
-  const bool ok = fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0;
-  if (fd >= 0) ::close(fd);
-  return ok ? ntohs(a.sin_port) : 0;
 }
 
 // Local addresses (hex, as /proc/net/tcp{,6} has them) of the sockets listening on `port`.
@@ -118,7 +107,7 @@ TEST(RigViewAgainstRigUp, CloudsAndImagesArriveAsTheMockRigPublishedThemAndTheHo
   const std::string image = "/sensors/camera/" + tag + "_cam/image_raw";
   const std::string config = (dir / "rig.yaml").string();
   std::ofstream(config) << "rig:\n  name: view-rig-up\n  dds: {domain: " << domain << ", profile: " << profile()
-                        << "}\nlidars:\n  - name: " << tag << "\n    model: VLP-16\n    port: " << free_port(SOCK_DGRAM)
+                        << "}\nlidars:\n  - name: " << tag << "\n    model: VLP-16\n    port: " << test::free_udp_port()
                         << "\n    position_port: 0\n    realtime_priority: 0\n    mock: {kind: synthetic, rpm: 600}\n"
                         << "cameras:\n  - {name: " << tag << "_cam, backend: aravis, device: " << addr
                         << ", pixel_format: BayerRG8, width: 320, height: 240, frame_rate: 10, mock: {kind: gige}}\n";
@@ -141,7 +130,7 @@ TEST(RigViewAgainstRigUp, CloudsAndImagesArriveAsTheMockRigPublishedThemAndTheHo
   const std::string before = host_state(dir / "host_before");
   ASSERT_FALSE(before.empty());
 
-  const int port = free_port(SOCK_STREAM);
+  const int port = test::free_tcp_port();
   ChildOptions view_opts;
   view_opts.pipe_stdio = true;
   ChildProcess view({rig_bin(), "view", "--domain", std::to_string(domain), "--dds-profile", profile(), "--port",
