@@ -3,20 +3,8 @@
 // the file) and prints one JSON object: per channel its schema, encoding, QoS metadata and count,
 // and per message what a test compares with what the publishers sent (stamps, sizes, FNV-1a of
 // payloads). Usage: node mcap_dump.mjs FILE   (exit 1 and {"error": ...} when a reader refuses it)
-import { open } from "node:fs/promises";
-import { McapIndexedReader, McapStreamReader } from "@mcap/core";
-import { parse } from "@foxglove/rosmsg";
-import { MessageReader } from "@foxglove/rosmsg2-serialization";
-import { decompress as zstdDecompress } from "fzstd";
-import lz4 from "lz4js";
-
-const decompressHandlers = {
-  zstd: (buf, size) => zstdDecompress(buf, new Uint8Array(Number(size))),
-  lz4: (buf, size) => {
-    const out = lz4.decompress(buf, Number(size));
-    return out.length === Number(size) ? out : out.subarray(0, Number(size));
-  },
-};
+import { McapStreamReader } from "@mcap/core";
+import { decompressHandlers, indexedReader, openFile, ros2Decoders } from "./mcap_open.mjs";
 
 function fnv1a(bytes) {
   let h = 0x811c9dc5;
@@ -69,27 +57,14 @@ function summarize(schemaName, m) {
 
 async function main() {
   const file = process.argv[2];
-  const handle = await open(file, "r");
-  const size = (await handle.stat()).size;
-  const readable = {
-    size: async () => BigInt(size),
-    read: async (offset, length) => {
-      const buf = new Uint8Array(Number(length));
-      await handle.read(buf, 0, Number(length), Number(offset));
-      return buf;
-    },
-  };
-  const reader = await McapIndexedReader.Initialize({ readable, decompressHandlers });
-  const decoders = new Map();
+  const { handle, size } = await openFile(file);
+  const reader = await indexedReader(handle, size);
+  const decoders = ros2Decoders(reader);
   const channels = {};
-  for (const [id, ch] of reader.channelsById) {
+  for (const [, ch] of reader.channelsById) {
     const schema = reader.schemasById.get(ch.schemaId);
     channels[ch.topic] = { schema: schema?.name, schema_encoding: schema?.encoding, message_encoding: ch.messageEncoding,
                            metadata: Object.fromEntries(ch.metadata), count: 0 };
-    if (schema && schema.encoding === "ros2msg" && ch.messageEncoding === "cdr") {
-      const defs = parse(new TextDecoder().decode(schema.data), { ros2: true });
-      decoders.set(id, { reader: new MessageReader(defs), schema: schema.name, topic: ch.topic });
-    }
   }
   const messages = [];
   let undecodable = 0;

@@ -5,18 +5,8 @@
 // Prints one JSON object: {"reader", "messages": [{"topic","sequence","log_time","publish_time",
 // "size","fnv"}] (fnv: FNV-1a of the message's bytes), "count", "per_topic", "statistics" (indexed),
 // "stopped" (stream: why it stopped, "" at a complete end)}. Exit 1 and {"error"} when a reader refuses.
-import { open } from "node:fs/promises";
-import { McapIndexedReader, McapStreamReader } from "@mcap/core";
-import { decompress as zstdDecompress } from "fzstd";
-import lz4 from "lz4js";
-
-const decompressHandlers = {
-  zstd: (buf, size) => zstdDecompress(buf, new Uint8Array(Number(size))),
-  lz4: (buf, size) => {
-    const out = lz4.decompress(buf, Number(size));
-    return out.length === Number(size) ? out : out.subarray(0, Number(size));
-  },
-};
+import { McapStreamReader } from "@mcap/core";
+import { decompressHandlers, indexedReader, openFile } from "./mcap_open.mjs";
 
 function fnv1a(bytes) {
   let h = 0x811c9dc5;
@@ -26,8 +16,7 @@ function fnv1a(bytes) {
 
 async function main() {
   const [file, mode] = process.argv.slice(2);
-  const handle = await open(file, "r");
-  const size = (await handle.stat()).size;
+  const { handle, size } = await openFile(file);
   const messages = [];
   const perTopic = {};
   const add = (topic, m) => {
@@ -37,15 +26,7 @@ async function main() {
   };
   const out = { reader: mode };
   if (mode === "indexed") {
-    const readable = {
-      size: async () => BigInt(size),
-      read: async (offset, length) => {
-        const buf = new Uint8Array(Number(length));
-        await handle.read(buf, 0, Number(length), Number(offset));
-        return buf;
-      },
-    };
-    const reader = await McapIndexedReader.Initialize({ readable, decompressHandlers });
+    const reader = await indexedReader(handle, size);
     for await (const m of reader.readMessages()) add(reader.channelsById.get(m.channelId).topic, m);
     const s = reader.statistics;
     out.statistics = s ? { message_count: String(s.messageCount), chunk_count: s.chunkCount,

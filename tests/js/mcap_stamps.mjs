@@ -6,44 +6,17 @@
 // "publish_time", "stamp_ns" (header stamp, when the message has a header), and for
 // sensor_rig_msgs/msg/SourceStamps "stamps_topic", "publish_ns"}], "undecodable"}; times are decimal
 // strings (ns). Exit 1 and {"error"} when the reader refuses the file.
-import { open } from "node:fs/promises";
-import { McapIndexedReader } from "@mcap/core";
-import { parse } from "@foxglove/rosmsg";
-import { MessageReader } from "@foxglove/rosmsg2-serialization";
-import { decompress as zstdDecompress } from "fzstd";
-import lz4 from "lz4js";
-
-const decompressHandlers = {
-  zstd: (buf, size) => zstdDecompress(buf, new Uint8Array(Number(size))),
-  lz4: (buf, size) => {
-    const out = lz4.decompress(buf, Number(size));
-    return out.length === Number(size) ? out : out.subarray(0, Number(size));
-  },
-};
+import { indexedReader, openFile, ros2Decoders } from "./mcap_open.mjs";
 
 const stampNs = (h) => (h && h.stamp ? String(BigInt(h.stamp.sec) * 1000000000n + BigInt(h.stamp.nanosec)) : undefined);
 
 async function main() {
-  const handle = await open(process.argv[2], "r");
-  const size = (await handle.stat()).size;
-  const readable = {
-    size: async () => BigInt(size),
-    read: async (offset, length) => {
-      const buf = new Uint8Array(Number(length));
-      await handle.read(buf, 0, Number(length), Number(offset));
-      return buf;
-    },
-  };
-  const reader = await McapIndexedReader.Initialize({ readable, decompressHandlers });
-  const decoders = new Map();
+  const { handle, size } = await openFile(process.argv[2]);
+  const reader = await indexedReader(handle, size);
+  const decoders = ros2Decoders(reader);
   const channels = {};
-  for (const [id, ch] of reader.channelsById) {
-    const schema = reader.schemasById.get(ch.schemaId);
-    channels[ch.topic] = { schema: schema?.name, count: 0 };
-    if (schema && schema.encoding === "ros2msg" && ch.messageEncoding === "cdr")
-      decoders.set(id, { reader: new MessageReader(parse(new TextDecoder().decode(schema.data), { ros2: true })),
-                         schema: schema.name, topic: ch.topic });
-  }
+  for (const [, ch] of reader.channelsById)
+    channels[ch.topic] = { schema: reader.schemasById.get(ch.schemaId)?.name, count: 0 };
   const messages = [];
   let undecodable = 0;
   for await (const msg of reader.readMessages()) {
