@@ -293,11 +293,7 @@ class Checker {
       violation("accounted", topic, std::to_string(unaccounted_all) + " " + log.header.unit +
                                         "s neither published nor counted lost" + besides + "; first: " + first);
     }
-    if (!errors.empty()) {
-      std::sort(errors.begin(), errors.end());
-      t.stamp_error_p99_ms = errors[std::min(errors.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(errors.size())))];
-      t.stamp_error_max_ms = errors.back();
-    }
+    set_stamp_errors(t, errors);
     check_isolation(topic, t, samples, exp_it != in_.expected.end() ? exp_it->second.rate_hz : 0.0, depends);
     check_recovery(topic, t, units, depends);
     check_monitor(topic, t, units, samples, judged_at);
@@ -462,6 +458,17 @@ class Checker {
 
 bool Result::all_held() const {
   return campaign_errors.empty() && std::all_of(invariants.begin(), invariants.end(), [](const auto& kv) { return kv.second; });
+}
+
+void set_stamp_errors(TopicResult& t, std::vector<double>& errors_ms) {
+  if (errors_ms.empty()) return;
+  std::sort(errors_ms.begin(), errors_ms.end());
+  const auto at = [&](double q) {
+    return errors_ms[std::min(errors_ms.size() - 1, static_cast<std::size_t>(q * static_cast<double>(errors_ms.size())))];
+  };
+  t.stamp_error_p50_ms = at(0.5);
+  t.stamp_error_p99_ms = at(0.99);
+  t.stamp_error_max_ms = errors_ms.back();
 }
 
 Result check(const Input& in) { return Checker(in).run(); }

@@ -95,6 +95,9 @@ struct TopicResult {
   std::uint64_t stamps_outside = 0;        // stamp error beyond the bound, the topic not flagged
   std::uint64_t stamps_flagged = 0;        // beyond the bound while the rig flagged it unsynchronized
   std::uint64_t mixes_flagged = 0;         // fused sweeps mixing rotations by member stamps the rig flagged
+  // |stamp - truth| over the judged samples. With fewer than 100 samples p99 is the largest but
+  // one or the largest: a frame the host held is in it; the median is the stamps' body.
+  double stamp_error_p50_ms = 0;
   double stamp_error_p99_ms = 0;
   double stamp_error_max_ms = 0;
   double healthy_rate_share = 1.0;         // delivered / expected while no fault touched the device
@@ -102,6 +105,9 @@ struct TopicResult {
   std::uint64_t monitor_received = 0, monitor_lost = 0;  // its totals at the end (--json)
   std::uint64_t monitor_expected = 0;                    // units made while it watched
 };
+
+// Sets the topic's stamp error quantiles from its samples' errors (ms; sorted here).
+void set_stamp_errors(TopicResult& t, std::vector<double>& errors_ms);
 
 struct Example {
   std::string invariant;

@@ -96,11 +96,7 @@ class FusedJudge {
     account_scans();
     unpaired_clouds();
     report();
-    if (!errors_.empty()) {
-      std::sort(errors_.begin(), errors_.end());
-      t_.stamp_error_p99_ms = errors_[std::min(errors_.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(errors_.size())))];
-      t_.stamp_error_max_ms = errors_.back();
-    }
+    set_stamp_errors(t_, errors_);
     check_recovery();
     check_monitor();
   }

@@ -23,6 +23,7 @@ std::string result_json(const Result& r) {
                           {"hidden_missing", t.hidden_missing},
                           {"published_twice", t.published_twice},
                           {"unmatched", t.unmatched},
+                          {"stamp_error_p50_ms", t.stamp_error_p50_ms},
                           {"stamp_error_p99_ms", t.stamp_error_p99_ms},
                           {"stamp_error_max_ms", t.stamp_error_max_ms},
                           {"stamps_flagged", t.stamps_flagged},

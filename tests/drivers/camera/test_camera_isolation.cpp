@@ -341,8 +341,7 @@ TEST_F(CameraIsolation, TheSameCameraByAddressAndBySerialIsRefusedTheSecondTime)
   auto fake = start(0, {});
   camera::AravisSource by_address(cfg(0));
   auto c = cfg(0);
-  c.device = "RIG";
-  for (char ch : addr(0)) c.device += ch == '.' ? '_' : ch;  // the fake's serial (start_gige_fake)
+  c.device = camera::mock::gige_fake_serial(addr(0));  // the fake's serial (start_gige_fake)
   camera::AravisSource by_serial(c);
   by_address.open();
   const auto frames_within = [&](Nanos ns) {
