@@ -27,7 +27,7 @@ demo: build
 # and the drive-by-wire threads under TSan. Each stage prints its wall time; the last lines are the
 # table of stages and the tests of all of them ("make test: P passed, F failed").
 # The suite's build is Release at -O2 (the optimization of `make build`, without its debug info):
-# -O3 took the library files 19 % longer to compile (12 files chosen at random, 49.7 s vs 40.3 s of
+# -O3 took the library files 23 % longer to compile (12 files chosen at random, 49.7 s vs 40.3 s of
 # CPU, side by side, 2026-11-29) for code the suite does not time; `make bench` keeps -O3.
 STAGES = $(CURDIR)/$(BUILD)/stage_times.tsv
 STAGE  = scripts/stage.sh $(STAGES)
