@@ -29,11 +29,6 @@ void fail(const std::string& what) {
 }
 
 namespace {
-struct BioFree {
-  void operator()(BIO* b) const { BIO_free_all(b); }
-};
-using Bio = std::unique_ptr<BIO, BioFree>;
-
 void ok(int rc, const char* what) {
   if (rc <= 0) fail(what);
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Private to dds/: the few OpenSSL (libcrypto) operations `rig security init` needs, RAII-owned,
 // every failure thrown with OpenSSL's own error text.
+#include <openssl/bio.h>
 #include <openssl/evp.h>
 #include <openssl/x509.h>
 
@@ -20,12 +21,16 @@ struct KeyFree {
 struct CertFree {
   void operator()(X509* c) const { X509_free(c); }
 };
+struct BioFree {
+  void operator()(BIO* b) const { BIO_free_all(b); }
+};
 struct CrlFree {
   void operator()(X509_CRL* c) const { X509_CRL_free(c); }
 };
 using Key = std::unique_ptr<EVP_PKEY, KeyFree>;
 using Cert = std::unique_ptr<X509, CertFree>;
 using Crl = std::unique_ptr<X509_CRL, CrlFree>;
+using Bio = std::unique_ptr<BIO, BioFree>;
 
 // Throws std::runtime_error("OpenSSL: what: <OpenSSL's queued errors>").
 [[noreturn]] void fail(const std::string& what);

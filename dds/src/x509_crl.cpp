@@ -13,11 +13,6 @@
 
 namespace sensor_rig::dds::x509 {
 namespace {
-struct BioFree {
-  void operator()(BIO* b) const { BIO_free_all(b); }
-};
-using Bio = std::unique_ptr<BIO, BioFree>;
-
 std::string decimal(const ASN1_INTEGER* i) {
   std::unique_ptr<BIGNUM, decltype(&BN_free)> bn(ASN1_INTEGER_to_BN(i, nullptr), &BN_free);
   if (!bn) fail("serial number");

@@ -11,6 +11,15 @@
 
 namespace sensor_rig::record {
 
+// Every MCAP record: its opcode (1 byte), then its body's length (u64).
+constexpr std::size_t kRecordHeader = 9;
+
+// An opcode as "0x.." for error messages.
+inline std::string hex_op(std::uint8_t op) {
+  constexpr char kHex[] = "0123456789abcdef";
+  return std::string("0x") + kHex[op >> 4] + kHex[op & 15];
+}
+
 class Out {
  public:
   explicit Out(std::vector<std::byte>& b) : b_(b) {}

@@ -17,13 +17,7 @@
 namespace sensor_rig::record {
 namespace {
 
-constexpr std::size_t kRecordHeader = 9;     // opcode + u64 length
-constexpr std::size_t kFooterRecord = 9 + 20;
-
-std::string hex_op(std::uint8_t op) {
-  constexpr char kHex[] = "0123456789abcdef";
-  return std::string("0x") + kHex[op >> 4] + kHex[op & 15];
-}
+constexpr std::size_t kFooterRecord = kRecordHeader + 20;
 
 }  // namespace
 

@@ -18,13 +18,6 @@
 namespace sensor_rig::record {
 namespace {
 
-constexpr std::size_t kRecordHeader = 9;  // opcode + u64 length
-
-std::string hex_op(std::uint8_t op) {
-  constexpr char kHex[] = "0123456789abcdef";
-  return std::string("0x") + kHex[op >> 4] + kHex[op & 15];
-}
-
 std::string op_name(std::uint8_t op) {
   switch (op) {
     case opcode::kSchema: return "Schema";

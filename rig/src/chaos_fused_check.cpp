@@ -7,14 +7,11 @@
 #include <numbers>
 #include <set>
 
+#include "sensor_rig/common/floor_div.hpp"
+
 namespace sensor_rig::rig::chaos {
 namespace {
 
-Nanos floor_mod(Nanos a, Nanos p) noexcept {
-  const Nanos m = a % p;
-  return m < 0 ? m + p : m;
-}
-std::int64_t floor_div(Nanos a, Nanos p) noexcept { return (a - floor_mod(a, p)) / p; }
 double ms(Nanos ns) { return static_cast<double>(ns) * 1e-6; }
 std::string fmt(double v) {
   char b[32];

@@ -12,7 +12,7 @@ using sensor_rig::Nanos;
 
 namespace {
 
-constexpr Nanos kMs = 1'000'000;
+using dbw::test::kMs;
 
 struct Loop {
   dbw::Protocol p = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());

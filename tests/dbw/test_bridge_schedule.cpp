@@ -13,7 +13,7 @@ using sensor_rig::Nanos;
 
 namespace {
 
-constexpr Nanos kMs = 1'000'000;
+using dbw::test::kMs;
 constexpr Nanos kUs = 1'000;
 
 struct Sent {

@@ -23,7 +23,7 @@ using sensor_rig::Nanos;
 
 namespace {
 
-constexpr Nanos kMs = 1'000'000;
+using dbw::test::kMs;
 constexpr double kDegPerRoadRad = 15.0 * 180.0 / 3.14159265358979323846;  // the mapping's ratio
 
 constexpr const char* kSplitDbc =

@@ -7,17 +7,12 @@
 #include <string>
 
 #include "envelope_fit.hpp"
+#include "sensor_rig/common/floor_div.hpp"
 
 namespace sensor_rig::timesync {
 
 namespace {
 constexpr std::size_t kMaxCandidates = 256;
-
-std::int64_t floor_div(std::int64_t a, std::int64_t b) noexcept {
-  std::int64_t q = a / b;
-  if ((a % b != 0) && ((a < 0) != (b < 0))) --q;
-  return q;
-}
 
 // a - b, saturated instead of overflowing (garbage device times must not be UB).
 std::int64_t sat_sub(std::int64_t a, std::int64_t b) noexcept {

@@ -3,16 +3,13 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "sensor_rig/common/floor_div.hpp"
+
 namespace sensor_rig::timesync {
 
 namespace {
 constexpr Nanos kRefLimit = Nanos{1} << 61;  // a + (b - c) of clamped values cannot overflow
 
-Nanos floor_div(Nanos a, Nanos b) noexcept {
-  Nanos q = a / b;
-  if ((a % b != 0) && ((a < 0) != (b < 0))) --q;
-  return q;
-}
 Nanos clamp_ref(Nanos v) noexcept { return std::clamp(v, -kRefLimit, kRefLimit); }
 // a + (b - c) with every operand clamped: host times from garbage input must not overflow.
 Nanos advance(Nanos a, Nanos b, Nanos c) noexcept {

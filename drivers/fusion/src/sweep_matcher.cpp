@@ -4,15 +4,10 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "sensor_rig/common/floor_div.hpp"
+
 namespace sensor_rig::drivers {
 namespace {
-
-Nanos floor_mod(Nanos a, Nanos p) noexcept {
-  const Nanos m = a % p;
-  return m < 0 ? m + p : m;
-}
-
-std::int64_t floor_div(Nanos a, Nanos p) noexcept { return (a - floor_mod(a, p)) / p; }
 
 // a - b on the circle of one period, in [-p/2, p/2).
 Nanos signed_circular(Nanos d, Nanos p) noexcept { return floor_mod(d + p / 2, p) - p / 2; }

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "sensor_rig/common/floor_div.hpp"
+
 namespace sensor_rig::lidar::mock {
 namespace {
 
@@ -13,8 +15,6 @@ double wrap_deg(double a) noexcept {
   const double w = std::fmod(a, 360.0);
   return w < 0 ? w + 360.0 : w;
 }
-
-Nanos floor_div(Nanos a, Nanos b) noexcept { return a / b - (a % b < 0 ? 1 : 0); }
 
 }  // namespace
 

@@ -4,20 +4,19 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include "sensor_rig/common/angles.hpp"
+#include "sensor_rig/common/floor_div.hpp"
 
 namespace sensor_rig::lidar::mock {
 namespace {
 
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr Nanos kSecNs = 1'000'000'000;
 constexpr std::uint8_t kFactoryInfo = 0x42;
 constexpr std::uint8_t kXtProtocolMajor = 6, kXtProtocolMinor = 1;
 constexpr std::uint8_t kXtDistanceUnitMm = 4;
-
-Nanos floor_div(Nanos a, Nanos b) noexcept { return a / b - ((a % b != 0 && (a < 0) != (b < 0)) ? 1 : 0); }
 
 // Civil date of a day count since 1970-01-01 (proleptic Gregorian; the inverse of the decoder's
 // days_from_civil).
@@ -75,7 +74,7 @@ SyntheticHesai::SyntheticHesai(SyntheticHesaiConfig config, Scene scene)
   if (config_.udp_sequence && config_.model != hesai::Model::kPandar40P)
     throw std::invalid_argument("synthetic Hesai: only the Pandar40P has the optional UDP sequence");
   for (std::size_t c = 0; c < n; ++c) {
-    const double el = cal.channels[c].elevation_deg * kDegToRad;
+    const double el = cal.channels[c].elevation_deg * kRadPerDeg;
     channels_.push_back(Channel{std::sin(el), std::cos(el), cal.channels[c].azimuth_deg, std::llround(fire.us[c] * 1000.0)});
   }
   const auto [lo, hi] = std::minmax_element(channels_.begin(), channels_.end(),
@@ -144,7 +143,7 @@ void SyntheticHesai::render_packet(std::uint64_t index, std::span<std::byte> out
     std::uint8_t* units = blk + mi_->block_units;
     for (std::size_t c = 0; c < channels_.size(); ++c) {
       const Channel& ch = channels_[c];
-      const double a = (azimuth_deg_at(tg + ch.fire_ns) + ch.azimuth_offset_deg) * kDegToRad;
+      const double a = (azimuth_deg_at(tg + ch.fire_ns) + ch.azimuth_offset_deg) * kRadPerDeg;
       const Vec3 dir{ch.cos_el * std::cos(a), -ch.cos_el * std::sin(a), ch.sin_el};
       const auto hit = scene_.cast({0, 0, 0}, dir, config_.max_range_m);
       if (!hit) continue;

@@ -8,12 +8,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "sensor_rig/common/angles.hpp"
 #include "sensor_rig/lidar/ouster/imu_packet.hpp"
 
 namespace sensor_rig::lidar::mock {
 namespace {
 
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr std::uint32_t kEncoderTicks = 90112;  // LEGACY encoder counts per revolution
 constexpr std::uint32_t kLegacyColumnValid = 0xFFFFFFFFU;
 constexpr std::uint16_t kColumnValid = 0x0001;
@@ -97,8 +97,8 @@ SyntheticOuster::SyntheticOuster(SyntheticOusterConfig config, Scene scene)
   for (std::size_t c = 0; c < width; ++c) {
     const double e = 2.0 * std::numbers::pi * (1.0 - static_cast<double>(c) / static_cast<double>(width));
     for (std::size_t r = 0; r < height; ++r) {
-      const double a = -m.beam_azimuth_deg[r] * kDegToRad;
-      const double p = m.beam_altitude_deg[r] * kDegToRad;
+      const double a = -m.beam_azimuth_deg[r] * kRadPerDeg;
+      const double p = m.beam_altitude_deg[r] * kRadPerDeg;
       const double dir[3] = {std::cos(e + a) * std::cos(p), std::sin(e + a) * std::cos(p), std::sin(p)};
       const double off[3] = {bx * std::cos(e) - d * dir[0], bx * std::sin(e) - d * dir[1], bz - d * dir[2]};
       double rd[3], ro[3];

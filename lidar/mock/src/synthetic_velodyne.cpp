@@ -5,18 +5,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "sensor_rig/common/angles.hpp"
+#include "sensor_rig/common/floor_div.hpp"
+
 namespace sensor_rig::lidar::mock {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
 constexpr Nanos kHourNs = 3'600'000'000'000LL;
 constexpr Nanos kSecNs = 1'000'000'000LL;
-
-Nanos floor_mod(Nanos a, Nanos m) noexcept {
-  const Nanos r = a % m;
-  return r < 0 ? r + m : r;
-}
 
 std::uint32_t sensor_time_us(Nanos t) noexcept {
   return static_cast<std::uint32_t>(floor_mod(t, kHourNs) / 1000);
@@ -100,7 +97,7 @@ void SyntheticVelodyne::render_data_packet(std::uint64_t index,
       const Nanos t_fire = t_block_ns + channel_ns_[c];
       const auto laser = static_cast<std::size_t>(channel_laser_[c]);
       std::uint8_t intensity = 0;
-      const std::uint16_t d = raw_distance(lasers_[laser], azimuth_deg_at(t_fire) * kDegToRad, intensity);
+      const std::uint16_t d = raw_distance(lasers_[laser], azimuth_deg_at(t_fire) * kRadPerDeg, intensity);
       velodyne::put_le16(block.channels[c].distance, d);
       block.channels[c].intensity = intensity;
     }

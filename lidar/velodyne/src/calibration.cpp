@@ -6,12 +6,11 @@
 #include <sstream>
 #include <string>
 
+#include "sensor_rig/common/angles.hpp"
 #include "sensor_rig/lidar/velodyne/calibration.hpp"
 
 namespace sensor_rig::lidar::velodyne {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // VLP-16 manual, table "Laser ID / vertical angle / vertical correction (mm)".
 constexpr std::array<double, 16> kVlp16Vert{-15, 1, -13, 3, -11, 5, -9, 7, -7, 9, -5, 11, -3, 13, -1, 15};
@@ -110,15 +109,15 @@ Calibration default_calibration(Model m) {
     l.laser_id = i;
     switch (m) {
       case Model::kVLP16:
-        l.vert_correction = kVlp16Vert[u] * kDeg;
+        l.vert_correction = kVlp16Vert[u] * kRadPerDeg;
         l.vert_offset_correction = kVlp16VertOffsetMm[u] / 1000.0;
         break;
       case Model::kVLP32C:
-        l.vert_correction = kVlp32Vert[u] * kDeg;
-        l.rot_correction = -kVlp32AzimuthOffset[u] * kDeg;
+        l.vert_correction = kVlp32Vert[u] * kRadPerDeg;
+        l.rot_correction = -kVlp32AzimuthOffset[u] * kRadPerDeg;
         break;
       case Model::kHDL32E:
-        l.vert_correction = kHdl32Vert[u] * kDeg;
+        l.vert_correction = kHdl32Vert[u] * kRadPerDeg;
         break;
     }
   }

@@ -3,17 +3,15 @@
 // A small tag scanner is enough for this machine-written format; it tracks lines for errors.
 #include <charconv>
 #include <cmath>
-#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "sensor_rig/common/angles.hpp"
 #include "sensor_rig/lidar/velodyne/calibration.hpp"
 
 namespace sensor_rig::lidar::velodyne {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 class XmlScanner {
  public:
@@ -131,9 +129,9 @@ class XmlScanner {
       l.laser_id = static_cast<int>(id);
       has_id = true;
     } else if (name == "rotCorrection_") {
-      l.rot_correction = number(text, name) * kDeg;
+      l.rot_correction = number(text, name) * kRadPerDeg;
     } else if (name == "vertCorrection_") {
-      l.vert_correction = number(text, name) * kDeg;
+      l.vert_correction = number(text, name) * kRadPerDeg;
     } else if (name == "distCorrection_") {
       l.dist_correction = number(text, name) / 100.0;
     } else if (name == "distCorrectionX_") {
