@@ -118,7 +118,6 @@ struct DecoderImpl {
   TimeJudge time_judge;
   bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
   detail::BlindArc blind;  // a sector the sensor stopped sending (learned, not loss)
-  std::uint32_t rejected_since_prev = 0;  // packets dropped (bad time / azimuth) since the last good one
   StreamGap gaps;           // when the sensor was last heard (a silence is no loss)
   double turning_step = 0;  // azimuth per group of the last turning packet (0.01°): the turn's length
 
@@ -201,7 +200,7 @@ struct DecoderImpl {
     prev_trailing_bad = 0;
     hole.open = 0;
     time_judge.reset();
-    rejected_since_prev = 0;
+    scans.clear_rejected();
     turning = false;
     line_shift = 0;
   }
@@ -367,7 +366,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // its own (a stuck azimuth at the cut made ~377 one-packet scans a second: issue 26 item 7).
   if (groups > 1 && fit.step < 0.5 && have_prev && turning) {
     ++stats.implausible_steps;
-    ++rejected_since_prev;
     scans.reject(PacketStatus::kBadAzimuth);
     last = PacketStatus::kBadAzimuth;
     return std::nullopt;
@@ -432,7 +430,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     if (gap.backwards) {
       if (in.dt_ns > period_ns / 2 && !jumped) {  // time moved on, azimuth back: frozen azimuth
         ++stats.implausible_steps;
-        ++rejected_since_prev;
         scans.reject(PacketStatus::kBadAzimuth);
         last = PacketStatus::kBadAzimuth;
         return std::nullopt;
@@ -447,7 +444,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     }
     if (gap.implausible) {  // an azimuth its time cannot reach (frozen encoder): corrupt, never a cut
       ++stats.implausible_steps;
-      ++rejected_since_prev;
       scans.reject(PacketStatus::kBadAzimuth);
       last = PacketStatus::kBadAzimuth;
       return std::nullopt;
@@ -456,7 +452,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       case TimeJudge::Verdict::kOk: break;
       case TimeJudge::Verdict::kCorrupt:
         ++stats.implausible_steps;
-        ++rejected_since_prev;
         scans.reject(PacketStatus::kBadTime);
         last = PacketStatus::kBadTime;
         return std::nullopt;
@@ -495,12 +490,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       const bool az_crosses = detail::turn_step(prev_az, emit_raw) > 0 &&
                               detail::turn_step(prev_az, emit_raw) <= detail::turn_step(prev_az, a0);
       // Rejected packets (a frozen azimuth) filled these slots first: dropped, not missing too.
-      std::uint32_t rejected = rejected_since_prev;
-      const auto take = [&](std::uint32_t k) {
-        const std::uint32_t r = std::min(k, rejected);
-        rejected -= r;
-        return k - r;
-      };
+      const auto take = [&](std::uint32_t k) { return scans.missing_beyond_rejected(k); };
       scans.add_missing(take(detail::packets_on_arc(fov, prev_az, emit_raw, fit.step, groups)));
       scans.merge(out, end(scans.current().from_cut));
       scans.drop_next();
@@ -519,12 +509,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     } else if (have_prev) {
       // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
       slots = missing;
-      missing -= std::min(missing, rejected_since_prev);
+      missing = scans.missing_beyond_rejected(missing);
       const long tol = std::lround(2.0 * fit.step * groups);
       if (missing >= 2 && blind.is_blind(prev_az, az[first_good], tol, detail::kTurn, tol / 2)) missing = 0;
     }
   }
-  rejected_since_prev = 0;
+  scans.clear_rejected();
   turning = fit.step >= 0.5;
   if (turning) turning_step = fit.step;
   blind.seen(az[first_good], detail::kTurn);

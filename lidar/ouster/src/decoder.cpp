@@ -153,7 +153,6 @@ struct DecoderImpl {
   LateHole hole;                // packet slots where the current scan last counted packets missing
   TimeJudge time_judge;
   detail::BlindArc blind;  // packet slots the sensor stopped sending (learned, not loss)
-  std::uint32_t rejected_since_prev = 0;  // packets dropped for their time since the last good one
   StreamGap gaps;  // when the sensor was last heard (a silence is no loss)
 
   // Packet slots strictly between slot `from` and slot `to` of one frame (to > from) that hold
@@ -261,7 +260,7 @@ struct DecoderImpl {
     have_base = false;
     hole.open = 0;
     time_judge.reset();
-    rejected_since_prev = 0;
+    scans.clear_rejected();
   }
 
   // Ends the current scan; the hole of late packets was that scan's.
@@ -346,7 +345,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     }
     if (best_n * 2 <= n_valid || best % cpp_cols != 0) {
       ++stats.implausible_steps;
-      ++rejected_since_prev;
       scans.reject(PacketStatus::kBadAzimuth);
       last = PacketStatus::kBadAzimuth;
       return std::nullopt;
@@ -370,6 +368,14 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     const long at = base + static_cast<long>(c);
     if (!cols[c].valid() && n_valid > 0 && at >= static_cast<long>(window_first) && at <= static_cast<long>(window_last))
       damaged = true;
+  }
+  // Every column's measurement id off the frame: nothing places the packet. Rejected whole (it
+  // takes its slot: dropped, not missing too), never a packet of its scan (issue 26 item 7).
+  if (n_valid == 0 && damaged) {
+    ++stats.implausible_steps;
+    scans.reject(PacketStatus::kBadAzimuth);
+    last = PacketStatus::kBadAzimuth;
+    return std::nullopt;
   }
 
   std::optional<Scan> out;
@@ -435,7 +441,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       case TimeJudge::Verdict::kOk: break;
       case TimeJudge::Verdict::kCorrupt:
         ++stats.implausible_steps;
-        ++rejected_since_prev;
         scans.reject(PacketStatus::kBadTime);
         last = PacketStatus::kBadTime;
         return out;
@@ -465,7 +470,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
         new_frame = false;
         missing_before = window_slots(prev_slot, slot);
-        if (missing_before >= 2 && rejected_since_prev == 0 && blind.is_blind(prev_slot, slot, 2, 0, 0)) missing_before = 0;
+        if (missing_before >= 2 && scans.rejected_since_kept() == 0 && blind.is_blind(prev_slot, slot, 2, 0, 0)) missing_before = 0;
         if (missing_before > 0) {
           hole = {prev_slot, slot, 0, missing_before};
           opened = true;
@@ -480,14 +485,13 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       }
     }
     // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
-    const std::uint32_t r = std::min(rejected_since_prev, missing_before);
-    missing_before -= r;
-    missing_after -= std::min(rejected_since_prev - r, missing_after);
+    missing_before = scans.missing_beyond_rejected(missing_before);
+    missing_after = scans.missing_beyond_rejected(missing_after);
     // Only the gap this packet opened shrinks: a packet that continues its predecessor leaves the
     // hole open for the late packet still to come (lidar.reorder n > 1).
     if (opened) hole.open = missing_before;
   }
-  if (!late) rejected_since_prev = 0;
+  if (!late) scans.clear_rejected();
   if (!late && n_valid > 0) blind.seen(slot, 0);
   if (n_valid > 0 && !late) {
     have_base = true;

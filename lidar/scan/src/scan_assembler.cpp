@@ -12,6 +12,7 @@ ScanAssembler::ScanAssembler(const ScanAssemblerOptions& options, ScanStats& sta
 }
 
 std::optional<Scan> ScanAssembler::flush() noexcept {
+  rejected_ = 0;
   std::optional<Scan> out;
   if (cur_.has_data()) {
     out = emit();

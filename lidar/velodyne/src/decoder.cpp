@@ -105,7 +105,6 @@ struct DecoderImpl {
   TimeJudge time_judge;
   bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
   detail::BlindArc blind;  // a sector the sensor stopped sending (learned, not loss)
-  std::uint32_t rejected_since_prev = 0;  // packets dropped (bad time / azimuth) since the last good one
   StreamGap gaps;           // when the sensor was last heard (a silence is no loss)
   double turning_step = 0;  // azimuth per group of the last turning packet (0.01°): the turn's length
 
@@ -316,7 +315,7 @@ struct DecoderImpl {
     prev_trailing_bad = 0;
     hole.open = 0;
     time_judge.reset();
-    rejected_since_prev = 0;
+    scans.clear_rejected();
     turning = false;
   }
 
@@ -366,7 +365,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // its own (a stuck azimuth at the cut made ~377 one-packet scans a second: issue 26 item 7).
   if (groups > 1 && fit.step < 0.5 && have_prev && turning) {
     ++stats.implausible_steps;
-    ++rejected_since_prev;
     scans.reject(PacketStatus::kBadAzimuth);
     last = PacketStatus::kBadAzimuth;
     return std::nullopt;
@@ -405,7 +403,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       // Its time moved on by more than half a packet: a new packet with a frozen azimuth.
       if (in.dt_ns > period_ns / 2 && !jumped) {
         ++stats.implausible_steps;
-        ++rejected_since_prev;
         scans.reject(PacketStatus::kBadAzimuth);
         last = PacketStatus::kBadAzimuth;
         return std::nullopt;
@@ -422,7 +419,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     }
     if (gap.implausible) {  // an azimuth its time cannot reach (frozen encoder): corrupt, never a cut
       ++stats.implausible_steps;
-      ++rejected_since_prev;
       scans.reject(PacketStatus::kBadAzimuth);
       last = PacketStatus::kBadAzimuth;
       return std::nullopt;
@@ -431,7 +427,6 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       case TimeJudge::Verdict::kOk: break;
       case TimeJudge::Verdict::kCorrupt:
         ++stats.implausible_steps;
-        ++rejected_since_prev;
         scans.reject(PacketStatus::kBadTime);
         last = PacketStatus::kBadTime;
         return std::nullopt;
@@ -453,12 +448,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       const int a0 = na[first_good];
       const bool az_crosses = detail::turn_step(prev_az, cut) > 0 && detail::turn_step(prev_az, cut) <= detail::turn_step(prev_az, a0);
       // Rejected packets (a frozen azimuth) filled these slots first: dropped, not missing too.
-      std::uint32_t rejected = rejected_since_prev;
-      const auto take = [&](std::uint32_t k) {
-        const std::uint32_t r = std::min(k, rejected);
-        rejected -= r;
-        return k - r;
-      };
+      const auto take = [&](std::uint32_t k) { return scans.missing_beyond_rejected(k); };
       if (!early_cut) scans.add_missing(take(detail::packets_on_arc(fov, prev_az, cut, fit.step, groups)));
       // The next scan starts at the cut when it lacks less than half its turn; otherwise its
       // stamp (its first packet) would lie nearer the next turn's: not published, a lost scan.
@@ -472,12 +462,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       gap = {};
     } else if (have_prev) {
       // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
-      gap.missing -= std::min<std::uint32_t>(gap.missing, rejected_since_prev);
+      gap.missing = scans.missing_beyond_rejected(gap.missing);
       const long tol = std::lround(2.0 * fit.step * groups);
       if (gap.missing >= 2 && blind.is_blind(prev_az, na[first_good], tol, detail::kTurn, tol / 2)) gap.missing = 0;
     }
   }
-  rejected_since_prev = 0;
+  scans.clear_rejected();
   turning = fit.step >= 0.5;
   if (turning) turning_step = fit.step;
   blind.seen(na[first_good], detail::kTurn);

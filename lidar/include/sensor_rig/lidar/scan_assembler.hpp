@@ -160,6 +160,7 @@ class ScanAssembler {
     if (status != PacketStatus::kOk) {
       ++stats_.by_status[static_cast<std::size_t>(status)];
       ++cur_.scan.dropped;
+      if (takes_slot(status)) ++rejected_;
       return false;
     }
     ++stats_.packets_used;
@@ -173,7 +174,25 @@ class ScanAssembler {
     --stats_.by_status[0];
     ++stats_.by_status[static_cast<std::size_t>(status)];
     ++cur_.scan.dropped;
+    if (takes_slot(status)) ++rejected_;
   }
+  // One rule for every vendor (issue 26 item 7): a packet rejected whole (bad length, flag,
+  // azimuths, ids, time) was sent in its place of the stream; it is counted `dropped`, so the gap
+  // the next decoded packet shows is first its: missing only beyond the rejected ones. A duplicate
+  // or late packet (kOutOfOrder) and a non-data packet (kNotData) hold no place of their own.
+  [[nodiscard]] static constexpr bool takes_slot(PacketStatus s) noexcept {
+    return s != PacketStatus::kOutOfOrder && s != PacketStatus::kNotData;
+  }
+  // Packets rejected whole since the last one decoded (or since clear_rejected()).
+  [[nodiscard]] std::uint32_t rejected_since_kept() const noexcept { return rejected_; }
+  // Of `slots` packets a gap lacks, those not taken by rejected packets (which it uses up): missing.
+  [[nodiscard]] std::uint32_t missing_beyond_rejected(std::uint32_t slots) noexcept {
+    const std::uint32_t r = std::min(slots, rejected_);
+    rejected_ -= r;
+    return slots - r;
+  }
+  // A packet was decoded (its gap judged), or continuity starts over: no rejected packet pending.
+  void clear_rejected() noexcept { rejected_ = 0; }
   // `n` packets were lost inside the current scan.
   void add_missing(std::uint32_t n) noexcept {
     cur_.scan.missing_packets += n;
@@ -233,6 +252,7 @@ class ScanAssembler {
   PendingScan nxt_;
   std::size_t last_scan_points_ = 0;
   std::uint64_t next_seq_ = 0;
+  std::uint32_t rejected_ = 0;  // rejected_since_kept()
   std::vector<std::vector<PointXYZIRT>> spare_;
 };
 
