@@ -3,12 +3,15 @@
 // not say (Cyclone 0.10 reports no SAMPLE_LOST when a reliable keep-last writer drops samples a
 // slow reader had not acknowledged: a recorder stopped 2.5 s missed 8-25 samples per topic and
 // counted 0, tests/record/record_monitor_counts_test.cpp). The drivers announce every sample they
-// write (topic, header stamp), as `rig monitor` uses them: a sample announced and not received
-// within the timeout is counted missed on its topic. Pure bookkeeping: no DDS, no I/O.
+// write (topic, header stamp, seq), as `rig monitor` uses them: a sample announced and not received
+// within the timeout is counted missed on its topic, and so is a sample whose announcement was lost
+// too (a gap in seq; AnnouncedSamples). Pure bookkeeping: no DDS, no I/O.
 #include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <deque>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <span>
@@ -64,6 +67,7 @@ inline std::optional<Nanos> header_stamp(std::span<const std::byte> body, std::e
 struct Announced {
   Nanos stamp = 0;
   std::string_view topic;
+  std::uint64_t seq = 0;
   Nanos publish_ns = 0;
 };
 
@@ -74,49 +78,158 @@ inline std::optional<Announced> source_stamps(std::span<const std::byte> body, s
   std::size_t off = 8;
   if (!stamp || !read_string(body, off, order)) return std::nullopt;  // frame_id
   const auto topic = read_string(body, off, order);
-  if (!topic || !read<std::uint64_t>(body, off, order)) return std::nullopt;  // seq
+  if (!topic) return std::nullopt;
+  const auto seq = read<std::uint64_t>(body, off, order);
+  if (!seq) return std::nullopt;
   for (int i = 0; i < 4; ++i)
     if (!read<std::int64_t>(body, off, order)) return std::nullopt;  // acquisition, first_rx, last_rx, ready
   const auto publish = read<std::int64_t>(body, off, order);
   if (!publish) return std::nullopt;
   a.stamp = *stamp;
   a.topic = *topic;
+  a.seq = *seq;
   a.publish_ns = *publish;
   return a;
 }
 
 }  // namespace record_cdr
 
+// What the recorder missed, per topic, exactly, with bounded memory.
+//  - An announcement without its sample after the timeout: missed (the join, by header stamp).
+//  - Announcements lost too: a recorder stopped for seconds gets only the last 64 of the rig's
+//    /rig/stamps writer (keep-last 64, one history for every topic; dds/stamps_writer.cpp) and what
+//    its socket held; the rest never come, and neither do their samples. They show as a gap in the
+//    topic's SourceStamps.seq between two announcements that did come: every sample of the gap is
+//    missed except those received (data whose stamp lies inside the gap and matched nothing),
+//    decided a timeout after the gap was seen (its samples may still be on the way). On topics whose
+//    seq is a device's frame id (cameras: a gap is also a frame the camera made and the rig never
+//    published) the same count is `unannounced` instead: an upper bound beside `missed`, never folded
+//    into it; on the dbw bridge's commands (stamped when transmitted) a gap is nothing. A seq that
+//    goes back (a driver restarted, a camera reopened, a frame id wrapped) starts over without a
+//    gap; a gap at the very end (no later announcement) is not seen.
+// Bounds, per topic: kMaxPending announcements waiting for their sample, kMaxPending samples waiting
+// for their announcement, kMaxGaps undecided gaps (std::map / std::deque nodes: ~0.6 MB per topic at
+// most, ~25 MB for a 40-topic recording). Past them nothing is silent: the oldest waiting
+// announcement is counted missed at once, the oldest waiting sample is forgotten (its announcement,
+// if it comes, is then counted missed), the two oldest gaps merge (exact: stamps are monotonic per
+// topic, so what lies between two gaps is matched and never waiting); each forced decision is
+// counted in `overflow`.
 class AnnouncedSamples {
  public:
+  static constexpr std::size_t kMaxPending = 4096;
+  static constexpr std::size_t kMaxGaps = 256;
+
+  struct Counts {
+    std::uint64_t missed = 0;       // announced (or in a kMissed seq gap), never received
+    std::uint64_t unannounced = 0;  // in a kUnannounced seq gap, never received
+    std::uint64_t overflow = 0;     // decisions the bounds forced (see above)
+  };
+
+  // What a gap in a topic's seq is. kMissed: its seq counts the published samples (LIDAR scans, the
+  // fused cloud, vehicle state). kUnannounced: a device's frame id (cameras). kNotCounted: a seq that
+  // skips by design (the dbw bridge stamps the commands it transmits, not every one it takes).
+  enum class SeqGaps { kMissed, kUnannounced, kNotCounted };
+  void set_seq_gaps(const std::string& topic, SeqGaps gaps) { topics_[topic].seq_gaps = gaps; }
+
   // A sample of `topic` with header stamp `stamp` taken at `now` (monotonic ns).
   void on_data(const std::string& topic, Nanos stamp, Nanos now) {
     Topic& t = topics_[topic];
-    if (t.announced.erase(stamp) == 0) t.received.insert_or_assign(stamp, now);
+    if (t.announced.erase(stamp) != 0) return;
+    t.received.insert_or_assign(stamp, now);
+    if (t.received.size() > kMaxPending) {
+      t.received.erase(t.received.begin());
+      if (t.has_seq) ++t.counts.overflow;  // a topic never announced (camera_info, raw packets) loses nothing by it
+    }
   }
-  // /rig/stamps announced a sample of `topic` at `stamp`, received here at `now`.
-  void on_announced(const std::string& topic, Nanos stamp, Nanos now) {
+
+  // /rig/stamps announced sample `seq` of `topic` at `stamp`, received here at `now`. `counted`
+  // false: before the recorder's reader of the topic matched (only the seq is kept, to see gaps).
+  void on_announced(const std::string& topic, Nanos stamp, std::uint64_t seq, Nanos now, bool counted = true) {
     Topic& t = topics_[topic];
-    if (t.received.erase(stamp) == 0) t.announced.insert_or_assign(stamp, now);
+    if (t.has_seq && seq == t.last_seq && stamp == t.last_stamp) return;  // the same announcement again
+    if (t.has_seq && seq > t.last_seq + 1 && counted && t.seq_gaps != SeqGaps::kNotCounted) add_gap(t, Gap{t.last_stamp, stamp, seq - t.last_seq - 1, now});
+    t.has_seq = true;
+    t.last_seq = seq;
+    t.last_stamp = stamp;
+    if (!counted) return;
+    if (t.received.erase(stamp) != 0) return;
+    t.announced.insert_or_assign(stamp, now);
+    if (t.announced.size() > kMaxPending) {
+      t.announced.erase(t.announced.begin());
+      ++t.counts.missed;
+      ++t.counts.overflow;
+    }
   }
-  // Announcements older than `timeout_ns` without their sample: `missed(topic)` once each, then
-  // forgotten; received samples no announcement came for within 5 timeouts are forgotten too.
-  template <class F>
-  void expire(Nanos now, Nanos timeout_ns, F&& missed) {
+
+  // Decides what is older than `timeout_ns`: announcements without their sample are missed, gaps
+  // count their samples not received; received samples no announcement came for within 5 timeouts
+  // are forgotten.
+  void expire(Nanos now, Nanos timeout_ns) {
     for (auto& [name, t] : topics_) {
+      while (!t.gaps.empty() && now - t.gaps.front().seen > timeout_ns) {
+        decide(t, t.gaps.front());
+        t.gaps.pop_front();
+      }
       std::erase_if(t.announced, [&](const auto& kv) {
         if (now - kv.second <= timeout_ns) return false;
-        missed(name);
+        ++t.counts.missed;
         return true;
       });
       std::erase_if(t.received, [&](const auto& kv) { return now - kv.second > 5 * timeout_ns; });
     }
   }
 
+  [[nodiscard]] Counts counts(const std::string& topic) const {
+    const auto it = topics_.find(topic);
+    return it == topics_.end() ? Counts{} : it->second.counts;
+  }
+
+  // Entries held (announced + received + gaps) over every topic: what the bounds bound.
+  [[nodiscard]] std::size_t held() const {
+    std::size_t n = 0;
+    for (const auto& [name, t] : topics_) n += t.announced.size() + t.received.size() + t.gaps.size();
+    return n;
+  }
+
  private:
+  struct Gap {
+    Nanos after = 0, before = 0;  // the header stamps of the announcements around it (exclusive)
+    std::uint64_t samples = 0;    // seqs between them
+    Nanos seen = 0;
+  };
   struct Topic {
     std::map<Nanos, Nanos> announced, received;  // header stamp -> when (monotonic)
+    std::deque<Gap> gaps;                        // in seq order
+    SeqGaps seq_gaps = SeqGaps::kMissed;
+    bool has_seq = false;
+    std::uint64_t last_seq = 0;
+    Nanos last_stamp = 0;
+    Counts counts;
   };
+
+  static void add_gap(Topic& t, Gap g) {
+    t.gaps.push_back(g);
+    if (t.gaps.size() <= kMaxGaps) return;
+    // Merged: the samples between the two were announced, so none of them waits in `received`.
+    Gap& second = t.gaps[1];
+    second.after = t.gaps.front().after;
+    second.samples += t.gaps.front().samples;
+    t.gaps.pop_front();
+    ++t.counts.overflow;
+  }
+
+  static void decide(Topic& t, const Gap& g) {
+    std::uint64_t received = 0;
+    if (g.after < g.before) {
+      const auto from = t.received.upper_bound(g.after);
+      const auto to = t.received.lower_bound(g.before);
+      received = static_cast<std::uint64_t>(std::distance(from, to));
+      t.received.erase(from, to);
+    }
+    const std::uint64_t lost = g.samples > received ? g.samples - received : 0;
+    (t.seq_gaps == SeqGaps::kMissed ? t.counts.missed : t.counts.unannounced) += lost;
+  }
+
   std::map<std::string, Topic, std::less<>> topics_;
 };
 

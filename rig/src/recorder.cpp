@@ -35,9 +35,8 @@ struct RecordTopic {
   // Of those received, how many came in an iceoryx chunk (recorded from the chunk itself): the
   // summary's proof that --transport shm took the shared-memory path, not the network.
   std::uint64_t from_shared_memory = 0;
-  // Announced on /rig/stamps (published from counting_since on, vehicle ns) and never received
-  // (record_gaps.hpp): what DDS lost without saying.
-  std::uint64_t missed = 0;
+  // Announced on /rig/stamps from counting_since on (vehicle ns) and never received: what DDS lost
+  // without saying (record_gaps.hpp's AnnouncedSamples counts it: missed, unannounced, overflow).
   Nanos counting_since = 0;
   // Writer thread (read by the DDS thread for progress):
   std::atomic<std::uint64_t> written{0}, disk_dropped{0}, queued{0};
@@ -164,11 +163,18 @@ class Recorder {
   static constexpr Nanos kAnnouncedTimeoutNs = 1'000'000'000;  // as rig monitor's default loss timeout
   static constexpr Nanos kAnnouncedAtStopNs = 200'000'000;
   static constexpr Nanos kMatchDelayNs = 500'000'000;  // a new reader takes this long to match its writers
+  static constexpr int kStampsReaderDepth = 8192;       // ~2 MB of SourceStamps at most, ~20 s of a 10-device rig
 
-  void expire(Nanos now, Nanos timeout_ns) {
-    announced_.expire(now, timeout_ns, [&](const std::string& topic) {
-      if (auto it = known_.find(topic); it != known_.end() && it->second != nullptr) ++it->second->missed;
-    });
+  void expire(Nanos now, Nanos timeout_ns) { announced_.expire(now, timeout_ns); }
+
+  // What a gap in a topic's SourceStamps.seq is (record_gaps.hpp). Samples published and missed,
+  // unless the seq is a camera's device frame id (it also skips the frames the camera made and the
+  // rig did not publish) or the dbw bridge's commands' (it stamps those it transmits, not every one
+  // it takes; rig monitor counts no seq gap there either, monitor.cpp).
+  static AnnouncedSamples::SeqGaps seq_gaps_of(const std::string& ros_name, const std::string& schema) {
+    if (ros_name == "/vehicle/dbw/cmd") return AnnouncedSamples::SeqGaps::kNotCounted;
+    if (schema == "sensor_msgs/msg/Image" || schema == "sensor_msgs/msg/CompressedImage") return AnnouncedSamples::SeqGaps::kUnannounced;
+    return AnnouncedSamples::SeqGaps::kMissed;
   }
 
   // Each sample's header stamp, and /rig/stamps' announcements of samples of recorded topics.
@@ -185,9 +191,10 @@ class Recorder {
     const auto a = record_cdr::source_stamps(body, *order);
     if (!a) return;
     const auto it = known_.find(std::string(a->topic));
-    // Samples written before this recorder's reader of the topic matched are not ours to miss.
-    if (it == known_.end() || it->second == nullptr || a->publish_ns < it->second->counting_since) return;
-    announced_.on_announced(it->first, a->stamp, now);
+    if (it == known_.end() || it->second == nullptr) return;
+    // Samples written before this recorder's reader of the topic matched are not ours to miss (their
+    // seq still tells where the topic's sequence stands).
+    announced_.on_announced(it->first, a->stamp, a->seq, now, a->publish_ns >= it->second->counting_since);
   }
 
   void discover() {
@@ -219,6 +226,9 @@ class Recorder {
       q.reliability = pub.reliability;
       q.durability = pub.durability;
       q.depth = std::max(16, pub.depth);  // room for a burst while the thread takes another topic
+      // /rig/stamps: every topic's announcements in one history. At the writer's 64 a recorder's
+      // thread a moment behind lost announcements its reader had already received.
+      if (ros == dds::kStampsTopic) q.depth = std::max(q.depth, kStampsReaderDepth);
       dds::QosSpec offered = q;
       offered.depth = pub.depth;
       RecordTopic& t = topics_.emplace_back();
@@ -229,6 +239,7 @@ class Recorder {
       t.reader = std::make_unique<dds::RawReader>(participant_, pub.topic, *type, q);
       waitset_.attach_reader(t.reader->handle(), static_cast<std::int64_t>(topics_.size() - 1));
       known_[ros] = &t;
+      announced_.set_seq_gaps(ros, seq_gaps_of(ros, type->schema_name));
     }
   }
 
@@ -257,7 +268,7 @@ class Recorder {
 
   struct Totals {
     std::uint64_t received = 0, bytes = 0, written = 0, dds_lost = 0, dds_rejected = 0, malformed = 0, queue = 0, disk = 0,
-                  missed = 0;
+                  missed = 0, unannounced = 0, overflow = 0;
   };
   Totals totals() {
     Totals s;
@@ -266,7 +277,10 @@ class Recorder {
       s.bytes += t.received_bytes;
       s.written += t.written;
       s.dds_lost += t.reader->lost();
-      s.missed += t.missed;
+      const auto c = announced_.counts(t.ros_name);
+      s.missed += c.missed;
+      s.unannounced += c.unannounced;
+      s.overflow += c.overflow;
       s.dds_rejected += t.reader->rejected();
       s.malformed += t.reader->malformed();
       s.queue += t.queue_dropped;
@@ -285,13 +299,27 @@ class Recorder {
     const double mbs_out = dt > 0 ? static_cast<double>(file_bytes - last_file_bytes_) / dt / 1e6 : 0;
     std::fprintf(stderr,
                  "rig record: %6.1f s  %zu topics  %8.1f msg/s  %7.1f MB/s in  %7.1f MB/s to disk  %" PRIu64
-                 " file(s) %.1f MB  queue %.1f MB  drops: dds %" PRIu64 " queue %" PRIu64 " disk %" PRIu64 "\n",
+                 " file(s) %.1f MB  queue %.1f MB  drops: dds %" PRIu64 " missed %" PRIu64 " queue %" PRIu64 " disk %" PRIu64 "%s\n",
                  static_cast<double>(elapsed) / 1e9, topics_.size(), rate, mbs_in, mbs_out, shared_.files.load(),
                  static_cast<double>(file_bytes) / 1e6, static_cast<double>(queue_.bytes()) / 1e6,
-                 s.dds_lost + s.dds_rejected + s.malformed + s.missed, s.queue, s.disk);
+                 s.dds_lost + s.dds_rejected + s.malformed, s.missed, s.queue, s.disk, missed_by_topic().c_str());
     last_ = s;
     last_elapsed_ = elapsed;
     last_file_bytes_ = file_bytes;
+  }
+
+  // The progress line's tail: which topics missed what (record_gaps.hpp), only those that did.
+  std::string missed_by_topic() const {
+    std::string missed, unannounced;
+    for (const auto& t : topics_) {
+      const auto c = announced_.counts(t.ros_name);
+      if (c.missed > 0) missed += (missed.empty() ? "" : ", ") + t.ros_name + " " + std::to_string(c.missed);
+      if (c.unannounced > 0) unannounced += (unannounced.empty() ? "" : ", ") + t.ros_name + " " + std::to_string(c.unannounced);
+    }
+    std::string out;
+    if (!missed.empty()) out += "  missed: " + missed;
+    if (!unannounced.empty()) out += "  unannounced: " + unannounced;
+    return out;
   }
 
   void summary(Nanos elapsed) {
@@ -313,10 +341,16 @@ class Recorder {
                       {"metadata", static_cast<double>(shared_.metadata_ns.load()) / 1e6}};
     j["drops"] = {{"dds_lost", s.dds_lost}, {"dds_rejected", s.dds_rejected}, {"malformed", s.malformed}, {"missed", s.missed},
                   {"queue_full", s.queue}, {"disk", s.disk}};
+    // Not drops: an upper bound on what else the recorder missed (record_gaps.hpp), and how often the
+    // missed bookkeeping's bounds decided early.
+    j["unannounced"] = s.unannounced;
+    j["missed_overflow"] = s.overflow;
     for (auto& t : topics_) {
+      const auto c = announced_.counts(t.ros_name);
       j["topics"][t.ros_name] = {{"type", t.spec.schema_name}, {"received", t.received}, {"written", t.written.load()},
                                  {"dds_lost", t.reader->lost()}, {"dds_rejected", t.reader->rejected()},
-                                 {"malformed", t.reader->malformed()}, {"missed", t.missed}, {"queue_full", t.queue_dropped},
+                                 {"malformed", t.reader->malformed()}, {"missed", c.missed}, {"unannounced", c.unannounced},
+                                 {"missed_overflow", c.overflow}, {"queue_full", t.queue_dropped},
                                  {"disk", t.disk_dropped.load()}, {"shared_memory", t.from_shared_memory}};
     }
     for (const auto& [topic, why] : skipped_) j["skipped"][topic] = why;
@@ -338,8 +372,8 @@ class Recorder {
   std::deque<RecordTopic> topics_;  // stable addresses: queued items point at their topic
   std::map<std::string, RecordTopic*> known_;  // nullptr: skipped
   std::map<std::string, std::string> skipped_;
-  std::set<std::string> raw_off_;
-  AnnouncedSamples announced_;  // raw channels seen and not recorded (no --raw)
+  std::set<std::string> raw_off_;  // raw channels seen and not recorded (no --raw)
+  AnnouncedSamples announced_;     // what the recorder missed (record_gaps.hpp)
   Totals last_;
   Nanos last_elapsed_ = 0;
   std::uint64_t last_file_bytes_ = 0;
