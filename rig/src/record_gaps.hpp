@@ -163,10 +163,12 @@ class AnnouncedSamples {
 
   // Decides what is older than `timeout_ns`: announcements without their sample are missed, gaps
   // count their samples not received; received samples no announcement came for within 5 timeouts
-  // are forgotten.
-  void expire(Nanos now, Nanos timeout_ns) {
+  // are forgotten. `gap_timeout_ns` (default: the same) for gaps: at the stop, once every sample
+  // was taken, 0 decides them all (what they lack is not in the file).
+  void expire(Nanos now, Nanos timeout_ns, std::optional<Nanos> gap_timeout_ns = std::nullopt) {
+    const Nanos gap_timeout = gap_timeout_ns.value_or(timeout_ns);
     for (auto& [name, t] : topics_) {
-      while (!t.gaps.empty() && now - t.gaps.front().seen > timeout_ns) {
+      while (!t.gaps.empty() && (gap_timeout == 0 || now - t.gaps.front().seen > gap_timeout)) {
         decide(t, t.gaps.front());
         t.gaps.pop_front();
       }

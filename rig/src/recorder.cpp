@@ -145,7 +145,8 @@ class Recorder {
     }
     for (auto& t : topics_) take(t);  // what arrived before the stop
     // Announced a while before the stop and still not here: missed (the newest may be on the way).
-    expire(monotonic_now_ns(), kAnnouncedAtStopNs);
+    // Every seq gap seen is decided now: what it lacks is not in the file.
+    announced_.expire(monotonic_now_ns(), kAnnouncedAtStopNs, 0);
     queue_.close();
     writer.join();
     for (auto& t : topics_) t.reader->update_status();

@@ -165,6 +165,14 @@ TEST(RecordGaps, ASeqGapIsMissedButForWhatWasReceivedInIt) {
   a.on_data("/cmd", 40, 20 * kS);
   a.expire(22 * kS, kS);
   EXPECT_EQ(a.counts("/cmd").missed + a.counts("/cmd").unannounced, 0u);
+  // At the stop every sample was taken: a gap seen a moment before is decided, an announcement that
+  // recent still waits (its sample may be on the way).
+  a.on_announced("/l", 400, 5, 30 * kS);  // seqs 2..4: a gap of 3, one received
+  a.on_data("/l", 350, 30 * kS);
+  a.on_announced("/l", 500, 6, 30 * kS);
+  a.expire(30 * kS + 1, kS / 5, 0);
+  EXPECT_EQ(a.counts("/l").missed, 4u + 2u);
+  EXPECT_EQ(a.held(), 2u);  // the announcements of stamps 400 and 500, a moment old
 }
 
 // A model of the rig against a recorder that falls far behind: 7 cameras (~30 Hz), 3 LIDARs and
