@@ -102,7 +102,7 @@ void AravisSource::open() {
     fresh->pool = std::move(st_->pool);  // reused when the size matches (start_stream)
   }
   control_lost_.store(false);
-  last_frame_id_ = 0;  // a reopened camera may have restarted its ids
+  reopened_ = true;  // its ids may go on (counted) or have restarted (count_missing_frames tells)
   last_exposure_ns_.store(0);
   AravisDetails details;
   try {
@@ -391,6 +391,7 @@ void AravisSource::close() noexcept {
   if (!control_lost_.load() && !gl.try_lock_for(std::chrono::milliseconds(kCloseTriggerWaitMs))) control_lost_.store(true);
   const bool lost = control_lost_.load();
   if (!lost) arv_camera_stop_acquisition(st_->camera, nullptr);
+  count_undelivered(st_->stream);
   fold_stats();
   st_->buffers.clear();
   if (lost) {

@@ -118,16 +118,50 @@ bool AravisSource::trigger() {
 
 // GigE Vision 1.x block ids run 1..65535 and wrap to 1 (0 is reserved): a step of more than one
 // is frames the camera made that never came out of the stream (an underrun, a frame Aravis dropped).
-// A step back or a huge one is a rebooted camera: no loss known, counting starts again.
-void AravisSource::count_missing_frames(std::uint64_t id) noexcept {
+// The ids are kept across a close and an open: a camera that was only closed and opened again (the
+// watchdog's reopen, a clean close) goes on numbering, and the frames it made meanwhile (waiting in
+// the closed stream, sent to it until the camera was stopped again) are a gap like any other; the
+// count restarted with each open and missed them (issue 27: "an uncounted first frame after a
+// reopen"). A camera that restarted (power cycle: ids from 1 again, its tick counter from 0) shows
+// a step back, a jump more frames than its rate allows in the time since its last frame, or device
+// ticks that did not follow that time: no loss known, counting starts again.
+void AravisSource::count_missing_frames(std::uint64_t id, Nanos device_ns, Nanos mono_ns) noexcept {
   constexpr std::int64_t kWrap = 65535;
   constexpr std::int64_t kPlausibleGap = 1000;
   if (last_frame_id_ != 0 && id != 0) {
     std::int64_t d = static_cast<std::int64_t>(id) - static_cast<std::int64_t>(last_frame_id_);
     if (id <= 0xFFFF && last_frame_id_ <= 0xFFFF && d <= 0) d += kWrap;
-    if (d > 1 && d <= kPlausibleGap) missing_frames_.fetch_add(static_cast<std::uint64_t>(d - 1));
+    std::int64_t most = kPlausibleGap;
+    if (reopened_) {
+      // What the camera can have made since its last frame, at its rate (a triggered camera's is
+      // the trigger's) with a margin; its clock must have run that time too (a reboot restarts it).
+      const double elapsed_s = static_cast<double>(mono_ns - last_frame_mono_ns_) / 1e9;
+      most = std::min<std::int64_t>(kPlausibleGap, static_cast<std::int64_t>(elapsed_s * std::max(cfg_.frame_rate, 1.0) * 1.5) + 2);
+      const Nanos ticked = device_ns - last_frame_device_ns_;
+      const Nanos elapsed = mono_ns - last_frame_mono_ns_;
+      if (ticked < elapsed / 2 - 1'000'000'000 || ticked > elapsed * 2 + 1'000'000'000) most = 0;
+    }
+    if (d > 1 && d <= most) missing_frames_.fetch_add(static_cast<std::uint64_t>(d - 1));
   }
+  reopened_ = false;
   last_frame_id_ = id;
+  last_frame_device_ns_ = device_ns;
+  last_frame_mono_ns_ = mono_ns;
+}
+
+// At a close: the frames the stream holds that next() never returned (the consumer was behind)
+// were made and are not published: counted lost, and their ids taken as seen, so that the gap at
+// the next open counts only what came after them.
+void AravisSource::count_undelivered(ArvStream* stream) noexcept {
+  if (stream == nullptr) return;
+  const Nanos mono = monotonic_now_ns();
+  while (ArvBuffer* b = arv_stream_try_pop_buffer(stream)) {
+    if (const auto id = arv_buffer_get_frame_id(b); id != 0) {
+      count_missing_frames(id, static_cast<Nanos>(arv_buffer_get_timestamp(b)), mono);
+      missing_frames_.fetch_add(1);
+    }
+    arv_stream_push_buffer(stream, b);  // the stream frees it with itself
+  }
 }
 
 Capture AravisSource::next(int timeout_ms) {
@@ -148,7 +182,7 @@ Capture AravisSource::next(int timeout_ms) {
   }
   const Nanos real = vehicle_now_ns();
   const Nanos mono = monotonic_now_ns();
-  count_missing_frames(arv_buffer_get_frame_id(b));
+  count_missing_frames(arv_buffer_get_frame_id(b), static_cast<Nanos>(arv_buffer_get_timestamp(b)), mono);
   const auto status = arv_buffer_get_status(b);
   // Any payload type that carries the image (with chunks, chunk data, multipart), at its real
   // row stride (GVSP row padding): issue 27 items 3 and 13, gvsp_payload.hpp.

@@ -248,9 +248,36 @@ void V4l2Source::requeue(std::uint32_t index) noexcept {
   (void)dev_->ioctl(fd_, VIDIOC_QBUF, &b);  // fails only when the device is gone: next() reports that
 }
 
+// Sequence gaps: frames the device (or its driver) made and never handed out. Drivers number a
+// stream from 0 at STREAMON (vb2, uvcvideo), so the first buffer's sequence is the frames lost
+// at the stream's start: a gap there (a device dropping its first frames after a reopen) was
+// invisible (the 10-minute campaign's corner_rear_right frames 86-88: a gap planned while the
+// device was gone, which fired at the reopened stream's first slots). A first
+// sequence of 1000 or more is a driver that does not restart it: nothing to count then.
+void V4l2Source::count_sequence(std::uint32_t sequence) noexcept {
+  if (have_sequence_ && sequence > last_sequence_ + 1 && sequence - last_sequence_ < 1000)
+    stats_.missing_frames += sequence - last_sequence_ - 1;
+  else if (!have_sequence_ && sequence < kMaxStartSequence)
+    stats_.missing_frames += sequence;
+  last_sequence_ = sequence;
+  have_sequence_ = true;
+}
+
 void V4l2Source::close() noexcept {
   if (fd_ < 0) return;
   if (streaming_) {
+    // Frames the device filled and nobody dequeued (the consumer was behind, or the watchdog gave
+    // up): made and never published, and STREAMOFF discards them. Counted lost here, as every
+    // source counts what its stream holds at a close (issue 27: the count restarted with each
+    // open, and these were neither published nor counted). The fd is non-blocking: EAGAIN ends it.
+    for (int n = 0; n < 64; ++n) {
+      v4l2_buffer b{};
+      b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+      b.memory = V4L2_MEMORY_MMAP;
+      if (dev_->ioctl(fd_, VIDIOC_DQBUF, &b) < 0) break;
+      count_sequence(b.sequence);
+      ++stats_.missing_frames;
+    }
     int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     (void)dev_->ioctl(fd_, VIDIOC_STREAMOFF, &type);
     streaming_ = false;
@@ -296,18 +323,7 @@ Capture V4l2Source::next(int timeout_ms) {
   }
   const Nanos real = vehicle_now_ns();
   const Nanos mono = monotonic_now_ns();
-  // Sequence gaps: frames the device (or its driver) made and never handed out. Drivers number a
-  // stream from 0 at STREAMON (vb2, uvcvideo), so the first buffer's sequence is the frames lost
-  // at the stream's start: a gap there (a device dropping its first frames after a reopen) was
-  // invisible (the 10-minute campaign's corner_rear_right frames 86-88: a gap planned while the
-  // device was gone, which fired at the reopened stream's first slots). A first
-  // sequence of 1000 or more is a driver that does not restart it: nothing to count then.
-  if (have_sequence_ && b.sequence > last_sequence_ + 1 && b.sequence - last_sequence_ < 1000)
-    stats_.missing_frames += b.sequence - last_sequence_ - 1;
-  else if (!have_sequence_ && b.sequence < kMaxStartSequence)
-    stats_.missing_frames += b.sequence;
-  last_sequence_ = b.sequence;
-  have_sequence_ = true;
+  count_sequence(b.sequence);
   if (b.index >= buffers_.size() || (b.flags & V4L2_BUF_FLAG_ERROR) != 0 || b.bytesused < image_bytes_) {
     ++stats_.incomplete;
     ++stats_.incomplete_other;

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <vector>
@@ -320,6 +322,59 @@ TEST(V4l2Chaos, StampModeEofWithAutoExposureLandsOnTheExposureStart) {
     const auto& u = units[static_cast<std::int64_t>(seq)];
     EXPECT_NEAR(static_cast<double>(dev + to_vehicle - u.acq_ns), 0.0, 1e6) << seq;
   }
+}
+
+}  // namespace
+}  // namespace sensor_rig::camera
+
+namespace sensor_rig::camera {
+namespace {
+
+// A close and an open (the driver's watchdog, a clean restart) with the consumer behind: the frames
+// the device filled and nobody dequeued are discarded by STREAMOFF. (Frames a device dropped for
+// want of a buffer after the last one dequeued show in no sequence: STREAMON restarts it. Not
+// counted; camera/README.md.) Every frame the device made
+// (sent into a buffer or dropped for want of one) from the first one returned to the last is
+// returned or counted lost, exactly once, across the reopen (issue 27: the count restarted with
+// each open and these were neither).
+TEST(V4l2Chaos, EveryFrameMadeAcrossAReopenIsReturnedOrCountedOnce) {
+  test::ChaosFolder folder;
+  std::vector<std::int64_t> returned;  // truth units: stream ordinal x 2^32 + sequence
+  SourceStats st;
+  {
+    auto dev = device(folder, {});
+    V4l2Source src(yuyv(), dev);
+    std::int64_t stream = 0;
+    const auto read_for = [&](Nanos ns) {
+      const Nanos until = monotonic_now_ns() + ns;
+      while (monotonic_now_ns() < until) {
+        auto c = src.next(20);
+        if (c.status == CaptureStatus::kFrame) returned.push_back(stream * (std::int64_t{1} << 32) + static_cast<std::int64_t>(c.frame.meta().seq));
+      }
+    };
+    src.open();
+    read_for(kS / 4);
+    ::usleep(60'000);  // behind by 3 frames (50 Hz, 4 buffers): the next poll fills 3, drops none
+    {
+      auto c = next_frame(src);  // one, then closed with the others still in their buffers
+      ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
+      returned.push_back(static_cast<std::int64_t>(c.frame.meta().seq));
+    }
+    src.close();
+    ++stream;
+    src.open();
+    read_for(kS / 4);
+    st = src.stats();
+    src.close();
+  }
+  const std::size_t n_returned = returned.size();
+  ASSERT_GE(returned.size(), 10u);
+  const auto [lo, hi] = std::minmax_element(returned.begin(), returned.end());
+  std::size_t made = 0;
+  for (const auto& p : truth::read(folder.truth()).parts)
+    if ((p.fate == truth::Fate::kSent || p.fate == truth::Fate::kDropped) && p.unit >= *lo && p.unit <= *hi) ++made;
+  std::printf("returned %zu, counted lost %llu, made between %zu\n", n_returned, static_cast<unsigned long long>(st.lost_frames()), made);
+  EXPECT_EQ(n_returned + st.lost_frames(), made);
 }
 
 }  // namespace

@@ -30,6 +30,7 @@
 // Aravis' handle types, declared as <arv.h> does (its headers stay out of this one).
 struct _ArvCamera;
 struct _ArvDevice;
+struct _ArvStream;
 
 namespace sensor_rig::camera {
 namespace detail {
@@ -84,7 +85,8 @@ class AravisSource final : public FrameSource {
   void set_line_trigger(_ArvCamera* cam);
   void start_stream(State& st);
   void fold_stats() noexcept;
-  void count_missing_frames(std::uint64_t id) noexcept;  // capture thread
+  void count_missing_frames(std::uint64_t id, Nanos device_ns, Nanos mono_ns) noexcept;  // capture thread
+  void count_undelivered(_ArvStream* stream) noexcept;  // close(): frames the stream holds, never returned
   void setup_ptp(_ArvDevice* dev);  // at open, before the state is installed (no lock)
   void poll_ptp();                          // under gc_mutex_
   std::string ptp_reset(_ArvDevice* dev, const std::string& status);
@@ -121,7 +123,12 @@ class AravisSource final : public FrameSource {
   std::atomic<std::uint64_t> incomplete_other_{0};
   std::atomic<std::uint64_t> completed_{0};
   std::atomic<std::uint64_t> missing_frames_{0};  // block-id gaps (count_missing_frames)
-  std::uint64_t last_frame_id_ = 0;               // capture thread: the last popped frame's id, 0: none
+  // The capture thread's (open/close too): the last frame's id (0: none), device time and arrival
+  // (CLOCK_MONOTONIC), kept across a close and an open; reopened_: no frame since the last open.
+  std::uint64_t last_frame_id_ = 0;
+  Nanos last_frame_device_ns_ = 0;
+  Nanos last_frame_mono_ns_ = 0;
+  bool reopened_ = false;
   AravisDetails details_;
   std::string claimed_;  // the identity claim_identity() holds; "" when none (open()/close() thread)
   // PTP: the state (under ptp_mutex_), the lock flag next() reads, the status thread.

@@ -104,7 +104,9 @@ struct SourceStats {
   std::uint64_t resent_packets = 0;
   std::uint64_t disconnects = 0;
   // Frames the device made that never reached next(): GigE block-id gaps (underruns, frames Aravis
-  // discarded), V4L2 sequence gaps. Counted within one open (a reopened device restarts its ids).
+  // discarded), V4L2 sequence gaps, and the frames a close found waiting in the stream. GigE ids
+  // are followed across a close and an open (a camera that goes on numbering: the gap is counted;
+  // one that restarted: not); a V4L2 stream restarts its sequence at STREAMON.
   std::uint64_t missing_frames = 0;
   // Software triggers refused because another access to the camera (a GenICam read in a GVCP
   // timeout) held it past the trigger's wait: the trigger never queues behind it.

@@ -59,6 +59,7 @@ class V4l2Source final : public FrameSource {
   Nanos buffer_stamp_mono(const v4l2_buffer& b, Nanos real, Nanos mono, bool& eof) noexcept;
   void start_streaming();
   void requeue(std::uint32_t index) noexcept;
+  void count_sequence(std::uint32_t sequence) noexcept;  // a dequeued buffer's sequence: gaps are missing_frames
   [[noreturn]] void fail(const std::string& what, int rc);
 
   SourceConfig cfg_;
