@@ -9,6 +9,7 @@
 
 #include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
+#include "sensor_rig/lidar/packet_order.hpp"
 #include "sensor_rig/lidar/stream_gap.hpp"
 #include "sensor_rig/lidar/hesai/packet.hpp"
 
@@ -355,9 +356,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // One corrupted azimuth must not cut the scan: groups off the packet's line are not decoded.
   const detail::AzimuthFit fit = detail::fit_azimuths(az, groups);
   if (fit.good * 2 <= groups) {
-    ++stats.implausible_steps;
-    scans.reject(PacketStatus::kBadAzimuth);
-    last = PacketStatus::kBadAzimuth;
+    last = scans.drop(PacketStatus::kBadAzimuth);
     return std::nullopt;
   }
   int first_good = 0;
@@ -365,9 +364,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // Every group at one azimuth while the rotor turns: a frozen encoder. Corrupt, never a scan of
   // its own (a stuck azimuth at the cut made ~377 one-packet scans a second: issue 26 item 7).
   if (groups > 1 && fit.step < 0.5 && have_prev && turning) {
-    ++stats.implausible_steps;
-    scans.reject(PacketStatus::kBadAzimuth);
-    last = PacketStatus::kBadAzimuth;
+    last = scans.drop(PacketStatus::kBadAzimuth);
     return std::nullopt;
   }
   const std::uint8_t* utc = p + mi->tail_utc;  // year, month, day, hour, minute, second
@@ -427,33 +424,25 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     const bool far_back = own < prev_own - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
     auto gap = detail::azimuth_gap(fov, in);
-    if (gap.backwards) {
-      if (in.dt_ns > period_ns / 2 && !jumped) {  // time moved on, azimuth back: frozen azimuth
-        ++stats.implausible_steps;
-        scans.reject(PacketStatus::kBadAzimuth);
-        last = PacketStatus::kBadAzimuth;
-        return std::nullopt;
+    if (gap.backwards) {  // the azimuth stepped back within the reorder window (packet_order.hpp)
+      switch (judge_order({.steps_back = true,
+                           .time_moved_on = in.dt_ns > period_ns / 2 && !jumped,
+                           .fills_hole = hole.holds(az[first_good]) && !far_back})) {
+        case Order::kLate: place_late(p, az, fit, groups, n, mode, unit, own, packet.rx_ns); break;
+        case Order::kFrozen: last = scans.drop(PacketStatus::kBadAzimuth); break;
+        case Order::kNext:
+        case Order::kDuplicate: last = scans.drop(PacketStatus::kOutOfOrder); break;
       }
-      if (hole.holds(az[first_good]) && !far_back) {
-        place_late(p, az, fit, groups, n, mode, unit, own, packet.rx_ns);
-        return std::nullopt;
-      }
-      scans.reject(PacketStatus::kOutOfOrder);
-      last = PacketStatus::kOutOfOrder;
       return std::nullopt;
     }
     if (gap.implausible) {  // an azimuth its time cannot reach (frozen encoder): corrupt, never a cut
-      ++stats.implausible_steps;
-      scans.reject(PacketStatus::kBadAzimuth);
-      last = PacketStatus::kBadAzimuth;
+      last = scans.drop(PacketStatus::kBadAzimuth);
       return std::nullopt;
     }
     switch (time_judge.judge(jumped, !gap.resync && gap.missing == 0)) {
       case TimeJudge::Verdict::kOk: break;
       case TimeJudge::Verdict::kCorrupt:
-        ++stats.implausible_steps;
-        scans.reject(PacketStatus::kBadTime);
-        last = PacketStatus::kBadTime;
+        last = scans.drop(PacketStatus::kBadTime);
         return std::nullopt;
       case TimeJudge::Verdict::kJump:  // a real clock step: the scan ends; continuity starts over
         ++stats.time_jumps;

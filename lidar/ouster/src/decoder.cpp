@@ -11,6 +11,7 @@
 #include "sensor_rig/lidar/ouster/packet.hpp"
 #include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
+#include "sensor_rig/lidar/packet_order.hpp"
 #include "sensor_rig/lidar/stream_gap.hpp"
 #include "pixel_reader.hpp"
 #include "profile_table.hpp"
@@ -344,9 +345,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       }
     }
     if (best_n * 2 <= n_valid || best % cpp_cols != 0) {
-      ++stats.implausible_steps;
-      scans.reject(PacketStatus::kBadAzimuth);
-      last = PacketStatus::kBadAzimuth;
+      last = scans.drop(PacketStatus::kBadAzimuth);
       return std::nullopt;
     }
     base = best;
@@ -372,9 +371,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // Every column's measurement id off the frame: nothing places the packet. Rejected whole (it
   // takes its slot: dropped, not missing too), never a packet of its scan (issue 26 item 7).
   if (n_valid == 0 && damaged) {
-    ++stats.implausible_steps;
-    scans.reject(PacketStatus::kBadAzimuth);
-    last = PacketStatus::kBadAzimuth;
+    last = scans.drop(PacketStatus::kBadAzimuth);
     return std::nullopt;
   }
 
@@ -414,14 +411,14 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     // wherever its slot lies: the previous frame's last packet arriving after the next frame's first
     // has a higher slot (it was taken for a new frame, and ended the one just begun). Negated as a
     // double: dt may be INT64_MIN.
-    if (dt <= 0 && -static_cast<double>(dt) <= reorder_ns) {
-      if (fid == prev_fid && hole.holds(slot)) {
-        late = true;  // placed below, continuity untouched
-      } else {
-        scans.reject(PacketStatus::kOutOfOrder);
-        last = PacketStatus::kOutOfOrder;
-        return out;
-      }
+    // Its column times are its position: no time of its own moves on while they step back.
+    switch (judge_order({.steps_back = dt <= 0 && -static_cast<double>(dt) <= reorder_ns,
+                         .time_moved_on = false,
+                         .fills_hole = fid == prev_fid && hole.holds(slot)})) {
+      case Order::kNext: break;
+      case Order::kLate: late = true; break;  // placed below, continuity untouched
+      case Order::kFrozen:
+      case Order::kDuplicate: last = scans.drop(PacketStatus::kOutOfOrder); return out;
     }
   }
   if (n_valid > 0 && !late) {
@@ -440,9 +437,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     switch (time_judge.judge(jumped, continues)) {
       case TimeJudge::Verdict::kOk: break;
       case TimeJudge::Verdict::kCorrupt:
-        ++stats.implausible_steps;
-        scans.reject(PacketStatus::kBadTime);
-        last = PacketStatus::kBadTime;
+        last = scans.drop(PacketStatus::kBadTime);
         return out;
       case TimeJudge::Verdict::kJump:
         ++stats.time_jumps;

@@ -176,6 +176,14 @@ class ScanAssembler {
     ++cur_.scan.dropped;
     if (takes_slot(status)) ++rejected_;
   }
+  // A packet rejected while decoding, the same counters for every vendor: `why` in the status
+  // counts and the scan's `dropped`; a corrupt one (azimuth, ids, time) also an implausible step.
+  // Returns `why` (the decoder's last status).
+  PacketStatus drop(PacketStatus why) noexcept {
+    if (why == PacketStatus::kBadAzimuth || why == PacketStatus::kBadTime) ++stats_.implausible_steps;
+    reject(why);
+    return why;
+  }
   // One rule for every vendor (issue 26 item 7): a packet rejected whole (bad length, flag,
   // azimuths, ids, time) was sent in its place of the stream; it is counted `dropped`, so the gap
   // the next decoded packet shows is first its: missing only beyond the rejected ones. A duplicate
