@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -87,20 +88,20 @@ void paint(FillContext& ctx, ArvBuffer* buffer) {
 // or never made when the stream has no free buffer, which Aravis counts as an underrun).
 void fill_and_record(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 /*gain*/, ArvPixelFormat /*format*/) {
   auto* ctx = static_cast<FillContext*>(data);
-  auto acq = static_cast<Nanos>(arv_buffer_get_timestamp(buffer));
+  // The exposure starts now (the fake set the stamp microseconds ago): its end is waited for on
+  // CLOCK_MONOTONIC from here. Waiting until stamp + exposure by CLOCK_REALTIME held the frame, and
+  // the fake's stream, as long as a host clock step back between the two (issue 27).
+  const Nanos start_mono = monotonic_now_ns();
+  Nanos acq = vehicle_now_ns();
   const guint64 frame_id = arv_buffer_get_frame_id(buffer);
   paint(*ctx, buffer);
   const Nanos exposure = Nanos{exposure_time_us} * 1000;
-  const Nanos left = acq + exposure - vehicle_now_ns();
-  if (left > 0) {
-    const Nanos mono = monotonic_now_ns() + left;
-    const timespec until{static_cast<time_t>(mono / 1'000'000'000), static_cast<long>(mono % 1'000'000'000)};
-    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
-    }
-  } else {
-    acq -= left;  // late by -left: the exposure began that much later
-    arv_buffer_set_timestamp(buffer, static_cast<guint64>(acq));
+  const Nanos end_mono = start_mono + exposure;
+  const timespec until{static_cast<time_t>(end_mono / 1'000'000'000), static_cast<long>(end_mono % 1'000'000'000)};
+  while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
   }
+  acq += std::max<Nanos>(0, monotonic_now_ns() - end_mono);  // late: the exposure began that much later
+  arv_buffer_set_timestamp(buffer, static_cast<guint64>(acq));
   // The host's receive time (what Aravis's GigE stream writes at the leader's arrival; the fake had
   // it equal to the timestamp, a frame arriving as its exposure began): the frame leaves now.
   arv_buffer_set_system_timestamp(buffer, static_cast<guint64>(vehicle_now_ns()));

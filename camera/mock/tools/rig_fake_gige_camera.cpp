@@ -76,29 +76,29 @@ struct FillContext {
   Pattern pattern;
 };
 
-// Runs in arv_fake_camera_fill_buffer after the frame's stamp is set, before the leader is sent.
-// The stamp is the exposure start (the truth's acq); chaos may change the exposure and what the
-// camera reports as its timestamp (PTP). The image is copied first (the fake's cost, not the
-// camera's timing), then the thread waits for the exposure's end, on CLOCK_MONOTONIC (a host clock
-// step does not stretch an exposure). A thread that got there late (a loaded host held it off its
-// core: 1.5 ms p50 in the whole-rig campaign, up to 4 ms) restamps the frame by that much: the
-// exposure began later, and the leader still leaves at the end of the exposure the camera reports,
-// as a camera's does and the rig's clock mapping takes it (issue 27: otherwise the mapping carries
-// the fake's lateness as a bias the truth does not have).
+// Runs in arv_fake_camera_fill_buffer after the frame's id is set, before the leader is sent: the
+// exposure starts now. Its stamp is the host's CLOCK_REALTIME now (the truth's acq, what the leader
+// says; this process's g_get_real_time, which Aravis stamped it with, is a clock that a host clock
+// step does not move: below). Chaos may change the exposure and what the camera reports as its
+// timestamp (PTP). The image is copied first (the fake's cost, not the camera's timing), then the
+// thread waits for the exposure's end, on CLOCK_MONOTONIC from its start (it waited until stamp +
+// exposure by CLOCK_REALTIME: a host step back between the two held the frame, and its camera, that
+// much longer). A thread that got there late (a loaded host held it off its core: 1.5 ms p50 in the
+// whole-rig campaign, up to 4 ms) restamps the frame by that much: the exposure began later, and the
+// leader still leaves at the end of the exposure the camera reports, as a camera's does and the
+// rig's clock mapping takes it (issue 27: otherwise the mapping carries the fake's lateness as a
+// bias the truth does not have).
 void expose_then_fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 /*gain*/, ArvPixelFormat /*format*/) {
   auto* ctx = static_cast<FillContext*>(data);
-  const auto exposure_start_ns = static_cast<sensor_rig::Nanos>(arv_buffer_get_timestamp(buffer));
+  const sensor_rig::Nanos start_mono = sensor_rig::monotonic_now_ns();
+  arv_buffer_set_timestamp(buffer, static_cast<guint64>(sensor_rig::vehicle_now_ns()));
   const guint32 exposure_us = ctx->chaos->on_fill(ctx->camera, buffer, exposure_time_us);
   ctx->pattern.fill(buffer, arv_fake_camera_get_payload(ctx->camera));
-  const sensor_rig::Nanos exposure_end_ns = exposure_start_ns + sensor_rig::Nanos{exposure_us} * 1000;
-  const sensor_rig::Nanos left = exposure_end_ns - sensor_rig::vehicle_now_ns();
-  if (left > 0) {
-    const sensor_rig::Nanos mono = sensor_rig::monotonic_now_ns() + left;
-    const timespec until{static_cast<time_t>(mono / 1'000'000'000), static_cast<long>(mono % 1'000'000'000)};
-    while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
-    }
+  const sensor_rig::Nanos end_mono = start_mono + sensor_rig::Nanos{exposure_us} * 1000;
+  const timespec until{static_cast<time_t>(end_mono / 1'000'000'000), static_cast<long>(end_mono % 1'000'000'000)};
+  while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
   }
-  ctx->chaos->restamp(buffer, sensor_rig::vehicle_now_ns() - exposure_end_ns);
+  ctx->chaos->restamp(buffer, sensor_rig::monotonic_now_ns() - end_mono);
 }
 
 bool trigger_pending(ArvFakeCamera* cam) {
@@ -166,15 +166,24 @@ extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
   return ::ppoll(pfds, nfds, &wait, nullptr);
 }
 
-// The loop's window check after g_poll ended a window (above): past it. Every other call is GLib's.
+// The clock of the camera's own timing: CLOCK_REALTIME when the process started, then CLOCK_MONOTONIC.
+// Aravis' fake times everything on g_get_real_time: its stream loop's frame instants and poll
+// windows (until g_get_real_time() passes the next frame's time), its frame grid, the controller's
+// heartbeat. On the host's CLOCK_REALTIME a step back (host.clock_step, an NTP/PTP servo's step)
+// held the stream loop for the step's length, every frame of it unsent, and a step forward beyond
+// the heartbeat timeout (3 s) took the controller's privilege away: the stream stopped for good. A
+// camera's timing runs on its own oscillator, which a host's clock step does not touch. The frames'
+// stamps stay the host's CLOCK_REALTIME (expose_then_fill). Free-running fakes started together
+// still expose on one instant (their offsets agree to microseconds).
+// The loop's window check after g_poll ended a window (above): past it. Every other call: the
+// camera's clock.
 extern "C" gint64 g_get_real_time() {
   if (t_end_window) {
     t_end_window = false;
     return std::numeric_limits<gint64>::max() / 2;
   }
-  timespec ts{};
-  ::clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<gint64>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+  static const sensor_rig::Nanos camera_clock_offset_ns = sensor_rig::vehicle_now_ns() - sensor_rig::monotonic_now_ns();
+  return (sensor_rig::monotonic_now_ns() + camera_clock_offset_ns) / 1000;
 }
 
 namespace {
