@@ -95,18 +95,19 @@ inline std::optional<Announced> source_stamps(std::span<const std::byte> body, s
 }  // namespace record_cdr
 
 // What the recorder missed, per topic, exactly, with bounded memory.
-//  - An announcement without its sample after the timeout: missed (the join, by header stamp).
+//  - An announcement without its sample once a later sample of the topic came (or, none coming,
+//    after the timeout): missed (the join, by header stamp).
 //  - Announcements lost too: a recorder stopped for seconds gets only the last 64 of the rig's
 //    /rig/stamps writer (keep-last 64, one history for every topic; dds/stamps_writer.cpp) and what
 //    its socket held; the rest never come, and neither do their samples. They show as a gap in the
 //    topic's SourceStamps.seq between two announcements that did come: every sample of the gap is
 //    missed except those received (data whose stamp lies inside the gap and matched nothing),
-//    decided a timeout after the gap was seen (its samples may still be on the way). On topics whose
+//    decided once a later sample came or a timeout after the gap was seen. On topics whose
 //    seq is a device's frame id (cameras: a gap is also a frame the camera made and the rig never
 //    published) the same count is `unannounced` instead: an upper bound beside `missed`, never folded
 //    into it; on the dbw bridge's commands (stamped when transmitted) a gap is nothing. A seq that
-//    goes back (a driver restarted, a camera reopened, a frame id wrapped) starts over without a
-//    gap; a gap at the very end (no later announcement) is not seen.
+//    goes back (a driver restarted, a camera reopened) starts over without a gap, but for a GigE
+//    camera's 16-bit frame id wrapping; a gap at the very end (no later announcement) is not seen.
 // Bounds, per topic: kMaxPending announcements waiting for their sample, kMaxPending samples waiting
 // for their announcement, kMaxGaps undecided gaps (std::map / std::deque nodes: ~0.6 MB per topic at
 // most, ~25 MB for a 40-topic recording). Past them nothing is silent: the oldest waiting
@@ -134,6 +135,8 @@ class AnnouncedSamples {
   // A sample of `topic` with header stamp `stamp` taken at `now` (monotonic ns).
   void on_data(const std::string& topic, Nanos stamp, Nanos now) {
     Topic& t = topics_[topic];
+    if (!t.has_data || stamp > t.newest_data) t.newest_data = stamp;
+    t.has_data = true;
     if (t.announced.erase(stamp) != 0) return;
     t.received.insert_or_assign(stamp, now);
     if (t.received.size() > kMaxPending) {
@@ -147,7 +150,13 @@ class AnnouncedSamples {
   void on_announced(const std::string& topic, Nanos stamp, std::uint64_t seq, Nanos now, bool counted = true) {
     Topic& t = topics_[topic];
     if (t.has_seq && seq == t.last_seq && stamp == t.last_stamp) return;  // the same announcement again
-    if (t.has_seq && seq > t.last_seq + 1 && counted && t.seq_gaps != SeqGaps::kNotCounted) add_gap(t, Gap{t.last_stamp, stamp, seq - t.last_seq - 1, now});
+    if (t.has_seq && counted && t.seq_gaps != SeqGaps::kNotCounted) {
+      std::uint64_t between = seq > t.last_seq + 1 ? seq - t.last_seq - 1 : 0;
+      // A GigE camera's 16-bit frame id wrapped (65535 is followed by 1): not a restart.
+      if (t.seq_gaps == SeqGaps::kUnannounced && seq < t.last_seq && t.last_seq <= 0xFFFF && t.last_seq - seq > 0x8000)
+        between = (0xFFFF - t.last_seq) + (seq > 0 ? seq - 1 : 0);
+      if (between > 0) add_gap(t, Gap{t.last_stamp, stamp, between, now});
+    }
     t.has_seq = true;
     t.last_seq = seq;
     t.last_stamp = stamp;
@@ -161,19 +170,25 @@ class AnnouncedSamples {
     }
   }
 
-  // Decides what is older than `timeout_ns`: announcements without their sample are missed, gaps
-  // count their samples not received; received samples no announcement came for within 5 timeouts
-  // are forgotten. `gap_timeout_ns` (default: the same) for gaps: at the stop, once every sample
-  // was taken, 0 decides them all (what they lack is not in the file).
+  // Decides what can no longer come: a topic's samples arrive in the order they were written (one
+  // reliable writer: DDS drops, never reorders), so once a later sample of the topic came, an
+  // announcement without its sample is missed and a gap counts its samples not received. Without
+  // a later sample, after `timeout_ns` (a topic that went quiet; a recorder catching up receives
+  // the repair of a large sample seconds after the announcements around it). Received samples no
+  // announcement came for within 5 timeouts are forgotten. `gap_timeout_ns` (default: the same)
+  // for gaps: at the stop, once every sample was taken, 0 decides them all (what they lack is not
+  // in the file).
   void expire(Nanos now, Nanos timeout_ns, std::optional<Nanos> gap_timeout_ns = std::nullopt) {
     const Nanos gap_timeout = gap_timeout_ns.value_or(timeout_ns);
     for (auto& [name, t] : topics_) {
-      while (!t.gaps.empty() && (gap_timeout == 0 || now - t.gaps.front().seen > gap_timeout)) {
-        decide(t, t.gaps.front());
+      while (!t.gaps.empty()) {
+        const Gap& g = t.gaps.front();
+        if (gap_timeout != 0 && now - g.seen <= gap_timeout && !(t.has_data && t.newest_data >= g.before)) break;
+        decide(t, g);
         t.gaps.pop_front();
       }
       std::erase_if(t.announced, [&](const auto& kv) {
-        if (now - kv.second <= timeout_ns) return false;
+        if (now - kv.second <= timeout_ns && !(t.has_data && t.newest_data > kv.first)) return false;
         ++t.counts.missed;
         return true;
       });
@@ -203,9 +218,10 @@ class AnnouncedSamples {
     std::map<Nanos, Nanos> announced, received;  // header stamp -> when (monotonic)
     std::deque<Gap> gaps;                        // in seq order
     SeqGaps seq_gaps = SeqGaps::kMissed;
-    bool has_seq = false;
+    bool has_seq = false, has_data = false;
     std::uint64_t last_seq = 0;
     Nanos last_stamp = 0;
+    Nanos newest_data = 0;  // the newest sample's header stamp
     Counts counts;
   };
 

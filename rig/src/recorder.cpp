@@ -161,7 +161,10 @@ class Recorder {
 
  private:
   static constexpr Nanos kExpirePeriodNs = 100'000'000;
-  static constexpr Nanos kAnnouncedTimeoutNs = 1'000'000'000;  // as rig monitor's default loss timeout
+  // What is missed is decided once a later sample of its topic came (record_gaps.hpp); this is for a
+  // topic that went quiet. 1 s (rig monitor's loss timeout) counted samples a recorder catching up
+  // after a 5 s stop received later: the repair of a fused cloud came > 1 s after its announcement.
+  static constexpr Nanos kAnnouncedTimeoutNs = 5'000'000'000;
   static constexpr Nanos kAnnouncedAtStopNs = 200'000'000;
   static constexpr Nanos kMatchDelayNs = 500'000'000;  // a new reader takes this long to match its writers
   static constexpr int kStampsReaderDepth = 8192;       // ~2 MB of SourceStamps at most, ~20 s of a 10-device rig

@@ -98,11 +98,14 @@ TEST(RecordGaps, AnnouncedAndNotReceivedWithinTheTimeoutIsMissedOnce) {
   a.on_data("/a", 200, 3);            // then its data: matched
   a.on_announced("/a", 300, 3, 4);    // never comes
   a.on_announced("/b", 300, 3, 4);    // another topic, same stamp: never comes either
-  a.on_data("/b", 400, 5);            // data never announced: not a loss
-  a.expire(kS, kS);                   // not yet a timeout old
+  a.expire(kS, kS);                   // not yet a timeout old, no later sample
   EXPECT_EQ(missed("/a"), 0u);
   EXPECT_EQ(missed("/b"), 0u);
-  a.expire(kS + 5, kS);
+  a.on_data("/b", 400, 5);            // a later sample (never announced: not a loss itself)
+  a.expire(kS, kS);                   // 300's can no longer come: samples arrive in order
+  EXPECT_EQ(missed("/a"), 0u);
+  EXPECT_EQ(missed("/b"), 1u);
+  a.expire(kS + 5, kS);               // a timeout old
   EXPECT_EQ(missed("/a"), 1u);
   EXPECT_EQ(missed("/b"), 1u);
   a.expire(10 * kS, kS);              // counted once
@@ -119,8 +122,9 @@ TEST(RecordGaps, AnnouncedAndNotReceivedWithinTheTimeoutIsMissedOnce) {
 }
 
 // A gap in a topic's seq: samples whose announcements were lost too. Those received (their stamp
-// inside the gap, matched nothing) are not missed; the rest are, once the timeout passed. A seq that
-// goes back starts over; announcements before the count started only set where the seq stands.
+// inside the gap, matched nothing) are not missed; the rest are, once a later sample came (none of
+// the gap's can come after it) or the timeout passed. A seq that goes back starts over (but for a
+// GigE frame id's wrap); announcements before the count started only set where the seq stands.
 TEST(RecordGaps, ASeqGapIsMissedButForWhatWasReceivedInIt) {
   constexpr Nanos kS = 1'000'000'000;
   AnnouncedSamples a;
@@ -130,16 +134,26 @@ TEST(RecordGaps, ASeqGapIsMissedButForWhatWasReceivedInIt) {
   a.on_data("/l", 20, 0);
   a.on_data("/l", 50, 1);                // seq 9's sample, its stamps lost
   a.on_announced("/l", 100, 14, 2);      // seqs 7..13 announced and lost: a gap of 7
-  a.on_data("/l", 70, 3);                // seq 11's sample after the announcement after it: in time
-  a.on_data("/l", 100, 3);
+  a.on_data("/l", 70, 3);                // seq 11's sample, after the announcement after it
   a.expire(kS, kS);
-  EXPECT_EQ(a.counts("/l").missed, 0u);  // the gap waits a timeout for its samples
-  a.on_data("/l", 90, kS + 1);           // seq 13's: still in time
-  a.expire(kS + 3, kS);
+  EXPECT_EQ(a.counts("/l").missed, 0u);  // no later sample yet: seq 13's may be on the way
+  a.on_data("/l", 90, 2 * kS);           // seq 13's, 2 s late (a repair): still counted received
+  a.expire(2 * kS, 5 * kS);
+  EXPECT_EQ(a.counts("/l").missed, 0u);
+  a.on_data("/l", 100, 2 * kS);          // seq 14's: the gap is passed
+  a.expire(2 * kS, 5 * kS);
   EXPECT_EQ(a.counts("/l").missed, 4u);  // 7 - 3 received
-  a.on_data("/l", 80, 2 * kS);           // too late: decided
+  a.on_data("/l", 80, 3 * kS);           // out of order: cannot happen, and changes nothing
   a.expire(10 * kS, kS);
   EXPECT_EQ(a.counts("/l").missed, 4u);
+  // A topic that goes quiet: its gap is decided after the timeout.
+  a.on_announced("/q", 10, 1, 0);
+  a.on_data("/q", 10, 0);
+  a.on_announced("/q", 40, 4, 0);        // 2 and 3 lost with their stamps, and 4's sample never comes
+  a.expire(kS, kS);
+  EXPECT_EQ(a.counts("/q").missed, 0u);
+  a.expire(kS + 1, kS);
+  EXPECT_EQ(a.counts("/q").missed, 3u);
   a.on_announced("/l", 200, 0, 11 * kS);  // the driver restarted: seq 0 again, no gap
   a.on_data("/l", 200, 11 * kS);
   a.on_announced("/l", 300, 1, 11 * kS);
@@ -157,6 +171,14 @@ TEST(RecordGaps, ASeqGapIsMissedButForWhatWasReceivedInIt) {
   a.expire(22 * kS, kS);
   EXPECT_EQ(a.counts("/c").missed, 0u);
   EXPECT_EQ(a.counts("/c").unannounced, 2u);
+  // A GigE camera's 16-bit frame id wraps: 65534, (65535, 1 lost), 2; the mock's start near 65500.
+  a.set_seq_gaps("/g", AnnouncedSamples::SeqGaps::kUnannounced);
+  a.on_announced("/g", 50, 65534, 23 * kS);
+  a.on_data("/g", 50, 23 * kS);
+  a.on_announced("/g", 80, 2, 23 * kS);
+  a.on_data("/g", 80, 23 * kS);
+  a.expire(23 * kS, kS);
+  EXPECT_EQ(a.counts("/g").unannounced, 2u);
   // The dbw bridge's commands: its seq skips by design, a gap is nothing.
   a.set_seq_gaps("/cmd", AnnouncedSamples::SeqGaps::kNotCounted);
   a.on_announced("/cmd", 10, 1, 20 * kS);
