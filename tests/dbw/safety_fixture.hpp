@@ -7,14 +7,13 @@
 
 #include <cstdint>
 
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/safety/safety_core.hpp"
 
 namespace sensor_rig::dbw::safety::test {
 
 namespace s = sensor_rig::dbw::safety;
 using sensor_rig::Nanos;
-
-inline constexpr Nanos kMs = 1'000'000;
 
 struct ParavanRef {
   static constexpr const s::VehicleLimits& kLimits = s::kParavanRef;

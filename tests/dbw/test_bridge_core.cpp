@@ -9,10 +9,9 @@
 namespace dbw = sensor_rig::dbw;
 namespace s = sensor_rig::dbw::safety;
 using sensor_rig::Nanos;
+using sensor_rig::kMs;
 
 namespace {
-
-using dbw::test::kMs;
 
 struct Loop {
   dbw::Protocol p = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());

@@ -4,17 +4,17 @@
 #include <gtest/gtest.h>
 
 #include "dbw_test_data.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
 #include "sensor_rig/dbw/mock/mock_ecu.hpp"
 
 namespace dbw = sensor_rig::dbw;
 namespace s = sensor_rig::dbw::safety;
 using sensor_rig::Nanos;
+using sensor_rig::kUs;
+using sensor_rig::kMs;
 
 namespace {
-
-using dbw::test::kMs;
-constexpr Nanos kUs = 1'000;
 
 struct Sent {
   Nanos t = 0;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "dbw_test_data.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
 #include "sensor_rig/dbw/bridge/frame_loss_counter.hpp"
 #include "sensor_rig/dbw/mock/mock_ecu.hpp"
@@ -15,10 +16,9 @@ namespace dbw = sensor_rig::dbw;
 namespace mock = sensor_rig::dbw::mock;
 namespace s = sensor_rig::dbw::safety;
 using sensor_rig::Nanos;
+using sensor_rig::kMs;
 
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
 
 s::E2eConfig p01() {
   s::E2eConfig c;

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "dbw_test_data.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/can/transport.hpp"
 #include "sensor_rig/dbw/mock/mock_ecu.hpp"
 #include "sensor_rig/dbw/mock/mock_runner.hpp"
@@ -16,10 +17,9 @@ namespace dbw = sensor_rig::dbw;
 namespace mock = sensor_rig::dbw::mock;
 namespace s = sensor_rig::dbw::safety;
 using sensor_rig::Nanos;
+using sensor_rig::kMs;
 
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
 
 class MockEcuTest : public ::testing::Test {
  protected:

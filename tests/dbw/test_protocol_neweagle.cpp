@@ -20,10 +20,10 @@ namespace fs = std::filesystem;
 namespace dbw = sensor_rig::dbw;
 namespace s = sensor_rig::dbw::safety;
 using sensor_rig::Nanos;
+using sensor_rig::kMs;
 
 namespace {
 
-using dbw::test::kMs;
 constexpr double kDegPerRoadRad = 15.0 * 180.0 / 3.14159265358979323846;  // the mapping's ratio
 
 constexpr const char* kSplitDbc =

@@ -9,12 +9,13 @@
 
 #include "mini_xml.hpp"
 
+#include "sensor_rig/common/clock.hpp"
+
 namespace sensor_rig::rig {
 namespace {
 
 using test::xml::Element;
 constexpr Nanos kT0 = 1'700'000'000'000'000'000;
-constexpr Nanos kMs = 1'000'000;
 
 // seq n of `topic`, 100 ms apart: sensor 1 ms, assemble 100 ms, process 2 ms, write 0.5 ms,
 // dds 0.2 + n/100 ms; `lost` ones have no receive time.

@@ -16,6 +16,7 @@
 
 #include "mock_faults.hpp"
 #include "rig_cli.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/fault_plan.hpp"
 #include "sensor_rig/common/truth_record.hpp"
 #include "sensor_rig/lidar/udp_source.hpp"
@@ -24,7 +25,6 @@ namespace sensor_rig::rig {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr Nanos kMs = 1'000'000;
 constexpr std::size_t kVelodynePacket = 1206, kTimestampAt = 1200;  // µs since the hour, little endian
 
 std::uint32_t sensor_us(std::span<const std::byte> b) {

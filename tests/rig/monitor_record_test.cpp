@@ -17,6 +17,7 @@
 
 #include "rig_process.hpp"
 #include "sample_record.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "wait_bounds.hpp"
@@ -27,7 +28,6 @@ namespace sensor_rig::rig {
 namespace {
 
 constexpr dds_domainid_t kDomain = 43;
-constexpr Nanos kMs = 1'000'000;
 
 // The real `rig monitor` as a child process; SIGKILL in the destructor if still running.
 class MonitorProcess {

@@ -11,11 +11,12 @@
 #include "sample_record.hpp"
 #include "rig_process.hpp"
 
+#include "sensor_rig/common/clock.hpp"
+
 namespace sensor_rig::rig {
 namespace {
 
 constexpr Nanos kT0 = 1'700'000'000'000'000'000;
-constexpr Nanos kMs = 1'000'000;
 
 // The stamps a driver publishes for sample `seq` acquired at kT0 + seq * 100 ms.
 msg::SourceStamps stamps(std::uint64_t seq, std::uint32_t missing = 0) {

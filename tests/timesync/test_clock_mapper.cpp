@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "sensor_rig/common/clock.hpp"
 #include "sim_clock.hpp"
 
 namespace sensor_rig::timesync {
@@ -15,10 +16,6 @@ namespace {
 using test::DelayModel;
 using test::SimDevice;
 using test::SimLink;
-
-constexpr Nanos kUs = 1'000;
-constexpr Nanos kMs = 1'000'000;
-constexpr Nanos kSec = 1'000'000'000;
 
 ClockMapperConfig config_for(const DelayModel& m) {
   ClockMapperConfig c;

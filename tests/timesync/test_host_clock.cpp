@@ -2,15 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include "test_instants.hpp"
+
 namespace sensor_rig::timesync {
 namespace {
-
-constexpr Nanos kT0 = 1'795'255'200'000'000'000;
+using test::kHour10;
 
 // An injectable host: monotonic advances steadily, realtime slews (200 ppm) and is stepped twice.
 TEST(RealtimeStepDetector, CountsStepsNotSlew) {
   RealtimeStepDetector d(1'000'000);
-  Nanos rt = kT0, mono = 5'000'000'000;
+  Nanos rt = kHour10, mono = 5'000'000'000;
   std::vector<Nanos> seen;
   for (int i = 0; i < 100; ++i) {
     mono += 100'000'000;

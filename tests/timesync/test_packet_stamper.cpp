@@ -6,12 +6,12 @@
 
 #include <cstdlib>
 
+#include "sensor_rig/common/clock.hpp"
+#include "test_instants.hpp"
+
 namespace sensor_rig::timesync {
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
-constexpr Nanos kSec = 1'000'000'000;
-constexpr Nanos kHour10 = 1'795'255'200'000'000'000;  // 2026-11-21 10:00:00 UTC
+using test::kHour10;
 constexpr Nanos kSpan = 1'327'104;                    // VLP-16 packet span
 
 StamperConfig config(TimeSource src, Correction c, HourSource h = HourSource::kHost) {

@@ -8,16 +8,15 @@
 #include <stdexcept>
 #include <vector>
 
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/timesync/host_clock.hpp"
 #include "sensor_rig/timesync/monotonic_stamps.hpp"
 #include "sensor_rig/timesync/packet_stamper.hpp"
+#include "test_instants.hpp"
 
 namespace sensor_rig::timesync {
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
-constexpr Nanos kSec = 1'000'000'000;
-constexpr Nanos kHour10 = 1'795'255'200'000'000'000;  // 2026-11-21 10:00:00 UTC
+using test::kHour10;
 constexpr Nanos kSpan = 1'327'104;                    // VLP-16 packet span
 
 // Issue 26 item 7: stamps held after a step back (or a raw stamp equal to the last) are 1 ns after

@@ -5,25 +5,20 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "sensor_rig/common/clock.hpp"
 #include "sim_clock.hpp"
+#include "test_instants.hpp"
 
 namespace sensor_rig::timesync {
 namespace {
+using test::kHour10;
+using test::us_of;
 
 using test::DelayModel;
 using test::SimDevice;
 using test::SimLink;
-
-constexpr Nanos kUs = 1'000;
-constexpr Nanos kMs = 1'000'000;
-constexpr Nanos kSec = 1'000'000'000;
-constexpr Nanos kHour10 = 1'795'255'200'000'000'000;  // 2026-11-21 10:00:00 UTC
 constexpr Nanos kVlp16Packet = 1'327'104;               // 12 blocks x 55.296 µs
 constexpr Nanos kPeriod = 1'327'104;                    // VLP-16 strongest: one packet per span
-
-std::uint32_t us_of(Nanos t) {
-  return static_cast<std::uint32_t>(((t % kHourNs) + kHourNs) % kHourNs / 1000);
-}
 
 StamperConfig vlp16(TimeSource src) {
   StamperConfig c;

@@ -1,6 +1,7 @@
 // SweepPhase against a synthetic rotation with a known truth: per-laser azimuth jitter, outliers,
 // lost packets, a long gap, a rate change, a LIDAR that stops, both rotation directions.
 #include "sensor_rig/timesync/sweep_phase.hpp"
+#include "test_instants.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +12,7 @@
 
 namespace sensor_rig::timesync {
 namespace {
-
-constexpr Nanos kT0 = 1'795'255'200'000'000'000;
+using test::kHour10;
 
 // The truth: azimuth(t) = phase + 360 * rate * (t - t_ref); rate may change at t_change.
 struct Rotation {
@@ -21,8 +21,8 @@ struct Rotation {
   Nanos t_change = 0;         // 0: never
   double rate_after_hz = 0.0;
   [[nodiscard]] double angle(Nanos t) const {  // unwrapped, degrees
-    if (t_change == 0 || t < t_change) return phase_deg + 360.0 * rate_hz * static_cast<double>(t - kT0) * 1e-9;
-    const double at_change = phase_deg + 360.0 * rate_hz * static_cast<double>(t_change - kT0) * 1e-9;
+    if (t_change == 0 || t < t_change) return phase_deg + 360.0 * rate_hz * static_cast<double>(t - kHour10) * 1e-9;
+    const double at_change = phase_deg + 360.0 * rate_hz * static_cast<double>(t_change - kHour10) * 1e-9;
     return at_change + 360.0 * rate_after_hz * static_cast<double>(t - t_change) * 1e-9;
   }
   // The first t > after with angle(t) = az (mod 360), by bisection over the monotonic angle.
@@ -85,8 +85,8 @@ TEST(SweepPhase, PredictsCrossingsOfAClockwiseAndACounterClockwiseSweep) {
     SweepPhase p;
     Feed f;
     f.rot.rate_hz = rate;
-    f.run(p, kT0, kT0 + 1'000'000'000);
-    const Nanos now = kT0 + 1'000'000'000;
+    f.run(p, kHour10, kHour10 + 1'000'000'000);
+    const Nanos now = kHour10 + 1'000'000'000;
     const auto st = p.status(now);
     EXPECT_EQ(st.state, SweepState::kLocked) << rate;
     EXPECT_NEAR(st.rate_hz, rate, std::abs(rate) * 1e-3);
@@ -103,22 +103,22 @@ TEST(SweepPhase, PredictsCrossingsOfAClockwiseAndACounterClockwiseSweep) {
 
 TEST(SweepPhase, NoPredictionBeforeEnoughSamples) {
   SweepPhase p;
-  EXPECT_EQ(p.status(kT0).state, SweepState::kNoData);
-  EXPECT_FALSE(p.next_crossing(0.0, kT0, kT0));
+  EXPECT_EQ(p.status(kHour10).state, SweepState::kNoData);
+  EXPECT_FALSE(p.next_crossing(0.0, kHour10, kHour10));
   Feed f;
-  f.run(p, kT0, kT0 + 2'000'000, 1'000'000);  // 2 ms: 5 samples
-  EXPECT_FALSE(p.next_crossing(0.0, kT0 + 2'000'000, kT0 + 2'000'000));
-  EXPECT_NE(p.status(kT0 + 2'000'000).state, SweepState::kLocked);
+  f.run(p, kHour10, kHour10 + 2'000'000, 1'000'000);  // 2 ms: 5 samples
+  EXPECT_FALSE(p.next_crossing(0.0, kHour10 + 2'000'000, kHour10 + 2'000'000));
+  EXPECT_NE(p.status(kHour10 + 2'000'000).state, SweepState::kLocked);
 }
 
 TEST(SweepPhase, OutliersAndLostPacketsDoNotMoveThePrediction) {
   SweepPhase p;
   Feed f;
   f.outlier_prob = 0.03;  // 3 % of samples at a random azimuth (corrupt packets, reflections)
-  f.run(p, kT0, kT0 + 500'000'000);
+  f.run(p, kHour10, kHour10 + 500'000'000);
   // 40 ms of lost packets (a quarter turn and more), then the stream goes on.
-  f.run(p, kT0 + 540'000'000, kT0 + 1'000'000'000);
-  const Nanos now = kT0 + 1'000'000'000;
+  f.run(p, kHour10 + 540'000'000, kHour10 + 1'000'000'000);
+  const Nanos now = kHour10 + 1'000'000'000;
   const auto st = p.status(now);
   EXPECT_EQ(st.state, SweepState::kLocked);
   EXPECT_GT(st.outliers, 50u);
@@ -132,11 +132,11 @@ TEST(SweepPhase, OutliersAndLostPacketsDoNotMoveThePrediction) {
 TEST(SweepPhase, LongGapReacquiresThePhase) {
   SweepPhase p;
   Feed f;
-  f.run(p, kT0, kT0 + 500'000'000);
+  f.run(p, kHour10, kHour10 + 500'000'000);
   // 3 s without packets (the sensor was restarted): its phase is unknown; the first scan after
   // re-acquires it, the gap is counted.
   f.rot.phase_deg = 200.0;  // a restarted sensor comes back at another phase
-  const Nanos back = kT0 + 3'500'000'000;
+  const Nanos back = kHour10 + 3'500'000'000;
   f.run(p, back, back + 300'000'000);
   const Nanos now = back + 300'000'000;
   EXPECT_EQ(p.status(now).gaps, 1u);
@@ -149,10 +149,10 @@ TEST(SweepPhase, LongGapReacquiresThePhase) {
 TEST(SweepPhase, RateChangeIsFollowed) {
   SweepPhase p;
   Feed f;
-  f.rot.t_change = kT0 + 1'000'000'000;  // 600 -> 1200 rpm (a reconfigured sensor)
+  f.rot.t_change = kHour10 + 1'000'000'000;  // 600 -> 1200 rpm (a reconfigured sensor)
   f.rot.rate_after_hz = 20.0;
-  f.run(p, kT0, kT0 + 1'600'000'000);
-  const Nanos now = kT0 + 1'600'000'000;
+  f.run(p, kHour10, kHour10 + 1'600'000'000);
+  const Nanos now = kHour10 + 1'600'000'000;
   const auto st = p.status(now);
   EXPECT_EQ(st.state, SweepState::kLocked);
   EXPECT_NEAR(st.rate_hz, 20.0, 0.02);
@@ -165,8 +165,8 @@ TEST(SweepPhase, RateChangeIsFollowed) {
 TEST(SweepPhase, StoppedLidarGivesNoPrediction) {
   SweepPhase p;
   Feed f;
-  f.run(p, kT0, kT0 + 500'000'000);
-  const Nanos end = kT0 + 500'000'000;
+  f.run(p, kHour10, kHour10 + 500'000'000);
+  const Nanos end = kHour10 + 500'000'000;
   EXPECT_TRUE(p.next_crossing(10.0, end, end + 100'000'000));
   // No sample for longer than the stale time (300 ms, 2.5 turns at 10 Hz): no trigger.
   EXPECT_FALSE(p.next_crossing(10.0, end + 400'000'000, end + 400'000'000));
@@ -179,8 +179,8 @@ TEST(SweepPhase, ActualCrossingIsInterpolatedFromBothSides) {
   SweepPhase p;
   Feed f;
   f.spacing_ns = 100'000;  // ~1000 points per turn, as the LIDAR driver samples a scan
-  f.run(p, kT0, kT0 + 500'000'000);
-  const Nanos asked = kT0 + 300'000'000;
+  f.run(p, kHour10, kHour10 + 500'000'000);
+  const Nanos asked = kHour10 + 300'000'000;
   for (double az : {0.0, 123.0, 359.5}) {
     const Nanos truth = f.rot.crossing(az, asked);
     const auto got = p.crossing_near(az, truth + 3'000'000);  // a hint a few ms off
@@ -188,7 +188,7 @@ TEST(SweepPhase, ActualCrossingIsInterpolatedFromBothSides) {
     EXPECT_LT(abs_ns(*got - truth), 100'000) << az;
   }
   // A crossing the samples do not reach yet (in the future) is not extrapolated.
-  const Nanos future = f.rot.crossing(90.0, kT0 + 500'000'000);
+  const Nanos future = f.rot.crossing(90.0, kHour10 + 500'000'000);
   EXPECT_FALSE(p.crossing_near(90.0, future));
 }
 
@@ -198,10 +198,10 @@ TEST(SweepPhase, ActualCrossingIsInterpolatedFromBothSides) {
 TEST(SweepPhase, AClockStepBackReacquiresThePhase) {
   SweepPhase p;
   Feed f;
-  f.run(p, kT0, kT0 + 500'000'000);
+  f.run(p, kHour10, kHour10 + 500'000'000);
   constexpr Nanos kStep = 2'000'000'000;
   f.rot.phase_deg -= 360.0 * f.rot.rate_hz * static_cast<double>(kStep) * 1e-9;  // same rotation, earlier stamps
-  const Nanos back = kT0 + 500'000'000 - kStep;
+  const Nanos back = kHour10 + 500'000'000 - kStep;
   f.run(p, back, back + 300'000'000);
   const Nanos now = back + 300'000'000;
   EXPECT_EQ(p.status(now).state, SweepState::kLocked);
@@ -214,11 +214,11 @@ TEST(SweepPhase, AClockStepBackReacquiresThePhase) {
 TEST(SweepPhase, ReorderedAndNonFiniteSamplesAreCounted) {
   SweepPhase p;
   Feed f;
-  f.run(p, kT0, kT0 + 200'000'000);
-  const auto before = p.status(kT0 + 200'000'000);
-  p.observe(SweepSample{10.0, kT0 + 50'000'000});  // 150 ms older than the newest
-  p.observe(SweepSample{std::nan(""), kT0 + 200'000'000});
-  const auto after = p.status(kT0 + 200'000'000);
+  f.run(p, kHour10, kHour10 + 200'000'000);
+  const auto before = p.status(kHour10 + 200'000'000);
+  p.observe(SweepSample{10.0, kHour10 + 50'000'000});  // 150 ms older than the newest
+  p.observe(SweepSample{std::nan(""), kHour10 + 200'000'000});
+  const auto after = p.status(kHour10 + 200'000'000);
   EXPECT_EQ(after.reordered, before.reordered + 1);
   EXPECT_EQ(after.outliers, before.outliers + 1);
   EXPECT_EQ(after.state, SweepState::kLocked);

@@ -11,11 +11,12 @@
 #include <set>
 #include <vector>
 
+#include "sensor_rig/common/clock.hpp"
+#include "test_instants.hpp"
+
 namespace sensor_rig::timesync {
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
-constexpr Nanos kT0 = 1'795'255'200'000'000'000;
+using test::kHour10;
 
 struct Truth {
   std::vector<SyncSample> arrivals;                          // in arrival order
@@ -45,7 +46,7 @@ Truth make_truth(const Scenario& sc) {
   std::vector<std::uint64_t> seq(sc.members, 0);
   std::vector<Nanos> last_arrival(sc.members, 0);
   for (int k = 0; k < sc.sets; ++k) {
-    const Nanos instant = kT0 + k * sc.period;
+    const Nanos instant = kHour10 + k * sc.period;
     std::vector<std::uint64_t> seqs;
     for (std::uint32_t m = 0; m < sc.members; ++m) {
       const std::uint64_t s = seq[m]++;
@@ -171,13 +172,13 @@ TEST(Synchronizer, AFastMemberGivesItsNearestSampleEvenWhenItArrivesLast) {
     std::uniform_int_distribution<Nanos> phase(0, 3 * kMs - 1), delay(0, 2 * kMs);
     std::vector<SyncSample> in;
     std::vector<std::uint64_t> truth;
-    const Nanos p0 = kT0 + phase(rng);
+    const Nanos p0 = kHour10 + phase(rng);
     for (std::uint64_t i = 0; i < 700; ++i) {
       const Nanos t = p0 + static_cast<Nanos>(i) * 3 * kMs;
       in.push_back({1, t, i, t + 40 * kMs + delay(rng)});
     }
     for (std::uint64_t k = 0; k < 20; ++k) {
-      const Nanos t = kT0 + 10 * kMs + static_cast<Nanos>(k) * 100 * kMs + phase(rng);
+      const Nanos t = kHour10 + 10 * kMs + static_cast<Nanos>(k) * 100 * kMs + phase(rng);
       in.push_back({0, t, k, t + delay(rng)});
       // Nearest fast sample (ties: the earlier one, as the synchronizer's smaller before-gap)
       const Nanos rel = t - p0;
@@ -218,9 +219,9 @@ TEST(Synchronizer, ExactPolicyEmitsAsSoonAsTheLastMemberArrives) {
   c.policy = SyncPolicy::kExact;
   c.members = 2;
   Synchronizer sync(c);
-  EXPECT_EQ(sync.push({0, kT0, 7, kT0}, kT0), PushResult::kAccepted);
+  EXPECT_EQ(sync.push({0, kHour10, 7, kHour10}, kHour10), PushResult::kAccepted);
   EXPECT_EQ(sync.ready(), 0u);
-  EXPECT_EQ(sync.push({1, kT0, 9, kT0}, kT0), PushResult::kAccepted);
+  EXPECT_EQ(sync.push({1, kHour10, 9, kHour10}, kHour10), PushResult::kAccepted);
   SyncSet s;
   ASSERT_TRUE(sync.pop(s));
   EXPECT_EQ(s.samples[0].seq, 7u);
@@ -231,9 +232,9 @@ TEST(Synchronizer, ExactPolicyEmitsAsSoonAsTheLastMemberArrives) {
 TEST(Synchronizer, PicksTheSmallestSpreadAndDropsTheSkippedSample) {
   // A: 0, 10 ms; B: 9 ms -> {A@10, B@9} (spread 1 ms); A@0 is in no set.
   Synchronizer sync(approx(2, 20 * kMs, 1000 * kMs));
-  sync.push({0, kT0, 0, kT0}, kT0);
-  sync.push({0, kT0 + 10 * kMs, 1, kT0}, kT0);
-  sync.push({1, kT0 + 9 * kMs, 0, kT0}, kT0);
+  sync.push({0, kHour10, 0, kHour10}, kHour10);
+  sync.push({0, kHour10 + 10 * kMs, 1, kHour10}, kHour10);
+  sync.push({1, kHour10 + 9 * kMs, 0, kHour10}, kHour10);
   SyncSet s;
   ASSERT_TRUE(sync.pop(s));
   EXPECT_EQ(s.samples[0].seq, 1u);
@@ -246,15 +247,15 @@ TEST(Synchronizer, PicksTheSmallestSpreadAndDropsTheSkippedSample) {
 TEST(Synchronizer, WithoutABoundASetWaitsForALaterSampleWithOneItIsFinalAtOnce) {
   // Stereo pair 0.2 ms apart.
   Synchronizer wait(approx(2, 5 * kMs, 1000 * kMs));
-  wait.push({0, kT0, 0, kT0}, kT0);
-  wait.push({1, kT0 + 200'000, 0, kT0}, kT0);
+  wait.push({0, kHour10, 0, kHour10}, kHour10);
+  wait.push({1, kHour10 + 200'000, 0, kHour10}, kHour10);
   EXPECT_EQ(wait.ready(), 0u) << "member 0 may still send a sample nearer the pivot";
-  wait.push({0, kT0 + 100 * kMs, 1, kT0 + 100 * kMs}, kT0 + 100 * kMs);
+  wait.push({0, kHour10 + 100 * kMs, 1, kHour10 + 100 * kMs}, kHour10 + 100 * kMs);
   EXPECT_EQ(wait.ready(), 1u);
 
   Synchronizer bounded(approx(2, 5 * kMs, 1000 * kMs, 50 * kMs));
-  bounded.push({0, kT0, 0, kT0}, kT0);
-  bounded.push({1, kT0 + 200'000, 0, kT0}, kT0);
+  bounded.push({0, kHour10, 0, kHour10}, kHour10);
+  bounded.push({1, kHour10 + 200'000, 0, kHour10}, kHour10);
   EXPECT_EQ(bounded.ready(), 1u);
 }
 
@@ -262,45 +263,45 @@ TEST(Synchronizer, TimeoutDecidesWithWhatIsThereAndADeadMemberGivesIncompleteSet
   Synchronizer sync(approx(3, 5 * kMs, 200 * kMs));
   // Member 2 is dead. Ten sets' worth of members 0 and 1.
   for (int k = 0; k < 10; ++k) {
-    const Nanos t = kT0 + k * 100 * kMs;
+    const Nanos t = kHour10 + k * 100 * kMs;
     sync.push({0, t, static_cast<std::uint64_t>(k), t}, t);
     sync.push({1, t + kMs, static_cast<std::uint64_t>(k), t}, t);
     sync.poll(t + 50 * kMs);
   }
-  sync.poll(kT0 + 5000 * kMs);
+  sync.poll(kHour10 + 5000 * kMs);
   EXPECT_EQ(sync.stats().sets, 0u);
   EXPECT_EQ(sync.stats().incomplete, 10u);
   EXPECT_EQ(sync.stats().dropped, 20u);
   EXPECT_GT(sync.stats().timeouts, 0u);
   // Before the timeout nothing is decided.
   Synchronizer young(approx(3, 5 * kMs, 200 * kMs));
-  young.push({0, kT0, 0, kT0}, kT0);
-  young.poll(kT0 + 199 * kMs);
+  young.push({0, kHour10, 0, kHour10}, kHour10);
+  young.poll(kHour10 + 199 * kMs);
   EXPECT_EQ(young.stats().dropped, 0u);
-  young.poll(kT0 + 200 * kMs);
+  young.poll(kHour10 + 200 * kMs);
   EXPECT_EQ(young.stats().dropped, 1u);
 }
 
 TEST(Synchronizer, TimeoutEmitsTheBestCompleteSetItHas) {
   Synchronizer sync(approx(2, 5 * kMs, 200 * kMs));
-  sync.push({0, kT0, 0, kT0}, kT0);
-  sync.push({1, kT0 + kMs, 0, kT0}, kT0);
+  sync.push({0, kHour10, 0, kHour10}, kHour10);
+  sync.push({1, kHour10 + kMs, 0, kHour10}, kHour10);
   EXPECT_EQ(sync.ready(), 0u);  // member 0 might still send a nearer one
-  sync.poll(kT0 + 250 * kMs);
+  sync.poll(kHour10 + 250 * kMs);
   EXPECT_EQ(sync.ready(), 1u);
   EXPECT_EQ(sync.stats().timeouts, 1u);
 }
 
 TEST(Synchronizer, LateDuplicateAndBadInputsAreRefusedAndCounted) {
   Synchronizer sync(approx(2, 5 * kMs, 1000 * kMs, 50 * kMs));
-  sync.push({0, kT0, 0, kT0}, kT0);
-  EXPECT_EQ(sync.push({0, kT0, 0, kT0}, kT0), PushResult::kDuplicate);
-  sync.push({1, kT0 + kMs, 0, kT0}, kT0);
+  sync.push({0, kHour10, 0, kHour10}, kHour10);
+  EXPECT_EQ(sync.push({0, kHour10, 0, kHour10}, kHour10), PushResult::kDuplicate);
+  sync.push({1, kHour10 + kMs, 0, kHour10}, kHour10);
   ASSERT_EQ(sync.ready(), 1u);
   // Member 1's sample of the same instant comes again, and an older one: late.
-  EXPECT_EQ(sync.push({1, kT0 + kMs, 0, kT0}, kT0), PushResult::kLate);
-  EXPECT_EQ(sync.push({1, kT0 - 100 * kMs, 0, kT0}, kT0), PushResult::kLate);
-  EXPECT_EQ(sync.push({5, kT0, 0, kT0}, kT0), PushResult::kBadMember);
+  EXPECT_EQ(sync.push({1, kHour10 + kMs, 0, kHour10}, kHour10), PushResult::kLate);
+  EXPECT_EQ(sync.push({1, kHour10 - 100 * kMs, 0, kHour10}, kHour10), PushResult::kLate);
+  EXPECT_EQ(sync.push({5, kHour10, 0, kHour10}, kHour10), PushResult::kBadMember);
   EXPECT_EQ(sync.stats().late, 2u);
   EXPECT_EQ(sync.stats().duplicates, 1u);
   EXPECT_EQ(sync.stats().pushed, 2u);
@@ -308,10 +309,10 @@ TEST(Synchronizer, LateDuplicateAndBadInputsAreRefusedAndCounted) {
 
 TEST(Synchronizer, SpreadBeyondTheLimitMakesNoSet) {
   Synchronizer sync(approx(2, 5 * kMs, 1000 * kMs, 50 * kMs));
-  sync.push({0, kT0, 0, kT0}, kT0);
-  sync.push({1, kT0 + 6 * kMs, 0, kT0}, kT0);
-  sync.push({0, kT0 + 100 * kMs, 1, kT0}, kT0);
-  sync.push({1, kT0 + 104 * kMs, 1, kT0}, kT0);
+  sync.push({0, kHour10, 0, kHour10}, kHour10);
+  sync.push({1, kHour10 + 6 * kMs, 0, kHour10}, kHour10);
+  sync.push({0, kHour10 + 100 * kMs, 1, kHour10}, kHour10);
+  sync.push({1, kHour10 + 104 * kMs, 1, kHour10}, kHour10);
   SyncSet s;
   ASSERT_TRUE(sync.pop(s));
   EXPECT_EQ(s.samples[0].seq, 1u);
@@ -325,7 +326,7 @@ TEST(Synchronizer, QueueOverflowDropsTheOldest) {
   SyncConfig c = approx(2, 5 * kMs, 100'000 * kMs);
   c.max_queue = 4;
   Synchronizer sync(c);
-  for (int k = 0; k < 10; ++k) sync.push({0, kT0 + k * 100 * kMs, static_cast<std::uint64_t>(k), kT0}, kT0);
+  for (int k = 0; k < 10; ++k) sync.push({0, kHour10 + k * 100 * kMs, static_cast<std::uint64_t>(k), kHour10}, kHour10);
   EXPECT_EQ(sync.stats().overflows, 6u);
   EXPECT_EQ(sync.stats().dropped, 6u);
 }
@@ -341,7 +342,7 @@ StepRun run_with_step(int wild, Nanos offset, bool sustained, bool both) {
   SyncSet set;
   StepRun r;
   for (int k = 0; k < 50; ++k) {
-    const Nanos t = kT0 + k * 100 * kMs;
+    const Nanos t = kHour10 + k * 100 * kMs;
     const bool stepped = sustained ? k >= wild : k == wild;
     const auto seq = static_cast<std::uint64_t>(k);
     sync.push({0, t + (stepped && both ? offset : 0), seq, t + 5 * kMs}, t + 5 * kMs);

@@ -6,19 +6,14 @@
 #include <random>
 #include <stdexcept>
 
+#include "sensor_rig/common/clock.hpp"
+#include "test_instants.hpp"
+
 namespace sensor_rig::timesync {
 namespace {
-
-constexpr Nanos kUs = 1'000;
-constexpr Nanos kMs = 1'000'000;
-constexpr Nanos kSec = 1'000'000'000;
+using test::kHour10;
+using test::us_of;
 constexpr Nanos kMin = 60 * kSec;
-// 2026-11-21 10:00:00 UTC
-constexpr Nanos kHour10 = 1'795'255'200'000'000'000;
-
-std::uint32_t us_of(Nanos t) {
-  return static_cast<std::uint32_t>(((t % kHourNs) + kHourNs) % kHourNs / 1000);
-}
 
 TEST(NearestHourTime, PicksTheHourClosestToTheReference) {
   ASSERT_EQ(kHour10 % kHourNs, 0);

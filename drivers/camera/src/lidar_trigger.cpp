@@ -29,9 +29,6 @@ constexpr std::size_t kKeepTicks = 32;     // ~3 s at 10 Hz: the frames of a tic
 constexpr Nanos kMemberDeadlineNs = 25'000'000;
 // A member still busy with an older shot when this one was aimed skips it rather than fire late.
 constexpr Nanos kStaleShotNs = 1'000'000;
-// How long stop() waits for a member's call in flight before it leaves it (a healthy call: < 1 ms;
-// a camera that died in a software trigger's GVCP write holds it ~2.4 s).
-constexpr Nanos kStopGraceNs = 100'000'000;
 
 void sleep_until(clockid_t clock, Nanos t) {
   const timespec ts{static_cast<time_t>(t / 1'000'000'000), static_cast<long>(t % 1'000'000'000)};
@@ -131,7 +128,7 @@ void LidarTrigger::stop() {
   std::vector<FiringThread> threads;  // a call hung on a dead camera is left, not waited for
   for (auto& m : members_)
     if (m.call) threads.push_back({&m.thread, m.call.get()});
-  join_or_leave(threads, kStopGraceNs);
+  join_or_leave(threads);
 }
 
 Nanos LidarTrigger::tick_before(Nanos t, std::size_t member) const {

@@ -38,8 +38,12 @@ struct FiringThread {
   MemberCall* call;
 };
 
+// How long a trigger source's stop() waits for a member's call in flight before it leaves it (a
+// healthy call: < 1 ms; a camera that died in a software trigger's GVCP write holds it ~2.4 s).
+inline constexpr Nanos kStopGraceNs = 100'000'000;
+
 // stop(), once the firing threads were told to end: each is joined, or detached when its call is
 // still in flight `grace_ns` after this began (it finishes alone; the source may go).
-void join_or_leave(const std::vector<FiringThread>& threads, Nanos grace_ns);
+void join_or_leave(const std::vector<FiringThread>& threads, Nanos grace_ns = kStopGraceNs);
 
 }  // namespace sensor_rig::drivers

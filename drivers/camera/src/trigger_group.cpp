@@ -8,12 +8,6 @@
 #include "sensor_rig/common/percentile.hpp"
 
 namespace sensor_rig::drivers {
-namespace {
-
-// How long stop() waits for a member's call in flight before it leaves it (a healthy call: < 1 ms).
-constexpr Nanos kStopGraceNs = 100'000'000;
-
-}  // namespace
 
 void ErrorHistory::add(Nanos e) {
   if (ring_.size() < kKeep) {
@@ -69,7 +63,7 @@ void TriggerGroup::stop() {
   std::vector<FiringThread> threads;
   for (auto& m : members_)
     if (m.call) threads.push_back({&m.thread, m.call.get()});
-  join_or_leave(threads, kStopGraceNs);
+  join_or_leave(threads);
 }
 
 std::uint64_t TriggerGroup::skipped(std::size_t member) const {

@@ -8,12 +8,11 @@
 #include <string>
 
 #include "sensor_rig/common/angles.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/floor_div.hpp"
 
 namespace sensor_rig::lidar::mock {
 namespace {
-
-constexpr Nanos kSecNs = 1'000'000'000;
 constexpr std::uint8_t kFactoryInfo = 0x42;
 constexpr std::uint8_t kXtProtocolMajor = 6, kXtProtocolMinor = 1;
 constexpr std::uint8_t kXtDistanceUnitMm = 4;
@@ -38,7 +37,7 @@ Civil civil_from_days(std::int64_t z) noexcept {
 
 // UTC date/time (year - year_offset, month, day, hour, minute, second) and µs within the second.
 void put_utc(std::uint8_t* utc, std::uint8_t* us_field, Nanos t, int year_offset) noexcept {
-  const Nanos sec = floor_div(t, kSecNs);
+  const Nanos sec = floor_div(t, kSec);
   const Nanos days = floor_div(sec, 86400);
   const Nanos sod = sec - days * 86400;
   const Civil c = civil_from_days(days);
@@ -48,7 +47,7 @@ void put_utc(std::uint8_t* utc, std::uint8_t* us_field, Nanos t, int year_offset
   utc[3] = static_cast<std::uint8_t>(sod / 3600);
   utc[4] = static_cast<std::uint8_t>(sod / 60 % 60);
   utc[5] = static_cast<std::uint8_t>(sod % 60);
-  hesai::put_le32(us_field, static_cast<std::uint32_t>((t - sec * kSecNs) / 1000));
+  hesai::put_le32(us_field, static_cast<std::uint32_t>((t - sec * kSec) / 1000));
 }
 
 }  // namespace

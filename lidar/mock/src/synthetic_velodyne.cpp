@@ -6,6 +6,7 @@
 #include <string>
 
 #include "sensor_rig/common/angles.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/floor_div.hpp"
 
 namespace sensor_rig::lidar::mock {
@@ -13,7 +14,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr Nanos kHourNs = 3'600'000'000'000LL;
-constexpr Nanos kSecNs = 1'000'000'000LL;
 
 std::uint32_t sensor_time_us(Nanos t) noexcept {
   return static_cast<std::uint32_t>(floor_mod(t, kHourNs) / 1000);
@@ -117,7 +117,7 @@ void SyntheticVelodyne::render_data_packet(std::uint64_t index,
 
 void SyntheticVelodyne::render_position_packet(Nanos t,
                                                std::span<std::byte, velodyne::kPositionPacketSize> out) const {
-  const Nanos whole_second = t - floor_mod(t, kSecNs);
+  const Nanos whole_second = t - floor_mod(t, kSec);
   const std::string rmc = velodyne::format_rmc({whole_second, config_.gps_fix_valid});
   velodyne::encode_position_packet(sensor_time_us(t), config_.pps, rmc, out);
 }

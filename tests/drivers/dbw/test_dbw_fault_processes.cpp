@@ -21,6 +21,7 @@
 #include "dbw_processes.hpp"
 #include "wait_bounds.hpp"
 #include "dbw_test_data.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
 #include "sensor_rig/drivers/dbw/dds_types.hpp"
 #include "sensor_rig/dbw/bridge/protocol.hpp"
@@ -32,11 +33,10 @@ namespace dbw = sensor_rig::dbw;
 namespace msg = sensor_rig::msg;
 namespace dds = sensor_rig::dds;
 using sensor_rig::Nanos;
+using sensor_rig::kMs;
 using sensor_rig::vehicle_now_ns;
 
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
 // Straight ahead: eclass_track rejects a steering step from the measured angle (the mock's wheel
 // stands at 0), so a source must start where the wheel is; 0 keeps every episode's engage simple.
 constexpr double kSteer = 0.0;

@@ -7,16 +7,16 @@
 
 #include "dbw_processes.hpp"
 #include "dbw_test_data.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/bridge/protocol.hpp"
 #include "sensor_rig/dbw/can/transport.hpp"
 
 namespace dbw = sensor_rig::dbw;
 using sensor_rig::monotonic_now_ns;
 using sensor_rig::Nanos;
+using sensor_rig::kMs;
 
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
 
 struct Pu {
   const dbw::Protocol& p;

@@ -17,6 +17,7 @@
 #include "dbw_processes.hpp"
 #include "wait_bounds.hpp"
 #include "dbw_test_data.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/dbw/bridge/protocol.hpp"
 #include "sensor_rig/dbw/can/candump.hpp"
 #include "sensor_rig/drivers/dbw/dds_domain.hpp"
@@ -26,11 +27,10 @@ namespace dbw = sensor_rig::dbw;
 namespace msg = sensor_rig::msg;
 namespace dds = sensor_rig::dds;
 using sensor_rig::Nanos;
+using sensor_rig::kMs;
 using sensor_rig::vehicle_now_ns;
 
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
 
 struct Transition {
   Nanos t = 0;

@@ -13,12 +13,11 @@
 #include <set>
 #include <vector>
 
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/drivers/fusion/sweep_matcher.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
 constexpr Nanos kPeriod = 100 * kMs;
 constexpr Nanos kTimeout = 150 * kMs;
 constexpr Nanos kDelivery = kPeriod + 2 * kMs;  // a scan is handed over one rotation + 2 ms after its first firing

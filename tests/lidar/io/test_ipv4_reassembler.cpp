@@ -7,6 +7,7 @@
 #include <random>
 
 #include "ipv4_packets.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/lidar/ipv4_reassembler.hpp"
 #include "sensor_rig/lidar/udp_frame.hpp"
 
@@ -15,8 +16,6 @@ namespace {
 
 using test::Bytes;
 using test::Ip;
-
-constexpr Nanos kMs = 1'000'000;
 
 std::uint64_t dropped(const Ipv4Reassembler& r, ReassemblyDrop d) {
   return r.counters().dropped[static_cast<std::size_t>(d)];

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <string>
 
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/lidar/velodyne/position_packet.hpp"
 
 namespace sensor_rig::lidar::velodyne {
@@ -14,8 +15,6 @@ namespace {
 // From the HDL-32E capture VeloView ships (Monterey, 2012-12-11 22:06:32 UTC).
 constexpr std::string_view kHdl32Sentence =
     "$GPRMC,220632,A,3707.8324,N,12139.2864,W,000.0,144.7,111212,013.8,E,D*09\r\n";
-
-constexpr Nanos kSec = 1'000'000'000LL;
 
 std::array<std::byte, kPositionPacketSize> packet_with(std::uint32_t us, PpsState pps, std::string_view s) {
   std::array<std::byte, kPositionPacketSize> buf{};

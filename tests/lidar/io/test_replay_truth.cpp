@@ -13,6 +13,7 @@
 #include <map>
 #include <thread>
 
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/mock/truth_stream.hpp"
 #include "sensor_rig/lidar/udp_source.hpp"
@@ -22,7 +23,6 @@ namespace sensor_rig::lidar::mock {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr Nanos kMs = 1'000'000;
 
 struct Result {
   std::vector<std::vector<std::byte>> rx;  // data packets in arrival order

@@ -28,7 +28,7 @@ using Bytes = std::vector<std::byte>;
 using sensor_rig::test::NetworkNamespaces;
 using sensor_rig::test::VethPair;
 
-Bytes payload(std::size_t size, unsigned tag) {
+Bytes ring_payload(std::size_t size, unsigned tag) {
   Bytes p(size);
   for (std::size_t i = 0; i < size; ++i) p[i] = static_cast<std::byte>((tag * 13 + i + (i >> 8)) & 0xff);
   return p;
@@ -92,9 +92,9 @@ TEST(RingSource, LoopbackFilterStampsAndCounters) {
   const Nanos before = vehicle_now_ns();
   std::vector<Bytes> sent;
   for (unsigned k = 0; k < 20; ++k) {
-    sent.push_back(payload(k == 7 ? 60000 : 1206, k));  // one larger than any Ethernet frame
+    sent.push_back(ring_payload(k == 7 ? 60000 : 1206, k));  // one larger than any Ethernet frame
     ASSERT_EQ(tx.send(sent.back(), 0).sent, 1u);
-    ASSERT_EQ(tx.send(payload(1206, 99), 1).sent, 1u);  // another port: the kernel filter drops it
+    ASSERT_EQ(tx.send(ring_payload(1206, 99), 1).sent, 1u);  // another port: the kernel filter drops it
   }
   const auto got = receive_all(*ring, sent.size());
   const Nanos after = vehicle_now_ns();
@@ -130,7 +130,7 @@ TEST(RingSource, FullRingDropsAreCounted) {
   UdpSender tx(dst);
   constexpr std::size_t kSent = 1000;
   for (std::size_t i = 0; i < kSent; ++i) {
-    tx.send(payload(1206, static_cast<unsigned>(i)));
+    tx.send(ring_payload(1206, static_cast<unsigned>(i)));
     if (i % 50 == 49) ::usleep(1000);  // stay under the loopback backlog: only the ring may drop
   }
   const auto got = receive_all(*ring, kSent, 3);  // all sent: the ring holds what it could
@@ -206,14 +206,14 @@ TEST(RingSource, VethNamespacesFragmentsReassembled) {
   std::size_t frames = 0, other_fragmented = 0, fragmented = 0;
   for (unsigned round = 0; round < 3; ++round) {
     for (std::size_t k = 0; k < kSizes.size(); ++k) {
-      sent.push_back(payload(kSizes[k], round * 100 + static_cast<unsigned>(k)));
+      sent.push_back(ring_payload(kSizes[k], round * 100 + static_cast<unsigned>(k)));
       ASSERT_EQ(tx->send(sent.back(), 0).sent, 1u) << kSizes[k];
       frames += fragments_of(kSizes[k]);
       fragmented += fragments_of(kSizes[k]) > 1;
       // Another port: its unfragmented datagrams stop at the kernel filter, its fragments are
       // reassembled and then dropped as filtered.
       const std::size_t other = k % 2 == 0 ? 300 : 5000;
-      ASSERT_EQ(tx->send(payload(other, 7), 1).sent, 1u);
+      ASSERT_EQ(tx->send(ring_payload(other, 7), 1).sent, 1u);
       if (fragments_of(other) > 1) {
         frames += fragments_of(other);
         ++other_fragmented;
@@ -261,9 +261,9 @@ TEST(RingSource, VethNamespacesSecondPortThroughTheSameRing) {
   std::vector<std::pair<std::uint16_t, Bytes>> sent;
   for (unsigned k = 0; k < 30; ++k) {
     const bool imu = k % 3 != 0;
-    sent.emplace_back(imu ? kImuPort : kPort, payload(imu ? 48 : 6464, k));
+    sent.emplace_back(imu ? kImuPort : kPort, ring_payload(imu ? 48 : 6464, k));
     ASSERT_EQ(tx->send(sent.back().second, imu ? 1 : 0).sent, 1u);
-    ASSERT_EQ(tx->send(payload(48, 99), 2).sent, 1u);
+    ASSERT_EQ(tx->send(ring_payload(48, 99), 2).sent, 1u);
   }
   const auto got = receive_all(*ring, sent.size());
   ASSERT_EQ(got.size(), sent.size());
@@ -300,7 +300,7 @@ TEST(RingSource, InterfaceDownIsReportedAndRecovers) {
   c.port = kPort;
   auto [ring, tx, why] = ring_across(net, c, {kPort});
   if (!ring) GTEST_SKIP() << why;
-  const auto p = payload(1206, 1);
+  const auto p = ring_payload(1206, 1);
   ASSERT_EQ(tx->send(p).sent, 1u);
   ASSERT_EQ(receive_all(*ring, 1).size(), 1u);
   ASSERT_EQ(std::system(("ip -n " + net.ns_a() + " link set " + net.if_a() + " down").c_str()), 0);

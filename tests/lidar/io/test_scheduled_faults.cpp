@@ -7,12 +7,11 @@
 #include <utility>
 #include <vector>
 
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/lidar/mock/scheduled_faults.hpp"
 
 namespace sensor_rig::lidar::mock {
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
 constexpr Nanos kGap = 663'000;  // a VLP-32C's data packets, ~1508 a second
 
 struct Left {
