@@ -10,6 +10,7 @@
 #include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 #include "sensor_rig/lidar/packet_order.hpp"
+#include "sensor_rig/lidar/packet_time.hpp"
 #include "sensor_rig/lidar/stream_gap.hpp"
 #include "sensor_rig/lidar/hesai/packet.hpp"
 
@@ -413,9 +414,10 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .groups_per_packet = groups,
                         .dt_ns = dt_us * 1000,
                         .packet_period_ns = period_ns};
-    const bool stamp_jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
-    const bool jumped = stamp_jumped && is_time_jump(0, in.dt_ns, cfg.max_packet_gap_ns);
-    if (stamp_jumped && !jumped) {  // the mapping moved, the sensor went on
+    const StampStep ts = stamp_step(is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns),
+                                    is_time_jump(0, in.dt_ns, cfg.max_packet_gap_ns));
+    const bool jumped = ts.jumped;
+    if (ts.mapping_moved) {  // the sensor went on: the scans begun keep their line
       line_shift += stamp - prev_stamp - in.dt_ns;
       own = stamp - line_shift;
       ++stats.mapping_steps;

@@ -12,6 +12,7 @@
 #include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 #include "sensor_rig/lidar/packet_order.hpp"
+#include "sensor_rig/lidar/packet_time.hpp"
 #include "sensor_rig/lidar/stream_gap.hpp"
 #include "pixel_reader.hpp"
 #include "profile_table.hpp"
@@ -424,8 +425,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   if (n_valid > 0 && !late) {
     const bool stamp_jumped = have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
     const bool sensor_jumped = !on_line || is_time_jump(prev_own, own, cfg.max_packet_gap_ns);
-    const bool jumped = stamp_jumped && sensor_jumped;
-    if (stamp_jumped && !sensor_jumped) {
+    const StampStep ts = stamp_step(stamp_jumped, sensor_jumped);
+    const bool jumped = ts.jumped;
+    if (ts.mapping_moved) {
       mapping_moved = true;
       ++stats.mapping_steps;
     }

@@ -18,6 +18,7 @@
 #include "sensor_rig/lidar/detail/azimuth_continuity.hpp"
 #include "sensor_rig/lidar/detail/decoder_pimpl_impl.hpp"
 #include "sensor_rig/lidar/packet_order.hpp"
+#include "sensor_rig/lidar/packet_time.hpp"
 #include "sensor_rig/lidar/stream_gap.hpp"
 
 namespace sensor_rig::lidar::velodyne {
@@ -390,7 +391,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .groups_per_packet = groups,
                         .dt_ns = dt_us * 1000,
                         .packet_period_ns = period_ns};
-    const bool jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    // Its stamps are its sensor time (µs since the hour, mapped): both jump alike, no mapping step.
+    const bool stamps_jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    const bool jumped = stamp_step(stamps_jumped, stamps_jumped).jumped;
     // A late packet steps back in time too: placed when within the reorder window.
     const bool far_back = stamp < prev_stamp - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "sensor_rig/lidar/packet.hpp"
+#include "sensor_rig/lidar/packet_time.hpp"  // is_time_jump, TimeJudge (were here)
 #include "sensor_rig/lidar/point_cloud.hpp"
 
 namespace sensor_rig::lidar {
@@ -32,6 +33,9 @@ struct ScanStats {
   std::uint64_t scans = 0;                                    // emitted
   std::uint64_t partial_scans_discarded = 0;
   std::uint64_t time_jumps = 0;  // scans ended early because the packet time jumped
+  // The caller's stamps jumped while the sensor's own time went on (its mapping moved: a host clock
+  // step): no time jump (packet_time.hpp). Hesai, Ouster; Velodyne's stamps are its time.
+  std::uint64_t mapping_steps = 0;
   std::uint64_t missing_packets = 0;      // lost between received packets (inside the FOV), summed over scans
   std::uint64_t implausible_steps = 0;    // corrupted azimuths / frame or measurement ids: dropped, not cuts
   std::uint64_t late_placed = 0;   // late (reordered) packets put into the hole they left in their scan
@@ -42,39 +46,6 @@ struct ScanStats {
   // or began again; a new stream followed, its turns not counted lost (the sensor made none).
   std::uint64_t silences = 0;
   [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
-};
-
-// How far a packet's time may step back before it counts as a jump (sensor jitter, reordering).
-inline constexpr Nanos kBackwardsTolerance = 1'000'000;
-
-// A packet time more than `max_gap_ns` after the previous one, or more than 1 ms before it: the
-// scan in progress ends as partial (t stays meaningful; a sensor clock reset cannot stall a decoder).
-[[nodiscard]] constexpr bool is_time_jump(Nanos prev_ns, Nanos now_ns, Nanos max_gap_ns) noexcept {
-  return now_ns < prev_ns - kBackwardsTolerance || now_ns > prev_ns + max_gap_ns;
-}
-
-// Judges a packet whose time jumped (is_time_jump) against its azimuth or ids: one packet whose
-// time jumps while its position continues the previous packet's is corrupt (dropped, counted
-// kBadTime: never a cut); the second in a row is a real clock step (a jump). Issue 26 item 2.
-class TimeJudge {
- public:
-  enum class Verdict : std::uint8_t { kOk, kCorrupt, kJump };
-  Verdict judge(bool jumped, bool continues) noexcept {
-    if (!jumped) {
-      suspect_ = false;
-      return Verdict::kOk;
-    }
-    if (continues && !suspect_) {
-      suspect_ = true;
-      return Verdict::kCorrupt;
-    }
-    suspect_ = false;
-    return Verdict::kJump;
-  }
-  void reset() noexcept { suspect_ = false; }
-
- private:
-  bool suspect_ = false;  // the previous packet was dropped for its time
 };
 
 // Where the current scan lost packets (the last gap counted missing): a late packet that lands

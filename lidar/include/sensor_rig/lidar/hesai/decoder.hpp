@@ -65,9 +65,8 @@ inline constexpr std::size_t kStatusCount = kPacketStatusCount;
 struct DecoderStats : ScanStats {
   std::uint64_t corrupt_blocks = 0;       // azimuth groups off their packet's line: not decoded
   std::uint64_t sequence_mismatches = 0;  // UDP sequence numbers the azimuth/time step contradicts (not trusted)
-  // The caller's stamps jumped while the tail times went on (its mapping moved: a host clock step):
-  // not a time jump; the scans begun stay on their line, the one after the next cut takes the new.
-  std::uint64_t mapping_steps = 0;
+  // mapping_steps (ScanStats): the scans begun stay on their line, the one after the next cut
+  // takes the new.
 };
 
 struct DecoderImpl;

@@ -54,9 +54,7 @@ struct DecoderStats : ScanStats {
   std::uint64_t invalid_columns = 0;         // status bit 0 clear: skipped
   std::uint64_t bad_measurement_ids = 0;     // measurement id >= columns_per_frame: skipped
   std::uint64_t init_id_mismatches = 0;      // packets whose init_id differs from the metadata's (decoded)
-  // The caller's stamps jumped while the column times went on (its mapping moved: a host clock
-  // step): not a time jump; the scan in progress stays on the line it began on.
-  std::uint64_t mapping_steps = 0;
+  // mapping_steps (ScanStats): the scan in progress stays on the line it began on.
 };
 
 struct DecoderImpl;
