@@ -26,8 +26,10 @@ state() {
   # /tmp: what the rig, its mocks, RouDi and the DDS peers name there (temporary folders of the
   # tests, GenICam files, iceoryx and Fast DDS locks). Only those names: other programs (a compiler
   # beside the suite) keep their own files there, which are neither reported nor touched.
+  # Not /tmp/rig-*.lock: developers' flock(1) files (one build, one real-time test, one commit at a
+  # time on a shared machine) come and go beside a run; removing one a process holds lets a second in.
   for f in /tmp/rig* /tmp/iox* /tmp/roudi* /tmp/iceoryx* /tmp/fastrtps* /tmp/fastdds* /tmp/arv* /tmp/sensor-rig*; do
-    [[ -e "$f" ]] && echo "tmp ${f#/tmp/}"
+    [[ -e "$f" && "$f" != /tmp/rig-*.lock ]] && echo "tmp ${f#/tmp/}"
   done
   for s in net.core.rmem_max net.core.wmem_max net.core.rmem_default net.core.wmem_default; do
     echo "sysctl $s=$(sysctl -n "$s" 2>/dev/null)"
