@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "gvsp_format.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 
 namespace sensor_rig::camera::mock {
@@ -17,9 +18,8 @@ namespace {
 
 std::atomic<GigeFakeChaos*> g_chaos{nullptr};
 constexpr guint16 kGvcpPort = 3956;
-// GVSP (standard header): packet type (2), block id (2), packet infos (4, content type in the top byte).
-constexpr std::size_t kGvspHeader = 8;
-constexpr std::uint8_t kLeader = 1, kTrailer = 2;
+using gvsp::kLeader;
+using gvsp::kTrailer;
 constexpr double kSlowOpenLateS = 5;
 constexpr Nanos kLeaderGapNs = 100'000;  // the leader goes out alone: its receiver takes it before the data  // the fake starts up to this long after the campaign's epoch
 
@@ -168,7 +168,7 @@ void GigeFakeChaos::restamp(ArvBuffer* buffer, Nanos late_ns) {
 void GigeFakeChaos::pace(GSocket* socket, const void* data, std::size_t bytes) {
   if (!is_stream(socket)) return;
   std::uint8_t type = 0;
-  if (bytes >= kGvspHeader) std::memcpy(&type, static_cast<const std::uint8_t*>(data) + 4, 1);
+  if (bytes >= gvsp::kHeader) std::memcpy(&type, static_cast<const std::uint8_t*>(data) + gvsp::kContentTypeOffset, 1);
   const Nanos now = monotonic_now_ns();
   Nanos until_ns = now;
   if ((type & 0x7f) == kLeader) until_ns = now + kLeaderGapNs;
@@ -191,7 +191,7 @@ bool GigeFakeChaos::on_send(GSocket* socket, const void* data, std::size_t size)
   const std::uint64_t silent = silenced_by(t);
   if (!is_stream(socket)) return silent == 0;
   std::uint8_t type = 0;
-  if (size >= kGvspHeader) std::memcpy(&type, static_cast<const std::uint8_t*>(data) + 4, 1);
+  if (size >= gvsp::kHeader) std::memcpy(&type, static_cast<const std::uint8_t*>(data) + gvsp::kContentTypeOffset, 1);
   type &= 0x7f;
   if (type == kLeader) {
     frame_.tx = vehicle_now_ns();

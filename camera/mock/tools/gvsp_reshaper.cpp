@@ -4,14 +4,16 @@
 #include <bit>
 #include <cstring>
 
+#include "gvsp_format.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 
 namespace sensor_rig::camera::mock {
 namespace {
 
-// GVSP standard header: status (2), block id (2), packet infos (4: content type, packet id).
-constexpr std::size_t kHeader = 8;
-constexpr std::uint8_t kLeader = 1, kTrailer = 2, kPayload = 3;
+using gvsp::kHeader;
+using gvsp::kLeader;
+using gvsp::kPayload;
+using gvsp::kTrailer;
 // Image leader, after the header: flags 0, payload type 2, timestamp 4..11, pixel format 12,
 // width 16, height 20, x/y offset 24/28, x padding 32, y padding 34.
 constexpr std::size_t kPayloadType = kHeader + 2, kPixelFormat = kHeader + 12, kWidth = kHeader + 16,

@@ -10,6 +10,7 @@
 
 #include "sensor_rig/camera/aravis_source.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/loopback_address.hpp"
 #include "chaos_files.hpp"
 #include "gige_fake_test.hpp"
@@ -17,8 +18,6 @@
 
 namespace sensor_rig::camera {
 namespace {
-
-constexpr Nanos kS = 1'000'000'000;
 
 class GigeChaos : public test::GigeFakeTest<240> {};
 
@@ -74,14 +73,14 @@ TEST_F(GigeChaos, DiesThenReturns) {
   AravisSource src(cfg());
   src.open();
   std::uint64_t last_id = 0;
-  while (monotonic_now_ns() < epoch + 29 * kS / 10) {  // frames until it dies at 1.5 s, then nothing
+  while (monotonic_now_ns() < epoch + 29 * kSec / 10) {  // frames until it dies at 1.5 s, then nothing
     auto c = src.next(50);
     if (c.status != CaptureStatus::kFrame) continue;
     last_id = c.frame.meta().seq;
-    EXPECT_LT(c.frame.meta().complete_mono_ns, epoch + 16 * kS / 10) << "a frame from a dead camera";
+    EXPECT_LT(c.frame.meta().complete_mono_ns, epoch + 16 * kSec / 10) << "a frame from a dead camera";
   }
   src.close();
-  while (monotonic_now_ns() < epoch + 32 * kS / 10) usleep(10'000);
+  while (monotonic_now_ns() < epoch + 32 * kSec / 10) usleep(10'000);
   src.open();  // it returned
   auto c = next_frame(src);
   ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
@@ -134,7 +133,7 @@ TEST_F(GigeChaos, PtpMasterReportsMasterAndTai) {
   const auto log = truth::read(folder_.truth());
   ASSERT_FALSE(log.units.empty());
   for (const auto& u : log.units) {
-    EXPECT_EQ(u.dev_ns - u.acq_ns, 37 * kS);
+    EXPECT_EQ(u.dev_ns - u.acq_ns, 37 * kSec);
   }
 }
 
@@ -158,9 +157,9 @@ TEST_F(GigeChaos, PtpColdStartStepsTheClock) {
   const auto log = truth::read(folder_.truth());
   bool listening = false, uncalibrated = false, slave = false;
   for (const auto& u : log.units) {
-    listening = listening || u.dev_ns < 10 * kS;
-    uncalibrated = uncalibrated || u.dev_ns - u.acq_ns == 37 * kS + 5'000'000;
-    slave = slave || u.dev_ns - u.acq_ns == 37 * kS;
+    listening = listening || u.dev_ns < 10 * kSec;
+    uncalibrated = uncalibrated || u.dev_ns - u.acq_ns == 37 * kSec + 5'000'000;
+    slave = slave || u.dev_ns - u.acq_ns == 37 * kSec;
   }
   EXPECT_TRUE(listening && uncalibrated && slave);
 }
@@ -211,7 +210,7 @@ TEST_F(GigeChaos, SlowOpenAnswersOnlyAfterItsDelay) {
   AravisSource src(cfg());
   const Nanos first = monotonic_now_ns();
   Nanos opened = 0;
-  while (opened == 0 && monotonic_now_ns() < first + 12 * kS) {
+  while (opened == 0 && monotonic_now_ns() < first + 12 * kSec) {
     try {
       src.open();
       opened = monotonic_now_ns();
@@ -219,7 +218,7 @@ TEST_F(GigeChaos, SlowOpenAnswersOnlyAfterItsDelay) {
     }
   }
   ASSERT_GT(opened, 0) << "never opened";
-  EXPECT_GE(opened - first, 2 * kS);
+  EXPECT_GE(opened - first, 2 * kSec);
   src.close();
   fake.stop(1000);
 }

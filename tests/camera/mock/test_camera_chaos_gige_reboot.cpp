@@ -14,11 +14,10 @@
 #include "chaos_files.hpp"
 #include "gige_fake_test.hpp"
 #include "next_frame.hpp"
+#include "sensor_rig/common/clock.hpp"
 
 namespace sensor_rig::camera {
 namespace {
-
-constexpr Nanos kS = 1'000'000'000;
 
 class GigeChaosReboot : public test::GigeFakeTest<240> {};
 
@@ -31,9 +30,9 @@ TEST_F(GigeChaosReboot, ADeadCameraSendsNothingOfItsOldAcquisitionWhenItReturns)
   AravisSource src(cfg());
   src.open();
   ASSERT_EQ(test::next_frame(src, 3000, true).status, CaptureStatus::kFrame);
-  while (monotonic_now_ns() < epoch + 2 * kS) (void)src.next(50);  // dead from 1.5 s
+  while (monotonic_now_ns() < epoch + 2 * kSec) (void)src.next(50);  // dead from 1.5 s
   src.close();  // the host's watchdog: the stream is closed, the camera keeps its acquisition
-  while (monotonic_now_ns() < epoch + 34 * kS / 10) usleep(10'000);  // it returned at 3 s
+  while (monotonic_now_ns() < epoch + 34 * kSec / 10) usleep(10'000);  // it returned at 3 s
   src.open();
   {
     const auto c = test::next_frame(src, 3000, true);

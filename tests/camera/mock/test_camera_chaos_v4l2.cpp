@@ -14,11 +14,10 @@
 #include "sensor_rig/camera/v4l2_source.hpp"
 #include "chaos_files.hpp"
 #include "next_frame.hpp"
+#include "sensor_rig/common/clock.hpp"
 
 namespace sensor_rig::camera {
 namespace {
-
-constexpr Nanos kS = 1'000'000'000;
 
 SourceConfig yuyv(double rate = 50) {
   SourceConfig c;
@@ -116,13 +115,13 @@ TEST(V4l2Chaos, DisconnectThenReturn) {
   V4l2Source src(yuyv(), dev);
   src.open();
   Capture c;
-  while (monotonic_now_ns() < epoch + 2 * kS && (c = src.next(50)).status != CaptureStatus::kDisconnected) {
+  while (monotonic_now_ns() < epoch + 2 * kSec && (c = src.next(50)).status != CaptureStatus::kDisconnected) {
   }
   EXPECT_EQ(c.status, CaptureStatus::kDisconnected);
-  EXPECT_LT(monotonic_now_ns(), epoch + 6 * kS / 10);
+  EXPECT_LT(monotonic_now_ns(), epoch + 6 * kSec / 10);
   src.close();
   EXPECT_THROW(src.open(), CameraError);
-  while (monotonic_now_ns() < epoch + 1 * kS) usleep(10'000);
+  while (monotonic_now_ns() < epoch + 1 * kSec) usleep(10'000);
   src.open();
   EXPECT_EQ(next_frame(src).status, CaptureStatus::kFrame);
   src.close();
@@ -171,7 +170,7 @@ TEST(V4l2Chaos, AGapAtAStreamsStartIsCounted) {
     auto dev = device(folder, {"v4l2.disconnect@0.2+0.4", "v4l2.sequence_gap:n=3@0.4"});
     V4l2Source src(yuyv(), dev);
     src.open();
-    seqs = read_through_a_disconnect(src, folder.epoch() + 1 * kS);
+    seqs = read_through_a_disconnect(src, folder.epoch() + 1 * kSec);
     missing = src.stats().missing_frames;
     src.close();
   }
@@ -204,9 +203,9 @@ TEST(V4l2Chaos, ADisconnectsNotSentSlotsEndWithIt) {
     auto dev = device(folder, {"v4l2.disconnect@0.1+0.2"});
     V4l2Source src(yuyv(), dev);
     src.open();
-    read_through_a_disconnect(src, folder.epoch() + 2 * kS / 10);  // gone at 0.1 s: closed
+    read_through_a_disconnect(src, folder.epoch() + 2 * kSec / 10);  // gone at 0.1 s: closed
     src.close();
-    while (monotonic_now_ns() < folder.epoch() + 8 * kS / 10) usleep(10'000);
+    while (monotonic_now_ns() < folder.epoch() + 8 * kSec / 10) usleep(10'000);
     src.open();
     EXPECT_EQ(next_frame(src).status, CaptureStatus::kFrame);
     src.close();
@@ -251,9 +250,9 @@ TEST(V4l2Chaos, EveryDisconnectIsRecordedAlsoWhileTheDeviceIsAway) {
                                "v4l2.disconnect@1.0+0.1"});
     V4l2Source src(yuyv(), dev);
     src.open();
-    read_through_a_disconnect(src, folder.epoch() + 9 * kS / 10);
+    read_through_a_disconnect(src, folder.epoch() + 9 * kSec / 10);
     src.close();  // nothing asked of the device from 0.9 s to 1.2 s
-    while (monotonic_now_ns() < folder.epoch() + 12 * kS / 10) usleep(10'000);
+    while (monotonic_now_ns() < folder.epoch() + 12 * kSec / 10) usleep(10'000);
     src.open();
     EXPECT_EQ(next_frame(src).status, CaptureStatus::kFrame);
     src.close();
@@ -353,7 +352,7 @@ TEST(V4l2Chaos, EveryFrameMadeAcrossAReopenIsReturnedOrCountedOnce) {
       }
     };
     src.open();
-    read_for(kS / 4);
+    read_for(kSec / 4);
     ::usleep(60'000);  // behind by 3 frames (50 Hz, 4 buffers): the next poll fills 3, drops none
     {
       auto c = next_frame(src);  // one, then closed with the others still in their buffers
@@ -363,7 +362,7 @@ TEST(V4l2Chaos, EveryFrameMadeAcrossAReopenIsReturnedOrCountedOnce) {
     src.close();
     ++stream;
     src.open();
-    read_for(kS / 4);
+    read_for(kSec / 4);
     st = src.stats();
     src.close();
   }

@@ -16,11 +16,10 @@
 #include "chaos_files.hpp"
 #include "gige_fake_test.hpp"
 #include "sensor_rig/camera/aravis_source.hpp"
+#include "sensor_rig/common/clock.hpp"
 
 namespace sensor_rig::camera {
 namespace {
-
-constexpr Nanos kMs = 1'000'000;
 
 class GigeFakeClockStep : public test::GigeFakeTest<240> {
  protected:

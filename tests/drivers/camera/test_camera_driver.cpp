@@ -17,6 +17,7 @@
 #include "sensor_rig/camera/v4l2_source.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
+#include "status_value.hpp"
 #include "wait.hpp"
 #include "wait_bounds.hpp"
 
@@ -46,12 +47,6 @@ CameraConfig v4l2_cfg(const std::string& name) {
   c.info.p = {500, 0, 320, 0, 0, 501, 240, 0, 0, 0, 1, 0};
   c.mock.kind = CameraMockConfig::Kind::kV4l2Fake;
   return c;
-}
-
-std::string value(const dds::DriverStatus& s, const std::string& key) {
-  for (const auto& [k, v] : s.values)
-    if (k == key) return v;
-  return {};
 }
 
 // A USB camera plugged back after 2 s streams again within a quarter second: a V4L2 open of a
@@ -110,11 +105,11 @@ TEST(CameraDriver, ASlowReliableSubscriberDoesNotStallCapture) {
   driver.stop();
   const auto c = dev->counters();
   const auto st = driver.status();
-  const auto published = std::stoull(value(st, "frames"));
-  const auto counted = std::stoull(value(st, "counted_lost"));
+  const auto published = std::stoull(test::status_value(st, "frames"));
+  const auto counted = std::stoull(test::status_value(st, "counted_lost"));
   std::printf("device: %llu frames made, %llu dropped for want of a buffer; driver: %llu published, %llu counted lost (%s by the queue)\n",
               static_cast<unsigned long long>(c.frames), static_cast<unsigned long long>(c.dropped),
-              static_cast<unsigned long long>(published), static_cast<unsigned long long>(counted), value(st, "publish_dropped").c_str());
+              static_cast<unsigned long long>(published), static_cast<unsigned long long>(counted), test::status_value(st, "publish_dropped").c_str());
   EXPECT_EQ(c.dropped, 0u) << "the device lost frames: the capture thread waited on the subscriber";
   EXPECT_GE(published, 3u);
   // Made = published + counted, but for the frames still in the device's buffers at the stop.
@@ -177,24 +172,24 @@ TEST(CameraDriver, PublishesRosLayoutImageAndCameraInfoAndSurvivesDeviceLoss) {
     });
     return info_ok;
   }, 3000));
-  EXPECT_EQ(value(driver.status(), "stamp_source"), "monotonic");
+  EXPECT_EQ(test::status_value(driver.status(), "stamp_source"), "monotonic");
 
   // The device goes away: reported within 1 s, reopened when it is back, frames resume.
   dev->disconnect();
   const Nanos gone = monotonic_now_ns();
-  ASSERT_TRUE(wait_for([&] { return value(driver.status(), "lost_reports") == "1"; }, 1000));
+  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "lost_reports") == "1"; }, 1000));
   EXPECT_LT(monotonic_now_ns() - gone, 1'000'000'000);
   EXPECT_EQ(driver.status().level, dds::Level::kError);
   dev->reconnect();
   const int before = take_images();
   ASSERT_TRUE(wait_for([&] { return take_images() >= before + 3; }, 3000));
-  EXPECT_EQ(value(driver.status(), "reopens"), "1");
+  EXPECT_EQ(test::status_value(driver.status(), "reopens"), "1");
   EXPECT_EQ(driver.status().level, dds::Level::kOk);
 
   // A stalled device (no error, just silence) is caught by the frame watchdog.
   dev->stall(true);
   const Nanos stalled = monotonic_now_ns();
-  ASSERT_TRUE(wait_for([&] { return value(driver.status(), "lost_reports") == "2"; }, 1000));
+  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "lost_reports") == "2"; }, 1000));
   EXPECT_LT(monotonic_now_ns() - stalled, 1'000'000'000);
   dev->stall(false);
   const int before2 = take_images();
@@ -250,7 +245,7 @@ TEST(CameraDriver, StereoPairOnOneSoftwareTickStampsWithin1ms) {
     if (it != stamps_seen[1].end() && it->first <= t + 1'000'000) ++paired;
   }
   EXPECT_GE(paired, 6) << "left " << stamps_seen[0].size() << " right " << stamps_seen[1].size();
-  EXPECT_EQ(value(drivers[0]->status(), "stamp_source"), "trigger_tick");
+  EXPECT_EQ(test::status_value(drivers[0]->status(), "stamp_source"), "trigger_tick");
   EXPECT_GT(group.ticks(), 5u);
   for (auto& d : drivers) d->stop();
 }
@@ -298,15 +293,15 @@ TEST(CameraDriver, PtpLockedCameraStampsDeviceTimeAndReportsTheLock) {
     return got >= 3;
   }, 5000));
   const auto st = driver.status();
-  EXPECT_EQ(value(st, "ptp"), "locked (Slave, TAI -> UTC)");
-  EXPECT_EQ(value(st, "ptp_status"), "Slave");
-  EXPECT_EQ(value(st, "ptp_resets"), "0");
-  EXPECT_NE(value(st, "stamp_source"), "device_vehicle");
-  EXPECT_EQ(value(st, "stamp_sync"), "unsynchronized");
-  EXPECT_NE(value(st, "stamp_rejected"), "0");
+  EXPECT_EQ(test::status_value(st, "ptp"), "locked (Slave, TAI -> UTC)");
+  EXPECT_EQ(test::status_value(st, "ptp_status"), "Slave");
+  EXPECT_EQ(test::status_value(st, "ptp_resets"), "0");
+  EXPECT_NE(test::status_value(st, "stamp_source"), "device_vehicle");
+  EXPECT_EQ(test::status_value(st, "stamp_sync"), "unsynchronized");
+  EXPECT_NE(test::status_value(st, "stamp_rejected"), "0");
   // Issue 27 item 4: the stream socket's grant, against one 640x480 Bayer frame (x2).
-  EXPECT_GT(std::stoll("0" + value(st, "socket_buffer_granted")), 0);
-  EXPECT_EQ(value(st, "socket_buffer_needed"), "614400");
+  EXPECT_GT(std::stoll("0" + test::status_value(st, "socket_buffer_granted")), 0);
+  EXPECT_EQ(test::status_value(st, "socket_buffer_needed"), "614400");
   EXPECT_EQ(st.level, dds::Level::kWarn);
   EXPECT_NE(st.message.find("timescale"), std::string::npos) << st.message;
   driver.stop();
@@ -462,9 +457,9 @@ TEST(CameraDriver, ACameraWhoseTriggerStoppedIsReportedNotReopened) {
   ::usleep(2'500'000);  // ~5 watchdog periods
   const auto st = drv.status();
   drv.stop();
-  EXPECT_EQ(value(st, "reopens"), "0");
-  EXPECT_EQ(value(st, "lost_reports"), "0");
-  EXPECT_EQ(value(st, "state"), "not triggered");
+  EXPECT_EQ(test::status_value(st, "reopens"), "0");
+  EXPECT_EQ(test::status_value(st, "lost_reports"), "0");
+  EXPECT_EQ(test::status_value(st, "state"), "not triggered");
 }
 
 }  // namespace

@@ -17,22 +17,16 @@
 #include "dds_domain_lease.hpp"
 #include "sensor_rig/camera/aravis_source.hpp"
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/loopback_address.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
+#include "status_value.hpp"
 #include "wait.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
 
-constexpr Nanos kMs = 1'000'000;
-constexpr Nanos kS = 1'000'000'000;
-
-std::string value(const dds::DriverStatus& s, const std::string& key) {
-  for (const auto& [k, v] : s.values)
-    if (k == key) return v;
-  return {};
-}
 
 // Two GigE fakes on leased loopback addresses of their own (127.0.0.216..225, by pid), each with
 // its plan and truth record.
@@ -125,7 +119,7 @@ TEST_F(CameraIsolation, ADeadCameraHoldsNoLockAnotherCamerasOpenNeedsAndStopsWit
     const Nanos t0 = monotonic_now_ns();
     ASSERT_NO_THROW(live.open()) << "round " << round;
     longest_open = std::max(longest_open, monotonic_now_ns() - t0);
-    const Nanos deadline = monotonic_now_ns() + 3 * kS;
+    const Nanos deadline = monotonic_now_ns() + 3 * kSec;
     camera::Capture c;
     while (monotonic_now_ns() < deadline && (c = live.next(50)).status != camera::CaptureStatus::kFrame) {
     }
@@ -142,9 +136,9 @@ TEST_F(CameraIsolation, ADeadCameraHoldsNoLockAnotherCamerasOpenNeedsAndStopsWit
   std::printf("open %.3f s at most, dead attempt %.3f s at most, stopped in %.3f s\n", static_cast<double>(longest_open) * 1e-9,
               static_cast<double>(longest_attempt.load()) * 1e-9, static_cast<double>(stopped_in) * 1e-9);
   EXPECT_GE(attempts.load(), attempts_before + 2) << "the healthy opens overlapped too few dead attempts";
-  EXPECT_LT(longest_open, 1 * kS) << "the healthy camera's open waited behind the dead one's";
-  EXPECT_LT(longest_attempt.load(), 1 * kS) << "one open attempt on the dead camera";
-  EXPECT_LT(stopped_in, 1 * kS) << "the dead camera's thread stopping";
+  EXPECT_LT(longest_open, 1 * kSec) << "the healthy camera's open waited behind the dead one's";
+  EXPECT_LT(longest_attempt.load(), 1 * kSec) << "one open attempt on the dead camera";
+  EXPECT_LT(stopped_in, 1 * kSec) << "the dead camera's thread stopping";
   live_fake.stop(1000);
   dead_fake.stop(1000);
   // The truth: the dead fake sent nothing; every frame read is one the healthy fake sent.
@@ -211,16 +205,16 @@ TEST_F(CameraIsolation, AStereoMemberThatNeverAnswersCostsItsPartnerNoFrame) {
   }
   CameraDriver& dead = *drivers[0];
   CameraDriver& live = *drivers[1];
-  const auto frames_now = [&] { return std::stoull("0" + value(live.status(), "frames")); };
+  const auto frames_now = [&] { return std::stoull("0" + test::status_value(live.status(), "frames")); };
   for (auto& d : drivers) d->start();
   group.start();
   const Nanos t0 = monotonic_now_ns();
   // Judged from 0.5 s on (the live camera's own open, a few ms, and its first tick), for 4 s.
-  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() - t0 > kS / 2; }, 10000));
+  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() - t0 > kSec / 2; }, 10000));
   const std::uint64_t ticks0 = group.ticks();
   const std::uint64_t frames0 = frames_now();
   const Nanos from_vehicle = vehicle_now_ns();
-  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() - t0 > 4 * kS + kS / 2; }, 10000));
+  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() - t0 > 4 * kSec + kSec / 2; }, 10000));
   const std::uint64_t ticks = group.ticks() - ticks0;
   const std::uint64_t frames = frames_now() - frames0;
   const Nanos to_vehicle = vehicle_now_ns();
@@ -243,9 +237,9 @@ TEST_F(CameraIsolation, AStereoMemberThatNeverAnswersCostsItsPartnerNoFrame) {
               static_cast<double>(dead_stopped_in) * 1e-9);
   EXPECT_GE(static_cast<double>(sent), 0.95 * static_cast<double>(ticks) - 1) << "sent " << sent << " of " << ticks << " ticks";
   EXPECT_GE(static_cast<double>(frames), 0.95 * static_cast<double>(ticks) - 2) << "published " << frames << " of " << ticks << " ticks";
-  EXPECT_LT(dead_stopped_in, 1 * kS);
-  EXPECT_NE(value(dead_status, "last_error").find("does not answer"), std::string::npos) << value(dead_status, "last_error");
-  EXPECT_EQ(value(dead_status, "frames"), "0");
+  EXPECT_LT(dead_stopped_in, 1 * kSec);
+  EXPECT_NE(test::status_value(dead_status, "last_error").find("does not answer"), std::string::npos) << test::status_value(dead_status, "last_error");
+  EXPECT_EQ(test::status_value(dead_status, "frames"), "0");
 }
 
 // A stereo member that dies mid-stream with a software trigger in flight (Aravis retries the GVCP
@@ -268,10 +262,10 @@ TEST_F(CameraIsolation, ATriggerInFlightWhenItsCameraDiesHoldsNeitherItsPartnerN
   CameraDriver& live = *drivers[0];
   CameraDriver& dead = *drivers[1];
   constexpr std::size_t kDeadMember = 1;
-  const auto frames_now = [&] { return std::stoull("0" + value(live.status(), "frames")); };
+  const auto frames_now = [&] { return std::stoull("0" + test::status_value(live.status(), "frames")); };
   for (auto& d : drivers) d->start();
   group.start();
-  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + value(dead.status(), "frames")) >= 3; }, 5000)) << dead.status().message;
+  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + test::status_value(dead.status(), "frames")) >= 3; }, 5000)) << dead.status().message;
   ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 1500 * kMs; }, 5000));
   // The first tick after the death is in its call once a later tick finds it busy.
   ASSERT_TRUE(test::wait_for([&] { return group.skipped(kDeadMember) >= 1; }, 3000)) << "no trigger call hung on the dead camera";
@@ -305,8 +299,8 @@ TEST_F(CameraIsolation, ATriggerInFlightWhenItsCameraDiesHoldsNeitherItsPartnerN
   std::printf("ticks %llu while the call hung: the live camera sent %zu, published %llu; group stopped in %.3f s, the dead camera in %.3f s\n",
               static_cast<unsigned long long>(ticks), sent, static_cast<unsigned long long>(frames),
               static_cast<double>(group_stopped_in.load()) * 1e-9, static_cast<double>(dead_stopped_in) * 1e-9);
-  EXPECT_LT(group_stopped_in.load(), 1 * kS) << "the group's stop waited for the hung call";
-  EXPECT_LT(dead_stopped_in, 1 * kS) << "the dead camera's stop waited for the hung call";
+  EXPECT_LT(group_stopped_in.load(), 1 * kSec) << "the group's stop waited for the hung call";
+  EXPECT_LT(dead_stopped_in, 1 * kSec) << "the dead camera's stop waited for the hung call";
   EXPECT_GE(sent + 1, ticks) << "the partner lost ticks while the dead member's call hung";
   EXPECT_GE(frames + 1, ticks) << "published " << frames << " of " << ticks << " ticks";
 }
@@ -322,7 +316,7 @@ TEST_F(CameraIsolation, ACameraThatDiedMidStreamStopsWithin1s) {
   dds::StampsWriter stamps(p);
   CameraDriver driver(driver_cfg(0, "died_"), p, stamps);
   driver.start();
-  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + value(driver.status(), "frames")) >= 5; }, 5000));
+  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + test::status_value(driver.status(), "frames")) >= 5; }, 5000));
   // Dead from 1.5 s; 0.2 s later, within the watchdog's 0.5 s: stopped while still "streaming".
   ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 1700 * kMs; }, 5000));
   const Nanos from = monotonic_now_ns();
@@ -330,7 +324,7 @@ TEST_F(CameraIsolation, ACameraThatDiedMidStreamStopsWithin1s) {
   const Nanos stopped_in = monotonic_now_ns() - from;
   fake.stop(1000);
   std::printf("stopped in %.3f s\n", static_cast<double>(stopped_in) * 1e-9);
-  EXPECT_LT(stopped_in, 1 * kS);
+  EXPECT_LT(stopped_in, 1 * kSec);
 }
 
 // One camera given twice, by its address and by its serial (the config's check compares the strings):
@@ -401,24 +395,24 @@ TEST_F(CameraIsolation, AStreamsFirstFrameIsExposedAtItsTrigger) {
   auto driver = std::make_unique<CameraDriver>(driver_cfg(0, "stale_", "stale"), p, stamps, &recorded);
   driver->start();
   group.start();
-  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 5 * kS; }, 10000));
+  ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 5 * kSec; }, 10000));
   group.stop();
   const auto st = driver->status();
   driver->stop();
   driver.reset();
   fake.stop(1000);
-  EXPECT_EQ(value(st, "reopens"), "1") << st.message;
+  EXPECT_EQ(test::status_value(st, "reopens"), "1") << st.message;
   std::vector<Nanos> calls;
   {
     std::lock_guard l(recorded.m);
     calls = recorded.accepted;
   }
-  const Nanos reboot = vehicle_now_ns() - (monotonic_now_ns() - epoch) + 2 * kS;
+  const Nanos reboot = vehicle_now_ns() - (monotonic_now_ns() - epoch) + 2 * kSec;
   std::size_t before = 0, after = 0;
   for (const auto& part : truth::read(folder_[0].truth()).parts) {
     if (part.fate != truth::Fate::kSent) continue;
     ++(part.acq_ns < reboot ? before : after);
-    Nanos nearest = kS;  // since the latest accepted call at or before the exposure
+    Nanos nearest = kSec;  // since the latest accepted call at or before the exposure
     for (const Nanos call : calls)
       if (call <= part.acq_ns + kMs) nearest = std::min(nearest, std::abs(part.acq_ns - call));
     EXPECT_LT(nearest, 15 * kMs) << "frame " << part.unit << " exposed " << static_cast<double>(nearest) * 1e-6
@@ -447,12 +441,12 @@ TEST(CameraWatchdog, AOneHertzCameraIsNotReopened) {
   EXPECT_EQ(c.watchdog(), 3000);
   CameraDriver driver(c, p, stamps);
   driver.start();
-  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + value(driver.status(), "frames")) >= 4; }, 10000))
+  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + test::status_value(driver.status(), "frames")) >= 4; }, 10000))
       << driver.status().message;
   const auto st = driver.status();
   driver.stop();
-  EXPECT_EQ(value(st, "reopens"), "0");
-  EXPECT_EQ(value(st, "lost_reports"), "0");
+  EXPECT_EQ(test::status_value(st, "reopens"), "0");
+  EXPECT_EQ(test::status_value(st, "lost_reports"), "0");
 }
 
 }  // namespace

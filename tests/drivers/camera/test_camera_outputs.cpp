@@ -11,6 +11,7 @@
 
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
+#include "status_value.hpp"
 #include "wait.hpp"
 #include "wait_bounds.hpp"
 
@@ -67,12 +68,6 @@ class BayerSceneSource : public camera::FrameSource {
   std::uint64_t seq_ = 0;
   camera::SourceStats stats_;
 };
-
-std::string value(const dds::DriverStatus& s, const std::string& key) {
-  for (const auto& [k, v] : s.values)
-    if (k == key) return v;
-  return {};
-}
 
 TEST(CameraOutputs, ColourAndJpegOfAKnownBayerSceneOffTheCaptureThread) {
   dds::Participant p;
@@ -138,12 +133,12 @@ TEST(CameraOutputs, ColourAndJpegOfAKnownBayerSceneOffTheCaptureThread) {
       10000))
       << "colour " << colours << " jpeg " << jpegs;
   const auto st = driver.status();
-  EXPECT_GE(std::stoull(value(st, "color_frames")), 5u);
-  EXPECT_GE(std::stoull(value(st, "compressed_frames")), 5u);
-  EXPECT_GT(std::stoull(value(st, "compressed_bytes")), 0u);
-  EXPECT_EQ(value(st, "worker_errors"), "0");
-  const auto offered = std::stoull(value(st, "worker_offered"));
-  EXPECT_GE(offered, std::stoull(value(st, "worker_processed")) + std::stoull(value(st, "worker_dropped")));
+  EXPECT_GE(std::stoull(test::status_value(st, "color_frames")), 5u);
+  EXPECT_GE(std::stoull(test::status_value(st, "compressed_frames")), 5u);
+  EXPECT_GT(std::stoull(test::status_value(st, "compressed_bytes")), 0u);
+  EXPECT_EQ(test::status_value(st, "worker_errors"), "0");
+  const auto offered = std::stoull(test::status_value(st, "worker_offered"));
+  EXPECT_GE(offered, std::stoull(test::status_value(st, "worker_processed")) + std::stoull(test::status_value(st, "worker_dropped")));
   driver.stop();
 }
 

@@ -20,6 +20,7 @@
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 #include "sensor_rig/drivers/camera/frame_clock.hpp"
+#include "status_value.hpp"
 #include "wait.hpp"
 
 namespace sensor_rig::drivers {
@@ -98,12 +99,6 @@ class FedCamera : public camera::FrameSource {
   std::vector<std::uint8_t> pixels_ = std::vector<std::uint8_t>(64, 0);
 };
 
-std::string value(const dds::DriverStatus& s, const std::string& key) {
-  for (const auto& [k, v] : s.values)
-    if (k == key) return v;
-  return {};
-}
-
 struct Seen {
   int frame = 0;
   bool locked = false;    // the mapping (the reference FrameClock) locked once this frame was stamped
@@ -171,8 +166,8 @@ TEST(CameraDriver, StampsBeforeTheClockMappingLocksAreFlaggedAfterEveryOpen) {
       if (!locked) last_unlocked = now;
       locked_for += locked ? 1 : 0;
       const auto st = driver.status();
-      seen.push_back({static_cast<int>(m.seq), locked, last_unlocked == 0 ? -1 : now - last_unlocked, value(st, "stamp_sync"),
-                      value(st, "sync"), st.message});
+      seen.push_back({static_cast<int>(m.seq), locked, last_unlocked == 0 ? -1 : now - last_unlocked, test::status_value(st, "stamp_sync"),
+                      test::status_value(st, "sync"), st.message});
     }
   };
 

@@ -17,6 +17,7 @@
 
 #include "sensor_rig/camera/mock/fake_v4l2_device.hpp"
 #include "sensor_rig/camera/v4l2_source.hpp"
+#include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/truth_record.hpp"
 #include "sensor_rig/drivers/camera/frame_clock.hpp"
 #include "sensor_rig/timesync/host_clock.hpp"
@@ -25,7 +26,6 @@
 namespace sensor_rig::drivers {
 namespace {
 
-constexpr Nanos kMs = 1'000'000;
 
 struct Published {
   Nanos stamp = 0;
