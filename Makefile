@@ -29,6 +29,9 @@ demo: build
 # The suite's build is Release at -O2 (the optimization of `make build`, without its debug info):
 # -O3 took the library files 23 % longer to compile (12 files chosen at random, 49.7 s vs 40.3 s of
 # CPU, side by side, 2026-11-29) for code the suite does not time; `make bench` keeps -O3.
+# Its three builds are unity builds (RIG_UNITY_BUILD, CMakeLists.txt): each target's files compiled in
+# batches of 8, ~32 % less CPU than file by file (rig_common 23.8 s vs 35.0, test_dbw_safety 17.1 s vs
+# 25.3, under the ASan flags, 2026-11-29). `make build` stays file by file.
 STAGES = $(CURDIR)/$(BUILD)/stage_times.tsv
 STAGE  = scripts/stage.sh $(STAGES)
 test:
@@ -36,7 +39,7 @@ test:
 	mkdir -p $(BUILD)
 	$(STAGE) "setup (Debian packages)" -- scripts/setup.sh
 	$(STAGE) "configure (Release)" -- cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release \
-	  -DCMAKE_C_FLAGS_RELEASE="-O2 -DNDEBUG" -DCMAKE_CXX_FLAGS_RELEASE="-O2 -DNDEBUG" $(CMAKE_ARGS)
+	  -DCMAKE_C_FLAGS_RELEASE="-O2 -DNDEBUG" -DCMAKE_CXX_FLAGS_RELEASE="-O2 -DNDEBUG" -DRIG_UNITY_BUILD=ON $(CMAKE_ARGS)
 	$(STAGE) "build (Release)" -- cmake --build $(BUILD) -j$(JOBS)
 	cd $(BUILD) && $(CURDIR)/$(STAGE) "suite (Release)" -- ctest --output-on-failure --timeout 300 -j$(JOBS)
 	$(MAKE) test-asan
@@ -53,7 +56,7 @@ test:
 SAN_OPT = -Og -g1 -DNDEBUG
 test-asan: setup
 	mkdir -p $(BUILD)
-	$(STAGE) "configure (ASan/UBSan)" -- cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_SANITIZE=ON -DRIG_BENCH=OFF \
+	$(STAGE) "configure (ASan/UBSan)" -- cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_SANITIZE=ON -DRIG_BENCH=OFF -DRIG_UNITY_BUILD=ON \
 	  -DCMAKE_C_FLAGS_RELWITHDEBINFO="$(SAN_OPT)" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$(SAN_OPT)"
 	# Only what this stage runs: the unit executables, the two end-to-end tests and the `rig` they start,
 	# and the payload sertype's test (C code that fills Cyclone's internal structs).
@@ -75,7 +78,7 @@ test-asan: setup
 TSAN_FLAGS = -fsanitize=thread -g1 -O1
 test-tsan: setup
 	mkdir -p $(BUILD)
-	$(STAGE) "configure (TSan)" -- cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_BENCH=OFF \
+	$(STAGE) "configure (TSan)" -- cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIG_BENCH=OFF -DRIG_UNITY_BUILD=ON \
 	  -DCMAKE_C_FLAGS="$(TSAN_FLAGS)" -DCMAKE_CXX_FLAGS="$(TSAN_FLAGS)" -DCMAKE_EXE_LINKER_FLAGS=-fsanitize=thread
 	$(STAGE) "build (TSan)" -- cmake --build build-tsan -j$(JOBS) --target test_dbw_transport test_dbw_bridge_core test_dbw_bridge_threads
 	cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/tests/support/tsan.supp" \

@@ -22,6 +22,13 @@ if(RIG_SANITIZE)
     -Wno-array-bounds -Wno-restrict -Wno-maybe-uninitialized)
 endif()
 
+# A unity batch includes the target's .cpp files into one file, so GCC takes a class of one .cpp that
+# holds a type from that .cpp's anonymous namespace for one "defined in a header" (-Wsubobject-linkage).
+# Each .cpp is still its own unit in the per-file builds, which keep the warning.
+if(RIG_UNITY_BUILD AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+  target_compile_options(rig_warnings INTERFACE $<$<COMPILE_LANGUAGE:CXX>:-Wno-subobject-linkage>)
+endif()
+
 # libFuzzer builds: the libraries under test carry the fuzzer's coverage and the sanitizers, not
 # only the harness file; otherwise libFuzzer sees no branch of a decoder (it stalls at the harness's
 # own ~20 edges) and ASan misses the decoders' out-of-bounds accesses.
@@ -76,7 +83,9 @@ function(rig_library name)
   target_compile_options(${name} PRIVATE ${_rig_gcc12_pch_flags})
   foreach(_src IN LISTS A_SOURCES)
     if(_src MATCHES "\\.c$")
-      set_source_files_properties(${_src} PROPERTIES SKIP_PRECOMPILE_HEADERS ON)
+      # The PCH is C++ only; a C file also stays out of unity batches, whose generated file would
+      # otherwise be given the (absent) C precompiled header.
+      set_source_files_properties(${_src} PROPERTIES SKIP_PRECOMPILE_HEADERS ON SKIP_UNITY_BUILD_INCLUSION ON)
     endif()
   endforeach()
 endfunction()
@@ -87,9 +96,22 @@ endfunction()
 # any code of its own (a 12-line file adding five options: 15 s; bench/perf/src/grid.cpp 13.5 s with
 # <CLI/CLI.hpp>, 4.8 s without, 2026-11-29): ~20 such files in each of make test's two full builds.
 # The files of a group must not define the same file-local names.
+# In a unity build (RIG_UNITY_BUILD) the target's other C++ files go to groups of 8 too; a group
+# build would otherwise compile them one by one. Call it after the target's last target_sources().
 function(rig_command_unit target)
   set_source_files_properties(${ARGN} TARGET_DIRECTORY ${target} PROPERTIES UNITY_GROUP commands)
   set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
+  if(RIG_UNITY_BUILD)
+    get_target_property(_sources ${target} SOURCES)
+    set(_n 0)
+    foreach(_src IN LISTS _sources)
+      if(_src MATCHES "\\.cpp$" AND NOT _src IN_LIST ARGN)
+        math(EXPR _batch "${_n} / 8")
+        set_source_files_properties(${_src} TARGET_DIRECTORY ${target} PROPERTIES UNITY_GROUP batch_${_batch})
+        math(EXPR _n "${_n} + 1")
+      endif()
+    endforeach()
+  endif()
 endfunction()
 
 # rig_test(NAME LABEL SOURCES... DEPS ...): a GoogleTest executable registered with ctest.
