@@ -12,62 +12,13 @@
 #include <vector>
 
 #include "sensor_rig/lidar/mock/packet_fields.hpp"
-#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
-#include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
+#include "synthetic_stream.hpp"
 
 namespace sensor_rig::lidar {
 namespace {
 
-struct Pkt {
-  std::vector<std::byte> bytes;
-  Nanos stamp = 0;
-  double rotor_deg = 0.0;
-};
-
-struct Stream {
-  std::vector<Pkt> pkts;
-  DecoderOptions options;
-  std::unique_ptr<mock::SyntheticSensor> sensor;
-};
-
-Stream render(const std::string& model, double seconds) {
-  mock::SyntheticOptions o;
-  o.model = model;
-  o.ouster_imu_period_ns = 0;
-  o.start_ns = 1'700'000'000'000'000'000LL;
-  Stream s;
-  s.sensor = mock::make_synthetic_sensor(o, mock::Scene::standard());
-  s.options.model = model;
-  if (mock::is_ouster_model(model)) {
-    s.options.metadata_text = mock::metadata_json(mock::synthetic_ouster_metadata(o));
-    s.options.metadata_name = "synthetic";
-  }
-  const auto n = static_cast<std::size_t>(s.sensor->packets_per_second() * seconds);
-  while (s.pkts.size() < n) {
-    const mock::SyntheticPacket p = s.sensor->next();
-    if (!p.truth.data) continue;
-    s.pkts.push_back({std::vector<std::byte>(p.bytes.begin(), p.bytes.end()), p.truth.acq_ns, p.truth.rotor_deg});
-  }
-  return s;
-}
-
-struct Decoded {
-  std::vector<Scan> scans;
-  DecoderCounters st;
-};
-
-Decoded run(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
-  const auto dec = make_decoder(o);
-  Decoded r;
-  Nanos rx = 1'000'000'000;
-  for (const auto& p : pkts) {
-    rx += 100'000;
-    if (auto s = dec->push(PacketView{p.bytes, rx, 0}, p.stamp)) r.scans.push_back(std::move(*s));
-  }
-  r.st = dec->counters();
-  return r;
-}
+using namespace test;  // the stream and its decode: synthetic_stream.hpp
 
 // Index of the packet that starts a scan (the first after the cut), near `from`.
 std::size_t scan_start_near(const Stream& s, std::size_t from) {

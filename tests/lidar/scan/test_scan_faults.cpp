@@ -16,80 +16,13 @@
 #include <vector>
 
 #include "sensor_rig/lidar/mock/packet_fields.hpp"
-#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
-#include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
+#include "synthetic_stream.hpp"
 
 namespace sensor_rig::lidar {
 namespace {
 
-struct Pkt {
-  std::vector<std::byte> bytes;
-  Nanos stamp = 0;  // first firing (what the driver's stamper gives)
-  double rotor_deg = 0.0;
-};
-
-struct Stream {
-  std::vector<Pkt> pkts;
-  DecoderOptions options;
-  mock::FieldBytes time_field;
-  std::unique_ptr<mock::SyntheticSensor> sensor;  // for freeze_azimuth's layout
-};
-
-// `clock_ns`: the sensor's clock that far ahead (the same packets, their times moved).
-Stream render(const std::string& model, double seconds, Nanos clock_ns = 0) {
-  mock::SyntheticOptions o;
-  o.model = model;
-  o.ouster_imu_period_ns = 0;
-  o.start_ns = 1'700'000'000'000'000'000LL + clock_ns;
-  Stream s;
-  s.sensor = mock::make_synthetic_sensor(o, mock::Scene::standard());
-  s.options.model = model;
-  if (mock::is_ouster_model(model)) {
-    s.options.metadata_text = mock::metadata_json(mock::synthetic_ouster_metadata(o));
-    s.options.metadata_name = "synthetic";
-  }
-  s.time_field = mock::PacketFields(*s.sensor).locate(mock::PacketField::kTime);
-  const auto n = static_cast<std::size_t>(s.sensor->packets_per_second() * seconds);
-  while (s.pkts.size() < n) {
-    const mock::SyntheticPacket p = s.sensor->next();
-    if (!p.truth.data) continue;
-    s.pkts.push_back({std::vector<std::byte>(p.bytes.begin(), p.bytes.end()), p.truth.acq_ns, p.truth.rotor_deg});
-  }
-  return s;
-}
-
-struct Decoded {
-  std::vector<Scan> scans;
-  DecoderCounters st;
-  [[nodiscard]] std::uint64_t missing() const {
-    std::uint64_t m = 0;
-    for (const auto& s : scans) m += s.missing_packets;
-    return m;
-  }
-  [[nodiscard]] std::uint64_t dropped() const {
-    std::uint64_t m = 0;
-    for (const auto& s : scans) m += s.dropped;
-    return m;
-  }
-  [[nodiscard]] std::uint64_t points() const {
-    std::uint64_t m = 0;
-    for (const auto& s : scans) m += s.points.size();
-    return m;
-  }
-};
-
-Decoded run(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
-  const auto dec = make_decoder(o);
-  Decoded r;
-  Nanos rx = 1'000'000'000;
-  for (const auto& p : pkts) {
-    rx += 100'000;
-    if (auto s = dec->push(PacketView{p.bytes, rx, 0}, p.stamp)) r.scans.push_back(std::move(*s));
-  }
-  r.st = dec->counters();
-  return r;
-}
+using namespace test;  // the stream and its decode: synthetic_stream.hpp
 
 std::uint64_t status(const Decoded& d, PacketStatus s) { return d.st.by_status[static_cast<std::size_t>(s)]; }
 
