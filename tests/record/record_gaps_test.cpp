@@ -46,6 +46,12 @@ class Cdr {
   std::vector<std::byte> bytes_;
 };
 
+// A sample announced with its seq and received, both at `now`.
+void delivered(AnnouncedSamples& a, const std::string& topic, Nanos stamp, std::uint64_t seq, Nanos now) {
+  a.on_announced(topic, stamp, seq, now);
+  a.on_data(topic, stamp, now);
+}
+
 Cdr stamps(std::endian order, std::int32_t sec, std::uint32_t nsec, const std::string& frame, const std::string& topic,
            std::int64_t publish_ns) {
   Cdr c(order);
@@ -130,8 +136,7 @@ TEST(RecordGaps, ASeqGapIsMissedButForWhatWasReceivedInIt) {
   AnnouncedSamples a;
   a.on_announced("/l", 10, 5, 0, /*counted=*/false);  // before the count: no gap before it
   a.on_data("/l", 10, 0);
-  a.on_announced("/l", 20, 6, 0);
-  a.on_data("/l", 20, 0);
+  delivered(a, "/l", 20, 6, 0);
   a.on_data("/l", 50, 1);                // seq 9's sample, its stamps lost
   a.on_announced("/l", 100, 14, 2);      // seqs 7..13 announced and lost: a gap of 7
   a.on_data("/l", 70, 3);                // seq 11's sample, after the announcement after it
@@ -147,8 +152,7 @@ TEST(RecordGaps, ASeqGapIsMissedButForWhatWasReceivedInIt) {
   a.expire(10 * kS, kS);
   EXPECT_EQ(a.counts("/l").missed, 4u);
   // A topic that goes quiet: its gap is decided after the timeout.
-  a.on_announced("/q", 10, 1, 0);
-  a.on_data("/q", 10, 0);
+  delivered(a, "/q", 10, 1, 0);
   a.on_announced("/q", 40, 4, 0);        // 2 and 3 lost with their stamps, and 4's sample never comes
   a.expire(kS, kS);
   EXPECT_EQ(a.counts("/q").missed, 0u);
@@ -156,35 +160,28 @@ TEST(RecordGaps, ASeqGapIsMissedButForWhatWasReceivedInIt) {
   EXPECT_EQ(a.counts("/q").missed, 3u);
   a.on_announced("/l", 200, 0, 11 * kS);  // the driver restarted: seq 0 again, no gap
   a.on_data("/l", 200, 11 * kS);
-  a.on_announced("/l", 300, 1, 11 * kS);
-  a.on_data("/l", 300, 11 * kS);
+  delivered(a, "/l", 300, 1, 11 * kS);
   a.on_announced("/l", 300, 1, 11 * kS);  // the same announcement again: no gap, no sample
   a.expire(20 * kS, kS);
   EXPECT_EQ(a.counts("/l").missed, 4u);
   EXPECT_EQ(a.counts("/l").unannounced, 0u);
   // A camera's seq is its frame id: the same gap is `unannounced`, never `missed`.
   a.set_seq_gaps("/c", AnnouncedSamples::SeqGaps::kUnannounced);
-  a.on_announced("/c", 10, 1, 20 * kS);
-  a.on_data("/c", 10, 20 * kS);
-  a.on_announced("/c", 40, 4, 20 * kS);
-  a.on_data("/c", 40, 20 * kS);
+  delivered(a, "/c", 10, 1, 20 * kS);
+  delivered(a, "/c", 40, 4, 20 * kS);
   a.expire(22 * kS, kS);
   EXPECT_EQ(a.counts("/c").missed, 0u);
   EXPECT_EQ(a.counts("/c").unannounced, 2u);
   // A GigE camera's 16-bit frame id wraps: 65534, (65535, 1 lost), 2; the mock's start near 65500.
   a.set_seq_gaps("/g", AnnouncedSamples::SeqGaps::kUnannounced);
-  a.on_announced("/g", 50, 65534, 23 * kS);
-  a.on_data("/g", 50, 23 * kS);
-  a.on_announced("/g", 80, 2, 23 * kS);
-  a.on_data("/g", 80, 23 * kS);
+  delivered(a, "/g", 50, 65534, 23 * kS);
+  delivered(a, "/g", 80, 2, 23 * kS);
   a.expire(23 * kS, kS);
   EXPECT_EQ(a.counts("/g").unannounced, 2u);
   // The dbw bridge's commands: its seq skips by design, a gap is nothing.
   a.set_seq_gaps("/cmd", AnnouncedSamples::SeqGaps::kNotCounted);
-  a.on_announced("/cmd", 10, 1, 20 * kS);
-  a.on_data("/cmd", 10, 20 * kS);
-  a.on_announced("/cmd", 40, 9, 20 * kS);
-  a.on_data("/cmd", 40, 20 * kS);
+  delivered(a, "/cmd", 10, 1, 20 * kS);
+  delivered(a, "/cmd", 40, 9, 20 * kS);
   a.expire(22 * kS, kS);
   EXPECT_EQ(a.counts("/cmd").missed + a.counts("/cmd").unannounced, 0u);
   // At the stop every sample was taken: a gap seen a moment before is decided, an announcement that
