@@ -104,7 +104,15 @@ TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
 
   // The campaign did what it planned: every kind occurred and every planned fault is in a truth record.
   for (const auto& k : kinds) EXPECT_GE(j["faults"].value(k, 0), 1) << k << " never injected";
-  EXPECT_EQ(j["invariants"]["faults_injected"], "held") << run.err;
+  // A broken invariant's examples, put before run.err: CI keeps only part of a long log.
+  const auto examples_of = [&](const std::string& invariant, const std::string& cls) {
+    std::string what;
+    for (const auto& e : j["examples"])
+      if (e["invariant"] == invariant && (cls.empty() || class_of(e["topic"].get<std::string>()) == cls))
+        what += "  " + e["topic"].get<std::string>() + ": " + e.value("what", "") + "\n";
+    return what;
+  };
+  EXPECT_EQ(j["invariants"]["faults_injected"], "held") << examples_of("faults_injected", "") << "the campaign's stderr:\n" << run.err;
 
   // Every device was judged: each LIDAR and camera topic, with units made (but a never-answering camera).
   std::set<std::string> silent;
@@ -130,7 +138,8 @@ TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
       std::printf("known defect (issue %s): %s on %s\n", known->second.c_str(), b.first.c_str(), b.second.c_str());
       continue;
     }
-    ADD_FAILURE() << b.first << " broken on " << b.second << " (not a known defect):\n" << run.err;
+    ADD_FAILURE() << b.first << " broken on " << b.second << " (not a known defect):\n" << examples_of(b.first, b.second)
+                  << "the campaign's stderr:\n" << run.err;
   }
   for (const auto& [known, issue] : kKnownBroken)
     if (!broken.contains(known)) std::printf("held this run (issue %s): %s on %s\n", issue.c_str(), known.first.c_str(), known.second.c_str());

@@ -67,7 +67,7 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
   for (const auto& s : sources_)
     if (s.seen && s.alive && std::abs(signed_circular(s.offset - step, p)) > tolerance) everyone = false;
   if (everyone) {
-    boundary_ = floor_mod(boundary_ + step, p);
+    boundary_ += step;  // not wrapped into [0, p): see place_boundary
     for (auto& s : sources_) {
       s.offset = signed_circular(s.offset - step, p);  // a dead source has yet to show the step
       if (std::abs(s.offset) <= tolerance) s.offset = 0;
@@ -124,9 +124,15 @@ void SweepMatcher::place_boundary(bool anew) {
   }
   Nanos nearest = p;
   for (const Nanos ph : phases) nearest = std::min(nearest, circular_distance(boundary_, ph, p));
-  if (anew || !boundary_set_ || nearest < widest / 4) {
+  // The boundary moves the short way round and is never wrapped back into [0, p): rotation numbers
+  // count periods from it, so a boundary stored wrapped (moved from 90 to 112.5 ms, kept as 12.5)
+  // renumbers every rotation by one. The scans already placed kept the old numbers: the rig's
+  // first sweep split, and a scan after such a move could be taken for a late one.
+  if (!boundary_set_) {
     boundary_ = middle;
     boundary_set_ = true;
+  } else if (anew || nearest < widest / 4) {
+    boundary_ += signed_circular(middle - boundary_, p);
   }
 }
 

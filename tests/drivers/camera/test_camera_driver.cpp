@@ -61,13 +61,13 @@ TEST(CameraDriver, AV4l2DevicePluggedBackStreamsWithinAQuarterSecond) {
   auto dev = std::make_shared<camera::mock::FakeV4l2Device>(fo);
   CameraDriver driver(cfg, std::make_unique<camera::V4l2Source>(cfg.source, dev), p, stamps);
   driver.start();
-  ASSERT_TRUE(wait_for([&] { return dev->counters().frames >= 3; }, 3000));
+  ASSERT_TRUE(wait_for([&] { return dev->counters().frames >= 3; }, test::kDiscoveryMs));
   dev->disconnect();
   usleep(2'000'000);
   const auto opens = dev->counters().opens;
   dev->reconnect();
   const Nanos back = monotonic_now_ns();
-  ASSERT_TRUE(wait_for([&] { return dev->counters().opens > opens; }, 3000));
+  ASSERT_TRUE(wait_for([&] { return dev->counters().opens > opens; }, test::kDiscoveryMs));
   const double reopened_ms = static_cast<double>(monotonic_now_ns() - back) * 1e-6;
   std::printf("reopened %.0f ms after the device was back\n", reopened_ms);
   EXPECT_LT(reopened_ms, 300.0);
@@ -100,7 +100,7 @@ TEST(CameraDriver, ASlowReliableSubscriberDoesNotStallCapture) {
   ASSERT_GT(slow, 0);
   CameraDriver driver(cfg, std::make_unique<camera::V4l2Source>(cfg.source, dev), p, stamps);
   driver.start();
-  ASSERT_TRUE(wait_for([&] { return dev->counters().frames >= 2; }, 3000));
+  ASSERT_TRUE(wait_for([&] { return dev->counters().frames >= 2; }, test::kDiscoveryMs));
   usleep(2'000'000);
   driver.stop();
   const auto c = dev->counters();
@@ -154,7 +154,7 @@ TEST(CameraDriver, PublishesRosLayoutImageAndCameraInfoAndSurvivesDeviceLoss) {
     });
     return got;
   };
-  ASSERT_TRUE(wait_for([&] { return take_images() >= 5; }, 5000));
+  ASSERT_TRUE(wait_for([&] { return take_images() >= 5; }, test::kDiscoveryMs));
   bool info_ok = false;
   ASSERT_TRUE(wait_for([&] {
     infos.take([&](const msg::CameraInfo& ci, const dds_sample_info_t&) {
@@ -171,29 +171,29 @@ TEST(CameraDriver, PublishesRosLayoutImageAndCameraInfoAndSurvivesDeviceLoss) {
       info_ok = true;
     });
     return info_ok;
-  }, 3000));
+  }, test::kDiscoveryMs));
   EXPECT_EQ(test::status_value(driver.status(), "stamp_source"), "monotonic");
 
   // The device goes away: reported within 1 s, reopened when it is back, frames resume.
   dev->disconnect();
   const Nanos gone = monotonic_now_ns();
-  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "lost_reports") == "1"; }, 1000));
+  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "lost_reports") == "1"; }, test::kDiscoveryMs));
   EXPECT_LT(monotonic_now_ns() - gone, 1'000'000'000);
   EXPECT_EQ(driver.status().level, dds::Level::kError);
   dev->reconnect();
   const int before = take_images();
-  ASSERT_TRUE(wait_for([&] { return take_images() >= before + 3; }, 3000));
+  ASSERT_TRUE(wait_for([&] { return take_images() >= before + 3; }, test::kDiscoveryMs));
   EXPECT_EQ(test::status_value(driver.status(), "reopens"), "1");
   EXPECT_EQ(driver.status().level, dds::Level::kOk);
 
   // A stalled device (no error, just silence) is caught by the frame watchdog.
   dev->stall(true);
   const Nanos stalled = monotonic_now_ns();
-  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "lost_reports") == "2"; }, 1000));
+  ASSERT_TRUE(wait_for([&] { return test::status_value(driver.status(), "lost_reports") == "2"; }, test::kDiscoveryMs));
   EXPECT_LT(monotonic_now_ns() - stalled, 1'000'000'000);
   dev->stall(false);
   const int before2 = take_images();
-  ASSERT_TRUE(wait_for([&] { return take_images() >= before2 + 3; }, 3000));
+  ASSERT_TRUE(wait_for([&] { return take_images() >= before2 + 3; }, test::kDiscoveryMs));
   driver.stop();
 }
 
@@ -234,7 +234,7 @@ TEST(CameraDriver, StereoPairOnOneSoftwareTickStampsWithin1ms) {
     // repeats a stamp), so distinct stamps outrun the ticks.
     return stamps_seen[0].size() >= 8 && stamps_seen[1].size() >= 8 && group.ticks() >= 8;
   };
-  const bool ok = wait_for(take, 8000);
+  const bool ok = wait_for(take, test::kDiscoveryMs);
   if (!ok)
     for (auto& d : drivers) std::fprintf(stderr, "%s: %s\n", d->topic().c_str(), d->status().message.c_str());
   ASSERT_TRUE(ok);
@@ -291,7 +291,7 @@ TEST(CameraDriver, PtpLockedCameraStampsDeviceTimeAndReportsTheLock) {
       ++got;
     });
     return got >= 3;
-  }, 5000));
+  }, test::kDiscoveryMs));
   const auto st = driver.status();
   EXPECT_EQ(test::status_value(st, "ptp"), "locked (Slave, TAI -> UTC)");
   EXPECT_EQ(test::status_value(st, "ptp_status"), "Slave");

@@ -128,7 +128,7 @@ TEST(CameraDriver, StampsBeforeTheClockMappingLocksAreFlaggedAfterEveryOpen) {
   FedCamera* cam = src.get();
   CameraDriver driver(c, std::move(src), p, stamps);
   driver.start();
-  ASSERT_TRUE(wait_for([&] { return cam->opens() == 1; }, 2000));
+  ASSERT_TRUE(wait_for([&] { return cam->opens() == 1; }, 30'000));
 
   FrameClock reference(FedCamera::kExposureNs);
   constexpr Nanos kPeriodNs = 50'000'000;
@@ -176,7 +176,7 @@ TEST(CameraDriver, StampsBeforeTheClockMappingLocksAreFlaggedAfterEveryOpen) {
   const std::size_t first_open = seen.size();
   // The device goes away and comes back: a new open, a new mapping from nothing.
   cam->unplug();
-  ASSERT_TRUE(wait_for([&] { return cam->opens() == 2; }, 3000));
+  ASSERT_TRUE(wait_for([&] { return cam->opens() == 2; }, 30'000));
   reference.reset(FedCamera::kExposureNs);
   stream(60, 5);
   driver.stop();

@@ -166,6 +166,25 @@ TEST(SweepMatcher, CompleteSweepsGoOutWhenTheLastScanArrives) {
   EXPECT_EQ(run.m_.counters().complete, 30u);
 }
 
+// The rig's phases at any offset from the vehicle clock's period grid (the node sees them at
+// whatever instant the car started). The boundary moved into the widest gap as the third LIDAR's
+// first scan came; when that move crossed the grid's zero it was stored wrapped, which renumbered
+// every rotation by one: 9 offsets of 40 split the first sweep, the third scan alone in the next
+// (test_fusion_dds failed 1 run in 4 on this).
+TEST(SweepMatcher, AnyOffsetOfThePhasesFromTheGridGroupsTheSameRotations) {
+  for (Nanos offset = 0; offset < kPeriod; offset += kPeriod / 40) {
+    SCOPED_TRACE("phases offset by " + std::to_string(offset / 1000) + " us");
+    std::vector<Nanos> phases;
+    for (const Nanos p : kPhases) phases.push_back(p + offset);
+    auto scans = rig_scans(phases, 0, 10);
+    SimulatedRig run(3);
+    run.feed(scans);
+    run.expect_truth(scans.size());
+    EXPECT_EQ(run.emitted_.size(), 10u);
+    EXPECT_EQ(run.m_.counters().complete, 10u);
+  }
+}
+
 // Whichever LIDAR delivers first: the rotation decides, so a rig whose first scan is a late phase
 // is grouped the same (the spread rule grouped {45, 100, 120} when 45 came first).
 TEST(SweepMatcher, StartupOnALatePhaseKeepsRotationsApart) {

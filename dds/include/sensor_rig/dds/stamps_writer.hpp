@@ -28,6 +28,9 @@ class StampsWriter {
   explicit StampsWriter(const dds::Participant& p);
   void write(const std::string& topic, const msg::Time& stamp, const char* frame_id, std::uint64_t seq,
              const SampleStamps& s);
+  // True once n readers matched (or false after timeout_ms): the topic is volatile, so a stamp
+  // written before its reader matched is not delivered to it.
+  bool wait_for_readers(std::uint32_t n, int timeout_ms) const { return writer_.wait_for_readers(n, timeout_ms); }
 
  private:
   dds::Topic<msg::SourceStamps> topic_;

@@ -124,7 +124,7 @@ class SweepMatcher {
   std::vector<Source> sources_;
   std::deque<Sweep> open_;            // by creation (= id) order
   std::deque<std::int64_t> emitted_;  // rotations of the last emitted sweeps (late scans are told by them)
-  Nanos boundary_ = 0;                // in [0, period)
+  Nanos boundary_ = 0;                // its phase mod period; moves continuously (never wrapped)
   bool boundary_set_ = false;
   std::uint64_t next_id_ = 1;
 };
