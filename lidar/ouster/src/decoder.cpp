@@ -369,9 +369,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     if (!cols[c].valid() && n_valid > 0 && at >= static_cast<long>(window_first) && at <= static_cast<long>(window_last))
       damaged = true;
   }
-  // Every column's measurement id off the frame: nothing places the packet. Rejected whole (it
-  // takes its slot: dropped, not missing too), never a packet of its scan (issue 26 item 7).
-  if (n_valid == 0 && damaged) {
+  // No column to place the packet by: every measurement id off the frame, or every column's status
+  // invalid (damaged: the sensor sends no packet wholly outside its column window). Rejected whole
+  // (it takes its slot: dropped, not missing too), never a packet of its scan (issue 26 item 7);
+  // counted as one of its scan's packets before, while the gap it seemed to leave counted it missing.
+  if (n_valid == 0) {
     last = scans.drop(PacketStatus::kBadAzimuth);
     return std::nullopt;
   }

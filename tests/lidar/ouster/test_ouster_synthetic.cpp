@@ -417,6 +417,46 @@ TEST(OusterDecoder, AHostClockStepMovesTheStampsNotTheSensorsFrame) {
   EXPECT_EQ(next[0].packets, 64U);
 }
 
+// A packet whose every column reads invalid (its status words damaged; the sensor sends no packet
+// wholly outside its column window) carries nothing to place or decode: one packet of its frame,
+// counted dropped once, never also missing. Before, it was counted one of the scan's packets, and
+// the gap it seemed to leave counted it missing as well. First, middle and last packet of a frame.
+TEST(OusterDecoder, APacketOfOnlyInvalidColumnsIsDroppedOnceNeverMissing) {
+  const Profile prof = Profile::kLegacy;
+  for (const std::size_t bad : {std::size_t{0}, std::size_t{20}, std::size_t{63}}) {
+    SCOPED_TRACE("invalid packet " + std::to_string(bad));
+    Decoder dec(config_for(prof));
+    (void)push_frame(dec, prof, 4);  // locked on
+    std::vector<Scan> out;
+    for (std::size_t k = 0; k < 64; ++k) {
+      std::vector<Column> cols(16);
+      for (std::size_t c = 0; c < 16; ++c) {
+        const std::size_t mid = k * 16 + c;
+        cols[c].measurement_id = static_cast<std::uint16_t>(mid);
+        cols[c].timestamp_ns = column_time(5, mid);
+        cols[c].valid = k != bad;
+        for (std::size_t r = 0; r < kPixels; ++r) cols[c].pixels.push_back(pixel_at(mid, r));
+      }
+      const auto pkt = encode_packet(prof, kPixels, 5, cols, 7654321);
+      if (auto s = dec.push(PacketView{as_bytes(pkt), 0, 7502}, static_cast<Nanos>(column_time(5, k * 16)))) out.push_back(std::move(*s));
+    }
+    for (auto& s : push_frame(dec, prof, 6)) out.push_back(std::move(s));
+    ASSERT_GE(out.size(), 1U);
+    const Scan& s5 = out[0];
+    EXPECT_EQ(s5.stamp, static_cast<Nanos>(column_time(5, bad == 0 ? 16 : 0)));
+    EXPECT_EQ(s5.missing_packets, 0U);
+    EXPECT_EQ(s5.dropped, 1U);
+    EXPECT_EQ(s5.packets + s5.dropped, 64U) << s5.packets << " packets";
+    EXPECT_EQ(s5.points.size(), 63U * 16U * kPixels);
+    EXPECT_EQ(dec.stats().invalid_columns, 16U);
+    // Frame 6 whole, on its own.
+    ASSERT_EQ(out.size(), 2U);
+    EXPECT_EQ(out[1].missing_packets, 0U);
+    EXPECT_EQ(out[1].dropped, 0U);
+    EXPECT_EQ(out[1].points.size(), 64U * 16U * kPixels);
+  }
+}
+
 TEST(OusterDecoder, ScanDecoderInterface) {
   DecoderOptions o;
   o.model = "OS";
