@@ -12,7 +12,9 @@
 // and the recorder must have counted every one (its summary's "missed"; on cameras "missed" +
 // "unannounced"), also those whose announcement it lost too: /rig/stamps' writer keeps its last 64
 // of ~60 a second there, so a recorder stopped 3.5 s never hears of some samples at all
-// (record_gaps.hpp: seq gaps). Its progress line names them per topic.
+// (record_gaps.hpp: seq gaps). Its progress line names them per topic. A third test: a camera's
+// JPEGs (image_raw/compressed), announced too (issue 29), one announced and never written and one
+// never announced, counted by both the recorder and the monitor.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -25,6 +27,7 @@
 
 #include "../rig/record_support.hpp"
 #include "dds_domain_lease.hpp"
+#include "wait.hpp"
 
 namespace sensor_rig::rig {
 namespace {
@@ -382,6 +385,100 @@ TEST_F(RecordFarBehind, ARecorderThatMissesSamplesCountsEachOne) {
   EXPECT_EQ(r.rec_summary["drops"]["queue_full"], 0);
   EXPECT_EQ(r.rec_summary["drops"]["disk"], 0);
   std::cout << "last progress line: " << progress;
+}
+
+// Issue 29: a camera's JPEGs (image_raw/compressed) are announced on /rig/stamps as its image_raw
+// is, with the frame's seq. Against a publisher here that does what the camera does, but for two
+// frames: one announced and never written, one neither (a gap in seq, as a frame the worker never
+// compressed). `rig record` counts the first missed and the second unannounced (a camera topic's
+// seq gap, record_gaps.hpp); `rig monitor` reads the JPEGs, joins them with their stamps and counts
+// both lost (the expired announcement and the seq gap). A monitor that did not read CompressedImage
+// never matches the writer (first assertion) and could count nothing.
+TEST(RecordAndMonitorCompressed, AJpegAnnouncedAndNeverReceivedIsCountedByBoth) {
+  test::TempDir dir;
+  const int domain = test::lease_dds_domain();
+  const std::string topic = "/sensors/camera/cmp" + std::to_string(::getpid()) + "/image_raw/compressed";
+  const auto path = [&](const std::string& name) { return (dir.path / name).string(); };
+  test::RigChild rec({"record", "--out", path("rec.mcap"), "--domain", std::to_string(domain), "--dds-profile", profile(),
+                      topic, dds::kStampsTopic},
+                     path("rec.out"), path("rec.err"));
+  test::RigChild mon({"monitor", "--domain", std::to_string(domain), "--dds-profile", profile(), "--loss-timeout", "0.5",
+                      "--record", path("monitor.csv"), "--summary", path("monitor.json"), topic},
+                     path("mon.out"), path("mon.err"));
+  dds::Participant p(dds::DomainConfig{static_cast<dds_domainid_t>(domain), profile()});
+  dds::QosSpec q;  // reliable, keep-last: as a camera's
+  q.depth = 16;
+  dds::Topic<msg::CompressedImage> t(p, topic, q);
+  dds::Writer<msg::CompressedImage> writer(p, t, q);
+  dds::StampsWriter stamps(p);
+  const auto logs = [&] { return "--- rig record:\n" + rec.err() + "\n--- rig monitor:\n" + test::read_file(path("mon.err")); };
+  ASSERT_TRUE(writer.wait_for_readers(2, test::kDiscoveryMs)) << "the recorder and the monitor read the JPEGs\n" << logs();
+  ASSERT_TRUE(stamps.wait_for_readers(2, test::kDiscoveryMs)) << logs();
+
+  const Nanos base = vehicle_now_ns();
+  std::vector<std::uint8_t> jpeg(700, 0xAB);
+  char frame[] = "cmp_frame", format[] = "bayer_rggb8; jpeg compressed bgr8";
+  Nanos last_publish = 0;
+  // Frame `seq`, stamped 20 ms apart: written (unless not), then announced (as image_outputs.cpp).
+  const auto frame_out = [&](std::uint64_t seq, bool write) {
+    msg::CompressedImage ci{};
+    ci.header.stamp = msg::to_time(base + static_cast<Nanos>(seq) * 20'000'000);
+    ci.header.frame_id = frame;
+    ci.format = format;
+    ci.data = {static_cast<std::uint32_t>(jpeg.size()), static_cast<std::uint32_t>(jpeg.size()), jpeg.data(), false};
+    const Nanos publish = vehicle_now_ns();
+    if (write) {
+      EXPECT_TRUE(writer.write(ci, publish).ok());
+    }
+    dds::SampleStamps s{msg::from_time(ci.header.stamp), publish, publish, publish, publish, vehicle_now_ns(), 1, 0, ci.data._length};
+    stamps.write(topic, ci.header.stamp, frame, seq, s);
+    last_publish = publish;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // a 50 Hz camera
+  };
+  // Both count from 500 ms after they discovered the topic (kMatchDelayNs in monitor.cpp and
+  // recorder.cpp), before their readers matched: frames for 700 ms first, all delivered.
+  std::uint64_t seq = 1;
+  const Nanos counting = monotonic_now_ns() + 700'000'000;
+  while (monotonic_now_ns() < counting) frame_out(seq++, true);
+  const std::uint64_t never_written = seq + 2, never_compressed = seq + 5, last = seq + 8;
+  for (; seq <= last; ++seq)
+    if (seq != never_compressed) frame_out(seq, seq != never_written);
+  // The monitor decides in seq order: the last frame's row comes once the unwritten one expired.
+  const auto decided = [&] {
+    for (const auto& row : read_monitor_csv(path("monitor.csv")))
+      if (row.topic == topic && row.publish_ns == last_publish) return true;
+    return false;
+  };
+  ASSERT_TRUE(test::wait_for(decided, 5000)) << logs();
+  EXPECT_EQ(mon.signal_and_wait(SIGINT, 15'000), 0) << logs();
+  EXPECT_EQ(rec.signal_and_wait(SIGINT, 15'000), 0) << logs();
+
+  auto summary = rec.summary();
+  ASSERT_FALSE(summary.is_discarded()) << rec.out() << logs();
+  const auto& r = summary["topics"][topic];
+  EXPECT_EQ(r["type"], "sensor_msgs/msg/CompressedImage") << r.dump();
+  EXPECT_EQ(r["missed"], 1) << r.dump();
+  EXPECT_EQ(r["unannounced"], 1) << r.dump();
+  EXPECT_EQ(r["received"], seq - 3) << r.dump();  // every frame written: 1 .. last but two
+  const auto monitor = nlohmann::json::parse(test::read_file(path("monitor.json")), nullptr, false);
+  ASSERT_TRUE(monitor.is_array()) << test::read_file(path("monitor.json"));
+  bool seen = false;
+  for (const auto& m : monitor) {
+    if (m.value("topic", "") != topic) continue;
+    seen = true;
+    EXPECT_EQ(m["lost"], 2) << m.dump();
+    EXPECT_GE(m["received"].get<std::uint64_t>(), 6u) << m.dump();  // at least the frames after the gaps' start
+  }
+  EXPECT_TRUE(seen) << monitor.dump();
+  // The rows: every announced frame once, the unwritten one not received.
+  std::size_t rows = 0, not_received = 0;
+  for (const auto& row : read_monitor_csv(path("monitor.csv")))
+    if (row.topic == topic) {
+      ++rows;
+      not_received += row.received ? 0 : 1;
+    }
+  EXPECT_EQ(not_received, 1u);
+  EXPECT_GE(rows, 8u);
 }
 
 }  // namespace

@@ -118,7 +118,15 @@ struct ImageOutputs::Impl {
       ci.data._buffer = const_cast<std::uint8_t*>(bytes.data());
       ci.data._length = ci.data._maximum = static_cast<std::uint32_t>(bytes.size());
       ci.data._release = false;
-      const auto wrc = jpeg_writer->write(ci, vehicle_now_ns());
+      const Nanos publish = vehicle_now_ns();
+      const auto wrc = jpeg_writer->write(ci, publish);
+      const Nanos written = vehicle_now_ns();
+      // Announced on /rig/stamps as image_raw and image_color are (seq: the frame's, so a frame the
+      // worker never compressed is a gap), also when the write failed: `rig record` and `rig monitor`
+      // then count a JPEG that never reached them. ready: the worker took the frame (debayer and
+      // encoding are the process stage).
+      dds::SampleStamps s{j.stamp_ns, m.first_rx_ns, m.complete_ns, start, publish, written, m.packets, 0, ci.data._length};
+      stamps.write(compressed_topic_name, stamp, ci.header.frame_id, m.seq, s);
       if (!wrc.ok()) return fail("compressed write: " + wrc.message());
       std::lock_guard lock(mutex);
       ++jpeg_frames;

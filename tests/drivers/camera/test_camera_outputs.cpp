@@ -1,6 +1,7 @@
 // image_color and image_raw/compressed end to end: a source of known Bayer frames -> the node ->
 // DDS readers: the colour image is the scene's colour, the JPEG decodes back to it, both carry the
-// raw image's stamp, and the counters reach /diagnostics.
+// raw image's stamp, and the counters reach /diagnostics. Every JPEG is announced on /rig/stamps
+// once (issue 29), with its frame's seq and stamp and its size, as image_raw is.
 #include <gtest/gtest.h>
 #include <turbojpeg.h>
 #include <unistd.h>
@@ -9,6 +10,7 @@
 #include <map>
 #include <vector>
 
+#include "sensor_rig/dds/stamps_writer.hpp"
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 #include "status_value.hpp"
@@ -92,11 +94,36 @@ TEST(CameraOutputs, ColourAndJpegOfAKnownBayerSceneOffTheCaptureThread) {
   dds::Reader<msg::Image> color(p, color_t, cfg.qos);
   dds::Topic<msg::CompressedImage> jpeg_t(p, base + "/image_raw/compressed", cfg.qos);
   dds::Reader<msg::CompressedImage> jpeg(p, jpeg_t, cfg.qos);
+  dds::Topic<msg::SourceStamps> stamps_t(p, dds::kStampsTopic, dds::stamps_qos());
+  dds::Reader<msg::SourceStamps> stamps_reader(p, stamps_t, dds::stamps_qos());
   CameraDriver driver(cfg, std::make_unique<BayerSceneSource>(320, 240), p, stamps);
   driver.start();
   ASSERT_TRUE(color.wait_for_writers(1, test::kDiscoveryMs));
   ASSERT_TRUE(jpeg.wait_for_writers(1, test::kDiscoveryMs));
   ASSERT_TRUE(raw.wait_for_writers(1, test::kDiscoveryMs));
+  ASSERT_TRUE(stamps_reader.wait_for_writers(1, test::kDiscoveryMs));
+
+  // This camera's announcements by topic and header stamp: seq, size, publish time; a second one
+  // of a sample is a failure.
+  struct Announced {
+    std::uint64_t seq = 0;
+    std::uint32_t size = 0;
+    Nanos acquisition = 0, publish = 0;
+  };
+  std::map<std::string, std::map<Nanos, Announced>> announced;
+  const auto take_stamps = [&] {
+    stamps_reader.take([&](const msg::SourceStamps& s, const dds_sample_info_t&) {
+      const std::string topic = s.topic != nullptr ? s.topic : "";
+      if (topic.rfind(base + "/", 0) != 0) return;
+      const bool added = announced[topic].emplace(msg::from_time(s.header.stamp), Announced{s.seq, s.size_bytes, s.acquisition_ns, s.publish_ns}).second;
+      EXPECT_TRUE(added) << topic << " announced twice at " << msg::from_time(s.header.stamp);
+    });
+  };
+  struct Jpeg {
+    std::uint32_t size = 0;
+    Nanos publish = 0;
+  };
+  std::map<Nanos, Jpeg> jpeg_received;  // by header stamp
 
   std::map<Nanos, bool> raw_stamps;
   int colours = 0, jpegs = 0;
@@ -115,8 +142,10 @@ TEST(CameraOutputs, ColourAndJpegOfAKnownBayerSceneOffTheCaptureThread) {
           }
           EXPECT_TRUE(raw_stamps.contains(msg::from_time(m.header.stamp)) || raw_stamps.empty());
         });
-        jpeg.take([&](const msg::CompressedImage& m, const dds_sample_info_t&) {
+        take_stamps();
+        jpeg.take([&](const msg::CompressedImage& m, const dds_sample_info_t& info) {
           ++jpegs;
+          jpeg_received[msg::from_time(m.header.stamp)] = {m.data._length, static_cast<Nanos>(info.source_timestamp)};
           EXPECT_STREQ(m.format, "bayer_bggr8; jpeg compressed rgb8");
           EXPECT_STREQ(m.header.frame_id, cfg.frame_id.c_str());
           tjhandle h = tjInitDecompress();
@@ -140,6 +169,33 @@ TEST(CameraOutputs, ColourAndJpegOfAKnownBayerSceneOffTheCaptureThread) {
   const auto offered = std::stoull(test::status_value(st, "worker_offered"));
   EXPECT_GE(offered, std::stoull(test::status_value(st, "worker_processed")) + std::stoull(test::status_value(st, "worker_dropped")));
   driver.stop();
+
+  // One announcement per JPEG written (the node's own count, final once stopped), none for a frame
+  // it did not compress.
+  const std::string compressed = base + "/image_raw/compressed", raw_topic = base + "/image_raw";
+  const auto written = std::stoull(test::status_value(driver.status(), "compressed_frames"));
+  EXPECT_TRUE(wait_for(
+      [&] {
+        take_stamps();
+        return announced[compressed].size() >= written;
+      },
+      test::kDiscoveryMs))
+      << announced[compressed].size() << " announcements of " << written << " JPEGs";
+  EXPECT_EQ(announced[compressed].size(), written);
+  // Each JPEG received: announced with its frame's seq (image_raw's for that stamp), stamp, size and
+  // DDS source timestamp.
+  ASSERT_GE(jpeg_received.size(), 5u);
+  for (const auto& [stamp, j] : jpeg_received) {
+    SCOPED_TRACE(stamp);
+    const auto a = announced[compressed].find(stamp);
+    ASSERT_NE(a, announced[compressed].end()) << "a JPEG never announced";
+    EXPECT_EQ(a->second.size, j.size);
+    EXPECT_EQ(a->second.publish, j.publish);
+    EXPECT_EQ(a->second.acquisition, stamp);
+    const auto r = announced[raw_topic].find(stamp);
+    ASSERT_NE(r, announced[raw_topic].end()) << "its image_raw frame never announced";
+    EXPECT_EQ(a->second.seq, r->second.seq);
+  }
 }
 
 }  // namespace
