@@ -90,6 +90,8 @@ int FakeV4l2Device::close(int fd) {
   streaming_ = false;
   buffers_.clear();
   queue_.clear();
+  sync_subscribed_ = false;  // a subscription is the file handle's
+  sync_events_.clear();
   return 0;
 }
 
@@ -257,6 +259,25 @@ int FakeV4l2Device::ioctl_locked(unsigned long request, void* arg) {
       b->timestamp.tv_usec = static_cast<suseconds_t>((stamp % 1'000'000'000) / 1000);
       return 0;
     }
+    case VIDIOC_SUBSCRIBE_EVENT:
+    case VIDIOC_UNSUBSCRIBE_EVENT: {
+      const auto* sub = static_cast<const v4l2_event_subscription*>(arg);
+      if (!opt_.frame_sync_events || sub->type != V4L2_EVENT_FRAME_SYNC) return -EINVAL;
+      sync_subscribed_ = request == VIDIOC_SUBSCRIBE_EVENT;
+      if (!sync_subscribed_) sync_events_.clear();
+      return 0;
+    }
+    case VIDIOC_DQEVENT: {
+      if (sync_events_.empty()) return -ENOENT;
+      auto* ev = static_cast<v4l2_event*>(arg);
+      *ev = {};
+      ev->type = V4L2_EVENT_FRAME_SYNC;
+      ev->u.frame_sync.frame_sequence = sync_events_.front();
+      sync_events_.pop_front();
+      ev->pending = static_cast<std::uint32_t>(sync_events_.size());
+      ev->sequence = event_count_++;
+      return 0;
+    }
     case VIDIOC_STREAMON:
       if (buffers_.empty()) return -EINVAL;
       if (streaming_) return 0;
@@ -313,6 +334,7 @@ bool FakeV4l2Device::fill_one(Nanos due) {
 // One frame slot at `due`: a sequence gap's drop, a queued buffer filled, or a frame dropped for
 // want of one.
 void FakeV4l2Device::make_slot_locked(Nanos due) {
+  frame_sync_locked(sequence_);  // every path below takes this slot's sequence, filled or dropped
   if (gap_left_ == 0)
     for (const auto& e : schedule_.events())
       if (e.kind == "v4l2.sequence_gap" && schedule_.seconds(due) >= e.at_s && gaps_done_.insert(e.id).second) {
@@ -337,6 +359,16 @@ void FakeV4l2Device::make_slot_locked(Nanos due) {
     return;
   }
   (void)fill_one(due);
+}
+
+// The frame's start, before the device knows whether a buffer takes it: the event of a dropped
+// frame too (its sequence is the one the next buffer skips).
+void FakeV4l2Device::frame_sync_locked(std::uint32_t seq) {
+  if (!sync_subscribed_) return;
+  constexpr std::size_t kKept = 4;  // the kernel keeps a subscription's newest `elems`
+  if (sync_events_.size() == kKept) sync_events_.pop_front();
+  sync_events_.push_back(seq);
+  ++counters_.frame_syncs;
 }
 
 int FakeV4l2Device::poll(int fd, int timeout_ms) {

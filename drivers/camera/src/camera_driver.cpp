@@ -317,6 +317,10 @@ struct CameraDriver::Impl {
     }
     publisher.drain();
     src->close();
+    // What the close counted (frames filled and never dequeued, frames the device began after the
+    // last dequeue): status() and the stop's line read these, not the source.
+    std::lock_guard lock(mutex);
+    source_stats = src->stats();
   }
 };
 

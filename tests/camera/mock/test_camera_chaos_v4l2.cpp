@@ -331,8 +331,9 @@ namespace {
 
 // A close and an open (the driver's watchdog, a clean restart) with the consumer behind: the frames
 // the device filled and nobody dequeued are discarded by STREAMOFF. (Frames a device dropped for
-// want of a buffer after the last one dequeued show in no sequence: STREAMON restarts it. Not
-// counted; camera/README.md.) Every frame the device made
+// want of a buffer after the last one dequeued show in no buffer's sequence, STREAMON restarts it:
+// counted from its V4L2_EVENT_FRAME_SYNC events, V4l2Fake.FramesDroppedAfterTheLastDequeue...;
+// camera/README.md.) Every frame the device made
 // (sent into a buffer or dropped for want of one) from the first one returned to the last is
 // returned or counted lost, exactly once, across the reopen (issue 27: the count restarted with
 // each open and these were neither).

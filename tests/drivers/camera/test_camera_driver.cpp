@@ -121,6 +121,55 @@ TEST(CameraDriver, ASlowReliableSubscriberDoesNotStallCapture) {
   dds_delete(slow);
 }
 
+// Issue 27 item 5: frames the device dropped after the last one dequeued, just before a stop. Two
+// buffers and a subscriber that never takes (each write waits 400 ms): the writer and its queue hold
+// both buffers, the device drops the slots between (no buffer queued) and one frame is dequeued per
+// write. Stopped two drops after a dequeue, those drops are in no later frame's sequence gap: they
+// were neither published nor counted lost (the close did not know them, and status() did not read
+// what the close counted). Ground truth: the fake's frames filled + dropped = published + counted_lost.
+TEST(CameraDriver, FramesTheDeviceDroppedJustBeforeTheStopAreCountedLost) {
+  dds::Participant p;
+  dds::StampsWriter stamps(p);
+  auto cfg = v4l2_cfg(unique("drv_tail_lost"));
+  cfg.source.buffers = 2;
+  cfg.qos.reliability = dds::QosSpec::Reliability::kReliable;
+  cfg.qos.depth = 0;  // keep all: a write waits for room
+  cfg.qos.max_blocking_ms = 400;
+  camera::mock::FakeV4l2Options fo;
+  fo.formats = {{camera::fourcc('Y', 'U', 'Y', 'V'), 640, 480}};
+  auto dev = std::make_shared<camera::mock::FakeV4l2Device>(fo);
+  dds::Topic<msg::Image> it(p, "/sensors/camera/" + cfg.name + "/image_raw", cfg.qos);
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+  dds_qset_resource_limits(q, 1, 1, 1);
+  const dds_entity_t slow = dds_create_reader(p.handle(), it.handle(), q, nullptr);
+  dds_delete_qos(q);
+  ASSERT_GT(slow, 0);
+  CameraDriver driver(cfg, std::make_unique<camera::V4l2Source>(cfg.source, dev), p, stamps);
+  driver.start();
+  // Streaming and dropping: then, right after a frame is filled, two slots dropped behind it (the
+  // next fill waits for a write's 400 ms; each slot is 50 ms).
+  ASSERT_TRUE(wait_for([&] { return dev->counters().frames >= 3 && dev->counters().dropped >= 2; }, test::kDiscoveryMs));
+  const auto filled = dev->counters().frames;
+  ASSERT_TRUE(wait_for([&] { return dev->counters().frames > filled; }, 2000));
+  const auto at_fill = dev->counters();
+  ASSERT_TRUE(wait_for([&] { return dev->counters().dropped >= at_fill.dropped + 2; }, 2000));
+  driver.stop();
+  const auto c = dev->counters();
+  const auto st = driver.status();
+  const auto published = std::stoull(test::status_value(st, "frames"));
+  const auto counted = std::stoull(test::status_value(st, "counted_lost"));
+  std::printf("device: %llu frames made, %llu dropped for want of a buffer (%llu since the last fill); driver: %llu published, %llu counted lost (%s missing_frames, %s by the queue)\n",
+              static_cast<unsigned long long>(c.frames + c.dropped), static_cast<unsigned long long>(c.dropped),
+              static_cast<unsigned long long>(c.dropped - at_fill.dropped), static_cast<unsigned long long>(published),
+              static_cast<unsigned long long>(counted), test::status_value(st, "missing_frames").c_str(),
+              test::status_value(st, "publish_dropped").c_str());
+  EXPECT_EQ(c.frames, at_fill.frames + 0) << "a frame was filled after the drops: the scenario did not happen";
+  EXPECT_EQ(published + counted, c.frames + c.dropped);
+  dds_delete(slow);
+}
+
 TEST(CameraDriver, PublishesRosLayoutImageAndCameraInfoAndSurvivesDeviceLoss) {
   dds::Participant p;
   dds::StampsWriter stamps(p);

@@ -60,6 +60,8 @@ class V4l2Source final : public FrameSource {
   void start_streaming();
   void requeue(std::uint32_t index) noexcept;
   void count_sequence(std::uint32_t sequence) noexcept;  // a dequeued buffer's sequence: gaps are missing_frames
+  void read_frame_syncs() noexcept;    // V4L2_EVENT_FRAME_SYNC events pending: the device's latest sequence
+  void count_unseen_tail() noexcept;   // at a close: frames the device began after the last one dequeued
   [[noreturn]] void fail(const std::string& what, int rc);
 
   SourceConfig cfg_;
@@ -78,6 +80,9 @@ class V4l2Source final : public FrameSource {
   bool stamp_warned_ = false;    // one warning per open about the buffers' timestamp clock
   std::uint32_t last_sequence_ = 0;
   bool have_sequence_ = false;   // within one open: a stream's sequence restarts at 0 (its first counts the frames lost since STREAMON)
+  bool frame_sync_ = false;      // V4L2_EVENT_FRAME_SYNC subscribed (the device sends them; uvcvideo does not)
+  std::uint32_t device_sequence_ = 0;  // the latest FRAME_SYNC's frame_sequence, this open
+  bool have_device_sequence_ = false;
 };
 
 }  // namespace sensor_rig::camera

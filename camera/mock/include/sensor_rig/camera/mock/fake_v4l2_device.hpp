@@ -42,12 +42,17 @@ struct FakeV4l2Options {
   bool realtime_stamps = false;  // buffer timestamps on CLOCK_REALTIME instead of CLOCK_MONOTONIC
   // V4L2_CID_GAIN's range (VIDIOC_QUERYCTRL) in the device's own units.
   std::int32_t gain_min = 0, gain_max = 480, gain_step = 1, gain_default = 0;
+  // V4L2_EVENT_FRAME_SYNC (VIDIOC_SUBSCRIBE_EVENT / DQEVENT): an event at every frame slot's start,
+  // made or dropped, carrying its sequence, as CSI receivers' drivers send; the last few kept (the
+  // kernel drops a subscription's oldest). uvcvideo sends none: false, and SUBSCRIBE fails (EINVAL).
+  bool frame_sync_events = true;
   ChaosArgs chaos;  // v4l2.stamp_mode, v4l2.sequence_gap, v4l2.disconnect of chaos.device; its truth
 };
 
 struct FakeV4l2Counters {
   std::uint64_t frames = 0;         // frames filled
   std::uint64_t dropped = 0;        // frames due while no buffer was queued
+  std::uint64_t frame_syncs = 0;    // V4L2_EVENT_FRAME_SYNC events queued (subscribed, one per slot)
   std::uint64_t opens = 0;
   std::uint32_t exposure_100us = 0;  // last V4L2_CID_EXPOSURE_ABSOLUTE
   std::int32_t gain = -1;           // last V4L2_CID_GAIN, raw
@@ -86,6 +91,7 @@ class FakeV4l2Device final : public V4l2Device {
   int ioctl_locked(unsigned long request, void* arg);
   bool fill_one(Nanos due);  // with mutex_ held
   void make_slot_locked(Nanos due);
+  void frame_sync_locked(std::uint32_t seq);  // with mutex_ held: a subscribed fd's event for this slot
   // With mutex_ held: begins and ends the plan's faults at this instant (disconnect, its fault lines).
   void apply_faults_locked();
   // With mutex_ held: the device returns at `until` (CLOCK_MONOTONIC); its stream is gone.
@@ -114,6 +120,9 @@ class FakeV4l2Device final : public V4l2Device {
   std::uint64_t streams_ = 0;   // STREAMONs so far: the truth unit's high 32 bits (its ordinal)
   std::vector<Buffer> buffers_;
   std::deque<std::uint32_t> queue_;  // queued buffers in QBUF order (filled FIFO, as drivers do)
+  bool sync_subscribed_ = false;     // V4L2_EVENT_FRAME_SYNC subscribed on the open fd
+  std::deque<std::uint32_t> sync_events_;  // their frame_sequence, oldest first
+  std::uint32_t event_count_ = 0;    // v4l2_event.sequence
   FakeV4l2Counters counters_;
   // Campaign (empty without one).
   CameraSchedule schedule_;
