@@ -49,6 +49,18 @@ CameraConfig v4l2_cfg(const std::string& name) {
   return c;
 }
 
+// A reliable keep-all reader with room for one sample that never takes: every write to it waits
+// up to the writer's max_blocking_ms for room.
+dds_entity_t never_taking_reader(const dds::Participant& p, const dds::Topic<msg::Image>& topic) {
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+  dds_qset_resource_limits(q, 1, 1, 1);
+  const dds_entity_t r = dds_create_reader(p.handle(), topic.handle(), q, nullptr);
+  dds_delete_qos(q);
+  return r;
+}
+
 // A USB camera plugged back after 2 s streams again within a quarter second: a V4L2 open of a
 // missing device fails at once, so its retries need no GigE backoff (0.25 s doubling to 2 s: the
 // reopen came 1.75 s after the device was back; the campaign's v4l2.disconnect, 1.8 s).
@@ -93,12 +105,7 @@ TEST(CameraDriver, ASlowReliableSubscriberDoesNotStallCapture) {
   fo.formats = {{camera::fourcc('Y', 'U', 'Y', 'V'), 640, 480}};
   auto dev = std::make_shared<camera::mock::FakeV4l2Device>(fo);
   dds::Topic<msg::Image> it(p, "/sensors/camera/" + cfg.name + "/image_raw", cfg.qos);
-  dds_qos_t* q = dds_create_qos();
-  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
-  dds_qset_resource_limits(q, 1, 1, 1);
-  const dds_entity_t slow = dds_create_reader(p.handle(), it.handle(), q, nullptr);
-  dds_delete_qos(q);
+  const dds_entity_t slow = never_taking_reader(p, it);
   ASSERT_GT(slow, 0);
   CameraDriver driver(cfg, std::make_unique<camera::V4l2Source>(cfg.source, dev), p, stamps);
   driver.start();
@@ -139,12 +146,7 @@ TEST(CameraDriver, FramesTheDeviceDroppedJustBeforeTheStopAreCountedLost) {
   fo.formats = {{camera::fourcc('Y', 'U', 'Y', 'V'), 640, 480}};
   auto dev = std::make_shared<camera::mock::FakeV4l2Device>(fo);
   dds::Topic<msg::Image> it(p, "/sensors/camera/" + cfg.name + "/image_raw", cfg.qos);
-  dds_qos_t* q = dds_create_qos();
-  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
-  dds_qset_resource_limits(q, 1, 1, 1);
-  const dds_entity_t slow = dds_create_reader(p.handle(), it.handle(), q, nullptr);
-  dds_delete_qos(q);
+  const dds_entity_t slow = never_taking_reader(p, it);
   ASSERT_GT(slow, 0);
   CameraDriver driver(cfg, std::make_unique<camera::V4l2Source>(cfg.source, dev), p, stamps);
   driver.start();
