@@ -211,7 +211,7 @@ std::string json_line(const mock::ReplayStats& s) {
   std::snprintf(buf, sizeof buf,
                 "{\"sent\":%llu,\"sent_data\":%llu,\"sent_position\":%llu,\"read\":%llu,\"elapsed_s\":%.3f,"
                 "\"late\":%llu,\"loops\":%llu,\"send_errors\":%llu,\"dropped\":%llu,\"corrupted\":%llu,"
-                "\"truncated\":%llu,\"duplicated\":%llu,\"reordered\":%llu,\"stalls\":%llu}",
+                "\"truncated\":%llu,\"duplicated\":%llu,\"reordered\":%llu,\"stalls\":%llu,\"max_late_ms\":%.3f}",
                 static_cast<unsigned long long>(s.sent), static_cast<unsigned long long>(s.sent_data),
                 static_cast<unsigned long long>(s.sent_position), static_cast<unsigned long long>(s.read),
                 static_cast<double>(s.elapsed_ns) * 1e-9, static_cast<unsigned long long>(s.late),
@@ -221,7 +221,7 @@ std::string json_line(const mock::ReplayStats& s) {
                 static_cast<unsigned long long>(s.faults.truncated),
                 static_cast<unsigned long long>(s.faults.duplicated),
                 static_cast<unsigned long long>(s.faults.reordered),
-                static_cast<unsigned long long>(s.faults.stalls));
+                static_cast<unsigned long long>(s.faults.stalls), static_cast<double>(s.max_late_ns) * 1e-6);
   return buf;
 }
 
