@@ -125,8 +125,8 @@ TEST(DdsRoundTrip, PointCloudViewsReadTheSerializedSampleInPlace) {
   ViewCounts counts;
   SerializedSample first_sample, second_sample;
   PointCloud2View first, second;
-  ASSERT_TRUE(wait_until([&] { return take_view(reader.handle(), first_sample, first, counts); }, 5000));
-  ASSERT_TRUE(wait_until([&] { return take_view(reader.handle(), second_sample, second, counts); }, 5000));
+  ASSERT_TRUE(wait_until([&] { return take_view(reader.handle(), first_sample, first, counts); }, 30'000));
+  ASSERT_TRUE(wait_until([&] { return take_view(reader.handle(), second_sample, second, counts); }, 30'000));
   EXPECT_EQ(first.header.nanosec, 1'000u);
   EXPECT_EQ(second.header.nanosec, 1'001u);
   for (const PointCloud2View* v : {&first, &second}) {

@@ -154,9 +154,9 @@ TEST(CameraDriver, FramesTheDeviceDroppedJustBeforeTheStopAreCountedLost) {
   // next fill waits for a write's 400 ms; each slot is 50 ms).
   ASSERT_TRUE(wait_for([&] { return dev->counters().frames >= 3 && dev->counters().dropped >= 2; }, test::kDiscoveryMs));
   const auto filled = dev->counters().frames;
-  ASSERT_TRUE(wait_for([&] { return dev->counters().frames > filled; }, 2000));
+  ASSERT_TRUE(wait_for([&] { return dev->counters().frames > filled; }, 30'000));
   const auto at_fill = dev->counters();
-  ASSERT_TRUE(wait_for([&] { return dev->counters().dropped >= at_fill.dropped + 2; }, 2000));
+  ASSERT_TRUE(wait_for([&] { return dev->counters().dropped >= at_fill.dropped + 2; }, 30'000));
   driver.stop();
   const auto c = dev->counters();
   const auto st = driver.status();

@@ -109,7 +109,7 @@ TEST_F(CameraIsolation, ADeadCameraHoldsNoLockAnotherCamerasOpenNeedsAndStopsWit
       if (t.joinable()) t.join();
     }
   } joiner{stop, retry};
-  ASSERT_TRUE(test::wait_for([&] { return attempts.load() >= 1; }, 5000));
+  ASSERT_TRUE(test::wait_for([&] { return attempts.load() >= 1; }, 30'000));
   Nanos longest_open = 0;
   std::set<std::uint64_t> read;  // frame ids the healthy camera gave
   // At least five rounds, and on until the dead camera has failed twice more: on a fast host five
@@ -265,15 +265,15 @@ TEST_F(CameraIsolation, ATriggerInFlightWhenItsCameraDiesHoldsNeitherItsPartnerN
   const auto frames_now = [&] { return std::stoull("0" + test::status_value(live.status(), "frames")); };
   for (auto& d : drivers) d->start();
   group.start();
-  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + test::status_value(dead.status(), "frames")) >= 3; }, 5000)) << dead.status().message;
+  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + test::status_value(dead.status(), "frames")) >= 3; }, 30'000)) << dead.status().message;
   ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 1500 * kMs; }, 5000));
   // The first tick after the death is in its call once a later tick finds it busy.
-  ASSERT_TRUE(test::wait_for([&] { return group.skipped(kDeadMember) >= 1; }, 3000)) << "no trigger call hung on the dead camera";
+  ASSERT_TRUE(test::wait_for([&] { return group.skipped(kDeadMember) >= 1; }, 30'000)) << "no trigger call hung on the dead camera";
   const std::uint64_t ticks0 = group.ticks();
   const std::uint64_t frames0 = frames_now();
   const Nanos from_vehicle = vehicle_now_ns();
   // ~0.8 s into the call, well before Aravis gives up on it: the stop must not wait for it.
-  ASSERT_TRUE(test::wait_for([&] { return group.skipped(kDeadMember) >= 7; }, 3000));
+  ASSERT_TRUE(test::wait_for([&] { return group.skipped(kDeadMember) >= 7; }, 30'000));
   const std::uint64_t ticks = group.ticks() - ticks0;
   const Nanos to_vehicle = vehicle_now_ns();
   // The group and the dead camera stopped at once, each timed: either may wait for the call.
@@ -316,7 +316,7 @@ TEST_F(CameraIsolation, ACameraThatDiedMidStreamStopsWithin1s) {
   dds::StampsWriter stamps(p);
   CameraDriver driver(driver_cfg(0, "died_"), p, stamps);
   driver.start();
-  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + test::status_value(driver.status(), "frames")) >= 5; }, 5000));
+  ASSERT_TRUE(test::wait_for([&] { return std::stoull("0" + test::status_value(driver.status(), "frames")) >= 5; }, 30'000));
   // Dead from 1.5 s; 0.2 s later, within the watchdog's 0.5 s: stopped while still "streaming".
   ASSERT_TRUE(test::wait_for([&] { return monotonic_now_ns() > epoch + 1700 * kMs; }, 5000));
   const Nanos from = monotonic_now_ns();

@@ -51,7 +51,7 @@ void offer_burst(int depth) {
   meta.seq = 0;
   frame[0] = 0;
   ASSERT_TRUE(w.offer(meta, 0, frame));
-  ASSERT_TRUE(wait_for([&] { return g.count() == 1; }, 5000));
+  ASSERT_TRUE(wait_for([&] { return g.count() == 1; }, 30'000));
   // 100 more while it is blocked: each offer returns at once (a copy and two short locks).
   constexpr int kBurst = 100;
   Nanos worst = 0;
@@ -70,7 +70,7 @@ void offer_burst(int depth) {
   EXPECT_EQ(c.processed, 0u);  // still in the first one
   EXPECT_EQ(c.dropped, static_cast<std::uint64_t>(kBurst - depth));
   g.release();
-  ASSERT_TRUE(wait_for([&] { return w.counters().processed == static_cast<std::uint64_t>(1 + depth); }, 5000));
+  ASSERT_TRUE(wait_for([&] { return w.counters().processed == static_cast<std::uint64_t>(1 + depth); }, 30'000));
   w.stop();
   // The worker saw the first frame and then exactly the newest `depth` ones, oldest first.
   std::vector<std::uint64_t> want{0};
@@ -89,7 +89,7 @@ TEST(FrameWorker, OversizeFramesAreCountedNotQueued) {
   std::vector<std::uint8_t> big(17), ok(16);
   EXPECT_FALSE(w.offer({}, 0, big));
   EXPECT_TRUE(w.offer({}, 0, ok));
-  ASSERT_TRUE(wait_for([&] { return w.counters().processed == 1; }, 5000));
+  ASSERT_TRUE(wait_for([&] { return w.counters().processed == 1; }, 30'000));
   EXPECT_EQ(w.counters().oversize, 1u);
   EXPECT_EQ(processed.load(), 1);
 }
@@ -100,7 +100,7 @@ TEST(FrameWorker, StopsWithFramesQueued) {
   w->start();
   std::vector<std::uint8_t> frame(64);
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(w->offer({}, 0, frame));
-  ASSERT_TRUE(wait_for([&] { return g.count() == 1; }, 5000));
+  ASSERT_TRUE(wait_for([&] { return g.count() == 1; }, 30'000));
   g.release();
   w.reset();  // joins: the destructor must not hang with frames queued
   SUCCEED();

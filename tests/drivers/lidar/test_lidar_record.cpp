@@ -172,7 +172,7 @@ TEST(LidarRecord, UnwritableDirectoryIsReportedAndTheDriverKeepsPublishing) {
       },
       5000))
       << scans.size();
-  ASSERT_TRUE(wait_for([&] { return node.status("record_dropped") == std::to_string(sent.size()); }, 2000))
+  ASSERT_TRUE(wait_for([&] { return node.status("record_dropped") == std::to_string(sent.size()); }, 30'000))
       << node.status("record_dropped");
   const auto st = node.driver.status();
   EXPECT_EQ(test::status_value(st, "record_packets"), "0");
