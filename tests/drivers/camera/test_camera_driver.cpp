@@ -49,6 +49,15 @@ CameraConfig v4l2_cfg(const std::string& name) {
   return c;
 }
 
+// A V4L2 camera publishing reliable keep-all: a write waits up to `max_blocking_ms` for room.
+CameraConfig keep_all_cfg(const std::string& name, int max_blocking_ms) {
+  auto cfg = v4l2_cfg(name);
+  cfg.qos.reliability = dds::QosSpec::Reliability::kReliable;
+  cfg.qos.depth = 0;
+  cfg.qos.max_blocking_ms = max_blocking_ms;
+  return cfg;
+}
+
 // A reliable keep-all reader with room for one sample that never takes: every write to it waits
 // up to the writer's max_blocking_ms for room.
 dds_entity_t never_taking_reader(const dds::Participant& p, const dds::Topic<msg::Image>& topic) {
@@ -97,10 +106,7 @@ TEST(CameraDriver, AV4l2DevicePluggedBackStreamsWithinAQuarterSecond) {
 TEST(CameraDriver, ASlowReliableSubscriberDoesNotStallCapture) {
   dds::Participant p;
   dds::StampsWriter stamps(p);
-  auto cfg = v4l2_cfg(unique("drv_slow_sub"));
-  cfg.qos.reliability = dds::QosSpec::Reliability::kReliable;
-  cfg.qos.depth = 0;  // keep all: a write waits for room
-  cfg.qos.max_blocking_ms = 100;
+  auto cfg = keep_all_cfg(unique("drv_slow_sub"), 100);
   camera::mock::FakeV4l2Options fo;
   fo.formats = {{camera::fourcc('Y', 'U', 'Y', 'V'), 640, 480}};
   auto dev = std::make_shared<camera::mock::FakeV4l2Device>(fo);
@@ -137,11 +143,8 @@ TEST(CameraDriver, ASlowReliableSubscriberDoesNotStallCapture) {
 TEST(CameraDriver, FramesTheDeviceDroppedJustBeforeTheStopAreCountedLost) {
   dds::Participant p;
   dds::StampsWriter stamps(p);
-  auto cfg = v4l2_cfg(unique("drv_tail_lost"));
+  auto cfg = keep_all_cfg(unique("drv_tail_lost"), 400);
   cfg.source.buffers = 2;
-  cfg.qos.reliability = dds::QosSpec::Reliability::kReliable;
-  cfg.qos.depth = 0;  // keep all: a write waits for room
-  cfg.qos.max_blocking_ms = 400;
   camera::mock::FakeV4l2Options fo;
   fo.formats = {{camera::fourcc('Y', 'U', 'Y', 'V'), 640, 480}};
   auto dev = std::make_shared<camera::mock::FakeV4l2Device>(fo);
