@@ -2,9 +2,14 @@
 // Helpers for tests that run the real `rig` binary in separate processes: ports, temp dirs, popen.
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/un.h>
 #include <unistd.h>
 
+#include <cstddef>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <mutex>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,19 +23,48 @@ namespace sensor_rig::test {
 
 inline std::filesystem::path test_data() { return data_dir(); }
 
-// A port of `type` (SOCK_DGRAM, SOCK_STREAM) on loopback the kernel just handed out (free at the
-// time of the call).
+// A port of `type` (SOCK_DGRAM, SOCK_STREAM) on loopback that no other test takes while this
+// process runs, free at the time of the call, for a `rig` child to bind. A port the kernel handed
+// out (bind to port 0) was the kernel's to hand out again: between the call and the child's bind,
+// another process's socket (a DDS participant, any unbound send) got it ("bind 127.0.0.1:52965:
+// Address already in use", a fresh-clone run of 2026-11-29). So the port comes from below the
+// kernel's ephemeral range (32768-60999) and below DDS's (7400 + 250 * domain + ...): [4100, 5300),
+// and it is leased as a DDS domain is (dds_domain_lease.hpp: an abstract unix socket per port,
+// freed when the process ends however it ends, no file left).
 inline int free_loopback_port(int type) {
-  const int fd = ::socket(AF_INET, type, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t len = sizeof a;
-  const bool ok = fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0;
-  if (fd >= 0) ::close(fd);
-  if (!ok) throw std::runtime_error("no free port on loopback");
-  return ntohs(a.sin_port);
+  constexpr int kFirst = 4100, kCount = 1200;
+  static std::mutex m;
+  static std::vector<int> leases;  // held until the process exits
+  std::lock_guard lock(m);
+  const int start = static_cast<int>((static_cast<unsigned>(::getpid()) * 7919U) % kCount);
+  for (int i = 0; i < kCount; ++i) {
+    const int port = kFirst + (start + i) % kCount;
+    const int lease = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    if (lease < 0) break;
+    sockaddr_un name{};
+    name.sun_family = AF_UNIX;
+    const std::string tag = "sensor-rig-test-port-" + std::to_string(port);
+    std::memcpy(name.sun_path + 1, tag.data(), tag.size());  // sun_path[0] == 0: abstract namespace
+    const auto name_len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + tag.size());
+    if (::bind(lease, reinterpret_cast<const sockaddr*>(&name), name_len) != 0) {
+      ::close(lease);
+      continue;
+    }
+    const int fd = ::socket(AF_INET, type | SOCK_CLOEXEC, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    const bool free = fd >= 0 && ::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
+    if (fd >= 0) ::close(fd);
+    if (!free) {
+      ::close(lease);
+      continue;
+    }
+    leases.push_back(lease);
+    return port;
+  }
+  throw std::runtime_error("no free port on loopback in [4100, 5300)");
 }
 inline int free_udp_port() { return free_loopback_port(SOCK_DGRAM); }
 inline int free_tcp_port() { return free_loopback_port(SOCK_STREAM); }
