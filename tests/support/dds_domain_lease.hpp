@@ -29,23 +29,31 @@ namespace sensor_rig::test {
 inline constexpr int kFirstLeasedDomain = 100;
 inline constexpr int kLastLeasedDomain = 229;
 
+// The lease of `name` among this host's processes: a socket bound to it in the abstract unix
+// namespace (one binder at a time, freed when the process ends however it ends, no file); its fd,
+// to keep open while the lease is held, or -1 when another process holds it.
+inline int take_test_lease(const std::string& name) {
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return -1;
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::memcpy(addr.sun_path + 1, name.data(), name.size());  // sun_path[0] == 0: abstract namespace
+  const auto len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + name.size());
+  if (::bind(fd, reinterpret_cast<const sockaddr*>(&addr), len) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
 // One leased domain, held while the object lives (the test's whole run for lease_dds_domain()).
 class DdsDomainLease {
  public:
   // The lease of `domain`, or an object without one (held() false) when another process holds it.
   static DdsDomainLease try_take(int domain) {
     DdsDomainLease l;
-    const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    const int fd = take_test_lease("sensor-rig-test-dds-domain-" + std::to_string(domain));
     if (fd < 0) return l;
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    const std::string name = "sensor-rig-test-dds-domain-" + std::to_string(domain);
-    std::memcpy(addr.sun_path + 1, name.data(), name.size());  // sun_path[0] == 0: abstract namespace
-    const auto len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + name.size());
-    if (::bind(fd, reinterpret_cast<const sockaddr*>(&addr), len) != 0) {
-      ::close(fd);
-      return l;
-    }
     l.fd_ = fd;
     l.domain_ = domain;
     return l;

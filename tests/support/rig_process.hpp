@@ -2,21 +2,19 @@
 // Helpers for tests that run the real `rig` binary in separate processes: ports, temp dirs, popen.
 #include <netinet/in.h>
 #include <sys/socket.h>
-#include <sys/un.h>
 #include <unistd.h>
 
-#include <cstddef>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
-#include <mutex>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "dds_domain_lease.hpp"
 #include "test_data.hpp"
 
 namespace sensor_rig::test {
@@ -39,17 +37,8 @@ inline int free_loopback_port(int type) {
   const int start = static_cast<int>((static_cast<unsigned>(::getpid()) * 7919U) % kCount);
   for (int i = 0; i < kCount; ++i) {
     const int port = kFirst + (start + i) % kCount;
-    const int lease = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    if (lease < 0) break;
-    sockaddr_un name{};
-    name.sun_family = AF_UNIX;
-    const std::string tag = "sensor-rig-test-port-" + std::to_string(port);
-    std::memcpy(name.sun_path + 1, tag.data(), tag.size());  // sun_path[0] == 0: abstract namespace
-    const auto name_len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + tag.size());
-    if (::bind(lease, reinterpret_cast<const sockaddr*>(&name), name_len) != 0) {
-      ::close(lease);
-      continue;
-    }
+    const int lease = take_test_lease("sensor-rig-test-port-" + std::to_string(port));
+    if (lease < 0) continue;
     const int fd = ::socket(AF_INET, type | SOCK_CLOEXEC, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
