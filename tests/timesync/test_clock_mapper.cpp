@@ -160,7 +160,9 @@ TEST(ClockMapper, DetectsAForwardStepWithinAFewSamplesAndRelocks) {
 }
 
 // Issue 27 item 8: while a step is being confirmed map() still uses the old line; deviation() says
-// so (how many samples, by how much, which way) so that a caller can refuse those stamps.
+// so (how many samples, by how much, which way) so that a caller can refuse those stamps. A step
+// forward (arrivals earlier than the line allows) confirms in a few samples; a step back (arrivals
+// later) only after late_confirm_ns, and deviation() says it is awaiting that (issue 26).
 TEST(ClockMapper, APendingStepIsReportedUntilConfirmed) {
   DelayModel dm;
   dm.tail_prob = 0;
@@ -170,24 +172,154 @@ TEST(ClockMapper, APendingStepIsReportedUntilConfirmed) {
   run(m, dev, link, 100.0, 0, 5 * kSec, 5 * kSec);
   ASSERT_EQ(m.state(), SyncState::kLocked);
   EXPECT_EQ(m.deviation().samples, 0u);
+  const Nanos late_confirm = m.config().late_confirm_ns;
   for (const Nanos step : {-80 * kMs, 80 * kMs}) {  // back (arrivals late), then forward (early)
     SCOPED_TRACE(step);
     dev.step_ns += step;
-    const Nanos from = dev.t0 + 6 * kSec + (step < 0 ? 0 : 2 * kSec);
+    const Nanos from = dev.t0 + 6 * kSec + (step < 0 ? 0 : 6 * kSec);
     std::size_t pending = 0;
-    for (int i = 0; i < 20; ++i) {
+    Nanos confirmed_after = -1;
+    for (int i = 0; i < 500; ++i) {
       const Nanos t = from + i * 10 * kMs;
-      if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) break;
+      if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) {
+        confirmed_after = t - from;
+        break;
+      }
       ++pending;
       const auto d = m.deviation();
-      EXPECT_EQ(d.samples, pending);
+      EXPECT_EQ(d.samples, std::min<std::size_t>(pending, d.samples));  // thinned beyond 256, never more
+      EXPECT_GE(d.samples, std::min<std::size_t>(pending, 128));
       EXPECT_NEAR(static_cast<double>(d.shift_ns), static_cast<double>(-step), 1e6);
+      // Awaiting the late span exactly when the normal rule would have confirmed a step back.
+      EXPECT_EQ(d.awaiting_late, step < 0 && pending >= 3 && d.span_ns >= m.config().jump_confirm_ns) << pending;
     }
     EXPECT_GE(pending, 1u);
+    if (step < 0) {
+      EXPECT_GE(confirmed_after, late_confirm);
+      EXPECT_LE(confirmed_after, late_confirm + 30 * kMs);
+    } else {
+      EXPECT_GE(confirmed_after, 0);
+      EXPECT_LE(confirmed_after, 30 * kMs);
+    }
     EXPECT_EQ(m.deviation().samples, 0u);
-    run(m, dev, link, 100.0, (from - dev.t0) + 300 * kMs, 1 * kSec, 200 * kMs);
+    run(m, dev, link, 100.0, (from - dev.t0) + confirmed_after + 300 * kMs, 1 * kSec, 200 * kMs);
   }
   EXPECT_EQ(m.status().jumps, 2u);
+}
+
+// Issue 26: a network (or netem, or a switch) that holds every packet 50 ms for a while is not the
+// sensor's clock stepping back: the line stays where it was, so the stamps stay the sensor's, and
+// nothing jumps there and back (before: two jumps, the mapping 50 ms off for the whole hold and
+// snapping back ~0.1 s after it, which mixed the fused cloud's rotations). Checked for holds of
+// 1 s and 2.5 s at LIDAR rate, with the held backlog released in order when the hold ends.
+TEST(ClockMapper, AHeldNetworkIsNotTakenForAStepBack) {
+  for (const Nanos hold : {1 * kSec, 2500 * kMs}) {
+    SCOPED_TRACE(hold);
+    DelayModel dm;
+    SimLink link(21, dm);
+    SimDevice dev;
+    dev.drift_ppm = 40;
+    ClockMapper m(config_for(dm));
+    run(m, dev, link, 754.0, 0, 4 * kSec, 4 * kSec);
+    ASSERT_EQ(m.state(), SyncState::kLocked);
+    const Nanos begin = dev.t0 + 4 * kSec, end = begin + hold;
+    Nanos max_err = 0, released = 0;
+    bool awaited = false;
+    for (Nanos t = begin; t < end + 3 * kSec; t += kSec / 754) {
+      // Held 50 ms while the hold lasts; after it, in order: nothing overtakes what is still held.
+      Nanos rx = t + link.delay() + (t < end ? 50 * kMs : 0);
+      rx = std::max(rx, released + 5 * kUs);
+      released = rx;
+      const Nanos d = dev.device_at(t);
+      m.observe(d, rx);
+      awaited = awaited || m.deviation().awaiting_late;
+      max_err = std::max(max_err, std::abs(*m.to_vehicle(d) - dev.vehicle_at(d)));
+    }
+    EXPECT_TRUE(awaited) << "the hold was never reported as doubtful";
+    EXPECT_EQ(m.status().jumps, 0u);
+    EXPECT_EQ(m.state(), SyncState::kLocked);
+    EXPECT_EQ(m.deviation().samples, 0u);
+    EXPECT_LT(max_err, 50 * kUs);
+  }
+}
+
+// The sensor's clock really stepped back by less than late_shift_max_ns: confirmed once the shift has
+// lasted late_confirm_ns, then mapped right. A step back beyond late_shift_max_ns (a reboot, below)
+// and an announced host step confirm at once.
+TEST(ClockMapper, AStepBackIsConfirmedAfterTheLateSpan) {
+  DelayModel dm;
+  SimLink link(22, dm);
+  SimDevice dev;
+  ClockMapper m(config_for(dm));
+  run(m, dev, link, 754.0, 0, 4 * kSec, 4 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+  dev.step_ns = -300 * kMs;
+  const Nanos from = dev.t0 + 4 * kSec;
+  Nanos confirmed_after = -1;
+  for (Nanos t = from; t < from + 5 * kSec; t += kSec / 754) {
+    if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) {
+      confirmed_after = t - from;
+      break;
+    }
+  }
+  EXPECT_GE(confirmed_after, m.config().late_confirm_ns);
+  EXPECT_LE(confirmed_after, m.config().late_confirm_ns + 20 * kMs);
+  EXPECT_NEAR(static_cast<double>(m.status().last_jump_ns), 300e6, 1e6);
+  const RunResult r = run(m, dev, link, 754.0, confirmed_after + 4 * kSec + 1 * kMs, 3 * kSec, 1 * kSec);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
+}
+
+// PTP stepping the host's CLOCK_REALTIME forward makes every arrival later against the device, as a
+// held network would; the node's RealtimeStepDetector knows better and says so (host_step): the
+// mapping follows at the normal pace. An announcement of another size changes nothing.
+TEST(ClockMapper, AnAnnouncedHostStepForwardConfirmsAtOnce) {
+  for (const Nanos announced : {500 * kMs, 200 * kMs}) {
+    SCOPED_TRACE(announced);
+    DelayModel dm;
+    SimLink link(23, dm);
+    SimDevice dev;
+    ClockMapper m(config_for(dm));
+    run(m, dev, link, 754.0, 0, 4 * kSec, 4 * kSec);
+    ASSERT_EQ(m.state(), SyncState::kLocked);
+    const Nanos from = dev.t0 + 4 * kSec;
+    m.host_step(announced, from + 500 * kMs);  // host time after the step
+    Nanos confirmed_after = -1;
+    for (Nanos t = from; t < from + 5 * kSec; t += kSec / 754) {
+      if (m.observe(dev.device_at(t), t + 500 * kMs + link.delay()) == ObserveResult::kJumpDetected) {
+        confirmed_after = t - from;
+        break;
+      }
+    }
+    const Nanos expected = announced == 500 * kMs ? m.config().jump_confirm_ns : m.config().late_confirm_ns;
+    EXPECT_GE(confirmed_after, expected);
+    EXPECT_LE(confirmed_after, expected + 20 * kMs);
+  }
+}
+
+// A persistent shift between the outlier and jump thresholds is re-acquired after reacquire_ns, also
+// at LIDAR rate. Before, the pending samples were dropped whenever 256 had gathered (340 ms at
+// 754 Hz, less than reacquire_ns): the line never moved, every later sample an outlier.
+TEST(ClockMapper, APersistentSmallShiftIsReacquiredAtLidarRate) {
+  DelayModel dm;
+  dm.tail_prob = 0;
+  SimLink link(24, dm);
+  SimDevice dev;
+  ClockMapper m(config_for(dm));
+  run(m, dev, link, 754.0, 0, 4 * kSec, 4 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+  dev.step_ns = 7 * kMs;  // arrivals 7 ms earlier than the line allows
+  const Nanos from = dev.t0 + 4 * kSec;
+  Nanos confirmed_after = -1;
+  for (Nanos t = from; t < from + 3 * kSec; t += kSec / 754) {
+    if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) {
+      confirmed_after = t - from;
+      break;
+    }
+  }
+  EXPECT_GE(confirmed_after, m.config().reacquire_ns);
+  EXPECT_LE(confirmed_after, m.config().reacquire_ns + 20 * kMs);
+  const RunResult r = run(m, dev, link, 754.0, confirmed_after + 4 * kSec + 1 * kMs, 3 * kSec, 1 * kSec);
+  EXPECT_LT(r.max_err_ns, 50 * kUs);
 }
 
 TEST(ClockMapper, DetectsADeviceClockResetAtLidarRate) {
@@ -354,6 +486,9 @@ TEST(ClockMapper, ConfigValidationNamesTheField) {
   EXPECT_THROW(ClockMapper{c}, std::invalid_argument);
   c = {};
   c.reacquire_ns = c.jump_confirm_ns - 1;
+  EXPECT_THROW(ClockMapper{c}, std::invalid_argument);
+  c = {};
+  c.late_confirm_ns = -1;
   EXPECT_THROW(ClockMapper{c}, std::invalid_argument);
   EXPECT_NO_THROW(ClockMapper{ClockMapperConfig{}});
 }

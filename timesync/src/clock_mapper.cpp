@@ -57,6 +57,8 @@ void ClockMapperConfig::validate() const {
   require(holdover_max_ns >= holdover_after_ns, "holdover_max_ns", "must be >= holdover_after_ns");
   require(fixed_delay_ns >= 0, "fixed_delay_ns", "must be >= 0");
   require(reacquire_ns >= jump_confirm_ns, "reacquire_ns", "must be >= jump_confirm_ns");
+  require(late_confirm_ns >= 0, "late_confirm_ns", "must be >= 0");
+  require(late_shift_max_ns >= 0, "late_shift_max_ns", "must be >= 0");
   require(residual_history >= 1 && residual_history <= 1'000'000, "residual_history",
           "must be in 1..1000000");
 }
@@ -81,6 +83,7 @@ void ClockMapper::reset() noexcept {
   s_ = 0.0;
   c_ = 0.0;
   state_ = SyncState::kUnsynced;
+  announced_step_ns_ = 0;
 }
 
 void ClockMapper::clear_window() noexcept {
@@ -199,25 +202,66 @@ void ClockMapper::push_residual(double r) noexcept {
   res_used_ = std::min(res_used_ + 1, residuals_.size());
 }
 
-ObserveResult ClockMapper::handle_deviation(Nanos device_ns, Nanos host_ns, Nanos y_ns,
-                                            double resid) noexcept {
-  if (!candidates_.empty()) {
-    const Candidate& first = candidates_.front();
-    const double first_resid =
-        static_cast<double>(sat_sub(first.y_ns, anchor_y_)) - predict_y(first.device_ns);
-    const bool consistent =
-        std::fabs(resid - first_resid) <= static_cast<double>(cfg_.outlier_threshold_ns);
-    if (!consistent || candidates_.size() == kMaxCandidates) candidates_.clear();
-  }
-  candidates_.push_back(Candidate{device_ns, host_ns, y_ns});
-  ++counters_.outliers;
+bool ClockMapper::is_late(double resid, Nanos host_ns) const noexcept {
+  if (state_ == SyncState::kConverging) return false;  // a cold line is restarted, not defended
+  if (!(resid > static_cast<double>(cfg_.outlier_threshold_ns)) || resid > static_cast<double>(cfg_.late_shift_max_ns))
+    return false;
+  const bool announced = announced_step_ns_ != 0 && host_ns <= announced_until_ns_ &&
+                         std::fabs(resid - static_cast<double>(announced_step_ns_)) <=
+                             static_cast<double>(cfg_.outlier_threshold_ns);
+  return !announced;
+}
+
+Nanos ClockMapper::confirm_span_ns(double resid, Nanos host_ns) const noexcept {
   // A step beyond jump_threshold confirms quickly; a smaller persistent shift (the estimate was
   // wrong, or the device stepped by less) only after reacquire_ns of consistent samples.
+  const Nanos span = std::fabs(resid) > static_cast<double>(cfg_.jump_threshold_ns) ? cfg_.jump_confirm_ns : cfg_.reacquire_ns;
+  return is_late(resid, host_ns) ? std::max(span, cfg_.late_confirm_ns) : span;
+}
+
+void ClockMapper::keep_candidate(const Candidate& c) noexcept {
+  if (candidates_.size() == kMaxCandidates) {
+    // A shift confirmed over seconds outlasts the buffer at LIDAR rates: thin it, keeping the first
+    // sample (the span is measured from it) and an even spread for the re-seed.
+    std::size_t kept = 1;
+    for (std::size_t i = 2; i < candidates_.size(); i += 2) candidates_[kept++] = candidates_[i];
+    candidates_.resize(kept);
+  }
+  candidates_.push_back(c);
+}
+
+void ClockMapper::host_step(Nanos step_ns, Nanos host_now_ns) noexcept {
+  announced_step_ns_ = step_ns;
+  Nanos until = 0;
+  announced_until_ns_ = __builtin_add_overflow(host_now_ns, cfg_.late_confirm_ns, &until) ? host_now_ns : until;
+}
+
+ObserveResult ClockMapper::handle_deviation(Nanos device_ns, Nanos host_ns, Nanos y_ns,
+                                            double resid) noexcept {
+  double first_resid = resid;
+  if (!candidates_.empty()) {
+    const Candidate& first = candidates_.front();
+    first_resid = static_cast<double>(sat_sub(first.y_ns, anchor_y_)) - predict_y(first.device_ns);
+    const auto band = static_cast<double>(cfg_.outlier_threshold_ns);
+    if (resid - first_resid > band) {
+      // Later than the shift by more than the band: that shift plus a queue (delays only add), no
+      // evidence against it. Over a late span of seconds every network has such samples.
+      ++counters_.outliers;
+      return std::fabs(resid) > static_cast<double>(cfg_.jump_threshold_ns) ? ObserveResult::kJumpCandidate
+                                                                             : ObserveResult::kOutlier;
+    }
+    if (first_resid - resid > band) {  // earlier: the first one sat in a queue; start again from this one
+      candidates_.clear();
+      first_resid = resid;
+    }
+  }
+  keep_candidate(Candidate{device_ns, host_ns, y_ns});
+  ++counters_.outliers;
   const bool big = std::fabs(resid) > static_cast<double>(cfg_.jump_threshold_ns);
   const Nanos span = sat_sub(candidates_.back().host_ns, candidates_.front().host_ns);
-  if (candidates_.size() < cfg_.jump_confirm_samples ||
-      span < (big ? cfg_.jump_confirm_ns : cfg_.reacquire_ns))
+  if (candidates_.size() < cfg_.jump_confirm_samples || span < confirm_span_ns(first_resid, host_ns))
     return big ? ObserveResult::kJumpCandidate : ObserveResult::kOutlier;
+  announced_step_ns_ = 0;  // whatever was announced has happened (or was not a shift of this device)
 
   // Confirmed: re-seed the window from the candidates, keeping the drift.
   const double old_pred = static_cast<double>(anchor_y_) + predict_y(device_ns);
@@ -290,9 +334,19 @@ ObserveResult ClockMapper::observe(Nanos device_ns, Nanos host_ns) noexcept {
 ClockMapper::Deviation ClockMapper::deviation() const noexcept {
   if (candidates_.empty() || !have_model_) return {};
   const Candidate& first = candidates_.front();
+  const Candidate& last = candidates_.back();
   const double resid = static_cast<double>(sat_sub(first.y_ns, anchor_y_)) - predict_y(first.device_ns);
-  if (!(std::fabs(resid) < 9e18)) return {candidates_.size(), resid < 0 ? std::numeric_limits<Nanos>::min() : std::numeric_limits<Nanos>::max()};
-  return {candidates_.size(), std::llround(resid)};
+  Deviation d;
+  d.samples = candidates_.size();
+  d.span_ns = sat_sub(last.host_ns, first.host_ns);
+  if (!(std::fabs(resid) < 9e18)) {
+    d.shift_ns = resid < 0 ? std::numeric_limits<Nanos>::min() : std::numeric_limits<Nanos>::max();
+    return d;
+  }
+  d.shift_ns = std::llround(resid);
+  const Nanos normal = std::fabs(resid) > static_cast<double>(cfg_.jump_threshold_ns) ? cfg_.jump_confirm_ns : cfg_.reacquire_ns;
+  d.awaiting_late = d.samples >= cfg_.jump_confirm_samples && d.span_ns >= normal && is_late(resid, last.host_ns);
+  return d;
 }
 
 SyncState ClockMapper::state_at_gap(Nanos gap_ns) const noexcept {

@@ -35,6 +35,22 @@ Nanos PacketStamper::stamp(const DevicePacket& p) noexcept {
   return host_stamp;  // no usable device time: the decoder counts the packet if it is bad
 }
 
+void PacketStamper::host_step(Nanos step_ns, Nanos host_now_ns) noexcept {
+  hour_.host_step(step_ns, host_now_ns);
+  absolute_.host_step(step_ns, host_now_ns);
+}
+
+Nanos PacketStamper::doubtful_shift_ns() const noexcept {
+  if (cfg_.source == TimeSource::kHost) return 0;  // arrival stamps: a held network is their truth
+  // Only stamps that rest on the mapping (or on a clock it says is synced) are in doubt; a GPS-timed
+  // sensor's or a `correction: never` sensor's time is taken as it is whatever the arrivals do.
+  const bool absolute = absolute_source_ == AbsoluteSource::kSensorSynced || absolute_source_ == AbsoluteSource::kSensorMapped;
+  if (const auto d = absolute_.deviation(); absolute && d.awaiting_late) return d.shift_ns;
+  if (const auto d = hour_.mapper().deviation(); hour_.last_source() == StampSource::kSensorMapped && d.awaiting_late)
+    return d.shift_ns;
+  return 0;
+}
+
 Nanos PacketStamper::stamp_absolute(std::int64_t device_ns, Nanos host_stamp) noexcept {
   // A PTP- or GPS-synced device's time is vehicle time; a free-running one is mapped.
   absolute_.observe(device_ns, host_stamp);

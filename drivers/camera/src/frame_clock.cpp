@@ -45,6 +45,9 @@ timesync::ClockMapperConfig mapper_config(Nanos /*exposure_ns*/) {
   c.jump_confirm_samples = 10;
   c.jump_confirm_ns = 1'000'000'000;
   c.reacquire_ns = 5'000'000'000;
+  // Late arrivals confirm like early ones here: the frame clock refuses the line's stamps while any
+  // step is pending (unconfirmed_step below), so the 1 s above is already its window of doubt.
+  c.late_confirm_ns = 0;
   return c;
 }
 

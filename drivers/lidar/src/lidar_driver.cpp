@@ -182,10 +182,16 @@ struct LidarDriver::Impl {
   // When the topic's stamps last knowingly differed from the sensor's time (CLOCK_MONOTONIC, 0 =
   // never): a scan stamp carrying more than kStampFlagNs of a host step back's correction (held and
   // slewed), or a sensor that was PTP/GPS-synced now disagreeing with the host (a host clock step:
-  // the stamps follow the mapped host clock, the sensor's own time says otherwise). /diagnostics
-  // says `stamp_sync: unsynchronized` until kUnsyncHoldNs after the last such scan (issue 26).
+  // the stamps follow the mapped host clock, the sensor's own time says otherwise), or arrivals late
+  // against the sensor's clock for longer than a step takes to confirm (a held network or the
+  // sensor's clock stepped back: not told apart for seconds). /diagnostics says `stamp_sync:
+  // unsynchronized` until kUnsyncHoldNs after the last such scan (issue 26).
   Nanos unsync_seen_mono_ns = 0;
-  bool unsync_slewed = false;          // the last reason: slewed (true) or sensor disagrees (false)
+  enum class Unsync : std::uint8_t { kSlewed, kSensorDisagrees, kArrivalsLate };
+  Unsync unsync_reason = Unsync::kSlewed;  // the last one
+  Nanos doubtful_seen_mono_ns = 0;         // a packet stamped while in doubt (driver thread)
+  Nanos doubtful_shift_ns = 0;             // by how much the arrivals were late then
+  Nanos late_shift_ns = 0;                 // its copy for status()
   bool sensor_was_synced = false;      // the absolute path has taken the sensor's time as is
 
   Impl(const LidarConfig& c, const dds::Participant& p, dds::StampsWriter& s)
@@ -270,7 +276,12 @@ struct LidarDriver::Impl {
     timesync::DevicePacket p = device_packet(decoder->packet_time(bytes), rx_ns);
     p.gprmc_utc_ns = gprmc_utc_ns;
     p.pps = have_position ? pps : PpsState::kUnknown;
-    return stamper.stamp(p);
+    const Nanos stamp = stamper.stamp(p);
+    if (const Nanos late = stamper.doubtful_shift_ns(); late != 0) {
+      doubtful_seen_mono_ns = monotonic_now_ns();
+      doubtful_shift_ns = late;
+    }
+    return stamp;
   }
 
   // One datagram of the second port, from its socket or from the ring.
@@ -392,7 +403,8 @@ struct LidarDriver::Impl {
     stamps.write(topic_name, pc.header.stamp, pc.header.frame_id, scan.seq, st);
     const bool slewed = cfg.time_source == timesync::TimeSource::kSensor && scan_monotonic.status().correction_ns > kStampFlagNs;
     // As /diagnostics says it while this scan goes out (unsync_seen_mono_ns: this thread writes it).
-    const bool flagged = slewed || (unsync_seen_mono_ns != 0 && monotonic_now_ns() - unsync_seen_mono_ns < kUnsyncHoldNs);
+    const Nanos seen = std::max(unsync_seen_mono_ns, doubtful_seen_mono_ns);
+    const bool flagged = slewed || (seen != 0 && monotonic_now_ns() - seen < kUnsyncHoldNs);
     for (auto* o : scan_observers) o->observe_scan(scan, written, flagged);
     notify_sweep(scan, sweep_stamp);
     std::lock_guard lock(mutex);
@@ -400,7 +412,7 @@ struct LidarDriver::Impl {
     stamp_monotonic = scan_monotonic.status();
     if (slewed) {
       unsync_seen_mono_ns = monotonic_now_ns();
-      unsync_slewed = true;
+      unsync_reason = Unsync::kSlewed;
     }
     last_points = scan.points.size();
     last_missing = scan.missing_packets;
@@ -431,6 +443,8 @@ struct LidarDriver::Impl {
       if (const Nanos step = realtime_steps.observe(vehicle_now_ns(), monotonic_now_ns()); step != 0) {
         scan_monotonic.realtime_step(step);  // the mapping will follow it: hold the topics' stamps
         imu_monotonic.realtime_step(step);
+        stamper.host_step(step, vehicle_now_ns());  // the arrivals' shift is the host's, not a held network
+        imu_stamper.host_step(step, vehicle_now_ns());
       }
       if (r.status == lidar::RecvStatus::kError) {
         std::lock_guard lock(mutex);
@@ -469,7 +483,12 @@ struct LidarDriver::Impl {
         sensor_was_synced = true;
       } else if (sensor_was_synced && absolute_source != timesync::AbsoluteSource::kNone) {
         unsync_seen_mono_ns = monotonic_now_ns();
-        unsync_slewed = false;
+        unsync_reason = Unsync::kSensorDisagrees;
+      }
+      if (doubtful_seen_mono_ns > unsync_seen_mono_ns) {
+        unsync_seen_mono_ns = doubtful_seen_mono_ns;
+        unsync_reason = Unsync::kArrivalsLate;
+        late_shift_ns = doubtful_shift_ns;
       }
     }
   }
@@ -542,10 +561,20 @@ dds::DriverStatus LidarDriver::status() const {
     s.message = "record: " + std::to_string(rec.queue_dropped) + " packets dropped, the writer fell behind (disk too slow?)";
   } else if (unsynchronized) {
     s.level = dds::Level::kWarn;
-    s.message = impl_->unsync_slewed
-                    ? "unsynchronized: stamps slewed after a CLOCK_REALTIME step back (" +
-                          std::to_string(impl_->stamp_monotonic.correction_ns / 1'000'000) + " ms still added)"
-                    : std::string("unsynchronized: the sensor's synchronized clock and the host disagree (host clock stepped?): stamps follow the host");
+    using Unsync = Impl::Unsync;
+    switch (impl_->unsync_reason) {
+      case Unsync::kSlewed:
+        s.message = "unsynchronized: stamps slewed after a CLOCK_REALTIME step back (" +
+                    std::to_string(impl_->stamp_monotonic.correction_ns / 1'000'000) + " ms still added)";
+        break;
+      case Unsync::kSensorDisagrees:
+        s.message = "unsynchronized: the sensor's synchronized clock and the host disagree (host clock stepped?): stamps follow the host";
+        break;
+      case Unsync::kArrivalsLate:
+        s.message = "unsynchronized: packets arrive " + std::to_string(impl_->late_shift_ns / 1'000'000) +
+                    " ms later than the sensor's clock says (a held network, or the sensor's clock stepped back): stamps keep the last mapping";
+        break;
+    }
   } else if (impl_->last_missing > 0) {
     s.level = dds::Level::kWarn;
     s.message = "last scan incomplete: " + std::to_string(impl_->last_missing) + " packets missing";

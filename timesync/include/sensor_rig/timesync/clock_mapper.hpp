@@ -32,6 +32,13 @@ struct ClockMapperConfig {
   std::size_t jump_confirm_samples = 3;   // consistent candidates needed to declare a jump
   Nanos jump_confirm_ns = 10'000'000;     // host-time span the candidates must cover
   Nanos reacquire_ns = 1'000'000'000;     // persistent shift between the two thresholds: re-seed
+  // Arrivals later than the line by up to late_shift_max_ns are a held network (a switch, netem, a
+  // busy NIC queue) as much as a device clock stepped back: one-way timing cannot tell the two apart,
+  // only time can. Such a shift is taken for a step only once it has lasted late_confirm_ns (0: as
+  // any other). Earlier arrivals (a step forward), bigger shifts (a reboot, an epoch change) and a
+  // shift the host announced (host_step) confirm at once.
+  Nanos late_confirm_ns = 3'000'000'000;
+  Nanos late_shift_max_ns = 1'000'000'000;
   double max_drift_ppm = 500.0;           // fits beyond this are rejected (drift kept)
   Nanos holdover_after_ns = 1'000'000'000;  // no sample for this long: holdover
   Nanos holdover_max_ns = 60'000'000'000;   // holdover beyond this: unsynced
@@ -83,6 +90,11 @@ class ClockMapper {
 
   ObserveResult observe(Nanos device_ns, Nanos host_ns) noexcept;
 
+  // The host's CLOCK_REALTIME was stepped by step_ns (a RealtimeStepDetector saw it at host_now_ns,
+  // after the step): every arrival from now on is step_ns later against the device, which is no
+  // held network. Arrivals that shift by it confirm at the normal pace until late_confirm_ns after.
+  void host_step(Nanos step_ns, Nanos host_now_ns) noexcept;
+
   // Vehicle time of a device time. State is kHoldover when device_ns is more than
   // holdover_after_ns past the last sample; invalid when unsynced or holdover expired.
   [[nodiscard]] MapResult map(Nanos device_ns) const noexcept;
@@ -98,9 +110,14 @@ class ClockMapper {
   // the first one's residual in (host - device): positive, the arrivals are later than the line
   // (a host delay, or the device clock stepped back); negative, earlier than the line allows (the
   // device clock stepped forward, or the line is late). samples == 0: none pending.
+  // span_ns: host time the pending samples cover. awaiting_late: they would have confirmed a step
+  // by the normal rule, but are later than the line (late_confirm_ns): a held network or a device
+  // stepped back, not yet told apart; the line's stamps are as doubtful as the arrivals'.
   struct Deviation {
     std::size_t samples = 0;
     Nanos shift_ns = 0;
+    Nanos span_ns = 0;
+    bool awaiting_late = false;
   };
   [[nodiscard]] Deviation deviation() const noexcept;
   [[nodiscard]] const ClockMapperConfig& config() const noexcept { return cfg_; }
@@ -129,6 +146,9 @@ class ClockMapper {
   void update_lock_state(bool drift_fitted) noexcept;
   ObserveResult handle_deviation(Nanos device_ns, Nanos host_ns, Nanos y_ns, double resid) noexcept;
   void push_residual(double r) noexcept;
+  [[nodiscard]] Nanos confirm_span_ns(double resid, Nanos host_ns) const noexcept;
+  [[nodiscard]] bool is_late(double resid, Nanos host_ns) const noexcept;
+  void keep_candidate(const Candidate& c) noexcept;
 
   ClockMapperConfig cfg_;
   SyncState state_ = SyncState::kUnsynced;
@@ -151,6 +171,8 @@ class ClockMapper {
   std::size_t res_used_ = 0;
   std::size_t buckets_since_seed_ = 0;
   Nanos first_device_ns_ = 0;  // since the last (re)seed, for lock span
+  Nanos announced_step_ns_ = 0;      // host_step(): the shift arrivals will show (0: none)
+  Nanos announced_until_ns_ = 0;     // host time after which the announcement is forgotten
   ClockMapperStatus counters_;
   std::vector<double> scratch_x_, scratch_y_, scratch_r_;  // reused by refit, no allocation
   std::vector<unsigned char> mask_;

@@ -48,6 +48,15 @@ class PacketStamper {
   [[nodiscard]] AbsoluteSource absolute_source() const noexcept { return absolute_source_; }
   [[nodiscard]] ClockMapperStatus absolute_status(Nanos host_now_ns) const { return absolute_.status(host_now_ns); }
 
+  // CLOCK_REALTIME was stepped by step_ns (the caller's RealtimeStepDetector, at host_now_ns after
+  // it): told to the mappers, so that the arrivals' shift is not held as a possible network delay.
+  void host_step(Nanos step_ns, Nanos host_now_ns) noexcept;
+  // The arrivals have been later than the sensor's clock says for longer than a step needs to be
+  // confirmed, and not yet long enough to tell a held network from the sensor's clock stepping back
+  // (ClockMapper::Deviation::awaiting_late): the stamps are doubtful until it is decided. 0: not
+  // doubtful; else the shift (arrivals later by, ns).
+  [[nodiscard]] Nanos doubtful_shift_ns() const noexcept;
+
   // |device - vehicle| below this: the device clock is synchronised (PTP/GPS) and taken as is.
   static constexpr Nanos kSyncedWithinNs = 1'000'000;
   // While the mapper converges: how far the receive times may lag a synced device's clock (the

@@ -89,6 +89,9 @@ class Stamper {
   [[nodiscard]] StamperStatus status() const;
   [[nodiscard]] StamperStatus status(Nanos host_now_ns) const;  // with mapper holdover by host time
   [[nodiscard]] const ClockMapper& mapper() const noexcept { return mapper_; }
+  [[nodiscard]] StampSource last_source() const noexcept { return last_source_; }
+  // CLOCK_REALTIME stepped (ClockMapper::host_step).
+  void host_step(Nanos step_ns, Nanos host_now_ns) noexcept { mapper_.host_step(step_ns, host_now_ns); }
   [[nodiscard]] const StamperConfig& config() const noexcept { return cfg_; }
 
  private:
