@@ -335,6 +335,72 @@ TEST(SweepMatcher, OwnPhaseChangeOfOneLidar) {
   }
 }
 
+// A LIDAR stalled for three rotations comes back on another phase of its own (the whole-rig campaign,
+// seed 25: the front's mock SIGSTOPped 300 ms, its phase 35 ms later after it): the others show no
+// step, so its new phase is taken once each of them has handed over a scan begun after its return.
+// Before, the matcher held its old phase for 3 of its scans, each fused with the rotation before
+// its own (the rig's phase moved from 31 to 66 ms past the others': its scans now lie 34 ms before
+// their next rotation, 66 ms after this one).
+TEST(SweepMatcher, AStalledLidarBackOnAPhaseOfItsOwnIsTakenOnceTheOthersShowNoStep) {
+  auto scans = rig_scans({31 * kMs, 0, 2 * kMs}, 0, 40);
+  erase_scans(scans, 0, 10, 13);
+  for (auto& t : scans)
+    if (t.source == 0 && t.rotation >= 13) {
+      t.stamp += 35 * kMs;
+      t.arrival += 35 * kMs;
+      t.rotation += 1;  // the truth: nearest the others' next rotation
+    }
+  SimulatedRig run(3);
+  run.feed(scans);
+  std::size_t mixed = 0;
+  for (const auto& e : run.emitted_)
+    for (const auto& t : e.scans)
+      if (t.rotation != e.scans[0].rotation) {
+        ++mixed;
+        break;
+      }
+  EXPECT_LE(mixed, 1u) << "only the returned scan itself may be placed by the old phase";
+  EXPECT_GE(run.m_.counters().phase_steps, 1u);
+  for (std::int64_t n = 17; n < 40; ++n) {
+    ASSERT_NE(run.sweep_of(n), nullptr) << n;
+    EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+  }
+}
+
+// A LIDAR back from 300 to 600 rpm on another phase: its last slow turn cut short (165 ms, the mock's
+// rotor keeps turning as a motor would), its next scans 35 ms earlier in the rotation. Its arrivals
+// moved with its stamps, so no clock stepped: its phase is taken at once. Before, held as a possible
+// clock step for 3 scans, each was fused with the rotation before its own (the whole-rig campaign,
+// seed 25, front LIDAR at 19.08 s).
+TEST(SweepMatcher, ALidarBackFromASlowerRpmOnAPhaseOfItsOwnIsTakenAtOnce) {
+  std::vector<TrueScan> scans;
+  for (std::int64_t n = 0; n < 40; ++n)
+    for (std::uint32_t s = 1; s < 3; ++s) {
+      const Nanos stamp = n * kPeriod + (s == 1 ? 0 : 2 * kMs);
+      scans.push_back({s, n, stamp, stamp + kDelivery});
+    }
+  for (std::int64_t j = 0; j < 6; ++j) {  // 300 rpm at 66 ms: nearest the others' next rotation
+    const Nanos stamp = 2 * j * kPeriod + 66 * kMs;
+    const Nanos span = j < 5 ? 2 * kPeriod : 165 * kMs;  // the last turn cut short
+    scans.push_back({0, 2 * j + 1, stamp, stamp + span + 2 * kMs, span, 2});
+  }
+  for (std::int64_t n = 12; n < 40; ++n) {  // 600 rpm again, at 31 ms: with the others' same rotation
+    const Nanos stamp = n * kPeriod + 31 * kMs;
+    scans.push_back({0, n, stamp, stamp + kDelivery, kPeriod});
+  }
+  SimulatedRig run(3);
+  run.feed(scans);
+  for (const auto& e : run.emitted_) {
+    if (e.scans[0].rotation < 11) continue;
+    for (const auto& t : e.scans)
+      EXPECT_EQ(t.rotation, e.scans[0].rotation) << "sweep emitted at " << e.at / kMs << " ms mixes rotations";
+  }
+  for (std::int64_t n = 13; n < 40; ++n) {
+    ASSERT_NE(run.sweep_of(n), nullptr) << n;
+    EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+  }
+}
+
 // Two PTP LIDARs whose stamps run half a rotation late for a while (the rig's mapped stamps after a
 // host.network_delay or a clock step's slew; their data and arrivals keep the rig's rotation), then
 // snap back, beside a GPS-timed one that stays true. A step of P/2 reads +P/2 or -P/2 by a few

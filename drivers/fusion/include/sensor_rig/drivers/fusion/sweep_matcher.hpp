@@ -95,6 +95,7 @@ class SweepMatcher {
     Nanos phase = 0;   // last stamp mod period
     Nanos offset = 0;  // its timeline stepped by this, not yet every live source's ([-P, P): the sign is the rotation)
     int offset_scans = 0;
+    Nanos jumped_at = 0;  // arrival of the scan whose step set the offset
     std::uint64_t last_sweep = 0;  // id of the sweep its last scan joined (0: none)
     int rotations = 1;             // periods one of its scans spans (2: a 300 rpm LIDAR beside 600 rpm)
     std::int64_t last_rotation = 0;   // rotation of its newest scan
@@ -112,6 +113,7 @@ class SweepMatcher {
   void track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span);
   [[nodiscard]] Nanos timeline_step(const Source& src, Nanos stamp, Nanos arrival, Nanos span) const noexcept;
   void place_boundary(bool anew);
+  [[nodiscard]] bool step_refuted(const Source& moved) const noexcept;
   [[nodiscard]] bool settled(const Sweep& s) const noexcept;
   [[nodiscard]] bool covered(std::size_t source, const Sweep& s) const noexcept;
   [[nodiscard]] Nanos wait_ns(const Sweep& s) const noexcept;  // timeout + a slower absent source's extra periods
