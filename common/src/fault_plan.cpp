@@ -60,7 +60,9 @@ constexpr std::array<KindInfo, 33> kKinds{{
     {"host.kill_mock", DC::kHost, "restart_s=1", 0, "a mock device process killed (SIGKILL), restarted restart_s later"},
     {"host.stall_mock", DC::kHost, "ms=300", 0, "a mock device process stopped (SIGSTOP) for ms"},
     {"host.network_delay", DC::kHost, "ms=50,jitter_ms=0", 1,
-     "the rig's LIDAR traffic held back by ms +-jitter_ms (netem on lo, may reorder; else in the LIDAR mocks, in order)"},
+     "the devices' network held back by ms +-jitter_ms: netem on lo (LIDAR UDP only, may reorder), else in the mocks, "
+     "in order, nothing lost: LIDAR datagrams, GigE fake cameras' GVSP, the mock ECU's CAN frames (not V4L2, not the "
+     "in-process Aravis fakes); camera stamps must not move, the dbw bridge's ECU watchdog trips only past ecu_timeout_ms"},
 }};
 
 std::map<std::string, std::string> default_params(const KindInfo& k) {

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "sensor_rig/common/fault_plan.hpp"
+#include "sensor_rig/common/network_hold.hpp"
 #include "sensor_rig/common/cli.hpp"
 #include "sensor_rig/common/shutdown.hpp"
 #include "sensor_rig/common/truth_record.hpp"
@@ -64,15 +65,19 @@ class PlannedFaults {
     for (const auto& e : plan.for_device(device)) {
       // Over before this process started: its predecessor's. Still on (the mock was restarted inside
       // it): injected for what is left of it, and recorded again by this run.
-      if (e.kind.rfind("dbw.", 0) != 0 || offset_s + e.at_s + e.duration_s < 0) continue;
+      const bool delay = e.kind == "host.network_delay" && e.device != "lo";
+      if ((e.kind.rfind("dbw.", 0) != 0 && !delay) || offset_s + e.at_s + e.duration_s < 0) continue;
       faults::FaultEvent left = e;
       if (offset_s + e.at_s < 0) {
         left.duration_s = offset_s + e.at_s + e.duration_s;
         left.at_s = -offset_s;
       }
-      faults.push_back(from_event(left, offset_s + left.at_s));
+      if (!delay) faults.push_back(from_event(left, offset_s + left.at_s));
       events_.push_back(left);
     }
+    // host.network_delay: the ECU's frames held on their way to the bus (the bus between ECU and PU
+    // delivers them late, in order), recorded per feedback frame with the fault's id.
+    hold_ = faults::NetworkHold(faults::NetworkHold::windows_of(plan, device));
     // Its units: the feedback frames, each one sample of /vehicle/state (the bridge publishes one per
     // frame it takes, stamped with the frame's receive time).
     truth_ = std::make_unique<truth::Writer>(
@@ -94,15 +99,27 @@ class PlannedFaults {
     if (feedback == nullptr) return;
     ecu.set_observer([this](const mock::EmittedFrame& e) {
       if (e.role != "feedback") return;
+      const Nanos made = vehicle_now_ns();
       if (e.fate == mock::EmittedFrame::Fate::kDropped) {
-        record_unit(e, false, vehicle_now_ns());
+        record_unit(e, false, made, made, 0);
       } else {
-        pending_.push_back(e);
+        pending_.push_back(Pending{e, made});
       }
     });
+    if (!hold_.empty())
+      run.depart = [this](const can::Frame&, Nanos made_mono) {
+        const auto d = hold_.due(made_mono);
+        held_by_.push_back(d.fault);  // one per frame, in the order they leave
+        return d.at_mono;
+      };
     run.on_sent = [this, feedback](const can::Frame& f, bool heard, Nanos handed_ns) {
+      std::uint64_t held_by = 0;
+      if (!held_by_.empty()) {
+        held_by = held_by_.front();
+        held_by_.pop_front();
+      }
       if (pending_.empty() || !feedback->matches(f)) return;
-      record_unit(pending_.front(), heard, handed_ns);
+      record_unit(pending_.front().frame, heard, handed_ns, pending_.front().made, held_by);
       pending_.pop_front();
     };
   }
@@ -110,16 +127,19 @@ class PlannedFaults {
  private:
   // `veh`: when the frame was handed to the bus (taken before the send: the bridge's kernel receive
   // stamp is that instant, whatever happens to this process after it), or made, for a dropped one.
-  void record_unit(const mock::EmittedFrame& e, bool on_bus, Nanos veh) {
+  // A CAN sample's acquisition is its kernel receive time (SPEC 6), so the unit's `acq` is `veh`;
+  // the part's `acq` is when the ECU made the frame (vehicle time; `dev` the ECU's monotonic clock),
+  // later than it by a host.network_delay's hold (`held_by`, its id on the part, fate sent).
+  void record_unit(const mock::EmittedFrame& e, bool on_bus, Nanos veh, Nanos made, std::uint64_t held_by) {
     using F = mock::EmittedFrame::Fate;
     const auto id = static_cast<std::int64_t>(units_++);
     truth_->unit({id, veh, e.now, 1});
     truth::PartRecord p;
     p.seq = static_cast<std::uint64_t>(id);
     p.unit = id;
-    p.acq_ns = veh;
+    p.acq_ns = made;
     p.dev_ns = e.now;
-    p.fault = e.fault;
+    p.fault = e.fault != 0 ? e.fault : held_by;
     if (e.fate == F::kDropped) {
       p.fate = truth::Fate::kDropped;
     } else if (!on_bus) {
@@ -140,14 +160,22 @@ class PlannedFaults {
       while (!stop_ && monotonic_now_ns() < at) ::usleep(5'000);
       if (stop_) return;
       const Nanos veh = vehicle_now_ns();
-      truth_->fault({e.id, e.kind, veh, veh + static_cast<Nanos>(e.duration_s * 1e9), -1, faults::to_string(faults::FaultSpec{e.kind, e.params, e.at_s, e.duration_s, 0, e.device})});
+      std::string detail = faults::to_string(faults::FaultSpec{e.kind, e.params, e.at_s, e.duration_s, 0, e.device});
+      if (e.kind == "host.network_delay") detail += ", via=mock ECU (its frames held on the bus, order kept)";
+      truth_->fault({e.id, e.kind, veh, veh + static_cast<Nanos>(e.duration_s * 1e9), -1, detail});
       truth_->flush();
     }
   }
   std::vector<faults::FaultEvent> events_;
   std::unique_ptr<truth::Writer> truth_;
   std::uint64_t units_ = 0;                    // the ECU's thread only
-  std::deque<mock::EmittedFrame> pending_;     // made, not yet handed to the bus (the ECU's thread)
+  struct Pending {
+    mock::EmittedFrame frame;
+    Nanos made = 0;  // vehicle time it was made
+  };
+  std::deque<Pending> pending_;                // made, not yet handed to the bus (the ECU's thread)
+  faults::NetworkHold hold_;                   // host.network_delay's windows (the ECU's thread)
+  std::deque<std::uint64_t> held_by_;          // per frame handed to the hold: the delay holding it
   Nanos epoch_mono_ = 0;
   std::atomic<bool> stop_{false};
   std::thread thread_;

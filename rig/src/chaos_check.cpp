@@ -67,6 +67,7 @@ class Checker {
       check_topic(log, by_topic[log.header.topic]);
     }
     if (in_.fused.enabled) check_fused_cloud(by_topic[kFusedCloudTopic]);
+    check_watchdog();
     return std::move(r_);
   }
 
@@ -89,6 +90,61 @@ class Checker {
     check_fused(in_, ctx, r_);
     const auto e = in_.expected.find(kFusedCloudTopic);
     if (e != in_.expected.end()) check_isolation(kFusedCloudTopic, r_.topics[kFusedCloudTopic], samples, e->second.rate_hz, e->second.depends_on);
+  }
+
+  // dbw/README.md "Safety rules": the bridge disengages when the ECU status is older than
+  // ecu_timeout_ms. A host.network_delay that holds the mock ECU's frames holds its status and its
+  // feedback alike: after the delay begins nothing arrives for the hold (plus a period), then the
+  // frames come at their period, late. So a bridge engaged before must stay engaged when that
+  // silence is shorter than the timeout (a late status is still a status), and must disengage
+  // (ecu_timeout) when it is longer. The silence is read from the feedback frames' real sends in the
+  // ECU's truth (its status frames leave among them, held alike); the bridge's state from its
+  // dbw/bridge status (once a second). Judged for delays no other fault of the ECU or the host
+  // overlaps, within the window.
+  void check_watchdog() {
+    if (in_.dbw_ecu_timeout_ns <= 0) return;
+    constexpr Nanos kMargin = 5'000'000;  // a silence this near the timeout: the scheduler's to decide
+    const auto starts = [](const std::string& m, const char* p) { return m.rfind(p, 0) == 0; };
+    for (const auto& log : in_.truths) {
+      if (log.header.device_class != "dbw") continue;
+      for (const auto& f : log.faults) {
+        if (f.kind != "host.network_delay" || !truth::injected(f)) continue;
+        if (f.at_ns < in_.window_begin_ns || f.until_ns > in_.window_end_ns) continue;
+        const bool overlapped = std::any_of(in_.events.begin(), in_.events.end(), [&](const faults::FaultEvent& e) {
+          return e.id != f.id && touches(e, log.header.device, {}) && event_begin(e) < f.until_ns + 2 * kSecond &&
+                 event_end(e) > f.at_ns - kSecond;
+        });
+        if (overlapped) continue;
+        std::vector<Nanos> tx;
+        for (const auto& p : log.parts)
+          if (p.tx_ns != 0 && p.tx_ns >= f.at_ns - kSecond / 10 && p.tx_ns < f.until_ns + kSecond) tx.push_back(p.tx_ns);
+        if (tx.size() < 2) continue;
+        std::sort(tx.begin(), tx.end());
+        Nanos gap = 0;
+        for (std::size_t i = 1; i < tx.size(); ++i) gap = std::max(gap, tx[i] - tx[i - 1]);
+        const std::string* before = nullptr;
+        for (const auto& [t, m] : in_.dbw_bridge)
+          if (t < f.at_ns) before = &m;
+        if (before == nullptr || !starts(*before, "engaged")) continue;  // not engaged: nothing to trip
+        // Its reports from the delay's start to 1.5 s after its end (a trip is reported within a second).
+        bool reported = false;
+        std::string off;
+        for (const auto& [t, m] : in_.dbw_bridge)
+          if (t >= f.at_ns && t < f.until_ns + kSecond * 3 / 2) {
+            reported = true;
+            if (off.empty() && !starts(m, "engaged")) off = "'" + m + "' at " + at_s(t) + " s";
+          }
+        if (!reported) continue;
+        const std::string what = "host.network_delay (fault " + std::to_string(f.id) + ", " + f.detail.substr(0, f.detail.find(',')) +
+                                 ") held the ECU's frames: longest silence " + fmt_s(ms(gap)) + " ms, ecu_timeout_ms " +
+                                 fmt_s(ms(in_.dbw_ecu_timeout_ns));
+        if (gap + kMargin < in_.dbw_ecu_timeout_ns && !off.empty())
+          violation("watchdog", log.header.topic, what + ": the bridge disengaged (" + off + ") though no ECU status was older than the timeout");
+        if (gap > in_.dbw_ecu_timeout_ns + kMargin && off.find("ecu_timeout") == std::string::npos)
+          violation("watchdog", log.header.topic, what + ": the bridge " + (off.empty() ? std::string("stayed engaged") : "said " + off) +
+                                                      ", not disengaged for ecu_timeout");
+      }
+    }
   }
 
   Nanos event_begin(const faults::FaultEvent& e) const { return in_.epoch_vehicle_ns + seconds_ns(e.at_s); }
@@ -200,7 +256,11 @@ class Checker {
         if (u != nullptr) judged_at[s] = u->rec.acq_ns;
         continue;
       }
-      if (u == nullptr) u = unit_nearest(units, s->acquisition_ns, tolerance);
+      // A CAN frame is its unit by its receive stamp; a burst of them (held by host.network_delay,
+      // leaving together when it ends) within 1 ms of each other: the nearest one not yet published.
+      if (u == nullptr)
+        u = t.device_class == "dbw" ? unit_nearest_free(units, s->acquisition_ns, tolerance, kSecond / 1000)
+                                    : unit_nearest(units, s->acquisition_ns, tolerance);
       judged_at[s] = u != nullptr ? u->rec.acq_ns : s->acquisition_ns;
       if (u == nullptr) {
         ++t.unmatched;
@@ -232,13 +292,21 @@ class Checker {
       const Nanos lo = u.rec.acq_ns, hi = std::max({lo, u.first_intact_acq, u.own_first_acq});
       const Nanos err = s.acquisition_ns < lo ? lo - s.acquisition_ns : s.acquisition_ns > hi ? s.acquisition_ns - hi : 0;
       errors.push_back(ms(err));
-      if (ms(err) > bound && flagged(topic, s.acquisition_ns)) {
+      // A camera frame held on the network (host.network_delay) keeps its exposure: its stamp is the
+      // camera's (mapped) clock, and a late arrival is no reason for it to move, so a flag does not
+      // excuse a stamp that moved then (nor in the settle after it, while a mapping that followed the
+      // arrivals comes back). A LIDAR's mapped stamps may follow them, flagged (docs/faults.md).
+      const std::uint64_t held_by = is_camera(t.device_class) ? network_hold_of(log, u) : 0;
+      if (ms(err) > bound && held_by == 0 && flagged(topic, s.acquisition_ns)) {
         ++t.stamps_flagged;
       } else if (ms(err) > bound) {
         ++t.stamps_outside;
         violation("stamps", topic, "seq " + std::to_string(s.seq) + ": stamp " + fmt_s(ms(s.acquisition_ns - lo)) +
                                        " ms from the true acquisition of " + log.header.unit + " " + std::to_string(u.rec.unit) +
-                                       " (bound " + fmt_s(bound) + " ms)");
+                                       " (bound " + fmt_s(bound) + " ms)" +
+                                       (held_by != 0 ? "; the network held it (host.network_delay, fault " + std::to_string(held_by) +
+                                                           "): a late arrival does not move an exposure"
+                                                     : std::string{}));
       }
       const std::uint32_t reported = s.missing_packets + s.dropped;
       if (reported < u.lost) {
@@ -309,6 +377,16 @@ class Checker {
     const auto it = in_.unsynchronized.find(topic);
     if (it == in_.unsynchronized.end()) return false;
     return std::any_of(it->second.begin(), it->second.end(), [t](const auto& iv) { return t >= iv.first && t < iv.second; });
+  }
+
+  // The host.network_delay that held this unit's data in its mock (its truth has the fault line),
+  // or whose settle it lies in (a mapping that followed the late arrivals returns after it); 0: none.
+  std::uint64_t network_hold_of(const truth::Log& log, const UnitTruth& u) const {
+    const Nanos settle = seconds_ns(in_.bounds.settle_s);
+    for (const auto& f : log.faults)
+      if (f.kind == "host.network_delay" && truth::injected(f) && u.rec.acq_ns >= f.at_ns && u.rec.acq_ns < f.until_ns + settle)
+        return f.id;
+    return 0;
   }
 
   std::string faults_of(const truth::Log& log, const UnitTruth& u) const {

@@ -71,6 +71,10 @@ struct Input {
   // stamp_sync): a stamp outside its bound then is the rig's own warning, not a lie.
   std::map<std::string, std::vector<std::pair<Nanos, Nanos>>> unsynchronized;
   FusedInput fused;
+  // The drive-by-wire bridge under host.network_delay (its ECU's frames held): its /diagnostics
+  // status dbw/bridge ("STATE (REASON)") as read, and the protocol's ecu_timeout_ms (0: not judged).
+  std::vector<std::pair<Nanos, std::string>> dbw_bridge;
+  Nanos dbw_ecu_timeout_ns = 0;
   Nanos window_begin_ns = 0;  // units are judged when their acquisition is in [begin, end)
   Nanos window_end_ns = 0;
   // How far the window of `counted_lost` may lie from [begin, end): the count is the difference of
@@ -126,7 +130,7 @@ struct Result {
 };
 
 inline constexpr const char* kInvariants[] = {"accounted",      "no_phantom_loss", "stamps", "isolation", "recovery",
-                                              "monitor_agrees", "faults_injected", "fused"};
+                                              "monitor_agrees", "faults_injected", "fused", "watchdog"};
 inline constexpr const char* kFusedCloudTopic = "/sensors/lidar/fused/points";
 
 Result check(const Input& in);

@@ -17,6 +17,8 @@ constexpr Nanos kAfter = 500'000'000;
 
 // The counters the judge reads, as "status/key".
 bool watched_counter(std::string_view status, std::string_view key) { return status == "fusion" && key == "scans_dropped"; }
+// The statuses whose messages the judge reads: the bridge's state and reason (its ECU watchdog).
+bool watched_message(std::string_view status) { return status == "dbw/bridge"; }
 
 dds::QosSpec sets_qos() {  // deeper than the writer's 16: the reader is polled every 100 ms
   dds::QosSpec q;
@@ -65,6 +67,10 @@ void DiagnosticsLog::run() {
           const Nanos t = msg::from_time(a.header.stamp);
           for (std::uint32_t i = 0; i < a.status._length; ++i) {
             const auto& st = a.status._buffer[i];
+            if (st.name != nullptr && st.message != nullptr && watched_message(st.name)) {
+              std::lock_guard lock(mutex_);
+              messages_[st.name].emplace_back(t, st.message);
+            }
             bool flagged = false;
             std::string topic_value;
             for (std::uint32_t k = 0; k < st.values._length; ++k) {
@@ -104,6 +110,15 @@ std::uint64_t DiagnosticsLog::counter_delta(const std::string& status, const std
     if (t <= end) at_end = v;
   }
   return at_end - std::min(at_end, at_begin);
+}
+
+std::vector<std::pair<Nanos, std::string>> DiagnosticsLog::messages(const std::string& status) const {
+  std::lock_guard lock(mutex_);
+  const auto it = messages_.find(status);
+  if (it == messages_.end()) return {};
+  auto out = it->second;
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
 }
 
 std::map<std::string, Intervals> DiagnosticsLog::unsynchronized() const {

@@ -39,6 +39,8 @@ class DiagnosticsLog {
   // A counter of a status (fusion/scans_dropped) between two vehicle times: its value in the last
   // status at or before `end` minus in the last at or before `begin` (0 before the first).
   [[nodiscard]] std::uint64_t counter_delta(const std::string& status, const std::string& key, Nanos begin, Nanos end) const;
+  // The messages of a status the judge reads (dbw/bridge: "STATE (REASON)"), with their stamps, in order.
+  [[nodiscard]] std::vector<std::pair<Nanos, std::string>> messages(const std::string& status) const;
 
  private:
   void run();
@@ -48,6 +50,7 @@ class DiagnosticsLog {
   std::map<std::string, std::vector<Nanos>> flagged_;  // topic -> stamps of flagged statuses
   std::map<std::string, std::vector<std::pair<Nanos, std::uint64_t>>> counters_;  // "status/key" -> (stamp, value)
   std::vector<FusedSet> fused_sets_;
+  std::map<std::string, std::vector<std::pair<Nanos, std::string>>> messages_;  // status -> (stamp, message)
   std::thread thread_;
 };
 

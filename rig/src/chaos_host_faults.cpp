@@ -76,10 +76,11 @@ void HostFaults::begin(const faults::FaultEvent& e) {
       // Held back in the mocks that send the rig's network traffic: each LIDAR mock holds every
       // datagram ms ± jitter_ms while the fault lasts, in order (netem's jitter reorders; the mock's
       // hold varies gradually so no datagram overtakes another), from the same plan, and records each
-      // packet's real send (lidar/mock/README.md). Nothing on the host is changed, so nothing is left
-      // to undo after the fault, a failed campaign or a kill (the mocks die with rig up).
+      // packet's real send (lidar/mock/README.md); the GigE fake cameras hold their GVSP datagrams and
+      // the mock ECU its CAN frames alike (common/network_hold.hpp). Nothing on the host is changed,
+      // so nothing is left to undo after the fault, a failed campaign or a kill (the mocks die with rig up).
       truth_.fault({e.id, e.kind, veh, veh + span, -1,
-                    std::string(params) + ", via=lidar mocks (datagrams held, order kept" +
+                    std::string(params) + ", via=mocks: lidar, gige cameras, mock ECU (datagrams and CAN frames held, order kept" +
                         (jitter > 0 ? std::string("; hold within ms +- jitter_ms, per datagram") : std::string{}) + ")"});
     }
   } else {

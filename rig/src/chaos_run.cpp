@@ -282,7 +282,8 @@ int run(const Options& o) {
   // ... and a netem delay it left on lo.
   for (const auto& line : LoopbackDelay::sweep()) log::warn("chaos", line);
   // host.network_delay: netem on lo where the kernel has it (the host's event, device "lo", which no
-  // mock takes), else the LIDAR mocks hold their datagrams (the event stays every process's).
+  // mock takes), else the mocks hold their traffic (the event stays every process's): the LIDAR
+  // mocks their datagrams, the GigE fakes their GVSP datagrams, the mock ECU its CAN frames.
   std::vector<int> lidar_ports;
   for (const auto& l : cfg.lidars)
     for (const int p : {l.port, l.position_port})
@@ -292,7 +293,10 @@ int run(const Options& o) {
     for (auto& e : plan.events)
       if (e.kind == "host.network_delay" && why.empty()) e.device = "lo";
     std::fprintf(stderr, "chaos: host.network_delay %s\n",
-                 why.empty() ? "by netem on lo" : ("held in the LIDAR mocks (no netem on lo: " + why + ")").c_str());
+                 why.empty() ? "by netem on lo (the LIDARs' UDP ports; the cameras' and the CAN bus's traffic is not held)"
+                             : ("held in the mocks: LIDAR datagrams, GigE cameras' GVSP, the mock ECU's CAN frames (no netem on lo: " +
+                                why + ")")
+                                   .c_str());
   }
   CampaignDir dir(o.out_dir);
   const std::string exe = self_executable();
@@ -396,6 +400,15 @@ int run(const Options& o) {
   in.count_edge_ns = 1'000'000'000 + static_cast<Nanos>(cfg.diagnostics_period_ms) * 1'000'000;  // a line, a period
   in.expected = expectations_of(cfg);
   in.unsynchronized = diagnostics.unsynchronized();
+  if (cfg.dbw.enabled && cfg.dbw.mock_ecu) {
+    in.dbw_bridge = diagnostics.messages("dbw/bridge");
+    try {
+      in.dbw_ecu_timeout_ns = dbw::Protocol::load(cfg.dbw.protocol.empty() ? dbw::default_protocol_config() : cfg.dbw.protocol).timing().ecu_timeout_ns;
+    } catch (const std::exception&) {
+      // Warned about by expectations_of: the watchdog is not judged.
+    }
+    std::fprintf(stderr, "chaos: dbw/bridge: %zu status reports read (its ECU watchdog is judged by them)\n", in.dbw_bridge.size());
+  }
   if (cfg.fusion.enabled) {
     in.fused.enabled = true;
     for (const auto& l : cfg.lidars) in.fused.lidar_topics.push_back(lidar_topic(l.name));

@@ -106,4 +106,15 @@ UnitTruth* unit_nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance)
   return best_d <= tolerance ? best : nullptr;
 }
 
+UnitTruth* unit_nearest_free(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance, Nanos burst) {
+  UnitTruth* nearest = unit_nearest(units, t, tolerance);
+  if (nearest == nullptr || nearest->sample == nullptr) return nearest;
+  const auto lo = std::lower_bound(units.begin(), units.end(), nearest->rec.acq_ns - burst,
+                                   [](const UnitTruth& u, Nanos v) { return u.rec.acq_ns < v; });
+  UnitTruth* best = nullptr;
+  for (auto it = lo; it != units.end() && it->rec.acq_ns <= nearest->rec.acq_ns + burst; ++it)
+    if (it->sample == nullptr && (best == nullptr || std::llabs(it->rec.acq_ns - t) < std::llabs(best->rec.acq_ns - t))) best = &*it;
+  return best != nullptr ? best : nearest;
+}
+
 }  // namespace sensor_rig::rig::chaos

@@ -23,4 +23,11 @@ UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s
 // The unit whose acquisition is nearest `t`, within `tolerance` (units in acquisition order).
 UnitTruth* unit_nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance);
 
+// The same, but where the nearest unit has its sample already, the nearest one without a sample
+// whose acquisition lies within `burst` of it: units delivered in one burst (the CAN frames a
+// host.network_delay held, leaving together behind the last held one when it ends) have acquisitions
+// (their receive times) microseconds apart, closer than the rig's stamps of them are to the sends;
+// nearest alone gave one unit several samples ("published twice") and its neighbours none.
+UnitTruth* unit_nearest_free(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance, Nanos burst);
+
 }  // namespace sensor_rig::rig::chaos

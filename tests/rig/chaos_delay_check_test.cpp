@@ -2,8 +2,12 @@
 // the planted LIDAR truth of chaos_check_fixture.hpp.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <string>
+
 #include "chaos_check.hpp"
 #include "chaos_check_fixture.hpp"
+#include "chaos_units.hpp"
 
 namespace sensor_rig::rig::chaos {
 namespace {
@@ -72,6 +76,130 @@ TEST(ChaosCheck, ANetemDelayIsTakenOffTheArrivalsOfTheUnitsSentDuringIt) {
   r = check(in);
   EXPECT_FALSE(r.invariants.at("accounted"));
   EXPECT_GT(r.topics.at(kTopic).published_twice, 0u) << result_text(r);
+}
+
+
+// A camera under host.network_delay held by its GigE fake (frames 20..29 50 ms late on the wire): a
+// frame's stamp is its exposure, so stamps that follow the late arrivals are stamp errors even where
+// the rig flagged the topic unsynchronized (a flag excuses a clock the rig knowingly cannot map, not
+// a network that is late); the same flag outside a delay still excuses. The old judge held it.
+TEST(ChaosCheck, ACameraStampThatFollowsAHeldNetworkIsAnErrorFlaggedOrNot) {
+  constexpr Nanos kDelay = 50'000'000, kExposure = 10'000'000;
+  const std::string topic = "/sensors/camera/cam/image_raw";
+  const auto held = [](std::int64_t unit) { return unit >= 20 && unit < 30; };
+  const Nanos at = kT0 + 20 * kPeriod, until = kT0 + 30 * kPeriod;
+  Input in;
+  truth::Log log;
+  log.header = truth::Header{"cam", "camera", "rig-fake-gige-camera", topic, "frame", "camera ns"};
+  for (int u = 1; u <= kScans; ++u) {
+    const Nanos acq = kT0 + u * kPeriod;
+    log.units.push_back(truth::UnitRecord{u, acq, acq, 1});
+    log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, acq, acq, acq + kExposure + (held(u) ? kDelay : 0),
+                                          truth::Fate::kSent, held(u) ? 5U : 0U});
+    SampleRecord s;
+    s.topic = topic;
+    s.seq = static_cast<std::uint64_t>(u);
+    s.acquisition_ns = acq;
+    s.first_rx_ns = log.parts.back().tx_ns + 100'000;
+    s.publish_ns = s.first_rx_ns + 2'000'000;
+    s.received_ns = s.publish_ns + 1'000'000;
+    in.samples.push_back(s);
+  }
+  log.faults.push_back(truth::FaultRecord{5, "host.network_delay", at, until, -1, "ms=50, jitter_ms=0, via=camera mock"});
+  in.truths.push_back(log);
+  in.truths.push_back(truth::Log{});
+  in.truths.back().header.device = "host";
+  in.truths.back().faults.push_back(truth::FaultRecord{5, "host.network_delay", at, until, -1, "ms=50, jitter_ms=0, via=mocks"});
+  in.events.push_back(faults::FaultEvent{5, "host.network_delay", "", 2.0, 1.0, {{"ms", "50"}}});
+  in.monitor[topic] = MonitorTotals{static_cast<std::uint64_t>(kScans), 0};
+  in.expected[topic] = TopicExpectation{"cam", 10.0, {}};
+  in.epoch_vehicle_ns = kT0;
+  in.window_begin_ns = kT0;
+  in.window_end_ns = kT0 + (kScans + 1) * kPeriod;
+  Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  // Stamps that follow the arrivals (a clock mapping that took the held network for a clock step),
+  // flagged unsynchronized by the rig.
+  for (auto& s : in.samples)
+    if (held(static_cast<std::int64_t>(s.seq))) s.acquisition_ns += kDelay;
+  in.unsynchronized[topic] = {{at, until + kDelay + kPeriod}};
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(topic).stamps_outside, 10u);
+  EXPECT_EQ(r.topics.at(topic).stamps_flagged, 0u);
+  EXPECT_EQ(r.topics.at(topic).unaccounted, 0u) << "each frame still matched by its frame id";
+  ASSERT_FALSE(r.examples.empty());
+  EXPECT_NE(r.examples.front().what.find("host.network_delay"), std::string::npos) << r.examples.front().what;
+  // The same stamps and flag with no delay in the camera's truth (a clock step, say): excused.
+  in.truths[0].faults.clear();
+  r = check(in);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(topic).stamps_flagged, 10u);
+}
+
+// The drive-by-wire bridge's ECU watchdog under host.network_delay held by the mock ECU
+// (dbw/README.md "Safety rules": disengage when the ECU status is older than ecu_timeout_ms). The
+// ECU's frames at 10 ms, held `hold` from 1 s to 2 s (in order: after the delay they leave behind
+// the last held one). A 50 ms hold leaves at most 60 ms between frames: a bridge that disengages
+// breaks `watchdog`; a 150 ms hold leaves 160 ms: a bridge that stays engaged breaks it.
+Input dbw_under_delay(Nanos hold) {
+  constexpr Nanos kFrame = 10'000'000;
+  const std::string topic = "/vehicle/state";
+  const Nanos at = kT0 + kSecond, until = kT0 + 2 * kSecond;
+  Input in;
+  truth::Log log;
+  log.header = truth::Header{"paravan", "dbw", "mock Paravan ECU", topic, "can_frame", "CLOCK_MONOTONIC"};
+  Nanos last_tx = 0;
+  for (int u = 0; u < 500; ++u) {
+    const Nanos made = kT0 + u * kFrame;
+    const bool held = made >= at && made < until;
+    const Nanos tx = std::max(made + (held ? hold : 0), last_tx);
+    last_tx = tx;
+    log.units.push_back(truth::UnitRecord{u, tx, made, 1});  // a CAN sample's acquisition: its receive (= send)
+    log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, made, made, tx, truth::Fate::kSent, held ? 5U : 0U});
+    SampleRecord s;
+    s.topic = topic;
+    s.seq = static_cast<std::uint64_t>(u);
+    s.acquisition_ns = tx + 50'000;
+    s.publish_ns = s.acquisition_ns + 200'000;
+    s.received_ns = s.publish_ns + 500'000;
+    in.samples.push_back(s);
+  }
+  const std::string ms = std::to_string(hold / 1'000'000);
+  log.faults.push_back(truth::FaultRecord{5, "host.network_delay", at, until, -1, "host.network_delay:jitter_ms=0:ms=" + ms + "@1+1, via=mock ECU"});
+  in.truths.push_back(log);
+  in.truths.push_back(truth::Log{});
+  in.truths.back().header.device = "host";
+  in.truths.back().faults.push_back(truth::FaultRecord{5, "host.network_delay", at, until, -1, "ms=" + ms + ", via=mocks"});
+  in.events.push_back(faults::FaultEvent{5, "host.network_delay", "", 1.0, 1.0, {{"ms", ms}}});
+  in.monitor[topic] = MonitorTotals{500, 0};
+  in.expected[topic] = TopicExpectation{"paravan", 100.0, {}};
+  in.epoch_vehicle_ns = kT0;
+  in.window_begin_ns = kT0;
+  in.window_end_ns = kT0 + 5 * kSecond;
+  in.dbw_ecu_timeout_ns = 100'000'000;
+  for (int k = 0; k < 5; ++k) in.dbw_bridge.emplace_back(kT0 + kSecond / 2 + k * kSecond, "engaged (enabled)");
+  return in;
+}
+
+TEST(ChaosCheck, TheBridgeWatchdogUnderAHeldEcuIsWhatTheSafetyRulesSay) {
+  Input in = dbw_under_delay(50'000'000);
+  Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_LT(r.topics.at("/vehicle/state").stamp_error_max_ms, 0.1) << "a CAN stamp is its receive time: the held send";
+  // A bridge that took 60 ms of silence for a dead ECU.
+  for (auto& [t, m] : in.dbw_bridge)
+    if (t > kT0 + kSecond) m = "disengaged (ecu_timeout)";
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("watchdog")) << result_text(r);
+
+  in = dbw_under_delay(150'000'000);
+  r = check(in);  // stayed engaged through 160 ms of silence
+  EXPECT_FALSE(r.invariants.at("watchdog")) << result_text(r);
+  for (auto& [t, m] : in.dbw_bridge)
+    if (t > kT0 + kSecond) m = "disengaged (ecu_timeout)";
+  r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cerrno>
 #include <cstring>
 
@@ -39,6 +40,9 @@ std::string detail_of(const faults::FaultEvent& e) {
   if (e.kind == "camera.exposure_change") return "ExposureTimeAbs " + e.text("us") + " us";
   if (e.kind == "camera.slow_open") return "silent until " + e.text("s") + " s after the first GVCP request";
   if (e.kind.rfind("v4l2.", 0) == 0) return "not injected: a v4l2 fault on a GigE camera";
+  if (e.kind == "host.network_delay")
+    return "ms=" + e.text("ms", "50") + ", jitter_ms=" + e.text("jitter_ms", "0") +
+           ", via=camera mock (GVSP datagrams held, order kept; frames' tx = the leader's real send)";
   return {};
 }
 
@@ -50,6 +54,112 @@ GigeFakeChaos::GigeFakeChaos(const Options& o)
     : schedule_(o.args.plan, o.args.device), lost_ratio_(o.lost_per_thousand / 1000.0), link_mbps_(o.link_mbps) {
   if (!o.args.truth.empty())
     truth_ = std::make_unique<CameraTruth>(o.args.truth, o.args.device, "camera", "rig-fake-gige-camera (Aravis ArvGvFakeCamera)", kClock);
+  if (!o.args.plan.empty()) {
+    const faults::Plan plan = faults::read_plan(o.args.plan);
+    hold_ = faults::NetworkHold(faults::NetworkHold::windows_of(plan, o.args.device));
+    for (const auto& e : plan.for_device(o.args.device))
+      if (e.kind == "host.network_delay" && e.device != "lo") delays_.push_back(e);
+  }
+  if (!hold_.empty()) sender_ = std::thread([this] { send_held(); });
+}
+
+GigeFakeChaos::~GigeFakeChaos() {
+  {
+    std::lock_guard lock(held_mutex_);
+    held_stop_ = true;
+  }
+  held_cv_.notify_all();
+  if (sender_.joinable()) sender_.join();
+}
+
+void GigeFakeChaos::release(Held& h, SendFn real) {
+  if (h.record) {
+    if (truth_ != nullptr)
+      truth_->frame(h.unit, h.acq, h.dev, h.leader_held && last_leader_tx_ != 0 ? last_leader_tx_ : h.tx, h.fate, h.fault, h.exposure);
+  } else {
+    if (h.leader) last_leader_tx_ = vehicle_now_ns();
+    if (real != nullptr) real(h.socket, h.address, reinterpret_cast<const gchar*>(h.bytes.data()), h.bytes.size(), nullptr, nullptr);
+  }
+  if (h.socket != nullptr) g_object_unref(h.socket);
+  if (h.address != nullptr) g_object_unref(h.address);
+  h.socket = nullptr;
+  h.address = nullptr;
+}
+
+void GigeFakeChaos::send_held() {
+  std::unique_lock lock(held_mutex_);
+  while (true) {
+    if (held_.empty()) {
+      if (held_stop_) return;
+      held_cv_.wait(lock);
+      continue;
+    }
+    const Nanos due = held_.front().due_mono;
+    // Stopping: what the network still holds leaves now (the process ends; nothing is lost by the hold).
+    if (!held_stop_ && monotonic_now_ns() < due) {
+      held_cv_.wait_for(lock, std::chrono::nanoseconds(due - monotonic_now_ns()));
+      continue;
+    }
+    release(held_.front(), held_real_);
+    held_.pop_front();
+  }
+}
+
+gssize GigeFakeChaos::transmit(SendFn real, GSocket* socket, GSocketAddress* address, const void* data, std::size_t size,
+                               GCancellable* cancellable, GError** error) {
+  if (hold_.empty() || !is_stream(socket)) return real(socket, address, static_cast<const gchar*>(data), size, cancellable, error);
+  std::uint8_t type = 0;
+  if (size >= gvsp::kHeader) std::memcpy(&type, static_cast<const std::uint8_t*>(data) + gvsp::kContentTypeOffset, 1);
+  const bool leader = (type & 0x7f) == kLeader;
+  const Nanos now = monotonic_now_ns();
+  const auto due = hold_.due(now);
+  std::unique_lock lock(held_mutex_);
+  if (held_.empty() && due.at_mono <= now) return real(socket, address, static_cast<const gchar*>(data), size, cancellable, error);
+  // Held, or behind a held one: in order, at its time.
+  Held h;
+  h.due_mono = due.at_mono;
+  h.bytes.assign(static_cast<const std::uint8_t*>(data), static_cast<const std::uint8_t*>(data) + size);
+  h.socket = G_SOCKET(g_object_ref(socket));
+  h.address = address != nullptr ? G_SOCKET_ADDRESS(g_object_ref(address)) : nullptr;
+  h.leader = leader;
+  held_real_ = real;
+  held_.push_back(std::move(h));
+  if (leader) frame_leader_held_ = true;
+  if (due.fault != 0) frame_held_by_ = due.fault;
+  lock.unlock();
+  held_cv_.notify_all();
+  return static_cast<gssize>(size);
+}
+
+void GigeFakeChaos::after_send(GSocket* socket) {
+  if (!is_stream(socket) || !frame_truth_due_) return;
+  frame_truth_due_ = false;
+  const auto fate = frame_.sent == 0 && frame_.silenced > 0    ? truth::Fate::kNotSent
+                    : frame_.lost + frame_.silenced > 0 ? truth::Fate::kDropped
+                                                        : truth::Fate::kSent;
+  // The fault that decided its fate; a frame delivered whole but late: the delay that held it.
+  const std::uint64_t fault = fate == truth::Fate::kSent ? frame_held_by_ : frame_.fault;
+  {
+    std::unique_lock lock(held_mutex_);
+    if (!held_.empty()) {
+      Held h;
+      h.due_mono = held_.back().due_mono;
+      h.record = true;
+      h.unit = frame_.unit;
+      h.acq = frame_.acq;
+      h.dev = frame_.dev;
+      h.tx = frame_.tx;
+      h.exposure = frame_.exposure_ns;
+      h.fate = fate;
+      h.fault = fault;
+      h.leader_held = frame_leader_held_;
+      held_.push_back(std::move(h));
+      lock.unlock();
+      held_cv_.notify_all();
+      return;
+    }
+  }
+  truth_->frame(frame_.unit, frame_.acq, frame_.dev, frame_.tx, fate, fault, frame_.exposure_ns);
 }
 
 void GigeFakeChaos::booted(ArvFakeCamera* cam) {
@@ -125,6 +235,9 @@ bool GigeFakeChaos::tick() {
       reboot = reboot || answered_.load() > 0;
     }
   }
+  if (truth_ != nullptr)  // host.network_delay: the frames it holds name it
+    for (const auto& e : delays_)
+      if (e.at_s <= t) truth_->fault(e, schedule_.vehicle_ns(e.at_s), schedule_.vehicle_ns(e.at_s + e.duration_s), -1, detail_of(e));
   const auto* dead = schedule_.active("camera.dies", t);
   if (dead != nullptr) {
     dies_.store(dead->id, std::memory_order_release);
@@ -197,6 +310,8 @@ bool GigeFakeChaos::on_send(GSocket* socket, const void* data, std::size_t size)
     frame_.tx = vehicle_now_ns();
     frame_.sent = frame_.lost = frame_.silenced = 0;
     frame_.fault = 0;
+    frame_leader_held_ = false;
+    frame_held_by_ = 0;
   }
   bool send = true;
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
@@ -213,12 +328,8 @@ bool GigeFakeChaos::on_send(GSocket* socket, const void* data, std::size_t size)
     send = false;
   }
   if (send) ++frame_.sent;
-  if (type == kTrailer && truth_ != nullptr && frame_.unit >= 0) {
-    const auto fate = frame_.sent == 0 && frame_.silenced > 0    ? truth::Fate::kNotSent
-                      : frame_.lost + frame_.silenced > 0 ? truth::Fate::kDropped
-                                                          : truth::Fate::kSent;
-    truth_->frame(frame_.unit, frame_.acq, frame_.dev, frame_.tx, fate, fate == truth::Fate::kSent ? 0 : frame_.fault, frame_.exposure_ns);
-  }
+  // Its truth line once the trailer went or was lost (after_send: a held trailer leaves later).
+  if (type == kTrailer && truth_ != nullptr && frame_.unit >= 0) frame_truth_due_ = true;
   return send;
 }
 
@@ -239,6 +350,14 @@ void GigeFakeChaos::update_ptp(ArvFakeCamera* cam, double t) {
 }
 
 void GigeFakeChaos::finish() {
+  if (sender_.joinable()) {  // what is still held leaves now, its truth lines with it
+    {
+      std::lock_guard lock(held_mutex_);
+      held_stop_ = true;
+    }
+    held_cv_.notify_all();
+    sender_.join();
+  }
   if (truth_ != nullptr) truth_->flush();
 }
 
@@ -271,15 +390,18 @@ extern "C" gssize g_socket_send_to(GSocket* socket, GSocketAddress* address, con
   // the chaos (lost, silenced, recorded) as the fake's own would.
   // A send that fails is the fake's to ignore (it only logs them): no GError for the many datagrams.
   const bool reshaped = chaos->reshape(socket, buffer, size, [&](const std::uint8_t* d, std::size_t n) {
-    if (chaos->on_send(socket, d, n)) real(socket, address, reinterpret_cast<const gchar*>(d), n, cancellable, nullptr);
+    if (chaos->on_send(socket, d, n)) chaos->transmit(real, socket, address, d, n, cancellable, nullptr);
+    chaos->after_send(socket);
     chaos->pace(socket, d, n);
   });
   if (reshaped) return static_cast<gssize>(size);
   if (!chaos->on_send(socket, buffer, size)) {  // lost on the way (after it took its time on the link)
+    chaos->after_send(socket);
     chaos->pace(socket, buffer, size);
     return static_cast<gssize>(size);
   }
-  const gssize sent = real(socket, address, buffer, size, cancellable, error);
+  const gssize sent = chaos->transmit(real, socket, address, buffer, size, cancellable, error);
+  chaos->after_send(socket);
   chaos->pace(socket, buffer, size);
   return sent;
 }

@@ -9,11 +9,18 @@
 #include <arv.h>
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <random>
 #include <set>
 #include <string>
+#include <thread>
+#include <vector>
+
+#include "sensor_rig/common/network_hold.hpp"
 
 #include "gvsp_reshaper.hpp"
 #include "sensor_rig/camera/mock/camera_chaos.hpp"
@@ -28,6 +35,9 @@ class GigeFakeChaos {
     double link_mbps = 0;          // --link-mbps: the stream's packets leave at this rate (0: as fast as sent)
   };
   explicit GigeFakeChaos(const Options& o);  // throws std::runtime_error (plan, truth file)
+  ~GigeFakeChaos();
+  GigeFakeChaos(const GigeFakeChaos&) = delete;
+  GigeFakeChaos& operator=(const GigeFakeChaos&) = delete;
 
   [[nodiscard]] bool needs_ptp_features() const { return schedule_.has("camera.ptp"); }
   // The fake (re)started: its registers are fresh, frame ids start again at 1.
@@ -48,6 +58,15 @@ class GigeFakeChaos {
   // gets each datagram to send instead. false: send this one as it is.
   bool reshape(GSocket* socket, const void* data, std::size_t size, const GvspReshaper::Emit& emit);
   bool on_receive(ArvFakeCamera* cam);                                // false: ignore the datagram
+  // A datagram on_send let through, to its socket: GVCP at once; GVSP at once too, unless
+  // host.network_delay holds it (then a thread of its own sends it at its time, in order: nothing
+  // lost, nothing overtaken). `real`: GLib's g_socket_send_to.
+  using SendFn = gssize (*)(GSocket*, GSocketAddress*, const gchar*, gsize, GCancellable*, GError**);
+  gssize transmit(SendFn real, GSocket* socket, GSocketAddress* address, const void* data, std::size_t size,
+                  GCancellable* cancellable, GError** error);
+  // After a stream datagram went (or was lost): a frame's truth line, due at its trailer, is written
+  // now, or (its datagrams held) once the held trailer has left, with the leader's real send.
+  void after_send(GSocket* socket);
   // After a stream datagram (sent or lost): after a frame's leader the fake pauses kLeaderGapNs, so
   // that the leader goes out alone and its receiver takes it before the data; with --link-mbps it
   // also waits while the link is busy with what was sent before. Sent back to back, three fakes on
@@ -59,6 +78,23 @@ class GigeFakeChaos {
   void finish();  // at exit: a camera still dead has its silence recorded
 
  private:
+  // One stream datagram held by host.network_delay (or queued behind held ones), or a frame's truth
+  // line to write once the datagrams before it have left.
+  struct Held {
+    Nanos due_mono = 0;
+    std::vector<std::uint8_t> bytes;
+    GSocket* socket = nullptr;          // referenced while held
+    GSocketAddress* address = nullptr;  // referenced while held
+    bool leader = false;
+    bool record = false;                // a truth line, no datagram
+    std::int64_t unit = -1;
+    Nanos acq = 0, dev = 0, tx = 0, exposure = 0;
+    truth::Fate fate = truth::Fate::kSent;
+    std::uint64_t fault = 0;
+    bool leader_held = false;           // its tx is the held leader's real send
+  };
+  void send_held();                   // the sender thread
+  void release(Held& h, SendFn real);  // sends one (sender's lock held)
   [[nodiscard]] std::uint64_t silenced_by(double t) const;  // the event that keeps it silent, 0 = none
   [[nodiscard]] bool is_stream(GSocket* socket);  // the GVSP socket (found at its first datagram)
   GvspFrameShape shape_of(ArvFakeCamera* cam, double t, std::uint64_t dev_ns, std::uint32_t exposure_us) const;
@@ -93,6 +129,20 @@ class GigeFakeChaos {
   GvspReshaper reshaper_;
   double link_mbps_ = 0;
   Nanos link_free_mono_ = 0;  // when the link has sent every datagram so far (CLOCK_MONOTONIC)
+  bool frame_truth_due_ = false;    // the frame's trailer went: its truth line is due (after_send)
+  bool frame_leader_held_ = false;  // its leader was held
+  std::uint64_t frame_held_by_ = 0; // the delay that held any of its datagrams
+
+  // host.network_delay (docs/faults.md): the plan's delays of this camera and what they hold.
+  std::vector<faults::FaultEvent> delays_;
+  faults::NetworkHold hold_;        // the fake thread's
+  std::mutex held_mutex_;           // held_, stop_, sends of stream datagrams while any is held
+  std::condition_variable held_cv_;
+  std::deque<Held> held_;
+  SendFn held_real_ = nullptr;
+  bool held_stop_ = false;
+  Nanos last_leader_tx_ = 0;        // the sender's: the last held leader's real send (vehicle time)
+  std::thread sender_;
 };
 
 // The instance the interposed GLib functions call (null: pass everything through), and the fake

@@ -1,5 +1,7 @@
 #include "sensor_rig/dbw/mock/mock_runner.hpp"
 
+#include <algorithm>
+#include <deque>
 #include <fstream>
 
 #include "sensor_rig/common/shutdown.hpp"
@@ -25,16 +27,33 @@ RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
   Nanos next_tick = start;
   Nanos next_print = start + 1'000'000'000;
   can::RxFrame rx;
+  auto send = [&](const can::Frame& f) {
+    const Nanos handed = vehicle_now_ns();
+    const bool ok = bus.send(f) == can::IoStatus::kOk;
+    if (!ok) ++r.send_failures;
+    if (o.on_sent) o.on_sent(f, ok && bus.last_send_heard(), handed);
+    write_log(vehicle_now_ns(), f);
+  };
+  // Frames held by a network delay (o.depart), in the order made: each leaves at its time.
+  std::deque<std::pair<Nanos, can::Frame>> held;
+  auto send_due = [&](Nanos now) {
+    while (!held.empty() && held.front().first <= now) {
+      send(held.front().second);
+      held.pop_front();
+    }
+  };
   while (!shutdown_requested()) {
     const Nanos now = monotonic_now_ns();
     if (end > 0 && now >= end) break;
+    send_due(now);
     if (now >= next_tick) {
       for (const auto& f : ecu.step(now)) {
-        const Nanos handed = vehicle_now_ns();
-        const bool ok = bus.send(f) == can::IoStatus::kOk;
-        if (!ok) ++r.send_failures;
-        if (o.on_sent) o.on_sent(f, ok && bus.last_send_heard(), handed);
-        write_log(vehicle_now_ns(), f);
+        const Nanos due = o.depart ? o.depart(f, now) : now;
+        if (held.empty() && due <= now) {
+          send(f);
+        } else {
+          held.emplace_back(std::max(due, held.empty() ? due : held.back().first), f);
+        }
       }
       next_tick += tick;
       if (next_tick < now) next_tick = now + tick;
@@ -50,7 +69,8 @@ RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
       }
       continue;
     }
-    const int wait_ms = static_cast<int>((next_tick - now + 999'999) / 1'000'000);
+    const Nanos wake = held.empty() ? next_tick : std::min(next_tick, held.front().first);
+    const int wait_ms = static_cast<int>((std::max<Nanos>(0, wake - now) + 999'999) / 1'000'000);
     const auto st = bus.receive(rx, wait_ms);
     if (st == can::IoStatus::kOk) {
       write_log(rx.stamp, rx.frame);
@@ -59,6 +79,8 @@ RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
       break;
     }
   }
+  // What the network still held when the ECU stopped goes out now: nothing the ECU made is lost by the hold.
+  for (const auto& [due, f] : held) send(f);
   log.flush();
   return r;
 }

@@ -23,6 +23,10 @@ struct RunOptions {
   // receiver's kernel stamp is the send's instant while this process may be descheduled (or
   // SIGSTOPped by host.stall_mock) between the send and its callback.
   std::function<void(const can::Frame&, bool heard, Nanos handed_ns)> on_sent;
+  // host.network_delay held in the mock (rig chaos, docs/faults.md): when a frame the ECU made at
+  // `made_mono` (CLOCK_MONOTONIC) goes on the bus; at or before `made_mono`: at once. A frame never
+  // leaves before one made earlier (they wait in order, as in a network's queue). Empty: at once.
+  std::function<Nanos(const can::Frame&, Nanos made_mono)> depart;
 };
 
 struct RunResult {
