@@ -220,6 +220,7 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
     src.rotations = k;
     src.last_rotation = rotation;
     src.covers_until = std::max(rotation + 1, rotation_of(src, stamp_ns + k * p));
+    src.short_turn = k > 1 && span_ns > 0 && span_ns < k * p - p / 8;
   }
   if (std::find(emitted_.begin(), emitted_.end(), rotation) != emitted_.end()) {
     ++counters_.late_scans;
@@ -261,9 +262,16 @@ bool SweepMatcher::whole(const Sweep& s) const noexcept {
 }
 
 // Nothing more to wait for: each source is in, covered, has moved on to a later sweep, or is dead.
+// A slow scan that ended short of its turns covers the rotations after it only until the source's
+// next scan says where it began: its last packets lost (the next one begins k periods on: covered),
+// or its turn cut short (a LIDAR back to the rig's rpm: the next one begins in the covered rotation
+// and belongs there). Until then, or the timeout, that sweep waits for it. Before, it went out at
+// once saying complete without that LIDAR, whose next scan then came late for it (the whole-rig
+// campaign, seed 25, front at 19.05 s).
 bool SweepMatcher::settled(const Sweep& s) const noexcept {
   for (std::size_t i = 0; i < sources_.size(); ++i)
-    if (!s.present[i] && sources_[i].alive && sources_[i].last_sweep <= s.id && !covered(i, s)) return false;
+    if (!s.present[i] && sources_[i].alive && sources_[i].last_sweep <= s.id && (!covered(i, s) || sources_[i].short_turn))
+      return false;
   return true;
 }
 

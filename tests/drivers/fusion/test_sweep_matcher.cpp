@@ -371,7 +371,9 @@ TEST(SweepMatcher, AStalledLidarBackOnAPhaseOfItsOwnIsTakenOnceTheOthersShowNoSt
 // rotor keeps turning as a motor would), its next scans 35 ms earlier in the rotation. Its arrivals
 // moved with its stamps, so no clock stepped: its phase is taken at once. Before, held as a possible
 // clock step for 3 scans, each was fused with the rotation before its own (the whole-rig campaign,
-// seed 25, front LIDAR at 19.08 s).
+// seed 25, front LIDAR at 19.08 s). And the cut slow turn reaches into the rotation its successor
+// begins in: that sweep waits for the successor; before, it went out complete without it, its scan
+// then dropped as late (seed 25 again, 19.05 s).
 TEST(SweepMatcher, ALidarBackFromASlowerRpmOnAPhaseOfItsOwnIsTakenAtOnce) {
   std::vector<TrueScan> scans;
   for (std::int64_t n = 0; n < 40; ++n)
@@ -399,6 +401,13 @@ TEST(SweepMatcher, ALidarBackFromASlowerRpmOnAPhaseOfItsOwnIsTakenAtOnce) {
     ASSERT_NE(run.sweep_of(n), nullptr) << n;
     EXPECT_TRUE(run.sweep_of(n)->complete) << n;
   }
+  // Rotation 12 holds the first fast scan, which began in it, though the cut slow turn reached into
+  // it: its sweep waited for that scan rather than going out complete without it (it came late then).
+  for (const auto& d : run.dropped_) EXPECT_LT(d.rotation, 10) << "dropped: the scan of rotation " << d.rotation;  // the start's first may be
+  const Emitted* twelve = run.sweep_of(12);
+  ASSERT_NE(twelve, nullptr);
+  EXPECT_TRUE(std::any_of(twelve->scans.begin(), twelve->scans.end(), [](const TrueScan& t) { return t.source == 0; }));
+  EXPECT_TRUE(twelve->complete);
 }
 
 // Two PTP LIDARs whose stamps run half a rotation late for a while (the rig's mapped stamps after a

@@ -100,6 +100,7 @@ class SweepMatcher {
     int rotations = 1;             // periods one of its scans spans (2: a 300 rpm LIDAR beside 600 rpm)
     std::int64_t last_rotation = 0;   // rotation of its newest scan
     std::int64_t covers_until = 0;    // that scan spans the rotations before this one (exclusive)
+    bool short_turn = false;          // that scan ended short of its k periods (see settled())
   };
   struct Sweep {
     std::uint64_t id = 0;
