@@ -125,12 +125,26 @@ bool AravisSource::trigger() {
 // reopen"). A camera that restarted (power cycle: ids from 1 again, its tick counter from 0) shows
 // a step back, a jump more frames than its rate allows in the time since its last frame, or device
 // ticks that did not follow that time: no loss known, counting starts again.
-void AravisSource::count_missing_frames(std::uint64_t id, Nanos device_ns, Nanos mono_ns) noexcept {
+//
+// An incomplete buffer's id may not be its frame's: Aravis (0.8) sets a buffer's frame id and
+// timestamp from the GVSP leader only, so a frame whose leader was lost comes out with the id of
+// the frame the buffer held before (0 for a buffer not used yet), a few frames back. Taken as the
+// newest id, the next frame's id "jumped" by the stream's depth: every lost leader counted its
+// frame lost twice and the 3 frames after it once more (4 buffers; issue 27, "58 counted lost, 50
+// not published" under camera.packet_loss). Such an id (0, or not ahead of the last known one) is
+// not used: the frame is counted where it is counted (incomplete, undelivered), and the next known
+// id's step counts only the frames beyond those. A leaderless buffer is never complete (Aravis
+// completes a frame from packet 0 on), so complete buffers' ids are always their own.
+void AravisSource::count_missing_frames(std::uint64_t id, Nanos device_ns, Nanos mono_ns, bool complete) noexcept {
   constexpr std::int64_t kWrap = 65535;
   constexpr std::int64_t kPlausibleGap = 1000;
+  std::int64_t d = static_cast<std::int64_t>(id) - static_cast<std::int64_t>(last_frame_id_);
+  if (id <= 0xFFFF && last_frame_id_ <= 0xFFFF && d <= 0) d += kWrap;
+  if (!complete && (id == 0 || (last_frame_id_ != 0 && (d <= 0 || d > kPlausibleGap)))) {
+    ++unknown_id_frames_;
+    return;
+  }
   if (last_frame_id_ != 0 && id != 0) {
-    std::int64_t d = static_cast<std::int64_t>(id) - static_cast<std::int64_t>(last_frame_id_);
-    if (id <= 0xFFFF && last_frame_id_ <= 0xFFFF && d <= 0) d += kWrap;
     std::int64_t most = kPlausibleGap;
     if (reopened_) {
       // What the camera can have made since its last frame, at its rate (a triggered camera's is
@@ -141,8 +155,10 @@ void AravisSource::count_missing_frames(std::uint64_t id, Nanos device_ns, Nanos
       const Nanos elapsed = mono_ns - last_frame_mono_ns_;
       if (ticked < elapsed / 2 - 1'000'000'000 || ticked > elapsed * 2 + 1'000'000'000) most = 0;
     }
-    if (d > 1 && d <= most) missing_frames_.fetch_add(static_cast<std::uint64_t>(d - 1));
+    const auto unknown = static_cast<std::int64_t>(unknown_id_frames_);
+    if (d > 1 && d <= most && d - 1 > unknown) missing_frames_.fetch_add(static_cast<std::uint64_t>(d - 1 - unknown));
   }
+  unknown_id_frames_ = 0;
   reopened_ = false;
   last_frame_id_ = id;
   last_frame_device_ns_ = device_ns;
@@ -151,15 +167,15 @@ void AravisSource::count_missing_frames(std::uint64_t id, Nanos device_ns, Nanos
 
 // At a close: the frames the stream holds that next() never returned (the consumer was behind)
 // were made and are not published: counted lost, and their ids taken as seen, so that the gap at
-// the next open counts only what came after them.
+// the next open counts only what came after them. A buffer without its own id (its leader lost:
+// count_missing_frames) is a frame all the same.
 void AravisSource::count_undelivered(ArvStream* stream) noexcept {
   if (stream == nullptr) return;
   const Nanos mono = monotonic_now_ns();
   while (ArvBuffer* b = arv_stream_try_pop_buffer(stream)) {
-    if (const auto id = arv_buffer_get_frame_id(b); id != 0) {
-      count_missing_frames(id, static_cast<Nanos>(arv_buffer_get_timestamp(b)), mono);
-      missing_frames_.fetch_add(1);
-    }
+    count_missing_frames(arv_buffer_get_frame_id(b), static_cast<Nanos>(arv_buffer_get_timestamp(b)), mono,
+                         arv_buffer_get_status(b) == ARV_BUFFER_STATUS_SUCCESS);
+    missing_frames_.fetch_add(1);
     arv_stream_push_buffer(stream, b);  // the stream frees it with itself
   }
 }
@@ -182,8 +198,9 @@ Capture AravisSource::next(int timeout_ms) {
   }
   const Nanos real = vehicle_now_ns();
   const Nanos mono = monotonic_now_ns();
-  count_missing_frames(arv_buffer_get_frame_id(b), static_cast<Nanos>(arv_buffer_get_timestamp(b)), mono);
   const auto status = arv_buffer_get_status(b);
+  count_missing_frames(arv_buffer_get_frame_id(b), static_cast<Nanos>(arv_buffer_get_timestamp(b)), mono,
+                       status == ARV_BUFFER_STATUS_SUCCESS);
   // Any payload type that carries the image (with chunks, chunk data, multipart), at its real
   // row stride (GVSP row padding): issue 27 items 3 and 13, gvsp_payload.hpp.
   const auto located = status == ARV_BUFFER_STATUS_SUCCESS ? detail::locate_image(b, cfg_.width, cfg_.height, cfg_.format)

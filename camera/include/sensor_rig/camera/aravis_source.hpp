@@ -85,7 +85,8 @@ class AravisSource final : public FrameSource {
   void set_line_trigger(_ArvCamera* cam);
   void start_stream(State& st);
   void fold_stats() noexcept;
-  void count_missing_frames(std::uint64_t id, Nanos device_ns, Nanos mono_ns) noexcept;  // capture thread
+  // The capture thread's. complete: the buffer's status is SUCCESS (its id is its own; see the .cpp).
+  void count_missing_frames(std::uint64_t id, Nanos device_ns, Nanos mono_ns, bool complete) noexcept;
   void count_undelivered(_ArvStream* stream) noexcept;  // close(): frames the stream holds, never returned
   void setup_ptp(_ArvDevice* dev);  // at open, before the state is installed (no lock)
   void poll_ptp();                          // under gc_mutex_
@@ -129,6 +130,9 @@ class AravisSource final : public FrameSource {
   Nanos last_frame_device_ns_ = 0;
   Nanos last_frame_mono_ns_ = 0;
   bool reopened_ = false;
+  // Frames counted lost since the last frame of known id whose own id Aravis did not give (their
+  // leader was lost): the next id step covers them, so it counts only the frames beyond them.
+  std::uint64_t unknown_id_frames_ = 0;
   AravisDetails details_;
   std::string claimed_;  // the identity claim_identity() holds; "" when none (open()/close() thread)
   // PTP: the state (under ptp_mutex_), the lock flag next() reads, the status thread.
