@@ -74,11 +74,21 @@ GigeFakeChaos::~GigeFakeChaos() {
 
 void GigeFakeChaos::release(Held& h, SendFn real) {
   if (h.record) {
+    // A held datagram the socket refused (the camera rebooted meanwhile: the old stream's socket is
+    // closed) never arrived: the frame is not whole.
+    const bool failed = held_send_failed_ && h.fate == truth::Fate::kSent;
     if (truth_ != nullptr)
-      truth_->frame(h.unit, h.acq, h.dev, h.leader_held && last_leader_tx_ != 0 ? last_leader_tx_ : h.tx, h.fate, h.fault, h.exposure);
+      truth_->frame(h.unit, h.acq, h.dev, h.leader_held && last_leader_tx_ != 0 ? last_leader_tx_ : h.tx,
+                    failed ? truth::Fate::kDropped : h.fate, h.fault, h.exposure);
+    held_send_failed_ = false;
   } else {
-    if (h.leader) last_leader_tx_ = vehicle_now_ns();
-    if (real != nullptr) real(h.socket, h.address, reinterpret_cast<const gchar*>(h.bytes.data()), h.bytes.size(), nullptr, nullptr);
+    if (h.leader) {
+      last_leader_tx_ = vehicle_now_ns();
+      held_send_failed_ = false;
+    }
+    if (real != nullptr &&
+        real(h.socket, h.address, reinterpret_cast<const gchar*>(h.bytes.data()), h.bytes.size(), nullptr, nullptr) < 0)
+      held_send_failed_ = true;
   }
   if (h.socket != nullptr) g_object_unref(h.socket);
   if (h.address != nullptr) g_object_unref(h.address);

@@ -142,6 +142,7 @@ class GigeFakeChaos {
   SendFn held_real_ = nullptr;
   bool held_stop_ = false;
   Nanos last_leader_tx_ = 0;        // the sender's: the last held leader's real send (vehicle time)
+  bool held_send_failed_ = false;   // the sender's: a datagram of the frame being sent was refused
   std::thread sender_;
 };
 
