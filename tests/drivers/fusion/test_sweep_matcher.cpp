@@ -410,6 +410,53 @@ TEST(SweepMatcher, ALidarBackFromASlowerRpmOnAPhaseOfItsOwnIsTakenAtOnce) {
   EXPECT_TRUE(twelve->complete);
 }
 
+// A LIDAR at 1200 rpm beside two at 600 for ten rotations (lidar.rpm_change, rpm=1200): two 50 ms
+// scans per rotation, its phase moving by half a turn every scan. Each scan joins the rotation its
+// stamp lies in by the rig's phases; of two in one rotation the second is repeated (dropped and
+// counted); no sweep mixes rotations, each holds one of its scans, and it is whole again after.
+// (A regression test: the LIDAR campaign's seed 3 mixed 20 sweeps in such a window on the matcher
+// before d4995c1; this simulation of it holds on that matcher too, so the cause was elsewhere.)
+TEST(SweepMatcher, ALidarAboveTheRigsRpmJoinsTheRotationsItsScansLieIn) {
+  // The campaign's rig (the three phases within a millisecond, the fast scans 3 and 53 ms into the
+  // rotation: the second 2.5 ms past the boundary) and one with the phases spread.
+  struct Rig {
+    std::vector<Nanos> phases;
+    Nanos fast_first;
+  };
+  for (const Rig& rig : {Rig{{900'000, 900'000, 0}, 3 * kMs}, Rig{kPhases, 45 * kMs}}) {
+    SCOPED_TRACE("fast scans at " + std::to_string(rig.fast_first / kMs) + " ms");
+    auto scans = rig_scans(rig.phases, 0, 40);
+    erase_scans(scans, 2, 10, 20);
+    for (auto& t : scans)
+      if (t.span == 0) t.span = kPeriod - kMs;
+    // The boundary lies in the middle of the widest gap between the phases at the rig's rpm.
+    Nanos lo = *std::max_element(rig.phases.begin(), rig.phases.end());
+    Nanos hi = *std::min_element(rig.phases.begin(), rig.phases.end()) + kPeriod;
+    const Nanos boundary = (lo + hi) / 2;
+    for (std::int64_t n = 10; n < 20; ++n)
+      for (const Nanos at : {rig.fast_first, rig.fast_first + 50 * kMs}) {
+        const Nanos stamp = n * kPeriod + at;
+        scans.push_back({2, at < boundary ? n : n + 1, stamp, stamp + 50 * kMs + 2 * kMs, 50 * kMs - kMs});
+      }
+    std::stable_sort(scans.begin(), scans.end(), [](const TrueScan& a, const TrueScan& b) { return a.stamp < b.stamp; });
+    SimulatedRig run(3);
+    run.feed(scans);
+    for (const auto& e : run.emitted_)
+      for (const auto& t : e.scans)
+        EXPECT_EQ(t.rotation, e.scans[0].rotation) << "sweep emitted at " << e.at / kMs << " ms mixes rotations";
+    for (std::int64_t n = 0; n < 40; ++n) {
+      const Emitted* e = run.sweep_of(n);
+      ASSERT_NE(e, nullptr) << n;
+      EXPECT_TRUE(e->complete) << "rotation " << n;
+    }
+    // Rotations 11..20 each had two of its scans (the last its first scan back at 600 rpm, behind
+    // the fast one that began in it): the second of each dropped as repeated.
+    for (const auto& d : run.dropped_) EXPECT_EQ(d.source, 2u) << "dropped: source " << d.source << " rotation " << d.rotation;
+    EXPECT_EQ(run.dropped_.size(), 10u);
+    EXPECT_EQ(run.m_.counters().repeated_scans + run.m_.counters().late_scans, 10u);  // the last after its sweep went out
+  }
+}
+
 // Two PTP LIDARs whose stamps run half a rotation late for a while (the rig's mapped stamps after a
 // host.network_delay or a clock step's slew; their data and arrivals keep the rig's rotation), then
 // snap back, beside a GPS-timed one that stays true. A step of P/2 reads +P/2 or -P/2 by a few
