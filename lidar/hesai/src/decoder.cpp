@@ -218,6 +218,18 @@ struct DecoderImpl {
   // group within a packet after the cut begins a whole scan.
   void new_stream(std::optional<Scan>& out, int first_az, double group_step, int groups) noexcept {
     ++stats.silences;
+    // Packets rejected whole since the last kept one (a frozen encoder) turned on to the next
+    // scan's window and past it: the scans they began were made (stream_gap.hpp). A scan begins
+    // where its window does (reset_raw); one whose window opened already is the lookahead, ended
+    // below with the current one.
+    if (have_prev && turning_step >= 0.5) {
+      const double packet_arc = turning_step * groups;
+      int arc = detail::turn_step(prev_az, reset_raw);
+      if (arc == 0) arc = detail::kTurn;
+      const int visible = arc - detail::arc_outside(fov, prev_az, arc);
+      scans.lose_scans(scans_begun_while_rejected(scans.rejected_since_kept(), std::ceil(visible / packet_arc),
+                                                  fov.length() / packet_arc));
+    }
     scans.merge(out, end(false));
     if (scans.current().scan.packets > 0) scans.merge(out, end(false));
     scans.drop_next();

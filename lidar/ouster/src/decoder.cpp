@@ -275,6 +275,15 @@ struct DecoderImpl {
   // and packet continuity start over at this packet (a frame from its first column is whole).
   std::optional<Scan> new_stream() noexcept {
     ++stats.silences;
+    // Packets rejected whole since the last kept one (no column to place them by: frozen
+    // measurement ids) filled the frame's window slots and went on into later frames: the frames
+    // they began were made (stream_gap.hpp). The next frame begins at its window's first slot.
+    if (have_base) {
+      const long prev_slot = prev_base >= 0 ? prev_base / static_cast<long>(layout.columns_per_packet) : 0;
+      scans.lose_scans(scans_begun_while_rejected(scans.rejected_since_kept(),
+                                                  window_slots(prev_slot, packets_per_frame) + 1.0,
+                                                  window_slots(-1, packets_per_frame)));
+    }
     std::optional<Scan> out = end(false);
     restart();
     return out;

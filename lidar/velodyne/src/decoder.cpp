@@ -325,6 +325,17 @@ struct DecoderImpl {
   // starts over at this packet; a first group within a packet after the cut begins a whole scan.
   std::optional<Scan> new_stream(int first_az, double group_step, int groups) noexcept {
     ++stats.silences;
+    // Packets rejected whole since the last kept one (a frozen encoder) turned on to the cut and
+    // past it: the scans they began were made (stream_gap.hpp). Packet k after the last kept one
+    // reaches the cut when its last group does.
+    if (have_prev && turning_step >= 0.5) {
+      const double packet_arc = turning_step * groups;
+      int arc = detail::turn_step(prev_az, cut);
+      if (arc == 0) arc = detail::kTurn;  // the last kept group began this scan at the cut
+      const int visible = arc - detail::arc_outside(fov, prev_az, arc);
+      scans.lose_scans(scans_begun_while_rejected(scans.rejected_since_kept(), std::ceil(visible / packet_arc),
+                                                  fov.length() / packet_arc));
+    }
     std::optional<Scan> out = end(false);
     restart();
     const double packet_arc = group_step * groups;

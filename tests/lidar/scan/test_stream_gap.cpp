@@ -11,6 +11,9 @@
 //   - A loss burst of the same sensor-time length: packets sent and lost. Where the sensor numbers
 //     them (Hesai UDP sequence, Ouster frame id) nothing arrives and they are still counted; without
 //     numbering, the host heard the sensor all along (every packet damaged on the way).
+//   - A frozen encoder, then silence (lidar.stuck_azimuth with host.kill_mock inside it): the turns
+//     the sensor made while every packet it sent was rejected are lost scans, though no good packet
+//     came after them on that stream (rig chaos seed 5, VLP-32C: 4 scans made, 1 counted lost).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,8 +22,10 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "sensor_rig/lidar/mock/packet_fields.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/lidar/mock/synthetic_hesai.hpp"
 #include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
@@ -86,24 +91,29 @@ struct Recorded {
   std::vector<mock::ClosedUnit> units;  // made and closed before the run's end (mid-turn)
 };
 
-enum class Fault { kNone, kSilence, kLossBurst };
+enum class Fault { kNone, kSilence, kLossBurst, kFrozenThenSilence };
 
 // 2.45 s of a sensor; from 0.65 s on (mid-turn), `gap_s` of `fault`: silent then a new sensor
 // (counters from 0, the rotor 2° behind where it fell silent: a restarted Pandar40P's first packets
 // were taken for late ones), or its packets lost (nothing received where the sensor numbers its
-// packets, else every one damaged on the way: 64 bytes).
-Recorded record(const Model& m, Fault fault, double gap_s) {
+// packets, else every one damaged on the way: 64 bytes). kFrozenThenSilence: the encoder frozen
+// for `frozen_s` before the silence, every azimuth field at one value (sent, rejected); the fault
+// from `from_s`.
+Recorded record(const Model& m, Fault fault, double gap_s, double frozen_s = 0.0, double from_s = 0.65) {
   Recorded r;
   auto sensor = m.make(kT0, 0.0);
+  const mock::PacketFields fields(*sensor);
+  std::vector<std::byte> frozen;
   mock::UnitTracker tracker(sensor->unit_rule());
-  const Nanos from = kT0 + 650'000'000, until = from + static_cast<Nanos>(gap_s * 1e9);
+  const Nanos from = kT0 + static_cast<Nanos>(from_s * 1e9), until = from + static_cast<Nanos>(gap_s * 1e9);
+  const bool silence = fault == Fault::kSilence || fault == Fault::kFrozenThenSilence;
   bool restarted = false;
   double last_rotor_deg = 0.0;
   for (;;) {
     mock::SyntheticPacket p = sensor->next();
     if (!p.truth.data) continue;
     if (p.time_ns >= kT0 + 2'450'000'000) break;
-    if (fault == Fault::kSilence && !restarted && p.time_ns >= from) {
+    if (silence && !restarted && p.time_ns >= from) {
       restarted = true;
       sensor = m.make(until, std::fmod(last_rotor_deg + 358.0, 360.0));
       tracker.restart();
@@ -115,6 +125,10 @@ Recorded record(const Model& m, Fault fault, double gap_s) {
     if (lost && m.numbered) continue;
     Pkt k{{p.bytes.begin(), p.bytes.end()}, p.truth.acq_ns, p.time_ns + 20'000};
     if (lost) k.bytes.resize(64);
+    if (fault == Fault::kFrozenThenSilence && !restarted && p.time_ns >= from - static_cast<Nanos>(frozen_s * 1e9)) {
+      if (frozen.empty()) frozen = k.bytes;
+      fields.freeze_azimuth(k.bytes, frozen);
+    }
     r.pkts.push_back(std::move(k));
   }
   r.units = tracker.closed();
@@ -186,6 +200,24 @@ TEST_P(StreamGap, ALossBurstOfTheSameLengthIsCountedScanByScan) {
   expect_accounted(run, d, "0.5 s of packets lost");
   EXPECT_EQ(d.st.silences, 0U);
   EXPECT_GE(d.st.scans_lost, 4U) << "the turns inside the burst";
+}
+
+// rig chaos seed 5 (lidar.stuck_azimuth 7.16-7.66 s, host.kill_mock of the front at 7.43 s): the
+// scan cut short and the 2 turns of rejected packets before the kill were made; the node counted 1
+// (the scan in progress, discarded at the silence) and 3 were neither published nor counted.
+TEST_P(StreamGap, TurnsOfRejectedPacketsBeforeASilenceAreLostScans) {
+  const Model m = model(GetParam());
+  // The freeze beginning and the silence at other places of the turn (rejected packets that end
+  // just short of a cut or just past one).
+  for (const auto& [frozen_s, from_s] : {std::pair{0.25, 0.65}, std::pair{0.18, 0.683}, std::pair{0.305, 0.717},
+                                         std::pair{0.22, 0.7}}) {
+    const std::string what = "frozen " + std::to_string(frozen_s) + " s to " + std::to_string(from_s) + " s, then 0.5 s silent";
+    const Recorded run = record(m, Fault::kFrozenThenSilence, 0.5, frozen_s, from_s);
+    const Decoded d = decode(m.options, run.pkts);
+    expect_accounted(run, d, what);
+    EXPECT_EQ(d.st.silences, 1U) << what;
+    EXPECT_GE(d.st.scans_lost, 2U) << what << ": the scan the freeze cut short and the turns after it";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, StreamGap,
