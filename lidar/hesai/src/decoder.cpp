@@ -117,6 +117,12 @@ struct DecoderImpl {
   bool have_seq = false;
   std::uint32_t prev_seq = 0;       // UDP sequence number (expected value after a mismatch)
   LateHole hole;                    // where the current scan last counted packets missing
+  // The hole is the scan's after a cut, begun inside the cut's window: a late packet there has only
+  // its channels past the cut in it (those before are the published scan's, which lacks them).
+  bool hole_after_cut = false;
+  // Packets lost inside the cut's window, counted missing in the lookahead scan too: where they lie,
+  // so that once the cut is done (the lookahead scan current) a late one is placed there.
+  LateHole window_hole;
   TimeJudge time_judge;
   bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
   detail::BlindArc blind;  // a sector the sensor stopped sending (learned, not loss)
@@ -201,6 +207,7 @@ struct DecoderImpl {
     have_seq = false;
     prev_trailing_bad = 0;
     hole.open = 0;
+    window_hole.open = 0;
     time_judge.reset();
     scans.clear_rejected();
     turning = false;
@@ -210,6 +217,7 @@ struct DecoderImpl {
   // Ends the current scan; the hole of late packets was that scan's.
   std::optional<Scan> end(bool complete) noexcept {
     hole.open = 0;
+    hole_after_cut = false;
     return scans.end_scan(complete);
   }
 
@@ -243,7 +251,10 @@ struct DecoderImpl {
     return static_cast<Nanos>(detail::kTurn / turning_step * static_cast<double>(mi->group_period_ns));
   }
 
-  void put_group(const std::uint8_t* blk, int a, Nanos group_stamp, bool overlap, int n, std::uint8_t mode, float unit);
+  // `past_cut_only`: the group's channels past the cut go into the current scan (begun at that cut),
+  // the rest nowhere (a late packet of the window after the cut was done).
+  void put_group(const std::uint8_t* blk, int a, Nanos group_stamp, bool overlap, int n, std::uint8_t mode, float unit,
+                 bool past_cut_only = false);
 
   // A late packet whose azimuth lies where the current scan counted packets missing: its points go
   // into the scan, an earlier first firing becomes its stamp. Inside the cut's window (still open:
@@ -253,12 +264,26 @@ struct DecoderImpl {
                   std::uint8_t mode, float unit, Nanos stamp, Nanos rx_ns) {
     scans.begin_packet();
     PendingScan& cur = scans.current();
-    cur.rebase(stamp);
+    if (!hole_after_cut) cur.rebase(stamp);
     bool in_next = false;
     for (int g = 0; g < groups; ++g) {
       if ((fit.bad >> g) & 1U) continue;
       const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
-      const bool overlap = window_open && in_sector(reset_raw, emit_raw, az[g]) && az[g] != emit_raw;
+      const bool in_window = in_sector(reset_raw, emit_raw, az[g]) && az[g] != emit_raw;
+      if (hole_after_cut) {
+        // The scan begun at the cut: a group inside the window gives it its channels past the cut,
+        // a group past the window all of its own; one before the window is the published scan's.
+        const bool past = !in_window && detail::turn_step(emit_raw, az[g]) < detail::kTurn / 2;
+        if (!in_window && !past) continue;
+        cur.rebase(group_stamp);
+        const Nanos last_rx = cur.scan.last_rx_ns;
+        cur.touch(group_stamp, rx_ns);
+        cur.scan.last_rx_ns = std::max(last_rx, rx_ns);
+        put_group(p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size, az[g], group_stamp, in_window,
+                  n, mode, unit, true);
+        continue;
+      }
+      const bool overlap = window_open && in_window;
       if (overlap) {
         in_next = true;
         PendingScan& nxt = scans.next();
@@ -275,14 +300,17 @@ struct DecoderImpl {
     }
     --hole.open;
     scans.fill_missing();
-    if (in_next) scans.fill_missing_next();  // counted in both: it has channels in both
+    if (in_next) {
+      scans.fill_missing_next();  // counted in both: it has channels in both
+      if (window_hole.open > 0) --window_hole.open;
+    }
   }
 };
 
 // One firing group's points: into the current scan, or (inside the cut's window, `overlap`) the
 // channels already past the cut into the next. Shared by the packet loop and late packets.
 inline void DecoderImpl::put_group(const std::uint8_t* blk, int a, Nanos group_stamp, bool overlap, int n,
-                                   std::uint8_t mode, float unit) {
+                                   std::uint8_t mode, float unit, bool past_cut_only) {
   const auto& tab = angles();
   const auto rm = static_cast<ReturnMode>(mode);
   const bool xt = cfg.model == Model::kPandarXT32;
@@ -297,7 +325,8 @@ inline void DecoderImpl::put_group(const std::uint8_t* blk, int a, Nanos group_s
     if (overlap) {
       std::int64_t rel = (a_udeg + t.off_udeg) % kMicroDeg;
       if (rel < 0) rel += kMicroDeg;
-      if (rel <= kNextScanSpan) s = &scans.next().scan;
+      if (rel > kNextScanSpan && past_cut_only) continue;
+      if (rel <= kNextScanSpan && !past_cut_only) s = &scans.next().scan;
     }
     const std::uint8_t* u0 = units + c * mi->unit_size;
     const Echo e0{le16(u0), u0[2]};
@@ -464,6 +493,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         // The lookahead scan (points already past the cut) will never be completed either.
         if (scans.current().scan.packets > 0) scans.merge(out, end(false));
         scans.drop_next();
+        window_hole.open = 0;
         to_caller_line();
         have_prev = false;
         have_seq = false;
@@ -497,6 +527,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       scans.add_missing(take(detail::packets_on_arc(fov, prev_az, emit_raw, fit.step, groups)));
       scans.merge(out, end(scans.current().from_cut));
       scans.drop_next();
+      window_hole.open = 0;
       window_open = false;
       // The next scan starts at the cut when it lacks less than half its turn; otherwise its
       // stamp (its first packet) would lie nearer the next turn's: not published, a lost scan.
@@ -545,11 +576,16 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       touching = detail::split_missing_at_cut(fov, reset_raw, az[first_good], fit.step, first_good + 1, groups, missing).after;
     missing_window = touching > missing_next ? touching - missing_next : 0;
   }
+  const int gap_from = prev_az;  // the loop below moves prev_az on
   if (missing > missing_next) {
     scans.add_missing(missing - missing_next);
     hole = {prev_az, az[first_good], detail::kTurn, missing - missing_next};
+    hole_after_cut = false;
   }
-  if (missing_window > 0) scans.add_missing_next(missing_window);
+  if (missing_window > 0) {
+    scans.add_missing_next(missing_window);
+    window_hole = {prev_az, az[first_good], detail::kTurn, missing_window};
+  }
   if (fit.bad != 0) {
     const auto nb = static_cast<std::uint64_t>(std::popcount(fit.bad));
     stats.corrupt_blocks += nb;
@@ -590,11 +626,22 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         prev_own += line_shift;
         to_caller_line();
       }
+      // The scan begun at the cut lacks what was lost past it and, counted in it while it was the
+      // lookahead, what was lost inside the window: a late packet from there is placed in it (its
+      // channels past the cut; rig chaos seed 7, a Pandar40P packet of the window one position late
+      // behind the packet that closed it: the scan after the cut counted it missing and dropped).
+      if (missing_next > 0 || window_hole.open > 0) {
+        hole = window_hole.open > 0
+                   ? LateHole{window_hole.from, missing_next > 0 ? az[first_good] : window_hole.to, detail::kTurn,
+                              window_hole.open + missing_next}
+                   : LateHole{gap_from, az[first_good], detail::kTurn, missing_next};
+        hole_after_cut = true;
+      }
       if (missing_next > 0) {
         scans.add_missing(missing_next);
-        hole = {prev_az, az[first_good], detail::kTurn, missing_next};
         missing_next = 0;
       }
+      window_hole.open = 0;
     }
     have_prev = true;
     prev_az = a;
