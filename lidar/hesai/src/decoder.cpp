@@ -545,7 +545,16 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       slots = missing;
       missing = scans.missing_beyond_rejected(missing);
       const long tol = std::lround(2.0 * fit.step * groups);
-      if (missing >= 2 && blind.is_blind(prev_az, az[first_good], tol, detail::kTurn, tol / 2)) missing = 0;
+      if (missing >= 2) {
+        // The gap's packets, the first one group past the last kept.
+        const detail::GapPackets lacked{prev_az + fit.step, fit.step * groups, missing};
+        if (blind.is_blind(prev_az, az[first_good], tol, detail::kTurn, tol / 2, lacked)) {
+          missing = 0;
+        } else if (const auto* arc = blind.learned_within(prev_az, az[first_good], tol, detail::kTurn)) {
+          // A loss burst beside the blind sector: only the burst is loss.
+          missing -= std::min(missing, detail::BlindArc::blind_packets(*arc, lacked, detail::kTurn));
+        }
+      }
     }
   }
   scans.clear_rejected();

@@ -478,7 +478,16 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         if (new_frame) ++stats.implausible_steps;  // frame id corrupted: the same frame goes on
         new_frame = false;
         missing_before = window_slots(prev_slot, slot);
-        if (missing_before >= 2 && scans.rejected_since_kept() == 0 && blind.is_blind(prev_slot, slot, 2, 0, 0)) missing_before = 0;
+        if (missing_before >= 2 && scans.rejected_since_kept() == 0) {
+          // Packet slots: the gap's packets are the slots after the last kept one, a slot each.
+          const detail::GapPackets lacked{static_cast<double>(prev_slot + 1), 1.0, missing_before};
+          if (blind.is_blind(prev_slot, slot, 2, 0, 0, lacked)) {
+            missing_before = 0;
+          } else if (const auto* arc = blind.learned_within(prev_slot, slot, 2, 0)) {
+            // A loss burst beside the blind sector: only the burst is loss.
+            missing_before -= std::min(missing_before, detail::BlindArc::blind_packets(*arc, lacked, 0));
+          }
+        }
         if (missing_before > 0) {
           hole = {prev_slot, slot, 0, missing_before};
           opened = true;

@@ -465,7 +465,16 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
       gap.missing = scans.missing_beyond_rejected(gap.missing);
       const long tol = std::lround(2.0 * fit.step * groups);
-      if (gap.missing >= 2 && blind.is_blind(prev_az, na[first_good], tol, detail::kTurn, tol / 2)) gap.missing = 0;
+      if (gap.missing >= 2) {
+        // The gap's packets, the first one group past the last kept.
+        const detail::GapPackets lacked{prev_az + fit.step, fit.step * groups, gap.missing};
+        if (blind.is_blind(prev_az, na[first_good], tol, detail::kTurn, tol / 2, lacked)) {
+          gap.missing = 0;
+        } else if (const auto* arc = blind.learned_within(prev_az, na[first_good], tol, detail::kTurn)) {
+          // A loss burst beside the blind sector: only the burst is loss.
+          gap.missing -= std::min(gap.missing, detail::BlindArc::blind_packets(*arc, lacked, detail::kTurn));
+        }
+      }
     }
   }
   scans.clear_rejected();

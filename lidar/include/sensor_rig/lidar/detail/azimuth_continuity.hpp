@@ -207,11 +207,26 @@ inline std::uint32_t packets_on_arc(const AzimuthFov& fov, int from, int to, dou
 // loss burst elsewhere) is a new candidate and leaves a learned arc learned. Before, one slot held
 // both, and a loss burst beside a learned blind sector made the next turn count the sector missing
 // again (rig chaos, OS-LEGACY: 16 phantom packets).
+// A gap's packets: the first one missing begins at `first`, one every `pitch`, `n` of them.
+struct GapPackets {
+  double first = 0, pitch = 0;
+  std::uint32_t n = 0;
+};
+
 struct BlindArc {
+  // Where the sector's ends lie, narrowed turn by turn (positions as offsets from `anchor`): the
+  // first packet not sent begins in (s_lo, s_hi], the first sent after it in (e_lo, e_hi]. One
+  // turn tells each to a packet's pitch; the packet grid shifts from turn to turn (a VLP-32C sends
+  // ~151.5 packets a turn), so the turns together tell it finer. What a gap holding the arc and a
+  // loss burst beside it lacks is then counted exactly (blind_packets).
   struct Arc {
     long from = 0, to = 0, margin = 0;
     bool on = false;
+    bool bounded = false;
+    long anchor = 0;
+    double s_lo = 0, s_hi = 0, e_lo = 0, e_hi = 0;
   };
+
   static constexpr int kArcs = 2;  // seen() lists them
   Arc arcs[kArcs];  // learned
   Arc cand;         // a gap seen once
@@ -227,12 +242,14 @@ struct BlindArc {
   // shifts from turn to turn, 0 for packet slots): true when it is a blind arc. `inner` must
   // leave room inside a gap of two packets, or a loss burst there would never be unlearned and the
   // next burst at the same place (lidar.loss_burst at_cut) would pass for a blind sector.
-  bool is_blind(long a, long b, long tol, long wrap, long inner) noexcept {
+  // `gap`: the gap's missing packets, to narrow where the sector's ends lie (pitch 0: not known).
+  bool is_blind(long a, long b, long tol, long wrap, long inner, const GapPackets& gap = {}) noexcept {
     for (Arc& arc : arcs) {
       if (arc.on && dist(a, arc.from, wrap) <= tol && dist(b, arc.to, wrap) <= tol) {
         arc.from = a;  // its ends move by up to a packet each turn: follow them
         arc.to = b;
         arc.margin = inner;
+        narrow(arc, gap, wrap);
         return true;
       }
     }
@@ -244,14 +261,55 @@ struct BlindArc {
         slot = &arcs[next];
         next = (next + 1) % kArcs;
       }
-      *slot = Arc{a, b, inner, true};
+      *slot = cand;  // with what its first turn told of its ends
+      slot->from = a;
+      slot->to = b;
+      slot->margin = inner;
+      narrow(*slot, gap, wrap);
       cand.on = false;
       refresh();
       return true;
     }
     cand = Arc{a, b, inner, true};
+    narrow(cand, gap, wrap);
     refresh();
     return false;
+  }
+  // Of a gap's packets (`gap`, holding the learned `arc`: learned_within), those the sector did not
+  // send: the ones beginning between its ends as narrowed (the middle of each end's range). Without
+  // bounds, the arc's own length in packets.
+  [[nodiscard]] static std::uint32_t blind_packets(const Arc& arc, const GapPackets& gap, long wrap) noexcept {
+    if (!(gap.pitch > 0) || gap.n == 0) return 0;
+    double s = 0, e = 0;
+    if (arc.bounded) {
+      s = (arc.s_lo + arc.s_hi) / 2;
+      e = (arc.e_lo + arc.e_hi) / 2;
+    } else {
+      s = offset(arc.from, static_cast<double>(arc.from) + gap.pitch / 2, wrap);
+      e = s + static_cast<double>(span_of(arc, wrap)) - gap.pitch;
+    }
+    const double m1 = offset(arc.bounded ? arc.anchor : arc.from, gap.first, wrap);
+    const long j0 = std::max(0L, static_cast<long>(std::ceil((s - m1) / gap.pitch)));
+    const long j1 = std::min(static_cast<long>(gap.n) - 1, static_cast<long>(std::ceil((e - m1) / gap.pitch)) - 1);
+    return j1 >= j0 ? static_cast<std::uint32_t>(j1 - j0 + 1) : 0U;
+  }
+  // A gap from `a` to `b` that holds a learned arc and more: a loss burst right beside the blind
+  // sector, on either side or both (is_blind() said no). The arc, else nullptr: its packets were not
+  // sent, the rest of the gap's were lost (rig chaos seed 3, OS-LEGACY: 10 packets lost right after
+  // a learned 16-packet arc were counted 26 missing).
+  [[nodiscard]] const Arc* learned_within(long a, long b, long tol, long wrap) const noexcept {
+    const auto fwd = [wrap](long x, long y) {
+      const long d = y - x;
+      return wrap > 0 ? ((d % wrap) + wrap) % wrap : d;
+    };
+    const long span = fwd(a, b);
+    for (const Arc& arc : arcs) {
+      if (!arc.on) continue;
+      const long from = dist(a, arc.from, wrap) <= tol ? 0 : fwd(a, arc.from);
+      const long to = dist(b, arc.to, wrap) <= tol ? span : fwd(a, arc.to);
+      if (from >= 0 && from < to && to <= span) return &arc;
+    }
+    return nullptr;
   }
   // A packet at `at`: from inside a blind arc (or the candidate), the sector sends again.
   void seen(long at, long wrap) noexcept {
@@ -275,6 +333,41 @@ struct BlindArc {
   }
 
  private:
+  // `x` as a signed offset from `anchor` (within half a turn).
+  static double offset(long anchor, double x, long wrap) noexcept {
+    double d = x - static_cast<double>(anchor);
+    if (wrap > 0) {
+      d = std::fmod(d, static_cast<double>(wrap));
+      if (d < 0) d += static_cast<double>(wrap);
+      if (d > static_cast<double>(wrap) / 2) d -= static_cast<double>(wrap);
+    }
+    return d;
+  }
+  static long span_of(const Arc& arc, long wrap) noexcept {
+    const long d = arc.to - arc.from;
+    return wrap > 0 ? ((d % wrap) + wrap) % wrap : d;
+  }
+  // This turn's gap tells where the sector's ends lie: kept with what the turns before told, or
+  // taken alone where they disagree (the sector moved).
+  static void narrow(Arc& arc, const GapPackets& gap, long wrap) noexcept {
+    if (!(gap.pitch > 0) || gap.n == 0) return;
+    if (!arc.bounded) arc.anchor = arc.from;
+    const double m1 = offset(arc.anchor, gap.first, wrap);
+    const double s_lo = m1 - gap.pitch, s_hi = m1;
+    const double e_lo = m1 + (gap.n - 1) * gap.pitch, e_hi = m1 + gap.n * gap.pitch;
+    if (arc.bounded && std::max(arc.s_lo, s_lo) < std::min(arc.s_hi, s_hi) && std::max(arc.e_lo, e_lo) < std::min(arc.e_hi, e_hi)) {
+      arc.s_lo = std::max(arc.s_lo, s_lo);
+      arc.s_hi = std::min(arc.s_hi, s_hi);
+      arc.e_lo = std::max(arc.e_lo, e_lo);
+      arc.e_hi = std::min(arc.e_hi, e_hi);
+      return;
+    }
+    arc.s_lo = s_lo;
+    arc.s_hi = s_hi;
+    arc.e_lo = e_lo;
+    arc.e_hi = e_hi;
+    arc.bounded = true;
+  }
   void refresh() noexcept {
     candidate = cand.on;
     learned = false;
