@@ -104,9 +104,11 @@ ReplayStats run_replay(PacketStream& stream, UdpSender& sender, const ReplayOpti
     if (pending.empty()) return;
     const Nanos tx = obs != nullptr ? vehicle_now_ns() : 0;
     const SendResult r = sender.send_batch(pending);
-    if (obs != nullptr)
+    if (obs != nullptr) {
       for (const std::int64_t tag : pending_tags)
         if (tag >= 0) obs->sent(tag, tx);
+      obs->batch_sent();
+    }
     pending_tags.clear();
     st.sent += r.sent;
     st.send_errors += pending.size() - r.sent;

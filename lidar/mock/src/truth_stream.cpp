@@ -201,6 +201,10 @@ void TruthStream::sent(std::int64_t tag, Nanos tx_ns) {
   put(*p);
 }
 
+void TruthStream::batch_sent() {
+  if (writer_) writer_->flush();  // one write() per sendmmsg: ~0.7-1.8 k a second per mock
+}
+
 void TruthStream::finish() {
   if (finished_) return;
   finished_ = true;

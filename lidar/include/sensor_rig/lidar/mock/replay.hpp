@@ -46,6 +46,9 @@ class ReplayObserver {
   virtual void fate(std::int64_t tag, truth::Fate fate, std::uint64_t fault) = 0;
   // Handed to sendmmsg at this CLOCK_REALTIME (the first time, for a duplicated packet).
   virtual void sent(std::int64_t tag, Nanos tx_ns) = 0;
+  // A batch was handed to sendmmsg (after its sent() calls): what it records of them may be written
+  // out now (a mock killed next must not take the parts it sent with it).
+  virtual void batch_sent() {}
 };
 
 class PacketStream {
