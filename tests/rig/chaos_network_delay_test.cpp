@@ -108,11 +108,15 @@ TEST(ChaosNetworkDelay, TheMockEcuHoldsItsFramesInOrderAndTheWatchdogTripsOnlyPa
   EXPECT_EQ(run.code, 0) << run.err;
 }
 
-// Two free-running GigE fakes (the mock rig's addresses) with a 50 ms hold for 3 s: every frame made
+// Two free-running GigE fakes (the mock rig's addresses) with a 50 ms hold for 2 s: every frame made
 // under it is sent whole, its leader 50 ms later than without, in order; the rig publishes every
-// frame (accounted, monitor_agrees). Their stamps are the exposure: where the rig's stamps of held
-// frames moved with the arrivals, `stamps` must be broken whatever the rig flagged (the camera's
-// clock mapping taking a held network for a clock step: timesync's, being changed), held otherwise.
+// frame (accounted, monitor_agrees). Their stamps are the exposure: a late arrival does not move it,
+// so every held frame's stamp stays within 1 ms of its exposure start and `stamps` holds (the camera
+// FrameClock keeps its clock's line while the mapper waits late_confirm_ns, 3 s, before it takes late
+// arrivals for a step back). Before, it refused the line after 3 late frames and took the shift
+// after 1 s: held frames' stamps p50 +50.2 ms, `stamps` broken (the judge takes no flag for them).
+// (2 s, not 3: a frame in flight when the hold begins is held too, and 31 held frames span the 3 s
+// after which the mapper takes the shift; a longer hold's last second is stamped 50 ms late.)
 TEST(ChaosNetworkDelay, GigeCamerasDeliverLateInOrderAndTheirStampsAreJudgedByExposure) {
   if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
   test::TempDir dir;
@@ -126,15 +130,12 @@ TEST(ChaosNetworkDelay, GigeCamerasDeliverLateInOrderAndTheirStampsAreJudgedByEx
   const std::string config = dir.write("cameras.yaml", y);
   const std::string out = (dir.path / "campaign").string();
   const auto run = test::run_rig("chaos " + config + " --duration 8 --warmup 3 --seed 1 --json --out " + out +
-                                 " --faults 'host.network_delay:ms=50@1.5+3'");
+                                 " --faults 'host.network_delay:ms=50@1.5+2'");
   ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
   const auto j = last_json_line(run.out);
   ASSERT_TRUE(j.is_object()) << run.out << "\n" << run.err;
   EXPECT_EQ(j["faults"].value("host.network_delay", 0), 1) << run.err;
-  for (const auto& [name, verdict] : j["invariants"].items())
-    if (name != "stamps") {
-      EXPECT_EQ(verdict, "held") << name << "\n" << run.err;
-    }
+  for (const auto& [name, verdict] : j["invariants"].items()) EXPECT_EQ(verdict, "held") << name << "\n" << run.err;
 
   // Samples by topic and seq: the stamp and the first packet's arrival.
   std::map<std::string, std::vector<std::pair<std::uint64_t, std::pair<Nanos, Nanos>>>> samples;
@@ -174,7 +175,7 @@ TEST(ChaosNetworkDelay, GigeCamerasDeliverLateInOrderAndTheirStampsAreJudgedByEx
     }
     EXPECT_EQ(not_whole, 0u);
     EXPECT_EQ(out_of_order, 0u);
-    ASSERT_GE(held.size(), 20u) << "10 Hz for 3 s held";
+    ASSERT_GE(held.size(), 15u) << "10 Hz for 2 s held";
     ASSERT_GE(clear.size(), 20u);
     EXPECT_NEAR(median(held) - median(clear), 50.0, 3.0) << "its leader left 50 ms later than its exposure's end";
     // The rig's stamps of the held frames against their exposure (a frame is its unit by its id).
@@ -190,14 +191,10 @@ TEST(ChaosNetworkDelay, GigeCamerasDeliverLateInOrderAndTheirStampsAreJudgedByEx
               << " ms, flagged " << tj["stamps_flagged"] << "\n";
   }
   std::cout << "held frames' largest stamp error: " << held_stamp_error_max_ms << " ms\n";
-  if (held_stamp_error_max_ms > 1.0) {
-    // The stamps moved with the late arrivals: an error, flagged or not.
-    EXPECT_EQ(j["invariants"]["stamps"], "broken") << run.err;
-    bool named = false;
-    for (const auto& e : j["examples"])
-      named = named || (e.value("invariant", "") == "stamps" && e.value("what", "").find("host.network_delay") != std::string::npos);
-    EXPECT_TRUE(named) << "the example names the hold: " << run.out;
-  }
+  // Against the truth itself, not only the judge: no held frame's stamp moved with its arrival.
+  EXPECT_GT(held_stamp_error_max_ms, 0.0) << "no held frame matched a published sample";
+  EXPECT_LT(held_stamp_error_max_ms, 1.0) << "a held network moved an exposure stamp";
+  EXPECT_EQ(j["invariants"]["stamps"], "held") << run.err;
 }
 
 }  // namespace

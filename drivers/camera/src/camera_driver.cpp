@@ -96,6 +96,9 @@ struct CameraDriver::Impl {
   Nanos rejected_seen_mono_ns = 0; // when the count last grew (CLOCK_MONOTONIC)
   Nanos slewed_seen_mono_ns = 0;   // when a stamp last carried a step back's correction (FrameStamp::slewed)
   Nanos unlocked_seen_mono_ns = 0; // when a stamp last came from device ticks not mapped (locked) yet
+  Nanos doubtful_seen_mono_ns = 0; // when a stamp last was FrameStamp::doubtful (arrivals late against the camera's clock)
+  Nanos doubtful_shift_ns = 0;     // by how much they were late then
+  std::uint64_t doubtful_frames = 0;  // frames stamped so (status `stamp_doubtful`)
   timesync::RealtimeStepDetector realtime_steps;  // told to the clock: stamps held over a step back
 
   Impl(const CameraConfig& c, std::unique_ptr<camera::FrameSource> s, const dds::Participant& p, dds::StampsWriter& st,
@@ -145,6 +148,11 @@ struct CameraDriver::Impl {
     {
       std::lock_guard lock(mutex);
       if (st.slewed) slewed_seen_mono_ns = monotonic_now_ns();
+      if (st.doubtful) {
+        doubtful_seen_mono_ns = monotonic_now_ns();
+        doubtful_shift_ns = clock.late_shift_ns();
+        ++doubtful_frames;
+      }
       // A device-tick camera stamped before its clock mapping locked (after every open): the stamp
       // is the arrival less the exposure, or a line of a few arrivals, or the trigger's tick, off
       // by the transport and host delay it cannot see (10-minute campaign: corner_front_right 1.8-
@@ -365,6 +373,7 @@ void CameraDriver::stop() {
   std::string line = impl_->cfg.name + ":";
   for (const auto& [k, v] : st.values)
     if (k == "frames" || k == "incomplete" || k == "reopens" || k == "stamp_source" || k == "sync" || k == "triggers" ||
+        k == "stamp_rejected" || k == "stamp_doubtful" ||
         k.rfind("phase_", 0) == 0 || k.rfind("trigger_spread_", 0) == 0 || k.rfind("trigger_call_", 0) == 0 ||
         k.rfind("trigger_to_exposure_", 0) == 0)
       line.append(" ").append(k).append("=").append(v);
@@ -384,7 +393,11 @@ dds::DriverStatus CameraDriver::status() const {
   // step for ten times its length (timesync/README.md "Realtime steps"): flagged, not passed as exact.
   const bool slewed_recently = recent(impl_->slewed_seen_mono_ns);
   const bool unlocked_recently = recent(impl_->unlocked_seen_mono_ns);
-  const bool unsynchronized = rejected_recently || slewed_recently || unlocked_recently;
+  // Frames arriving later than the camera's clock says, for longer than a host hiccup: a held network
+  // (the stamps are the exposures) or the camera's clock stepped back (they are the step off); not
+  // told apart for 3 s (timesync/README.md item 5): flagged, as the LIDARs' are.
+  const bool doubtful_recently = recent(impl_->doubtful_seen_mono_ns);
+  const bool unsynchronized = rejected_recently || slewed_recently || unlocked_recently || doubtful_recently;
   if (!impl_->open) {
     s.level = impl_->published.samples() == 0 && impl_->lost_reports == 0 ? dds::Level::kWarn : dds::Level::kError;
     s.message = impl_->state + (impl_->last_error.empty() ? "" : ": " + impl_->last_error);
@@ -401,6 +414,10 @@ dds::DriverStatus CameraDriver::status() const {
     s.level = dds::Level::kWarn;
     s.message = "unsynchronized: stamps slewed after a CLOCK_REALTIME step back (" +
                 std::to_string(impl_->monotonic.correction_ns / 1'000'000) + " ms still added)";
+  } else if (doubtful_recently && !rejected_recently) {
+    s.level = dds::Level::kWarn;
+    s.message = "unsynchronized: frames arrive " + std::to_string(impl_->doubtful_shift_ns / 1'000'000) +
+                " ms later than the camera's clock says (a held network, or its clock stepped back: stamps from its clock)";
   } else if (unlocked_recently && !rejected_recently) {
     s.level = dds::Level::kWarn;
     s.message = "unsynchronized: the device clock is not mapped yet (stamps from the arrival or the trigger)";
@@ -472,6 +489,8 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("stamp_rejected", impl_->rejected.count);
   // Of them: replaced while the mapper held a device clock step it had not confirmed (issue 27 item 8).
   s.add_number("stamp_rejected_steps", impl_->rejected.steps);
+  // Frames stamped from the camera's clock while they arrived later than it says (FrameStamp::doubtful).
+  s.add_number("stamp_doubtful", impl_->doubtful_frames);
   s.add_number("sync_jumps", impl_->sync.jumps);
   if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
   if (impl_->outputs) impl_->outputs->add_status(s);

@@ -1,6 +1,7 @@
 #include "sensor_rig/drivers/camera/frame_clock.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 
 namespace sensor_rig::drivers {
 namespace {
@@ -16,16 +17,12 @@ constexpr std::size_t kMaxPending = 8;
 
 // Consecutive samples later than the line by a consistent amount before the line is distrusted:
 // one or two late frames are a host hiccup (the mapped stamp is right, the arrival is not); more,
-// and a device clock stepped back is as likely (the mapped stamp would be the step off).
+// and a device clock stepped back is as likely (the mapped stamp would be the step off): refused,
+// or, for a late shift the mapper defends (doubt() below), kept and flagged.
 constexpr std::size_t kStepSamples = 3;
 
 // A step of a PTP camera's raw ticks beyond this is no servo correction (the mapper's jump threshold).
 constexpr Nanos kPtpStepNs = 10'000'000;
-
-// The mapper's line disagrees with the recent arrivals: a device clock step it has not confirmed.
-bool unconfirmed_step(const timesync::ClockMapper::Deviation& d) noexcept {
-  return d.samples > 0 && (d.shift_ns < 0 || d.samples >= kStepSamples);
-}
 
 // The mapper is fed the exposure start by the arrival (first packet - exposure), so its line does
 // not depend on the exposure: one that changes while streaming changes what is subtracted per
@@ -45,9 +42,15 @@ timesync::ClockMapperConfig mapper_config(Nanos /*exposure_ns*/) {
   c.jump_confirm_samples = 10;
   c.jump_confirm_ns = 1'000'000'000;
   c.reacquire_ns = 5'000'000'000;
-  // Late arrivals confirm like early ones here: the frame clock refuses the line's stamps while any
-  // step is pending (unconfirmed_step below), so the 1 s above is already its window of doubt.
-  c.late_confirm_ns = 0;
+  // late_confirm_ns / late_shift_max_ns: the mapper's defaults (3 s / 1 s), as the LIDARs'. Arrivals
+  // later than the line are a held network (host.network_delay: GVSP 50 ms late for seconds) as much
+  // as a clock stepped back. Before, late_confirm_ns was 0 and such a shift refused the line after 3
+  // frames and was confirmed after 1 s: a held camera's stamps followed its arrivals (campaign: held
+  // frames p50 +50.2 ms, none flagged), though a late arrival does not move an exposure. Now the line
+  // stays for 3 s, its stamps kept and flagged (doubt() below); a real step back up to 1 s is mapped
+  // that step off, flagged, for 3 s. Worth it: a free-running camera's ticks step back only when it
+  // restarts (by far more than 1 s: refused at once as before), a PTP camera's come with a lock
+  // change (refused as before, doubt()), while a held network is what a car's switch does.
   return c;
 }
 
@@ -71,6 +74,45 @@ void FrameClock::reset(Nanos exposure_ns) {
   mapper_ = timesync::ClockMapper(mapper_config(exposure_ns));
   exposure_ns_ = exposure_ns;
   pending_.clear();
+  announced_step_ns_ = 0;  // the new mapper converges from scratch: no line a step could shift
+  have_domain_ = false;
+  ptp_changed_at_ns_ = 0;
+}
+
+bool FrameClock::ptp_changed_recently(Nanos now) const noexcept {
+  return ptp_changed_at_ns_ != 0 && now - ptp_changed_at_ns_ <= mapper_.config().late_confirm_ns;
+}
+
+void FrameClock::announce_ptp_step(Nanos now) noexcept {
+  if (!ptp_changed_recently(now)) return;
+  const auto d = mapper_.deviation();
+  if (d.samples == 0 || d.shift_ns <= 0 || d.shift_ns == announced_step_ns_) return;
+  mapper_.host_step(d.shift_ns, now);
+  announced_step_ns_ = d.shift_ns;
+  announced_at_ns_ = now;
+}
+
+FrameClock::Doubt FrameClock::doubt(const timesync::ClockMapper::Deviation& d, Nanos now) const noexcept {
+  if (d.samples == 0) return {};
+  // Earlier than the line allows: no network delivers before the send; the device clock stepped
+  // forward (or CLOCK_REALTIME back): the line's stamps are refused at once.
+  if (d.shift_ns < 0) return {true, false};
+  const auto& cfg = mapper_.config();
+  // The mapper's own rule (ClockMapper::is_late, timesync/README.md item 5): a late shift up to
+  // late_shift_max_ns waits late_confirm_ns unless the line is still converging (restarted, not
+  // defended) or the host announced it (a CLOCK_REALTIME step forward of that size: the arrivals
+  // moved, not the exposures; the line's stamps are the step early, refused as before).
+  const bool announced = announced_step_ns_ != 0 && now - announced_at_ns_ <= cfg.late_confirm_ns &&
+                         std::llabs(d.shift_ns - announced_step_ns_) <= cfg.outlier_threshold_ns;
+  // Nor a late shift near a PTP lock change: the camera's clock took its (new) master's time, or
+  // ran free: a step is what that does, a held network does not come with it.
+  const bool defended = cfg.late_confirm_ns > 0 && mapper_.state() != timesync::SyncState::kConverging &&
+                        d.shift_ns <= cfg.late_shift_max_ns && !announced && !ptp_changed_recently(now);
+  if (!defended) return {d.samples >= kStepSamples, false};
+  // A held network or a clock stepped back: only time tells. The line's stamp is the exposure of a
+  // held frame (refusing it stamped the arrival: +50 ms under a 50 ms hold) and the step off for a
+  // clock stepped back: kept, flagged once kStepSamples agree (one or two are a host hiccup).
+  return {false, d.samples >= kStepSamples};
 }
 
 void FrameClock::observe(const camera::FrameMeta& m, Nanos device) noexcept {
@@ -95,7 +137,21 @@ void FrameClock::observe(const camera::FrameMeta& m, Nanos device) noexcept {
 }
 
 FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
+  if (host_step_ns_ != 0) {  // the first frame dequeued after the step: its arrival is the host time after it
+    mapper_.host_step(host_step_ns_, m.first_rx_ns);
+    announced_step_ns_ = host_step_ns_;
+    announced_at_ns_ = m.first_rx_ns;
+    host_step_ns_ = 0;
+  }
+  if (m.domain != camera::TimeDomain::kMonotonic) {
+    const bool ptp_then = domain_ == camera::TimeDomain::kVehicle, ptp_now = m.domain == camera::TimeDomain::kVehicle;
+    if (have_domain_ && ptp_then != ptp_now) ptp_changed_at_ns_ = m.first_rx_ns;
+    have_domain_ = true;
+    domain_ = m.domain;
+    announce_ptp_step(m.first_rx_ns);  // a step the ticks showed before the status poll said so
+  }
   FrameStamp s = device_stamp(m, tick_ns);
+  if (s.doubtful) late_shift_ns_ = mapper_.deviation().shift_ns;
   // Every source through the one filter: trigger ticks bypassed it, so after a host step back a
   // triggered camera's topic went back with its ticks and forward again with its mapped exposures.
   s.vehicle_ns = monotonic_.apply(s.vehicle_ns);
@@ -126,28 +182,36 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
       // A small step of the raw ticks is the servo correcting the clock (a cold start's
       // Uncalibrated -> Slave, ~ms): the PTP stamp is taken. A step beyond the mapper's jump
       // threshold while PTP says locked is a clock that lost its master before the status poll
-      // (up to a second) says so: refused until the mapper confirms it.
+      // (up to a second) says so: refused until the mapper confirms it, if the ticks went forward
+      // (or far back). Ticks later than their line by up to late_shift_max_ns are a held network as
+      // much as that clock stepped back: the PTP stamp (the exposure, for a held frame) is kept,
+      // flagged `doubtful` while the mapper waits (doubt()).
       observe(m, raw);
+      announce_ptp_step(m.first_rx_ns);
       const auto deviation = mapper_.deviation();
-      const bool ticks_stepped = unconfirmed_step(deviation);
-      const bool ptp_stepped = ticks_stepped && (deviation.shift_ns > kPtpStepNs || deviation.shift_ns < -kPtpStepNs);
-      if (plausible(m.device_ns) && !ptp_stepped) return {m.device_ns, StampSource::kVehicle, m.device_ns};
+      const Doubt ticks = doubt(deviation, m.first_rx_ns);
+      const bool big = deviation.shift_ns > kPtpStepNs || deviation.shift_ns < -kPtpStepNs;
+      const bool ptp_stepped = ticks.refuse && big;
+      if (plausible(m.device_ns) && !ptp_stepped)
+        return {m.device_ns, StampSource::kVehicle, m.device_ns, false, false, ticks.doubtful && big};
       reject(m.device_ns, ptp_stepped);
       const auto r = mapper_.map(raw);
-      if (r.valid && r.state == timesync::SyncState::kLocked && plausible(r.vehicle_ns) && !ticks_stepped)
-        return {r.vehicle_ns, StampSource::kDeviceMapped, r.vehicle_ns, false, true};
+      if (r.valid && r.state == timesync::SyncState::kLocked && plausible(r.vehicle_ns) && !ticks.refuse)
+        return {r.vehicle_ns, StampSource::kDeviceMapped, r.vehicle_ns, false, true, ticks.doubtful};
       return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0, false, true};
     }
     case camera::TimeDomain::kDeviceTicks:
       break;
   }
   observe(m, m.device_ns);
+  announce_ptp_step(m.first_rx_ns);
   auto r = mapper_.map(m.device_ns);
   // A device clock step the mapper has not confirmed yet: far outside the window (a PTP cold start,
   // decades), or inside it, where only the arrivals disagreeing with the line show it.
   // (A step forward by decades also puts the mapping out of holdover: invalid, still a step.)
   const auto deviation = mapper_.deviation();
-  const bool stepped = unconfirmed_step(deviation);
+  const Doubt line = doubt(deviation, m.first_rx_ns);
+  const bool stepped = line.refuse;
   bool replaced = false;
   if (stepped || (r.valid && !plausible(r.vehicle_ns))) {
     // The old line puts the exposure start the step off what the arrival says.
@@ -163,10 +227,11 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
     // A mapped exposure after the frame arrived, or long before its trigger, is the mapping's
     // error, not the camera's: the tick then.
     const bool near_tick = r.valid && r.state == timesync::SyncState::kLocked && r.vehicle_ns >= tick_ns - kMappedExposureSlackNs;
-    if (near_tick) return {r.vehicle_ns, StampSource::kTriggerExposure, device};
+    // (A line that a clock stepped back put more than the slack early gives the tick: right.)
+    if (near_tick) return {r.vehicle_ns, StampSource::kTriggerExposure, device, false, false, line.doubtful};
     return {tick_ns, StampSource::kTriggerTick, device, false, replaced};
   }
-  if (r.valid) return {r.vehicle_ns, StampSource::kDeviceMapped, device};
+  if (r.valid) return {r.vehicle_ns, StampSource::kDeviceMapped, device, false, false, line.doubtful};
   return {m.first_rx_ns - exposure_ns_, StampSource::kHostFallback, 0, false, replaced};
 }
 

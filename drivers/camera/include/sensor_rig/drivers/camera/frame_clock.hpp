@@ -11,9 +11,16 @@
 // (a camera that won the PTP election, a wrong timescale, a clock step not yet confirmed by the
 // mapper): the frame falls back to the mapped ticks, else the arrival minus the exposure, counted.
 // A device clock step inside the window (seconds, milliseconds) is caught by the mapper's pending
-// deviation: arrivals earlier than its line allows (the clock stepped forward) at once, later ones
-// (stepped back, or a host delay) once kStepSamples agree; those frames fall back to the arrival
-// too, counted, until the jump is confirmed and the line re-seeded (issue 27 item 8).
+// deviation: arrivals earlier than its line allows (the clock stepped forward, or CLOCK_REALTIME
+// stepped back) fall back to the arrival at once, counted, until the jump is confirmed and the line
+// re-seeded (issue 27 item 8). Arrivals later than the line by up to the mapper's late_shift_max_ns
+// are a held network as much as a clock stepped back (one-way timing cannot tell them apart for
+// late_confirm_ns): the line's stamp is kept, the exposure a held frame really had, and once
+// kStepSamples agree it is `doubtful` (flagged: for a real step back it is the step off). A late
+// shift the host announced (realtime_step: CLOCK_REALTIME stepped forward) is no held network: it
+// falls back to the arrival at once as before, and the mapper confirms it at the normal pace; so is
+// one within late_confirm_ns of a PTP lock change (the frames' domain went to or from kVehicle: the
+// camera lost or found its master, whose step its clock took), told to the mapper as well.
 // A topic's stamps never go backwards when CLOCK_REALTIME is stepped back (timesync's
 // MonotonicStamps: held, then slewed out), trigger ticks included: a triggered camera switches
 // between its ticks and its mapped exposures, and one filter for both keeps the topic monotonic.
@@ -44,6 +51,11 @@ struct FrameStamp {
   // The device's stamp was found wrong and replaced (outside the arrival window, or its clock
   // stepped and the mapper has not confirmed the new line yet): counted in rejected().
   bool replaced = false;
+  // The frames arrive later than the device's clock (its line) says, consistently, and the mapper
+  // has not taken it for a step yet: a held network (the stamp is right) or the clock stepped back
+  // by up to late_shift_max_ns (the stamp is that step off). Kept, flagged (the node says
+  // `stamp_sync: unsynchronized` as for `slewed`); late_shift_ns() says by how much.
+  bool doubtful = false;
 };
 // A correction beyond this (the camera stamp bound of rig chaos) makes a stamp `slewed`.
 inline constexpr Nanos kSlewFlagNs = 1'000'000;
@@ -64,8 +76,15 @@ class FrameClock {
     return m.first_rx_ns - (m.exposure_ns > 0 ? m.exposure_ns : exposure_ns_);  // the latest exposure known
   }
   [[nodiscard]] const timesync::MonotonicStampsStatus& monotonic() const noexcept { return monotonic_.status(); }
-  // CLOCK_REALTIME was stepped (the caller's RealtimeStepDetector): a step back is absorbed.
-  void realtime_step(Nanos step_ns) noexcept { monotonic_.realtime_step(step_ns); }
+  // CLOCK_REALTIME was stepped (the caller's RealtimeStepDetector; 0: not): a step back is absorbed;
+  // the mapper is told with the next frame (its arrival is the host time after the step), so that
+  // arrivals later by a step forward are not taken for a held network.
+  void realtime_step(Nanos step_ns) noexcept {
+    monotonic_.realtime_step(step_ns);
+    if (step_ns != 0) host_step_ns_ = step_ns;
+  }
+  // How much later than the device's clock the frames arrived at the last `doubtful` stamp (ns).
+  [[nodiscard]] Nanos late_shift_ns() const noexcept { return late_shift_ns_; }
   // A (re)opened device: its tick counter may have restarted, its exposure time changed.
   void reset(Nanos exposure_ns);
   // Device stamps (PTP or mapped ticks) found outside the frame's arrival window and replaced
@@ -80,6 +99,16 @@ class FrameClock {
 
  private:
   FrameStamp device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept;
+  // What the mapper's pending deviation means for this frame's stamp (see frame_clock.cpp).
+  struct Doubt {
+    bool refuse = false;    // the line's stamp is refused (an unconfirmed step)
+    bool doubtful = false;  // the line's stamp is kept but may be the step off (flag it)
+  };
+  [[nodiscard]] Doubt doubt(const timesync::ClockMapper::Deviation& d, Nanos now) const noexcept;
+  [[nodiscard]] bool ptp_changed_recently(Nanos now) const noexcept;
+  // A late shift pending after a PTP lock change is the camera's step: told to the mapper (as a host
+  // step would be) so that it confirms it at the normal pace, not after late_confirm_ns.
+  void announce_ptp_step(Nanos now) noexcept;
   // Feeds the mapper (device time, exposure start by the arrival): with the frame's own exposure
   // where the source reports it a frame or two later (FrameMeta::exposure_seq), else the latest.
   void observe(const camera::FrameMeta& m, Nanos device) noexcept;
@@ -94,6 +123,13 @@ class FrameClock {
   Nanos exposure_ns_;
   Rejected rejected_;
   std::deque<Pending> pending_;  // frames waiting for their exposure (sources that report it)
+  Nanos host_step_ns_ = 0;        // a CLOCK_REALTIME step not told to the mapper yet
+  Nanos announced_step_ns_ = 0;   // the last step told to the mapper, and when (host time)
+  Nanos announced_at_ns_ = 0;
+  Nanos late_shift_ns_ = 0;
+  bool have_domain_ = false;         // the last frame's time domain (a PTP lock change: to/from kVehicle)
+  camera::TimeDomain domain_ = camera::TimeDomain::kDeviceTicks;
+  Nanos ptp_changed_at_ns_ = 0;      // host time of the last PTP lock change (0: none)
 };
 
 }  // namespace sensor_rig::drivers
