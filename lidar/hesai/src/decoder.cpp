@@ -265,7 +265,7 @@ struct DecoderImpl {
     scans.begin_packet();
     PendingScan& cur = scans.current();
     if (!hole_after_cut) cur.rebase(stamp);
-    bool in_next = false;
+    bool in_next = false, placed = false;
     for (int g = 0; g < groups; ++g) {
       if ((fit.bad >> g) & 1U) continue;
       const Nanos group_stamp = stamp + static_cast<Nanos>(mi->group_period_ns) * g;
@@ -281,6 +281,7 @@ struct DecoderImpl {
         cur.scan.last_rx_ns = std::max(last_rx, rx_ns);
         put_group(p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size, az[g], group_stamp, in_window,
                   n, mode, unit, true);
+        placed = true;
         continue;
       }
       const bool overlap = window_open && in_window;
@@ -297,6 +298,10 @@ struct DecoderImpl {
       cur.scan.last_rx_ns = std::max(last_rx, rx_ns);
       put_group(p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size, az[g], group_stamp, overlap, n,
                 mode, unit);
+    }
+    if (hole_after_cut && !placed) {  // wholly the published scan's (a gap begun before the window)
+      last = scans.drop(PacketStatus::kOutOfOrder);
+      return;
     }
     --hole.open;
     scans.fill_missing();
