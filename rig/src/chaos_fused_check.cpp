@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
-#include <numbers>
+#include <optional>
 #include <set>
 
 #include "sensor_rig/common/floor_div.hpp"
@@ -41,35 +42,54 @@ bool stops_a_lidar(const faults::FaultEvent& e) {
 }
 
 // The rotation boundary of the truth: the LIDARs turn phase-locked at one period, each scan starts
-// at its LIDAR's phase (the circular mean of its true acquisitions mod the period); the boundary lies
+// at its LIDAR's phase (its latest true acquisition mod the period); the boundary lies
 // in the middle of the widest gap between the phases, as the fusion's matcher places its own. A
 // scan's rotation is floor((acquisition - boundary) / period): scans of one rotation are the ones
-// that lie closest together.
-Nanos rotation_boundary(const std::vector<Lidar>& lidars, Nanos period) {
-  std::vector<Nanos> phases;
-  for (const auto& l : lidars) {
-    if (l.acqs.empty()) continue;
-    double sx = 0, sy = 0;
-    for (const Nanos acq : l.acqs) {
-      const double a = 2 * std::numbers::pi * static_cast<double>(floor_mod(acq, period)) / static_cast<double>(period);
-      sx += std::cos(a);
-      sy += std::sin(a);
-    }
-    double mean = std::atan2(sy, sx);
-    if (mean < 0) mean += 2 * std::numbers::pi;
-    phases.push_back(floor_mod(std::llround(mean / (2 * std::numbers::pi) * static_cast<double>(period)), period));
-  }
-  if (phases.empty()) return 0;
-  std::sort(phases.begin(), phases.end());
+// that lie closest together. The phases are those of the time (each LIDAR's latest scan in
+// [from, to)): a LIDAR that comes back from a stall or an rpm change on another phase regroups the
+// rotations from its first scan on it. One boundary for the whole run, from each LIDAR's mean phase,
+// put a front LIDAR back at 300 rpm half a rotation off (46 ms before one neighbour, 54 after the
+// other) with the rotation its mean phase said, against the closer grouping the matcher made
+// (whole-rig campaign, seed 25). `previous` (the boundary
+// before, not wrapped) is kept while no phase comes within a quarter of the widest gap, as the
+// matcher keeps its own: phases that jitter across two nearly equal gaps must not renumber.
+struct Phases {
+  std::vector<Nanos> sorted;
   Nanos widest = -1, middle = 0;
-  for (std::size_t i = 0; i < phases.size(); ++i) {
-    const Nanos next = i + 1 < phases.size() ? phases[i + 1] : phases[0] + period;
-    if (next - phases[i] > widest) {
-      widest = next - phases[i];
-      middle = floor_mod(phases[i] + widest / 2, period);
+};
+Phases phases_between(const std::vector<Lidar>& lidars, Nanos period, Nanos from, Nanos to) {
+  Phases ph;
+  for (const auto& l : lidars) {
+    const auto first = std::lower_bound(l.acqs.begin(), l.acqs.end(), from);
+    const auto last = std::lower_bound(first, l.acqs.end(), to);
+    if (first == last) continue;
+    ph.sorted.push_back(floor_mod(*std::prev(last), period));  // its latest scan's: the phase it is on
+  }
+  std::sort(ph.sorted.begin(), ph.sorted.end());
+  for (std::size_t i = 0; i < ph.sorted.size(); ++i) {
+    const Nanos next = i + 1 < ph.sorted.size() ? ph.sorted[i + 1] : ph.sorted[0] + period;
+    if (next - ph.sorted[i] > ph.widest) {
+      ph.widest = next - ph.sorted[i];
+      ph.middle = floor_mod(ph.sorted[i] + ph.widest / 2, period);
     }
   }
-  return middle;
+  return ph;
+}
+
+// x in [-period/2, period/2).
+Nanos signed_mod(Nanos x, Nanos period) { return floor_mod(x + period / 2, period) - period / 2; }
+
+// The boundary for [from, to), moved the short way from `previous` (never wrapped: rotation numbers
+// count periods from it) or kept there; nullopt without any acquisition then.
+std::optional<Nanos> rotation_boundary(const std::vector<Lidar>& lidars, Nanos period, Nanos from, Nanos to,
+                                       std::optional<Nanos> previous) {
+  const Phases ph = phases_between(lidars, period, from, to);
+  if (ph.sorted.empty()) return previous;
+  if (!previous) return ph.middle;
+  Nanos nearest = period;
+  for (const Nanos p : ph.sorted) nearest = std::min<Nanos>(nearest, std::abs(signed_mod(p - *previous, period)));
+  if (nearest >= ph.widest / 4) return previous;
+  return *previous + signed_mod(ph.middle - *previous, period);
 }
 
 std::string name_of(const std::string& topic) {
@@ -88,7 +108,7 @@ class FusedJudge {
     t_.device = "fusion";
     t_.device_class = "fusion";
     load();
-    boundary_ = rotation_boundary(lidars_, period_);
+    place_boundaries();
     for (const FusedSet& set : in_.fused.sets) judge_sweep(set);
     account_scans();
     unpaired_clouds();
@@ -124,7 +144,39 @@ class FusedJudge {
     return m.lidar->name + " seq " + std::to_string(m.scan->seq) + "'s own stamp is " + fmt(ms(own)) + " ms off its truth";
   }
   bool in_window(Nanos x) const { return x >= in_.window_begin_ns && x < in_.window_end_ns && !ctx_.doubled(x); }
-  std::int64_t rotation(Nanos acq) const { return floor_div(acq - boundary_, period_); }
+  // The boundary in force at time t (pieces of piece_ from the earliest acquisition).
+  Nanos boundary_at(Nanos t) const {
+    if (boundaries_.empty()) return 0;
+    const std::int64_t i = std::clamp<std::int64_t>(floor_div(t - pieces_from_, piece_), 0, static_cast<std::int64_t>(boundaries_.size()) - 1);
+    return boundaries_[static_cast<std::size_t>(i)];
+  }
+  std::int64_t rotation(Nanos acq) const { return floor_div(acq - boundary_at(acq), period_); }
+  // Where rotation n begins (its boundary's piece found from the first piece's numbering, once refined).
+  Nanos rotation_start(std::int64_t n) const {
+    Nanos start = boundary_at(pieces_from_) + n * period_;
+    start = boundary_at(start) + n * period_;
+    return start;
+  }
+  // Pieces of a rotation; each LIDAR's phase that of its latest scan up to the piece's end (within
+  // three rotations: a LIDAR silent longer has none): the phase of the moment, as the matcher knows
+  // it (a LIDAR whose phase changed is taken on its new one from its first scan on it).
+  Nanos piece_ = 1;
+  void place_boundaries() {
+    Nanos lo = std::numeric_limits<Nanos>::max(), hi = std::numeric_limits<Nanos>::min();
+    for (const auto& l : lidars_)
+      if (!l.acqs.empty()) {
+        lo = std::min(lo, l.acqs.front());
+        hi = std::max(hi, l.acqs.back());
+      }
+    if (lo > hi) return;
+    piece_ = period_;
+    pieces_from_ = lo;
+    std::optional<Nanos> b;
+    for (Nanos t = lo; t <= hi; t += piece_) {
+      b = rotation_boundary(lidars_, period_, t - 2 * period_, t + period_, b);
+      boundaries_.push_back(b.value_or(0));
+    }
+  }
 
   void load() {
     for (const auto& topic : in_.fused.lidar_topics) {
@@ -139,12 +191,16 @@ class FusedJudge {
           last = std::max(last, p.acq_ns);
         }
         for (const auto& u : log.units) {
-          l.acqs.push_back(u.acq_ns);
           const auto it = last_firing.find(u.unit);
-          l.units.emplace_back(u.acq_ns, it == last_firing.end() ? 0 : std::max<Nanos>(0, it->second - u.acq_ns));
+          const Nanos span = it == last_firing.end() ? 0 : std::max<Nanos>(0, it->second - u.acq_ns);
+          l.units.emplace_back(u.acq_ns, span);
+          // A scan short of a turn (a LIDAR above the rig's rpm: its phase moves by half a turn each
+          // scan, the circular mean of two opposite phases is noise) says nothing of the rig's rotation.
+          if (span == 0 || span >= period_ - period_ / 4) l.acqs.push_back(u.acq_ns);
         }
       }
       std::sort(l.units.begin(), l.units.end());
+      std::sort(l.acqs.begin(), l.acqs.end());
       lidar_of_[topic] = lidars_.size();
       lidars_.push_back(std::move(l));
     }
@@ -296,7 +352,7 @@ class FusedJudge {
   // (its median a slow scan) had k = 1, and every sweep its scans covered read "says complete
   // with 2 of 3 LIDARs".
   bool covered_by_slower(const Lidar& l, std::int64_t n) const {
-    const Nanos start = boundary_ + n * period_;
+    const Nanos start = rotation_start(n);
     auto it = std::lower_bound(l.units.begin(), l.units.end(), std::make_pair(start, Nanos{0}));
     if (it != l.units.end() && it->first < start + period_) return false;  // it began one in n
     if (it == l.units.begin()) return false;
@@ -434,7 +490,8 @@ class FusedJudge {
   const JudgeContext& ctx_;
   TopicResult& t_;
   const Nanos period_;
-  Nanos boundary_ = 0;
+  Nanos pieces_from_ = 0;
+  std::vector<Nanos> boundaries_;  // per piece of piece_ from pieces_from_ (not wrapped)
   std::vector<Lidar> lidars_;
   std::map<std::string, std::size_t> lidar_of_;
   std::map<std::uint64_t, const SampleRecord*> clouds_;                          // fused clouds by seq

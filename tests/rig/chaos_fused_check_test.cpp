@@ -295,6 +295,52 @@ TEST(ChaosFusedCheck, AFusedCloudThatStaysPartialAfterALidarReturnsIsCaught) {
   EXPECT_NEAR(r.topics.at(kFusedCloudTopic).recovery_max_s, 1.2, 0.01);
 }
 
+// The left LIDAR, 31 ms into the rotation, stalls for three rotations and comes back on a phase of
+// its own, 60 ms in (the whole-rig campaign's front after a stall). From then on its scan lies
+// 40 ms before the others' next rotation and 60 ms after their own: the closer grouping, the one the
+// matcher makes, fuses it with the next. Held. The judge's rotation boundary used to be one for the
+// whole run, from each LIDAR's mean phase (the left's ~46 ms: the boundary at 73 ms), and called
+// every such sweep mixed; now the same sweeps grouping the far way (the left's scan with the
+// others' own rotation) are the ones caught.
+TEST(ChaosFusedCheck, ALidarBackOnAPhaseOfItsOwnIsJudgedByThePhasesOfTheTime) {
+  Input near = honest();
+  const auto moved = [](std::int64_t u) -> Nanos { return u >= 15 ? 58'000'000 : 29'000'000; };
+  const auto left_acq = [&](int u) { return acq(1, u) + moved(u); };
+  near.events.push_back(faults::FaultEvent{1, "lidar.restart", "left", 1.2, 0.3, {}});
+  near.truths[1].faults.push_back(truth::FaultRecord{1, "lidar.restart", kT0 + 1'200'000'000, kT0 + 1'500'000'000, 12, ""});
+  remove_scans(near, 1, 12, 15);
+  remove_scans(near, 1, 29, 30);  // its sweep would be the 31st
+  for (auto& u : near.truths[1].units) u.acq_ns += moved(u.unit), u.dev_ns += moved(u.unit);
+  for (auto& part : near.truths[1].parts) part.acq_ns += moved(part.unit), part.dev_ns += moved(part.unit), part.tx_ns += moved(part.unit);
+  for (auto& x : near.samples)
+    if (x.topic == topic_of(1)) {
+      const Nanos by = moved(static_cast<std::int64_t>(x.seq - seq_of(1, 0)));
+      x.acquisition_ns += by;
+      x.first_rx_ns += by;
+      x.publish_ns += by;
+      x.received_ns += by;
+    }
+  for (int u = 0; u < 12; ++u) near.fused.sets[static_cast<std::size_t>(u)].members[1].stamp = left_acq(u);
+  Input far = near;
+  for (int u = 12; u < 16; ++u) without(near, u, 1);
+  for (int u = 16; u < kRotations; ++u) {  // the left's scan u - 1 with the others' u: the earliest, the sweep's stamp
+    auto& set = near.fused.sets[static_cast<std::size_t>(u)];
+    set.members[1] = FusedMember{topic_of(1), left_acq(u - 1), seq_of(1, u - 1)};
+    set.stamp = left_acq(u - 1);
+    cloud_of(near, static_cast<std::uint64_t>(u)).acquisition_ns = left_acq(u - 1);
+  }
+  Result r = check(near);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).unaccounted, 0u);
+  // The far grouping: the left's scan u with the others' u, 60 ms after them.
+  for (int u = 12; u < 15; ++u) without(far, u, 1);
+  without(far, 29, 1);
+  for (int u = 15; u < 29; ++u) far.fused.sets[static_cast<std::size_t>(u)].members[1].stamp = left_acq(u);
+  r = check(far);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "sweep 15 (stamped at 1.500 s) mixes rotations")) << result_text(r);
+}
+
 // The left LIDAR at 300 rpm for rotations 10..19: each of its scans spans two rotations (twice the
 // packets). The sweeps of the rotations its scans began in hold them; the others lack nothing and
 // say complete without it (the fusion's rule for a slower LIDAR): held. The same sweeps saying
