@@ -269,6 +269,33 @@ TEST(ClockMapper, AStepBackIsConfirmedAfterTheLateSpan) {
   EXPECT_LT(r.max_err_ns, 50 * kUs);
 }
 
+// The first sample after a step back arrived promptly, every later one 6 ms later (a queue that
+// stays): those are later than the first by more than the outlier band, which alone says "the
+// shift plus a queue" and is skipped; three in a row say the first was the odd one, and the
+// candidates start again from them. Before, every later sample was skipped and the step never
+// confirmed (a camera's PTP step in a campaign: its stamps 40 ms early for 6 s).
+TEST(ClockMapper, AnOddlyPromptFirstSampleDoesNotBlockTheConfirmation) {
+  DelayModel dm;
+  dm.tail_prob = 0;
+  SimLink link(25, dm);
+  SimDevice dev;
+  ClockMapper m(config_for(dm));
+  run(m, dev, link, 100.0, 0, 5 * kSec, 5 * kSec);
+  ASSERT_EQ(m.state(), SyncState::kLocked);
+  dev.step_ns = -40 * kMs;
+  const Nanos from = dev.t0 + 5 * kSec;
+  Nanos confirmed_after = -1;
+  for (int i = 0; i < 600; ++i) {
+    const Nanos t = from + i * 10 * kMs;
+    if (m.observe(dev.device_at(t), t + link.delay() + (i == 0 ? 0 : 6 * kMs)) == ObserveResult::kJumpDetected) {
+      confirmed_after = t - from;
+      break;
+    }
+  }
+  EXPECT_GE(confirmed_after, m.config().late_confirm_ns);
+  EXPECT_LE(confirmed_after, m.config().late_confirm_ns + 100 * kMs);
+}
+
 // PTP stepping the host's CLOCK_REALTIME forward makes every arrival later against the device, as a
 // held network would; the node's RealtimeStepDetector knows better and says so (host_step): the
 // mapping follows at the normal pace. An announcement of another size changes nothing.

@@ -220,6 +220,7 @@ Nanos ClockMapper::confirm_span_ns(double resid, Nanos host_ns) const noexcept {
 }
 
 void ClockMapper::keep_candidate(const Candidate& c) noexcept {
+  skipped_ = 0;
   if (candidates_.size() == kMaxCandidates) {
     // A shift confirmed over seconds outlasts the buffer at LIDAR rates: thin it, keeping the first
     // sample (the span is measured from it) and an even spread for the re-seed.
@@ -243,14 +244,15 @@ ObserveResult ClockMapper::handle_deviation(Nanos device_ns, Nanos host_ns, Nano
     const Candidate& first = candidates_.front();
     first_resid = static_cast<double>(sat_sub(first.y_ns, anchor_y_)) - predict_y(first.device_ns);
     const auto band = static_cast<double>(cfg_.outlier_threshold_ns);
-    if (resid - first_resid > band) {
+    if (resid - first_resid > band && ++skipped_ < cfg_.jump_confirm_samples) {
       // Later than the shift by more than the band: that shift plus a queue (delays only add), no
-      // evidence against it. Over a late span of seconds every network has such samples.
+      // evidence against it. Over a late span of seconds every network has such samples. Several
+      // in a row say the first one was the odd one (an unusually prompt arrival): start again.
       ++counters_.outliers;
       return std::fabs(resid) > static_cast<double>(cfg_.jump_threshold_ns) ? ObserveResult::kJumpCandidate
                                                                              : ObserveResult::kOutlier;
     }
-    if (first_resid - resid > band) {  // earlier: the first one sat in a queue; start again from this one
+    if (std::fabs(first_resid - resid) > band) {  // earlier (the first sat in a queue), or that odd one
       candidates_.clear();
       first_resid = resid;
     }

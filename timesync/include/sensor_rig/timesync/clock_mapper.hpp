@@ -173,6 +173,7 @@ class ClockMapper {
   Nanos first_device_ns_ = 0;  // since the last (re)seed, for lock span
   Nanos announced_step_ns_ = 0;      // host_step(): the shift arrivals will show (0: none)
   Nanos announced_until_ns_ = 0;     // host time after which the announcement is forgotten
+  std::size_t skipped_ = 0;          // later-than-the-shift samples in a row (handle_deviation)
   ClockMapperStatus counters_;
   std::vector<double> scratch_x_, scratch_y_, scratch_r_;  // reused by refit, no allocation
   std::vector<unsigned char> mask_;
