@@ -613,3 +613,49 @@ TEST(ChaosCheck, TheJsonLineHasTheContractsKeys) {
 
 }  // namespace
 }  // namespace sensor_rig::rig::chaos
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+// The mock ECU's feedback frames (a CAN frame every 10 ms, /vehicle/state one sample per frame, its
+// stamp the receive 10 us after the send) across a host clock step back of 500 ms recorded 5 us
+// after frame 299's send: the vehicle time from 5 us after frame 249's send to 5 us after frame
+// 299's happened twice. At both edges a frame and its sample lie on either side (frame 249 before,
+// its sample inside; frame 299 inside, its sample after): the side is the frame's. Before, by number
+// one frame was "neither published nor counted lost" (whole-rig campaign seed 25, a can_frame at the
+// edge of the doubled second, 2 runs of 9; here frame 249).
+TEST(ChaosCheck, ACanFrameAtTheEdgeOfDoubledTimeIsOnItsFramesSide) {
+  constexpr Nanos kFrame = 10'000'000;
+  constexpr int kFrames = 500;
+  const std::string topic = "/vehicle/state";
+  Input in;
+  truth::Log log;
+  log.header = truth::Header{"paravan", "dbw", "mock Paravan ECU", topic, "can_frame", "CLOCK_MONOTONIC"};
+  for (int u = 0; u < kFrames; ++u) {
+    const Nanos tx = kT0 + u * kFrame;
+    log.units.push_back(truth::UnitRecord{u, tx, tx, 1});
+    log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, tx, tx, tx, truth::Fate::kSent, 0});
+    SampleRecord s;
+    s.topic = topic;
+    s.seq = static_cast<std::uint64_t>(u);
+    s.acquisition_ns = tx + 10'000;
+    s.publish_ns = s.acquisition_ns + 50'000;
+    s.received_ns = s.publish_ns + 100'000;
+    in.samples.push_back(s);
+  }
+  const Nanos step_at = kT0 + 299 * kFrame + 5'000;
+  log.faults.push_back(truth::FaultRecord{1, "host.clock_step", step_at, step_at + 1'000'000'000, -1, "ms=-500"});
+  in.truths.push_back(log);
+  in.monitor[topic] = MonitorTotals{kFrames, 0};
+  in.expected[topic] = TopicExpectation{"paravan", 100.0, {}};
+  in.epoch_vehicle_ns = kT0;
+  in.window_begin_ns = kT0;
+  in.window_end_ns = kT0 + kFrames * kFrame;
+  const Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  EXPECT_EQ(r.topics.at(topic).unaccounted, 0u);
+}
+
+}  // namespace
+}  // namespace sensor_rig::rig::chaos
