@@ -26,34 +26,32 @@ std::vector<NetworkHold::Window> NetworkHold::windows_of(const Plan& plan, const
   return out;
 }
 
-Nanos NetworkHold::hold_for(std::size_t i, Nanos now) {
-  const Window& w = windows_[i];
-  if (w.jitter_ns <= 0) return w.delay_ns;
-  const Nanos lo = std::max<Nanos>(0, w.delay_ns - w.jitter_ns), hi = w.delay_ns + w.jitter_ns;
+Nanos HoldWalk::next(Nanos now, Nanos delay_ns, Nanos jitter_ns, std::mt19937_64& rng) {
+  if (jitter_ns <= 0) return delay_ns;
+  const Nanos lo = std::max<Nanos>(0, delay_ns - jitter_ns), hi = delay_ns + jitter_ns;
   std::uniform_int_distribution<Nanos> draw(lo, hi);
-  Walk& k = walks_[i];
-  Nanos budget = (now - k.last_in) / 2;  // falls by at most half the time since the last datagram
-  k.last_in = now;
-  if (!k.started || budget >= hi - lo) {
-    k.started = true;
-    k.hold = draw(rng_);
-    k.target = draw(rng_);
-    return k.hold;
+  Nanos budget = (now - last_in) / 2;  // falls by at most half the time since the last datagram
+  last_in = now;
+  if (!started || budget >= hi - lo) {  // the first datagram, or a gap long enough to reach any hold
+    started = true;
+    hold = draw(rng);
+    target = draw(rng);
+    return hold;
   }
   while (budget > 0) {
-    const Nanos step = std::min(budget, std::abs(k.target - k.hold));
-    k.hold += k.target > k.hold ? step : -step;
+    const Nanos step = std::min(budget, std::abs(target - hold));
+    hold += target > hold ? step : -step;
     budget -= step;
-    if (k.hold == k.target) k.target = draw(rng_);
+    if (hold == target) target = draw(rng);
   }
-  return k.hold;
+  return hold;
 }
 
 NetworkHold::Due NetworkHold::due(Nanos now) {
   Due d{now, 0};
   for (std::size_t i = 0; i < windows_.size(); ++i)
     if (now >= windows_[i].from_mono && now < windows_[i].until_mono) {
-      d.at_mono = std::max(d.at_mono, now + hold_for(i, now));
+      d.at_mono = std::max(d.at_mono, now + walks_[i].next(now, windows_[i].delay_ns, windows_[i].jitter_ns, rng_));
       d.fault = windows_[i].id;
     }
   d.at_mono = std::max(d.at_mono, held_until_);

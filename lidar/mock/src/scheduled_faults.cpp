@@ -15,29 +15,6 @@ ScheduledFaults::ScheduledFaults(std::vector<NetFault> faults, std::uint64_t see
     : faults_(std::move(faults)), done_(faults_.size(), false), rng_(seed), jitter_rng_(seed ^ kJitterStream),
       walks_(faults_.size()) {}
 
-Nanos ScheduledFaults::hold_for(std::size_t i, Nanos offset) {
-  const NetFault& f = faults_[i];
-  if (f.jitter_ns <= 0) return f.delay_ns;
-  const Nanos lo = std::max<Nanos>(0, f.delay_ns - f.jitter_ns), hi = f.delay_ns + f.jitter_ns;
-  std::uniform_int_distribution<Nanos> draw(lo, hi);
-  HoldWalk& w = walks_[i];
-  Nanos budget = (offset - w.last_in) / 2;  // the hold falls by at most half the time since the last packet
-  w.last_in = offset;
-  if (!w.started || budget >= hi - lo) {  // first packet, or a gap long enough to reach any hold
-    w.started = true;
-    w.hold = draw(jitter_rng_);
-    w.target = draw(jitter_rng_);
-    return w.hold;
-  }
-  while (budget > 0) {
-    const Nanos step = std::min(budget, std::abs(w.target - w.hold));
-    w.hold += w.target > w.hold ? step : -step;
-    budget -= step;
-    if (w.hold == w.target) w.target = draw(jitter_rng_);
-  }
-  return w.hold;
-}
-
 void ScheduledFaults::decide(std::int64_t tag, truth::Fate fate, std::uint64_t fault) {
   if (tag >= 0) decisions_.push_back(NetDecision{tag, fate, fault});
 }
@@ -68,7 +45,7 @@ std::span<const NetPacket> ScheduledFaults::push(const NetPacket& in, double rot
   for (std::size_t i = 0; i < faults_.size(); ++i) {  // a delayed network holds every packet back, in order
     const NetFault& f = faults_[i];
     if (f.kind == NetFault::Kind::kDelay && in.offset_ns >= f.from_ns && in.offset_ns < f.until_ns) {
-      p.offset_ns += hold_for(i, in.offset_ns);
+      p.offset_ns += walks_[i].next(in.offset_ns, faults_[i].delay_ns, faults_[i].jitter_ns, jitter_rng_);
       if (!in.position) decide(in.tag, truth::Fate::kSent, f.id);
     }
   }

@@ -15,6 +15,18 @@
 
 namespace sensor_rig::faults {
 
+// The hold of one delay's datagrams: walks between targets drawn uniformly from [delay - jitter,
+// delay + jitter] (never below 0), falling by at most half the time since the previous datagram, so
+// that none overtakes another and each is held within delay ± jitter (independent draws kept in order
+// would all wait behind the longest). The one walk of the LIDAR mocks (ScheduledFaults) and of the
+// other mocks (NetworkHold).
+struct HoldWalk {
+  bool started = false;
+  Nanos hold = 0, target = 0, last_in = 0;
+  // The hold of a datagram handed over at `now` (calls in order of `now`).
+  Nanos next(Nanos now, Nanos delay_ns, Nanos jitter_ns, std::mt19937_64& rng);
+};
+
 class NetworkHold {
  public:
   struct Window {
@@ -38,14 +50,8 @@ class NetworkHold {
   [[nodiscard]] const std::vector<Window>& windows() const noexcept { return windows_; }
 
  private:
-  struct Walk {
-    bool started = false;
-    Nanos hold = 0, target = 0, last_in = 0;
-  };
-  Nanos hold_for(std::size_t i, Nanos now);
-
   std::vector<Window> windows_;
-  std::vector<Walk> walks_;
+  std::vector<HoldWalk> walks_;
   std::mt19937_64 rng_;
   Nanos held_until_ = 0;  // the latest held datagram's departure: none after it leaves before it
 };

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/common/network_hold.hpp"
 #include "sensor_rig/common/truth_record.hpp"
 #include "sensor_rig/lidar/mock/packet_fields.hpp"
 
@@ -67,14 +68,6 @@ class ScheduledFaults {
     int after = 0;          // data packets still to pass before it
     Nanos release_ns = -1;  // or: released by the first packet at/after this offset
   };
-  // A jittered delay's hold: it walks between targets drawn uniformly from [delay - jitter, delay +
-  // jitter], falling by at most half the time between two packets, so no packet overtakes another
-  // (independent draws per packet would, and kept in order they would all wait for the longest).
-  struct HoldWalk {
-    bool started = false;
-    Nanos hold = 0, target = 0, last_in = 0;
-  };
-  Nanos hold_for(std::size_t fault, Nanos offset);
   void decide(std::int64_t tag, truth::Fate fate, std::uint64_t fault);
   std::span<std::byte> keep(std::span<const std::byte> bytes);
   void release(Nanos offset, bool force);
@@ -83,7 +76,7 @@ class ScheduledFaults {
   std::vector<bool> done_;
   std::mt19937_64 rng_;
   std::mt19937_64 jitter_rng_;  // its own: a jitter changes no other fault's draws for a seed
-  std::vector<HoldWalk> walks_;
+  std::vector<faults::HoldWalk> walks_;  // a jittered delay's hold (common/network_hold.hpp)
   Nanos held_until_ = 0;  // the latest held packet's due offset: none after it leaves before it
   std::vector<Held> held_;
   std::vector<NetPacket> out_;
