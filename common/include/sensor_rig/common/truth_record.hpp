@@ -103,10 +103,7 @@ class Writer {
 
  private:
   void put(const char* line, int n);
-  // The stream's buffer: lines between two flush()es go out in one write() up to this size.
-  static constexpr std::size_t kBufferBytes = std::size_t{1} << 16;
   std::string path_;
-  std::unique_ptr<char[]> buffer_;  // outlives file_: closed in ~Writer before the members go
   std::FILE* file_ = nullptr;
   std::mutex mutex_;
   std::uint64_t lines_ = 0;
