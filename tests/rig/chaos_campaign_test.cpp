@@ -42,12 +42,10 @@ const std::map<std::pair<std::string, std::string>, std::string> kKnownBroken = 
     // 2026-11-28 (not yet explained): still listed.
     {{"isolation", "camera"}, "27"},      {{"recovery", "camera"}, "27"},
     // The fused cloud: its breaks in this campaign were the clock mapper taking a held network for a
-    // step back (a371737) and the matcher holding a LIDAR's own new phase (after a stall, an rpm
-    // change) as a possible clock step for 3 scans (6672f05, d4995c1); after those it held in 7 of
-    // 8 runs of this seed (4 of 5 beside a busy loop). The one left: the front back from a stall at
-    // 300 rpm about half a rotation from the others; the judge's rotation boundary is fixed for the
-    // run from each LIDAR's mean phase, the matcher's placed from the phases of the moment, and a scan
-    // 46 ms before one neighbour and 54 ms after the other fell on different sides (8 sweeps).
+    // step back (a371737), the matcher holding a LIDAR's own new phase (after a stall, an rpm change)
+    // as a possible clock step for 3 scans (6672f05, d4995c1), and the judge's one rotation boundary
+    // for the whole run (25abe97). After those it held in 8 of 9 runs of this seed (4 of 5 beside a
+    // busy loop); the one break is not traced yet (its examples are printed now).
     {{"fused", "lidar"}, "26"},
     // The drive-by-wire feedback is no longer listed: its "11 frames of a dbw.bad_crc second neither
     // published nor counted" (1 of 2 runs) was the judge holding a count read from once-a-second
@@ -141,7 +139,9 @@ TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
   for (const auto& b : broken) {
     const auto known = kKnownBroken.find(b);
     if (known != kKnownBroken.end()) {
-      std::printf("known defect (issue %s): %s on %s\n", known->second.c_str(), b.first.c_str(), b.second.c_str());
+      // With its examples: a known defect that shows up only now and then is traced from the log.
+      std::printf("known defect (issue %s): %s on %s\n%s", known->second.c_str(), b.first.c_str(), b.second.c_str(),
+                  examples_of(b.first, b.second).c_str());
       continue;
     }
     ADD_FAILURE() << b.first << " broken on " << b.second << " (not a known defect):\n" << examples_of(b.first, b.second)
