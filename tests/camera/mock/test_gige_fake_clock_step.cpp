@@ -45,7 +45,7 @@ struct Read {
 };
 
 // Back 500 ms at 1 s (the campaign's default), forward again at 2 s; forward 4 s at 3 s (beyond the
-// 3 s heartbeat timeout), back at 4 s. 20 Hz for 5 s: no gap between frames beyond three periods,
+// 3 s heartbeat timeout), back at 4 s. 20 Hz for 5 s: no gap between frames near a step's size,
 // and every frame's truth acq is its exposure start on the fake's clock as stepped.
 TEST_F(GigeFakeClockStep, TheFakeStreamsThroughHostClockStepsAndItsTruthFollowsThem) {
   const Nanos started = monotonic_now_ns();
@@ -73,7 +73,9 @@ TEST_F(GigeFakeClockStep, TheFakeStreamsThroughHostClockStepsAndItsTruthFollowsT
   std::printf("frames %zu in 5.2 s, longest gap %.0f ms (at %.2f s), last at %.2f s\n", read.size(), static_cast<double>(longest) / 1e6,
               static_cast<double>(at) / 1e9, static_cast<double>(last - started) / 1e9);
   EXPECT_GE(read.size(), 90u) << "20 Hz for ~5 s";
-  EXPECT_LT(longest, 150 * kMs) << "a gap of " << longest / kMs << " ms from " << at / kMs << " ms after the fake started";
+  // A fake that stalls over a step stalls by the step (500 ms or 4 s); a loaded host drops a frame
+  // or two and delays the next (150.5 ms once in a fresh-clone suite run): the bound lies between.
+  EXPECT_LT(longest, 400 * kMs) << "a gap of " << longest / kMs << " ms from " << at / kMs << " ms after the fake started";
   // The truth: the exposure start on the fake's CLOCK_REALTIME, i.e. this host's plus the step
   // standing at that instant (0, -500 ms or +4 s): the first packet's arrival less the 10 ms
   // exposure, for one of them; up to 2 ms after it (the leader leaves at the exposure's end), up to
