@@ -52,6 +52,7 @@ void ClockMapperConfig::validate() const {
   require(jump_confirm_samples >= 1 && jump_confirm_samples <= kMaxCandidates,
           "jump_confirm_samples", "must be in 1..256");
   require(jump_confirm_ns >= 0, "jump_confirm_ns", "must be >= 0");
+  require(slope_support_ns >= 0, "slope_support_ns", "must be >= 0");
   require(max_drift_ppm > 0 && max_drift_ppm < 1e5, "max_drift_ppm", "must be in (0, 1e5)");
   require(holdover_after_ns > 0, "holdover_after_ns", "must be > 0");
   require(holdover_max_ns >= holdover_after_ns, "holdover_max_ns", "must be >= holdover_after_ns");
@@ -162,6 +163,8 @@ void ClockMapper::refit() noexcept {
   detail::FitOptions o;
   o.free_slope = free_slope;
   o.slope_prior = s_;
+  o.support = static_cast<double>(cfg_.slope_support_ns);
+  o.low_trim = static_cast<double>(cfg_.outlier_threshold_ns);
   if (fit_valid_) {  // the previous line in this window's coordinates
     o.start = true;
     o.start_s = s_;
@@ -176,7 +179,7 @@ void ClockMapper::refit() noexcept {
       o.start = false;
       f = detail::fit_envelope(scratch_x_, scratch_y_, o, scratch_r_, mask_, hull_);
     } else {
-      drift_known_ = true;
+      drift_known_ = true;  // fitted, or the prior kept for want of support: locked either way
     }
   }
   fit_valid_ = true;

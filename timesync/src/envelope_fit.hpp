@@ -11,6 +11,7 @@ struct LineFit {
   double s = 0.0;
   double rms = 0.0;  // rms of inlier residuals around the lowered line
   std::size_t inliers = 0;
+  bool supported = true;  // false: the hull's slope lacked support on a side, the prior was kept
 };
 
 // Robust lower-envelope line. Trimmed least squares (the prior slope when not free or x has no
@@ -24,6 +25,12 @@ struct FitOptions {
   bool start = false;        // trim against (start_c, start_s) first: the previous fit
   double start_c = 0.0;
   double start_s = 0.0;
+  // Points below the median are dropped only beyond max(6 sigma, low_trim): with sparse prompt
+  // arrivals the floor itself lies 6 sigma of the late ones below their median (a camera frame
+  // 2.8 ms more prompt than its neighbours was trimmed, its line 2.8 ms late); the caller admits
+  // nothing farther below its line than its outlier threshold anyway.
+  double low_trim = 0.0;
+  double support = 0.0;      // > 0: a free slope needs inliers this close to it on both sides of the mean x
 };
 
 LineFit fit_envelope(std::span<const double> x, std::span<const double> y, const FitOptions& o,

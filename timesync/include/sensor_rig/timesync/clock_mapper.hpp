@@ -40,6 +40,9 @@ struct ClockMapperConfig {
   Nanos late_confirm_ns = 3'000'000'000;
   Nanos late_shift_max_ns = 1'000'000'000;
   double max_drift_ppm = 500.0;           // fits beyond this are rejected (drift kept)
+  // A new drift is taken only where the floor is seen: >= 3 bucket minima within this of the line
+  // on each side of the window's mean (sparse prompt arrivals fit hundreds of ppm; README item 2).
+  Nanos slope_support_ns = 100'000;
   Nanos holdover_after_ns = 1'000'000'000;  // no sample for this long: holdover
   Nanos holdover_max_ns = 60'000'000'000;   // holdover beyond this: unsynced
   Nanos fixed_delay_ns = 0;               // known minimum transport delay, subtracted
