@@ -361,12 +361,19 @@ class Checker {
       if (u.produced == 0 || u.sample != nullptr || !near_edge(u.rec.acq_ns)) continue;
       ++(in_window(u.rec.acq_ns) ? facts.edge_in : facts.edge_out);
     }
+    // Slots a frozen alive counter hides the ECU's silence in: each looks like a lost frame to the
+    // rig (the count's window, like the edges', give or take count_edge_ns).
+    if (t.device_class == "dbw")
+      facts.silent_slots = slots_skipped_while_frozen(log, in_.window_begin_ns - in_.count_edge_ns, in_.window_end_ns + in_.count_edge_ns);
     const CountVerdict count = reconcile_count(facts);
     const std::string besides =
         count.doubled_lost > 0 ? " (" + std::to_string(count.doubled_lost) + " of them made while the host clock read a time twice)" : "";
+    const std::string silent = facts.silent_slots > 0 ? "; " + std::to_string(facts.silent_slots) +
+                                                            " slots the device sent nothing in while its counter stood still allowed"
+                                                      : "";
     if (count.over_counted)
       violation("no_phantom_loss", topic, "the rig counted " + std::to_string(facts.rig_counted) + " " + log.header.unit + "s lost, " +
-                                              std::to_string(count.most) + " were not published" + besides);
+                                              std::to_string(count.most - facts.silent_slots) + " were not published" + besides + silent);
     const std::uint64_t unaccounted_all = count.unaccounted_all;
     t.unaccounted = count.unaccounted;
     t.counted_lost = count.counted_lost;

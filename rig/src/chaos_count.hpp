@@ -16,6 +16,9 @@ struct CountFacts {
   std::uint64_t edge_in = 0, edge_out = 0;
   // Units made in vehicle time the host clock read twice (a step back), and samples published there.
   std::uint64_t doubled_made = 0, doubled_samples = 0;
+  // Slots the device made nothing in that the rig cannot tell from a loss (a CAN message's frozen
+  // alive counter: chaos_units.hpp slots_skipped_while_frozen): an honest count may have them.
+  std::uint64_t silent_slots = 0;
 };
 
 struct CountVerdict {
@@ -28,7 +31,7 @@ struct CountVerdict {
 };
 
 // An honest count lies in [not_published - edge_in + doubled_lost, not_published + edge_out +
-// doubled_lost]; below it the rest is unaccounted (judged units first), above it phantom.
+// doubled_lost + silent_slots]; below it the rest is unaccounted (judged units first), above it phantom.
 CountVerdict reconcile_count(const CountFacts& f);
 
 }  // namespace sensor_rig::rig::chaos

@@ -1,6 +1,7 @@
 #include "chaos_units.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <map>
 #include <set>
@@ -135,6 +136,46 @@ std::vector<HeldInterval> netem_delays(const std::vector<truth::Log>& truths) {
       out.push_back({f.at_ns, f.until_ns, static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6)});
     }
   return out;
+}
+
+std::uint64_t slots_skipped_while_frozen(const truth::Log& log, Nanos begin, Nanos end) {
+  // The runs the bridge sees frozen: from the last good frame before the fault (its first frame still
+  // counts on) to the first good one after (the first frame after it repeats the frozen value once
+  // more): a period's margin before, two after.
+  std::vector<Interval> frozen;
+  for (const auto& f : log.faults)
+    if (f.kind == "dbw.stuck_counter" && truth::injected(f)) frozen.push_back({f.at_ns, f.until_ns});
+  if (frozen.empty()) return 0;
+  // Frames in the order the ECU made them, on its own clock (`dev`: monotonic, no host clock step
+  // moves it); `at` in vehicle time (its send), as the fault lines have it.
+  struct MadeFrame {
+    Nanos dev, at;
+  };
+  std::vector<MadeFrame> made;
+  made.reserve(log.units.size());
+  for (const auto& u : log.units) made.push_back({u.dev_ns, u.acq_ns});
+  if (made.size() < 3) return 0;
+  std::sort(made.begin(), made.end(), [](const MadeFrame& a, const MadeFrame& b) { return a.dev < b.dev; });
+  std::vector<Nanos> gaps;
+  for (std::size_t i = 1; i < made.size(); ++i) gaps.push_back(made[i].dev - made[i - 1].dev);
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+  const Nanos period = gaps[gaps.size() / 2];
+  if (period <= 0) return 0;
+  // Across a silence of half a counter turn (8 periods for 16 values, 7.5 for P01's 15) the rig
+  // guesses nothing: such silences are no count's.
+  constexpr double kHalfCounterTurn = 8.0;
+  std::uint64_t skipped = 0;
+  for (std::size_t i = 1; i < made.size(); ++i) {
+    const MadeFrame& a = made[i - 1];
+    const MadeFrame& b = made[i];
+    if (b.at < begin || b.at >= end) continue;
+    const bool in_frozen = std::any_of(frozen.begin(), frozen.end(), [&](const Interval& f) {
+      return a.at >= f.begin - period && b.at <= f.end + 2 * period;
+    });
+    const double periods = static_cast<double>(b.dev - a.dev) / static_cast<double>(period);
+    if (in_frozen && periods >= 1.5 && periods < kHalfCounterTurn) skipped += static_cast<std::uint64_t>(std::llround(periods) - 1);
+  }
+  return skipped;
 }
 
 }  // namespace sensor_rig::rig::chaos

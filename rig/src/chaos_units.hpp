@@ -77,4 +77,12 @@ std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths
 
 std::vector<HeldInterval> netem_delays(const std::vector<truth::Log>& truths);
 
+// Slots of a CAN message's period in which the ECU made no frame while its alive counter stood still
+// (dbw.stuck_counter), the later frame of each such silence in [begin, end). On the bus a silent slot
+// and a frame lost there are the same: a frozen counter shows no jump, only the period shows the gap,
+// so the rig's count may have them (FrameLossCounter counts a frozen run's room at its learned period).
+// A mock ECU late by a period on a loaded host skips a slot (it starts a new grid rather than burst):
+// whole-rig campaign seed 25, "the rig counted 241 can_frames lost, 240 were not published".
+std::uint64_t slots_skipped_while_frozen(const truth::Log& log, Nanos begin, Nanos end);
+
 }  // namespace sensor_rig::rig::chaos
