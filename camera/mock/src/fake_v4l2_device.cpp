@@ -391,6 +391,8 @@ int FakeV4l2Device::poll(int fd, int timeout_ms) {
           next_due_ += static_cast<Nanos>(1e9 / rate_hz_);
           make_slot_locked(due);
         }
+        // On disk before the consumer can dequeue one of these frames (and the rig publish it).
+        flush_truth_locked();
         wake = std::min(wake, next_due_);
       }
       for (const auto& b : buffers_)
@@ -408,6 +410,17 @@ void FakeV4l2Device::record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, t
   const Nanos to_vehicle = vehicle_now_ns() - monotonic_now_ns();
   // The buffer's timestamp is a timeval: what the device says is whole microseconds.
   truth_->frame(unit_of(seq), acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns(), fate, fault);
+  truth_unflushed_ = true;
+}
+
+// Once per call, not per line: a late consumer's poll makes several slots, a return many not_sent
+// ones. Without it the frame lines sat in the writer's buffer until it filled or the device's last
+// owner let it go (only the fault lines were flushed): a reader saw no return's not_sent slots, a
+// killed driver took the last 4-64 KiB of frames it had published with it.
+void FakeV4l2Device::flush_truth_locked() {
+  if (!truth_unflushed_) return;
+  truth_->flush();
+  truth_unflushed_ = false;
 }
 
 std::int64_t FakeV4l2Device::unit_of(std::uint32_t seq) const noexcept {
@@ -469,6 +482,7 @@ void FakeV4l2Device::end_disconnect_locked(Nanos until) {
   if (disconnected_at_ > 0) {
     const auto period = static_cast<Nanos>(1e9 / rate_hz_);
     for (Nanos slot = disconnected_at_; slot < until; slot += period) record(sequence_++, slot, slot, truth::Fate::kNotSent, disconnect_fault_);
+    flush_truth_locked();  // back: what it did not make while gone is in the record now
   }
   disconnected_at_ = 0;
   streaming_ = false;  // what was streaming is gone with the device

@@ -133,6 +133,70 @@ TEST(V4l2Chaos, DisconnectThenReturn) {
   EXPECT_LE(not_sent, 30u);
 }
 
+// The record as a driver killed at this moment (SIGKILL of `rig up`, a crash) leaves it: the lines
+// the fake put on disk. The sent frames by their device stamps, the not_sent slots counted.
+struct TruthOnDisk {
+  std::set<Nanos> sent_dev;
+  std::size_t not_sent = 0;
+};
+TruthOnDisk truth_on_disk(const std::string& path) {
+  TruthOnDisk d;
+  for (const auto& p : truth::read(path).parts) {
+    if (p.fate == truth::Fate::kSent) d.sent_dev.insert(p.dev_ns);
+    if (p.fate == truth::Fate::kNotSent) ++d.not_sent;
+  }
+  return d;
+}
+
+// Every frame V4l2Source returns is on disk when it returns it (the rig publishes it next), and a
+// disconnect's not_sent slots are once the device is back, read while it is open: a driver killed
+// then leaves no frame it published and no absence its truth lacks, whatever the writer's buffer.
+// Old fake: only fault lines were flushed; the frame lines sat in the writer's buffer until it
+// filled or the device's last owner freed it (DisconnectThenReturn read 0 not_sent with 64 KiB).
+TEST(V4l2Chaos, WhatTheDeviceDidIsOnDiskWhenTheConsumerSeesIt) {
+  test::ChaosFolder folder;
+  std::vector<Nanos> read_dev;
+  std::size_t not_on_disk = 0;       // frames returned whose line was not on disk then
+  std::size_t not_sent_at_return = 0;
+  bool returned = false;
+  {
+    auto dev = device(folder, {"v4l2.disconnect@0.3+0.4"});
+    V4l2Source src(yuyv(), dev);
+    src.open();
+    bool open = true;
+    while (monotonic_now_ns() < folder.epoch() + kSec) {
+      if (!open) {
+        try {
+          src.open();
+          open = returned = true;
+          not_sent_at_return = truth_on_disk(folder.truth()).not_sent;
+        } catch (const CameraError&) {
+          usleep(20'000);
+        }
+        continue;
+      }
+      auto c = src.next(50);
+      if (c.status == CaptureStatus::kFrame) {
+        read_dev.push_back(c.frame.meta().device_ns);
+        if (truth_on_disk(folder.truth()).sent_dev.count(read_dev.back()) == 0) ++not_on_disk;
+      }
+      if (c.status == CaptureStatus::kDisconnected) {
+        src.close();
+        open = false;
+      }
+    }
+    src.close();
+  }
+  ASSERT_TRUE(returned);
+  ASSERT_GE(read_dev.size(), 15U);  // ~15 before the disconnect, ~15 after it at 50 Hz
+  EXPECT_EQ(not_on_disk, 0U) << "of " << read_dev.size() << " frames returned";
+  // Against the whole record, once the device is freed: the same frames, the same absence.
+  const auto all = truth_on_disk(folder.truth());
+  for (const Nanos d : read_dev) EXPECT_EQ(all.sent_dev.count(d), 1U) << d;
+  EXPECT_GE(all.not_sent, 17U);  // 0.4 s at 50 Hz
+  EXPECT_EQ(not_sent_at_return, all.not_sent) << "not_sent slots on disk when the device was back";
+}
+
 // Reads until the device is gone, then reopens every 20 ms until it is back: a camera driver's
 // loop around a v4l2.disconnect (without its backoff). Returns the sequences read.
 std::vector<std::uint32_t> read_through_a_disconnect(V4l2Source& src, Nanos until) {

@@ -7,6 +7,8 @@
 // Under a campaign (FakeV4l2Options::chaos) it takes the plan's v4l2.* faults by time and writes its
 // truth record: a unit and a part line per frame slot, a fault line each. Unit = the stream's
 // ordinal (its STREAMON, from 0) x 2^32 + the V4L2 sequence, which restarts at 0 with each stream.
+// The lines of a call's slots are on disk when it returns: before a frame can be dequeued, and a
+// disconnect's not_sent slots once the device is back (a killed driver takes no line with it).
 #include <linux/videodev2.h>
 
 #include <cstdint>
@@ -99,6 +101,8 @@ class FakeV4l2Device final : public V4l2Device {
   [[nodiscard]] bool gone() const noexcept { return disconnected_ || fault_disconnected_; }
   // With mutex_ held: one frame slot's truth (unit = its sequence).
   void record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, truth::Fate fate, std::uint64_t fault);
+  // With mutex_ held: the lines record() wrote since the last call, on disk.
+  void flush_truth_locked();
   // at_s >= 0: when it really began (plan seconds), where that is not its planned time.
   void fault_line(const faults::FaultEvent& e, std::int64_t unit, const std::string& detail, double at_s = -1.0);
   [[nodiscard]] std::int64_t unit_of(std::uint32_t seq) const noexcept;  // the truth's unit of this stream's seq
@@ -127,6 +131,7 @@ class FakeV4l2Device final : public V4l2Device {
   // Campaign (empty without one).
   CameraSchedule schedule_;
   std::unique_ptr<CameraTruth> truth_;
+  bool truth_unflushed_ = false;      // record() wrote lines still in the writer's buffer
   bool fault_disconnected_ = false;
   Nanos disconnected_at_ = 0;         // CLOCK_MONOTONIC
   std::uint64_t disconnect_fault_ = 0;
