@@ -77,9 +77,11 @@ void GigeFakeChaos::release(Held& h, SendFn real) {
     // A held datagram the socket refused (the camera rebooted meanwhile: the old stream's socket is
     // closed) never arrived: the frame is not whole.
     const bool failed = held_send_failed_ && h.fate == truth::Fate::kSent;
-    if (truth_ != nullptr)
+    if (truth_ != nullptr) {
       truth_->frame(h.unit, h.acq, h.dev, h.leader_held && last_leader_tx_ != 0 ? last_leader_tx_ : h.tx,
                     failed ? truth::Fate::kDropped : h.fate, h.fault, h.exposure);
+      truth_->flush();  // as after_send's: a killed tool takes no frame the rig has with it
+    }
     held_send_failed_ = false;
   } else {
     if (h.leader) {
@@ -170,6 +172,10 @@ void GigeFakeChaos::after_send(GSocket* socket) {
     }
   }
   truth_->frame(frame_.unit, frame_.acq, frame_.dev, frame_.tx, fate, fault, frame_.exposure_ns);
+  // On disk with the frame's last datagram, as every mock's (the in-process fakes', the LIDARs' per
+  // batch): a tool killed (SIGKILL, or after its 1 s of grace at the rig's stop) took the frames of
+  // the writer's buffer with it, frames the rig had published (4 KiB: ~20; 64 KiB: ~300).
+  truth_->flush();
 }
 
 void GigeFakeChaos::booted(ArvFakeCamera* cam) {

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -52,6 +53,30 @@ TEST_F(GigeChaos, FaultFreeTruthIsWhatAravisReads) {
   }
   EXPECT_EQ(test::count_fate(log, truth::Fate::kSent), log.parts.size());
   EXPECT_EQ(log.units.size(), log.parts.size());
+}
+
+// A tool killed (a crash; SIGKILL after its 1 s of grace at the rig's stop) leaves every frame
+// AravisSource had from it in the truth: a frame's lines are on disk with its last datagram. Old
+// tool: only fault lines and a clean stop flushed; the frame lines went with the writer's buffer.
+TEST_F(GigeChaos, AKilledToolLeavesEveryFrameReadInTheTruth) {
+  auto fake = start({});
+  AravisSource src(cfg());
+  src.open();
+  std::map<std::uint64_t, Nanos> read;  // frame id -> device time
+  for (int i = 0; i < 10; ++i) {
+    auto c = next_frame(src);
+    ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
+    read[c.frame.meta().seq] = c.frame.meta().device_ns;
+  }
+  src.close();
+  ::usleep(20'000);  // the last frame's lines follow its trailer by microseconds
+  fake.signal(SIGKILL);
+  ASSERT_TRUE(fake.wait_exit(2000));
+  std::map<std::uint64_t, Nanos> units;
+  for (const auto& u : truth::read(folder_.truth()).units) units[static_cast<std::uint64_t>(u.unit & 0xffff)] = u.dev_ns;
+  std::size_t missing = 0;
+  for (const auto& [id, dev] : read) missing += units.count(id) == 1 && units[id] == dev ? 0 : 1;
+  EXPECT_EQ(missing, 0U) << "of " << read.size() << " frames read, not in the killed tool's truth";
 }
 
 // A camera that never answers: no open succeeds, and the truth has the fault and no frame.
