@@ -48,10 +48,19 @@ Writer::Writer(const std::string& path, const Header& h) : path_(path) {
   // header; the reader keeps the two runs' unit ids apart.
   file_ = std::fopen(path.c_str(), "a+");
   if (file_ == nullptr) throw std::runtime_error("cannot create truth record " + path);
+  // Before any other operation on the stream (setvbuf after the fseek below is undefined), and with a
+  // buffer of our own: glibc ignores the size when given none and keeps st_blksize (4 KiB), so a batch
+  // of lines went out in several write()s, the last line of one often split across two. The writers
+  // still decide when the lines are on disk (flush()); this only bounds the writes between flushes.
+  buffer_ = std::make_unique<char[]>(kBufferBytes);
+  std::setvbuf(file_, buffer_.get(), _IOFBF, kBufferBytes);
   // A predecessor killed mid-line left it unterminated: end it, so that our header is a line of its own.
-  if (std::fseek(file_, -1, SEEK_END) == 0 && std::fgetc(file_) != '\n') std::fputc('\n', file_);
-  std::fseek(file_, 0, SEEK_END);
-  std::setvbuf(file_, nullptr, _IOFBF, 1 << 16);
+  // The seek between the read and the write is the one the standard requires there.
+  if (std::fseek(file_, -1, SEEK_END) == 0) {
+    const int last = std::fgetc(file_);
+    std::fseek(file_, 0, SEEK_END);
+    if (last != '\n') std::fputc('\n', file_);
+  }
   const std::string line = "{\"truth\":1,\"device\":\"" + escaped(h.device) + "\",\"class\":\"" + escaped(h.device_class) +
                            "\",\"model\":\"" + escaped(h.model) + "\",\"topic\":\"" + escaped(h.topic) + "\",\"unit\":\"" +
                            escaped(h.unit) + "\",\"clock\":\"" + escaped(h.clock) + "\"}\n";

@@ -97,13 +97,19 @@ class Writer {
   void unit(const UnitRecord& r);
   void part(const PartRecord& r);
   void fault(const FaultRecord& r);
+  // Puts the lines written so far on disk: the only call that does, short of a full buffer (64 KiB)
+  // or the writer's end. Each mock calls it where its lines must be there (a frame, a send batch, a
+  // fault), before the rig can have what they describe; a SIGKILL takes what is not flushed.
   void flush();
   [[nodiscard]] std::uint64_t lines() const noexcept { return lines_; }
   [[nodiscard]] const std::string& path() const noexcept { return path_; }
 
  private:
   void put(const char* line, int n);
+  // The stream's buffer: lines between two flush()es go out in one write() up to this size.
+  static constexpr std::size_t kBufferBytes = std::size_t{1} << 16;
   std::string path_;
+  std::unique_ptr<char[]> buffer_;  // outlives file_: closed in ~Writer before the members go
   std::FILE* file_ = nullptr;
   std::mutex mutex_;
   std::uint64_t lines_ = 0;
