@@ -581,13 +581,19 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   std::uint32_t missing_next = 0, missing_window = 0;
   if (missing > 0 && have_prev) {
     const int step0 = az_step(prev_az, az[first_good]);
+    const double gap_step = detail::gap_group_step(fov, prev_az, az[first_good],
+                                                   prev_trailing_bad + first_good + 1 + static_cast<long>(slots) * groups, fit.step);
+    // The group crossing the cut is in both scans (as the truth's units count it): a lost packet
+    // holding it is the ending scan's too.
     if (crosses(prev_az, step0, emit_raw, true))
-      missing_next = detail::missing_after_cut(fov, emit_raw, az[first_good], fit.step, first_good + 1, groups, missing);
+      missing_next = missing - detail::split_missing_at_cut(fov, emit_raw, az[first_good], gap_step, first_good + 1, groups,
+                                                            missing, detail::CrossingGroup::kBoth).before;
     std::uint32_t touching = 0;
     if (window_open)
       touching = missing;
     else if (crosses(prev_az, step0, reset_raw, true))
-      touching = detail::split_missing_at_cut(fov, reset_raw, az[first_good], fit.step, first_good + 1, groups, missing).after;
+      touching = detail::split_missing_at_cut(fov, reset_raw, az[first_good], gap_step, first_good + 1, groups, missing,
+                                              detail::CrossingGroup::kBoth).after;
     missing_window = touching > missing_next ? touching - missing_next : 0;
   }
   const int gap_from = prev_az;  // the loop below moves prev_az on

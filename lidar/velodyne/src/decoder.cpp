@@ -385,6 +385,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // continues is corrupt (item 2); only a sustained step ends the scan.
   std::optional<Scan> out;
   detail::GapResult gap{};
+  std::uint32_t gap_slots = 0;  // packet slots of the gap: lost and rejected
   const Nanos period_ns = static_cast<Nanos>(block_ns) * groups;
   constexpr std::int64_t kHourUs = 3'600'000'000LL;
   std::int64_t dt_us = static_cast<std::int64_t>(sensor_us) - prev_sensor_us;
@@ -463,6 +464,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       gap = {};
     } else if (have_prev) {
       // Packets rejected since the previous good one took slots of the gap: dropped, not missing too.
+      gap_slots = gap.missing;
       gap.missing = scans.missing_beyond_rejected(gap.missing);
       const long tol = std::lround(2.0 * fit.step * groups);
       if (gap.missing >= 2) {
@@ -508,8 +510,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       if (k == first_good && gap.missing > 0) {
         // Packets lost across the cut: those past it belong to the next scan, one across it to both.
         detail::CutSplit split{gap.missing, 0};
-        if (crosses && !early_cut)
-          split = detail::split_missing_at_cut(fov, cut, na[k], fit.step, k + 1, groups, gap.missing);
+        if (crosses && !early_cut) {
+          const long gap_groups = prev_trailing_bad + k + 1 + static_cast<long>(gap_slots) * groups;
+          const double gstep = detail::gap_group_step(fov, prev_az, na[k], gap_groups, fit.step);
+          split = detail::split_missing_at_cut(fov, cut, na[k], gstep, k + 1, groups, gap.missing,
+                                               detail::CrossingGroup::kNextOnly);  // the crossing group starts it
+        }
         scans.add_missing(split.before);
         hole = {prev_az, a_cut, detail::kTurn, split.before};
         if (crosses && !early_cut) {

@@ -375,35 +375,62 @@ struct BlindArc {
   }
 };
 
-// Of `missing` packets lost on an arc that crosses `cut`: those with firings before the cut (the
-// scan that ends) and those with firings after it (the next scan's). A packet across the cut is in
-// both, as its firings are (a truth record counts it in both units); the next scan's hole then takes
-// its later firings when it comes late (its stamp moves back to them). Jitter up to half a group.
+// Packets lost on an arc that crosses `cut`, split between the scan that ends and the next one
+// exactly as the truth record's units do (mock/unit_tracker.hpp): each lost group is placed where
+// the sensor would have sent it, counted back from the first group received after the gap at
+// `group_step` (its azimuth rounded as the sensor's), and the group that crosses the cut (the
+// first at or past it) decides. A packet with a group past the crossing one, or the crossing one
+// itself, is the next scan's; a packet with a group before the crossing one is the ending scan's,
+// and so is one whose group crosses when `crossing` says that group is in both (Hesai: it
+// touches both scans; Velodyne: it starts the next). A packet with firings on both sides is in
+// both. Before, the packets past the cut were rounded to the nearest whole packet (Hesai) or
+// judged with half a group's tolerance (Velodyne): one lost packet at the cut was charged to the
+// wrong scan when the cut fell in its far half (hidden in one scan, phantom in the other).
 struct CutSplit {
   std::uint32_t before = 0, after = 0;
 };
-inline CutSplit split_missing_at_cut(const AzimuthFov& fov, int cut, int first_az, double group_step,
-                                     int groups_before_first, int groups_per_packet, std::uint32_t missing) noexcept {
-  if (group_step <= 0.5) return {missing, 0};
-  const int arc = turn_step(cut, first_az);
-  const int visible = arc - arc_outside(fov, cut, arc);
-  const double k = (visible / group_step - groups_before_first) / groups_per_packet;
-  const double tol = 0.5 / groups_per_packet;
-  const auto whole_after = static_cast<std::uint32_t>(std::max(0.0, std::floor(k + tol)));
-  const auto touching = static_cast<std::uint32_t>(std::max(0.0, std::ceil(k - tol)));
-  return {missing - std::min(whole_after, missing), std::min(touching, missing)};
+enum class CrossingGroup : std::uint8_t { kNextOnly, kBoth };
+
+// Back index (0: the first group after the gap, 1: the one before it, ...) of the earliest group
+// at or past `target` on the arc up to `first_az`; `target` lies on that arc.
+inline long crossing_back_index(const AzimuthFov& fov, int target, int first_az, double group_step) noexcept {
+  const int arc = turn_step(target, first_az);
+  const int visible = arc - arc_outside(fov, target, arc);
+  // Group b lies at first_az - round(b * step): at or past the target while round(b * step) <= visible.
+  return static_cast<long>(std::ceil((visible + 0.5) / group_step)) - 1;
+}
+// Of `missing` lost packets (the last one's last group at back index `groups_before_first`), those
+// whose every group lies at back indices <= b, and those with any group there.
+inline std::uint32_t lost_wholly_within(long b, int groups_before_first, int groups_per_packet, std::uint32_t missing) noexcept {
+  const long n = b - groups_before_first + 1;
+  return n <= 0 ? 0U : static_cast<std::uint32_t>(std::min<long>(n / groups_per_packet, missing));
+}
+inline std::uint32_t lost_touching_within(long b, int groups_before_first, int groups_per_packet, std::uint32_t missing) noexcept {
+  const long n = b - groups_before_first;
+  return n < 0 ? 0U : static_cast<std::uint32_t>(std::min<long>(n / groups_per_packet + 1, missing));
 }
 
-// Of `missing` packets lost on an arc that crosses `cut`, those after the cut (the next scan's).
-inline std::uint32_t missing_after_cut(const AzimuthFov& fov, int cut, int first_az, double group_step,
-                                       int groups_before_first, int groups_per_packet,
-                                       std::uint32_t missing) noexcept {
-  if (group_step <= 0.5) return 0;
-  const int arc = turn_step(cut, first_az);
-  const int visible = arc - arc_outside(fov, cut, arc);
-  const double k = (visible / group_step - groups_before_first) / groups_per_packet;
-  const auto after = static_cast<std::uint32_t>(std::max(0L, std::lround(k)));
-  return std::min(after, missing);
+// The azimuth per group across a gap of `groups` group steps from `prev_az` to `first_az`: one
+// packet's fitted step is off by up to ~1/groups of a 0.01° from its rounded azimuths, which over a
+// burst of lost packets adds up to a fraction of a group (a VLP-32C, 19.9 hundredths of a degree per
+// group: 5 lost packets placed ~0.05° off, one of them charged to the wrong scan at the cut). `fit_step` when the gap
+// disagrees with it by half a group or more (packets rejected inside it, a blind arc).
+inline double gap_group_step(const AzimuthFov& fov, int prev_az, int first_az, long groups, double fit_step) noexcept {
+  if (groups <= 0 || fit_step <= 0.5) return fit_step;
+  const int arc = turn_step(prev_az, first_az);
+  const double visible = arc - arc_outside(fov, prev_az, arc);
+  return std::abs(visible - fit_step * static_cast<double>(groups)) < fit_step / 2 ? visible / static_cast<double>(groups) : fit_step;
+}
+
+inline CutSplit split_missing_at_cut(const AzimuthFov& fov, int cut, int first_az, double group_step,
+                                     int groups_before_first, int groups_per_packet, std::uint32_t missing,
+                                     CrossingGroup crossing) noexcept {
+  if (group_step <= 0.5) return {missing, 0};
+  const long b = crossing_back_index(fov, cut, first_az, group_step);
+  // Past the cut only: every group at or past the crossing one (Velodyne), or past it (Hesai).
+  const long past_only = crossing == CrossingGroup::kBoth ? b - 1 : b;
+  return {missing - lost_wholly_within(past_only, groups_before_first, groups_per_packet, missing),
+          lost_touching_within(b, groups_before_first, groups_per_packet, missing)};
 }
 
 }  // namespace sensor_rig::lidar::detail
