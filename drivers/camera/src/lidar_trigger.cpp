@@ -229,6 +229,15 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen, MemberCall& cal
     }
     shot_cv_.notify_all();
     if (late && called != 0) settle_late_call(i, seen, called, accepted);
+    // Its frame may come before the shot closes (the trigger thread waits up to 25 ms for a partner
+    // that does not answer): the tick is there for it now. Before, while stereo_right was slow to
+    // open, every stereo_left frame (10 ms after its call) was matched to the tick before: masked
+    // by the mapped exposure until a held network put the mapping in holdover, then published
+    // 100 ms early, unflagged.
+    if (!late && accepted) {
+      std::lock_guard lock(mutex_);
+      members_[i].exposures.add(called + latency_ns_);
+    }
   }
 }
 

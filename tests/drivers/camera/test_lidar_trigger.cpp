@@ -405,6 +405,59 @@ TEST(LidarTrigger, ACallReturningAfterTheDeadlineStillRecordsItsTick) {
     EXPECT_NEAR(static_cast<double>(trigger.tick_before(called[0][k] + 2'000'000, 0)), static_cast<double>(called[0][k]), 1e6) << k;
 }
 
+// A partner that does not answer holds the shot open for its 25 ms deadline; the healthy member's
+// frame comes 10 ms after its call (the GigE fakes' exposure). Its tick must be there by then, as
+// a frame is matched to the latest tick before it. Before, every such frame (a stereo camera
+// beside its slow-to-open partner in rig chaos) found the tick before: 100 ms early, masked by
+// the mapped exposure until a held network left the mapping in holdover, then published.
+TEST(LidarTrigger, AMembersTickIsThereForItsFrameWhileAPartnerHoldsTheShot) {
+  LidarTrigger trigger("stereo", LidarTriggerConfig{"front", 0.0, 0.0});
+  std::mutex m;
+  std::vector<std::pair<Nanos, Nanos>> healthy;  // (vehicle time of the call, monotonic return)
+  trigger.add([] {
+    ::usleep(200'000);  // a camera that answers nothing in time: every shot waits its deadline
+    return false;
+  });
+  trigger.add([&] {
+    const Nanos called = vehicle_now_ns();
+    std::lock_guard lock(m);
+    healthy.emplace_back(called, monotonic_now_ns());
+    return true;
+  });
+  const Sweep sweep{vehicle_now_ns(), -10.0, 200.0};
+  SimulatedLidar lidar(sweep, trigger);
+  trigger.start();
+  // Each call is checked as its frame would be: until 15 ms after it returned (the frame's
+  // arrival, with a loaded host's slack, and still inside the partner's 25 ms deadline).
+  std::size_t seen = 0, checked = 0, found = 0;
+  const Nanos t_start = monotonic_now_ns();
+  while (checked < 15 && monotonic_now_ns() - t_start < 30'000'000'000) {
+    std::pair<Nanos, Nanos> call{0, 0};
+    {
+      std::lock_guard lock(m);
+      if (healthy.size() > seen) call = healthy[seen];
+    }
+    if (call.first == 0) {
+      ::usleep(1'000);
+      continue;
+    }
+    ++seen;
+    if (monotonic_now_ns() - call.second >= 15'000'000) continue;  // this checker came too late (a loaded host)
+    bool there = false;
+    while (!there && monotonic_now_ns() - call.second < 15'000'000) {
+      // The frame's reference: its call + the 10 ms exposure.
+      there = std::llabs(trigger.tick_before(call.first + 10'000'000, 1) - call.first) < 1'000'000;
+      if (!there) ::usleep(500);
+    }
+    found += there ? 1 : 0;
+    ++checked;
+  }
+  trigger.stop();
+  lidar.stop();
+  ASSERT_EQ(checked, 15u) << "the healthy member was not fired";
+  EXPECT_EQ(found, checked) << "frames matched to the tick before their own";
+}
+
 // Issue 27 item 1, the periodic group (`group:` without a LIDAR): a member whose camera hangs in
 // its trigger call (1.5 s of GVCP timeouts) misses its ticks, counted; its partner is called at
 // every tick. Before, the members were called one after another: the partner got a call per 1.5 s.

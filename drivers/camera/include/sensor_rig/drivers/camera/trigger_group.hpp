@@ -2,6 +2,7 @@
 // One software trigger tick for a group of cameras (a stereo pair): a thread that, at the group's
 // rate, triggers every member back to back and records the tick's vehicle time, so the frames it
 // exposed carry the same stamp.
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
@@ -25,6 +26,8 @@ class MemberCall;  // a member's call that stop() may leave in flight (src/membe
 class RecentTicks {
  public:
   void add(Nanos tick) {
+    // Once: a member's tick is recorded when its call returns and again when its shot closes.
+    if (std::find(ticks_.begin(), ticks_.end(), tick) != ticks_.end()) return;
     if (ticks_.size() >= kKeep) ticks_.erase(ticks_.begin());
     ticks_.push_back(tick);
   }
