@@ -70,8 +70,7 @@ bool hull_edge_at(std::span<const double> x, std::span<const double> y,
 // read 280-294 ppm of drift from a clock with none: the stamps drifted 1.3-2 ms in seconds. A slope
 // is a property of the floor only where the floor is seen: a new one is taken when at least
 // kSupport inliers on each side of the mean x lie within `support` of its line; else the prior
-// (the last slope taken, 0 from cold) is kept, through the lowest point (below every point, as the
-// one-sided noise wants). A LIDAR's bucket minima, microseconds apart, support any fit at once.
+// (the last slope taken, 0 from cold) is kept. A LIDAR's bucket minima, microseconds apart, support any fit at once.
 void keep_prior_unless_supported(std::span<const double> x, std::span<const double> y, const std::vector<unsigned char>& mask,
                                  double mean_x, double prior, double support, LineFit& f) {
   constexpr std::size_t kSupport = 3;
@@ -81,6 +80,8 @@ void keep_prior_unless_supported(std::span<const double> x, std::span<const doub
     ++(x[i] < mean_x ? left : right);
   }
   if (left >= kSupport && right >= kSupport) return;
+  // The prior slope through the lowest point: below every point, as the one-sided noise wants (a
+  // lone prompt frame is the floor: an impossible early one is its caller's to keep out).
   f.s = prior;
   f.supported = false;
   bool first = true;

@@ -74,6 +74,7 @@ void FrameClock::reset(Nanos exposure_ns) {
   mapper_ = timesync::ClockMapper(mapper_config(exposure_ns));
   exposure_ns_ = exposure_ns;
   pending_.clear();
+  exposures_reported_ = false;
   announced_step_ns_ = 0;  // the new mapper converges from scratch: no line a step could shift
   have_domain_ = false;
   ptp_changed_at_ns_ = 0;
@@ -120,6 +121,15 @@ void FrameClock::observe(const camera::FrameMeta& m, Nanos device) noexcept {
     mapper_.observe(device, m.first_rx_ns - exposure_ns_);
     return;
   }
+  if (!exposures_reported_ && m.exposure_ns != exposure_ns_) {
+    // The first exposure the source tells (a frame after the first, read after it) is not the one
+    // the frames before were observed with: they arrived that much earlier or later than the
+    // mapper was told. Too early is an impossible prompt sample, which the mapper rightly takes
+    // for the floor (auto exposure at 7 ms against the configured 10: every stamp 2.9 ms early).
+    // A frame or two into the stream: the line starts again from the frames it knows.
+    mapper_ = timesync::ClockMapper(mapper_.config());
+  }
+  exposures_reported_ = true;
   exposure_ns_ = m.exposure_ns;
   if (m.exposure_seq == m.seq) {  // the frame's own exposure (its chunk data): observed at once
     mapper_.observe(device, m.first_rx_ns - m.exposure_ns);

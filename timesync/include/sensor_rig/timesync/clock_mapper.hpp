@@ -42,7 +42,7 @@ struct ClockMapperConfig {
   double max_drift_ppm = 500.0;           // fits beyond this are rejected (drift kept)
   // A new drift is taken only where the floor is seen: >= 3 bucket minima within this of the line
   // on each side of the window's mean (sparse prompt arrivals fit hundreds of ppm; README item 2).
-  Nanos slope_support_ns = 100'000;
+  Nanos slope_support_ns = 200'000;
   Nanos holdover_after_ns = 1'000'000'000;  // no sample for this long: holdover
   Nanos holdover_max_ns = 60'000'000'000;   // holdover beyond this: unsynced
   Nanos fixed_delay_ns = 0;               // known minimum transport delay, subtracted

@@ -123,6 +123,7 @@ class FrameClock {
   Nanos exposure_ns_;
   Rejected rejected_;
   std::deque<Pending> pending_;  // frames waiting for their exposure (sources that report it)
+  bool exposures_reported_ = false;  // the source told a frame's exposure since the (re)open
   Nanos host_step_ns_ = 0;        // a CLOCK_REALTIME step not told to the mapper yet
   Nanos announced_step_ns_ = 0;   // the last step told to the mapper, and when (host time)
   Nanos announced_at_ns_ = 0;
