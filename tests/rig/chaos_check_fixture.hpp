@@ -49,6 +49,19 @@ inline Input honest() {
   return in;
 }
 
+// A CAN topic's sample of frame `frame` (one sample a frame, its seq the frame's): acquired at
+// `acquisition_ns`, published `publish_after_ns` later, received `receive_after_ns` after that.
+inline SampleRecord can_sample(const std::string& topic, int frame, Nanos acquisition_ns, Nanos publish_after_ns,
+                               Nanos receive_after_ns) {
+  SampleRecord s;
+  s.topic = topic;
+  s.seq = static_cast<std::uint64_t>(frame);
+  s.acquisition_ns = acquisition_ns;
+  s.publish_ns = s.acquisition_ns + publish_after_ns;
+  s.received_ns = s.publish_ns + receive_after_ns;
+  return s;
+}
+
 inline void drop_part(Input& in, int unit, std::uint32_t part, truth::Fate fate = truth::Fate::kDropped) {
   in.truths[0].parts[static_cast<std::size_t>(unit) * kParts + part].fate = fate;
 }

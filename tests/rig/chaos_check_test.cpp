@@ -635,13 +635,7 @@ TEST(ChaosCheck, ACanFrameAtTheEdgeOfDoubledTimeIsOnItsFramesSide) {
     const Nanos tx = kT0 + u * kFrame;
     log.units.push_back(truth::UnitRecord{u, tx, tx, 1});
     log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, tx, tx, tx, truth::Fate::kSent, 0});
-    SampleRecord s;
-    s.topic = topic;
-    s.seq = static_cast<std::uint64_t>(u);
-    s.acquisition_ns = tx + 10'000;
-    s.publish_ns = s.acquisition_ns + 50'000;
-    s.received_ns = s.publish_ns + 100'000;
-    in.samples.push_back(s);
+    in.samples.push_back(can_sample(topic, u, tx + 10'000, 50'000, 100'000));
   }
   const Nanos step_at = kT0 + 299 * kFrame + 5'000;
   log.faults.push_back(truth::FaultRecord{1, "host.clock_step", step_at, step_at + 1'000'000'000, -1, "ms=-500"});
@@ -689,13 +683,7 @@ struct FrozenCounterEcu {
       log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, tx, kMono0 + slot * kSlot, tx,
                                             repeated ? truth::Fate::kCorrupted : truth::Fate::kSent, repeated ? 17U : 0U});
       if (repeated) continue;
-      SampleRecord s;
-      s.topic = topic;
-      s.seq = static_cast<std::uint64_t>(u);
-      s.acquisition_ns = tx + 10'000;
-      s.publish_ns = s.acquisition_ns + 50'000;
-      s.received_ns = s.publish_ns + 100'000;
-      in.samples.push_back(s);
+      in.samples.push_back(can_sample(topic, u, tx + 10'000, 50'000, 100'000));
     }
     if (frozen) log.faults.push_back(truth::FaultRecord{17, "dbw.stuck_counter", kT0 + 100 * kSlot - 2'000'000, kT0 + 200 * kSlot - 2'000'000, -1, "dbw.stuck_counter@1+1>paravan"});
     in.truths.push_back(log);

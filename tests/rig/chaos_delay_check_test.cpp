@@ -157,13 +157,7 @@ Input dbw_under_delay(Nanos hold) {
     last_tx = tx;
     log.units.push_back(truth::UnitRecord{u, tx, made, 1});  // a CAN sample's acquisition: its receive (= send)
     log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, made, made, tx, truth::Fate::kSent, held ? 5U : 0U});
-    SampleRecord s;
-    s.topic = topic;
-    s.seq = static_cast<std::uint64_t>(u);
-    s.acquisition_ns = tx + 50'000;
-    s.publish_ns = s.acquisition_ns + 200'000;
-    s.received_ns = s.publish_ns + 500'000;
-    in.samples.push_back(s);
+    in.samples.push_back(can_sample(topic, u, tx + 50'000, 200'000, 500'000));
   }
   const std::string ms = std::to_string(hold / 1'000'000);
   log.faults.push_back(truth::FaultRecord{5, "host.network_delay", at, until, -1, "host.network_delay:jitter_ms=0:ms=" + ms + "@1+1, via=mock ECU"});

@@ -21,23 +21,30 @@
 namespace sensor_rig::camera {
 namespace {
 
-class GigeChaos : public test::GigeFakeTest<240> {};
-
 Capture next_frame(FrameSource& s, int budget_ms = 3000) { return test::next_frame(s, budget_ms, true); }
+
+class GigeChaos : public test::GigeFakeTest<240> {
+ protected:
+  // Opens an AravisSource on the fake, reads `n` frames into `read` (frame id -> device time) and
+  // closes it. A read that is not a frame is a fatal failure: call under ASSERT_NO_FATAL_FAILURE.
+  void read_frames(int n, std::map<std::uint64_t, Nanos>& read) {
+    AravisSource src(cfg());
+    src.open();
+    for (int i = 0; i < n; ++i) {
+      auto c = next_frame(src);
+      ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
+      read[c.frame.meta().seq] = c.frame.meta().device_ns;
+    }
+    src.close();
+  }
+};
 
 // Without faults every frame AravisSource returns is a unit of the truth with the same frame id
 // and timestamp, sent; the exposure start (acq) is the stamp the camera reports.
 TEST_F(GigeChaos, FaultFreeTruthIsWhatAravisReads) {
   auto fake = start({});
-  AravisSource src(cfg());
-  src.open();
   std::map<std::uint64_t, Nanos> read;  // frame id -> device time
-  for (int i = 0; i < 10; ++i) {
-    auto c = next_frame(src);
-    ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
-    read[c.frame.meta().seq] = c.frame.meta().device_ns;
-  }
-  src.close();
+  ASSERT_NO_FATAL_FAILURE(read_frames(10, read));
   fake.stop(1000);
   const auto log = truth::read(folder_.truth());
   EXPECT_EQ(log.header.device, "cam");
@@ -60,15 +67,8 @@ TEST_F(GigeChaos, FaultFreeTruthIsWhatAravisReads) {
 // tool: only fault lines and a clean stop flushed; the frame lines went with the writer's buffer.
 TEST_F(GigeChaos, AKilledToolLeavesEveryFrameReadInTheTruth) {
   auto fake = start({});
-  AravisSource src(cfg());
-  src.open();
   std::map<std::uint64_t, Nanos> read;  // frame id -> device time
-  for (int i = 0; i < 10; ++i) {
-    auto c = next_frame(src);
-    ASSERT_EQ(c.status, CaptureStatus::kFrame) << c.error;
-    read[c.frame.meta().seq] = c.frame.meta().device_ns;
-  }
-  src.close();
+  ASSERT_NO_FATAL_FAILURE(read_frames(10, read));
   ::usleep(20'000);  // the last frame's lines follow its trailer by microseconds
   fake.signal(SIGKILL);
   ASSERT_TRUE(fake.wait_exit(2000));

@@ -23,6 +23,8 @@
 #include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 
+#include "../synthetic_sensor_factory.hpp"
+
 namespace sensor_rig::lidar::mock {
 namespace {
 
@@ -48,14 +50,7 @@ Rendered render_with_units(const std::string& model, double rpm, ReturnSelection
   base.rpm = rpm;
   base.returns = returns;
   base.ouster_imu_period_ns = 0;
-  SensorFactory make = [base](const SensorSetup& s) {
-    SyntheticOptions o = base;
-    o.start_ns = s.start_ns;
-    o.rpm = s.rpm;
-    o.start_rotor_deg = s.start_rotor_deg;
-    return make_synthetic_sensor(o, Scene::standard());
-  };
-  FaultySensor sensor(make, SensorSetup{kStart, rpm, rotor_deg, 0}, {});
+  FaultySensor sensor(test::synthetic_sensor_factory(base), SensorSetup{kStart, rpm, rotor_deg, 0}, {});
   Rendered r;
   r.options.model = model;
   r.options.returns = returns;

@@ -13,6 +13,8 @@
 #include "sensor_rig/lidar/mock/synthetic_ouster.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 
+#include "../synthetic_sensor_factory.hpp"
+
 namespace sensor_rig::lidar::mock {
 namespace {
 
@@ -34,14 +36,7 @@ TEST_P(TruthUnits, EveryDecodedScanIsATruthUnit) {
   base.model = c.model;
   base.rpm = c.rpm;
   base.returns = c.returns;
-  SensorFactory make = [base](const SensorSetup& s) {
-    SyntheticOptions o = base;
-    o.start_ns = s.start_ns;
-    o.rpm = s.rpm;
-    o.start_rotor_deg = s.start_rotor_deg;
-    return make_synthetic_sensor(o, Scene::standard());
-  };
-  FaultySensor sensor(make, SensorSetup{kStart, c.rpm, c.rotor_deg, 0}, {});
+  FaultySensor sensor(test::synthetic_sensor_factory(base), SensorSetup{kStart, c.rpm, c.rotor_deg, 0}, {});
 
   DecoderOptions d;
   d.model = c.model;
