@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -48,6 +49,31 @@ RunResult run(ClockMapper& mapper, const SimDevice& dev, SimLink& link, double r
     ++r.checked;
   }
   return r;
+}
+
+struct Confirmation {
+  int observed = 0;     // samples observed, the confirming one included (all of them: none confirmed)
+  Nanos after_ns = -1;  // from `from` to the confirming sample; -1: none confirmed
+};
+
+// After a step of `dev`: its samples every `period` from host time `from` until `until`, each
+// received its link delay plus late(i) after it was taken (i from 0), observed until one confirms
+// the step (kJumpDetected); pending(result) sees each sample before that one.
+Confirmation observe_until_confirmed(ClockMapper& m, const SimDevice& dev, SimLink& link, Nanos from, Nanos period,
+                                     Nanos until, const std::function<Nanos(int)>& late = nullptr,
+                                     const std::function<void(ObserveResult)>& pending = nullptr) {
+  Confirmation c;
+  for (Nanos t = from; t < until; t += period) {
+    const Nanos rx = t + link.delay() + (late ? late(c.observed) : 0);
+    ++c.observed;
+    const ObserveResult res = m.observe(dev.device_at(t), rx);
+    if (res == ObserveResult::kJumpDetected) {
+      c.after_ns = t - from;
+      break;
+    }
+    if (pending) pending(res);
+  }
+  return c;
 }
 
 TEST(ClockMapper, StartsUnsyncedAndMapsNothing) {
@@ -133,18 +159,11 @@ TEST(ClockMapper, DetectsAForwardStepWithinAFewSamplesAndRelocks) {
   ASSERT_EQ(m.state(), SyncState::kLocked);
 
   dev.step_ns = 250 * kMs;  // device clock stepped forward
-  int samples_to_detect = -1;
-  for (int i = 0; i < 20; ++i) {
-    const Nanos t = dev.t0 + 5 * kSec + i * 10 * kMs;
-    const ObserveResult res = m.observe(dev.device_at(t), t + link.delay());
-    if (res == ObserveResult::kJumpDetected) {
-      samples_to_detect = i + 1;
-      break;
-    }
-    EXPECT_EQ(res, ObserveResult::kJumpCandidate);
-  }
-  EXPECT_GE(samples_to_detect, 2);
-  EXPECT_LE(samples_to_detect, 4);
+  const Nanos from = dev.t0 + 5 * kSec;
+  const auto c = observe_until_confirmed(m, dev, link, from, 10 * kMs, from + 200 * kMs, nullptr,
+                                         [](ObserveResult res) { EXPECT_EQ(res, ObserveResult::kJumpCandidate); });
+  EXPECT_GE(c.observed, 2);  // 20 when none confirmed
+  EXPECT_LE(c.observed, 4);
   ClockMapperStatus s = m.status();
   EXPECT_EQ(s.jumps, 1u);
   EXPECT_EQ(s.state, SyncState::kJumped);
@@ -256,13 +275,7 @@ TEST(ClockMapper, AStepBackIsConfirmedAfterTheLateSpan) {
   ASSERT_EQ(m.state(), SyncState::kLocked);
   dev.step_ns = -300 * kMs;
   const Nanos from = dev.t0 + 4 * kSec;
-  Nanos confirmed_after = -1;
-  for (Nanos t = from; t < from + 5 * kSec; t += kSec / 754) {
-    if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) {
-      confirmed_after = t - from;
-      break;
-    }
-  }
+  const Nanos confirmed_after = observe_until_confirmed(m, dev, link, from, kSec / 754, from + 5 * kSec).after_ns;
   EXPECT_GE(confirmed_after, m.config().late_confirm_ns);
   EXPECT_LE(confirmed_after, m.config().late_confirm_ns + 20 * kMs);
   EXPECT_NEAR(static_cast<double>(m.status().last_jump_ns), 300e6, 1e6);
@@ -285,14 +298,8 @@ TEST(ClockMapper, AnOddlyPromptFirstSampleDoesNotBlockTheConfirmation) {
   ASSERT_EQ(m.state(), SyncState::kLocked);
   dev.step_ns = -40 * kMs;
   const Nanos from = dev.t0 + 5 * kSec;
-  Nanos confirmed_after = -1;
-  for (int i = 0; i < 600; ++i) {
-    const Nanos t = from + i * 10 * kMs;
-    if (m.observe(dev.device_at(t), t + link.delay() + (i == 0 ? 0 : 6 * kMs)) == ObserveResult::kJumpDetected) {
-      confirmed_after = t - from;
-      break;
-    }
-  }
+  const auto queued = [](int i) { return i == 0 ? 0 : 6 * kMs; };
+  const Nanos confirmed_after = observe_until_confirmed(m, dev, link, from, 10 * kMs, from + 6 * kSec, queued).after_ns;
   EXPECT_GE(confirmed_after, m.config().late_confirm_ns);
   EXPECT_LE(confirmed_after, m.config().late_confirm_ns + 100 * kMs);
 }
@@ -311,13 +318,9 @@ TEST(ClockMapper, AnAnnouncedHostStepForwardConfirmsAtOnce) {
     ASSERT_EQ(m.state(), SyncState::kLocked);
     const Nanos from = dev.t0 + 4 * kSec;
     m.host_step(announced, from + 500 * kMs);  // host time after the step
-    Nanos confirmed_after = -1;
-    for (Nanos t = from; t < from + 5 * kSec; t += kSec / 754) {
-      if (m.observe(dev.device_at(t), t + 500 * kMs + link.delay()) == ObserveResult::kJumpDetected) {
-        confirmed_after = t - from;
-        break;
-      }
-    }
+    const auto host_stepped = [](int) { return 500 * kMs; };
+    const Nanos confirmed_after =
+        observe_until_confirmed(m, dev, link, from, kSec / 754, from + 5 * kSec, host_stepped).after_ns;
     const Nanos expected = announced == 500 * kMs ? m.config().jump_confirm_ns : m.config().late_confirm_ns;
     EXPECT_GE(confirmed_after, expected);
     EXPECT_LE(confirmed_after, expected + 20 * kMs);
@@ -337,13 +340,7 @@ TEST(ClockMapper, APersistentSmallShiftIsReacquiredAtLidarRate) {
   ASSERT_EQ(m.state(), SyncState::kLocked);
   dev.step_ns = 7 * kMs;  // arrivals 7 ms earlier than the line allows
   const Nanos from = dev.t0 + 4 * kSec;
-  Nanos confirmed_after = -1;
-  for (Nanos t = from; t < from + 3 * kSec; t += kSec / 754) {
-    if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) {
-      confirmed_after = t - from;
-      break;
-    }
-  }
+  const Nanos confirmed_after = observe_until_confirmed(m, dev, link, from, kSec / 754, from + 3 * kSec).after_ns;
   EXPECT_GE(confirmed_after, m.config().reacquire_ns);
   EXPECT_LE(confirmed_after, m.config().reacquire_ns + 20 * kMs);
   const RunResult r = run(m, dev, link, 754.0, confirmed_after + 4 * kSec + 1 * kMs, 3 * kSec, 1 * kSec);
@@ -359,12 +356,9 @@ TEST(ClockMapper, DetectsADeviceClockResetAtLidarRate) {
   run(m, dev, link, 754.0, 0, 3 * kSec, 3 * kSec);
   ASSERT_EQ(m.state(), SyncState::kLocked);
   dev.step_ns = -dev.device_at(dev.t0 + 3 * kSec);  // power cycle: counter restarts near 0
-  int n = 0;
-  for (; n < 50; ++n) {
-    const Nanos t = dev.t0 + 3 * kSec + n * (kSec / 754);
-    if (m.observe(dev.device_at(t), t + link.delay()) == ObserveResult::kJumpDetected) break;
-  }
-  EXPECT_LE(n + 1, 10);  // 3 samples and >= 10 ms of host time: ~9 packets at 754 Hz
+  const Nanos from = dev.t0 + 3 * kSec;
+  const int observed = observe_until_confirmed(m, dev, link, from, kSec / 754, from + 50 * (kSec / 754)).observed;
+  EXPECT_LE(observed, 10);  // 3 samples and >= 10 ms of host time: ~9 packets at 754 Hz
   EXPECT_EQ(m.status().jumps, 1u);
   const RunResult r = run(m, dev, link, 754.0, 3 * kSec + 20 * kMs, 3 * kSec, 1 * kSec);
   EXPECT_LT(r.max_err_ns, 50 * kUs);
