@@ -315,7 +315,7 @@ class Checker {
       // camera's (mapped) clock, and a late arrival is no reason for it to move, so a flag does not
       // excuse a stamp that moved then (nor in the settle after it, while a mapping that followed the
       // arrivals comes back). A LIDAR's mapped stamps may follow them, flagged (docs/faults.md).
-      const std::uint64_t held_by = is_camera(t.device_class) ? network_hold_of(log, u) : 0;
+      const std::uint64_t held_by = is_camera(t.device_class) ? network_hold_of(log, units, u) : 0;
       if (ms(err) > bound && held_by == 0 && flagged(topic, s.acquisition_ns)) {
         ++t.stamps_flagged;
       } else if (ms(err) > bound) {
@@ -407,13 +407,30 @@ class Checker {
 
   // The host.network_delay that held this unit's data in its mock (its truth has the fault line),
   // or whose settle it lies in (a mapping that followed the late arrivals returns after it); 0: none.
-  std::uint64_t network_hold_of(const truth::Log& log, const UnitTruth& u) const {
+  // The hold whose frames (or their settle) unit u is of, where the camera's stream had a mapping
+  // to hold them against: one that began less than kMappedBeforeHoldNs before the hold (a camera
+  // back from camera.dies 0.2-0.3 s before it, whole-rig campaign seed 25, 2 runs of 3) has none.
+  // Its mapper locks after 1 s of frames; before, one-way timing cannot tell a held network from
+  // the floor of its arrivals, and its stamps may follow them, flagged, as a LIDAR's may.
+  std::uint64_t network_hold_of(const truth::Log& log, const std::vector<UnitTruth>& units, const UnitTruth& u) const {
     const Nanos settle = seconds_ns(in_.bounds.settle_s);
     for (const auto& f : log.faults)
       if (f.kind == "host.network_delay" && truth::injected(f) && u.rec.acq_ns >= f.at_ns && u.rec.acq_ns < f.until_ns + settle)
-        return f.id;
+        return stream_began(units, f.at_ns) <= f.at_ns - kMappedBeforeHoldNs ? f.id : 0;
     return 0;
   }
+  // When the camera's frames before `at` began, without a second's gap (a camera that died or was
+  // reopened starts a new stream).
+  static Nanos stream_began(const std::vector<UnitTruth>& units, Nanos at) {
+    Nanos began = 0, prev = 0;
+    for (const UnitTruth& v : units) {
+      if (v.rec.acq_ns >= at) break;
+      if (prev == 0 || v.rec.acq_ns - prev > kSecond) began = v.rec.acq_ns;
+      prev = v.rec.acq_ns;
+    }
+    return began == 0 ? at : began;
+  }
+  static constexpr Nanos kMappedBeforeHoldNs = 1'500'000'000;
 
   std::string faults_of(const truth::Log& log, const UnitTruth& u) const {
     std::set<std::string> kinds;

@@ -395,9 +395,10 @@ TEST(FrameClock, AHeldNetworkDoesNotMoveTheExposureStamps) {
     m.device_ticks_ns = start + kTaiNs;
     m.device_ns = start;
   };
-  // A triggered frame's line after 1 s of held frames (no sample accepted: the mapping in holdover,
-  // not locked) gives way to its trigger tick as before a lock: right within the trigger's latency
-  // (0.3 ms here), not the device's clock, so not doubtful.
+  // A triggered frame's line after 1 s of held frames (no sample accepted: the mapping in holdover)
+  // is the locked line extrapolated: kept, as the free-running camera's. Before, it gave way to the
+  // trigger tick as before a lock: the call, 0.3 ms before the exposure here, 1.5 ms under load
+  // (whole-rig campaign seed 25, a held stereo frame 1.525 ms early: `stamps` broken), not doubtful.
   struct Case {
     const char* what;
     StepRun run;
@@ -405,7 +406,7 @@ TEST(FrameClock, AHeldNetworkDoesNotMoveTheExposureStamps) {
     int doubtful;
   };
   for (const auto& c : {Case{"free-running", run_frames_with(500, ticks, held), StampSource::kDeviceMapped, 18},
-                        Case{"triggered", run_frames_with(500, ticks, held_triggered), StampSource::kTriggerExposure, 8},
+                        Case{"triggered", run_frames_with(500, ticks, held_triggered), StampSource::kTriggerExposure, 18},
                         Case{"PTP Slave", run_frames_with(500, ptp, held), StampSource::kVehicle, 18}}) {
     SCOPED_TRACE(c.what);
     print(c.what, c.run);
@@ -420,7 +421,7 @@ TEST(FrameClock, AHeldNetworkDoesNotMoveTheExposureStamps) {
       worst_ms = std::max(worst_ms, err_ms);
       held_wrong += err_ms > 1.0 ? 1 : 0;
       held_doubtful += f.doubtful ? 1 : 0;
-      other_source += f.source != c.source && !(f.source == StampSource::kTriggerTick && i >= 310) ? 1 : 0;
+      other_source += f.source != c.source ? 1 : 0;
     }
     std::printf("%s: held frames %d, beyond 1 ms %d (worst %.3f ms), doubtful %d\n", c.what, held_frames, held_wrong, worst_ms,
                 held_doubtful);
