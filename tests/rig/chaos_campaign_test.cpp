@@ -41,6 +41,10 @@ const std::map<std::pair<std::string, std::string>, std::string> kKnownBroken = 
     // camera isolation and recovery held in most whole-rig runs, but isolation broke in 1 of 3 on
     // 2026-11-28 (not yet explained): still listed.
     {{"isolation", "camera"}, "27"},      {{"recovery", "camera"}, "27"},
+    // Camera stamps broke in every run of this seed on 2026-11-29 until the clock mapper's support
+    // rule (34862b4, cffd3df), the trigger's tick at the call's return (c65beb3) and a holdover line
+    // for held triggered frames (53af01e); after them every invariant held in 7 of 7 runs (stop 42).
+    // Still listed until fresh machines agree.
     // The fused cloud: its breaks in this campaign were the clock mapper taking a held network for a
     // step back (a371737), the matcher holding a LIDAR's own new phase (after a stall, an rpm change)
     // as a possible clock step for 3 scans (6672f05, d4995c1), and the judge's one rotation boundary
