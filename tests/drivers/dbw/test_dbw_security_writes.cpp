@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <regex>
 #include <set>
@@ -46,17 +47,43 @@ struct Seen {
   std::set<dds_instance_handle_t> writers;
 };
 
-// The rate of /vehicle/state in the last JSON line `rig monitor --json` printed for it; -1 if none.
-double last_state_rate(const std::string& monitor_output) {
-  double rate = -1.0;
+// The rate of /vehicle/state in each report window `rig monitor --json` printed, in order.
+std::vector<double> state_rates(const std::string& monitor_output) {
+  std::vector<double> rates;
   std::istringstream in(monitor_output);
   const std::regex key("\"rate_hz\":([0-9.]+)");
   std::smatch m;
   for (std::string line; std::getline(in, line);) {
     if (line.find("\"topic\":\"/vehicle/state\"") != std::string::npos && std::regex_search(line, m, key))
-      rate = std::stod(m[1]);
+      rates.push_back(std::stod(m[1]));
   }
-  return rate;
+  return rates;
+}
+
+// Waits (up to bound_ms) until the monitor has printed `n` windows after its first `from`, and returns
+// those; fewer if the bound passed. A window's rate is a condition's input, never a fixed wait's: a
+// window a writer began or was discovered in holds part of its rate.
+std::vector<double> windows_after(const dbw::test::RigProcesses& rig, std::size_t from, std::size_t n, int bound_ms) {
+  const Nanos end = vehicle_now_ns() + static_cast<Nanos>(bound_ms) * 1'000'000;
+  std::vector<double> r = state_rates(rig.output("monitor"));
+  while (r.size() < from + n && vehicle_now_ns() < end) {
+    ::usleep(100'000);
+    r = state_rates(rig.output("monitor"));
+  }
+  if (r.size() <= from) return {};
+  return {r.begin() + static_cast<std::ptrdiff_t>(from), r.begin() + static_cast<std::ptrdiff_t>(std::min(r.size(), from + n))};
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return -1.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+std::string joined(const std::vector<double>& v) {
+  std::ostringstream o;
+  for (double x : v) o << x << ' ';
+  return o.str();
 }
 
 TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) {
@@ -93,17 +120,29 @@ TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) 
     }
     return s;
   };
-  const pid_t monitor = rig.start("monitor", {"monitor", "/vehicle/state", "--domain", dom, "--json", "--duration", "40"});
+  const pid_t monitor = rig.start("monitor", {"monitor", "/vehicle/state", "--domain", dom, "--json", "--duration", "150"});
 
   // The spoofer alone: an ordinary participant on a mock ECU of its own.
   const std::string bus2 = rig.path("bus2.sock");
-  const pid_t mock2 = rig.start("mock2", {"mock", "paravan", "--transport", "unix-listen:" + bus2, "--duration", "40"});
+  const pid_t mock2 = rig.start("mock2", {"mock", "paravan", "--transport", "unix-listen:" + bus2, "--duration", "150"});
   for (int i = 0; i < 300 && !fs::exists(bus2); ++i) ::usleep(10'000);
   const pid_t spoofer =
-      rig.start("spoofer", {"dbw", "bridge", "--domain", dom, "--transport", "unix:" + bus2, "--duration", "40"});
+      rig.start("spoofer", {"dbw", "bridge", "--domain", dom, "--transport", "unix:" + bus2, "--duration", "150"});
   Seen strict_seen = collect(3000);
-  const double spoofer_rate = last_state_rate(rig.output("monitor"));
-  EXPECT_GT(spoofer_rate, 30.0) << "the spoofer is not publishing\n" << rig.output("monitor") << rig.output("spoofer");
+  // The spoofer's rate: the first window it shows in may hold part of it; the two after it are whole.
+  std::size_t first = 0;
+  for (const Nanos end = vehicle_now_ns() + static_cast<Nanos>(sensor_rig::test::kDiscoveryMs) * 1'000'000;
+       vehicle_now_ns() < end; ::usleep(100'000)) {
+    const std::vector<double> r = state_rates(rig.output("monitor"));
+    const auto it = std::find_if(r.begin(), r.end(), [](double hz) { return hz > 0; });
+    if (it != r.end()) {
+      first = static_cast<std::size_t>(it - r.begin()) + 1;
+      break;
+    }
+  }
+  const std::vector<double> spoofer_windows = windows_after(rig, first, 2, 10'000);
+  const double spoofer_rate = median(spoofer_windows);
+  ASSERT_GT(spoofer_rate, 30.0) << "the spoofer is not publishing\n" << rig.output("monitor") << rig.output("spoofer");
   EXPECT_EQ(strict_seen.samples, 0) << "the strict reader took /vehicle/state from a participant without credentials";
 
   // Authenticated without the grant: its state writer is refused, it does not run.
@@ -112,7 +151,7 @@ TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) 
   EXPECT_EQ(rig.wait_exit(ungranted, 15000), 1) << rig.output("ungranted");
 
   // The real bridge, authenticated and granted.
-  const pid_t mock = rig.start_mock({"--duration", "40"});
+  const pid_t mock = rig.start_mock({"--duration", "150"});
   ASSERT_GT(mock, 0);
   const pid_t bridge = rig.start("bridge", {"dbw", "bridge", "--domain", dom, "--transport", rig.bus(), "--duration",
                                             "40", "--security", sec});
@@ -120,16 +159,30 @@ TEST_P(DbwSecurityWrites, StrictReadersTakeTheRigsTopicsOnlyFromGrantedWriters) 
   strict_seen = collect(3000);
   EXPECT_GT(strict_seen.samples, 30) << rig.output("bridge");
   EXPECT_EQ(strict_seen.writers.size(), 1U) << "the strict reader took samples from more than the real bridge";
-  // The ordinary reader: both writers' rate where reads stay open, the spoofer's alone under sign.
-  const double both_rate = last_state_rate(rig.output("monitor"));
+  // The ordinary reader: both writers' rate where reads stay open (it shows once the monitor has
+  // discovered the bridge), the spoofer's alone under sign (three whole windows after the strict reader
+  // took the bridge's samples: the monitor had as long to discover it).
+  const std::size_t mark = state_rates(rig.output("monitor")).size();
   if (w.plain_reads_real) {
-    EXPECT_GT(both_rate, 1.6 * spoofer_rate) << rig.output("monitor");
+    std::vector<double> seen;
+    for (const Nanos end = vehicle_now_ns() + static_cast<Nanos>(sensor_rig::test::kDiscoveryMs) * 1'000'000;
+         vehicle_now_ns() < end; ::usleep(100'000)) {
+      seen = windows_after(rig, mark, 1000, 0);
+      if (!seen.empty() && seen.back() > 1.6 * spoofer_rate) break;
+    }
+    ASSERT_FALSE(seen.empty()) << rig.output("monitor");
+    EXPECT_GT(seen.back(), 1.6 * spoofer_rate) << "windows " << joined(seen) << "; spoofer " << spoofer_rate;
   } else {
-    EXPECT_LT(both_rate, 1.3 * spoofer_rate) << rig.output("monitor");
+    const std::vector<double> both = windows_after(rig, mark + 1, 3, 15'000);
+    ASSERT_EQ(both.size(), 3U) << rig.output("monitor");
+    EXPECT_LT(median(both), 1.3 * spoofer_rate) << "windows " << joined(both) << "; spoofer " << spoofer_rate;
   }
   EXPECT_EQ(rig.stop(monitor), 0) << rig.output("monitor");
   dbw::test::BridgeDiagnostics diag;
-  dbw::test::take_bridge_diagnostics(diagnostics, diag);
+  for (int i = 0; i < 600 && diag.level == 255; ++i) {  // once a second: bounded, not a fixed wait
+    dbw::test::take_bridge_diagnostics(diagnostics, diag);
+    if (diag.level == 255) ::usleep(100'000);
+  }
   EXPECT_EQ(diag.level, 1) << diag.message;
   EXPECT_NE(diag.message.find("certificate of 'dbw_bridge' expires"), std::string::npos) << diag.message;
   EXPECT_TRUE(diag.values["security_days_left"] == "19" || diag.values["security_days_left"] == "20")
