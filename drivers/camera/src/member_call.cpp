@@ -23,6 +23,12 @@ bool MemberCall::leave() {
   return in_call_;
 }
 
+bool MemberCall::leave_if_in_call() {
+  std::lock_guard lock(mutex_);
+  if (in_call_) left_ = true;
+  return in_call_;
+}
+
 bool MemberCall::in_call() const {
   std::lock_guard lock(mutex_);
   return in_call_;

@@ -23,6 +23,10 @@ class MemberCall {
   std::optional<bool> call();
   // stop(): no call starts from here on; true while one is in flight.
   bool leave();
+  // The source gives up on a call hung past its deadline (a camera in GVCP retries) to call the
+  // member again on a fresh MemberCall: true, and left, only while a call is in flight; false
+  // (nothing changed) when none is.
+  bool leave_if_in_call();
   [[nodiscard]] bool in_call() const;
 
  private:

@@ -44,11 +44,41 @@ void TriggerGroup::start() {
     std::lock_guard lock(calls_mutex_);
     closing_ = false;
   }
-  for (std::size_t i = 0; i < members_.size(); ++i) {
-    members_[i].call = std::make_shared<MemberCall>(members_[i].trigger);
-    members_[i].thread = std::thread([this, i, call = members_[i].call] { run_member(i, *call); });
-  }
+  for (std::size_t i = 0; i < members_.size(); ++i) start_member(i);
   thread_ = std::thread([this] { run(); });
+}
+
+void TriggerGroup::start_member(std::size_t i) {
+  Member& m = members_[i];
+  m.call = std::make_shared<MemberCall>(m.trigger);
+  m.busy = false;
+  m.thread = std::thread([this, i, call = m.call] { run_member(i, *call); });
+}
+
+void TriggerGroup::leave_hung_call(std::size_t i, Nanos mono) {
+  Member& m = members_[i];
+  if (!m.busy || mono - m.busy_since <= kLeaveCallAfterNs) return;
+  std::erase_if(m.left_in_flight, [](const std::shared_ptr<MemberCall>& c) { return !c->in_call(); });
+  if (m.left_in_flight.size() >= kMaxCallsLeft) return;  // its ticks stay skipped, counted
+  // Not in its call (it just returned, or its thread has not reached it): the thread clears busy.
+  if (!m.call->leave_if_in_call()) return;
+  m.left_in_flight.push_back(m.call);
+  ++m.left;
+  // Left, the thread returns from the call without touching this group: it may outlive it.
+  m.thread.detach();
+  start_member(i);
+}
+
+std::uint64_t TriggerGroup::calls_left(std::size_t member) const {
+  std::lock_guard lock(calls_mutex_);
+  return member < members_.size() ? members_[member].left : 0;
+}
+
+void TriggerGroup::add_status(dds::DriverStatus& s, std::size_t member) const {
+  std::lock_guard lock(calls_mutex_);
+  if (member >= members_.size()) return;
+  s.add_number("trigger_skipped", members_[member].skipped);
+  s.add_number("trigger_calls_left", members_[member].left);
 }
 
 void TriggerGroup::stop() {
@@ -78,6 +108,7 @@ void TriggerGroup::run_member(std::size_t i, MemberCall& call) {
     if (!members_[i].pending) return;  // closing, nothing to call
     members_[i].pending = false;
     members_[i].busy = true;
+    members_[i].busy_since = monotonic_now_ns();
     lock.unlock();
     // A closed camera refuses: its driver reports that. Left by stop(): this group may be gone.
     if (!call.call()) return;
@@ -105,7 +136,10 @@ void TriggerGroup::run() {
     }
     {
       std::lock_guard lock(calls_mutex_);
-      for (auto& m : members_) {
+      const Nanos mono = monotonic_now_ns();
+      for (std::size_t i = 0; i < members_.size(); ++i) {
+        leave_hung_call(i, mono);
+        Member& m = members_[i];
         if (m.busy || m.pending)
           ++m.skipped;  // still in an older tick's call: this one is not queued behind it
         else

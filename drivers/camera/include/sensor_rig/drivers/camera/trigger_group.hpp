@@ -107,22 +107,42 @@ class TriggerGroup : public TriggerSource {
   [[nodiscard]] std::uint64_t ticks() const noexcept { return ticks_.load(); }
   // Ticks `member` missed because its previous call had not returned (a camera in GVCP timeouts).
   [[nodiscard]] std::uint64_t skipped(std::size_t member) const;
+  // Calls of `member` given up on, hung past kLeaveCallAfterNs: left to finish on their own thread
+  // while the member is called afresh.
+  [[nodiscard]] std::uint64_t calls_left(std::size_t member) const;
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
+  // trigger_skipped, trigger_calls_left.
+  void add_status(dds::DriverStatus& s, std::size_t member) const override;
+
+  // A trigger call still in flight this long is hung (a healthy GVCP write: < 1 ms, ~10 ms on a
+  // loaded host; one to a camera that rebooted or died: Aravis retries it ~2.4 s). Its shot is lost
+  // anyway; waiting for it would skip the member's ticks to the reopened camera too (issue 27 item 1:
+  // a reopened stereo camera got no trigger for 2.4 s and was reopened 4 times).
+  static constexpr Nanos kLeaveCallAfterNs = 200'000'000;
+  // Hung calls left in flight at once per member: more are not started (ticks skipped, counted);
+  // on the same dead connection a fresh call fails at once on the camera's GenICam lock anyway.
+  static constexpr std::size_t kMaxCallsLeft = 2;
 
  private:
   // Each member is called on a thread of its own: the tick never waits for a call, so a member
   // whose camera does not answer misses its ticks (counted) and its partners do not (issue 27
-  // item 1; they were called one after another).
+  // item 1; they were called one after another). A call hung past kLeaveCallAfterNs is left to its
+  // thread and the member gets a fresh one.
   struct Member {
     std::function<bool()> trigger;
     std::shared_ptr<MemberCall> call;  // made by start(), owned with its thread
     std::thread thread;
     bool pending = false;  // under calls_mutex_: a tick to call
     bool busy = false;     // in its call
+    Nanos busy_since = 0;  // monotonic: when that call began
     std::uint64_t skipped = 0;
+    std::uint64_t left = 0;
+    std::vector<std::shared_ptr<MemberCall>> left_in_flight;  // pruned once they returned
   };
   void run();
   void run_member(std::size_t i, MemberCall& call);
+  void start_member(std::size_t i);                   // its firing thread on a fresh call
+  void leave_hung_call(std::size_t i, Nanos mono);   // calls_mutex_ held
   std::string name_;
   double rate_hz_;
   std::vector<Member> members_;
