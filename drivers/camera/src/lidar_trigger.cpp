@@ -104,17 +104,45 @@ void LidarTrigger::start(int realtime_priority) {
     shot_.busy.assign(members_.size(), 0);
     shot_.abandoned.assign(members_.size(), 0);
     shot_.taken.assign(members_.size(), 0);
+    shot_.call_began.assign(members_.size(), 0);
   }
   started_ns_.store(vehicle_now_ns());
-  for (std::size_t i = 0; i < members_.size(); ++i) {
-    members_[i].call = std::make_shared<MemberCall>(members_[i].trigger);
-    members_[i].thread = std::thread([this, i, generation, call = members_[i].call] { run_member(i, generation, *call); });
-    (void)pthread_setname_np(members_[i].thread.native_handle(), ("trg" + std::to_string(i) + ":" + name_).substr(0, 15).c_str());
-    set_fifo(members_[i].thread, realtime_priority, name_);
-  }
+  realtime_priority_ = realtime_priority;
+  for (std::size_t i = 0; i < members_.size(); ++i) start_firing_thread(i, generation);
   thread_ = std::thread([this] { run(); });
   (void)pthread_setname_np(thread_.native_handle(), ("trg:" + name_).substr(0, 15).c_str());
   set_fifo(thread_, realtime_priority, name_);
+}
+
+void LidarTrigger::start_firing_thread(std::size_t i, std::uint64_t seen) {
+  Member& m = members_[i];
+  m.call = std::make_shared<MemberCall>(m.trigger);
+  m.thread = std::thread([this, i, seen, call = m.call] { run_member(i, seen, *call); });
+  (void)pthread_setname_np(m.thread.native_handle(), ("trg" + std::to_string(i) + ":" + name_).substr(0, 15).c_str());
+  set_fifo(m.thread, realtime_priority_, name_);
+}
+
+void LidarTrigger::leave_hung_calls(Nanos mono) {
+  for (std::size_t i = 0; i < members_.size(); ++i) {
+    Member& m = members_[i];
+    const Nanos began = shot_.call_began[i];
+    if (began == 0 || mono - began <= kTriggerCallHungNs) continue;
+    std::erase_if(m.left_in_flight, [](const std::shared_ptr<MemberCall>& c) { return !c->in_call(); });
+    if (m.left_in_flight.size() >= kMaxTriggerCallsLeft) continue;  // its shots stay skipped, refused
+    if (!m.call->leave_if_in_call()) continue;  // it just returned: its thread reports it
+    m.left_in_flight.push_back(m.call);
+    // Left, the thread returns from the call without touching this trigger: it may outlive it. Its
+    // shot was timed out and waits to be settled by the call's return: refused now.
+    m.thread.detach();
+    shot_.call_began[i] = 0;
+    shot_.reported[i] = shot_.generation;
+    {
+      std::lock_guard lock(mutex_);
+      ++m.refused;
+      ++m.calls_left;
+    }
+    start_firing_thread(i, shot_.generation);  // it takes the next shot armed
+  }
 }
 
 void LidarTrigger::stop() {
@@ -203,6 +231,7 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen, MemberCall& cal
       // Given up on before this thread even took it (counted refused): not fired.
       fire_it = shot_.abandoned[i] == 0 && (shot_.busy[i] == 0 || monotonic_now_ns() <= aim + kStaleShotNs);
       shot_.taken[i] = fire_it ? 1 : 0;
+      if (fire_it) shot_.call_began[i] = aim;
     }
     // Armed: fired even when stop() came meanwhile, so that no member fires alone. A shot whose
     // aim passed while this member's camera held it in an older call is skipped, not fired late.
@@ -221,6 +250,7 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen, MemberCall& cal
     {
       std::lock_guard lock(shot_mutex_);
       late = shot_.generation != seen || shot_.abandoned[i] != 0;
+      shot_.call_began[i] = 0;
       if (shot_.generation == seen) {  // the trigger thread still waits for this shot
         shot_.called[i] = called;
         shot_.accepted[i] = accepted ? 1 : 0;
@@ -276,6 +306,7 @@ void LidarTrigger::fire(Nanos target, Nanos aim) {
     std::fill(shot_.accepted.begin(), shot_.accepted.end(), 0);
     std::fill(shot_.abandoned.begin(), shot_.abandoned.end(), 0);
     std::fill(shot_.taken.begin(), shot_.taken.end(), 0);
+    leave_hung_calls(monotonic_now_ns());
     for (std::size_t i = 0; i < members_.size(); ++i) shot_.busy[i] = shot_.reported[i] != shot_.generation ? 1 : 0;
     const std::uint64_t gen = ++shot_.generation;
     t.generation = gen;
@@ -366,6 +397,7 @@ LidarTriggerFigures LidarTrigger::figures(std::size_t member) const {
     const auto& m = members_[member];
     f.refused = m.refused;
     f.timed_out = m.timed_out;
+    f.calls_left = m.calls_left;
     f.call_error = figure_of(m.call_error);
     f.to_exposure = figure_of(m.to_exposure);
     f.exposure_unmatched = m.unmatched;
@@ -392,6 +424,7 @@ void LidarTrigger::add_status(dds::DriverStatus& s, std::size_t member) const {
   s.add_number("triggers", f.triggers);
   s.add_number("triggers_refused", f.refused);
   s.add_number("triggers_timed_out", f.timed_out);
+  s.add_number("trigger_calls_left", f.calls_left);
   s.add_number("triggers_late", f.late);
   s.add_number("trigger_prediction_lost", f.prediction_lost);
   // The phase figure's exposure start: the camera's own report, or the trigger call + latency.

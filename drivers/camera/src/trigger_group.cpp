@@ -57,9 +57,9 @@ void TriggerGroup::start_member(std::size_t i) {
 
 void TriggerGroup::leave_hung_call(std::size_t i, Nanos mono) {
   Member& m = members_[i];
-  if (!m.busy || mono - m.busy_since <= kLeaveCallAfterNs) return;
+  if (!m.busy || mono - m.busy_since <= kTriggerCallHungNs) return;
   std::erase_if(m.left_in_flight, [](const std::shared_ptr<MemberCall>& c) { return !c->in_call(); });
-  if (m.left_in_flight.size() >= kMaxCallsLeft) return;  // its ticks stay skipped, counted
+  if (m.left_in_flight.size() >= kMaxTriggerCallsLeft) return;  // its ticks stay skipped, counted
   // Not in its call (it just returned, or its thread has not reached it): the thread clears busy.
   if (!m.call->leave_if_in_call()) return;
   m.left_in_flight.push_back(m.call);

@@ -47,6 +47,9 @@ struct LidarTriggerFigures {
   // Its call had not returned by the shot's deadline; settled when it returns: refused, or its
   // tick recorded late (a camera that took the trigger exposes for it: the frame is stamped by it).
   std::uint64_t timed_out = 0;
+  // Its calls hung past kTriggerCallHungNs, left to their thread (counted refused): the camera is
+  // fired afresh from the next shot on.
+  std::uint64_t calls_left = 0;
   std::uint64_t late = 0;            // fired more than 1 ms after the aimed time (woke late)
   std::uint64_t prediction_lost = 0; // times the prediction went away (LIDAR stopped / lost lock)
   std::uint64_t measured = 0;        // this camera's triggers in the phase figure below
@@ -106,6 +109,8 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
     ErrorHistory to_exposure;       // reported exposure start - trigger call
     std::uint64_t refused = 0;
     std::uint64_t timed_out = 0;    // its call had not returned by the shot's deadline (a dead camera)
+    std::uint64_t calls_left = 0;
+    std::vector<std::shared_ptr<MemberCall>> left_in_flight;  // the trigger thread only
     std::uint64_t unmatched = 0;
   };
   // The shot every firing thread takes: armed by the trigger thread, fired by all members at once.
@@ -118,6 +123,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
     std::vector<char> busy;         // per member: still in an older shot's call when this one was armed
     std::vector<char> abandoned;    // per member: the trigger thread stopped waiting for its call
     std::vector<char> taken;        // per member: its firing thread took this shot (calls, not skips)
+    std::vector<Nanos> call_began;  // per member: CLOCK_MONOTONIC its call began; 0 when not in one
     bool closing = false;           // stop(): firing threads end once nothing is armed
   };
   // A fired tick, until its crossing is measured and its frames have reported their exposure.
@@ -132,6 +138,10 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   void run();
   void run_member(std::size_t i, std::uint64_t seen, MemberCall& call);  // seen: the shots armed before it started
   void fire(Nanos target, Nanos aim);
+  void start_firing_thread(std::size_t i, std::uint64_t seen);
+  // shot_mutex_ held: a member's call hung past kTriggerCallHungNs is left, the member gets a fresh
+  // firing thread for the next shot.
+  void leave_hung_calls(Nanos mono);
   // A member's call that returned after its shot's deadline: refused, or its tick recorded now.
   void settle_late_call(std::size_t i, std::uint64_t generation, Nanos called, bool accepted);
   void settle(Nanos newest) noexcept;  // ticks whose crossing the samples now cover
@@ -141,6 +151,7 @@ class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
   LidarTriggerConfig cfg_;
   Nanos latency_ns_;
   std::vector<Member> members_;
+  int realtime_priority_ = 0;
   std::thread thread_;
   std::atomic<bool> stop_{false};
   std::atomic<Nanos> started_ns_{0};

@@ -21,6 +21,16 @@ namespace sensor_rig::drivers {
 
 class MemberCall;  // a member's call that stop() may leave in flight (src/member_call.hpp)
 
+// A trigger call still in flight this long is hung (a healthy GVCP write: < 1 ms, ~10 ms on a
+// loaded host; one to a camera that rebooted or died: Aravis retries it ~2.4 s). Its shot is lost
+// anyway; waiting for it would skip the member's shots to the reopened camera too (issue 27 item 1:
+// a reopened stereo camera got no trigger for 2.4 s and was reopened 4 times). Both trigger sources
+// leave such a call to its thread and call the member afresh.
+inline constexpr Nanos kTriggerCallHungNs = 200'000'000;
+// Hung calls left in flight at once per member: more are not started (shots skipped, counted); on
+// the same dead connection a fresh call fails at once on the camera's GenICam lock anyway.
+inline constexpr std::size_t kMaxTriggerCallsLeft = 2;
+
 // The last ticks (exposure starts) a trigger source fired, for matching a frame to its tick. Not
 // synchronized: the source guards it with its own mutex.
 class RecentTicks {
@@ -107,26 +117,18 @@ class TriggerGroup : public TriggerSource {
   [[nodiscard]] std::uint64_t ticks() const noexcept { return ticks_.load(); }
   // Ticks `member` missed because its previous call had not returned (a camera in GVCP timeouts).
   [[nodiscard]] std::uint64_t skipped(std::size_t member) const;
-  // Calls of `member` given up on, hung past kLeaveCallAfterNs: left to finish on their own thread
+  // Calls of `member` given up on, hung past kTriggerCallHungNs: left to finish on their own thread
   // while the member is called afresh.
   [[nodiscard]] std::uint64_t calls_left(std::size_t member) const;
   [[nodiscard]] const std::string& name() const noexcept { return name_; }
   // trigger_skipped, trigger_calls_left.
   void add_status(dds::DriverStatus& s, std::size_t member) const override;
 
-  // A trigger call still in flight this long is hung (a healthy GVCP write: < 1 ms, ~10 ms on a
-  // loaded host; one to a camera that rebooted or died: Aravis retries it ~2.4 s). Its shot is lost
-  // anyway; waiting for it would skip the member's ticks to the reopened camera too (issue 27 item 1:
-  // a reopened stereo camera got no trigger for 2.4 s and was reopened 4 times).
-  static constexpr Nanos kLeaveCallAfterNs = 200'000'000;
-  // Hung calls left in flight at once per member: more are not started (ticks skipped, counted);
-  // on the same dead connection a fresh call fails at once on the camera's GenICam lock anyway.
-  static constexpr std::size_t kMaxCallsLeft = 2;
 
  private:
   // Each member is called on a thread of its own: the tick never waits for a call, so a member
   // whose camera does not answer misses its ticks (counted) and its partners do not (issue 27
-  // item 1; they were called one after another). A call hung past kLeaveCallAfterNs is left to its
+  // item 1; they were called one after another). A call hung past kTriggerCallHungNs is left to its
   // thread and the member gets a fresh one.
   struct Member {
     std::function<bool()> trigger;
