@@ -140,8 +140,8 @@ std::vector<HeldInterval> netem_delays(const std::vector<truth::Log>& truths) {
 
 std::uint64_t slots_skipped_while_frozen(const truth::Log& log, Nanos begin, Nanos end) {
   // The runs the bridge sees frozen: from the last good frame before the fault (its first frame still
-  // counts on) to the first good one after (the first frame after it repeats the frozen value once
-  // more): a period's margin before, two after.
+  // counts on) to the first good one after (the mock's counter counts on from the frozen value): a
+  // period's margin before, two after (the fault's edges are on the mock's step grid).
   std::vector<Interval> frozen;
   for (const auto& f : log.faults)
     if (f.kind == "dbw.stuck_counter" && truth::injected(f)) frozen.push_back({f.at_ns, f.until_ns});

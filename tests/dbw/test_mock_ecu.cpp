@@ -176,6 +176,34 @@ TEST_F(MockEcuTest, InjectedFaultsShowOnTheBus) {
   EXPECT_EQ(seen["during_bus_off"], 0);
 }
 
+// The truth of a frozen counter (rig chaos holds the bridge's counts against it): every status frame
+// the receiver's E2E check finds repeating its predecessor's counter is recorded kRepeatedCounter,
+// and every frame recorded kSent passes it. Before, the counter stayed frozen one frame past the
+// fault: the first frame after it repeated the frozen value and was recorded sent.
+TEST_F(MockEcuTest, EveryFrameRepeatingTheCounterIsRecordedSoAndNoneAfterTheFault) {
+  mock::MockEcu ecu(p_, {mock::parse_fault("stuck-counter@0.2+0.05"), mock::parse_fault("stuck-counter@0.4+0.03")});
+  std::vector<mock::EmittedFrame::Fate> fates;  // the status frames', in order
+  ecu.set_observer([&](const mock::EmittedFrame& e) {
+    if (e.role == "status") fates.push_back(e.fate);
+  });
+  s::E2eChecker chk(p_.rx("status")->e2e);
+  std::vector<s::E2eStatus> verdicts;
+  for (int c = 0; c < 60; ++c)
+    for (const auto& f : cycle(ecu, true, 0, 0))
+      if (!f.error && p_.rx("status")->matches(f)) verdicts.push_back(chk.check(f.payload()));
+  ASSERT_EQ(fates.size(), verdicts.size());
+  int repeated = 0;
+  for (std::size_t i = 0; i < fates.size(); ++i) {
+    const bool said_repeated = fates[i] == mock::EmittedFrame::Fate::kRepeatedCounter;
+    EXPECT_EQ(verdicts[i] == s::E2eStatus::kRepeated, said_repeated) << "status frame " << i;
+    if (fates[i] == mock::EmittedFrame::Fate::kSent) {
+      EXPECT_EQ(verdicts[i], s::E2eStatus::kOk) << "status frame " << i;
+    }
+    repeated += said_repeated ? 1 : 0;
+  }
+  EXPECT_GE(repeated, 5);  // the two faults' frames but their first
+}
+
 TEST_F(MockEcuTest, FrameLossDropsAboutTheConfiguredShare) {
   mock::MockEcu ecu(p_, {mock::parse_fault("loss=0.5")}, 7);
   for (int c = 0; c < 200; ++c) cycle(ecu, false, 0, 0);

@@ -94,14 +94,19 @@ void MockEcu::emit(std::size_t index, std::initializer_list<std::pair<std::strin
   const RoleMessage& rm = p_.rx_messages()[index];
   safety::E2eSender& sender = senders_[index];
   can::Frame f;
+  const bool protected_msg = rm.e2e.profile != safety::E2eProfile::kNone;
+  const Fault* stuck = fault_active(FaultKind::kStuckCounter, t_s);
+  // A counter that unfreezes counts on from its frozen value: the first frame after the fault is not
+  // one more repeat (it was, and its truth said "sent": rig chaos saw the bridge refuse a sent frame).
+  if (stuck == nullptr && protected_msg && last_counter_[index] == sender.next_counter())
+    sender.set_counter(static_cast<std::uint8_t>(sender.next_counter() + 1));
   const std::uint8_t counter = sender.next_counter();
   if (!p_.encode(rm, values, &sender, f)) return;
   EmittedFrame e;
   e.role = rm.role;
   e.now = now;
   // A frozen counter: this frame gets the value the last one had (the first of the fault still counts on).
-  const bool protected_msg = rm.e2e.profile != safety::E2eProfile::kNone;
-  if (const Fault* stuck = fault_active(FaultKind::kStuckCounter, t_s)) {
+  if (stuck != nullptr) {
     sender.set_counter(counter);
     if (protected_msg && last_counter_[index] == counter) e = {rm.role, EmittedFrame::Fate::kRepeatedCounter, stuck->id, now};
   }
