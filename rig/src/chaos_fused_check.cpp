@@ -54,6 +54,7 @@ bool stops_a_lidar(const faults::FaultEvent& e) {
 // before, not wrapped) is kept while no phase comes within a quarter of the widest gap, as the
 // matcher keeps its own: phases that jitter across two nearly equal gaps must not renumber.
 struct Phases {
+  std::vector<std::optional<Nanos>> of;  // per LIDAR; none: no scan then
   std::vector<Nanos> sorted;
   Nanos widest = -1, middle = 0;
 };
@@ -62,8 +63,12 @@ Phases phases_between(const std::vector<Lidar>& lidars, Nanos period, Nanos from
   for (const auto& l : lidars) {
     const auto first = std::lower_bound(l.acqs.begin(), l.acqs.end(), from);
     const auto last = std::lower_bound(first, l.acqs.end(), to);
-    if (first == last) continue;
-    ph.sorted.push_back(floor_mod(*std::prev(last), period));  // its latest scan's: the phase it is on
+    if (first == last) {
+      ph.of.emplace_back();
+      continue;
+    }
+    ph.of.emplace_back(floor_mod(*std::prev(last), period));  // its latest scan's: the phase it is on
+    ph.sorted.push_back(*ph.of.back());
   }
   std::sort(ph.sorted.begin(), ph.sorted.end());
   for (std::size_t i = 0; i < ph.sorted.size(); ++i) {
@@ -79,13 +84,25 @@ Phases phases_between(const std::vector<Lidar>& lidars, Nanos period, Nanos from
 // x in [-period/2, period/2).
 Nanos signed_mod(Nanos x, Nanos period) { return floor_mod(x + period / 2, period) - period / 2; }
 
+// A LIDAR on a phase an eighth of a rotation or more from the one it was on (a restart, a stall, a new
+// rpm): its own move, which the matcher answers by placing its boundary anew (SweepMatcher::
+// track_phase), in the widest gap.
+bool a_lidar_moved(const Phases& before, const Phases& now, Nanos period) {
+  for (std::size_t i = 0; i < now.of.size() && i < before.of.size(); ++i)
+    if (now.of[i] && before.of[i] && std::abs(signed_mod(*now.of[i] - *before.of[i], period)) > period / 8) return true;
+  return false;
+}
+
 // The boundary for [from, to), moved the short way from `previous` (never wrapped: rotation numbers
-// count periods from it) or kept there; nullopt without any acquisition then.
-std::optional<Nanos> rotation_boundary(const std::vector<Lidar>& lidars, Nanos period, Nanos from, Nanos to,
-                                       std::optional<Nanos> previous) {
-  const Phases ph = phases_between(lidars, period, from, to);
+// count periods from it) or kept there; nullopt without any acquisition then. `before`: the phases
+// the previous boundary was placed by; a LIDAR that moved since places it anew, as the matcher does.
+// Kept there by the quarter-gap rule alone, the boundary stayed between two LIDARs once a third came
+// back from an rpm change half a turn off (phases 99, 0 and 47 ms: kept at ~25 ms in the 47 ms gap,
+// where the matcher placed its own in the 52 ms one): 40 sweeps of a LIDAR-fault campaign "mixed".
+std::optional<Nanos> rotation_boundary(const Phases& ph, const Phases& before, Nanos period, std::optional<Nanos> previous) {
   if (ph.sorted.empty()) return previous;
   if (!previous) return ph.middle;
+  if (a_lidar_moved(before, ph, period)) return *previous + signed_mod(ph.middle - *previous, period);
   Nanos nearest = period;
   for (const Nanos p : ph.sorted) nearest = std::min<Nanos>(nearest, std::abs(signed_mod(p - *previous, period)));
   if (nearest >= ph.widest / 4) return previous;
@@ -172,9 +189,17 @@ class FusedJudge {
     piece_ = period_;
     pieces_from_ = lo;
     std::optional<Nanos> b;
+    Phases before;
     for (Nanos t = lo; t <= hi; t += piece_) {
-      b = rotation_boundary(lidars_, period_, t - 2 * period_, t + period_, b);
+      const Phases ph = phases_between(lidars_, period_, t - 2 * period_, t + period_);
+      b = rotation_boundary(ph, before, period_, b);
       boundaries_.push_back(b.value_or(0));
+
+      // A LIDAR silent in this piece keeps the phase it was last on (the matcher keeps a dead
+      // source's): its return on another phase is a move.
+      if (before.of.empty()) before = ph;
+      for (std::size_t i = 0; i < ph.of.size(); ++i)
+        if (ph.of[i]) before.of[i] = ph.of[i];
     }
   }
 
@@ -265,10 +290,12 @@ class FusedJudge {
     const Member* earliest = nullptr;
     for (const auto& m : members) {
       if (m.truth == nullptr) continue;
-      rotations.emplace(rotation(m.truth->acq), &m);
+      if (!short_of_a_turn(m)) rotations.emplace(rotation(m.truth->acq), &m);
       if (earliest == nullptr || m.truth->acq < earliest->truth->acq) earliest = &m;
     }
-    if (rotations.size() > 1) {
+    if (rotations.size() > 1 && one_rotation_while_regrouping(members, earliest)) {
+      ++t_.mixes_regrouped;
+    } else if (rotations.size() > 1) {
       std::string what = sweep + " mixes rotations:", why;
       for (const auto& [rot, m] : rotations) what += " " + scan_name(*m) + ";";
       // Put in one by members' stamps off their truth, each flagged by its LIDAR, and the fused
@@ -343,6 +370,37 @@ class FusedJudge {
       fail("phantom", sweep + " holds every LIDAR and counts " + std::to_string(cloud->missing_packets) + " packets missing; its scans miss " +
            std::to_string(missing));
     }
+  }
+
+  // Where a LIDAR's phase moved (a restart, an rpm change), the boundary moves with it: the judge
+  // places its own by the scans of a piece up to a rotation ahead, the matcher by the scans that have
+  // arrived (a turn after they began, two for a slow one), so around the move the two regroup the
+  // rotations up to two sweeps apart (one campaign of 68 LIDAR restarts and rpm changes: 8 sweeps,
+  // each at a move; the judge also sees the scans a killed mock made and never sent). A sweep one
+  // rotation by the boundary in force up to two rotations before or after its earliest member is
+  // such a regrouping, not a mix: held, counted (`mixes_regrouped`). Away from a move the boundaries
+  // are one, and a sweep mixing rotation N with N+1 is caught as before.
+  bool one_rotation_while_regrouping(const std::vector<Member>& members, const Member* earliest) const {
+    if (earliest == nullptr) return false;
+    const Nanos t = earliest->truth->acq;
+    for (const Nanos at : {t - 2 * period_, t - period_, t + period_, t + 2 * period_}) {
+      const Nanos b = boundary_at(at);
+      std::set<std::int64_t> n;
+      for (const auto& m : members)
+        if (m.truth != nullptr && !short_of_a_turn(m)) n.insert(floor_div(m.truth->acq - b, period_));
+      if (n.size() <= 1) return true;
+    }
+    return false;
+  }
+  // A scan short of three quarters of a turn (a LIDAR above the rig's rpm: two or more scans a
+  // rotation, each on another phase) has no rotation of its own at the rig's period: the fusion takes
+  // one of them, and the sweep is one rotation by its other members. (Its phase is left out of the
+  // boundary for the same reason, so the judge's boundary may cut between a fast LIDAR's scans where
+  // the matcher's does not: 2 of 11 "mixed" sweeps of a LIDAR-fault campaign.)
+  bool short_of_a_turn(const Member& m) const {
+    const auto& u = m.lidar->units;
+    const auto it = std::lower_bound(u.begin(), u.end(), std::make_pair(m.truth->acq, Nanos{0}));
+    return it != u.end() && it->first == m.truth->acq && it->second > 0 && it->second < period_ - period_ / 4;
   }
 
   // LIDAR `l` began no scan in rotation n, and its scan that began in an earlier rotation spans it

@@ -28,6 +28,7 @@ std::string result_json(const Result& r) {
                           {"stamp_error_max_ms", t.stamp_error_max_ms},
                           {"stamps_flagged", t.stamps_flagged},
                           {"mixes_flagged", t.mixes_flagged},
+                          {"mixes_regrouped", t.mixes_regrouped},
                           {"healthy_rate_share", t.healthy_rate_share},
                           {"recovery_max_s", t.recovery_max_s},
                           {"monitor", {{"received", t.monitor_received}, {"lost", t.monitor_lost}, {"expected", t.monitor_expected}}}};

@@ -338,7 +338,91 @@ TEST(ChaosFusedCheck, ALidarBackOnAPhaseOfItsOwnIsJudgedByThePhasesOfTheTime) {
   for (int u = 15; u < 29; ++u) far.fused.sets[static_cast<std::size_t>(u)].members[1].stamp = left_acq(u);
   r = check(far);
   EXPECT_FALSE(r.invariants.at("fused"));
-  EXPECT_TRUE(example_says(r, "sweep 15 (stamped at 1.500 s) mixes rotations")) << result_text(r);
+  // Sweeps 15 and 16 are one rotation by the boundary before the move (the matcher may keep it until
+  // the moved scans arrive): a regrouping; from 17 on, mixed.
+  EXPECT_TRUE(example_says(r, "sweep 17 (stamped at 1.700 s) mixes rotations")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).mixes_regrouped, 2u);
+}
+
+// The left LIDAR, 60 ms into the rotation (front 0, right 5: the boundary in the widest gap, at
+// 32.5 ms: left u goes with the others' u + 1), moves by itself to 47 ms from its scan 15 (an rpm
+// change, a restart). The widest gap is now 47 -> 100 (53 ms), and 32.5 is 14.5 ms from the nearest
+// phase, more than a quarter of it: kept by the quarter-gap rule alone, the judge kept grouping left
+// u with the others' u + 1, while the matcher places its boundary anew at a LIDAR's own move (73.5
+// ms: left u with the others' u) and drops the left's scan 15, whose rotation it had emitted. The
+// judge places anew too: the matcher's sweeps hold (the one around the move a regrouping), and the
+// kept boundary's grouping is caught once the move is two rotations past.
+TEST(ChaosFusedCheck, ALidarMovingByItselfRegroupsTheRotationsByTheWidestGapAtOnce) {
+  constexpr int kMove = 15;
+  const auto left_at = [](int u) { return kT0 + u * kPeriod + (u < kMove ? 60'000'000 : 47'000'000); };
+  const auto rebuild = [&](bool anew) {
+    Input in = honest();
+    for (auto& u : in.truths[1].units) u.dev_ns = u.acq_ns = left_at(static_cast<int>(u.unit));
+    for (auto& part : in.truths[1].parts) {
+      const Nanos by = left_at(static_cast<int>(part.unit)) - acq(1, static_cast<int>(part.unit));
+      part.acq_ns += by, part.dev_ns += by, part.tx_ns += by;
+    }
+    for (auto& x : in.samples)
+      if (x.topic == topic_of(1)) {
+        const Nanos by = left_at(static_cast<int>(x.seq - seq_of(1, 0))) - x.acquisition_ns;
+        x.acquisition_ns += by, x.first_rx_ns += by, x.publish_ns += by, x.received_ns += by;
+      }
+    // The sweeps: rotation n holds the others' n + 1 and the left's n before the move; after it
+    // (matcher) the left's n + 1, its scan kMove dropped; or (kept boundary) still the left's n.
+    std::erase_if(in.samples, [](const SampleRecord& x) { return x.topic == kFusedCloudTopic; });
+    in.fused.sets.clear();
+    const auto left = [&](int u) { return FusedMember{topic_of(1), left_at(u), seq_of(1, u)}; };
+    for (int n = -1; n < kRotations - 1; ++n) {
+      FusedSet set{static_cast<std::uint64_t>(n + 1), 0, {member(0, n + 1), member(2, n + 1)}};
+      if (n >= kMove && anew) set.members.push_back(left(n + 1));
+      else if (n >= 0 && (n < kMove - 1 || !anew)) set.members.push_back(left(n));
+      else if (n == kMove - 1) set.members.push_back(left(n));
+      Nanos stamp = INT64_MAX;
+      for (const auto& m : set.members) stamp = std::min(stamp, m.stamp);
+      set.stamp = stamp;
+      const auto parts = static_cast<std::uint32_t>(set.members.size()) * kParts;
+      in.samples.push_back(cloud(set.seq, stamp, parts, set.members.size() == 3 ? 0 : kParts));
+      in.fused.sets.push_back(set);
+    }
+    in.fused.scans_dropped = anew ? 1 : 0;  // the left's scan kMove (matcher); the kept grouping fuses them all
+    in.monitor[kFusedCloudTopic] = MonitorTotals{kRotations, 0};
+    return in;
+  };
+  Result r = check(rebuild(true));
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).unaccounted, 0u);
+  EXPECT_LE(r.topics.at(kFusedCloudTopic).mixes_regrouped, 2u);
+  r = check(rebuild(false));
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "mixes rotations")) << result_text(r);
+}
+
+// The right LIDAR's scan 12 is short of a turn and begins 55 ms late (a LIDAR above the rig's rpm:
+// two scans a rotation, each on another phase). Its phase says nothing of the rig's rotation, so it
+// is not held to one: the sweep is one rotation by its other members. The same late start in a
+// whole scan is a mix.
+TEST(ChaosFusedCheck, AScanShortOfATurnHasNoRotationOfItsOwnToMix) {
+  const auto shifted = [](bool short_scan) {
+    Input in = honest();
+    constexpr Nanos kLate = 55'000'000;
+    for (auto& u : in.truths[2].units)
+      if (u.unit == 12) u.acq_ns += kLate, u.dev_ns += kLate;
+    std::uint32_t q = 0;
+    for (auto& part : in.truths[2].parts)
+      if (part.unit == 12) {
+        const Nanos t = acq(2, 12) + kLate + q++ * (short_scan ? kPeriod / 8 : kPeriod / kParts);
+        part.acq_ns = part.dev_ns = part.tx_ns = t;
+      }
+    for (auto& x : in.samples)
+      if (x.topic == topic_of(2) && x.seq == seq_of(2, 12))
+        x.acquisition_ns += kLate, x.first_rx_ns += kLate, x.publish_ns += kLate, x.received_ns += kLate;
+    in.fused.sets[12].members[2].stamp += kLate;
+    return in;
+  };
+  Result r = check(shifted(true));
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  r = check(shifted(false));
+  EXPECT_TRUE(example_says(r, "sweep 12 (stamped at 1.200 s) mixes rotations")) << result_text(r);
 }
 
 // The left LIDAR at 300 rpm for rotations 10..19: each of its scans spans two rotations (twice the
