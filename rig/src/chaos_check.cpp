@@ -419,16 +419,20 @@ class Checker {
         return stream_began(units, f.at_ns) <= f.at_ns - kMappedBeforeHoldNs ? f.id : 0;
     return 0;
   }
-  // When the camera's frames before `at` began, without a second's gap (a camera that died or was
-  // reopened starts a new stream).
+  // When the camera's stream running at `at` began: its frames sent before `at` without a second's
+  // gap (a camera that died or was reopened starts a new stream); `at` when none was running then.
+  // Frames the camera never sent are no stream: a GigE fake records the frames of its camera.dies
+  // `not_sent`, and counted as frames they made a camera back 0.1 s before a hold (its first sent
+  // frame 0.2 s into it) one streaming for minutes (10-minute campaign, seed 1: front_narrow).
   static Nanos stream_began(const std::vector<UnitTruth>& units, Nanos at) {
     Nanos began = 0, prev = 0;
     for (const UnitTruth& v : units) {
       if (v.rec.acq_ns >= at) break;
+      if (v.produced == 0) continue;
       if (prev == 0 || v.rec.acq_ns - prev > kSecond) began = v.rec.acq_ns;
       prev = v.rec.acq_ns;
     }
-    return began == 0 ? at : began;
+    return began == 0 || at - prev > kSecond ? at : began;
   }
   static constexpr Nanos kMappedBeforeHoldNs = 1'500'000'000;
 

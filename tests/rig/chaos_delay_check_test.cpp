@@ -168,6 +168,26 @@ TEST(ChaosCheck, ACameraBackJustBeforeAHoldMayStampTheArrivalsFlagged) {
   EXPECT_EQ(r.topics.at(kHeldCamera).stamps_outside, 10u);
 }
 
+// The same camera streaming since frame 1, dead from frame 5 and back at frame 21, in the hold: its
+// fake records the dead frames `not_sent`. Its stream began in the hold, not at frame 1: flagged,
+// its stamps may follow the arrivals. The old judge took the not-sent frames for a stream and held
+// the returning camera to its exposures (10-minute campaign, seed 1: front_narrow).
+TEST(ChaosCheck, FramesADeadCameraNeverSentAreNoStreamBeforeAHold) {
+  Input in = held_camera(1);
+  auto& log = in.truths[0];
+  for (auto& part : log.parts)
+    if (part.unit >= 5 && part.unit <= 20) part.fate = truth::Fate::kNotSent, part.tx_ns = 0;
+  std::erase_if(in.samples, [](const SampleRecord& s) { return s.seq >= 5 && s.seq <= 20; });
+  in.monitor[kHeldCamera].received -= 16;
+  stamps_follow_the_hold_flagged(in);
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kHeldCamera).stamps_flagged, 9u);  // frames 21..29
+  in.unsynchronized.clear();
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("stamps"));
+}
+
 // The drive-by-wire bridge's ECU watchdog under host.network_delay held by the mock ECU
 // (dbw/README.md "Safety rules": disengage when the ECU status is older than ecu_timeout_ms). The
 // ECU's frames at 10 ms, held `hold` from 1 s to 2 s (in order: after the delay they leave behind
