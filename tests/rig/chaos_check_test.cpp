@@ -340,6 +340,25 @@ TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheNextScanInOrderBeyondTheReadSlac
   EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
 }
 
+// Shared host times, scans 25-29 sent 1.013 ms after scans 20-24, and the older scans' first packets
+// arriving 1.71 ms after their sends: 0.70 ms after the newer scans' (the 10-minute campaign, seed
+// 1, the Ouster's scans 485/490). Nearest the arrival, sample 20 named scan 25: "scan 25 published
+// twice (seq 20 and 25)", five times. Both are next in order: the earlier is the sample's.
+TEST(ChaosCheck, AnArrivalTwoNextUnitsShareGoesToTheEarlierInOrder) {
+  Input in = honest();
+  auto& parts = in.truths[0].parts;
+  for (std::uint32_t p = 0; p < kParts; ++p)
+    for (int u = 25; u < 30; ++u)
+      parts[static_cast<std::size_t>(u) * kParts + p].tx_ns = parts[static_cast<std::size_t>(u - 5) * kParts + p].tx_ns + 1'013'000;
+  for (int u = 0; u < kScans; ++u)
+    in.samples[static_cast<std::size_t>(u)].first_rx_ns =
+        parts[static_cast<std::size_t>(u) * kParts].tx_ns + (u >= 20 && u < 25 ? 1'710'000 : 10'000);
+  const Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
+  EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
+}
+
 // A host clock step back: scans 20-24 were made in vehicle time that then happened again, so no
 // sample is matched to them; two of them were not published and the rig counted both. Its count is
 // held against the doubled time by number: an honest count, not a phantom (before: "the rig counted
