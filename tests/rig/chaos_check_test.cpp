@@ -301,21 +301,27 @@ TEST(ChaosCheck, SamplesOfScansMadeInDoubledTimeAreLeftOutOfTheMonitorsCheckWith
   EXPECT_EQ(r.topics.at(kTopic).monitor_expected, 45u);
 }
 
+// Scans 25-29 sent at the host times of scans 20-24 (a -500 ms step back), `newer_after` later; the
+// first packets of scans 20-24 arriving `older_arrival` after their sends, every other scan's 10 us.
+Input shared_host_times(Nanos newer_after, Nanos older_arrival) {
+  Input in = honest();
+  auto& parts = in.truths[0].parts;
+  for (std::uint32_t p = 0; p < kParts; ++p)
+    for (int u = 25; u < 30; ++u)
+      parts[static_cast<std::size_t>(u) * kParts + p].tx_ns = parts[static_cast<std::size_t>(u - 5) * kParts + p].tx_ns + newer_after;
+  for (int u = 0; u < kScans; ++u)
+    in.samples[static_cast<std::size_t>(u)].first_rx_ns =
+        parts[static_cast<std::size_t>(u) * kParts].tx_ns + (u >= 20 && u < 25 ? older_arrival : 10'000);
+  return in;
+}
+
 // Shared host times, the older scans' first packets arriving 2.9 ms after their sends (the host
 // stalled between the truth's read of the clock and the send), the newer scans sent 0.47 ms after
 // those arrivals: ChaosCampaign.AHostClockStepLeavesNoLidarStampOffUnflagged, 1 run in 5, the
 // Ouster's seq 76 (first packet 2.867 ms after scan 76's send, 0.470 ms before scan 81's) named scan
 // 81: "scan 81 published twice (seq 76 and 81)". An arrival comes after its send.
 TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheScanSentBeforeIt) {
-  Input in = honest();
-  auto& parts = in.truths[0].parts;
-  for (std::uint32_t p = 0; p < kParts; ++p)
-    for (int u = 25; u < 30; ++u)
-      parts[static_cast<std::size_t>(u) * kParts + p].tx_ns = parts[static_cast<std::size_t>(u - 5) * kParts + p].tx_ns + 3'337'000;
-  for (int u = 0; u < kScans; ++u)
-    in.samples[static_cast<std::size_t>(u)].first_rx_ns =
-        parts[static_cast<std::size_t>(u) * kParts].tx_ns + (u >= 20 && u < 25 ? 2'867'000 : 10'000);
-  const Result r = check(in);
+  const Result r = check(shared_host_times(3'337'000, 2'867'000));
   EXPECT_TRUE(r.all_held()) << result_text(r);
   EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
   EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
@@ -327,14 +333,7 @@ TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheScanSentBeforeIt) {
 // 176/181). Nearest the arrival, sample 25 named scan 20: "published twice", scan 25 unaccounted.
 // Scans are published in order: the unit after the previous sample's goes first.
 TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheNextScanInOrderBeyondTheReadSlack) {
-  Input in = honest();
-  auto& parts = in.truths[0].parts;
-  for (std::uint32_t p = 0; p < kParts; ++p)
-    for (int u = 25; u < 30; ++u)
-      parts[static_cast<std::size_t>(u) * kParts + p].tx_ns = parts[static_cast<std::size_t>(u - 5) * kParts + p].tx_ns - 1'005'000;
-  for (int u = 0; u < kScans; ++u)
-    in.samples[static_cast<std::size_t>(u)].first_rx_ns = parts[static_cast<std::size_t>(u) * kParts].tx_ns + 10'000;
-  const Result r = check(in);
+  const Result r = check(shared_host_times(-1'005'000, 10'000));
   EXPECT_TRUE(r.all_held()) << result_text(r);
   EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
   EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
@@ -345,15 +344,7 @@ TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheNextScanInOrderBeyondTheReadSlac
 // 1, the Ouster's scans 485/490). Nearest the arrival, sample 20 named scan 25: "scan 25 published
 // twice (seq 20 and 25)", five times. Both are next in order: the earlier is the sample's.
 TEST(ChaosCheck, AnArrivalTwoNextUnitsShareGoesToTheEarlierInOrder) {
-  Input in = honest();
-  auto& parts = in.truths[0].parts;
-  for (std::uint32_t p = 0; p < kParts; ++p)
-    for (int u = 25; u < 30; ++u)
-      parts[static_cast<std::size_t>(u) * kParts + p].tx_ns = parts[static_cast<std::size_t>(u - 5) * kParts + p].tx_ns + 1'013'000;
-  for (int u = 0; u < kScans; ++u)
-    in.samples[static_cast<std::size_t>(u)].first_rx_ns =
-        parts[static_cast<std::size_t>(u) * kParts].tx_ns + (u >= 20 && u < 25 ? 1'710'000 : 10'000);
-  const Result r = check(in);
+  const Result r = check(shared_host_times(1'013'000, 1'710'000));
   EXPECT_TRUE(r.all_held()) << result_text(r);
   EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
   EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
