@@ -245,7 +245,8 @@ class Checker {
     std::int64_t previous_unit = std::numeric_limits<std::int64_t>::min();
     for (const SampleRecord* s : samples) {
       const bool in_order = previous != nullptr && s->seq > previous->seq;
-      UnitTruth* u = by_arrival    ? unit_by_arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min())
+      UnitTruth* u = by_arrival    ? unit_by_arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min(),
+                                                     doubled(s->first_rx_ns))
                      : by_frame_id ? unit_by_frame_id(units, *s)
                                    : nullptr;
       if (u != nullptr && by_arrival) {

@@ -26,7 +26,7 @@ constexpr Nanos kArrivalSlack = 1'000'000;
 // rig; its sample's first packet came 64 ms after the scan's first send, past half a period, so the
 // stamp named the next scan: "published twice (seq 165 and 166)").
 UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance,
-                           const std::vector<HeldInterval>& held, std::int64_t after_unit) {
+                           const std::vector<HeldInterval>& held, std::int64_t after_unit, bool doubled_arrival) {
   if (s.first_rx_ns == 0) return nullptr;
   const auto since = [&](Nanos tx) {
     Nanos d = 0;
@@ -66,13 +66,15 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
     }
   }
   if (best == nullptr) return nullptr;
-  // Two next units both sent within the tolerance before the arrival are the two timelines of a
-  // step back (units a period apart are never both within half of one): the earlier in order is
-  // this sample's, however their sends fall. By the read slack alone, the Ouster's scan 490, sent
-  // 1.013 ms after its twin 485 at the same host time, took 485's sample (first packet 1.71 ms
-  // after 485's send, 0.70 ms after 490's): "scan 490 published twice (seq 485 and 490)" for five
-  // scans of the 10-minute campaign, seed 1.
-  const bool in_order = after_unit != std::numeric_limits<std::int64_t>::min();
+  // In host time a step back made happen twice, two next units both sent within the tolerance
+  // before the arrival are the step's two timelines: the earlier in order is this sample's, however
+  // their sends fall. By the read slack alone, the Ouster's scan 490, sent 1.013 ms after its twin
+  // 485 at the same host time, took 485's sample (first packet 1.71 ms after 485's send, 0.70 ms
+  // after 490's): "scan 490 published twice (seq 485 and 490)" for five scans of the 10-minute
+  // campaign, seed 1. Only there: elsewhere the unit before may be within the tolerance by its last
+  // intact packets (a scan whose encoder froze, sent whole but for its end), and it took the next
+  // scan's sample, its stamp "a period late" (lidar.stuck_azimuth, 3 of 5).
+  const bool in_order = after_unit != std::numeric_limits<std::int64_t>::min() && doubled_arrival;
   for (auto& u : units) {
     const Nanos after = after_send(u);
     if (&u == best || u.first_tx == 0 || after < -kArrivalSlack || after > tolerance) continue;

@@ -13,8 +13,9 @@ namespace sensor_rig::rig::chaos {
 // `tolerance`; of units sent at one host time (a clock step back), the first after `after_unit`
 // (the unit of the sample's previous seq: scans are published in order). nullptr: no arrival
 // in the record, or no unit sent within the tolerance before it.
+// `doubled_arrival`: the arrival lies in host time a clock step back made happen twice.
 UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos tolerance,
-                           const std::vector<HeldInterval>& held, std::int64_t after_unit);
+                           const std::vector<HeldInterval>& held, std::int64_t after_unit, bool doubled_arrival = false);
 
 // The unit with the sample's frame id (a camera's 16-bit GVSP block id, a V4L2 sequence: the low
 // 16 bits of the truth's unit) nearest its first packet's arrival, within 1 s.

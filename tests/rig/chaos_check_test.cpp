@@ -344,10 +344,31 @@ TEST(ChaosCheck, AnArrivalTwoUnitsShareGoesToTheNextScanInOrderBeyondTheReadSlac
 // 1, the Ouster's scans 485/490). Nearest the arrival, sample 20 named scan 25: "scan 25 published
 // twice (seq 20 and 25)", five times. Both are next in order: the earlier is the sample's.
 TEST(ChaosCheck, AnArrivalTwoNextUnitsShareGoesToTheEarlierInOrder) {
-  const Result r = check(shared_host_times(1'013'000, 1'710'000));
+  Input in = shared_host_times(1'013'000, 1'710'000);
+  in.truths[0].faults.push_back(truth::FaultRecord{1, "host.clock_step", kT0 + 25 * kPeriod, kT0 + 30 * kPeriod, -1, "ms=-500"});
+  const Result r = check(in);
   EXPECT_TRUE(r.all_held()) << result_text(r);
   EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
   EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
+}
+
+// A scan whose encoder froze (lidar.stuck_azimuth) sent whole, its packets damaged but its last one;
+// the rig dropped it and counted it. The next scan's sample arrives 10 ms after that intact packet's
+// send and 10 us after its own scan's: it is its own scan's, not the one before (taken "earlier in
+// order" outside doubled time, it was stamped "a period late": 3 of 5 stuck-azimuth faults).
+TEST(ChaosCheck, ASampleIsNotGivenToTheScanBeforeByThatScansLastIntactPacket) {
+  Input in = honest();
+  for (std::uint32_t p = 0; p + 1 < kParts; ++p) drop_part(in, 20, p, truth::Fate::kCorrupted);
+  auto& parts = in.truths[0].parts;
+  for (int u = 0; u < kScans; ++u)
+    in.samples[static_cast<std::size_t>(u)].first_rx_ns = parts[static_cast<std::size_t>(u) * kParts].tx_ns + 10'000;
+  in.samples.erase(in.samples.begin() + 20);
+  in.monitor[kTopic] = MonitorTotals{kScans - 1, 1};
+  in.counted_lost[kTopic] = 1;
+  const Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).published_twice, 0u);
+  EXPECT_EQ(r.topics.at(kTopic).stamps_outside, 0u);
 }
 
 // A host clock step back: scans 20-24 were made in vehicle time that then happened again, so no
