@@ -104,7 +104,7 @@ class PlannedFaults {
       // read 49.3 ms under a 50 ms hold in a fresh-clone suite run).
       const Nanos made = vehicle_now_ns() - (monotonic_now_ns() - e.now);
       if (e.fate == mock::EmittedFrame::Fate::kDropped) {
-        record_unit(e, false, made, made, 0);
+        record_unit(e, false, made, made, made, 0);
       } else {
         pending_.push_back(Pending{e, made});
       }
@@ -115,25 +115,27 @@ class PlannedFaults {
         held_by_.push_back(d.fault);  // one per frame, in the order they leave
         return d.at_mono;
       };
-    run.on_sent = [this, feedback](const can::Frame& f, bool heard, Nanos handed_ns) {
+    run.on_sent = [this, feedback](const can::Frame& f, bool heard, Nanos handed_ns, Nanos returned_ns) {
       std::uint64_t held_by = 0;
       if (!held_by_.empty()) {
         held_by = held_by_.front();
         held_by_.pop_front();
       }
       if (pending_.empty() || !feedback->matches(f)) return;
-      record_unit(pending_.front().frame, heard, handed_ns, pending_.front().made, held_by);
+      record_unit(pending_.front().frame, heard, handed_ns, returned_ns, pending_.front().made, held_by);
       pending_.pop_front();
     };
   }
 
  private:
-  // `veh`: when the frame was handed to the bus (taken before the send: the bridge's kernel receive
-  // stamp is that instant, whatever happens to this process after it), or made, for a dropped one.
-  // A CAN sample's acquisition is its kernel receive time (SPEC 6), so the unit's `acq` is `veh`;
-  // the part's `acq` is when the ECU made the frame (vehicle time; `dev` the ECU's monotonic clock),
-  // later than it by a host.network_delay's hold (`held_by`, its id on the part, fate sent).
-  void record_unit(const mock::EmittedFrame& e, bool on_bus, Nanos veh, Nanos made, std::uint64_t held_by) {
+  // `veh`: when the frame was handed to the bus (taken just before the send), or made, for a dropped
+  // one; `returned`: when the send returned. A CAN sample's acquisition is its kernel receive time
+  // (SPEC 6), the send's instant, which lies in [veh, returned] whatever happens to this process
+  // around it: the unit's `acq` is `veh`, the part's `tx` is `returned` (the judge matches a sample to
+  // the send that brackets its stamp). The part's `acq` is when the ECU made the frame (vehicle time;
+  // `dev` the ECU's monotonic clock), earlier by a host.network_delay's hold (`held_by`, its id on the
+  // part, fate sent).
+  void record_unit(const mock::EmittedFrame& e, bool on_bus, Nanos veh, Nanos returned, Nanos made, std::uint64_t held_by) {
     using F = mock::EmittedFrame::Fate;
     const auto id = static_cast<std::int64_t>(units_++);
     truth_->unit({id, veh, e.now, 1});
@@ -148,7 +150,7 @@ class PlannedFaults {
     } else if (!on_bus) {
       p.fate = truth::Fate::kNotSent;  // no node on the bus: made, heard by none, not a loss
     } else {
-      p.tx_ns = veh;
+      p.tx_ns = returned;
       p.fate = e.fate == F::kSent ? truth::Fate::kSent : truth::Fate::kCorrupted;
     }
     truth_->part(p);

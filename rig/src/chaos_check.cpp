@@ -232,6 +232,8 @@ class Checker {
     // of the stamp's error. No such unit (no arrival in the record): by the stamp.
     const bool by_frame_id = t.device_class == "camera" || t.device_class == "v4l2";
     const bool by_arrival = t.device_class == "lidar";
+    // A CAN frame is its unit by the send that brackets its kernel receive stamp (unit_by_send).
+    const bool by_send = t.device_class == "dbw";
     std::map<const SampleRecord*, Nanos> judged_at;  // the acquisition each sample is counted at
     // Units and samples in vehicle time that happened twice are not matched (above), but the rig's
     // count of losses covers them: those units less those samples are the losses it may have counted
@@ -248,6 +250,7 @@ class Checker {
       UnitTruth* u = by_arrival    ? unit_by_arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min(),
                                                      doubled(s->first_rx_ns))
                      : by_frame_id ? unit_by_frame_id(units, *s)
+                     : by_send     ? unit_by_send(units, s->acquisition_ns)
                                    : nullptr;
       if (u != nullptr && by_arrival) {
         previous = s;
@@ -309,7 +312,8 @@ class Checker {
       const SampleRecord& s = *u.sample;
       // The stamp: the unit's first firing, or (its first parts lost) anywhere up to the first part that
       // arrived: a rig may extrapolate or stamp what it got.
-      const Nanos lo = u.rec.acq_ns, hi = std::max({lo, u.first_intact_acq, u.own_first_acq});
+      // A CAN frame's: anywhere in its send (the kernel stamps it there, however late the sender ran).
+      const Nanos lo = u.rec.acq_ns, hi = std::max({lo, u.first_intact_acq, u.own_first_acq, by_send ? u.last_tx : Nanos{0}});
       const Nanos err = s.acquisition_ns < lo ? lo - s.acquisition_ns : s.acquisition_ns > hi ? s.acquisition_ns - hi : 0;
       errors.push_back(ms(err));
       // A camera frame held on the network (host.network_delay) keeps its exposure: its stamp is the

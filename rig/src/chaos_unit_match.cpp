@@ -102,6 +102,21 @@ UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s
   return best != nullptr && std::llabs(best->rec.acq_ns - s.first_rx_ns) <= kSecond ? best : nullptr;
 }
 
+UnitTruth* unit_by_send(std::vector<UnitTruth>& units, Nanos t) {
+  // Units in acquisition order; a send brackets only times after its acquisition, and a bracket
+  // spans more than a few units only where a clock step back interleaved two timelines.
+  constexpr std::ptrdiff_t kReach = 8;
+  const auto it = std::upper_bound(units.begin(), units.end(), t, [](Nanos v, const UnitTruth& u) { return v < u.rec.acq_ns; });
+  UnitTruth* found = nullptr;
+  for (auto c = it; c != units.begin() && it - c < kReach;) {
+    --c;
+    if (c->last_tx == 0 || c->last_tx < t) continue;
+    if (found != nullptr) return nullptr;
+    found = &*c;
+  }
+  return found;
+}
+
 UnitTruth* unit_nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance) {
   auto it = std::lower_bound(units.begin(), units.end(), t, [](const UnitTruth& u, Nanos v) { return u.rec.acq_ns < v; });
   UnitTruth* best = nullptr;

@@ -21,6 +21,14 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
 // 16 bits of the truth's unit) nearest its first packet's arrival, within 1 s.
 UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s);
 
+// The one unit whose send brackets `t`: its acquisition (the clock read just before the send) at or
+// before it, its part's send return (`last_tx`) at or after it. A CAN frame's sample is stamped by
+// the receiver's kernel at the send's instant, inside that bracket however long the sender was
+// descheduled around it; nearest-acquisition gave a frame sent 5 ms late the next frame's unit
+// ("published twice", CI, dbw campaign seed 4). nullptr: no bracket or two (a record without the
+// return, or time a clock step back made happen twice).
+UnitTruth* unit_by_send(std::vector<UnitTruth>& units, Nanos t);
+
 // The unit whose acquisition is nearest `t`, within `tolerance` (units in acquisition order).
 UnitTruth* unit_nearest(std::vector<UnitTruth>& units, Nanos t, Nanos tolerance);
 

@@ -108,5 +108,48 @@ TEST(ChaosCheck, ACountedSilenceIsPhantomWhereTheCounterMovedOrNothingWasSkipped
   EXPECT_FALSE(moving.invariants.at("no_phantom_loss")) << result_text(moving);
 }
 
+// The mock ECU's feedback frames, one per 10 ms, each recorded with its send's bracket (the clock
+// just before the send, the unit's acquisition, and just after it returned, the part's tx). Frame
+// 100's sender was descheduled 6 ms before its send: the bridge's kernel stamp, the send's instant,
+// is 6 ms after the unit's acquisition and 4 ms before frame 101's. Nearest-acquisition gave it
+// frame 101 ("can_frame 101 published twice", frame 100 "neither published nor counted lost", CI,
+// dbw campaign seed 4); the bracket gives it its own frame, and its stamp is right.
+TEST(ChaosCheck, ACanFrameSentLateIsTheUnitWhoseSendBracketsItsStamp) {
+  constexpr Nanos kFrame = 10'000'000;
+  constexpr int kFrames = 300;
+  const std::string topic = "/vehicle/state";
+  const auto campaign = [&](bool with_return) {
+    Input in;
+    truth::Log log;
+    log.header = truth::Header{"paravan", "dbw", "mock Paravan ECU", topic, "can_frame", "CLOCK_MONOTONIC"};
+    for (int u = 0; u < kFrames; ++u) {
+      const Nanos handed = kT0 + u * kFrame;
+      const Nanos queued = handed + (u == 100 ? 6'000'000 : 10'000);
+      const Nanos returned = with_return ? queued + 20'000 : handed;
+      log.units.push_back(truth::UnitRecord{u, handed, handed, 1});
+      log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, handed, handed, returned, truth::Fate::kSent, 0});
+      in.samples.push_back(can_sample(topic, u, queued, 50'000, 100'000));
+    }
+    in.truths.push_back(log);
+    in.monitor[topic] = MonitorTotals{kFrames, 0};
+    in.expected[topic] = TopicExpectation{"paravan", 100.0, {}};
+    in.epoch_vehicle_ns = kT0;
+    in.window_begin_ns = kT0;
+    in.window_end_ns = kT0 + kFrames * kFrame;
+    return check(in);
+  };
+  const Result r = campaign(true);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(topic).published_twice, 0u);
+  EXPECT_EQ(r.topics.at(topic).unaccounted, 0u);
+  EXPECT_EQ(r.topics.at(topic).published_complete, static_cast<std::uint64_t>(kFrames));
+  // A record without the send's return (the truth before) has no bracket: by the nearest
+  // acquisition, as before, the late frame is its neighbour's.
+  const Result old = campaign(false);
+  EXPECT_FALSE(old.invariants.at("accounted")) << result_text(old);
+  EXPECT_EQ(old.topics.at(topic).published_twice, 1u);
+}
+
 }  // namespace
 }  // namespace sensor_rig::rig::chaos

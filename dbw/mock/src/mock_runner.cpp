@@ -30,9 +30,10 @@ RunResult run_mock(MockEcu& ecu, can::Transport& bus, const RunOptions& o) {
   auto send = [&](const can::Frame& f) {
     const Nanos handed = vehicle_now_ns();
     const bool ok = bus.send(f) == can::IoStatus::kOk;
+    const Nanos returned = vehicle_now_ns();
     if (!ok) ++r.send_failures;
-    if (o.on_sent) o.on_sent(f, ok && bus.last_send_heard(), handed);
-    write_log(vehicle_now_ns(), f);
+    if (o.on_sent) o.on_sent(f, ok && bus.last_send_heard(), handed, returned);
+    write_log(returned, f);
   };
   // Frames held by a network delay (o.depart), in the order made: each leaves at its time.
   std::deque<std::pair<Nanos, can::Frame>> held;
