@@ -395,8 +395,7 @@ class FusedJudge {
   // A scan short of three quarters of a turn (a LIDAR above the rig's rpm: two or more scans a
   // rotation, each on another phase) has no rotation of its own at the rig's period: the fusion takes
   // one of them, and the sweep is one rotation by its other members. (Its phase is left out of the
-  // boundary for the same reason, so the judge's boundary may cut between a fast LIDAR's scans where
-  // the matcher's does not: 2 of 11 "mixed" sweeps of a LIDAR-fault campaign.)
+  // boundary for the same reason, here as in the matcher's place_boundary.)
   bool short_of_a_turn(const Member& m) const {
     const auto& u = m.lidar->units;
     const auto it = std::lower_bound(u.begin(), u.end(), std::make_pair(m.truth->acq, Nanos{0}));

@@ -151,11 +151,17 @@ Nanos SweepMatcher::timeline_step(const Source& src, Nanos stamp, Nanos arrival,
 // The boundary goes into the middle of the widest gap between the sources' phases. It stays where it
 // is while no phase comes near it (within a quarter of that gap): phases that jitter across two
 // nearly equal gaps must not move it back and forth, since moving it renumbers rotations.
+// A source above the rig's rpm (Source::above_rpm) has no phase at the rig's period: its scans begin
+// half a turn apart. Counted, its phase flipped the widest gap with every scan, and the boundary with
+// it, across another LIDAR's phase (the ten-minute campaign, seed 1: 373 sweeps mixed rotations
+// while the right LIDAR ran at 1200 rpm). Its phase counts only where every source is such (one rpm
+// for all: the boundary is theirs).
 void SweepMatcher::place_boundary(bool anew) {
   const Nanos p = cfg_.period_ns;
+  const bool any_at_rpm = std::any_of(sources_.begin(), sources_.end(), [](const Source& s) { return s.seen && !s.above_rpm; });
   std::vector<Nanos> phases;
   for (const auto& s : sources_)
-    if (s.seen) phases.push_back(floor_mod(s.phase - s.offset, p));  // in the boundary's timeline
+    if (s.seen && (!any_at_rpm || !s.above_rpm)) phases.push_back(floor_mod(s.phase - s.offset, p));  // in the boundary's timeline
   if (phases.empty()) return;
   std::sort(phases.begin(), phases.end());
   Nanos widest = -1, middle = 0;
@@ -211,6 +217,13 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
     ++counters_.clock_steps_back;
     emitted_.clear();
   }
+  // Above the rig's rpm: scans short of three quarters of a turn that follow each other by less. A
+  // scan short of its turn alone (its last packets lost, a turn cut by a restart) comes a whole
+  // period after the one before: the source keeps its phase (left out, the boundary could move
+  // across it, and that scan join the next rotation). One at the rig's rpm or slower ends it.
+  const bool short_of_a_turn = span_ns > 0 && span_ns < p - p / 4;
+  if (!short_of_a_turn) src.above_rpm = false;
+  else if (delta > 0 && delta < p - p / 4) src.above_rpm = true;
   // The phase first, so that a source's first scan never lies on the boundary.
   track_phase(src, stamp_ns, arrival_ns, span_ns);
   place_boundary(false);

@@ -423,7 +423,11 @@ TEST(SweepMatcher, ALidarAboveTheRigsRpmJoinsTheRotationsItsScansLieIn) {
     std::vector<Nanos> phases;
     Nanos fast_first;
   };
-  for (const Rig& rig : {Rig{{900'000, 900'000, 0}, 3 * kMs}, Rig{kPhases, 45 * kMs}}) {
+  // And a rig whose LIDARs came back on phases of their own (0 and 47 ms): the fast scans' phases,
+  // 20 and 70 ms, counted in the widest gap, moved the boundary across the 47 ms LIDAR's phase each
+  // scan (73.5 with one, 23.5 with the other), renumbering its rotations (the ten-minute campaign,
+  // seed 1: 373 sweeps mixed rotations while the right LIDAR ran at 1200 rpm).
+  for (const Rig& rig : {Rig{{900'000, 900'000, 0}, 3 * kMs}, Rig{kPhases, 45 * kMs}, Rig{{0, 47 * kMs, 10 * kMs}, 20 * kMs}}) {
     SCOPED_TRACE("fast scans at " + std::to_string(rig.fast_first / kMs) + " ms");
     auto scans = rig_scans(rig.phases, 0, 40);
     erase_scans(scans, 2, 10, 20);

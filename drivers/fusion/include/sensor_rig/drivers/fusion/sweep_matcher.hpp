@@ -4,7 +4,8 @@
 //
 // Sweeps are matched by rotation, not by spread: the LIDARs turn at one period P (phase-locked,
 // `max_spread_ms`), so each source's stamps keep one phase (stamp mod P). The sweep boundary lies in
-// the middle of the widest gap between the sources' phases, and a scan belongs to the rotation
+// the middle of the widest gap between the sources' phases (a LIDAR above the rig's rpm, its scans
+// short of a turn, has none while another source has one), and a scan belongs to the rotation
 // floor((stamp - boundary) / P): the sweep whose scans lie closest together, whichever scan arrives
 // first or late. A clock step moves every source's phase alike: the boundary follows once each live
 // source has shown it. A scan of a rotation whose sweep was emitted is late (dropped, counted); a
@@ -101,6 +102,7 @@ class SweepMatcher {
     std::int64_t last_rotation = 0;   // rotation of its newest scan
     std::int64_t covers_until = 0;    // that scan spans the rotations before this one (exclusive)
     bool short_turn = false;          // that scan ended short of its k periods (see settled())
+    bool above_rpm = false;           // its scans are short of a turn and follow by less (1200 rpm beside 600)
   };
   struct Sweep {
     std::uint64_t id = 0;
