@@ -1,4 +1,5 @@
-// `rig chaos CONFIG --duration S --seed N [--faults SPEC] [--rate PER_MIN] [--json]` (docs/faults.md).
+// `rig chaos CONFIG --duration S --seed N [--faults SPEC] [--rate PER_MIN] [--json] [--out DIR]`, and
+// `rig chaos --judge DIR [--json]` (docs/faults.md).
 #include <memory>
 #include <string>
 
@@ -27,7 +28,7 @@ void register_chaos_cli(CLI::App& app, cli::Context& ctx) {
   auto o = std::make_shared<chaos::Options>();
   auto* cmd = app.add_subcommand("chaos", "The rig on its mocks under a fault campaign, its output checked against the mocks' truth");
   cmd->footer(kinds_help());
-  cmd->add_option("CONFIG", o->config, "Rig config (YAML) whose devices all have mocks")->required();
+  cmd->add_option("CONFIG", o->config, "Rig config (YAML) whose devices all have mocks (required unless --judge)");
   cmd->add_option("--duration", o->duration_s, "Seconds of faults (after a warm-up)")->check(CLI::Range(5.0, 86400.0))->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the random plan: same seed, same campaign")->capture_default_str();
   cmd->add_option("--faults", o->faults,
@@ -35,7 +36,10 @@ void register_chaos_cli(CLI::App& app, cli::Context& ctx) {
                   "(default: every kind the mocks inject; 'none': a baseline without faults)");
   cmd->add_option("--rate", o->rate_per_min, "Random faults per minute (on top of one of each kind)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("--json", o->json, "Last line on stdout: {\"faults\":..,\"topics\":..,\"invariants\":..}");
-  cmd->add_option("--out", o->out_dir, "Keep the campaign here: plan.jsonl, truth/*.jsonl, monitor.csv, logs/");
+  cmd->add_option("--out", o->out_dir, "Keep the campaign here: plan.jsonl, truth/*.jsonl, monitor.csv, fused_sets.jsonl, judge.json, logs/");
+  cmd->add_option("--judge", o->judge_dir,
+                  "Judge a campaign kept with --out again (after a fix of the judge, or to read a verdict a test printed): runs nothing")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--warmup", o->warmup_s, "Seconds for the rig to start before the first fault")->check(CLI::Range(1.0, 60.0))->capture_default_str();
   cmd->callback([o, &ctx] { ctx.exit_code = chaos::run(*o); });
 }

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "chaos_campaign_files.hpp"
 #include "chaos_diagnostics.hpp"
 #include "chaos_host_faults.hpp"
 #include "network_delay.hpp"
@@ -45,7 +46,8 @@ class CampaignDir {
     if (!out.empty()) {
       path_ = out;
       fs::create_directories(path_);
-      for (const char* sub : {"truth", "logs"}) fs::remove_all(path_ / sub);  // a previous campaign's
+      // A previous campaign's: none of it may be judged with this one's (judge.json last of all).
+      for (const char* old : {"truth", "logs", "monitor.csv", "fused_sets.jsonl", "judge.json"}) fs::remove_all(path_ / old);
     } else {
       std::string tmpl = (fs::temp_directory_path() / ("rig-chaos-" + std::to_string(::getpid()) + "-XXXXXX")).string();
       if (::mkdtemp(tmpl.data()) == nullptr) throw std::runtime_error("cannot create a campaign directory");
@@ -67,19 +69,6 @@ class CampaignDir {
   fs::path path_;
   bool owned_ = false;
 };
-
-std::vector<truth::Log> read_truths(const fs::path& dir) {
-  std::vector<truth::Log> out;
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".jsonl") files.push_back(e.path());
-  std::sort(files.begin(), files.end());
-  for (const auto& f : files) {
-    out.push_back(truth::read(f.string()));
-    if (out.back().cut_last_line) log::warn("chaos", f.string() + ": last line cut (its mock was killed mid-write)");
-  }
-  return out;
-}
 
 struct MonitorLine {
   Nanos mono_ns;  // when we read it (the monitor prints once a second)
@@ -139,18 +128,6 @@ void fit_to_models(std::vector<faults::FaultEvent>& events, const RigConfig& cfg
       if (l.name == e.device) base = l.mock.rpm;
     if (model.rfind("Pandar", 0) == 0 && rpm != 600 && rpm != 1200) e.params["rpm"] = base == 1200 ? "600" : "1200";
   }
-}
-
-// The fused sweeps' members as received, kept with the campaign (one JSON line per sweep).
-void write_fused_sets(const std::string& path, const std::vector<FusedSet>& sets) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) return;
-  for (const auto& s : sets) {
-    nlohmann::json j{{"seq", s.seq}, {"stamp", s.stamp}, {"members", nlohmann::json::array()}};
-    for (const auto& m : s.members) j["members"].push_back({{"topic", m.topic}, {"stamp", m.stamp}, {"seq", m.seq}});
-    std::fprintf(f, "%s\n", j.dump().c_str());
-  }
-  std::fclose(f);
 }
 
 }  // namespace
@@ -253,7 +230,35 @@ std::vector<faults::FaultEvent> make_plan(const Options& o, const std::vector<fa
   return events;
 }
 
+namespace {
+
+// `rig chaos --judge DIR`: a kept campaign judged again, nothing run.
+int judge_kept(const Options& o) {
+  Input in;
+  std::vector<std::string> campaign_errors;
+  try {
+    in = read_campaign(o.judge_dir, campaign_errors);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: rig chaos --judge: %s\n", e.what());
+    return 2;
+  }
+  std::fprintf(stderr, "chaos: judging the campaign kept in %s again (%zu truth records, %zu samples, %zu faults planned)\n",
+               o.judge_dir.c_str(), in.truths.size(), in.samples.size(), in.events.size());
+  Result r = check(in);
+  r.campaign_errors = campaign_errors;
+  std::fputs(result_text(r).c_str(), stderr);
+  if (o.json) std::printf("%s\n", result_json(r).c_str());
+  return r.all_held() ? 0 : 1;
+}
+
+}  // namespace
+
 int run(const Options& o) {
+  if (!o.judge_dir.empty()) return judge_kept(o);
+  if (o.config.empty()) {
+    std::fprintf(stderr, "error: rig chaos needs a CONFIG (or --judge DIR)\n");
+    return 2;
+  }
   RigConfig cfg;
   try {
     cfg = load_rig_config(o.config);
@@ -419,6 +424,8 @@ int run(const Options& o) {
     // first one a status period after it (a scan is counted when it comes, reported within a period).
     in.fused.scans_dropped = diagnostics.counter_delta("fusion", "scans_dropped", in.window_begin_ns, in.window_end_ns + 1'500'000'000);
   }
+  // Kept with the campaign, so that `rig chaos --judge DIR` can judge it again.
+  write_judge_input((dir.path() / "judge.json").string(), in, campaign_errors);
   Result r = check(in);
   r.campaign_errors = campaign_errors;
   std::fputs(result_text(r).c_str(), stderr);

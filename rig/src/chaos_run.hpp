@@ -21,6 +21,7 @@ struct Options {
   bool json = false;
   std::string out_dir;   // keep the campaign (plan, truth, monitor record, logs) here
   double warmup_s = 5;   // rig up and the monitor start, DDS discovers: no fault yet
+  std::string judge_dir;  // judge a campaign kept with --out again, run nothing
 };
 
 // The kinds the mocks inject today (a plan may only name these: a fault no mock injects would
@@ -38,7 +39,8 @@ std::map<std::string, TopicExpectation> expectations_of(const RigConfig& cfg);
 // std::invalid_argument for a bad or not injected spec.
 std::vector<faults::FaultEvent> make_plan(const Options& o, const std::vector<faults::Device>& devices, const RigConfig& cfg);
 
-// Exit code: 0 every invariant held, 1 one broken or the campaign failed, 2 bad usage / config.
+// Exit code: 0 every invariant held, 1 one broken or the campaign failed, 2 bad usage / config (or,
+// with judge_dir, a kept campaign that cannot be read).
 int run(const Options& o);
 
 }  // namespace sensor_rig::rig::chaos

@@ -177,11 +177,18 @@ TEST(ChaosCampaign, DriveByWireHoldsEveryInvariantUnderItsFaults) {
   const auto run = test::run_rig("chaos " + config + " --duration 22 --seed 4 --json --faults '"
                                  "host.kill_mock@1>paravan;dbw.loss:p=0.2@3+2;dbw.bad_crc@6+0.5;dbw.stuck_counter@8+0.5;"
                                  "dbw.bus_off@10+0.3;dbw.override@11.5+0.5;dbw.ecu_fault@13+0.5;dbw.no_status@14.5+0.3;"
-                                 "host.stall_mock:ms=300@16>paravan'");
+                                 "host.stall_mock:ms=300@16>paravan' --out " + (dir.path / "kept").string());
   ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
-  const auto last_nl = run.out.find_last_of('\n', run.out.size() - 2);
-  const auto j = nlohmann::json::parse(run.out.substr(last_nl == std::string::npos ? 0 : last_nl + 1), nullptr, false);
+  const auto last_json = [](const std::string& out) {
+    const auto last_nl = out.find_last_of('\n', out.size() - 2);
+    return nlohmann::json::parse(out.substr(last_nl == std::string::npos ? 0 : last_nl + 1), nullptr, false);
+  };
+  const auto j = last_json(run.out);
   ASSERT_TRUE(j.is_object()) << run.out << "\n" << run.err;
+  // The kept campaign judged again (rig chaos --judge): the same verdict, nothing run.
+  const auto again = test::run_rig("chaos --judge " + (dir.path / "kept").string() + " --json");
+  EXPECT_EQ(again.code, run.code) << again.err;
+  EXPECT_EQ(last_json(again.out), j) << again.err;
   const auto& t = j["topics"]["/vehicle/state"];
   ASSERT_TRUE(t.is_object()) << run.out;
   EXPECT_GT(t["sent"].get<std::uint64_t>(), 1500u) << "100 Hz for ~20 s";
