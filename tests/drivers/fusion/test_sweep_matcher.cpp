@@ -124,10 +124,15 @@ class SimulatedRig {
     return e->at - last;
   }
 
-  // A scan of `source` that began before rotation n spans it.
+  // A scan of `source` that began before rotation n spans it, and is in the cloud (a scan dropped
+  // as late covers nothing).
   [[nodiscard]] bool spanned_by_earlier(std::uint32_t source, std::int64_t n) const {
-    return std::any_of(fed_.begin(), fed_.end(),
-                       [&](const TrueScan& t) { return t.source == source && t.rotation < n && n < t.rotation + t.rotations; });
+    const auto dropped = [&](const TrueScan& t) {
+      return std::any_of(dropped_.begin(), dropped_.end(), [&](const TrueScan& d) { return d.source == t.source && d.stamp == t.stamp; });
+    };
+    return std::any_of(fed_.begin(), fed_.end(), [&](const TrueScan& t) {
+      return t.source == source && t.rotation < n && n < t.rotation + t.rotations && !dropped(t);
+    });
   }
 
   SweepMatcher m_;
@@ -577,6 +582,39 @@ TEST(SweepMatcher, SlowerLidarShortScanAndStop) {
     EXPECT_EQ(run.wait_of(n), 0) << n;
     EXPECT_FALSE(run.sweep_of(n)->complete) << n;
   }
+}
+
+// The first scan of a LIDAR slowing to 300 rpm is handed over two periods after its stamp: on a
+// phase late in the rotation (60 ms after the first LIDAR's) it comes after its sweep timed out
+// (the matcher knew it at 600 rpm then) and is dropped as late. The next rotation's sweep, which
+// that scan spans, is still open (the third LIDAR's scans come 40 ms later than the others'): it
+// must not wait for the slow LIDAR (nothing more of that time will come), and must not say
+// complete, for the cloud has none of that LIDAR's points of that time. Before, it said complete
+// ("covered") by the scan it had dropped: the whole-rig campaign's fused judge, "complete with 2 of
+// 3". From the second slow scan on, every sweep is whole.
+TEST(SweepMatcher, ASlowScanDroppedAsLateCoversNothingInTheCloud) {
+  const std::vector<Nanos> phases{0, 60 * kMs, 30 * kMs};
+  auto scans = rig_scans(phases, 0, 40);
+  erase_scans(scans, 1, 10, 40);
+  for (std::int64_t n = 10; n + 2 <= 40; n += 2) {
+    const Nanos stamp = n * kPeriod + phases[1];
+    scans.push_back({1, n, stamp, stamp + 2 * kPeriod + 2 * kMs, 2 * kPeriod - kMs, 2});
+  }
+  for (auto& t : scans) {
+    if (t.rotations == 1 && t.span == 0) t.span = kPeriod - kMs;
+    if (t.source == 2) t.arrival += 40 * kMs;
+  }
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  ASSERT_EQ(run.dropped_.size(), 1u);
+  EXPECT_EQ(run.dropped_[0].source, 1u);
+  EXPECT_EQ(run.dropped_[0].rotation, 10);
+  ASSERT_NE(run.sweep_of(11), nullptr);
+  EXPECT_FALSE(run.sweep_of(10)->complete);
+  EXPECT_FALSE(run.sweep_of(11)->complete) << "said complete by the scan it dropped";
+  EXPECT_EQ(run.wait_of(11), 0) << "waited for a scan that cannot come";
+  for (std::int64_t n = 12; n < 38; ++n) EXPECT_TRUE(run.sweep_of(n)->complete) << n;
 }
 
 TEST(SweepMatcher, UnknownSourceIsDroppedAndConfigChecked) {

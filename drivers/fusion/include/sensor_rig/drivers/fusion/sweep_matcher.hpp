@@ -22,8 +22,9 @@
 // firing), and that sweep waits for it up to timeout + (k - 1) periods (the scan is handed over k
 // periods after its stamp, not one). The sweeps of the rotations that scan also spans do not wait
 // for it and lack nothing: it is `covered` there (its points for that time are in the sweep where its
-// scan began; they say complete without it). k comes from the scan's span (its last point's time,
-// rounded to whole periods); a scan that lacks part of its turn keeps the source's k while its
+// scan began; they say complete without it). A slow scan dropped as late covers nothing in the
+// cloud: the sweeps it spans do not wait for that LIDAR, and lack it. k comes from the scan's span
+// (its last point's time, rounded to whole periods); a scan that lacks part of its turn keeps the source's k while its
 // stamps still step by k periods. Before, a 300 rpm LIDAR never made the fused cloud: every other
 // sweep waited for it in vain, declared it dead, and its next scan came after its sweep was written.
 
@@ -61,7 +62,7 @@ struct ClosedSweep {
   std::uint64_t id = 0;
   bool complete = false;      // every source present or covered
   std::vector<bool> present;  // per source
-  std::vector<bool> covered;  // per source: absent, its scan of an earlier sweep spans this rotation (not missing)
+  std::vector<bool> covered;  // per source: absent, its scan in an earlier sweep spans this rotation (not missing)
 };
 
 class SweepMatcher {
@@ -102,6 +103,7 @@ class SweepMatcher {
     std::int64_t last_rotation = 0;   // rotation of its newest scan
     std::int64_t covers_until = 0;    // that scan spans the rotations before this one (exclusive)
     bool short_turn = false;          // that scan ended short of its k periods (see settled())
+    bool newest_placed = true;        // that scan joined a sweep (dropped as late it covers nothing in the cloud)
     bool above_rpm = false;           // its scans are short of a turn and follow by less (1200 rpm beside 600)
   };
   struct Sweep {
@@ -119,6 +121,7 @@ class SweepMatcher {
   [[nodiscard]] bool step_refuted(const Source& moved) const noexcept;
   [[nodiscard]] bool settled(const Sweep& s) const noexcept;
   [[nodiscard]] bool covered(std::size_t source, const Sweep& s) const noexcept;
+  [[nodiscard]] bool covered_in_cloud(std::size_t source, const Sweep& s) const noexcept;  // by a scan that joined a sweep
   [[nodiscard]] Nanos wait_ns(const Sweep& s) const noexcept;  // timeout + a slower absent source's extra periods
   [[nodiscard]] bool whole(const Sweep& s) const noexcept;     // every source present or covered
   static constexpr int kMaxRotations = 4;  // 150 rpm beside 600
