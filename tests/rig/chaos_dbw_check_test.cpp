@@ -8,6 +8,18 @@
 namespace sensor_rig::rig::chaos {
 namespace {
 
+// The mock ECU's record in a campaign's input: every one of its `frames` published, judged from kT0
+// over their slots.
+void add_ecu(Input& in, const truth::Log& log, int frames, Nanos frame) {
+  const std::string& topic = log.header.topic;
+  in.truths.push_back(log);
+  in.monitor[topic] = MonitorTotals{static_cast<std::uint64_t>(frames), 0};
+  in.expected[topic] = TopicExpectation{"paravan", 100.0, {}};
+  in.epoch_vehicle_ns = kT0;
+  in.window_begin_ns = kT0;
+  in.window_end_ns = kT0 + frames * frame;
+}
+
 // The mock ECU's feedback frames (a CAN frame every 10 ms, /vehicle/state one sample per frame, its
 // stamp the receive 10 us after the send) across a host clock step back of 500 ms recorded 5 us
 // after frame 299's send: the vehicle time from 5 us after frame 249's send to 5 us after frame
@@ -30,12 +42,7 @@ TEST(ChaosCheck, ACanFrameAtTheEdgeOfDoubledTimeIsOnItsFramesSide) {
   }
   const Nanos step_at = kT0 + 299 * kFrame + 5'000;
   log.faults.push_back(truth::FaultRecord{1, "host.clock_step", step_at, step_at + 1'000'000'000, -1, "ms=-500"});
-  in.truths.push_back(log);
-  in.monitor[topic] = MonitorTotals{kFrames, 0};
-  in.expected[topic] = TopicExpectation{"paravan", 100.0, {}};
-  in.epoch_vehicle_ns = kT0;
-  in.window_begin_ns = kT0;
-  in.window_end_ns = kT0 + kFrames * kFrame;
+  add_ecu(in, log, kFrames, kFrame);
   const Result r = check(in);
   EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
   EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
@@ -130,12 +137,7 @@ TEST(ChaosCheck, ACanFrameSentLateIsTheUnitWhoseSendBracketsItsStamp) {
       log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, handed, handed, returned, truth::Fate::kSent, 0});
       in.samples.push_back(can_sample(topic, u, queued, 50'000, 100'000));
     }
-    in.truths.push_back(log);
-    in.monitor[topic] = MonitorTotals{kFrames, 0};
-    in.expected[topic] = TopicExpectation{"paravan", 100.0, {}};
-    in.epoch_vehicle_ns = kT0;
-    in.window_begin_ns = kT0;
-    in.window_end_ns = kT0 + kFrames * kFrame;
+    add_ecu(in, log, kFrames, kFrame);
     return check(in);
   };
   const Result r = campaign(true);
