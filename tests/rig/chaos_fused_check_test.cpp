@@ -260,6 +260,19 @@ void without(Input& in, int u, std::size_t lidar, bool count_missing = true) {
   if (lidar == 0) c.acquisition_ns = in.fused.sets[static_cast<std::size_t>(u)].stamp = acq(1, u);  // the earliest left
 }
 
+// Moves every scan of `lidar` later by `by` (its truth, its published scans, its fused members): a
+// rig whose phases are spread, as LIDARs back from restarts on phases of their own are. The sweeps'
+// stamps stay the front's (the earliest) for moves of the others under a rotation.
+void move_lidar(Input& in, std::size_t lidar, Nanos by) {
+  for (auto& u : in.truths[lidar].units) u.acq_ns += by, u.dev_ns += by;
+  for (auto& part : in.truths[lidar].parts) part.acq_ns += by, part.dev_ns += by, part.tx_ns += by;
+  for (auto& x : in.samples)
+    if (x.topic == topic_of(lidar)) x.acquisition_ns += by, x.first_rx_ns += by, x.publish_ns += by, x.received_ns += by;
+  for (auto& set : in.fused.sets)
+    for (auto& m : set.members)
+      if (m.topic == topic_of(lidar)) m.stamp += by;
+}
+
 // The left LIDAR restarts at 0.5 s (silent 0.3 s). Honest: the sweeps it missed say so, and it is
 // fused again from its first scan back. Planted: the fusion never takes it back (its scans counted
 // dropped, every sweep after says the left scan is missing: no other invariant sees a lie); the
@@ -423,6 +436,93 @@ TEST(ChaosFusedCheck, AScanShortOfATurnHasNoRotationOfItsOwnToMix) {
   EXPECT_TRUE(r.all_held()) << result_text(r);
   r = check(shifted(false));
   EXPECT_TRUE(example_says(r, "sweep 12 (stamped at 1.200 s) mixes rotations")) << result_text(r);
+}
+
+// Phases spread (front 0, left 2, right 45 ms: the boundary in the 45-100 ms gap). The left LIDAR
+// makes one scan on a phase of its own (70 ms) that it never sends, and is silent for a second after
+// it (restarted inside that scan, and again). The matcher never saw that scan; the judge took its
+// phase, placed the boundary anew in the 0-45 ms gap, across the right's phase, kept it there while
+// the left was silent, and judged the front's and right's honest sweeps "mixed" (LIDAR-fault campaign
+// seed 3: the left's one scan between two restarts, 0.9 s of sweeps). The phases are the published
+// scans'.
+TEST(ChaosFusedCheck, AScanNeverPublishedSetsNoPhase) {
+  Input in = honest();
+  move_lidar(in, 2, 40'000'000);
+  constexpr int kGhost = 15;
+  constexpr Nanos kOwnPhase = 68'000'000;
+  for (auto& u : in.truths[1].units)
+    if (u.unit == kGhost) u.acq_ns += kOwnPhase, u.dev_ns += kOwnPhase;
+  for (auto& part : in.truths[1].parts)
+    if (part.unit == kGhost) part.acq_ns += kOwnPhase, part.dev_ns += kOwnPhase, part.tx_ns = 0, part.fate = truth::Fate::kNotSent;
+  std::erase_if(in.samples, [&](const SampleRecord& x) { return x.topic == topic_of(1) && x.seq == seq_of(1, kGhost); });
+  in.monitor[topic_of(1)].received -= 1;
+  remove_scans(in, 1, kGhost + 1, kGhost + 11);
+  for (int u = kGhost; u < kGhost + 11; ++u) without(in, u, 1);
+  in.events.push_back(faults::FaultEvent{1, "lidar.restart", "left", 1.5, 1.1, {}});
+  in.truths[1].faults.push_back(truth::FaultRecord{1, "lidar.restart", kT0 + 1'500'000'000, kT0 + 2'600'000'000, kGhost, ""});
+  const Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).mixes_regrouped, 0u);
+}
+
+// Phases spread (front 0, right 35, left 53 ms: the boundary in the 53-100 ms gap). From rotation 15
+// the right LIDAR turns at 1200 rpm: two scans a rotation, 35 and 85 ms in, short of a turn. It has
+// no phase at the rig's period, so the matcher places its boundary anew between the other two (in
+// the 0-53 ms gap): each sweep then holds the left's scan n with the front's n + 1 (the front's scan
+// 16 dropped at the change, the right's second scan of each rotation dropped as repeated). The
+// judge kept the right's last phase (its long scan still in the window) and then its boundary by the
+// quarter-gap rule, and called every sweep after the change "mixed" (LIDAR-fault campaign seed 3: 12
+// sweeps after lidar.rpm_change rpm=1200). A LIDAR going above the rig's rpm moves the boundary.
+TEST(ChaosFusedCheck, ALidarGoingAboveTheRigsRpmPlacesTheBoundaryAnew) {
+  constexpr int kFast = 15;
+  Input in = honest();
+  move_lidar(in, 1, 51'000'000);
+  move_lidar(in, 2, 30'000'000);
+  // The right LIDAR's truth and published scans from kFast on: two short scans a rotation.
+  remove_scans(in, 2, kFast, kRotations);
+  std::vector<Nanos> fast;  // their first firings, in order
+  for (int n = kFast; n < kRotations; ++n)
+    for (const Nanos at : {35'000'000, 85'000'000}) fast.push_back(kT0 + n * kPeriod + at);
+  auto& right = in.truths[2];
+  std::uint64_t part_seq = right.parts.size();
+  for (std::size_t k = 0; k < fast.size(); ++k) {
+    const auto unit = static_cast<std::int64_t>(kFast + k);
+    right.units.push_back(truth::UnitRecord{unit, fast[k], fast[k], kParts});
+    for (std::uint32_t q = 0; q < kParts; ++q) {
+      const Nanos t = fast[k] + q * (kPeriod / 8);
+      right.parts.push_back(truth::PartRecord{part_seq++, unit, t, t, t, truth::Fate::kSent, 0});
+    }
+    SampleRecord x;
+    x.topic = topic_of(2);
+    x.seq = seq_of(2, static_cast<int>(unit));
+    x.acquisition_ns = fast[k];
+    x.first_rx_ns = fast[k] + 100'000;
+    x.publish_ns = fast[k] + kPeriod / 2 + 5'000'000;
+    x.received_ns = x.publish_ns + 1'000'000;
+    x.packets = kParts;
+    in.samples.push_back(x);
+  }
+  in.monitor[topic_of(2)].received += fast.size();
+  // The matcher's sweeps from kFast on: the left's n, the front's n + 1 (from n = 16), the right's
+  // first scan of rotation n.
+  std::erase_if(in.samples, [](const SampleRecord& x) { return x.topic == kFusedCloudTopic && x.seq >= kFast; });
+  in.fused.sets.resize(kFast);
+  const auto right_member = [&](std::size_t k) { return FusedMember{topic_of(2), fast[k], seq_of(2, kFast + static_cast<int>(k))}; };
+  const auto left_member = [](int n) { return FusedMember{topic_of(1), acq(1, n) + 51'000'000, seq_of(1, n)}; };
+  for (int n = kFast; n < kRotations; ++n) {
+    FusedSet set{static_cast<std::uint64_t>(n), 0, {left_member(n), right_member(static_cast<std::size_t>(2 * (n - kFast)))}};
+    if (n == kFast) set.members.push_back(member(0, n));
+    else if (n + 1 < kRotations) set.members.push_back(member(0, n + 1));
+    set.stamp = INT64_MAX;
+    for (const auto& m : set.members) set.stamp = std::min(set.stamp, m.stamp);
+    in.samples.push_back(cloud(set.seq, set.stamp, static_cast<std::uint32_t>(set.members.size()) * kParts,
+                               set.members.size() == 3 ? 0 : kParts));
+    in.fused.sets.push_back(set);
+  }
+  in.fused.scans_dropped = 1 + (kRotations - kFast);  // the front's 16, the right's second scans
+  const Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("fused")) << result_text(r);
+  EXPECT_LE(r.topics.at(kFusedCloudTopic).mixes_regrouped, 2u);
 }
 
 // The left LIDAR at 300 rpm for rotations 10..19: each of its scans spans two rotations (twice the
