@@ -372,6 +372,38 @@ TEST(SweepMatcher, AStalledLidarBackOnAPhaseOfItsOwnIsTakenOnceTheOthersShowNoSt
   }
 }
 
+// A LIDAR back from a restart on a phase of its own (front: 20 ms before the left's, then 16 ms
+// after it; right 27 ms after the left), its first scan handed over 20 ms late: the arrivals do not
+// show the move, so it is held as a possible clock step. The left's next scan, begun after the
+// front's return and unmoved, refutes that at once; the right's comes 12 ms late, after the front's
+// second scan. Waiting for both witnesses fused that second scan with the next rotation too (the
+// LIDAR-fault campaign seed 3 at 157.2 s, replayed through the matcher: 2 sweeps mixed); one
+// witness proves it, and only the returned scan itself may be placed by the old phase.
+TEST(SweepMatcher, OneUnmovedWitnessRefutesAStepAtOnce) {
+  auto scans = rig_scans({-20 * kMs, 15 * kMs, 42 * kMs}, 0, 40);
+  erase_scans(scans, 0, 10, 40);
+  for (std::int64_t n = 13; n < 40; ++n) {
+    const Nanos stamp = n * kPeriod + 31 * kMs;
+    scans.push_back({0, n, stamp, stamp + kDelivery + (n == 13 ? 20 * kMs : 0)});
+  }
+  for (auto& t : scans)
+    if (t.source == 2) t.arrival += 12 * kMs;
+  SimulatedRig run(3);
+  run.feed(scans);
+  std::size_t mixed = 0;
+  for (const auto& e : run.emitted_)
+    for (const auto& t : e.scans)
+      if (t.rotation != e.scans[0].rotation) {
+        ++mixed;
+        break;
+      }
+  EXPECT_LE(mixed, 1u) << "only the returned scan itself may be placed by the old phase";
+  for (std::int64_t n = 15; n < 40; ++n) {
+    ASSERT_NE(run.sweep_of(n), nullptr) << n;
+    EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+  }
+}
+
 // A LIDAR back from 300 to 600 rpm on another phase: its last slow turn cut short (165 ms, the mock's
 // rotor keeps turning as a motor would), its next scans 35 ms earlier in the rotation. Its arrivals
 // moved with its stamps, so no clock stepped: its phase is taken at once. Before, held as a possible
