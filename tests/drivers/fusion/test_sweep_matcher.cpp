@@ -161,6 +161,13 @@ class SimulatedRig {
 
 const std::vector<Nanos> kPhases{0, 20 * kMs, 45 * kMs};  // the widest gap: 45 -> 100 ms
 
+// Emitted sweeps holding scans of more than one true rotation.
+std::size_t mixed_sweeps(const SimulatedRig& run) {
+  return static_cast<std::size_t>(std::count_if(run.emitted_.begin(), run.emitted_.end(), [](const Emitted& e) {
+    return std::any_of(e.scans.begin(), e.scans.end(), [&](const TrueScan& t) { return t.rotation != e.scans[0].rotation; });
+  }));
+}
+
 TEST(SweepMatcher, CompleteSweepsGoOutWhenTheLastScanArrives) {
   auto scans = rig_scans(kPhases, 0, 30);
   SimulatedRig run(3);
@@ -357,14 +364,7 @@ TEST(SweepMatcher, AStalledLidarBackOnAPhaseOfItsOwnIsTakenOnceTheOthersShowNoSt
     }
   SimulatedRig run(3);
   run.feed(scans);
-  std::size_t mixed = 0;
-  for (const auto& e : run.emitted_)
-    for (const auto& t : e.scans)
-      if (t.rotation != e.scans[0].rotation) {
-        ++mixed;
-        break;
-      }
-  EXPECT_LE(mixed, 1u) << "only the returned scan itself may be placed by the old phase";
+  EXPECT_LE(mixed_sweeps(run), 1u) << "only the returned scan itself may be placed by the old phase";
   EXPECT_GE(run.m_.counters().phase_steps, 1u);
   for (std::int64_t n = 17; n < 40; ++n) {
     ASSERT_NE(run.sweep_of(n), nullptr) << n;
@@ -390,14 +390,7 @@ TEST(SweepMatcher, OneUnmovedWitnessRefutesAStepAtOnce) {
     if (t.source == 2) t.arrival += 12 * kMs;
   SimulatedRig run(3);
   run.feed(scans);
-  std::size_t mixed = 0;
-  for (const auto& e : run.emitted_)
-    for (const auto& t : e.scans)
-      if (t.rotation != e.scans[0].rotation) {
-        ++mixed;
-        break;
-      }
-  EXPECT_LE(mixed, 1u) << "only the returned scan itself may be placed by the old phase";
+  EXPECT_LE(mixed_sweeps(run), 1u) << "only the returned scan itself may be placed by the old phase";
   for (std::int64_t n = 15; n < 40; ++n) {
     ASSERT_NE(run.sweep_of(n), nullptr) << n;
     EXPECT_TRUE(run.sweep_of(n)->complete) << n;
