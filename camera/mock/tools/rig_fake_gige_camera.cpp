@@ -18,19 +18,22 @@
 // camera's leader leaves after exposure + readout, which is what the rig's clock mapping assumes
 // (first packet = exposure start + exposure time). So the fill callback here copies a precomputed
 // ramp (memcpy, shifted per frame), then waits until stamp + ExposureTime: the leader leaves at
-// exposure end (a thread held off its core restamps the frame by its lateness, expose_then_fill).
+// exposure end (a free-running frame whose thread was held off its core is restamped by its
+// lateness; a triggered one's exposure starts at its trigger's kernel receive time: expose_then_fill).
 // And the leader goes out alone (a pause after it), so that its receiver takes it before the data
 // (gige_fake_chaos pace(); --link-mbps paces every packet at a link's rate).
 #include <arv.h>
 #include <poll.h>
 #include <pthread.h>
 #include <sys/prctl.h>
+#include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -52,6 +55,13 @@ std::atomic<ArvFakeCamera*> g_camera{nullptr};  // set once the fake runs; read 
 volatile std::sig_atomic_t g_stop = 0;
 double g_grid_hz = sensor_rig::camera::mock::kTriggerGridHz;
 constexpr int kIdleWaitMs = 100;  // the fake's own longest poll
+
+// The kernel's receive time (CLOCK_REALTIME) of the latest TriggerSoftware write that came in, 0
+// once a frame took it: a triggered frame's exposure starts there, as a camera's does on the
+// trigger's arrival (hardware: microseconds), however late this process's threads ran after it.
+std::atomic<sensor_rig::Nanos> g_trigger_rx_ns{0};
+// A trigger older than this took no frame (refused, or its frame lost): never a later frame's start.
+constexpr sensor_rig::Nanos kTriggerRxValidNs = 500'000'000;
 
 void on_signal(int) { g_stop = 1; }
 
@@ -77,28 +87,98 @@ struct FillContext {
 };
 
 // Runs in arv_fake_camera_fill_buffer after the frame's id is set, before the leader is sent: the
-// exposure starts now. Its stamp is the host's CLOCK_REALTIME now (the truth's acq, what the leader
-// says; this process's g_get_real_time, which Aravis stamped it with, is a clock that a host clock
-// step does not move: below). Chaos may change the exposure and what the camera reports as its
-// timestamp (PTP). The image is copied first (the fake's cost, not the camera's timing), then the
-// thread waits for the exposure's end, on CLOCK_MONOTONIC from its start (it waited until stamp +
-// exposure by CLOCK_REALTIME: a host step back between the two held the frame, and its camera, that
-// much longer). A thread that got there late (a loaded host held it off its core: 1.5 ms p50 in the
-// whole-rig campaign, up to 4 ms) restamps the frame by that much: the exposure began later, and the
-// leader still leaves at the end of the exposure the camera reports, as a camera's does and the
-// rig's clock mapping takes it (issue 27: otherwise the mapping carries the fake's lateness as a
-// bias the truth does not have).
+// exposure starts now; a software-triggered frame's started when its trigger arrived
+// (g_trigger_rx_ns), as a camera's does, however late this thread ran after it (a fake held off its
+// core stamped a triggered frame "exposed 61 ms after the rig's trigger", a fresh-clone suite run's
+// CameraIsolation.AStreamsFirstFrameIsExposedAtItsTrigger). Its stamp is the host's CLOCK_REALTIME
+// (the truth's acq, what the leader says; this process's g_get_real_time, which Aravis stamped it
+// with, is a clock that a host clock step does not move: below). Chaos may change the exposure and
+// what the camera reports as its timestamp (PTP). The image is copied first (the fake's cost, not the
+// camera's timing), then the thread waits for the exposure's end, on CLOCK_MONOTONIC from its start
+// (it waited until stamp + exposure by CLOCK_REALTIME: a host step back between the two held the
+// frame, and its camera, that much longer). A free-running frame whose thread got there late (a
+// loaded host held it off its core: 1.5 ms p50 in the whole-rig campaign, up to 4 ms) is restamped
+// by that much: the exposure began later, and the leader still leaves at the end of the exposure the
+// camera reports, as a camera's does and the rig's clock mapping takes it (issue 27: otherwise the
+// mapping carries the fake's lateness as a bias the truth does not have).
 void expose_then_fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 /*gain*/, ArvPixelFormat /*format*/) {
   auto* ctx = static_cast<FillContext*>(data);
-  const sensor_rig::Nanos start_mono = sensor_rig::monotonic_now_ns();
-  arv_buffer_set_timestamp(buffer, static_cast<guint64>(sensor_rig::vehicle_now_ns()));
+  sensor_rig::Nanos start_mono = sensor_rig::monotonic_now_ns();
+  sensor_rig::Nanos start = sensor_rig::vehicle_now_ns();
+  const sensor_rig::Nanos trigger_rx = g_trigger_rx_ns.exchange(0);
+  const bool at_trigger = arv_fake_camera_is_in_software_trigger_mode(ctx->camera) && trigger_rx > 0 &&
+                          trigger_rx <= start && start - trigger_rx < kTriggerRxValidNs;
+  if (at_trigger) {
+    start_mono -= start - trigger_rx;
+    start = trigger_rx;
+  }
+  arv_buffer_set_timestamp(buffer, static_cast<guint64>(start));
   const guint32 exposure_us = ctx->chaos->on_fill(ctx->camera, buffer, exposure_time_us);
   ctx->pattern.fill(buffer, arv_fake_camera_get_payload(ctx->camera));
   const sensor_rig::Nanos end_mono = start_mono + sensor_rig::Nanos{exposure_us} * 1000;
   const timespec until{static_cast<time_t>(end_mono / 1'000'000'000), static_cast<long>(end_mono % 1'000'000'000)};
   while (::clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &until, nullptr) == EINTR) {
   }
-  ctx->chaos->restamp(buffer, sensor_rig::monotonic_now_ns() - end_mono);
+  // A triggered exposure began at its trigger: a late thread only delays the readout.
+  if (!at_trigger) ctx->chaos->restamp(buffer, sensor_rig::monotonic_now_ns() - end_mono);
+}
+
+// Each socket the fake polls gets its datagrams' kernel receive times (SO_TIMESTAMPNS; set on every
+// call: a restarted fake's new sockets may reuse the numbers). Non-sockets refuse it, harmlessly.
+void stamp_datagrams(const pollfd* pfds, nfds_t nfds) {
+  const int on = 1;
+  for (nfds_t i = 0; i < nfds; ++i) ::setsockopt(pfds[i].fd, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
+}
+
+// Before the fake reads them: a readable socket's next datagram, peeked, is it a GVCP
+// WRITEREG_CMD with TriggerSoftware among its (address, value) pairs? Then its receive time is
+// the trigger's. (A write the fake then ignores, from a connection that is not its controller or
+// outside acquisition, is overwritten by the next trigger's before any frame takes it.)
+void note_trigger_writes(const pollfd* pfds, nfds_t nfds) {
+  for (nfds_t i = 0; i < nfds; ++i) {
+    if ((pfds[i].revents & POLLIN) == 0) continue;
+    std::uint8_t packet[8 + 8 * 16];
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+    iovec iov{packet, sizeof packet};
+    msghdr msg{};
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(pfds[i].fd, &msg, MSG_PEEK | MSG_DONTWAIT);
+    // GVCP command header: 0x42, flags, command (big endian), length, request id.
+    if (n < 16 || packet[0] != 0x42 || packet[2] != 0x00 || packet[3] != 0x82) continue;
+    bool trigger = false;
+    for (ssize_t at = 8; at + 8 <= n; at += 8) {
+      const std::uint32_t address = (std::uint32_t{packet[at]} << 24) | (std::uint32_t{packet[at + 1]} << 16) |
+                                    (std::uint32_t{packet[at + 2]} << 8) | packet[at + 3];
+      const bool nonzero = (packet[at + 4] | packet[at + 5] | packet[at + 6] | packet[at + 7]) != 0;
+      trigger = trigger || (address == ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE && nonzero);
+    }
+    if (!trigger) continue;
+    sensor_rig::Nanos rx = 0;
+    for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c))
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+        timespec ts{};
+        std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+        rx = sensor_rig::Nanos{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+      }
+    g_trigger_rx_ns.store(rx > 0 ? rx : sensor_rig::vehicle_now_ns());
+  }
+}
+
+// poll(2) as GLib's g_poll, noting the trigger writes among what came in.
+int poll_noting_triggers(pollfd* pfds, nfds_t nfds, const timespec* wait) {
+  stamp_datagrams(pfds, nfds);
+  const int n = ::ppoll(pfds, nfds, wait, nullptr);
+  if (n > 0) note_trigger_writes(pfds, nfds);
+  return n;
+}
+
+int poll_noting_triggers(pollfd* pfds, nfds_t nfds, int timeout_ms) {
+  if (timeout_ms < 0) return poll_noting_triggers(pfds, nfds, nullptr);
+  const timespec wait{timeout_ms / 1000, static_cast<long>(timeout_ms % 1000) * 1'000'000};
+  return poll_noting_triggers(pfds, nfds, &wait);
 }
 
 bool trigger_pending(ArvFakeCamera* cam) {
@@ -159,11 +239,12 @@ extern "C" gint g_poll(GPollFD* fds, guint nfds, gint timeout) {
     t_end_window = true;
     return 0;
   }
-  if (timeout != 0 || cam == nullptr) return ::poll(pfds, nfds, timeout);
+  if (cam == nullptr) return ::poll(pfds, nfds, timeout);
+  if (timeout != 0) return poll_noting_triggers(pfds, nfds, timeout);
   const bool triggered = arv_fake_camera_is_in_software_trigger_mode(cam);
-  if (triggered && !trigger_pending(cam)) return ::poll(pfds, nfds, kIdleWaitMs);  // woken by the trigger's packet
+  if (triggered && !trigger_pending(cam)) return poll_noting_triggers(pfds, nfds, kIdleWaitMs);  // woken by the trigger's packet
   const timespec wait = until_next_grid_point(cam, triggered);
-  return ::ppoll(pfds, nfds, &wait, nullptr);
+  return poll_noting_triggers(pfds, nfds, &wait);
 }
 
 // The clock of the camera's own timing: CLOCK_REALTIME when the process started, then CLOCK_MONOTONIC.

@@ -80,6 +80,42 @@ TEST_F(GigeChaos, AKilledToolLeavesEveryFrameReadInTheTruth) {
 }
 
 // A camera that never answers: no open succeeds, and the truth has the fault and no frame.
+// A software-triggered frame is exposed at its trigger's arrival, as a camera's is, however late the
+// fake's process runs after it: here stopped for 60 ms right after each trigger's ack (a loaded
+// host). Before, the fake exposed when its thread got to the frame, or restamped the frame by its
+// lateness: 50-60 ms after the trigger by its truth and stamp, while the rig stamps the trigger's
+// tick (a fresh-clone suite run: a frame "61 ms after the rig's latest trigger").
+TEST_F(GigeChaos, ATriggeredFrameIsExposedAtItsTriggerHoweverLateTheFakeRuns) {
+  auto fake = start({});
+  auto c = cfg();
+  c.trigger = TriggerMode::kSoftware;
+  c.exposure_us = 5000;
+  AravisSource src(c);
+  src.open();
+  std::map<std::uint64_t, std::pair<Nanos, Nanos>> sent;  // frame id -> the trigger call's bracket
+  for (int i = 0; i < 5; ++i) {
+    const Nanos before = vehicle_now_ns();
+    ASSERT_TRUE(src.trigger());
+    const Nanos after = vehicle_now_ns();
+    fake.signal(SIGSTOP);
+    ::usleep(60'000);
+    fake.signal(SIGCONT);
+    auto frame = next_frame(src);
+    ASSERT_EQ(frame.status, CaptureStatus::kFrame) << frame.error;
+    sent[frame.frame.meta().seq] = {before, after};
+  }
+  src.close();
+  fake.stop(1000);
+  std::map<std::uint64_t, Nanos> acq;
+  for (const auto& u : truth::read(folder_.truth()).units) acq[static_cast<std::uint64_t>(u.unit & 0xffff)] = u.acq_ns;
+  for (const auto& [id, call] : sent) {
+    ASSERT_TRUE(acq.count(id)) << "frame " << id << " read but not in the truth";
+    EXPECT_GE(acq[id], call.first) << "frame " << id << " exposed before its trigger was sent";
+    EXPECT_LE(acq[id], call.second) << "frame " << id << " exposed " << static_cast<double>(acq[id] - call.second) * 1e-6
+                                    << " ms after its trigger was acknowledged";
+  }
+}
+
 TEST_F(GigeChaos, NeverAnswersIsNeverOpened) {
   auto fake = start({"camera.never_answers@0"});
   AravisSource src(cfg());
