@@ -321,7 +321,7 @@ class Checker {
       // excuse a stamp that moved then (nor in the settle after it, while a mapping that followed the
       // arrivals comes back). A LIDAR's mapped stamps may follow them, flagged (docs/faults.md).
       const std::uint64_t held_by = is_camera(t.device_class) ? network_hold_of(log, units, u) : 0;
-      if (ms(err) > bound && held_by == 0 && flagged(topic, s.acquisition_ns)) {
+      if (ms(err) > bound && held_by == 0 && flagged(topic, s.out_ns())) {
         ++t.stamps_flagged;
       } else if (ms(err) > bound) {
         ++t.stamps_outside;

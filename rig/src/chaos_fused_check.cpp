@@ -338,11 +338,11 @@ class FusedJudge {
       // Put in one by members' stamps off their truth, each flagged by its LIDAR, and the fused
       // cloud flagged as it went out: the rig's own warning that these sweeps' times are not to be
       // trusted, as a flagged stamp is (the matcher has nothing but the stamps to go by).
-      bool warned = topic_flagged(kFusedCloudTopic, set.stamp);
+      bool warned = topic_flagged(kFusedCloudTopic, cloud != nullptr ? cloud->out_ns() : set.stamp);
       for (const auto& m : members)
         if (const std::string e = own_stamp_error(m); !e.empty()) {
           why += (why.empty() ? " its stamps put them in one: " : ", ") + e;
-          warned = warned && topic_flagged(m.lidar->topic, m.scan->acquisition_ns);
+          warned = warned && topic_flagged(m.lidar->topic, m.scan->out_ns());
         }
       if (!why.empty() && warned) {
         ++t_.mixes_flagged;
@@ -362,7 +362,7 @@ class FusedJudge {
       const Nanos lo = earliest->truth->acq, hi = earliest->truth->first_intact;
       const Nanos err = set.stamp < lo ? lo - set.stamp : set.stamp > hi ? set.stamp - hi : 0;
       errors_.push_back(ms(err));
-      if (ms(err) > in_.bounds.lidar_stamp_ms && flagged(members, set.stamp)) {
+      if (ms(err) > in_.bounds.lidar_stamp_ms && flagged(members)) {
         ++t_.stamps_flagged;
       } else if (ms(err) > in_.bounds.lidar_stamp_ms) {
         ++t_.stamps_outside;
@@ -508,8 +508,9 @@ class FusedJudge {
     return it != in_.unsynchronized.end() &&
            std::any_of(it->second.begin(), it->second.end(), [t](const auto& iv) { return t >= iv.first && t < iv.second; });
   }
-  bool flagged(const std::vector<Member>& members, Nanos t) const {
-    return std::any_of(members.begin(), members.end(), [&](const Member& m) { return topic_flagged(m.lidar->topic, t); });
+  // A member's flag is held against when it went out (SampleRecord::out_ns), not its stamp.
+  bool flagged(const std::vector<Member>& members) const {
+    return std::any_of(members.begin(), members.end(), [&](const Member& m) { return topic_flagged(m.lidar->topic, m.scan->out_ns()); });
   }
 
   // Every scan a fused LIDAR published in the window: in exactly one sweep, or counted dropped.

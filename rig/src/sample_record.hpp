@@ -37,6 +37,11 @@ struct SampleRecord {
   std::uint32_t packets = 0;  // packets that made the sample (rig chaos holds it against the truth)
 
   [[nodiscard]] bool lost() const { return received_ns == 0; }
+  // When the rig had it out, on the host's clock, as its /diagnostics reports are stamped: what a
+  // flag ("stamp_sync: unsynchronized") is held against. Not the stamp: a stamp slewed after a host
+  // clock step lies up to the step after its publication (330 ms: a clock-step campaign's camera
+  // frames, published inside a flagged span, stamped in the 120 ms between two).
+  [[nodiscard]] Nanos out_ns() const { return publish_ns != 0 ? publish_ns : written_ns != 0 ? written_ns : acquisition_ns; }
 };
 
 // Each stage's latency in ms, where both its stamps are known.

@@ -160,8 +160,10 @@ TEST(ChaosCheck, AStampTwoMillisecondsOffIsCaughtAndAFirstPacketLostMovesNothing
   Result r = check(in);
   EXPECT_FALSE(r.invariants.at("stamps"));
   EXPECT_NEAR(r.topics.at(kTopic).stamp_error_max_ms, 2.0, 1e-9);
-  // The rig itself flagged the topic unsynchronized then (/diagnostics stamp_sync): its own warning.
-  in.unsynchronized[kTopic] = {{kT0 + 29 * kPeriod, kT0 + 31 * kPeriod}};
+  // The rig itself flagged the topic unsynchronized when it published the scan (/diagnostics
+  // stamp_sync): its own warning.
+  const Nanos out = in.samples[30].publish_ns;
+  in.unsynchronized[kTopic] = {{out - kPeriod, out + kPeriod}};
   r = check(in);
   EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
   EXPECT_EQ(r.topics.at(kTopic).stamps_flagged, 1u);
@@ -184,6 +186,28 @@ TEST(ChaosCheck, AStampTwoMillisecondsOffIsCaughtAndAFirstPacketLostMovesNothing
   EXPECT_FALSE(r.invariants.at("stamps"));
   EXPECT_EQ(r.topics.at(kTopic).unmatched, 1u);
   EXPECT_FALSE(r.invariants.at("accounted")) << "scan 31 itself was then never published";
+}
+
+// A flag is held against when the rig published the sample, on the host's clock as its
+// /diagnostics are, not against the stamp: after a host clock step back a slewed stamp lies up to
+// the step after its publication, and a clock-step campaign's camera frames, published while their
+// topic was flagged, were "unflagged" for stamps in the 120 ms between two flagged reports (the
+// step forward that undid the step parted them by more than a report's span).
+TEST(ChaosCheck, AFlagCoversTheSamplesPublishedWhileItHeldWhereverTheirStampsLie) {
+  Input in = honest();
+  in.samples[30].acquisition_ns += 2'000'000;  // off its truth, ~100 ms before its publication
+  const Nanos out = in.samples[30].publish_ns;
+  constexpr Nanos kSpan = 40'000'000;
+  in.unsynchronized[kTopic] = {{out - kSpan, out + kSpan}};
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).stamps_flagged, 1u);
+  // The same span around the stamp instead: the rig published it unflagged.
+  const Nanos stamp = in.samples[30].acquisition_ns;
+  in.unsynchronized[kTopic] = {{stamp - kSpan, stamp + kSpan}};
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("stamps"));
+  EXPECT_EQ(r.topics.at(kTopic).stamps_flagged, 0u);
 }
 
 TEST(ChaosCheck, AScanSplitInTwoIsPublishedTwice) {

@@ -170,11 +170,12 @@ TEST(ChaosFusedCheck, ASweepMixingRotationsByAMembersStampIsCaughtAndSaysWhy) {
 TEST(ChaosFusedCheck, ASweepMixingRotationsByStampsTheRigFlaggedIsItsOwnWarning) {
   Input in = left_slewed_into_the_previous_rotation();
   const Nanos slewed = acq(1, 11) - 110'000'000;
-  in.unsynchronized[topic_of(1)] = {{slewed - 1'000'000, acq(1, 12)}};
+  // Flagged from the slewed stamp to past the publication (a flag holds against the latter).
+  in.unsynchronized[topic_of(1)] = {{slewed - 1'000'000, acq(1, 14)}};
   Result r = check(in);
   EXPECT_FALSE(r.invariants.at("fused")) << "the fused topic said nothing";
   EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
-  in.unsynchronized[kFusedCloudTopic] = {{slewed - 1'000'000, acq(0, 12)}};
+  in.unsynchronized[kFusedCloudTopic] = {{slewed - 1'000'000, acq(0, 14)}};
   r = check(in);
   EXPECT_TRUE(r.all_held()) << result_text(r);
   EXPECT_EQ(r.topics.at(kFusedCloudTopic).mixes_flagged, 1u);
