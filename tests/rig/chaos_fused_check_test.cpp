@@ -210,6 +210,44 @@ TEST(ChaosFusedCheck, ASweepSayingCompleteWithoutALiveLidarsScanIsCaught) {
   EXPECT_TRUE(r.all_held()) << result_text(r);
 }
 
+// A sweep that says complete without a LIDAR whose scan of its true rotation was published, put so
+// by a member's stamp off its truth: caught, and said why. With that member's LIDAR and the fused
+// cloud flagged as they went out, it is the rig's own warning (mixes_flagged), as a mix by flagged
+// stamps is: the ten-minute campaign's 300 rpm front LIDAR "covered" a rotation by the left and
+// right LIDARs' stamps, slewed 120 ms early after a host clock step back.
+TEST(ChaosFusedCheck, ASweepCompleteWithoutALidarByStampsTheRigFlaggedIsItsOwnWarning) {
+  Input in = honest();
+  const Nanos slewed = acq(2, 15) - 110'000'000;
+  for (auto& s : in.samples)
+    if (s.topic == topic_of(2) && s.seq == seq_of(2, 15)) s.acquisition_ns = slewed;
+  in.fused.sets[15].members[2].stamp = slewed;
+  in.fused.sets[15].members.erase(in.fused.sets[15].members.begin() + 1);  // the left scan absent
+  in.fused.sets[15].stamp = slewed;
+  cloud_of(in, 15).acquisition_ns = slewed;
+  cloud_of(in, 15).packets = 2 * kParts;
+  in.fused.scans_dropped = 1;
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "absent: left (its scan seq 1015 was published); its stamps put them in one: right seq 2015's own "
+                              "stamp is -110.000 ms off its truth"))
+      << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).hidden_missing, 1u);
+  const auto out = [&](const std::string& topic, std::uint64_t seq) {
+    for (const auto& s : in.samples)
+      if (s.topic == topic && s.seq == seq) return s.out_ns();
+    return Nanos{0};
+  };
+  const Nanos right_out = out(topic_of(2), seq_of(2, 15)), cloud_out = out(kFusedCloudTopic, 15);
+  in.unsynchronized[topic_of(2)] = {{right_out - kPeriod, right_out + kPeriod}};
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused")) << "the fused topic said nothing";
+  in.unsynchronized[kFusedCloudTopic] = {{cloud_out - kPeriod, cloud_out + kPeriod}};
+  r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).mixes_flagged, 1u);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).hidden_missing, 0u);
+}
+
 TEST(ChaosFusedCheck, AFusedScanThatWasNeverPublishedIsCaught) {
   Input in = honest();
   in.fused.sets[20].members[0].seq = 777;  // no front scan has this seq
