@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "rig_process.hpp"
+#include "test_addresses.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/dds/types.hpp"
 
@@ -65,7 +66,8 @@ cameras:
 TEST(CameraRig, RigUpPublishesCamerasAndRestartsAKilledGigeFake) {
   test::TempDir dir;
   const std::string tag = std::to_string(::getpid());
-  const std::string addr = "127.0.0." + std::to_string(100 + ::getpid() % 100);
+  const auto claim = test::TestAddresses::take(100, 199);
+  const std::string addr = claim[0];
   const std::string gige = "e2e_gige_" + tag;
   const std::string usb = "e2e_usb_" + tag;
   const auto file = dir.write("cams.yaml", "rig: {name: cams, diagnostics_period_ms: 500}\ncameras:\n"

@@ -26,6 +26,7 @@
 #include "sensor_rig/lidar/mock/replay.hpp"
 #include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "status_value.hpp"
+#include "test_addresses.hpp"
 #include "wait.hpp"
 
 namespace sensor_rig::drivers {
@@ -85,11 +86,11 @@ struct GigeMock {
   ChildProcess fake;
 };
 
-// A camera triggered by `lidar` at `azimuth_deg`, on a GigE fake at 127.0.0.<host> (which gates
-// its stream on the software trigger: one frame per trigger) — started into `mock` — or an
+// A camera triggered by `lidar` at `azimuth_deg`, on a GigE fake at address k of `claim` (which
+// gates its stream on the software trigger: one frame per trigger) — started into `mock` — or an
 // in-process Aravis fake where no loopback address can be added. Returns whether it is GigE.
-bool triggered_camera(CameraConfig& c, const std::string& name, const std::string& lidar, double azimuth_deg, int host,
-                      GigeMock& mock) {
+bool triggered_camera(CameraConfig& c, const std::string& name, const std::string& lidar, double azimuth_deg,
+                      const test::TestAddresses& claim, std::size_t k, GigeMock& mock) {
   c.name = unique(name);
   c.frame_id = "camera_" + c.name;
   c.source.format = camera::PixelFormat::kBayerRG8;
@@ -101,7 +102,7 @@ bool triggered_camera(CameraConfig& c, const std::string& name, const std::strin
   c.lidar_trigger.lidar = lidar;
   c.lidar_trigger.azimuth_deg = azimuth_deg;
   c.lidar_trigger.latency_us = 100.0;
-  const std::string address = "127.0.0." + std::to_string(host);
+  const std::string address = claim[k];
   std::string why;
   mock.address = LoopbackAddress::take(address, why);
   const bool gige = mock.address.has_value();
@@ -135,8 +136,9 @@ void expect_fake_exposures(const LidarTriggerFigures& f, const dds::DriverStatus
 TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
   const LidarConfig l = front_lidar();
   CameraConfig c;
+  const auto claim = test::TestAddresses::take(140, 159);
   GigeMock mock;
-  const bool gige = triggered_camera(c, "trig_cam", l.name, 45.0, 140 + ::getpid() % 20, mock);  // a front-left camera
+  const bool gige = triggered_camera(c, "trig_cam", l.name, 45.0, claim, 0, mock);  // a front-left camera
 
   dds::Participant p;
   dds::StampsWriter stamps(p);
@@ -213,10 +215,11 @@ TEST(LidarTriggeredCamera, TriggersAtTheSweepCrossingAndStopsWithTheLidar) {
 TEST(LidarTriggeredCamera, StereoPairIsFiredTogetherStampsWithin1msPhaseMeasuredPerCamera) {
   const LidarConfig l = front_lidar();
   CameraConfig cams[2];
+  const auto claim = test::TestAddresses::take(160, 199, 2);
   GigeMock fakes[2];
   bool gige = true;
   for (int i = 0; i < 2; ++i) {
-    gige = triggered_camera(cams[i], i == 0 ? "trig_left" : "trig_right", l.name, 0.0, 160 + 2 * (::getpid() % 20) + i, fakes[i]) && gige;
+    gige = triggered_camera(cams[i], i == 0 ? "trig_left" : "trig_right", l.name, 0.0, claim, i, fakes[i]) && gige;
     cams[i].trigger_group = "stereo";
   }
   dds::Participant p;

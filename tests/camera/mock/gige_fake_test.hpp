@@ -1,8 +1,8 @@
 #pragma once
 // A test fixture with rig-fake-gige-camera on a loopback address of its own (leased: taken from
 // `lo` again when the test ends, also when it fails), a fault plan and a truth record per test.
-// kBase: the first of ten addresses 127.0.0.kBase.. the fixture's tests pick from by pid, so that
-// two test executables running at once never share a fake.
+// kBase: the first of ten addresses 127.0.0.kBase.. the fixture's tests pick from, one that no other
+// test process holds (test_addresses.hpp), so that two tests running at once never share a fake.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -13,13 +13,14 @@
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 #include "sensor_rig/camera/source.hpp"
 #include "sensor_rig/common/loopback_address.hpp"
+#include "test_addresses.hpp"
 
 namespace sensor_rig::camera::test {
 
 template <int kBase>
 class GigeFakeTest : public ::testing::Test {
  protected:
-  static std::string address() { return "127.0.0." + std::to_string(kBase + ::getpid() % 10); }
+  [[nodiscard]] std::string address() const { return claim_[0]; }
   void SetUp() override {
     std::string why;
     auto lease = LoopbackAddress::take(address(), why);
@@ -37,7 +38,7 @@ class GigeFakeTest : public ::testing::Test {
     return mock::start_gige_fake(o);
   }
   // 320x200 Bayer at 20 Hz from this test's fake.
-  static SourceConfig cfg() {
+  [[nodiscard]] SourceConfig cfg() const {
     SourceConfig c;
     c.device = address();
     c.format = PixelFormat::kBayerRG8;
@@ -46,6 +47,7 @@ class GigeFakeTest : public ::testing::Test {
     c.frame_rate = 20;
     return c;
   }
+  sensor_rig::test::TestAddresses claim_ = sensor_rig::test::TestAddresses::take(kBase, kBase + 9);  // before the lease, gone after it
   ChaosFolder folder_;
   std::vector<LoopbackAddress> lease_;
 };

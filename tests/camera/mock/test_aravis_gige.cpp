@@ -23,12 +23,17 @@
 #include "glib_log_counter.hpp"
 #include "next_frame.hpp"
 #include "open_at_once.hpp"
+#include "test_addresses.hpp"
 
 namespace sensor_rig::camera {
 namespace {
 
-// Per-process addresses: a concurrent run in another build dir must not share a fake.
-std::string address(int k) { return "127.0.0." + std::to_string(20 + k + 10 * (::getpid() % 20)); }
+// Four addresses this process holds alone among test processes (test_addresses.hpp) for its whole
+// run: a concurrent test, or a run in another build dir, never shares a fake.
+std::string address(int k) {
+  static const sensor_rig::test::TestAddresses claim = sensor_rig::test::TestAddresses::take(20, 219, 4);
+  return claim[static_cast<std::size_t>(k)];
+}
 
 class GigeFake : public ::testing::Test {
  protected:

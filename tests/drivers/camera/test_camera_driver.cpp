@@ -18,6 +18,7 @@
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 #include "status_value.hpp"
+#include "test_addresses.hpp"
 #include "wait.hpp"
 #include "wait_bounds.hpp"
 
@@ -311,7 +312,8 @@ TEST(CameraDriver, StereoPairOnOneSoftwareTickStampsWithin1ms) {
 // come out 37 s before receipt: the driver finds them outside the arrival window, publishes the
 // mapped ticks instead and says the timescale is wrong; /diagnostics shows the lock.
 TEST(CameraDriver, PtpLockedCameraStampsDeviceTimeAndReportsTheLock) {
-  const std::string addr = "127.0.0." + std::to_string(230 + ::getpid() % 20);
+  const auto claim = test::TestAddresses::take(230, 249);
+  const std::string addr = claim[0];
   std::string why;
   const auto lease = LoopbackAddress::take(addr, why);
   if (!lease) GTEST_SKIP() << why;

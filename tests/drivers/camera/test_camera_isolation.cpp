@@ -22,17 +22,18 @@
 #include "sensor_rig/dds/types.hpp"
 #include "sensor_rig/drivers/camera/camera_driver.hpp"
 #include "status_value.hpp"
+#include "test_addresses.hpp"
 #include "wait.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
 
 
-// Two GigE fakes on leased loopback addresses of their own (127.0.0.216..225, by pid), each with
-// its plan and truth record.
+// Two GigE fakes on leased loopback addresses of their own (two of 127.0.0.216..225 no other test
+// process holds: test_addresses.hpp), each with its plan and truth record.
 class CameraIsolation : public ::testing::Test {
  protected:
-  static std::string addr(int k) { return "127.0.0." + std::to_string(216 + 2 * (::getpid() % 5) + k); }
+  [[nodiscard]] std::string addr(int k) const { return claim_[static_cast<std::size_t>(k)]; }
   void SetUp() override {
     for (int k = 0; k < 2; ++k) {
       std::string why;
@@ -51,7 +52,7 @@ class CameraIsolation : public ::testing::Test {
     return camera::mock::start_gige_fake(o);
   }
   // A driver of fake k named `prefix` + pid; in a trigger group: software-triggered at 10 Hz.
-  static CameraConfig driver_cfg(int k, const std::string& prefix, const std::string& group = "") {
+  [[nodiscard]] CameraConfig driver_cfg(int k, const std::string& prefix, const std::string& group = "") const {
     CameraConfig c;
     c.name = prefix + std::to_string(::getpid());
     c.frame_id = "camera_" + c.name;
@@ -64,7 +65,7 @@ class CameraIsolation : public ::testing::Test {
     c.info = camera::uncalibrated(320, 200);
     return c;
   }
-  static camera::SourceConfig cfg(int k) {
+  [[nodiscard]] camera::SourceConfig cfg(int k) const {
     camera::SourceConfig c;
     c.device = addr(k);
     c.format = camera::PixelFormat::kBayerRG8;
@@ -73,6 +74,7 @@ class CameraIsolation : public ::testing::Test {
     c.frame_rate = 20;
     return c;
   }
+  test::TestAddresses claim_ = test::TestAddresses::take(216, 225, 2);  // before the leases, gone after them
   camera::test::ChaosFolder folder_[2];
   std::vector<LoopbackAddress> leases_;
 };
