@@ -126,6 +126,29 @@ std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths
   return out;
 }
 
+std::vector<SlewSpan> slews_after_steps_back(const std::vector<truth::Log>& truths) {
+  std::vector<SlewSpan> out;
+  for (const auto& log : truths)
+    for (const auto& f : log.faults) {
+      if (f.kind != "host.clock_step") continue;
+      const auto pos = f.detail.find("ms=");
+      if (pos == std::string::npos) continue;
+      const Nanos by = static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6);
+      if (by == 0) continue;
+      // Back at `at` (by < 0), or at the return of a step forward (by > 0): as doubled_vehicle_time.
+      const Nanos step = by < 0 ? -by : by, at = by < 0 ? f.at_ns : f.until_ns + by;
+      out.push_back({at - step, at + 11 * step, step});
+    }
+  return out;
+}
+
+Nanos slew_bound(const std::vector<SlewSpan>& slews, Nanos t) {
+  Nanos bound = 0;
+  for (const auto& s : slews)
+    if (t >= s.begin && t < s.end) bound += s.step;
+  return bound;
+}
+
 std::vector<HeldInterval> netem_delays(const std::vector<truth::Log>& truths) {
   std::vector<HeldInterval> out;
   for (const auto& log : truths)

@@ -77,6 +77,17 @@ std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths
 
 std::vector<HeldInterval> netem_delays(const std::vector<truth::Log>& truths);
 
+// Each host clock step back (a host.clock_step back, or the return of one forward) and the time its
+// slew may run: a node holds a step back and slews it out at 10 % of the elapsed time, its stamps
+// late by at most the step meanwhile (timesync/README.md "Realtime steps"). [begin, end) spans the
+// step time in the clock before and after it, and the 10 steps' lengths of slew after it.
+struct SlewSpan {
+  Nanos begin, end, step;
+};
+std::vector<SlewSpan> slews_after_steps_back(const std::vector<truth::Log>& truths);
+// How late a stamp at t may be by those slews: the steps whose slew may still run at t, summed.
+Nanos slew_bound(const std::vector<SlewSpan>& slews, Nanos t);
+
 // Slots of a CAN message's period in which the ECU made no frame while its alive counter stood still
 // (dbw.stuck_counter), the later frame of each such silence in [begin, end). On the bus a silent slot
 // and a frame lost there are the same: a frozen counter shows no jump, only the period shows the gap,

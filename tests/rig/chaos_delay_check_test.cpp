@@ -150,6 +150,30 @@ TEST(ChaosCheck, ACameraStampThatFollowsAHeldNetworkIsAnErrorFlaggedOrNot) {
   EXPECT_EQ(r.topics.at(topic).stamps_flagged, 10u);
 }
 
+// The hold 0.5 s after a host clock step back of 500 ms (still undone 5 s later): the camera node
+// holds the step and slews it out, its stamps late by up to the step and flagged (timesync
+// "Realtime steps"). Late by what the slew may leave, flagged: the step's, excused in the hold too;
+// later than the step could leave: the hold's, caught (10-minute campaign, seed 2: corner_rear_left
+// 118-158 ms late in a 50 ms hold 2.5 s after a -500 ms step, flagged, was "the network held it").
+TEST(ChaosCheck, AHeldCameraFrameLateByAClockStepsSlewFlaggedIsTheSteps) {
+  Input in = held_camera(1);
+  const Nanos step_at = kT0 + 15 * kPeriod;
+  in.truths.back().faults.push_back(truth::FaultRecord{6, "host.clock_step", step_at, step_at + 5 * kSecond, -1, "ms=-500, back after the fault"});
+  in.events.push_back(faults::FaultEvent{6, "host.clock_step", "", 1.5, 5.0, {{"ms", "-500"}}});
+  for (auto& s : in.samples)
+    if (held_frame(static_cast<std::int64_t>(s.seq))) s.acquisition_ns += 200'000'000;
+  in.unsynchronized[kHeldCamera] = {{kT0 + 15 * kPeriod, kT0 + 32 * kPeriod + kHeldDelay}};
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("stamps")) << result_text(r);
+  EXPECT_EQ(r.topics.at(kHeldCamera).stamps_flagged, 10u);
+  // 600 ms late: more than the step could leave.
+  for (auto& s : in.samples)
+    if (held_frame(static_cast<std::int64_t>(s.seq))) s.acquisition_ns += 400'000'000;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("stamps"));
+  EXPECT_EQ(r.topics.at(kHeldCamera).stamps_outside, 10u);
+}
+
 // A camera back 0.3 s before the hold (camera.dies just ended: its stream began at frame 17) has no
 // mapping yet to hold the late arrivals against: its stamps may follow them, flagged, as a LIDAR's
 // (whole-rig campaign seed 25, corner_rear_left: 2 runs of 3 broken, flagged). Unflagged, still
