@@ -44,7 +44,7 @@ std::int64_t SweepMatcher::rotation_of(const Source& src, Nanos stamp) const noe
 // of the vehicle clock reaches the sources one scan after another: until every live source has
 // shown it, the ones that stepped keep their offset (their scans then match each other's, never
 // an unstepped scan of another rotation); then the boundary moves by the step.
-void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span) {
+void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span, bool returning) {
   const Nanos p = cfg_.period_ns, tolerance = p / 8;
   const Nanos phase = floor_mod(stamp, p);
   if (!src.seen) {
@@ -64,10 +64,14 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
   if (std::abs(jump) > tolerance) {
     ++counters_.phase_steps;
     const bool none_pending = std::all_of(sources_.begin(), sources_.end(), [](const Source& s) { return s.offset == 0; });
-    if (std::abs(unexplained) <= tolerance && none_pending) {
+    if ((std::abs(unexplained) <= tolerance || returning) && none_pending) {
       // Its own phase, told by the arrivals at once: the boundary is placed anew now. Held as a
       // possible clock step, the scans of the whole-rig campaign's front LIDAR returning from
       // 300 to 600 rpm (a turn cut to 165 ms) were fused with the rotation before their own.
+      // Or back after it was dead (a restart, a kill): a step of the clock meanwhile would have
+      // shown in the others' scans first (none is pending), and across the gap its arrivals say
+      // nothing. Held as a possible step, a front LIDAR killed for a second and back 61 ms later in
+      // the rotation had its first scan fused with the next rotation (ten-minute campaign, seed 2).
       place_boundary(true);
       return;
     }
@@ -103,6 +107,22 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
     place_boundary(true);
     return;
   }
+}
+
+// Where the turn began that a scan is the tail of, when its head was lost: a scan short of its turn
+// (one rotation, the rig's rpm) whose stamp is off the source's phase while its end lies where a
+// whole turn from the phase ends. Else its stamp.
+Nanos SweepMatcher::head_lost_turn_began(const Source& src, Nanos stamp, Nanos span) const noexcept {
+  const Nanos p = cfg_.period_ns, tolerance = p / 8;
+  if (!src.seen || src.rotations != 1 || src.above_rpm || src.offset != 0 || span <= 0 || span >= p - p / 4) return stamp;
+  const Nanos turn = src.last_span >= p - p / 8 && src.last_span <= p + p / 8 ? src.last_span : p;
+  const Nanos began = stamp + span - turn;
+  // Its stamp is past the start of the turn after its predecessor's: scans above the rig's rpm
+  // (following each other by half a turn) and a clock step back are not this.
+  if (stamp - src.last_stamp < p + tolerance) return stamp;
+  if (std::abs(signed_circular(stamp - src.phase, p)) <= tolerance) return stamp;  // on its phase: its tail was lost
+  if (std::abs(signed_circular(began - src.phase, p)) > tolerance) return stamp;   // neither end on it
+  return began;
 }
 
 // A step of the vehicle clock shows in every source's scans that begin after it. The moved source's
@@ -200,13 +220,25 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
     return out;
   }
   auto& src = sources_[source];
+  const bool returning = src.seen && !src.alive;  // a sweep waited for it in vain: stopped, killed, restarted
   src.alive = true;  // delivering, even if this scan comes too late
+  const Nanos p = cfg_.period_ns;
+  // A scan short of its turn that ends where the source's turns end, its stamp off the source's
+  // phase, lost its head (a stuck encoder, packets lost at the start: the decoder stamps its first
+  // intact firing): it is the tail of the turn that began on the phase, and is placed as that turn.
+  // By its stamp it joined the next rotation (ten-minute campaign, seed 2: the left LIDAR's first
+  // scan after a lidar.stuck_azimuth, 16 of 64 packets stamped 75 ms into its turn, fused with the
+  // others' next rotation).
+  if (const Nanos began = head_lost_turn_began(src, stamp_ns, span_ns); began != stamp_ns) {
+    span_ns = stamp_ns + span_ns - began;
+    stamp_ns = began;
+    ++counters_.head_lost_scans;
+  }
   // The periods this scan spans (k). Its span must be a whole number of periods (within P/8, at
   // most kMaxRotations) and its stamp step from the source's previous scan agree: k periods, or
   // one period where the source just slowed down. A span that is neither (a clock step inside the
   // scan: the campaign's -500 ms host steps made 600 ms spans) says nothing. A scan short of its
   // turn (lost packets) keeps the source's k while its stamps step by that many periods.
-  const Nanos p = cfg_.period_ns;
   const Nanos delta = src.seen ? stamp_ns - src.last_stamp : -1;
   const auto near = [&](Nanos a, Nanos b, Nanos tol) { return std::abs(a - b) <= tol; };
   const Nanos whole = span_ns > 0 ? (span_ns + p / 2) / p : 0;
@@ -231,7 +263,7 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
   if (!short_of_a_turn) src.above_rpm = false;
   else if (delta > 0 && delta < p - p / 4) src.above_rpm = true;
   // The phase first, so that a source's first scan never lies on the boundary.
-  track_phase(src, stamp_ns, arrival_ns, span_ns);
+  track_phase(src, stamp_ns, arrival_ns, span_ns, returning);
   place_boundary(false);
   const std::int64_t rotation = rotation_of(src, stamp_ns);
   src.last_stamp = stamp_ns;

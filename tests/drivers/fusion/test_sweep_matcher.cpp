@@ -397,6 +397,36 @@ TEST(SweepMatcher, OneUnmovedWitnessRefutesAStepAtOnce) {
   }
 }
 
+// A LIDAR whose encoder stuck for five turns: its first scan after lost its head, 24 of 100 ms
+// stamped 75 ms into its turn (the decoder stamps the first intact firing), its end where its turns
+// end. By that stamp it lies past the boundary (72.5 ms), in the next rotation; it is the tail of
+// its own: placed there, or dropped as late, never fused with the next rotation, and the next scan
+// is not a second one of that rotation (ten-minute campaign, seed 2: the left LIDAR after a
+// lidar.stuck_azimuth, 16 of 64 packets, fused with the others' next rotation).
+TEST(SweepMatcher, AScanThatLostItsHeadIsPlacedAsTheTurnItIsTheTailOf) {
+  auto scans = rig_scans(kPhases, 0, 40);
+  erase_scans(scans, 0, 10, 15);
+  TrueScan& tail = find_scan(scans, 0, 15);
+  tail.stamp += 75 * kMs;
+  tail.span = 24 * kMs;
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  EXPECT_EQ(mixed_sweeps(run), 0u);
+  EXPECT_EQ(run.m_.counters().head_lost_scans, 1u);
+  EXPECT_EQ(run.m_.counters().repeated_scans, 0u);
+  ASSERT_NE(run.sweep_of(16), nullptr);
+  EXPECT_TRUE(run.sweep_of(16)->complete);
+  // Its tail on its phase instead (the turn's last packets lost): placed by its stamp, as before.
+  auto cut = rig_scans(kPhases, 0, 40);
+  find_scan(cut, 0, 15).span = 24 * kMs;
+  SimulatedRig run2(3);
+  run2.feed(cut);
+  run2.expect_truth(cut.size());
+  EXPECT_EQ(run2.m_.counters().head_lost_scans, 0u);
+  EXPECT_EQ(mixed_sweeps(run2), 0u);
+}
+
 // A LIDAR back from 300 to 600 rpm on another phase: its last slow turn cut short (165 ms, the mock's
 // rotor keeps turning as a motor would), its next scans 35 ms earlier in the rotation. Its arrivals
 // moved with its stamps, so no clock stepped: its phase is taken at once. Before, held as a possible

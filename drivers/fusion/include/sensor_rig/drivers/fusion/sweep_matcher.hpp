@@ -27,6 +27,11 @@
 // (its last point's time, rounded to whole periods); a scan that lacks part of its turn keeps the source's k while its
 // stamps still step by k periods. Before, a 300 rpm LIDAR never made the fused cloud: every other
 // sweep waited for it in vain, declared it dead, and its next scan came after its sweep was written.
+//
+// A scan short of its turn whose stamp is off its source's phase while its end lies where the
+// source's turns end lost its head (a stuck encoder; the decoder stamps its first intact firing): it
+// is placed as the turn it is the tail of. A source back after it was dead takes a phase jump as its
+// own at once: a clock step meanwhile would have shown in the others' scans first.
 
 #include <cstdint>
 #include <deque>
@@ -54,6 +59,7 @@ struct SweepCounters {
   std::uint64_t clock_steps_back = 0;    // a source's stamps went back (a new timeline)
   std::uint64_t phase_steps = 0;         // a source's phase jumped (a clock step, or its own phase changed)
   std::uint64_t covered = 0;             // sources absent from a sweep whose rotation their last (slower) scan spans
+  std::uint64_t head_lost_scans = 0;     // placed where their turn began: short of it, their stamp off the phase, their end on it
   std::vector<std::uint64_t> missing;    // per source: emitted sweeps without its scan
 };
 
@@ -115,7 +121,8 @@ class SweepMatcher {
   };
 
   [[nodiscard]] std::int64_t rotation_of(const Source& src, Nanos stamp) const noexcept;
-  void track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span);
+  void track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span, bool returning);
+  [[nodiscard]] Nanos head_lost_turn_began(const Source& src, Nanos stamp, Nanos span) const noexcept;
   [[nodiscard]] Nanos timeline_step(const Source& src, Nanos stamp, Nanos arrival, Nanos span) const noexcept;
   void place_boundary(bool anew);
   [[nodiscard]] bool step_refuted(const Source& moved) const noexcept;

@@ -1,0 +1,96 @@
+// The sweep matcher on scans of a real campaign (campaign_replays.hpp), as the fusion node met them:
+// every sweep it emits holds scans of one true rotation. Both stretches were mixed by the matcher of
+// stop 44 (replayed: one sweep each) and are what its rules for a scan that lost its head and for a
+// LIDAR back from the dead are for.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "campaign_replays.hpp"
+#include "sensor_rig/common/floor_div.hpp"
+#include "sensor_rig/drivers/fusion/sweep_matcher.hpp"
+
+namespace sensor_rig::drivers {
+namespace {
+
+constexpr Nanos kReplayPeriod = 100 * kMs;
+
+struct Replayed {
+  std::vector<std::vector<replay::Scan>> sweeps;  // as emitted
+  std::vector<replay::Scan> dropped;
+  SweepCounters counters;
+};
+
+// The node's loop: each scan pushed at its arrival, ready() after it and at every deadline between.
+Replayed run(const std::vector<replay::Scan>& scans) {
+  SweepMatcher m({3, kReplayPeriod, 150 * kMs});
+  Replayed out;
+  std::map<std::uint64_t, std::vector<replay::Scan>> open;
+  const auto drain = [&](Nanos now) {
+    while (auto c = m.ready(now)) {
+      out.sweeps.push_back(std::move(open[c->id]));
+      open.erase(c->id);
+    }
+  };
+  for (const auto& s : scans) {
+    for (Nanos d = m.deadline(); d >= 0 && d <= s.arrival; d = m.deadline()) drain(d);
+    const auto place = m.push(s.source, s.stamp, s.arrival, s.span);
+    if (place.late)
+      out.dropped.push_back(s);
+    else
+      open[place.sweep].push_back(s);
+    drain(s.arrival);
+  }
+  for (Nanos d = m.deadline(); d >= 0; d = m.deadline()) drain(d);
+  out.counters = m.counters();
+  return out;
+}
+
+// The true rotation of a scan: periods from the boundary in the middle of the widest gap between
+// the LIDARs' true phases (the fused judge's rule).
+std::int64_t rotation(Nanos truth, Nanos boundary) { return floor_div(truth - boundary, kReplayPeriod); }
+
+std::string describe(const std::vector<replay::Scan>& sweep) {
+  std::string s;
+  for (const auto& m : sweep) s += " src " + std::to_string(m.source) + " true " + std::to_string(m.truth / kMs) + " ms;";
+  return s;
+}
+
+// The left LIDAR's first scan after its encoder stuck (16 of 64 packets, stamped 75 ms into its
+// turn) is the tail of its turn: placed as that turn (there, its sweep gone, dropped and counted),
+// never fused with the front and right LIDARs' next rotation. True phases: front 0, left 20.5,
+// right 98.9 ms: the boundary at 59.7 ms.
+TEST(SweepMatcherReplay, AScanAfterAStuckEncoderIsNotFusedWithTheNextRotation) {
+  const Replayed r = run(replay::kStuckLeft);
+  constexpr Nanos kBoundary = 59'700'000;
+  for (const auto& sweep : r.sweeps)
+    for (const auto& m : sweep) EXPECT_EQ(rotation(m.truth, kBoundary), rotation(sweep.front().truth, kBoundary)) << describe(sweep);
+  EXPECT_EQ(r.counters.head_lost_scans, 1u);
+  EXPECT_LE(r.dropped.size(), 2u);
+}
+
+// The front LIDAR back from a kill 61 ms later in its turn, its first scan 50 ms late: its phase is
+// its own (it was dead), so its scans join the rotation of their true acquisition. True phases
+// before: right 26.5, front 39.4, left 73.0 ms (the boundary at 99.75 ms); after: front 0 (49.75 ms).
+// Sweeps with scans from both sides of the move are its regrouping and not judged here.
+TEST(SweepMatcherReplay, ALidarBackFromAKillIsNotFusedWithAnotherRotation) {
+  const Replayed r = run(replay::kFrontKilled);
+  constexpr Nanos kBack = 1'900'000'000, kBefore = 99'750'000, kAfter = 49'750'000;
+  std::size_t judged = 0;
+  for (const auto& sweep : r.sweeps) {
+    const bool after = sweep.front().truth >= kBack;
+    if (std::any_of(sweep.begin(), sweep.end(), [&](const replay::Scan& m) { return (m.truth >= kBack) != after; })) continue;
+    const Nanos boundary = after ? kAfter : kBefore;
+    for (const auto& m : sweep) EXPECT_EQ(rotation(m.truth, boundary), rotation(sweep.front().truth, boundary)) << describe(sweep);
+    ++judged;
+  }
+  EXPECT_GE(judged, r.sweeps.size() - 2);
+  EXPECT_LE(r.dropped.size(), 3u);
+}
+
+}  // namespace
+}  // namespace sensor_rig::drivers
