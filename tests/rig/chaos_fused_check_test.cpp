@@ -599,6 +599,51 @@ TEST(ChaosFusedCheck, ASlowerLidarCoversTheRotationsItsScanSpansAStoppedOneDoesN
   EXPECT_EQ(r.topics.at(kFusedCloudTopic).hidden_missing, 5u);
 }
 
+// The matcher's boundary and the judge's may lie in different gaps where two are nearly equal: a
+// slower front LIDAR's scan (two turns, begun 2 ms before the left's) in a sweep of its own, and the
+// left and right scans of its rotation in the next, saying complete: the front's points of that time
+// are in the cloud, in the sweep its scan began in (the matcher's `covered`): held (ten-minute
+// campaign, seed 2: a 300 rpm front's turn cut short on its return to 600 rpm, "complete with 2 of
+// 3"). The same sweep saying complete while the front's scan was never fused is caught.
+TEST(ChaosFusedCheck, ASlowerLidarsScanInASweepOfItsOwnCoversTheSweepItSpans) {
+  Input in = honest();
+  in.events.push_back(faults::FaultEvent{2, "lidar.rpm_change", "front", 1.0, 1.0, {{"rpm", "300"}}});
+  in.truths[0].faults.push_back(truth::FaultRecord{2, "lidar.rpm_change", kT0 + 1'000'000'000, kT0 + 2'000'000'000, 10, ""});
+  for (int u = 11; u < 20; u += 2) {
+    remove_scans(in, 0, u, u + 1);
+    without(in, u, 0, false);
+  }
+  for (auto& unit : in.truths[0].units)
+    if (unit.unit >= 10 && unit.unit < 20) unit.parts = 2 * kParts;
+  in.truths[0].parts.clear();
+  std::uint64_t seq = 0;
+  for (const auto& unit : in.truths[0].units)
+    for (std::uint32_t q = 0; q < unit.parts; ++q) {
+      const Nanos t = unit.acq_ns + q * (kPeriod / kParts);
+      in.truths[0].parts.push_back(truth::PartRecord{seq++, unit.unit, t, 0, t, truth::Fate::kSent, 0});
+    }
+  for (auto& x : in.samples)
+    if (x.topic == topic_of(0) && x.seq >= seq_of(0, 10) && x.seq < seq_of(0, 20)) x.packets = 2 * kParts;
+  for (int u = 10; u < 20; u += 2) cloud_of(in, static_cast<std::uint64_t>(u)).packets += kParts;
+  // Rotation 12: the front's scan alone in sweep 100, the left and right in sweep 12.
+  without(in, 12, 0, false);
+  cloud_of(in, 12).packets = 2 * kParts;
+  in.fused.sets.push_back(FusedSet{100, acq(0, 12), {member(0, 12)}});
+  in.samples.push_back(cloud(100, acq(0, 12), 2 * kParts, 2 * kParts));  // partial: the left and right missing
+  in.monitor[kFusedCloudTopic].received += 1;
+  Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).hidden_missing, 0u);
+  // Never fused: sweep 100 gone, its scan counted dropped; sweep 12 still says complete.
+  in.fused.sets.pop_back();
+  in.samples.pop_back();
+  in.monitor[kFusedCloudTopic].received -= 1;
+  in.fused.scans_dropped = 1;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("fused"));
+  EXPECT_TRUE(example_says(r, "sweep 12 (stamped at 1.202 s) says complete (missing 0) with 2 of 3 LIDARs; absent: front")) << result_text(r);
+}
+
 TEST(ChaosFusedCheck, NotJudgedWithoutFusion) {
   Input in = honest();
   in.fused = FusedInput{};

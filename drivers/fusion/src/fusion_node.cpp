@@ -392,6 +392,7 @@ dds::DriverStatus FusionNode::status() const {
   s.add_number("repeated_scans", c.repeated_scans);
   s.add_number("clock_steps_back", c.clock_steps_back);
   s.add_number("covered_by_slower", c.covered);
+  s.add_number("head_lost_scans", c.head_lost_scans);
   s.add_number("dropped_backlog", m.dropped_backlog);
   s.add_number("points_last_sweep", m.last_points);
   s.add_number("lidars_last_sweep", m.last_sources);
