@@ -111,34 +111,39 @@ Nanos match_tolerance(const std::vector<UnitTruth>& units) {
   return std::max<Nanos>(gaps[gaps.size() / 2] / 2, 1'000'000);
 }
 
-std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths) {
-  std::vector<Interval> out;
+namespace {
+
+// Each host clock step back the host truth records: a host.clock_step back at `at` (`at` was read
+// before the step), or the return of one forward at `until` (in the clock as it was), and its size.
+struct StepBack {
+  Nanos at, step;
+};
+std::vector<StepBack> steps_back(const std::vector<truth::Log>& truths) {
+  std::vector<StepBack> out;
   for (const auto& log : truths)
     for (const auto& f : log.faults) {
       if (f.kind != "host.clock_step") continue;
       const auto pos = f.detail.find("ms=");
       if (pos == std::string::npos) continue;
       const Nanos by = static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6);
-      // `at` was read before the step; the step is undone at `until` (in the clock as it was).
-      if (by < 0) out.push_back({f.at_ns + by, f.at_ns});
-      if (by > 0) out.push_back({f.until_ns, f.until_ns + by});
+      if (by < 0) out.push_back({f.at_ns, -by});
+      if (by > 0) out.push_back({f.until_ns + by, by});
     }
+  return out;
+}
+
+}  // namespace
+
+// The host's clock read [at - step, at) a second time after each step back.
+std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths) {
+  std::vector<Interval> out;
+  for (const auto& s : steps_back(truths)) out.push_back({s.at - s.step, s.at});
   return out;
 }
 
 std::vector<SlewSpan> slews_after_steps_back(const std::vector<truth::Log>& truths) {
   std::vector<SlewSpan> out;
-  for (const auto& log : truths)
-    for (const auto& f : log.faults) {
-      if (f.kind != "host.clock_step") continue;
-      const auto pos = f.detail.find("ms=");
-      if (pos == std::string::npos) continue;
-      const Nanos by = static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6);
-      if (by == 0) continue;
-      // Back at `at` (by < 0), or at the return of a step forward (by > 0): as doubled_vehicle_time.
-      const Nanos step = by < 0 ? -by : by, at = by < 0 ? f.at_ns : f.until_ns + by;
-      out.push_back({at - step, at + 11 * step, step});
-    }
+  for (const auto& s : steps_back(truths)) out.push_back({s.at - s.step, s.at + 11 * s.step, s.step});
   return out;
 }
 

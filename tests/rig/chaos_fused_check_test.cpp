@@ -564,32 +564,43 @@ TEST(ChaosFusedCheck, ALidarGoingAboveTheRigsRpmPlacesTheBoundaryAnew) {
   EXPECT_LE(r.topics.at(kFusedCloudTopic).mixes_regrouped, 2u);
 }
 
+// `lidar` gone from the odd rotations 10..19 (lidar.rpm_change to 300 rpm from 1 s to 2 s): the
+// sweeps of those rotations without it, saying complete.
+void odd_rotations_gone(Input& in, std::size_t lidar) {
+  in.events.push_back(faults::FaultEvent{2, "lidar.rpm_change", kNames[lidar], 1.0, 1.0, {{"rpm", "300"}}});
+  in.truths[lidar].faults.push_back(truth::FaultRecord{2, "lidar.rpm_change", kT0 + 1'000'000'000, kT0 + 2'000'000'000, 10, ""});
+  for (int u = 11; u < 20; u += 2) {
+    remove_scans(in, lidar, u, u + 1);
+    without(in, u, lidar, false);
+  }
+}
+
+// `lidar` at 300 rpm for rotations 10..19: its scans of the even ones span two rotations (twice the
+// packets, at the same rate), and the sweeps they are in count them.
+void slower_lidar(Input& in, std::size_t lidar) {
+  odd_rotations_gone(in, lidar);
+  for (auto& unit : in.truths[lidar].units)
+    if (unit.unit >= 10 && unit.unit < 20) unit.parts = 2 * kParts;
+  in.truths[lidar].parts.clear();
+  std::uint64_t seq = 0;
+  for (const auto& unit : in.truths[lidar].units)
+    for (std::uint32_t q = 0; q < unit.parts; ++q) {
+      const Nanos t = unit.acq_ns + q * (kPeriod / kParts);
+      in.truths[lidar].parts.push_back(truth::PartRecord{seq++, unit.unit, t, 0, t, truth::Fate::kSent, 0});
+    }
+  for (auto& x : in.samples)
+    if (x.topic == topic_of(lidar) && x.seq >= seq_of(lidar, 10) && x.seq < seq_of(lidar, 20)) x.packets = 2 * kParts;
+  for (int u = 10; u < 20; u += 2) cloud_of(in, static_cast<std::uint64_t>(u)).packets += kParts;
+}
+
 // The left LIDAR at 300 rpm for rotations 10..19: each of its scans spans two rotations (twice the
 // packets). The sweeps of the rotations its scans began in hold them; the others lack nothing and
 // say complete without it (the fusion's rule for a slower LIDAR): held. The same sweeps saying
 // complete while the left LIDAR had stopped (its scan of one rotation only) are caught.
 TEST(ChaosFusedCheck, ASlowerLidarCoversTheRotationsItsScanSpansAStoppedOneDoesNot) {
   Input slow = honest(), stopped = honest();
-  for (Input* in : {&slow, &stopped}) {
-    in->events.push_back(faults::FaultEvent{2, "lidar.rpm_change", "left", 1.0, 1.0, {{"rpm", "300"}}});
-    in->truths[1].faults.push_back(truth::FaultRecord{2, "lidar.rpm_change", kT0 + 1'000'000'000, kT0 + 2'000'000'000, 10, ""});
-    for (int u = 11; u < 20; u += 2) {
-      remove_scans(*in, 1, u, u + 1);
-      without(*in, u, 1, false);
-    }
-  }
-  for (auto& unit : slow.truths[1].units)
-    if (unit.unit >= 10 && unit.unit < 20) unit.parts = 2 * kParts;  // a whole scan: two rotations of packets
-  slow.truths[1].parts.clear();  // the parts again, each unit's packets at the same rate
-  std::uint64_t seq = 0;
-  for (const auto& unit : slow.truths[1].units)
-    for (std::uint32_t q = 0; q < unit.parts; ++q) {
-      const Nanos t = unit.acq_ns + q * (kPeriod / kParts);
-      slow.truths[1].parts.push_back(truth::PartRecord{seq++, unit.unit, t, 0, t, truth::Fate::kSent, 0});
-    }
-  for (auto& x : slow.samples)
-    if (x.topic == topic_of(1) && x.seq >= seq_of(1, 10) && x.seq < seq_of(1, 20)) x.packets = 2 * kParts;
-  for (int u = 10; u < 20; u += 2) cloud_of(slow, static_cast<std::uint64_t>(u)).packets += kParts;
+  slower_lidar(slow, 1);
+  odd_rotations_gone(stopped, 1);
   Result r = check(slow);
   EXPECT_TRUE(r.all_held()) << result_text(r);
   EXPECT_EQ(r.topics.at(kFusedCloudTopic).hidden_missing, 0u);
@@ -607,24 +618,7 @@ TEST(ChaosFusedCheck, ASlowerLidarCoversTheRotationsItsScanSpansAStoppedOneDoesN
 // 3"). The same sweep saying complete while the front's scan was never fused is caught.
 TEST(ChaosFusedCheck, ASlowerLidarsScanInASweepOfItsOwnCoversTheSweepItSpans) {
   Input in = honest();
-  in.events.push_back(faults::FaultEvent{2, "lidar.rpm_change", "front", 1.0, 1.0, {{"rpm", "300"}}});
-  in.truths[0].faults.push_back(truth::FaultRecord{2, "lidar.rpm_change", kT0 + 1'000'000'000, kT0 + 2'000'000'000, 10, ""});
-  for (int u = 11; u < 20; u += 2) {
-    remove_scans(in, 0, u, u + 1);
-    without(in, u, 0, false);
-  }
-  for (auto& unit : in.truths[0].units)
-    if (unit.unit >= 10 && unit.unit < 20) unit.parts = 2 * kParts;
-  in.truths[0].parts.clear();
-  std::uint64_t seq = 0;
-  for (const auto& unit : in.truths[0].units)
-    for (std::uint32_t q = 0; q < unit.parts; ++q) {
-      const Nanos t = unit.acq_ns + q * (kPeriod / kParts);
-      in.truths[0].parts.push_back(truth::PartRecord{seq++, unit.unit, t, 0, t, truth::Fate::kSent, 0});
-    }
-  for (auto& x : in.samples)
-    if (x.topic == topic_of(0) && x.seq >= seq_of(0, 10) && x.seq < seq_of(0, 20)) x.packets = 2 * kParts;
-  for (int u = 10; u < 20; u += 2) cloud_of(in, static_cast<std::uint64_t>(u)).packets += kParts;
+  slower_lidar(in, 0);
   // Rotation 12: the front's scan alone in sweep 100, the left and right in sweep 12.
   without(in, 12, 0, false);
   cloud_of(in, 12).packets = 2 * kParts;
