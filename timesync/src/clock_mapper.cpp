@@ -336,6 +336,20 @@ ObserveResult ClockMapper::observe(Nanos device_ns, Nanos host_ns) noexcept {
   return ObserveResult::kAccepted;
 }
 
+ClockMapper::FloorSupport ClockMapper::floor_support(std::size_t last, Nanos tol_ns) const noexcept {
+  FloorSupport f;
+  if (!have_model_) return f;
+  const std::size_t cap = buckets_.size();
+  const double tol = static_cast<double>(tol_ns);
+  for (std::size_t k = used_; k-- > 0 && f.of < last;) {
+    const Bucket& b = buckets_[(head_ + k) % cap];
+    const double resid = static_cast<double>(sat_sub(b.y_ns, anchor_y_)) - predict_y(b.device_ns);
+    ++f.of;
+    if (std::fabs(resid) <= tol) ++f.seen;
+  }
+  return f;
+}
+
 ClockMapper::Deviation ClockMapper::deviation() const noexcept {
   if (candidates_.empty() || !have_model_) return {};
   const Candidate& first = candidates_.front();

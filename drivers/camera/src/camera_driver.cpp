@@ -99,6 +99,9 @@ struct CameraDriver::Impl {
   Nanos doubtful_seen_mono_ns = 0; // when a stamp last was FrameStamp::doubtful (arrivals late against the camera's clock)
   Nanos doubtful_shift_ns = 0;     // by how much they were late then
   std::uint64_t doubtful_frames = 0;  // frames stamped so (status `stamp_doubtful`)
+  Nanos floor_unseen_mono_ns = 0;  // when a stamp last was FrameStamp::floor_unseen (the mapping's floor seen too rarely)
+  std::uint64_t floor_unseen_frames = 0;
+  timesync::ClockMapper::FloorSupport floor{};  // the mapping's floor support at the last frame
   timesync::RealtimeStepDetector realtime_steps;  // told to the clock: stamps held over a step back
 
   Impl(const CameraConfig& c, std::unique_ptr<camera::FrameSource> s, const dds::Participant& p, dds::StampsWriter& st,
@@ -153,6 +156,11 @@ struct CameraDriver::Impl {
         doubtful_shift_ns = clock.late_shift_ns();
         ++doubtful_frames;
       }
+      if (st.floor_unseen) {
+        floor_unseen_mono_ns = monotonic_now_ns();
+        ++floor_unseen_frames;
+      }
+      floor = clock.floor();
       // A device-tick camera stamped before its clock mapping locked (after every open): the stamp
       // is the arrival less the exposure, or a line of a few arrivals, or the trigger's tick, off
       // by the transport and host delay it cannot see (10-minute campaign: corner_front_right 1.8-
@@ -397,7 +405,11 @@ dds::DriverStatus CameraDriver::status() const {
   // (the stamps are the exposures) or the camera's clock stepped back (they are the step off); not
   // told apart for 3 s (timesync/README.md item 5): flagged, as the LIDARs' are.
   const bool doubtful_recently = recent(impl_->doubtful_seen_mono_ns);
-  const bool unsynchronized = rejected_recently || slewed_recently || unlocked_recently || doubtful_recently;
+  // The mapping rests on a floor few recent frames saw: the receiving thread is held off most
+  // frames, and the line may be late by that (FrameStamp::floor_unseen).
+  const bool floor_unseen_recently = recent(impl_->floor_unseen_mono_ns);
+  const bool unsynchronized =
+      rejected_recently || slewed_recently || unlocked_recently || doubtful_recently || floor_unseen_recently;
   if (!impl_->open) {
     s.level = impl_->published.samples() == 0 && impl_->lost_reports == 0 ? dds::Level::kWarn : dds::Level::kError;
     s.message = impl_->state + (impl_->last_error.empty() ? "" : ": " + impl_->last_error);
@@ -418,6 +430,10 @@ dds::DriverStatus CameraDriver::status() const {
     s.level = dds::Level::kWarn;
     s.message = "unsynchronized: frames arrive " + std::to_string(impl_->doubtful_shift_ns / 1'000'000) +
                 " ms later than the camera's clock says (a held network, or its clock stepped back: stamps from its clock)";
+  } else if (floor_unseen_recently && !rejected_recently && !unlocked_recently) {
+    s.level = dds::Level::kWarn;
+    s.message = "unsynchronized: only " + std::to_string(impl_->floor.seen) + " of the last " + std::to_string(impl_->floor.of) +
+                " device clock buckets had a prompt frame (the receiving thread is held off: give the camera realtime_priority)";
   } else if (unlocked_recently && !rejected_recently) {
     s.level = dds::Level::kWarn;
     s.message = "unsynchronized: the device clock is not mapped yet (stamps from the arrival or the trigger)";
@@ -491,6 +507,10 @@ dds::DriverStatus CameraDriver::status() const {
   s.add_number("stamp_rejected_steps", impl_->rejected.steps);
   // Frames stamped from the camera's clock while they arrived later than it says (FrameStamp::doubtful).
   s.add_number("stamp_doubtful", impl_->doubtful_frames);
+  // Frames stamped from a mapping whose floor too few recent frames saw, and the support now.
+  s.add_number("stamp_floor_unseen", impl_->floor_unseen_frames);
+  s.add_number("sync_floor_seen", impl_->floor.seen);
+  s.add_number("sync_floor_of", impl_->floor.of);
   s.add_number("sync_jumps", impl_->sync.jumps);
   if (!impl_->last_error.empty()) s.add("last_error", impl_->last_error);
   if (impl_->outputs) impl_->outputs->add_status(s);

@@ -123,6 +123,17 @@ class ClockMapper {
     bool awaiting_late = false;
   };
   [[nodiscard]] Deviation deviation() const noexcept;
+  // How many of the newest `last` buckets have their minimum within tol_ns of the line (either
+  // side), of how many there are: where the floor the line rests on was actually seen. The line is
+  // the lower envelope of the arrivals, right only where some arrive with the transport's minimum
+  // delay; a receiver held off at most frames (a loaded host, a thread below real-time work) puts
+  // the envelope on the rare prompt frame, or on a late one when none came (timesync/README.md
+  // "Floor support").
+  struct FloorSupport {
+    std::size_t seen = 0;
+    std::size_t of = 0;
+  };
+  [[nodiscard]] FloorSupport floor_support(std::size_t last, Nanos tol_ns) const noexcept;
   [[nodiscard]] const ClockMapperConfig& config() const noexcept { return cfg_; }
   void reset() noexcept;  // back to unsynced; counters kept
 

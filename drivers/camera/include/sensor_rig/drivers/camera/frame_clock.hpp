@@ -56,6 +56,11 @@ struct FrameStamp {
   // by up to late_shift_max_ns (the stamp is that step off). Kept, flagged (the node says
   // `stamp_sync: unsynchronized` as for `slewed`); late_shift_ns() says by how much.
   bool doubtful = false;
+  // Stamped from a device clock mapping whose floor too few recent frames saw (FrameClock::floor()):
+  // the frames mostly arrive late by the receiving thread's delay, so the line may be late by it
+  // too (a first prompt frame at +1.2 ms and none better for 5 s: every stamp 1.2 ms late, said
+  // locked). Kept, flagged, as `doubtful`.
+  bool floor_unseen = false;
 };
 // A correction beyond this (the camera stamp bound of rig chaos) makes a stamp `slewed`.
 inline constexpr Nanos kSlewFlagNs = 1'000'000;
@@ -96,6 +101,8 @@ class FrameClock {
     Nanos last_error_ns = 0;   // rejected stamp - (arrival - exposure)
   };
   [[nodiscard]] const Rejected& rejected() const noexcept { return rejected_; }
+  // The mapping's floor as of the last mapped stamp: in how many of the newest buckets it was seen.
+  [[nodiscard]] timesync::ClockMapper::FloorSupport floor() const noexcept { return floor_; }
 
  private:
   FrameStamp device_stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept;
@@ -128,6 +135,7 @@ class FrameClock {
   Nanos announced_step_ns_ = 0;   // the last step told to the mapper, and when (host time)
   Nanos announced_at_ns_ = 0;
   Nanos late_shift_ns_ = 0;
+  timesync::ClockMapper::FloorSupport floor_{};
   bool have_domain_ = false;         // the last frame's time domain (a PTP lock change: to/from kVehicle)
   camera::TimeDomain domain_ = camera::TimeDomain::kDeviceTicks;
   Nanos ptp_changed_at_ns_ = 0;      // host time of the last PTP lock change (0: none)
