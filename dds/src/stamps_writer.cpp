@@ -29,6 +29,12 @@ void StampsWriter::write(const std::string& topic, const msg::Time& stamp, const
   m.size_bytes = s.size_bytes;
   m.missing_packets = s.missing_packets;
   m.ecu_status_ns = s.ecu_status_ns;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = published_.find(topic);
+    if (it == published_.end()) it = published_.emplace(topic, 0).first;
+    m.published = ++it->second;
+  }
   writer_.write(m, vehicle_now_ns());
 }
 

@@ -69,9 +69,11 @@ struct Announced {
   std::string_view topic;
   std::uint64_t seq = 0;
   Nanos publish_ns = 0;
+  std::uint64_t published = 0;  // the writer's count of this topic's announcements (0: not counted)
 };
 
-// sensor_rig_msgs/SourceStamps: header, topic, seq, then acquisition .. publish_ns (int64 each).
+// sensor_rig_msgs/SourceStamps: header, topic, seq, acquisition .. written_ns (int64 each), four
+// uint32, ecu_status_ns, published (uint64; absent from a writer before it: 0).
 inline std::optional<Announced> source_stamps(std::span<const std::byte> body, std::endian order) {
   Announced a;
   const auto stamp = header_stamp(body, order);
@@ -89,6 +91,11 @@ inline std::optional<Announced> source_stamps(std::span<const std::byte> body, s
   a.topic = *topic;
   a.seq = *seq;
   a.publish_ns = *publish;
+  const bool tail = read<std::int64_t>(body, off, order) && read<std::uint32_t>(body, off, order) &&
+                    read<std::uint32_t>(body, off, order) && read<std::uint32_t>(body, off, order) &&
+                    read<std::uint32_t>(body, off, order) && read<std::int64_t>(body, off, order);
+  if (tail)
+    if (const auto published = read<std::uint64_t>(body, off, order)) a.published = *published;
   return a;
 }
 
@@ -102,12 +109,15 @@ inline std::optional<Announced> source_stamps(std::span<const std::byte> body, s
 //    its socket held; the rest never come, and neither do their samples. They show as a gap in the
 //    topic's SourceStamps.seq between two announcements that did come: every sample of the gap is
 //    missed except those received (data whose stamp lies inside the gap and matched nothing),
-//    decided once a later sample came or a timeout after the gap was seen. On topics whose
-//    seq is a device's frame id (cameras: a gap is also a frame the camera made and the rig never
-//    published) the same count is `unannounced` instead: an upper bound beside `missed`, never folded
-//    into it; on the dbw bridge's commands (stamped when transmitted) a gap is nothing. A seq that
-//    goes back (a driver restarted, a camera reopened) starts over without a gap, but for a GigE
-//    camera's 16-bit frame id wrapping; a gap at the very end (no later announcement) is not seen.
+//    decided once a later sample came or a timeout after the gap was seen. The gap is read from
+//    SourceStamps.published, the writer's own gapless count of the topic's announcements, where
+//    the writer numbers them (every driver since it was added): exact on every topic, cameras too.
+//    Else from seq: on topics whose seq is a device's frame id (cameras: a gap is also a frame the
+//    camera made and the rig never published) the count is `unannounced` instead, an upper bound
+//    beside `missed`, never folded into it. On the dbw bridge's commands (stamped when transmitted)
+//    a gap is nothing. A count that goes back (a driver's process restarted; for seq also a camera
+//    reopened) starts over without a gap, but for a GigE camera's 16-bit frame id wrapping; a gap at
+//    the very end (no later announcement) is not seen.
 // Bounds, per topic: kMaxPending announcements waiting for their sample, kMaxPending samples waiting
 // for their announcement, kMaxGaps undecided gaps (std::map / std::deque nodes: ~0.6 MB per topic at
 // most, ~25 MB for a 40-topic recording). Past them nothing is silent: the oldest waiting
@@ -145,20 +155,27 @@ class AnnouncedSamples {
     }
   }
 
-  // /rig/stamps announced sample `seq` of `topic` at `stamp`, received here at `now`. `counted`
-  // false: before the recorder's reader of the topic matched (only the seq is kept, to see gaps).
-  void on_announced(const std::string& topic, Nanos stamp, std::uint64_t seq, Nanos now, bool counted = true) {
+  // /rig/stamps announced sample `seq` of `topic` at `stamp`, received here at `now`; `published`
+  // its writer's count of the topic's announcements (0: not counted). `counted` false: before the
+  // recorder's reader of the topic matched (only the counts are kept, to see gaps).
+  void on_announced(const std::string& topic, Nanos stamp, std::uint64_t seq, Nanos now, bool counted = true,
+                    std::uint64_t published = 0) {
     Topic& t = topics_[topic];
     if (t.has_seq && seq == t.last_seq && stamp == t.last_stamp) return;  // the same announcement again
     if (t.has_seq && counted && t.seq_gaps != SeqGaps::kNotCounted) {
-      std::uint64_t between = seq > t.last_seq + 1 ? seq - t.last_seq - 1 : 0;
-      // A GigE camera's 16-bit frame id wrapped (65535 is followed by 1): not a restart.
-      if (t.seq_gaps == SeqGaps::kUnannounced && seq < t.last_seq && t.last_seq <= 0xFFFF && t.last_seq - seq > 0x8000)
-        between = (0xFFFF - t.last_seq) + (seq > 0 ? seq - 1 : 0);
-      if (between > 0) add_gap(t, Gap{t.last_stamp, stamp, between, now});
+      if (published > 0 && t.last_published > 0) {
+        if (published > t.last_published + 1) add_gap(t, Gap{t.last_stamp, stamp, published - t.last_published - 1, now, true});
+      } else if (published == 0) {
+        std::uint64_t between = seq > t.last_seq + 1 ? seq - t.last_seq - 1 : 0;
+        // A GigE camera's 16-bit frame id wrapped (65535 is followed by 1): not a restart.
+        if (t.seq_gaps == SeqGaps::kUnannounced && seq < t.last_seq && t.last_seq <= 0xFFFF && t.last_seq - seq > 0x8000)
+          between = (0xFFFF - t.last_seq) + (seq > 0 ? seq - 1 : 0);
+        if (between > 0) add_gap(t, Gap{t.last_stamp, stamp, between, now, t.seq_gaps == SeqGaps::kMissed});
+      }
     }
     t.has_seq = true;
     t.last_seq = seq;
+    t.last_published = published;
     t.last_stamp = stamp;
     if (!counted) return;
     if (t.received.erase(stamp) != 0) return;
@@ -211,8 +228,9 @@ class AnnouncedSamples {
  private:
   struct Gap {
     Nanos after = 0, before = 0;  // the header stamps of the announcements around it (exclusive)
-    std::uint64_t samples = 0;    // seqs between them
+    std::uint64_t samples = 0;    // announcements between them
     Nanos seen = 0;
+    bool published = true;        // counted samples the rig published (else maybe frames it never had)
   };
   struct Topic {
     std::map<Nanos, Nanos> announced, received;  // header stamp -> when (monotonic)
@@ -220,6 +238,7 @@ class AnnouncedSamples {
     SeqGaps seq_gaps = SeqGaps::kMissed;
     bool has_seq = false, has_data = false;
     std::uint64_t last_seq = 0;
+    std::uint64_t last_published = 0;
     Nanos last_stamp = 0;
     Nanos newest_data = 0;  // the newest sample's header stamp
     Counts counts;
@@ -230,6 +249,12 @@ class AnnouncedSamples {
     if (t.gaps.size() <= kMaxGaps) return;
     // Merged: the samples between the two were announced, so none of them waits in `received`.
     Gap& second = t.gaps[1];
+    if (second.published != t.gaps.front().published) {  // a rig restarted in between: decided apart
+      decide(t, t.gaps.front());
+      t.gaps.pop_front();
+      ++t.counts.overflow;
+      return;
+    }
     second.after = t.gaps.front().after;
     second.samples += t.gaps.front().samples;
     t.gaps.pop_front();
@@ -245,7 +270,7 @@ class AnnouncedSamples {
       t.received.erase(from, to);
     }
     const std::uint64_t lost = g.samples > received ? g.samples - received : 0;
-    (t.seq_gaps == SeqGaps::kMissed ? t.counts.missed : t.counts.unannounced) += lost;
+    (g.published ? t.counts.missed : t.counts.unannounced) += lost;
   }
 
   std::map<std::string, Topic, std::less<>> topics_;

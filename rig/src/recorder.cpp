@@ -171,10 +171,11 @@ class Recorder {
 
   void expire(Nanos now, Nanos timeout_ns) { announced_.expire(now, timeout_ns); }
 
-  // What a gap in a topic's SourceStamps.seq is (record_gaps.hpp). Samples published and missed,
-  // unless the seq is a camera's device frame id (it also skips the frames the camera made and the
-  // rig did not publish) or the dbw bridge's commands' (it stamps those it transmits, not every one
-  // it takes; rig monitor counts no seq gap there either, monitor.cpp).
+  // What a gap in a topic's SourceStamps.seq is (record_gaps.hpp), for announcements their writer did
+  // not number (SourceStamps.published 0; numbered ones are exact on every topic). Samples published
+  // and missed, unless the seq is a camera's device frame id (it also skips the frames the camera
+  // made and the rig did not publish) or the dbw bridge's commands' (it stamps those it transmits,
+  // not every one it takes; rig monitor counts no seq gap there either, monitor.cpp).
   static AnnouncedSamples::SeqGaps seq_gaps_of(const std::string& ros_name, const std::string& schema) {
     if (ros_name == "/vehicle/dbw/cmd") return AnnouncedSamples::SeqGaps::kNotCounted;
     if (schema == "sensor_msgs/msg/Image" || schema == "sensor_msgs/msg/CompressedImage") return AnnouncedSamples::SeqGaps::kUnannounced;
@@ -198,7 +199,7 @@ class Recorder {
     if (it == known_.end() || it->second == nullptr) return;
     // Samples written before this recorder's reader of the topic matched are not ours to miss (their
     // seq still tells where the topic's sequence stands).
-    announced_.on_announced(it->first, a->stamp, a->seq, now, a->publish_ns >= it->second->counting_since);
+    announced_.on_announced(it->first, a->stamp, a->seq, now, a->publish_ns >= it->second->counting_since, a->published);
   }
 
   void discover() {

@@ -194,6 +194,41 @@ TEST(RecordGaps, ASeqGapIsMissedButForWhatWasReceivedInIt) {
   EXPECT_EQ(a.held(), 2u);  // the announcements of stamps 400 and 500, a moment old
 }
 
+// Announcements their writer numbers (SourceStamps.published): a gap in the number is samples the rig
+// published and the recorder lost with their announcements, on a camera as on any topic, whatever
+// the device's frame id did meanwhile (frames the camera made and the rig never had are not the
+// recorder's). Before, a camera's gaps were all `unannounced`: frames lost before the rig and
+// samples the recorder missed in one upper bound.
+TEST(RecordGaps, ANumberedCameraGapIsMissedExactlyWhateverItsFrameIdsSkip) {
+  constexpr Nanos kS = 1'000'000'000;
+  AnnouncedSamples a;
+  a.set_seq_gaps("/c", AnnouncedSamples::SeqGaps::kUnannounced);
+  // Frame ids 10, 11, (12, 13 the camera made, the rig lost before it), 14 .. 17 published as 3 .. 6.
+  a.on_announced("/c", 100, 10, 0, true, 1);
+  a.on_data("/c", 100, 0);
+  a.on_announced("/c", 110, 11, 0, true, 2);
+  a.on_data("/c", 110, 0);
+  a.on_announced("/c", 140, 14, 0, true, 3);  // frame ids skip 2: the number does not
+  a.on_data("/c", 140, 0);
+  // The recorder stopped: 15 and 16 (numbers 4, 5) lost with their announcements; 16's sample came.
+  a.on_data("/c", 160, kS);
+  a.on_announced("/c", 170, 17, kS, true, 6);
+  a.on_data("/c", 170, kS);
+  a.expire(2 * kS, kS);
+  EXPECT_EQ(a.counts("/c").missed, 1u) << "number 4 (frame 15): lost by the recorder";
+  EXPECT_EQ(a.counts("/c").unannounced, 0u) << "frames 12 and 13 never reached the rig: not the recorder's";
+  // The driver's process restarted: numbers from 1 again, no gap; then one announcement and its
+  // sample lost: missed.
+  a.on_announced("/c", 300, 30, 3 * kS, true, 1);
+  a.on_data("/c", 300, 3 * kS);
+  a.on_announced("/c", 320, 32, 3 * kS, true, 3);
+  a.on_data("/c", 320, 3 * kS);
+  a.expire(4 * kS, kS);
+  EXPECT_EQ(a.counts("/c").missed, 2u);
+  EXPECT_EQ(a.counts("/c").unannounced, 0u);
+  EXPECT_EQ(a.counts("/c").overflow, 0u);
+}
+
 // A model of the rig against a recorder that falls far behind: 7 cameras (~30 Hz), 3 LIDARs and
 // the fused cloud (10 Hz), vehicle state (100 Hz) announce every sample on one /rig/stamps writer
 // that keeps its last 64; each data writer keeps its last 2. The recorder stops for `stall` and,

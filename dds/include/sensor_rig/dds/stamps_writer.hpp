@@ -1,6 +1,8 @@
 #pragma once
 // The shared writer of per-sample source stamps (rt/rig/stamps); thread-safe (Cyclone writers are).
 #include <cstdint>
+#include <map>
+#include <mutex>
 #include <string>
 
 #include "sensor_rig/dds/types.hpp"
@@ -26,6 +28,9 @@ struct SampleStamps {
 class StampsWriter {
  public:
   explicit StampsWriter(const dds::Participant& p);
+  // Numbers each announcement of `topic` (SourceStamps.published: 1, 2, ... per topic in this
+  // writer), so that a reader that lost some, and their samples, counts them exactly where `seq` is
+  // a device's frame id (cameras). One thread per topic writes, as every driver does.
   void write(const std::string& topic, const msg::Time& stamp, const char* frame_id, std::uint64_t seq,
              const SampleStamps& s);
   // True once n readers matched (or false after timeout_ms): the topic is volatile, so a stamp
@@ -35,6 +40,8 @@ class StampsWriter {
  private:
   dds::Topic<msg::SourceStamps> topic_;
   dds::Writer<msg::SourceStamps> writer_;
+  std::mutex mutex_;  // the drivers of a process share one writer
+  std::map<std::string, std::uint64_t, std::less<>> published_;
 };
 
 // QoS of the stamps topic: reliable, keep-last 64 (many topics feed one monitor).
