@@ -371,6 +371,16 @@ class Checker {
       if (u.produced == 0 || u.sample != nullptr || !near_edge(u.rec.acq_ns)) continue;
       ++(in_window(u.rec.acq_ns) ? facts.edge_in : facts.edge_out);
     }
+    // A V4L2 frame done and gone with its device (v4l2.disconnect) before the rig dequeued it: no
+    // call tells of it (whole-rig campaign seed 25: a frame done 1 ms before the unplug, "neither
+    // published nor counted"); the rig may count it lost (from its rate) or not.
+    std::set<std::uint64_t> unplugs;
+    for (const auto& f : log.faults)
+      if (f.kind == "v4l2.disconnect") unplugs.insert(f.id);
+    for (const UnitTruth& u : units)
+      if (u.produced > 0 && u.sample == nullptr && u.lost > 0 && unplugs.contains(u.lost_fault) && in_window(u.rec.acq_ns) &&
+          !near_edge(u.rec.acq_ns))
+        ++facts.unseeable;
     // Slots a frozen alive counter hides the ECU's silence in: each looks like a lost frame to the
     // rig (the count's window, like the edges', give or take count_edge_ns).
     if (t.device_class == "dbw")

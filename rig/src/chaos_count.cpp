@@ -8,7 +8,7 @@ CountVerdict reconcile_count(const CountFacts& f) {
   CountVerdict v;
   v.doubled_lost = f.doubled_made > f.doubled_samples ? f.doubled_made - f.doubled_samples : 0;
   // edge_in counts units inside the window, all of them among not_published.
-  const std::uint64_t least = f.not_published - std::min(f.edge_in, f.not_published) + v.doubled_lost;
+  const std::uint64_t least = f.not_published - std::min(f.edge_in + f.unseeable, f.not_published) + v.doubled_lost;
   v.most = f.not_published + f.edge_out + v.doubled_lost + f.silent_slots;
   v.over_counted = f.rig_counted > v.most;
   const std::uint64_t counted = std::min(f.rig_counted, v.most);

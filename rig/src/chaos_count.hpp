@@ -19,6 +19,10 @@ struct CountFacts {
   // Slots the device made nothing in that the rig cannot tell from a loss (a CAN message's frozen
   // alive counter: chaos_units.hpp slots_skipped_while_frozen): an honest count may have them.
   std::uint64_t silent_slots = 0;
+  // Units the device lost where nothing tells the rig (a V4L2 frame done and gone with its device at
+  // a disconnect, before it was dequeued: vb2 answers EIO before its done list): among
+  // not_published, an honest count may have them or not.
+  std::uint64_t unseeable = 0;
 };
 
 struct CountVerdict {
@@ -30,8 +34,9 @@ struct CountVerdict {
   std::uint64_t counted_lost = 0;     // of the judged units
 };
 
-// An honest count lies in [not_published - edge_in + doubled_lost, not_published + edge_out +
-// doubled_lost + silent_slots]; below it the rest is unaccounted (judged units first), above it phantom.
+// An honest count lies in [not_published - edge_in - unseeable + doubled_lost, not_published +
+// edge_out + doubled_lost + silent_slots]; below it the rest is unaccounted (judged units first),
+// above it phantom.
 CountVerdict reconcile_count(const CountFacts& f);
 
 }  // namespace sensor_rig::rig::chaos

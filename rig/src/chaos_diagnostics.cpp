@@ -89,6 +89,11 @@ void DiagnosticsLog::run() {
             if (topic_name.empty()) continue;
             std::lock_guard lock(mutex_);
             flagged_[topic_name].push_back(t);
+            const std::string message = st.message != nullptr ? st.message : "";
+            if (auto& last = last_reason_[topic_name]; last != message) {
+              last = message;
+              flag_reasons_.push_back({t, topic_name, message});
+            }
           }
         },
         64);
@@ -119,6 +124,11 @@ std::vector<std::pair<Nanos, std::string>> DiagnosticsLog::messages(const std::s
   auto out = it->second;
   std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   return out;
+}
+
+std::vector<DiagnosticsLog::FlagReason> DiagnosticsLog::flag_reasons() const {
+  std::lock_guard lock(mutex_);
+  return flag_reasons_;
 }
 
 std::map<std::string, Intervals> DiagnosticsLog::unsynchronized() const {

@@ -41,6 +41,14 @@ class DiagnosticsLog {
   [[nodiscard]] std::uint64_t counter_delta(const std::string& status, const std::string& key, Nanos begin, Nanos end) const;
   // The messages of a status the judge reads (dbw/bridge: "STATE (REASON)"), with their stamps, in order.
   [[nodiscard]] std::vector<std::pair<Nanos, std::string>> messages(const std::string& status) const;
+  // Why each topic was flagged: the status message of every flagged status that said something new
+  // for its topic, in order (not judged: for whoever traces a campaign's flags, logs/flags.jsonl).
+  struct FlagReason {
+    Nanos stamp = 0;
+    std::string topic;
+    std::string message;
+  };
+  [[nodiscard]] std::vector<FlagReason> flag_reasons() const;
 
  private:
   void run();
@@ -48,6 +56,8 @@ class DiagnosticsLog {
   std::atomic<bool> stop_{false};
   mutable std::mutex mutex_;
   std::map<std::string, std::vector<Nanos>> flagged_;  // topic -> stamps of flagged statuses
+  std::vector<FlagReason> flag_reasons_;
+  std::map<std::string, std::string> last_reason_;  // topic -> its last flagged status's message
   std::map<std::string, std::vector<std::pair<Nanos, std::uint64_t>>> counters_;  // "status/key" -> (stamp, value)
   std::vector<FusedSet> fused_sets_;
   std::map<std::string, std::vector<std::pair<Nanos, std::string>>> messages_;  // status -> (stamp, message)

@@ -405,6 +405,12 @@ int run(const Options& o) {
   in.count_edge_ns = 1'000'000'000 + static_cast<Nanos>(cfg.diagnostics_period_ms) * 1'000'000;  // a line, a period
   in.expected = expectations_of(cfg);
   in.unsynchronized = diagnostics.unsynchronized();
+  {  // why: one line per change of a flagged topic's message, seconds from the campaign's epoch
+    std::ofstream flags(dir.path() / "logs" / "flags.jsonl");
+    for (const auto& f : diagnostics.flag_reasons())
+      flags << nlohmann::json{{"at_s", static_cast<double>(f.stamp - epoch_vehicle) / 1e9}, {"topic", f.topic}, {"message", f.message}}.dump()
+            << "\n";
+  }
   if (cfg.dbw.enabled && cfg.dbw.mock_ecu) {
     in.dbw_bridge = diagnostics.messages("dbw/bridge");
     try {

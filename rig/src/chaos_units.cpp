@@ -66,7 +66,10 @@ std::vector<UnitTruth> units_of(const truth::Log& log) {
       if (it == index.end()) continue;
       UnitTruth& u = units[it->second];
       ++u.produced;
-      if (p.fate == truth::Fate::kDropped) ++u.lost;
+      if (p.fate == truth::Fate::kDropped) {
+        ++u.lost;
+        if (p.fault != 0) u.lost_fault = p.fault;
+      }
       if (p.fate == truth::Fate::kCorrupted || p.fate == truth::Fate::kTruncated) ++u.damaged;
       if (p.fate == truth::Fate::kDelayed) u.delayed_tx.push_back(p.tx_ns);
       else u.last_tx = std::max(u.last_tx, p.tx_ns);

@@ -18,6 +18,7 @@ struct UnitTruth {
   truth::UnitRecord rec;
   std::uint32_t produced = 0;  // parts the device produced (everything but not_sent)
   std::uint32_t lost = 0;      // dropped on the way
+  std::uint64_t lost_fault = 0;  // the fault its dropped parts name (the last one's; 0 = none)
   std::uint32_t damaged = 0;   // corrupted or truncated
   // Parts reordered (delayed) past every other part of their unit: the rig may have published the
   // unit before they came (a scan ends at its last packet or the next scan's first), so it may count

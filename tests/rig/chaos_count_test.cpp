@@ -44,6 +44,22 @@ TEST(ChaosCount, LossesNearTheEdgesMayBeInTheCountOrNotOnlyThose) {
   EXPECT_EQ(v.unaccounted_all, 0U);  // an over-count is phantom loss, not also a shortfall
 }
 
+// A V4L2 frame done and gone with its device at a disconnect before the rig dequeued it: no call
+// tells of it, so the count may have it or not (whole-rig campaign seed 25: 7 not published, 6
+// counted, one of them such a frame: "neither published nor counted"). Only those.
+TEST(ChaosCount, LossesNoCallTellsOfMayBeInTheCountOrNot) {
+  auto f = facts(6, 7);
+  EXPECT_EQ(reconcile_count(f).unaccounted_all, 1U);
+  f.unseeable = 1;
+  EXPECT_EQ(reconcile_count(f).unaccounted_all, 0U);
+  f.rig_counted = 7;  // counted from the device's rate: no phantom either
+  EXPECT_FALSE(reconcile_count(f).over_counted);
+  f.rig_counted = 5;  // one more missing from the count is not the unplug's
+  EXPECT_EQ(reconcile_count(f).unaccounted_all, 1U);
+  f.rig_counted = 8;
+  EXPECT_TRUE(reconcile_count(f).over_counted);
+}
+
 TEST(ChaosCount, UnitsOfTimeReadTwiceAreHeldByNumberAndNotChargedToJudgedUnits) {
   auto f = facts(3, 0);
   f.doubled_made = 5;

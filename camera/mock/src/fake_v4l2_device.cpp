@@ -56,6 +56,7 @@ void FakeV4l2Device::stall(bool on) {
 void FakeV4l2Device::disconnect() {
   std::lock_guard lock(mutex_);
   disconnected_ = true;
+  settle_filled_locked(truth::Fate::kDropped, 0);
 }
 void FakeV4l2Device::reconnect() {
   std::lock_guard lock(mutex_);
@@ -88,6 +89,7 @@ int FakeV4l2Device::close(int fd) {
   if (fd != fd_) return -EBADF;
   fd_ = -1;
   streaming_ = false;
+  settle_filled_locked(truth::Fate::kSent, 0);  // delivered: the consumer let them go
   buffers_.clear();
   queue_.clear();
   sync_subscribed_ = false;  // a subscription is the file handle's
@@ -247,6 +249,8 @@ int FakeV4l2Device::ioctl_locked(unsigned long request, void* arg) {
           index = i;
         }
       if (oldest == nullptr) return -EAGAIN;
+      write_truth(oldest->truth, truth::Fate::kSent, 0);
+      flush_truth_locked();  // on disk before the consumer has the frame (and the rig publishes it)
       oldest->filled = false;
       oldest->queued = false;
       b->index = index;
@@ -290,6 +294,7 @@ int FakeV4l2Device::ioctl_locked(unsigned long request, void* arg) {
       return 0;
     case VIDIOC_STREAMOFF:
       streaming_ = false;
+      settle_filled_locked(truth::Fate::kSent, 0);  // delivered: the consumer let them go
       for (auto& b : buffers_) b.queued = b.filled = false;
       queue_.clear();
       return 0;
@@ -319,7 +324,7 @@ bool FakeV4l2Device::fill_one(Nanos due) {
       exposure_start = due - exposure - static_cast<Nanos>(0.5e9 / rate_hz_);
     }
     if (mode != nullptr) fault_line(*mode, unit_of(seq), "buffer timestamps: " + mode->text("mode", "eof"));
-    record(seq, exposure_start, due + b.mono_to_stamp_clock, truth::Fate::kSent, 0);
+    b.truth = frame_truth(seq, exposure_start, due + b.mono_to_stamp_clock);  // written as it leaves the driver
     b.bytesused = short_every_ != 0 && (seq + 1) % short_every_ == 0 ? sizeimage_ / 2 : sizeimage_;
     b.filled = true;
     ++counters_.frames;
@@ -407,10 +412,30 @@ int FakeV4l2Device::poll(int fd, int timeout_ms) {
 
 void FakeV4l2Device::record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, truth::Fate fate, std::uint64_t fault) {
   if (truth_ == nullptr) return;
+  auto t = frame_truth(seq, acq_mono, dev_mono);
+  write_truth(t, fate, fault);
+}
+
+FakeV4l2Device::Buffer::Truth FakeV4l2Device::frame_truth(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono) const {
   const Nanos to_vehicle = vehicle_now_ns() - monotonic_now_ns();
   // The buffer's timestamp is a timeval: what the device says is whole microseconds.
-  truth_->frame(unit_of(seq), acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns(), fate, fault);
+  return {true, seq, acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns()};
+}
+
+void FakeV4l2Device::write_truth(Buffer::Truth& t, truth::Fate fate, std::uint64_t fault) {
+  if (truth_ == nullptr || !t.pending) return;
+  t.pending = false;
+  truth_->frame(unit_of(t.seq), t.acq_ns, t.dev_ns, t.done_ns, fate, fault);
   truth_unflushed_ = true;
+}
+
+void FakeV4l2Device::settle_filled_locked(truth::Fate fate, std::uint64_t fault) {
+  for (auto& b : buffers_) {
+    if (!b.filled) continue;
+    write_truth(b.truth, fate, fault);
+    if (fate == truth::Fate::kDropped) b.filled = false;
+  }
+  flush_truth_locked();
 }
 
 // Once per call, not per line: a late consumer's poll makes several slots, a return many not_sent
@@ -444,12 +469,20 @@ void FakeV4l2Device::apply_faults_locked() {
   const double t = schedule_.seconds(now);
   const auto* active = schedule_.active("v4l2.disconnect", t);
   if (active != nullptr && !fault_disconnected_) {
+    // The slots due before it went were made (the consumer not polling does not stop a device);
+    // from its start on, none (before, slots between the consumer's last call and now were in no
+    // record at all).
+    const Nanos gone_at = std::min(now, schedule_.mono_ns(active->at_s));
+    const auto period = static_cast<Nanos>(1e9 / rate_hz_);
+    if (streaming_ && !stalled_)
+      for (; next_due_ < gone_at; next_due_ += period) make_slot_locked(next_due_);
     fault_disconnected_ = true;
-    disconnected_at_ = streaming_ ? now : 0;  // a device not streaming misses no frame
+    disconnected_at_ = streaming_ ? std::max(gone_at, next_due_) : 0;  // a device not streaming misses no frame
     disconnect_fault_ = active->id;
     disconnect_until_s_ = active->at_s + active->duration_s;
     disconnects_seen_.insert(active->id);
     fault_line(*active, unit_of(sequence_), "the device is gone (ENODEV), then returns");
+    settle_filled_locked(truth::Fate::kDropped, active->id);  // done, never dequeued: gone with it
   }
   for (const auto& e : schedule_.events()) {
     if (e.kind != "v4l2.disconnect" || e.at_s > t || !disconnects_seen_.insert(e.id).second) continue;
@@ -467,6 +500,7 @@ void FakeV4l2Device::apply_faults_locked() {
       fault_disconnected_ = true;
       disconnected_at_ = std::max(schedule_.mono_ns(e.at_s), next_due_);  // the slots not made yet
       disconnect_fault_ = e.id;
+      settle_filled_locked(truth::Fate::kDropped, e.id);
       end_disconnect_locked(schedule_.mono_ns(e.at_s + e.duration_s));
     }
   }

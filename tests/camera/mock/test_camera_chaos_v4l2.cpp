@@ -222,6 +222,59 @@ std::vector<std::uint32_t> read_through_a_disconnect(V4l2Source& src, Nanos unti
   return seqs;
 }
 
+// A device that goes while frames it finished wait in the driver: vb2's queue error answers DQBUF
+// with EIO before its done list, so those frames are lost where no call tells of them, and the truth
+// says so (dropped, by the disconnect), not `sent`. Whole-rig campaign (seed 25): a frame done 1 ms
+// before the unplug was in the record as sent, the rig never had it, and the judge found it "neither
+// published nor counted lost". Here the consumer stops reading 0.1 s before the unplug: the ~5 frames
+// of that 0.1 s (50 Hz) are made (before, in no record at all) and lost with the device; every frame
+// read is `sent`; from the unplug on, `not_sent`.
+TEST(V4l2Chaos, FramesDoneAndNotDequeuedAtAnUnplugAreLostWithTheDevice) {
+  test::ChaosFolder folder;
+  std::vector<Nanos> read_dev;
+  {
+    auto dev = device(folder, {"v4l2.disconnect@0.4+0.2"});
+    V4l2Source src(yuyv(), dev);
+    src.open();
+    while (monotonic_now_ns() < folder.epoch() + 3 * kSec / 10) {
+      auto c = src.next(50);
+      if (c.status == CaptureStatus::kFrame) read_dev.push_back(c.frame.meta().device_ns);
+    }
+    while (monotonic_now_ns() < folder.epoch() + 5 * kSec / 10) usleep(10'000);  // not reading through the unplug
+    EXPECT_EQ(src.next(50).status, CaptureStatus::kDisconnected);
+    src.close();
+    while (monotonic_now_ns() < folder.epoch() + 7 * kSec / 10) usleep(10'000);
+    src.open();  // back: its absence is in the record now
+    src.close();
+  }
+  const auto log = truth::read(folder.truth());
+  ASSERT_EQ(log.faults.size(), 1u);
+  const std::uint64_t unplug = log.faults.front().id;
+  const Nanos unplug_at = log.faults.front().at_ns;
+  std::set<Nanos> sent, lost;
+  std::size_t not_sent = 0, starved = 0;
+  for (const auto& p : log.parts) {
+    if (p.fate == truth::Fate::kSent) sent.insert(p.dev_ns);
+    if (p.fate == truth::Fate::kDropped && p.fault == 0) ++starved;  // no buffer queued for it: the consumer's
+    if (p.fate == truth::Fate::kDropped && p.fault != 0) {
+      EXPECT_EQ(p.fault, unplug) << "a frame lost with the device names its unplug";
+      EXPECT_LT(p.acq_ns, unplug_at) << "made before the device went";
+      lost.insert(p.dev_ns);
+    }
+    if (p.fate == truth::Fate::kNotSent) {
+      EXPECT_GE(p.acq_ns, unplug_at - 1'000'000) << "a slot after the unplug";
+      ++not_sent;
+    }
+  }
+  ASSERT_GE(read_dev.size(), 10U);
+  EXPECT_EQ(sent, std::set<Nanos>(read_dev.begin(), read_dev.end())) << "sent is what the consumer read";
+  // 0.3 s -> 0.4 s at 50 Hz: ~5 slots, in as many buffers as were queued (the rest dropped for want of one).
+  EXPECT_GE(lost.size(), 3U);
+  EXPECT_GE(lost.size() + starved, 4U);
+  EXPECT_LE(lost.size() + starved, 6U);
+  EXPECT_GE(not_sent, 9U);  // the unplug's 0.2 s at 50 Hz, from its start (before: from the next call)
+}
+
 // Issue 27 (10-minute campaign): a v4l2.sequence_gap planned while the device was gone fires at
 // the first slots of the stream after the reopen. The device's frames dropped there must be
 // counted: the truth's dropped frames = V4l2Source's missing_frames. Old code: the gap came before

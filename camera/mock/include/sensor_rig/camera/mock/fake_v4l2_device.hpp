@@ -89,6 +89,15 @@ class FakeV4l2Device final : public V4l2Device {
     Nanos stamp_mono = 0;
     Nanos mono_to_stamp_clock = 0;   // realtime_stamps: CLOCK_REALTIME - CLOCK_MONOTONIC when filled
     std::uint32_t stamp_source = 0;  // V4L2_BUF_FLAG_TSTAMP_SRC_SOE or _EOF
+    // Its frame's truth, written when the frame leaves the driver: dequeued (sent), discarded by the
+    // consumer's STREAMOFF or close (sent: the device delivered it), or gone with the device at a
+    // disconnect (dropped: vb2's queue error answers DQBUF with EIO before its done list, so a frame
+    // done a moment before the unplug is lost where no V4L2 call tells of it).
+    struct Truth {
+      bool pending = false;
+      std::uint32_t seq = 0;
+      Nanos acq_ns = 0, dev_ns = 0, done_ns = 0;  // vehicle time, the device's stamp, when it was filled
+    } truth;
   };
   int ioctl_locked(unsigned long request, void* arg);
   bool fill_one(Nanos due);  // with mutex_ held
@@ -101,6 +110,11 @@ class FakeV4l2Device final : public V4l2Device {
   [[nodiscard]] bool gone() const noexcept { return disconnected_ || fault_disconnected_; }
   // With mutex_ held: one frame slot's truth (unit = its sequence).
   void record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, truth::Fate fate, std::uint64_t fault);
+  [[nodiscard]] Buffer::Truth frame_truth(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono) const;
+  void write_truth(Buffer::Truth& t, truth::Fate fate, std::uint64_t fault);  // once: clears `pending`
+  // With mutex_ held: the filled buffers the consumer will never dequeue, with this fate (dropped:
+  // the device went with them, and they are no longer filled).
+  void settle_filled_locked(truth::Fate fate, std::uint64_t fault);
   // With mutex_ held: the lines record() wrote since the last call, on disk.
   void flush_truth_locked();
   // at_s >= 0: when it really began (plan seconds), where that is not its planned time.
