@@ -349,9 +349,14 @@ TEST(LidarEndToEnd, DeadDeviceAndBadPacketsAreReportedInDiagnostics) {
   }
   sender.stop();
   EXPECT_EQ(rig.stop(), 0);
-  // Scans kept coming (10 Hz: a diagnostics period holds ~10) and the status stayed OK.
+  // Scans kept coming (10 Hz: a diagnostics period holds ~10) and the status stayed OK. But for one
+  // thing that is not the garbage's: a sender held off its core (this suite under ctest -j2: the
+  // replay reported sends up to 32 ms late, 2026-11-30) delivers packets later than their sensor
+  // time, which the rig rightly flags (WARN, "packets arrive N ms later than the sensor's clock
+  // says"); the garbage itself must leave the status as it was.
   EXPECT_GE(std::stoull(st.values.at("scans")), scans_after_garbage + 10);
-  EXPECT_EQ(st.level, 0) << st.message;
+  const bool late_sender = st.level == 1 && st.message.find("later than the sensor's clock says") != std::string::npos;
+  EXPECT_TRUE(st.level == 0 || late_sender) << st.message;
   // Loopback with an 8 MB receive buffer loses nothing: every bad datagram is counted, by reason.
   EXPECT_EQ(st.values.at("kernel_drops"), "0");
   EXPECT_EQ(st.values["dropped_wrong_size"], std::to_string(bad.wrong_size));
