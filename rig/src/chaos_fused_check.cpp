@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <optional>
@@ -154,6 +155,7 @@ class FusedJudge {
   // Violations by kind: each kind reported once, its first sweep with the count of sweeps like it,
   // so that the few examples of the verdict show every kind and how often.
   void fail(const std::string& kind, const std::string& what) {
+    if (std::getenv("RIG_CHAOS_TRACE") != nullptr) std::fprintf(stderr, "fused %s: %s\n", kind.c_str(), what.c_str());
     const auto it = std::find_if(kinds_.begin(), kinds_.end(), [&](const auto& k) { return k.kind == kind; });
     if (it == kinds_.end()) kinds_.push_back({kind, what, 1});
     else ++it->count;
