@@ -174,7 +174,7 @@ struct FusionNode::Impl {
     // The scan's span (its latest point's time): a slower LIDAR's scan spans more than one rotation.
     std::uint32_t span = 0;
     for (const auto& pt : in.points) span = std::max(span, pt.t);
-    const auto place = matcher.push(in.source, in.stamp, in.arrival_ns, static_cast<Nanos>(span));
+    const auto place = matcher.push(in.source, in.stamp, in.arrival_ns, static_cast<Nanos>(span), in.stamp_unsynchronized);
     expected_packets[in.source] = in.packets + in.missing_packets;
     if (!place.late) {
       auto& slot = slot_for(place.sweep);
@@ -393,6 +393,8 @@ dds::DriverStatus FusionNode::status() const {
   s.add_number("clock_steps_back", c.clock_steps_back);
   s.add_number("covered_by_slower", c.covered);
   s.add_number("head_lost_scans", c.head_lost_scans);
+  s.add_number("unsynchronized_scans", c.unsynchronized_scans);
+  s.add_number("resynchronized", c.resynchronized);
   s.add_number("dropped_backlog", m.dropped_backlog);
   s.add_number("points_last_sweep", m.last_points);
   s.add_number("lidars_last_sweep", m.last_sources);

@@ -88,6 +88,7 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
     if (everyone) {
       boundary_ += step;  // not wrapped into [0, p): see place_boundary
       for (auto& s : sources_) {
+        s.sync_phase = floor_mod(s.sync_phase + step, p);  // the same phase in the stepped timeline
         s.offset = signed_circular(s.offset - step, p);  // a dead source has yet to show the step
         if (std::abs(s.offset) <= tolerance) s.offset = 0;
       }
@@ -182,12 +183,19 @@ Nanos SweepMatcher::timeline_step(const Source& src, Nanos stamp, Nanos arrival,
 // it, across another LIDAR's phase (the ten-minute campaign, seed 1: 373 sweeps mixed rotations
 // while the right LIDAR ran at 1200 rpm). Its phase counts only where every source is such (one rpm
 // for all: the boundary is theirs).
+// A source whose stamps are flagged is placed by its last synchronized phase (one never
+// synchronized, by what it has).
+Nanos SweepMatcher::boundary_phase(const Source& s) const noexcept {
+  if (s.flagged && s.synced_once) return s.sync_phase;
+  return floor_mod(s.phase - s.offset, cfg_.period_ns);  // in the boundary's timeline
+}
+
 void SweepMatcher::place_boundary(bool anew) {
   const Nanos p = cfg_.period_ns;
   const bool any_at_rpm = std::any_of(sources_.begin(), sources_.end(), [](const Source& s) { return s.seen && !s.above_rpm; });
   std::vector<Nanos> phases;
   for (const auto& s : sources_)
-    if (s.seen && (!any_at_rpm || !s.above_rpm)) phases.push_back(floor_mod(s.phase - s.offset, p));  // in the boundary's timeline
+    if (s.seen && (!any_at_rpm || !s.above_rpm)) phases.push_back(boundary_phase(s));
   if (phases.empty()) return;
   std::sort(phases.begin(), phases.end());
   Nanos widest = -1, middle = 0;
@@ -212,7 +220,7 @@ void SweepMatcher::place_boundary(bool anew) {
   }
 }
 
-SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns, Nanos span_ns) {
+SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns, Nanos span_ns, bool unsynchronized) {
   Placement out;
   if (source >= cfg_.sources) {
     ++counters_.late_scans;
@@ -262,9 +270,21 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
   const bool short_of_a_turn = span_ns > 0 && span_ns < p - p / 4;
   if (!short_of_a_turn) src.above_rpm = false;
   else if (delta > 0 && delta < p - p / 4) src.above_rpm = true;
-  // The phase first, so that a source's first scan never lies on the boundary.
+  // The phase first, so that a source's first scan never lies on the boundary. A flagged scan's phase
+  // places nothing (the boundary keeps the source's last synchronized one); the first synchronized
+  // scan after flagged ones places the boundary anew, in the widest gap of the phases now.
+  const bool resynchronized = src.seen && src.flagged && !unsynchronized;
+  src.flagged = unsynchronized;
   track_phase(src, stamp_ns, arrival_ns, span_ns, returning);
-  place_boundary(false);
+  src.flagged = unsynchronized;  // (a source's first scan made its state anew)
+  if (unsynchronized) {
+    ++counters_.unsynchronized_scans;
+  } else {
+    src.sync_phase = floor_mod(src.phase - src.offset, p);
+    src.synced_once = true;
+  }
+  if (resynchronized) ++counters_.resynchronized;
+  place_boundary(resynchronized);
   const std::int64_t rotation = rotation_of(src, stamp_ns);
   src.last_stamp = stamp_ns;
   if (newest) {

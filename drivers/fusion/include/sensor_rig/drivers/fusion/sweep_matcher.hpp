@@ -32,6 +32,14 @@
 // source's turns end lost its head (a stuck encoder; the decoder stamps its first intact firing): it
 // is placed as the turn it is the tail of. A source back after it was dead takes a phase jump as its
 // own at once: a clock step meanwhile would have shown in the others' scans first.
+//
+// A scan whose stamps its LIDAR flagged (unsynchronized: slewing after a host clock step, no sync
+// source) says nothing true about its phase: the boundary is placed by that source's last
+// synchronized phase while it is flagged, and placed anew (the widest gap) once its stamps are
+// synchronized again. Followed, the flagged stamps of two LIDARs slewing across the turn carried the
+// boundary into a narrower gap (46.5 ms beside 52.5), where the quarter-gap rule kept it once they
+// were back: 1,115 sweeps mixed rotations after the host clock steps of the ten-minute campaign,
+// seed 3.
 
 #include <cstdint>
 #include <deque>
@@ -60,6 +68,8 @@ struct SweepCounters {
   std::uint64_t phase_steps = 0;         // a source's phase jumped (a clock step, or its own phase changed)
   std::uint64_t covered = 0;             // sources absent from a sweep whose rotation their last (slower) scan spans
   std::uint64_t head_lost_scans = 0;     // placed where their turn began: short of it, their stamp off the phase, their end on it
+  std::uint64_t unsynchronized_scans = 0;  // their LIDAR flagged their stamps: their phase did not place the boundary
+  std::uint64_t resynchronized = 0;        // a source's stamps synchronized again: the boundary placed anew
   std::vector<std::uint64_t> missing;    // per source: emitted sweeps without its scan
 };
 
@@ -80,8 +90,9 @@ class SweepMatcher {
     std::uint64_t sweep = 0;  // else: the sweep it joined (ClosedSweep::id)
   };
   // `arrival_ns` on a clock that does not step (monotonic); `span_ns` the scan's duration (its last
-  // point's time after its stamp; 0 = unknown: one period). Then call ready() until it returns none.
-  Placement push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns, Nanos span_ns = 0);
+  // point's time after its stamp; 0 = unknown: one period). `unsynchronized`: its LIDAR flagged the
+  // scan's stamp. Then call ready() until it returns none.
+  Placement push(std::uint32_t source, Nanos stamp_ns, Nanos arrival_ns, Nanos span_ns = 0, bool unsynchronized = false);
   // The next sweep to emit now, oldest first, or none.
   std::optional<ClosedSweep> ready(Nanos now_ns);
   // Arrival deadline of the oldest open sweep (call ready() then), or -1 when none is open.
@@ -111,6 +122,9 @@ class SweepMatcher {
     bool short_turn = false;          // that scan ended short of its k periods (see settled())
     bool newest_placed = true;        // that scan joined a sweep (dropped as late it covers nothing in the cloud)
     bool above_rpm = false;           // its scans are short of a turn and follow by less (1200 rpm beside 600)
+    bool flagged = false;             // its newest scan's stamp was flagged unsynchronized
+    bool synced_once = false;         // it has had a synchronized scan
+    Nanos sync_phase = 0;             // its last synchronized scan's phase, in the boundary's timeline
   };
   struct Sweep {
     std::uint64_t id = 0;
@@ -125,6 +139,7 @@ class SweepMatcher {
   [[nodiscard]] Nanos head_lost_turn_began(const Source& src, Nanos stamp, Nanos span) const noexcept;
   [[nodiscard]] Nanos timeline_step(const Source& src, Nanos stamp, Nanos arrival, Nanos span) const noexcept;
   void place_boundary(bool anew);
+  [[nodiscard]] Nanos boundary_phase(const Source& s) const noexcept;  // the phase the boundary is placed by
   [[nodiscard]] bool step_refuted(const Source& moved) const noexcept;
   [[nodiscard]] bool settled(const Sweep& s) const noexcept;
   [[nodiscard]] bool covered(std::size_t source, const Sweep& s) const noexcept;
