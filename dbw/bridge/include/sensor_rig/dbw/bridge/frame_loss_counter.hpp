@@ -11,6 +11,8 @@
 // silence with room for more than half a counter turn is counted as `gaps_unknown`, never guessed.
 // A frozen counter (the same value repeated) cannot show a loss either: the frames a frozen run had
 // room for at the message's learned period, less those that arrived, are counted when it ends.
+// Refused frames over half a counter turn (a wrong CRC for a second) carry every value many times: the
+// frames sent across such a run are told by the counter modulo its turn and the time for the turn.
 #include <cstdint>
 #include <span>
 
@@ -35,6 +37,7 @@ class FrameLossCounter {
 
  private:
   [[nodiscard]] std::uint64_t missing_while_frozen(Nanos now) const noexcept;
+  [[nodiscard]] long long sent_across_refused_run(int skipped, Nanos now, double silence_room, int modulus) const noexcept;
 
   safety::E2eConfig c_;
   bool have_last_ = false;
