@@ -3,6 +3,7 @@
 // frames) feeding the real BridgeCore, each feedback frame the ECU made either taken or counted lost.
 #include <gtest/gtest.h>
 
+#include <deque>
 #include <random>
 #include <vector>
 
@@ -255,6 +256,47 @@ TEST(FrameLoss, EveryFeedbackFrameTheEcuMadeIsTakenOrCounted) {
                                                   << ", dropped " << dropped << ", damaged " << damaged;
   // The 300 ms bus-off is a silence the counter shows (it went on where it stopped), not a gap.
   EXPECT_EQ(bridge.feedback_gaps_unknown(), 0u);
+}
+
+// The ten-minute campaign's drive-by-wire stretches (seed 3, 279-297 s), through the mock ECU and the
+// real BridgeCore: an ECU fault, a wrong CRC for a second under a bus losing one frame in ten, then a
+// second wrong-CRC second, and a loss while the network holds every frame 50 ms (order kept: what
+// the hold gathered leaves in a burst at its end, as the mock's runner sends it).
+TEST(FrameLoss, TheCampaignsOverlappingFaultsAreTakenOrCounted) {
+  const dbw::Protocol p = dbw::Protocol::load((dbw::test::source_dir() / "config/dbw/paravan_ref.yaml").string());
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    std::vector<mock::Fault> faults;
+    for (const char* spec : {"ecu-fault@1+1", "bad-crc@1.8+1", "loss=0.1@2.4+2", "bad-crc@3.9+1", "bad-crc@6+1", "loss=0.1@9+2"})
+      faults.push_back(mock::parse_fault(spec));
+    mock::MockEcu ecu(p, faults, seed);
+    std::uint64_t made = 0;
+    ecu.set_observer([&](const mock::EmittedFrame& e) { made += e.role == "feedback" ? 1 : 0; });
+    dbw::BridgeCore bridge(p);
+    std::uint64_t taken = 0;
+    std::deque<std::pair<Nanos, dbw::can::Frame>> held;  // the network's hold, as mock_runner.cpp keeps it
+    const Nanos t0 = 1'000'000'000;
+    const auto deliver = [&](const dbw::can::Frame& f, Nanos at) {
+      dbw::can::RxFrame rx;
+      rx.frame = f;
+      rx.stamp = at;
+      if (bridge.on_frame(rx, at) == dbw::RxKind::kFeedback) ++taken;
+    };
+    for (Nanos now = t0; now < t0 + 14'000 * kMs; now += kMs) {
+      while (!held.empty() && held.front().first <= now) {
+        deliver(held.front().second, now);
+        held.pop_front();
+      }
+      const bool holding = now >= t0 + 10'700 * kMs && now < t0 + 11'700 * kMs;
+      for (const auto& f : ecu.step(now)) {
+        const Nanos due = holding ? now + 50 * kMs : now;
+        if (held.empty() && due <= now) deliver(f, now);
+        else held.emplace_back(std::max(due, held.empty() ? due : held.back().first), f);
+      }
+    }
+    for (const auto& [due, f] : held) deliver(f, due);
+    EXPECT_EQ(taken + bridge.feedback_lost(), made) << "seed " << seed << ": taken " << taken << ", counted " << bridge.feedback_lost();
+    EXPECT_EQ(bridge.feedback_gaps_unknown(), 0u) << "seed " << seed;
+  }
 }
 
 }  // namespace
