@@ -8,7 +8,8 @@
 // the bus counts when the next good frame shows the jump: the counter values skipped, less those the
 // refused frames in between carried. A counter of N values cannot tell k lost frames from k + N, nor a
 // loss from an ECU that was silent (bus-off, restart: frames never sent are not lost): a jump across a
-// silence with room for more than half a counter turn is counted as `gaps_unknown`, never guessed.
+// silence with room for a whole counter turn (less a frame and a half of jitter) is counted as
+// `gaps_unknown`, never guessed.
 // A frozen counter (the same value repeated) cannot show a loss either: the frames a frozen run had
 // room for at the message's learned period, less those that arrived, are counted when it ends.
 // Refused frames over half a counter turn (a wrong CRC for a second) carry every value many times: the
