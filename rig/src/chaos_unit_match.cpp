@@ -34,11 +34,12 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
       if (tx >= h.begin && tx < h.end) d = h.delay;
     return s.first_rx_ns - tx - d;
   };
-  const auto after_send = [&](const UnitTruth& u) {
+  // A unit is found by its first send, or, its head damaged, by its first intact part's (tail_only).
+  const auto tail_only = [&](const UnitTruth& u) {
     const Nanos first = since(u.first_tx);
-    if ((first >= -kArrivalSlack && first <= tolerance) || u.first_intact_tx == 0 || u.first_intact_tx == u.first_tx) return first;
-    return since(u.first_intact_tx);
+    return !(first >= -kArrivalSlack && first <= tolerance) && u.first_intact_tx != 0 && u.first_intact_tx != u.first_tx;
   };
+  const auto after_send = [&](const UnitTruth& u) { return tail_only(u) ? since(u.first_intact_tx) : since(u.first_tx); };
   // Of the units sent within the tolerance before the arrival, one after `after_unit` first: two
   // scans sent at one host time (a step back) need not be within kArrivalSlack of each other (LIDAR
   // campaign seed 11: the Ouster's scan 181 sent 1.005 ms before scan 176's first send, its sample
@@ -50,8 +51,19 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
   // the arrival, seq 76 named scan 81 (ChaosCampaign.AHostClockStep..., 1 run in 5: "scan 81
   // published twice (seq 76 and 81)", scan 76 unaccounted, monitor_agrees off by one).
   const auto is_next = [&](const UnitTruth& u) { return u.rec.unit > after_unit; };
+  // A unit found by its tail alone whose intact packets went out within two slacks of the next
+  // unit's first send, just before the arrival: its last packet straddled the cut (the truth gives a
+  // packet to the unit of its first firing; its firings past the cut begin the next turn, and the
+  // sample with them). Taken as sent before the arrival, the tail won: the front LIDAR's first scan
+  // after a lidar.stuck_azimuth that ended 1 ms before the cut was judged "100.030 ms from its true
+  // acquisition", and the fused sweep with it "mixes rotations" (ten-minute campaign, seed 3).
+  const auto straddled = [&](const UnitTruth& u, Nanos after, const UnitTruth& b, Nanos b_after) {
+    return tail_only(u) && !tail_only(b) && b_after >= -kArrivalSlack && std::llabs(after - b_after) <= 2 * kArrivalSlack;
+  };
   const auto better = [&](const UnitTruth& u, Nanos after, const UnitTruth& b, Nanos b_after) {
     if (is_next(u) != is_next(b)) return is_next(u);
+    if (straddled(u, after, b, b_after)) return false;
+    if (straddled(b, b_after, u, after)) return true;
     if ((after >= 0) != (b_after >= 0)) return after >= 0;
     return after < b_after;
   };
@@ -78,6 +90,7 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
   for (auto& u : units) {
     const Nanos after = after_send(u);
     if (&u == best || u.first_tx == 0 || after < -kArrivalSlack || after > tolerance) continue;
+    if (straddled(u, after, *best, best_after)) continue;
     const bool both_next = in_order && u.rec.unit > after_unit && best->rec.unit > after_unit;
     if (std::llabs(after - best_after) > (both_next ? tolerance : kArrivalSlack)) continue;
     const bool u_next = u.rec.unit > after_unit, best_next = best->rec.unit > after_unit;
