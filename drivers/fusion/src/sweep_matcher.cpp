@@ -271,8 +271,9 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
   if (!short_of_a_turn) src.above_rpm = false;
   else if (delta > 0 && delta < p - p / 4) src.above_rpm = true;
   // The phase first, so that a source's first scan never lies on the boundary. A flagged scan's phase
-  // places nothing (the boundary keeps the source's last synchronized one); the first synchronized
-  // scan after flagged ones places the boundary anew, in the widest gap of the phases now.
+  // places nothing: the boundary keeps the source's last synchronized one, which its synchronized
+  // stamps come back to. (Placed anew when they did, the boundary could move by the jitter of the
+  // phases and split a sweep; a phase that really changed meanwhile is a move, taken as any is.)
   const bool resynchronized = src.seen && src.flagged && !unsynchronized;
   src.flagged = unsynchronized;
   track_phase(src, stamp_ns, arrival_ns, span_ns, returning);
@@ -284,7 +285,7 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
     src.synced_once = true;
   }
   if (resynchronized) ++counters_.resynchronized;
-  place_boundary(resynchronized);
+  place_boundary(false);
   const std::int64_t rotation = rotation_of(src, stamp_ns);
   src.last_stamp = stamp_ns;
   if (newest) {

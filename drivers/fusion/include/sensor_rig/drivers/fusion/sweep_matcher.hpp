@@ -35,11 +35,10 @@
 //
 // A scan whose stamps its LIDAR flagged (unsynchronized: slewing after a host clock step, no sync
 // source) says nothing true about its phase: the boundary is placed by that source's last
-// synchronized phase while it is flagged, and placed anew (the widest gap) once its stamps are
-// synchronized again. Followed, the flagged stamps of two LIDARs slewing across the turn carried the
-// boundary into a narrower gap (46.5 ms beside 52.5), where the quarter-gap rule kept it once they
-// were back: 1,115 sweeps mixed rotations after the host clock steps of the ten-minute campaign,
-// seed 3.
+// synchronized phase while it is flagged. Followed, the flagged stamps of two LIDARs slewing across
+// the turn carried the boundary into a narrower gap (46.5 ms beside 52.5), where the quarter-gap rule
+// kept it once they were back: 1,115 sweeps mixed rotations after the host clock steps of the
+// ten-minute campaign, seed 3.
 
 #include <cstdint>
 #include <deque>
@@ -69,7 +68,7 @@ struct SweepCounters {
   std::uint64_t covered = 0;             // sources absent from a sweep whose rotation their last (slower) scan spans
   std::uint64_t head_lost_scans = 0;     // placed where their turn began: short of it, their stamp off the phase, their end on it
   std::uint64_t unsynchronized_scans = 0;  // their LIDAR flagged their stamps: their phase did not place the boundary
-  std::uint64_t resynchronized = 0;        // a source's stamps synchronized again: the boundary placed anew
+  std::uint64_t resynchronized = 0;        // a source's stamps synchronized again (its phase places the boundary again)
   std::vector<std::uint64_t> missing;    // per source: emitted sweeps without its scan
 };
 
