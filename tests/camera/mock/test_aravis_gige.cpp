@@ -106,13 +106,18 @@ TEST_F(GigeFake, TheGrantedSocketBufferIsReportedAgainstWhatAFrameNeeds) {
     c.socket_buffer_bytes = static_cast<int>(asked);
     AravisSource src(c);
     src.open();
-    ASSERT_EQ(next_frame(src).status, CaptureStatus::kFrame);
-    const auto st = src.stats();
+    const auto st = src.stats();  // read back at open
     EXPECT_EQ(st.socket_buffer_granted, 2 * std::min(asked, rmem_max));
     EXPECT_EQ(st.socket_buffer_needed, 2 * frame);
     // 200 kB is short of a 300 kB frame whatever the host allows: the case the WARN is for.
     if (asked < frame) {
       EXPECT_LT(st.socket_buffer_granted, st.socket_buffer_needed);
+    }
+    // A frame comes through a buffer that holds one. One short of a frame may lose a packet of every
+    // frame while the receiving thread waits for a core (a fresh clone's suite: no whole frame in 3 s
+    // through 400 kB granted for 600 kB): the loss the WARN announces, not a failure of the source.
+    if (st.socket_buffer_granted >= st.socket_buffer_needed) {
+      EXPECT_EQ(next_frame(src).status, CaptureStatus::kFrame);
     }
     src.close();
   }

@@ -18,13 +18,13 @@ constexpr Nanos kFloorExposure = 2'000'000;
 constexpr Nanos kFloorPeriod = 100'000'000;  // 10 Hz
 constexpr Nanos kFloorT0 = 1'800'000'000'000'000'000;
 
-// Issue 27 item 9: auto exposure, 5-15 ms frame to frame, the source telling each frame's exposure
-// one frame later (read from the camera after the frame): the mapping follows the exposure start,
-// not the shortest exposure's arrival (which biased every stamp by the difference, -5 ms here).
-TEST(FrameClock, AnExposureThatChangesEveryFrameIsFollowed) {
+// Frames at 10 Hz with an exposure of 5-15 ms chosen anew for each, delivered 0.1-3 ms after it
+// ends; the source tells each frame's exposure with the frame itself (chunk data) or one frame later
+// (read from the camera after the frame). The worst stamp error after 10 s, each stamp mapped.
+double worst_error_following_exposure(unsigned seed, bool told_with_the_frame) {
   const Nanos t0 = 1'800'000'000'000'000'000;
   FrameClock clock(10'000'000);
-  std::mt19937 rng(11);
+  std::mt19937 rng(seed);
   std::uniform_int_distribution<Nanos> exposure(5'000'000, 15'000'000);
   std::uniform_int_distribution<Nanos> jitter(100'000, 3'000'000);
   Nanos prev_exposure = 0;
@@ -38,7 +38,10 @@ TEST(FrameClock, AnExposureThatChangesEveryFrameIsFollowed) {
     m.device_ns = 3'000'000'000 + (start - t0);
     m.first_rx_ns = start + e + jitter(rng);
     m.complete_ns = m.first_rx_ns + 2'000'000;
-    if (i > 1) {  // the previous frame's exposure, read after it arrived
+    if (told_with_the_frame) {
+      m.exposure_seq = m.seq;
+      m.exposure_ns = e;
+    } else if (i > 1) {
       m.exposure_seq = static_cast<std::uint64_t>(i - 1);
       m.exposure_ns = prev_exposure;
     }
@@ -49,39 +52,18 @@ TEST(FrameClock, AnExposureThatChangesEveryFrameIsFollowed) {
       worst = std::max(worst, std::abs(static_cast<double>(s.vehicle_ns - start)));
     }
   }
-  EXPECT_LT(worst, 1e6);
+  return worst;
 }
+
+// Issue 27 item 9: auto exposure, told one frame later: the mapping follows the exposure start, not
+// the shortest exposure's arrival (which biased every stamp by the difference, -5 ms here).
+TEST(FrameClock, AnExposureThatChangesEveryFrameIsFollowed) { EXPECT_LT(worst_error_following_exposure(11, false), 1e6); }
 
 // Issue 27 items 3 and 9: a camera in chunk mode tells each frame's exposure in the frame itself
 // (ChunkExposureTime: exposure_seq = seq). The mapping must be fed with it at once; it was looked
 // for among the frames before (never found), so the mapper starved and the stamps fell back to
 // the arrival less the exposure, off by the delivery jitter (up to 3 ms here).
-TEST(FrameClock, AFramesOwnExposureFromItsChunkIsFollowed) {
-  const Nanos t0 = 1'800'000'000'000'000'000;
-  FrameClock clock(10'000'000);
-  std::mt19937 rng(12);
-  std::uniform_int_distribution<Nanos> exposure(5'000'000, 15'000'000);
-  std::uniform_int_distribution<Nanos> jitter(100'000, 3'000'000);
-  double worst = 0;
-  for (int i = 1; i <= 200; ++i) {
-    const Nanos start = t0 + static_cast<Nanos>(i) * 100'000'000;
-    const Nanos e = exposure(rng);
-    camera::FrameMeta m;
-    m.seq = static_cast<std::uint64_t>(i);
-    m.domain = camera::TimeDomain::kDeviceTicks;
-    m.device_ns = 3'000'000'000 + (start - t0);
-    m.first_rx_ns = start + e + jitter(rng);
-    m.complete_ns = m.first_rx_ns + 2'000'000;
-    m.exposure_seq = m.seq;
-    m.exposure_ns = e;
-    const auto s = clock.stamp(m);
-    if (i > 100) {
-      EXPECT_EQ(s.source, StampSource::kDeviceMapped) << i;
-      worst = std::max(worst, std::abs(static_cast<double>(s.vehicle_ns - start)));
-    }
-  }
-  EXPECT_LT(worst, 1e6);
-}
+TEST(FrameClock, AFramesOwnExposureFromItsChunkIsFollowed) { EXPECT_LT(worst_error_following_exposure(12, true), 1e6); }
 
 // The line is the lower envelope of the arrivals: right where some frames arrive with the
 // transport's minimum delay. A receiving thread held off at most frames (normal priority beside the
