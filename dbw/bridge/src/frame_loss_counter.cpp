@@ -12,9 +12,14 @@ namespace sensor_rig::dbw {
 // silence instead, a frame 6 ms late followed by one 6 ms early (a loaded host) counted a frame lost
 // that was jitter (rig chaos: "the rig counted 162 can_frames lost, 161 were not published"). Never
 // guessed across a silence of more than half a counter turn (a stalled ECU: frames never sent).
+// Frames the span since the last good frame had room for, at the learned period (> 0).
+double FrameLossCounter::slots_since_good(Nanos now) const noexcept {
+  return static_cast<double>(now - last_good_arrival_) / period_ns_ - 1.0;
+}
+
 std::uint64_t FrameLossCounter::missing_while_frozen(Nanos now) const noexcept {
   if (period_ns_ <= 0 || static_cast<double>(longest_silence_) / period_ns_ >= safety::counter_modulus(c_.profile) / 2.0) return 0;
-  const auto room = std::llround(static_cast<double>(now - last_good_arrival_) / period_ns_) - 1;
+  const auto room = std::llround(slots_since_good(now));
   return room > static_cast<long long>(arrivals_since_good_) ? static_cast<std::uint64_t>(room) - arrivals_since_good_ : 0;
 }
 
@@ -28,7 +33,7 @@ std::uint64_t FrameLossCounter::missing_while_frozen(Nanos now) const noexcept {
 // a run.
 long long FrameLossCounter::sent_across_refused_run(int skipped, Nanos now, double silence_room, int modulus) const noexcept {
   if (period_ns_ <= 0 || arrivals_since_good_ == 0 || silence_room > modulus / 2.0) return -1;
-  const double by_time = static_cast<double>(now - last_good_arrival_) / period_ns_ - 1.0;
+  const double by_time = slots_since_good(now);
   if (by_time < modulus / 2.0) return -1;  // within half a turn the values tell (above)
   const auto turns = std::llround((by_time - skipped) / modulus);
   const long long sent = skipped + std::max<long long>(0, turns) * modulus;

@@ -37,6 +37,7 @@ class FrameLossCounter {
   [[nodiscard]] bool countable() const noexcept { return c_.profile != safety::E2eProfile::kNone; }
 
  private:
+  [[nodiscard]] double slots_since_good(Nanos now) const noexcept;
   [[nodiscard]] std::uint64_t missing_while_frozen(Nanos now) const noexcept;
   [[nodiscard]] long long sent_across_refused_run(int skipped, Nanos now, double silence_room, int modulus) const noexcept;
 
