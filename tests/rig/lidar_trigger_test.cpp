@@ -301,11 +301,15 @@ TEST(LidarTriggeredCamera, StereoPairIsFiredTogetherStampsWithin1msPhaseMeasured
   const auto right = trigger.figures(1);
   std::fprintf(stderr,
                "stereo: paired %d of %zu, stamp difference max %.3f ms; trigger spread p50 %.3f p99 %.3f ms; call error "
-               "p50 %.3f/%.3f p99 %.3f/%.3f ms; phase (%s) p50 %.3f/%.3f p99 %.3f/%.3f ms\n",
+               "p50 %.3f/%.3f p99 %.3f/%.3f ms; phase (%s) p50 %.3f/%.3f p99 %.3f/%.3f ms; exposures unmatched %llu/%llu of "
+               "%llu/%llu\n",
                paired, seen[0].size(), ms(worst), ms(f.spread_p50_ns), ms(f.spread_p99_ns), ms(left.call_error.p50_ns),
                ms(right.call_error.p50_ns), ms(left.call_error.p99_ns), ms(right.call_error.p99_ns),
                left.from_device ? "device exposure" : "trigger call", ms(left.error_p50_ns), ms(right.error_p50_ns),
-               ms(left.error_p99_ns), ms(right.error_p99_ns));
+               ms(left.error_p99_ns), ms(right.error_p99_ns), static_cast<unsigned long long>(left.exposure_unmatched),
+               static_cast<unsigned long long>(right.exposure_unmatched),
+               static_cast<unsigned long long>(left.to_exposure.count + left.exposure_unmatched),
+               static_cast<unsigned long long>(right.to_exposure.count + right.exposure_unmatched));
   for (auto& d : drivers) d->stop();
   lidar.stop();
   for (auto& mock : fakes)

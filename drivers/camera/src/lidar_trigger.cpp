@@ -161,7 +161,12 @@ void LidarTrigger::stop() {
 
 Nanos LidarTrigger::tick_before(Nanos t, std::size_t member) const {
   std::lock_guard lock(mutex_);
-  return member < members_.size() ? members_[member].exposures.before(t) : 0;
+  if (member >= members_.size()) return 0;
+  const Member& m = members_[member];
+  const Nanos by_call = t + latency_ns_;  // ticks are call + latency: compare the calls
+  const Nanos recorded = m.exposures.before(by_call);
+  const Nanos calling = m.calling->load();
+  return calling != 0 && calling <= by_call ? std::max(recorded, calling) : recorded;
 }
 
 void LidarTrigger::observe_sweep(std::span<const timesync::SweepSample> samples) noexcept {
@@ -242,9 +247,15 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen, MemberCall& cal
     if (fire_it) {
       spin_until_monotonic(aim);
       called = vehicle_now_ns();
+      std::atomic<Nanos>& calling = *members_[i].calling;
+      calling.store(called + latency_ns_);
       const auto answer = call.call();
       if (!answer) return;  // left by stop() during (or before) the call: this trigger may be gone
       accepted = *answer;
+      if (!accepted) {  // no frame comes for it: not a tick to match one to
+        std::lock_guard lock(mutex_);
+        calling.store(0);
+      }
     }
     bool late = false;  // the trigger thread gave up waiting for this call
     {
@@ -267,6 +278,7 @@ void LidarTrigger::run_member(std::size_t i, std::uint64_t seen, MemberCall& cal
     if (!late && accepted) {
       std::lock_guard lock(mutex_);
       members_[i].exposures.add(called + latency_ns_);
+      members_[i].calling->store(0);  // recorded: matched from the ticks now
     }
   }
 }
@@ -280,6 +292,7 @@ void LidarTrigger::settle_late_call(std::size_t i, std::uint64_t generation, Nan
   // Taken, only late (the camera answered after the deadline): its frame comes for this tick.
   const Nanos exposure = called + latency_ns_;
   members_[i].exposures.add(exposure);
+  members_[i].calling->store(0);
   members_[i].accepted_mono.add(monotonic_now_ns());
   const auto it = std::find_if(ticks_.begin(), ticks_.end(), [&](const Tick& t) { return t.generation == generation; });
   if (it != ticks_.end()) it->exposures[i] = exposure;

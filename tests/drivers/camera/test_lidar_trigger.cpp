@@ -16,9 +16,14 @@
 
 #include "sensor_rig/drivers/camera/camera_config.hpp"
 #include "sensor_rig/drivers/camera/lidar_trigger.hpp"
+#include "simulated_sweep.hpp"
 
 namespace sensor_rig::drivers {
 namespace {
+
+using sweep_sim::run_until_measured;
+using sweep_sim::SimulatedLidar;
+using sweep_sim::Sweep;
 
 std::string problems_of(const std::string& yaml, CameraConfig* out = nullptr) {
   auto problems = std::make_shared<config::Problems>();
@@ -55,51 +60,6 @@ TEST(LidarTriggerConfig, KeysDefaultsAndErrors) {
   p = problems_of("name: c\ndevice: 127.0.0.3\ntrigger: {mode: software, azimuth_deg: 10}\n");
   EXPECT_NE(p.find("azimuth_deg: only with lidar"), std::string::npos) << p;
 }
-
-// The simulated LIDAR: azimuth(t) = 360 * rate * (t - t0) + phase, counter-clockwise or not.
-struct Sweep {
-  Nanos t0;
-  double rate_hz;
-  double phase_deg;
-  [[nodiscard]] double angle(Nanos t) const { return phase_deg + 360.0 * rate_hz * static_cast<double>(t - t0) * 1e-9; }
-  // The crossing of `az` nearest t.
-  [[nodiscard]] Nanos crossing_near(double az, Nanos t) const {
-    const double k = std::round((angle(t) - az) / 360.0);
-    const double target = az + 360.0 * k;
-    return t0 + static_cast<Nanos>(std::llround((target - phase_deg) / (360.0 * rate_hz) * 1e9));
-  }
-};
-
-// Feeds `observer` the sweep's samples every 100 ms (a complete scan each) on its own thread.
-class SimulatedLidar {
- public:
-  SimulatedLidar(const Sweep& sweep, timesync::SweepObserver& observer)
-      : thread_([this, sweep, &observer] {
-          Nanos covered = sweep.t0;
-          while (on_.load()) {
-            ::usleep(100'000);  // one scan, delivered when it is complete
-            const Nanos now = vehicle_now_ns();
-            std::vector<timesync::SweepSample> scan;
-            for (Nanos t = covered; t < now; t += 100'000) {
-              const double a = std::fmod(std::fmod(sweep.angle(t), 360.0) + 360.0, 360.0);
-              scan.push_back({a, t});
-            }
-            covered = now;
-            observer.observe_sweep(scan);
-          }
-        }) {}
-  ~SimulatedLidar() { stop(); }
-  SimulatedLidar(const SimulatedLidar&) = delete;
-  SimulatedLidar& operator=(const SimulatedLidar&) = delete;
-  void stop() {
-    on_.store(false);
-    if (thread_.joinable()) thread_.join();
-  }
-
- private:
-  std::atomic<bool> on_{true};
-  std::thread thread_;
-};
 
 TEST(LidarTrigger, FiresAtTheSweepCrossingOncePerTurnAndStopsWithTheLidar) {
   LidarTriggerConfig cfg{"front", 45.0, 0.0};
@@ -156,20 +116,6 @@ TEST(LidarTrigger, FiresAtTheSweepCrossingOncePerTurnAndStopsWithTheLidar) {
   while (monotonic_now_ns() - started < 2'300'000'000) ::usleep(20'000);  // past the 2 s start-up grace
   trigger.add_status(st, 0);
   EXPECT_EQ(st.level, dds::Level::kWarn);  // the LIDAR stopped: not triggered
-}
-
-// Runs `trigger` against a simulated 600 rpm sweep until member `watch` has `measured` triggers
-// measured (or ~6 s), then lets the sweep run on until every tick fired is measured; false when
-// it never got there.
-bool run_until_measured(LidarTrigger& trigger, std::size_t watch, std::uint64_t measured) {
-  const Sweep sweep{vehicle_now_ns(), -10.0, 200.0};
-  SimulatedLidar lidar(sweep, trigger);
-  trigger.start();
-  for (int i = 0; i < 600 && trigger.figures(watch).measured < measured; ++i) ::usleep(10'000);
-  trigger.stop();
-  ::usleep(250'000);  // the LIDAR's next scans cover the last crossings fired: every tick settled
-  lidar.stop();
-  return trigger.figures(watch).measured >= measured;
 }
 
 // A stereo pair on one LIDAR trigger: each crossing fires both cameras at once, once; the left
