@@ -228,6 +228,7 @@ Capture AravisSource::next(int timeout_ms) {
     arv_stream_push_buffer(stream, b);
     return c;
   }
+  payload_.store(detail::payload_name(b));
   FrameMeta m;
   m.seq = arv_buffer_get_frame_id(b);
   m.width = cfg_.width;
@@ -294,6 +295,7 @@ SourceStats AravisSource::stats() const {
   s.trigger_busy = trigger_lock_busy_;
   s.socket_buffer_granted = socket_granted_.load();
   s.socket_buffer_needed = socket_needed_.load();
+  s.payload = payload_.load();
   return s;
 }
 

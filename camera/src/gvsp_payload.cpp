@@ -45,6 +45,16 @@ std::size_t first_chunk_bytes(const std::uint8_t* data, std::size_t size) {
   return 0;
 }
 
+const char* payload_name(ArvBuffer* b) {
+  switch (arv_buffer_get_payload_type(b)) {
+    case ARV_BUFFER_PAYLOAD_TYPE_IMAGE: return arv_buffer_has_chunks(b) != FALSE ? "image+chunks" : "image";
+    case ARV_BUFFER_PAYLOAD_TYPE_CHUNK_DATA: return "chunk_data";
+    case ARV_BUFFER_PAYLOAD_TYPE_EXTENDED_CHUNK_DATA: return "extended_chunk_data";
+    case ARV_BUFFER_PAYLOAD_TYPE_MULTIPART: return "multipart";
+    default: return "other";
+  }
+}
+
 LocatedImage locate_image(ArvBuffer* b, std::uint32_t width, std::uint32_t height, PixelFormat format) {
   const std::uint32_t row = row_step(format, width);
   std::size_t size = 0;

@@ -27,6 +27,10 @@ struct LocatedImage {
 // stride its length / height; multipart: the 2D image part of this size.
 LocatedImage locate_image(ArvBuffer* buffer, std::uint32_t width, std::uint32_t height, PixelFormat format);
 
+// The GVSP payload of a buffer, for the camera's status: "image", "image+chunks", "chunk_data",
+// "extended_chunk_data", "multipart" or "other" (a static string).
+const char* payload_name(ArvBuffer* buffer);
+
 // The image chunk of a chunk-data buffer: the chunk at offset 0, walked from the end as Aravis does
 // (data, then id and length, big endian). Returns its length, 0 when the layout does not add up.
 std::size_t first_chunk_bytes(const std::uint8_t* data, std::size_t size);

@@ -1,6 +1,7 @@
 #include "sensor_rig/common/fault_plan.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <array>
 #include <charconv>
 #include <cstdlib>
@@ -39,7 +40,7 @@ constexpr std::array<KindInfo, 33> kKinds{{
     {"camera.exposure_change", DC::kCamera, "us=8000", 0, "exposure time changed while streaming"},
     {"camera.auto_exposure", DC::kCamera, "", 3, "auto exposure on: exposure varies frame to frame"},
     {"camera.chunk_data", DC::kCamera, "payload=image", 3,
-     "chunks (timestamp, exposure) appended to each frame: payload=image (0x4001, image + chunks) or chunk (0x0004, the image its first chunk)"},
+     "chunks (timestamp, exposure) appended to each frame: payload=image (0x4001, image + chunks), chunk (0x0004, the image its first chunk) or multipart (0x000A: a chunk part, then the image part)"},
     {"camera.packet_loss", DC::kCamera, "p=0.01,resend=1", 2, "GVSP packets lost (resend=1: the camera answers resends)"},
     {"camera.padded_rows", DC::kCamera, "bytes=64", 2, "rows padded to a stride wider than width x bytes per pixel"},
     // USB cameras (V4L2).
@@ -85,6 +86,36 @@ double parse_seconds(std::string_view text, std::string_view what, std::string_v
     throw std::invalid_argument("'" + std::string(spec) + "': " + std::string(what) + " '" + std::string(text) +
                                 "' is not a number of seconds >= 0");
   return v;
+}
+
+// Parameters that name one of a few choices: a misspelt one is an error here, not another fault
+// injected in silence (camera.chunk_data:payload=multipat was the 0x4001 payload).
+struct Choices {
+  std::string_view kind, param, values;  // values: '|'-separated
+};
+constexpr Choices kChoices[] = {
+    {"camera.chunk_data", "payload", "image|chunk|multipart"},
+    {"camera.ptp", "state", "Initializing|Faulty|Disabled|Listening|Master|Slave|Uncalibrated|cold_start"},
+    {"v4l2.stamp_mode", "mode", "eof|soe"},
+    {"lidar.corrupt", "field", "time|azimuth|frame_id|column_status|udp_seq|byte"},
+};
+
+void check_choice(std::string_view spec, std::string_view kind, std::string_view param, std::string_view value) {
+  for (const auto& c : kChoices) {
+    if (c.kind != kind || c.param != param) continue;
+    for (std::string_view rest = c.values; !rest.empty();) {
+      const auto bar = rest.find('|');
+      const auto choice = rest.substr(0, bar);
+      if (std::equal(choice.begin(), choice.end(), value.begin(), value.end(),
+                     [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b)); }))
+        return;  // in any case, as the mocks read them
+      rest = bar == std::string_view::npos ? std::string_view{} : rest.substr(bar + 1);
+    }
+    std::string one_of(c.values);
+    std::replace(one_of.begin(), one_of.end(), '|', ',');
+    throw std::invalid_argument("'" + std::string(spec) + "': " + std::string(param) + "='" + std::string(value) +
+                                "' is not one of " + one_of);
+  }
 }
 
 // The next of the markers that end a spec's kind/params part.
@@ -137,6 +168,7 @@ FaultSpec parse_spec(std::string_view spec) {
       throw std::invalid_argument("'" + std::string(spec) + "': " + s.kind + " takes no parameter '" + name +
                                   "' (it takes: " + (k->params.empty() ? std::string("none") : std::string(k->params)) + ")");
     s.params[name] = std::string(item.substr(eq + 1));
+    check_choice(spec, s.kind, name, s.params[name]);
     rest = next == std::string_view::npos ? std::string_view{} : rest.substr(next + 1);
   }
   std::size_t pos = head_end;

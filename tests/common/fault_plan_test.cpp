@@ -40,6 +40,17 @@ TEST(FaultSpec, BadSpecsNameWhatIsWrong) {
   EXPECT_NE(message("lidar.reorder@-1").find("start '-1'"), std::string::npos);
   EXPECT_NE(message("lidar.reorder@1~0").find("period must be > 0"), std::string::npos);
   EXPECT_NE(message("lidar.reorder>").find("needs a device"), std::string::npos);
+  // A choice misspelt is an error, not the default fault injected in its place.
+  EXPECT_NE(message("camera.chunk_data:payload=multipat").find("payload='multipat' is not one of image,chunk,multipart"),
+            std::string::npos);
+  EXPECT_NE(message("camera.ptp:state=Slav").find("is not one of Initializing,"), std::string::npos);
+  EXPECT_EQ(message("camera.ptp:state=slave"), "accepted");  // any case, as the mocks read it
+  EXPECT_EQ(message("camera.ptp:state=cold_start"), "accepted");
+  EXPECT_NE(message("v4l2.stamp_mode:mode=sof").find("mode='sof'"), std::string::npos);
+  EXPECT_NE(message("lidar.corrupt:field=azimut").find("field='azimut'"), std::string::npos);
+  EXPECT_EQ(message("camera.chunk_data:payload=multipart"), "accepted");
+  EXPECT_EQ(message("camera.ptp:state=Slave"), "accepted");
+  EXPECT_EQ(message("lidar.corrupt:field=udp_seq"), "accepted");
 }
 
 TEST(FaultPlan, ExpandsPerDeviceAndRepeats) {

@@ -1,6 +1,6 @@
 // `rig chaos` on the GigE cameras of the mock rig alone (config/mock_rig.yaml's free-running
-// cameras) under camera.chunk_data (both payload types) and camera.padded_rows (issue 25; issue 27
-// items 3 and 13): every frame the fakes made is published complete (chunk-data frames were all
+// cameras) under camera.chunk_data (the three payload types: image + chunks, chunk data,
+// multipart) and camera.padded_rows (issue 25; issue 27 items 3 and 13): every frame the fakes made is published complete (chunk-data frames were all
 // dropped as incomplete), and the frames made under these faults are stamped within 1 ms of their
 // true exposure start, or no worse than the same cameras' frames without them (a chunked frame's
 // own exposure starved the clock mapping: stamps drifted to 3 ms). The `stamps` invariant itself is
@@ -44,13 +44,14 @@ TEST(ChaosCameraPayload, ChunksAndPaddedRowsHoldAccountedAndStamps) {
                                                            camera("corner_rear_left", "127.0.0.5", 400));
   const std::string out = (dir.path / "campaign").string();
   const auto run = test::run_rig("chaos " + config + " --duration 20 --seed 3 --json --out " + out + " --faults '"
-                                 "camera.chunk_data@2+12>front_narrow;camera.padded_rows:bytes=64@2+12>corner_front_right;"
+                                 "camera.chunk_data@2+6>front_narrow;camera.chunk_data:payload=multipart@9+6>front_narrow;"
+                                 "camera.padded_rows:bytes=64@2+12>corner_front_right;"
                                  "camera.chunk_data:payload=chunk@2+12>corner_rear_left;camera.padded_rows:bytes=32@4+6>corner_rear_left'");
   ASSERT_TRUE(run.code == 0 || run.code == 1) << "exit " << run.code << "\n" << run.err;
   const auto last_nl = run.out.find_last_of('\n', run.out.size() - 2);
   const auto j = nlohmann::json::parse(run.out.substr(last_nl == std::string::npos ? 0 : last_nl + 1), nullptr, false);
   ASSERT_TRUE(j.is_object()) << run.out << "\n" << run.err;
-  EXPECT_EQ(j["faults"]["camera.chunk_data"], 2);
+  EXPECT_EQ(j["faults"]["camera.chunk_data"], 3);
   EXPECT_EQ(j["faults"]["camera.padded_rows"], 2);
   for (const char* name : {"front_narrow", "corner_front_right", "corner_rear_left"}) {
     const auto& t = j["topics"][std::string("/sensors/camera/") + name + "/image_raw"];

@@ -35,7 +35,9 @@ std::string detail_of(const faults::FaultEvent& e) {
     return "rows padded by " + e.text("bytes") + " bytes (GVSP x_padding, padding bytes 0xFF)";
   if (e.kind == "camera.chunk_data")
     return std::string("chunks ChunkTimestamp, ChunkExposureTime; payload type ") +
-           (e.text("payload") == "chunk" ? "0x0004 (chunk data, the image its first chunk)" : "0x4001 (image + chunks)");
+           (e.text("payload") == "chunk"       ? "0x0004 (chunk data, the image its first chunk)"
+            : e.text("payload") == "multipart" ? "0x000A (multipart, extended ids: part 0 the chunks, part 1 the image)"
+                                               : "0x4001 (image + chunks)");
   if (e.kind == "camera.ptp") return "state=" + e.text("state") + " tai_offset_s=" + e.text("tai_offset_s") + " step_ms=" + e.text("step_ms");
   if (e.kind == "camera.exposure_change") return "ExposureTimeAbs " + e.text("us") + " us";
   if (e.kind == "camera.slow_open") return "silent until " + e.text("s") + " s after the first GVCP request";
@@ -204,6 +206,7 @@ GvspFrameShape GigeFakeChaos::shape_of(ArvFakeCamera* cam, double t, std::uint64
   const auto* chunk = schedule_.active("camera.chunk_data", t);
   shape.chunks = (chunk_mode & 1) != 0 || chunk != nullptr;
   if (chunk != nullptr && chunk->text("payload") == "chunk") shape.payload_type = 0x0004;
+  shape.multipart = chunk != nullptr && chunk->text("payload") == "multipart";
   shape.chunk_timestamp = dev_ns;
   shape.chunk_exposure_us = exposure_us;
   return shape;

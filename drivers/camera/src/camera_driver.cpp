@@ -474,6 +474,7 @@ dds::DriverStatus CameraDriver::status() const {
       s.add("socket_buffer", "too small for a frame: net.core.rmem_max or socket_buffer_bytes (the WARN at open says which)");
   }
   s.add_number("resent_packets", st.resent_packets);
+  if (st.payload != nullptr && *st.payload != '\0') s.add("gvsp_payload", st.payload);  // what the camera sends
   s.add_number("lost_reports", impl_->lost_reports);
   s.add_number("reopens", impl_->reopens);
   s.add_number("write_errors", impl_->published.write_errors());

@@ -123,6 +123,7 @@ class AravisSource final : public FrameSource {
   std::atomic<std::uint64_t> incomplete_missing_{0};
   std::atomic<std::uint64_t> incomplete_other_{0};
   std::atomic<std::uint64_t> completed_{0};
+  std::atomic<const char*> payload_{""};  // the GVSP payload of the last frame returned
   std::atomic<std::uint64_t> missing_frames_{0};  // block-id gaps (count_missing_frames)
   // The capture thread's (open/close too): the last frame's id (0: none), device time and arrival
   // (CLOCK_MONOTONIC), kept across a close and an open; reopened_: no frame since the last open.

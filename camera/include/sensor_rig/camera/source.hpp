@@ -115,6 +115,9 @@ struct SourceStats {
   // what one frame in flight needs; 0: not a UDP stream (issue 27 item 4).
   std::int64_t socket_buffer_granted = 0;
   std::int64_t socket_buffer_needed = 0;
+  // GigE: the GVSP payload of the last frame returned ("image", "image+chunks", "chunk_data",
+  // "extended_chunk_data", "multipart"; a static string); "" before the first or for another kind.
+  const char* payload = "";
   // Every frame made and not returned: what the driver reports as `counted_lost`.
   [[nodiscard]] std::uint64_t lost_frames() const noexcept { return incomplete + missing_frames; }
 };
