@@ -106,9 +106,7 @@ void check_choice(std::string_view spec, std::string_view kind, std::string_view
     for (std::string_view rest = c.values; !rest.empty();) {
       const auto bar = rest.find('|');
       const auto choice = rest.substr(0, bar);
-      if (std::equal(choice.begin(), choice.end(), value.begin(), value.end(),
-                     [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b)); }))
-        return;  // in any case, as the mocks read them
+      if (same_choice(choice, value)) return;
       rest = bar == std::string_view::npos ? std::string_view{} : rest.substr(bar + 1);
     }
     std::string one_of(c.values);
@@ -135,6 +133,12 @@ std::string_view to_string(DeviceClass c) noexcept {
 }
 
 std::span<const KindInfo> kinds() { return kKinds; }
+
+bool same_choice(std::string_view a, std::string_view b) noexcept {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](char x, char y) {
+    return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+  });
+}
 
 const KindInfo* find_kind(std::string_view name) noexcept {
   for (const auto& k : kKinds)

@@ -1,7 +1,6 @@
 #include "sensor_rig/camera/mock/camera_chaos.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 
 namespace sensor_rig::camera::mock {
@@ -52,15 +51,10 @@ std::string_view to_string(PtpState s) noexcept {
 }
 
 namespace {
-bool same_word(std::string_view a, std::string_view b) {
-  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
-           return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
-         });
-}
 PtpState parse_state(std::string_view s) {
   for (auto v : {PtpState::kInitializing, PtpState::kFaulty, PtpState::kDisabled, PtpState::kListening, PtpState::kMaster,
                  PtpState::kSlave, PtpState::kUncalibrated})
-    if (same_word(s, to_string(v))) return v;
+    if (faults::same_choice(s, to_string(v))) return v;
   return PtpState::kFaulty;  // a state the model does not know: the camera's servo reports a fault
 }
 constexpr Nanos kS = 1'000'000'000;
@@ -73,7 +67,7 @@ PtpView ptp_at(const CameraSchedule& s, double t_s, bool ptp_enabled) noexcept {
   const Nanos tai = static_cast<Nanos>(std::llround(e->number("tai_offset_s", kTaiUtcOffsetS) * 1e9));
   const Nanos step = static_cast<Nanos>(std::llround(e->number("step_ms", 0) * 1e6));
   const std::string state = e->text("state", "Master");
-  if (!same_word(state, "cold_start")) return {parse_state(state), tai + step};
+  if (!faults::same_choice(state, "cold_start")) return {parse_state(state), tai + step};
   // A cold start: the clock counts from power-on (1970 + uptime) while it listens for a master,
   // is stepped to the master's TAI (off by step_ms) while the servo converges, then locks.
   const double into = (t_s - e->at_s) / std::max(e->duration_s, 1e-9);

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "sensor_rig/common/fault_plan.hpp"
 #include "sensor_rig/lidar/mock/packet_fields.hpp"
 #include "sensor_rig/lidar/scan_decoder.hpp"
 #include "synthetic_stream.hpp"
@@ -453,6 +454,15 @@ TEST(HesaiLateInTheWindow, PacketLateBehindTheCutIsPlacedInTheScanAfterIt) {
       ++lacking;
     }
     EXPECT_EQ(lacking, 1U);
+  }
+}
+
+// `rig chaos` checks lidar.corrupt's field against its own list (common sits below the LIDAR
+// mocks): every field the mock knows must be a choice there.
+TEST(ScanFaults, EveryPacketFieldTheMockKnowsIsAFaultChoice) {
+  for (auto f = static_cast<int>(mock::PacketField::kTime); f <= static_cast<int>(mock::PacketField::kByte); ++f) {
+    const std::string name(mock::to_string(static_cast<mock::PacketField>(f)));
+    EXPECT_NO_THROW(faults::parse_spec("lidar.corrupt:field=" + name)) << name;
   }
 }
 

@@ -34,6 +34,8 @@ struct KindInfo {
 };
 std::span<const KindInfo> kinds();
 const KindInfo* find_kind(std::string_view name) noexcept;  // nullptr when unknown
+// A parameter's choice as the parser checks it and the mocks read it: the same word in any case.
+bool same_choice(std::string_view a, std::string_view b) noexcept;
 
 struct FaultSpec {
   std::string kind;
