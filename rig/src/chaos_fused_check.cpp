@@ -286,7 +286,11 @@ class FusedJudge {
     sets_.insert(set.seq);
     for (const auto& m : set.members)
       if (const auto it = lidar_of_.find(m.topic); it != lidar_of_.end()) fused_in_[{it->second, m.seq}].push_back(set.seq);
-    if (!in_window(set.stamp)) return;
+    // Judged when any member lies in the window, not only its stamp (its earliest member's): a sweep
+    // whose earliest scan fired just before the window began holds scans counted in it, and their
+    // sweep's verdict is theirs (a fresh clone's suite: the Pandar's first firing 0.9 ms before the
+    // window began, the other two after it, counted "incomplete" for want of a verdict).
+    if (!in_window(set.stamp) && std::none_of(set.members.begin(), set.members.end(), [&](const FusedMember& m) { return in_window(m.stamp); })) return;
     const std::string sweep = "sweep " + std::to_string(set.seq) + " (stamped at " + ctx_.at_s(set.stamp) + " s)";
     const auto cit = clouds_.find(set.seq);
     const SampleRecord* cloud = cit == clouds_.end() ? nullptr : cit->second;
@@ -352,7 +356,8 @@ class FusedJudge {
       if (min_stamp != set.stamp)
         fail("stamp_rule", sweep + ": stamped " + fmt(ms(set.stamp - min_stamp)) + " ms from its earliest member's stamp");
     }
-    if (earliest != nullptr) {
+    // Its stamp judged when in the window: before it, its earliest member has no truth matched here.
+    if (earliest != nullptr && in_window(set.stamp)) {
       const Nanos lo = earliest->truth->acq, hi = earliest->truth->first_intact;
       const Nanos err = set.stamp < lo ? lo - set.stamp : set.stamp > hi ? set.stamp - hi : 0;
       errors_.push_back(ms(err));

@@ -176,9 +176,13 @@ std::map<std::string, TopicExpectation> expectations_of(const RigConfig& cfg) {
     if (c.lidar_trigger.enabled()) e.depends_on.push_back(c.lidar_trigger.lidar);
     out[camera_topic(c.name)] = e;
   }
-  // The fused cloud: one sweep per rotation while no fault touches a LIDAR (or the host).
+  // The fused cloud: one sweep per rotation of the fusion's period (its max_spread_ms, as the judge
+  // takes it) while no fault touches a LIDAR (or the host); not the first LIDAR's rate, which read
+  // "healthy 200 %" beside a front LIDAR at 300 rpm.
   if (cfg.fusion.enabled && !cfg.lidars.empty()) {
-    TopicExpectation e{"fusion", cfg.lidars.front().mock.rpm / 60.0, {}};
+    double rate_hz = cfg.lidars.front().mock.rpm / 60.0;
+    if (cfg.fusion.max_spread_ms > 0) rate_hz = 1000.0 / static_cast<double>(cfg.fusion.max_spread_ms);
+    TopicExpectation e{"fusion", rate_hz, {}};
     for (const auto& l : cfg.lidars) e.depends_on.push_back(l.name);
     out[kFusedCloudTopic] = e;
   }

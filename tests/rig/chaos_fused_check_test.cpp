@@ -113,6 +113,26 @@ TEST(ChaosFusedCheck, AnHonestFusedCloudHoldsEveryInvariant) {
   EXPECT_EQ(j["invariants"]["fused"], "held");
 }
 
+// The window begins between a sweep's earliest member (the front's first firing) and the others:
+// the two scans counted in the window are judged by their sweep's verdict, complete, not left
+// without one (they were counted "incomplete", one run in about a hundred of the mixed-rpm test).
+TEST(ChaosFusedCheck, ASweepWhoseEarliestScanFiredBeforeTheWindowIsJudgedForItsOthers) {
+  Input in = honest();
+  in.window_begin_ns = acq(0, 0) + 1'000'000;
+  const Result r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  const TopicResult& t = r.topics.at(kFusedCloudTopic);
+  EXPECT_EQ(t.sent, 89u);
+  EXPECT_EQ(t.published_complete, 89u);
+  EXPECT_EQ(t.published_incomplete, 0u);
+  // And such a sweep that lacks a LIDAR while saying complete is caught, as inside the window.
+  in.fused.sets[0].members.pop_back();
+  cloud_of(in, 0).packets = 2 * kParts;
+  const Result lie = check(in);
+  EXPECT_FALSE(lie.invariants.at("fused"));
+  EXPECT_TRUE(example_says(lie, "sweep 0 (stamped at")) << result_text(lie);
+}
+
 // After one late scan: the right LIDAR's rotation 11 fused with the others' 10, rotation 11 without it.
 TEST(ChaosFusedCheck, ASweepMixingRotationsIsCaught) {
   Input in = honest();

@@ -65,6 +65,8 @@ TEST(FusionMixedRpm, EverySlowScanIsFusedInTheRotationItBeganInAgainstTheTruth) 
   EXPECT_EQ(fused["hidden_missing"].get<std::uint64_t>(), 0u) << run.err;
   // Each sweep stamped at its earliest member's true first firing (the LIDAR bound, 0.1 ms).
   EXPECT_LE(fused["stamp_error_max_ms"].get<double>(), 0.1) << run.err;
+  // One sweep per rotation of the fusion's period (10 Hz), not the slow LIDAR's rate (it read 200 %).
+  EXPECT_NEAR(fused["healthy_rate_share"].get<double>(), 1.0, 0.1) << run.out;
   for (const auto& [name, verdict] : j["invariants"].items()) EXPECT_EQ(verdict, "held") << name << "\n" << run.err;
 
   // The members as published (rt/rig/sets/fused): one front scan in every other sweep, each once.
