@@ -36,7 +36,7 @@ TEST(ChaosCameraPayload, ChunksAndPaddedRowsHoldAccountedAndStamps) {
   if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
   test::TempDir dir;
   const std::string src = test::source_dir().string();
-  const std::string config = dir.write("cameras.yaml", "rig:\n  name: cameras-only\n  dds: {domain: 0, profile: " + src +
+  const std::string config = dir.write("cameras.yaml", "rig:\n  name: cameras-only\n  dds: {domain: " + std::to_string(test::lease_dds_domain()) + ", profile: " + src +
                                                            "/config/cyclonedds/loopback.xml}\n  diagnostics_period_ms: 1000\n"
                                                            "cameras:\n" +
                                                            camera("front_narrow", "127.0.0.2", 480) +
