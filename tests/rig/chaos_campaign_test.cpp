@@ -42,12 +42,12 @@ namespace {
 // late, its clock mapping resting on a late floor and said locked: the mock rig's free-running
 // cameras now run real-time and such a mapping flags its stamps (FrameStamp::floor_unseen); 8 runs
 // since held it.
-const std::map<std::pair<std::string, std::string>, std::string> kKnownBroken = {
-    // The LIDAR-triggered stereo pair short of its rate while no fault touched it (94.8 % and 93.6 %,
-    // bound 95 %) in 1 of 2 verbose runs of stop 45 (stop 43 saw the same: missed trigger ticks);
-    // in none of stop 46's 13 runs of this seed (98.8-101.1 %). Not traced.
-    {{"isolation", "camera"}, "27"},
-};
+// Stop 49: camera `isolation` went, the last entry. Its breaks (the LIDAR-triggered stereo pair at
+// 93.6-94.8 % while no fault touched it, stops 43 and 45) were not traced; the likeliest cause is the
+// one e833f87 fixed: a frame matched to the trigger call a period before its own takes the previous
+// frame's stamp. 6 runs since held it, every camera at 99-101 % of its rate (the shares are printed
+// below). The list stays for a defect found and not yet fixed.
+const std::map<std::pair<std::string, std::string>, std::string> kKnownBroken = {};
 
 std::string class_of(const std::string& topic) {
   if (topic.rfind("/sensors/lidar/", 0) == 0) return "lidar";
@@ -146,6 +146,11 @@ TEST(ChaosCampaign, EveryKindOnTheWholeMockRigIsJudgedAgainstTheTruth) {
   }
   for (const auto& [known, issue] : kKnownBroken)
     if (!broken.contains(known)) std::printf("held this run (issue %s): %s on %s\n", issue.c_str(), known.first.c_str(), known.second.c_str());
+  // Each device's share of its rate while no fault touched it, the margin of `isolation` (bound 95 %).
+  std::string shares;
+  for (const auto& [topic, t] : topics.items())
+    if (t.contains("healthy_rate_share")) shares += " " + t.value("device", topic) + " " + std::to_string(static_cast<int>(100 * t["healthy_rate_share"].get<double>() + 0.5)) + "%";
+  std::printf("healthy rate shares:%s\n", shares.c_str());
   // Whatever went wrong around the campaign itself (a rig that did not stop in time, a mock that did
   // not start), printed for whoever reads the log.
   if (j.contains("campaign_errors")) std::printf("campaign errors: %s\n", j["campaign_errors"].dump().c_str());
