@@ -104,15 +104,15 @@ bool a_lidar_moved(const Phases& before, const Phases& now, Nanos period) {
 }
 
 // The boundary for [from, to), moved the short way from `previous` (never wrapped: rotation numbers
-// count periods from it) or kept there; nullopt without any acquisition then. `before`: the phases
-// the previous boundary was placed by; a LIDAR that moved since places it anew, as the matcher does.
+// count periods from it) or kept there; nullopt without any acquisition then. `anew`: a LIDAR moved
+// lately (see place_boundaries), and the boundary is placed anew, as the matcher does.
 // Kept there by the quarter-gap rule alone, the boundary stayed between two LIDARs once a third came
 // back from an rpm change half a turn off (phases 99, 0 and 47 ms: kept at ~25 ms in the 47 ms gap,
 // where the matcher placed its own in the 52 ms one): 40 sweeps of a LIDAR-fault campaign "mixed".
-std::optional<Nanos> rotation_boundary(const Phases& ph, const Phases& before, Nanos period, std::optional<Nanos> previous) {
+std::optional<Nanos> rotation_boundary(const Phases& ph, bool anew, Nanos period, std::optional<Nanos> previous) {
   if (ph.sorted.empty()) return previous;
   if (!previous) return ph.middle;
-  if (a_lidar_moved(before, ph, period)) return *previous + signed_mod(ph.middle - *previous, period);
+  if (anew) return *previous + signed_mod(ph.middle - *previous, period);
   Nanos nearest = period;
   for (const Nanos p : ph.sorted) nearest = std::min<Nanos>(nearest, std::abs(signed_mod(p - *previous, period)));
   if (nearest >= ph.widest / 4) return previous;
@@ -185,6 +185,14 @@ class FusedJudge {
     start = boundary_at(start) + n * period_;
     return start;
   }
+  // After a LIDAR moved, the boundary follows the widest gap for this many pieces more: the matcher
+  // places it anew at the move or up to its kOwnPhaseScans scans later (a move held as a possible
+  // clock step until a witness refutes it), and a LIDAR's first scan after a move may lie off the
+  // phase it settles on. Placed by that scan alone, the judge's boundary stayed in the gap it made:
+  // the right LIDAR back from 1200 rpm at phase 64 ms, then 59 ms for good beside 0 and 23 ms; the
+  // judge kept 43.6 ms (the widest gap of 0/23/64), the matcher placed 79.4 ms (of 0/23/59), and
+  // 322 sweeps "mixed rotations" for 32 s (ten-minute campaign, seed 4).
+  static constexpr std::int64_t kSettlingPieces = 4;
   // Pieces of a rotation; each LIDAR's phase that of its latest scan up to the piece's end (within
   // three rotations: a LIDAR silent longer has none): the phase of the moment, as the matcher knows
   // it (a LIDAR whose phase changed is taken on its new one from its first scan on it).
@@ -201,9 +209,11 @@ class FusedJudge {
     pieces_from_ = lo;
     std::optional<Nanos> b;
     Phases before;
+    std::int64_t since_move = kSettlingPieces + 1;
     for (Nanos t = lo; t <= hi; t += piece_) {
       const Phases ph = phases_between(lidars_, period_, t - 2 * period_, t + period_);
-      b = rotation_boundary(ph, before, period_, b);
+      since_move = a_lidar_moved(before, ph, period_) ? 0 : since_move + 1;
+      b = rotation_boundary(ph, since_move <= kSettlingPieces, period_, b);
       boundaries_.push_back(b.value_or(0));
 
       // A LIDAR silent in this piece keeps the phase it was last on (the matcher keeps a dead

@@ -469,6 +469,61 @@ TEST(ChaosFusedCheck, ALidarMovingByItselfRegroupsTheRotationsByTheWidestGapAtOn
   EXPECT_TRUE(example_says(r, "mixes rotations")) << result_text(r);
 }
 
+// The right LIDAR comes back on another phase (ten-minute campaign, seed 4: back from 1200 rpm): its
+// first scan at 64 ms into the rotation, then 59 ms for good, beside the front at 0 and the left at
+// 23. By 0/23/64 the widest gap is 23-64 ms; by 0/23/59 it is 59-100 ms, where the matcher places its
+// boundary once the move is its own (a scan or three later), and each sweep holds the three scans of
+// one turn. The judge placed its boundary by the first scan alone and kept it there (no phase came
+// within a quarter of the widest gap): every later sweep "mixed rotations". Now it follows the widest
+// gap for a few rotations after a move.
+TEST(ChaosFusedCheck, ALidarBackOnANewPhaseIsJudgedByThePhaseItSettlesOn) {
+  constexpr int kMove = 10;
+  const auto right_at = [](int u) {
+    if (u < kMove) return kT0 + u * kPeriod + 95'000'000;
+    return kT0 + u * kPeriod + (u == kMove + 1 ? 64'000'000 : 59'000'000);
+  };
+  Input in = honest();
+  move_lidar(in, 1, 21'000'000);  // the left at 23 ms
+  for (auto& u : in.truths[2].units) u.dev_ns = u.acq_ns = right_at(static_cast<int>(u.unit));
+  for (auto& part : in.truths[2].parts) {
+    const Nanos by = right_at(static_cast<int>(part.unit)) - acq(2, static_cast<int>(part.unit));
+    part.acq_ns += by, part.dev_ns += by, part.tx_ns += by;
+  }
+  for (auto& x : in.samples)
+    if (x.topic == topic_of(2)) {
+      const Nanos by = right_at(static_cast<int>(x.seq - seq_of(2, 0))) - x.acquisition_ns;
+      x.acquisition_ns += by, x.first_rx_ns += by, x.publish_ns += by, x.received_ns += by;
+    }
+  remove_scans(in, 2, kMove, kMove + 1);  // silent while it changed
+  // The sweeps as the matcher makes them: before the move the right's turn n - 1 (95 ms) with the
+  // others' n; after it the right's n.
+  std::erase_if(in.samples, [](const SampleRecord& x) { return x.topic == kFusedCloudTopic; });
+  in.fused.sets.clear();
+  for (int n = 0; n < kRotations; ++n) {
+    FusedSet set{static_cast<std::uint64_t>(n), acq(0, n), {member(0, n), FusedMember{topic_of(1), acq(1, n) + 21'000'000, seq_of(1, n)}}};
+    if (n >= 1 && n - 1 < kMove) set.members.push_back(FusedMember{topic_of(2), right_at(n - 1), seq_of(2, n - 1)});
+    if (n > kMove) set.members.push_back(FusedMember{topic_of(2), right_at(n), seq_of(2, n)});
+    for (const auto& m : set.members) set.stamp = std::min(set.stamp, m.stamp);  // the earliest member's
+    const auto parts = static_cast<std::uint32_t>(set.members.size()) * kParts;
+    in.samples.push_back(cloud(set.seq, set.stamp, parts, set.members.size() == 3 ? 0 : kParts));
+    in.fused.sets.push_back(set);
+  }
+  const Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("fused")) << result_text(r);
+  EXPECT_LE(r.topics.at(kFusedCloudTopic).mixes_regrouped, 2u) << result_text(r);
+  // Its lying twin: after the move the right's turn n with the others' n + 1.
+  for (int n = kMove + 1; n < kRotations; ++n) {
+    auto& members = in.fused.sets[static_cast<std::size_t>(n)].members;
+    members.back() = FusedMember{topic_of(2), right_at(n - 1), seq_of(2, n - 1)};
+  }
+  in.fused.sets[kMove + 1].members.pop_back();  // the right's silent turn
+  cloud_of(in, kMove + 1).packets = 2 * kParts;
+  in.fused.scans_dropped = 1;  // its last turn, in no sweep now
+  const Result lie = check(in);
+  EXPECT_FALSE(lie.invariants.at("fused"));
+  EXPECT_TRUE(example_says(lie, "mixes rotations")) << result_text(lie);
+}
+
 // The right LIDAR's scan 12 is short of a turn and begins 55 ms late (a LIDAR above the rig's rpm:
 // two scans a rotation, each on another phase). Its phase says nothing of the rig's rotation, so it
 // is not held to one: the sweep is one rotation by its other members. The same late start in a
