@@ -332,6 +332,22 @@ void move_lidar(Input& in, std::size_t lidar, Nanos by) {
       if (m.topic == topic_of(lidar)) m.stamp += by;
 }
 
+// Places LIDAR `lidar`'s scan u (its truth and its published scan) at at(u): a phase of its own that
+// may change over time. Its scans must still be where honest() put them.
+template <typename At>
+void place_lidar(Input& in, std::size_t lidar, const At& at) {
+  for (auto& u : in.truths[lidar].units) u.dev_ns = u.acq_ns = at(static_cast<int>(u.unit));
+  for (auto& part : in.truths[lidar].parts) {
+    const Nanos by = at(static_cast<int>(part.unit)) - acq(lidar, static_cast<int>(part.unit));
+    part.acq_ns += by, part.dev_ns += by, part.tx_ns += by;
+  }
+  for (auto& x : in.samples)
+    if (x.topic == topic_of(lidar)) {
+      const Nanos by = at(static_cast<int>(x.seq - seq_of(lidar, 0))) - x.acquisition_ns;
+      x.acquisition_ns += by, x.first_rx_ns += by, x.publish_ns += by, x.received_ns += by;
+    }
+}
+
 // The left LIDAR restarts at 0.5 s (silent 0.3 s). Honest: the sweeps it missed say so, and it is
 // fused again from its first scan back. Planted: the fusion never takes it back (its scans counted
 // dropped, every sweep after says the left scan is missing: no other invariant sees a lie); the
@@ -429,16 +445,7 @@ TEST(ChaosFusedCheck, ALidarMovingByItselfRegroupsTheRotationsByTheWidestGapAtOn
   const auto left_at = [](int u) { return kT0 + u * kPeriod + (u < kMove ? 60'000'000 : 47'000'000); };
   const auto rebuild = [&](bool anew) {
     Input in = honest();
-    for (auto& u : in.truths[1].units) u.dev_ns = u.acq_ns = left_at(static_cast<int>(u.unit));
-    for (auto& part : in.truths[1].parts) {
-      const Nanos by = left_at(static_cast<int>(part.unit)) - acq(1, static_cast<int>(part.unit));
-      part.acq_ns += by, part.dev_ns += by, part.tx_ns += by;
-    }
-    for (auto& x : in.samples)
-      if (x.topic == topic_of(1)) {
-        const Nanos by = left_at(static_cast<int>(x.seq - seq_of(1, 0))) - x.acquisition_ns;
-        x.acquisition_ns += by, x.first_rx_ns += by, x.publish_ns += by, x.received_ns += by;
-      }
+    place_lidar(in, 1, left_at);
     // The sweeps: rotation n holds the others' n + 1 and the left's n before the move; after it
     // (matcher) the left's n + 1, its scan kMove dropped; or (kept boundary) still the left's n.
     std::erase_if(in.samples, [](const SampleRecord& x) { return x.topic == kFusedCloudTopic; });
@@ -484,16 +491,7 @@ TEST(ChaosFusedCheck, ALidarBackOnANewPhaseIsJudgedByThePhaseItSettlesOn) {
   };
   Input in = honest();
   move_lidar(in, 1, 21'000'000);  // the left at 23 ms
-  for (auto& u : in.truths[2].units) u.dev_ns = u.acq_ns = right_at(static_cast<int>(u.unit));
-  for (auto& part : in.truths[2].parts) {
-    const Nanos by = right_at(static_cast<int>(part.unit)) - acq(2, static_cast<int>(part.unit));
-    part.acq_ns += by, part.dev_ns += by, part.tx_ns += by;
-  }
-  for (auto& x : in.samples)
-    if (x.topic == topic_of(2)) {
-      const Nanos by = right_at(static_cast<int>(x.seq - seq_of(2, 0))) - x.acquisition_ns;
-      x.acquisition_ns += by, x.first_rx_ns += by, x.publish_ns += by, x.received_ns += by;
-    }
+  place_lidar(in, 2, right_at);
   remove_scans(in, 2, kMove, kMove + 1);  // silent while it changed
   // The sweeps as the matcher makes them: before the move the right's turn n - 1 (95 ms) with the
   // others' n; after it the right's n.
