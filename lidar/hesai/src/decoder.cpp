@@ -224,8 +224,10 @@ struct DecoderImpl {
   // A silence before this packet (stream_gap.hpp): the scans in progress (and the lookahead past
   // the cut) end as partial, continuity and the UDP sequence start over at this packet; a first
   // group within a packet after the cut begins a whole scan.
-  void new_stream(std::optional<Scan>& out, int first_az, double group_step, int groups) noexcept {
+  void new_stream(std::optional<Scan>& out, int first_az, double group_step, int groups, Nanos rx_ns) noexcept {
     ++stats.silences;
+    const std::uint32_t rejected = scans.rejected_since_kept();
+    const std::uint32_t before = gaps.rejected_before_silence(rx_ns, rejected);
     // Packets rejected whole since the last kept one (a frozen encoder) turned on to the next
     // scan's window and past it: the scans they began were made (stream_gap.hpp). A scan begins
     // where its window does (reset_raw); one whose window opened already is the lookahead, ended
@@ -235,14 +237,21 @@ struct DecoderImpl {
       int arc = detail::turn_step(prev_az, reset_raw);
       if (arc == 0) arc = detail::kTurn;
       const int visible = arc - detail::arc_outside(fov, prev_az, arc);
-      scans.lose_scans(scans_begun_while_rejected(scans.rejected_since_kept(), std::ceil(visible / packet_arc),
-                                                  fov.length() / packet_arc));
+      scans.lose_scans(scans_begun_while_rejected(before, std::ceil(visible / packet_arc), fov.length() / packet_arc));
     }
     scans.merge(out, end(false));
     if (scans.current().scan.packets > 0) scans.merge(out, end(false));
     scans.drop_next();
     restart();
     const double packet_arc = group_step * groups;
+    if (packet_arc > 0.5) {
+      // Those rejected after the silence are the new stream's: the turns they ended before this
+      // packet's were made (its own turn's are this scan's, begun partial).
+      const int arc = detail::turn_step(reset_raw, first_az);
+      const int visible = arc - detail::arc_outside(fov, reset_raw, arc);
+      scans.lose_scans(scans_ended_while_rejected(rejected - before, std::floor(visible / packet_arc),
+                                                  fov.length() / packet_arc));
+    }
     scans.current().from_cut = packet_arc > 0.5 && detail::turn_step(emit_raw, first_az) < packet_arc;
   }
   // One turn of the sensor (ns) from the last turning packet's azimuth rate; 0: not known yet.
@@ -448,7 +457,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                              std::llround(static_cast<double>(dt_us) * 1000.0 / static_cast<double>(period_ns)))
             : IdsAcrossGap::kNone;
     if (is_silence(quiet, turn_ns(), sensor_continues(dt_us * 1000, period_ns), ids)) {
-      new_stream(out, az[first_good], fit.step, groups);
+      new_stream(out, az[first_good], fit.step, groups, packet.rx_ns);
       to_caller_line();
     }
   }

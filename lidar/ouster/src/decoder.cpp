@@ -273,17 +273,21 @@ struct DecoderImpl {
 
   // A silence before this packet (stream_gap.hpp): the scan in progress ends as partial, frame
   // and packet continuity start over at this packet (a frame from its first column is whole).
-  std::optional<Scan> new_stream() noexcept {
+  std::optional<Scan> new_stream(long slot, Nanos rx_ns) noexcept {
     ++stats.silences;
+    const std::uint32_t rejected = scans.rejected_since_kept();
+    const std::uint32_t before = gaps.rejected_before_silence(rx_ns, rejected);
+    const double per_frame = window_slots(-1, packets_per_frame);
     // Packets rejected whole since the last kept one (no column to place them by: frozen
     // measurement ids) filled the frame's window slots and went on into later frames: the frames
     // they began were made (stream_gap.hpp). The next frame begins at its window's first slot.
     if (have_base) {
       const long prev_slot = prev_base >= 0 ? prev_base / static_cast<long>(layout.columns_per_packet) : 0;
-      scans.lose_scans(scans_begun_while_rejected(scans.rejected_since_kept(),
-                                                  window_slots(prev_slot, packets_per_frame) + 1.0,
-                                                  window_slots(-1, packets_per_frame)));
+      scans.lose_scans(scans_begun_while_rejected(before, window_slots(prev_slot, packets_per_frame) + 1.0, per_frame));
     }
+    // Those rejected after the silence are the new stream's: the frames they ended before this
+    // packet's were made (the window slots before `slot` are this frame's, begun partial).
+    scans.lose_scans(scans_ended_while_rejected(rejected - before, window_slots(-1, slot), per_frame));
     std::optional<Scan> out = end(false);
     restart();
     return out;
@@ -401,7 +405,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     const long ahead = slot > prev_slot ? 0 : 1;
     const IdsAcrossGap ids = dt > 0 ? ids_across_gap(prev_fid, fid, 0xFFFFU, ahead + extra_frames(prev_slot, slot, ahead, dt))
                                     : IdsAcrossGap::kRestarted;
-    if (is_silence(quiet, frame_ns(), sensor_continues(dt, span_ns), ids)) out = new_stream();
+    if (is_silence(quiet, frame_ns(), sensor_continues(dt, span_ns), ids)) out = new_stream(slot, packet.rx_ns);
   }
   // The packet on the current scan's line (unsigned: a corrupt column time wraps, as the ids' do).
   // A packet without column times (0) has only the caller's stamp.

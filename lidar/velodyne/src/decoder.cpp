@@ -323,8 +323,10 @@ struct DecoderImpl {
 
   // A silence before this packet (stream_gap.hpp): the scan in progress ends as partial, continuity
   // starts over at this packet; a first group within a packet after the cut begins a whole scan.
-  std::optional<Scan> new_stream(int first_az, double group_step, int groups) noexcept {
+  std::optional<Scan> new_stream(int first_az, double group_step, int groups, Nanos rx_ns) noexcept {
     ++stats.silences;
+    const std::uint32_t rejected = scans.rejected_since_kept();
+    const std::uint32_t before = gaps.rejected_before_silence(rx_ns, rejected);
     // Packets rejected whole since the last kept one (a frozen encoder) turned on to the cut and
     // past it: the scans they began were made (stream_gap.hpp). Packet k after the last kept one
     // reaches the cut when its last group does.
@@ -333,12 +335,19 @@ struct DecoderImpl {
       int arc = detail::turn_step(prev_az, cut);
       if (arc == 0) arc = detail::kTurn;  // the last kept group began this scan at the cut
       const int visible = arc - detail::arc_outside(fov, prev_az, arc);
-      scans.lose_scans(scans_begun_while_rejected(scans.rejected_since_kept(), std::ceil(visible / packet_arc),
-                                                  fov.length() / packet_arc));
+      scans.lose_scans(scans_begun_while_rejected(before, std::ceil(visible / packet_arc), fov.length() / packet_arc));
     }
     std::optional<Scan> out = end(false);
     restart();
     const double packet_arc = group_step * groups;
+    if (packet_arc > 0.5) {
+      // Those rejected after the silence are the new stream's: the turns they ended before this
+      // packet's were made (its own turn's are this scan's, begun partial).
+      const int arc = detail::turn_step(cut, first_az);
+      const int visible = arc - detail::arc_outside(fov, cut, arc);
+      scans.lose_scans(scans_ended_while_rejected(rejected - before, std::floor(visible / packet_arc),
+                                                  fov.length() / packet_arc));
+    }
     scans.current().from_cut = packet_arc > 0.5 && detail::turn_step(cut, first_az) < packet_arc;
     return out;
   }
@@ -394,7 +403,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // to say otherwise). Judged first: nothing before a silence is this packet's order or loss.
   if (const Nanos quiet = gaps.quiet_ns(packet.rx_ns); have_prev && quiet > kSilenceTurns * period_ns &&
       is_silence(quiet, turn_ns(period_ns, groups), sensor_continues(dt_us * 1000, period_ns), IdsAcrossGap::kNone))
-    out = new_stream(na[first_good], fit.step, groups);
+    out = new_stream(na[first_good], fit.step, groups, packet.rx_ns);
   if (have_prev) {
     detail::GapInput in{.prev_az = prev_az,
                         .groups_since_prev = prev_trailing_bad + first_good + 1,

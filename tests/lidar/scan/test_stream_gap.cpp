@@ -91,14 +91,16 @@ struct Recorded {
   std::vector<mock::ClosedUnit> units;  // made and closed before the run's end (mid-turn)
 };
 
-enum class Fault { kNone, kSilence, kLossBurst, kFrozenThenSilence };
+enum class Fault { kNone, kSilence, kLossBurst, kFrozenThenSilence, kSilenceThenFrozen, kFrozenAcrossSilence };
 
 // 2.45 s of a sensor; from 0.65 s on (mid-turn), `gap_s` of `fault`: silent then a new sensor
 // (counters from 0, the rotor 2° behind where it fell silent: a restarted Pandar40P's first packets
 // were taken for late ones), or its packets lost (nothing received where the sensor numbers its
 // packets, else every one damaged on the way: 64 bytes). kFrozenThenSilence: the encoder frozen
 // for `frozen_s` before the silence, every azimuth field at one value (sent, rejected); the fault
-// from `from_s`.
+// from `from_s`. kSilenceThenFrozen: the restarted sensor's first `frozen_s` frozen at its first
+// packet's azimuth fields. kFrozenAcrossSilence: `frozen_s` before the silence and after it, at
+// the first frozen packet's fields (the mock's lidar.stuck_azimuth around a lidar.restart).
 Recorded record(const Model& m, Fault fault, double gap_s, double frozen_s = 0.0, double from_s = 0.65) {
   Recorded r;
   auto sensor = m.make(kT0, 0.0);
@@ -106,7 +108,9 @@ Recorded record(const Model& m, Fault fault, double gap_s, double frozen_s = 0.0
   std::vector<std::byte> frozen;
   mock::UnitTracker tracker(sensor->unit_rule());
   const Nanos from = kT0 + static_cast<Nanos>(from_s * 1e9), until = from + static_cast<Nanos>(gap_s * 1e9);
-  const bool silence = fault == Fault::kSilence || fault == Fault::kFrozenThenSilence;
+  const bool silence = fault != Fault::kNone && fault != Fault::kLossBurst;
+  const bool frozen_before = fault == Fault::kFrozenThenSilence || fault == Fault::kFrozenAcrossSilence;
+  const bool frozen_after = fault == Fault::kSilenceThenFrozen || fault == Fault::kFrozenAcrossSilence;
   bool restarted = false;
   double last_rotor_deg = 0.0;
   for (;;) {
@@ -125,7 +129,11 @@ Recorded record(const Model& m, Fault fault, double gap_s, double frozen_s = 0.0
     if (lost && m.numbered) continue;
     Pkt k{{p.bytes.begin(), p.bytes.end()}, p.truth.acq_ns, p.time_ns + 20'000};
     if (lost) k.bytes.resize(64);
-    if (fault == Fault::kFrozenThenSilence && !restarted && p.time_ns >= from - static_cast<Nanos>(frozen_s * 1e9)) {
+    if (frozen_before && !restarted && p.time_ns >= from - static_cast<Nanos>(frozen_s * 1e9)) {
+      if (frozen.empty()) frozen = k.bytes;
+      fields.freeze_azimuth(k.bytes, frozen);
+    }
+    if (frozen_after && restarted && p.time_ns < until + static_cast<Nanos>(frozen_s * 1e9)) {
       if (frozen.empty()) frozen = k.bytes;
       fields.freeze_azimuth(k.bytes, frozen);
     }
@@ -217,6 +225,27 @@ TEST_P(StreamGap, TurnsOfRejectedPacketsBeforeASilenceAreLostScans) {
     expect_accounted(run, d, what);
     EXPECT_EQ(d.st.silences, 1U) << what;
     EXPECT_GE(d.st.scans_lost, 2U) << what << ": the scan the freeze cut short and the turns after it";
+  }
+}
+
+// rig chaos seed 4 (the left OS-LEGACY: lidar.restart 254.2-255.2 s, lidar.stuck_azimuth 255.19-255.69 s):
+// the restarted sensor's stream began frozen. The rejected packets after the silence were heard, so
+// no silence was seen; the turns they made were counted nowhere (6 scans made and not published,
+// 2 counted lost).
+TEST_P(StreamGap, TurnsOfRejectedPacketsAfterARestartAreLostScans) {
+  const Model m = model(GetParam());
+  // Frozen turns ending at other places of the turn (just short of a cut, just past one).
+  for (const auto& [gap_s, frozen_s] : {std::pair{1.0, 0.49}, std::pair{0.5, 0.25}, std::pair{1.0, 0.132},
+                                        std::pair{0.4, 0.0995}, std::pair{0.4, 0.1005}, std::pair{0.7, 0.31}}) {
+    for (const Fault f : {Fault::kSilenceThenFrozen, Fault::kFrozenAcrossSilence}) {
+      const std::string what = std::string(f == Fault::kSilenceThenFrozen ? "" : "frozen, ") + std::to_string(gap_s) +
+                               " s silent, then frozen " + std::to_string(frozen_s) + " s";
+      const Recorded run = record(m, f, gap_s, frozen_s);
+      const Decoded d = decode(m.options, run.pkts);
+      expect_accounted(run, d, what);
+      EXPECT_EQ(d.st.silences, 1U) << what;
+      EXPECT_GE(d.st.scans_lost, 2U) << what << ": the scan the silence cut short and the frozen turns";
+    }
   }
 }
 

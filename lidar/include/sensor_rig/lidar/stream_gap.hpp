@@ -20,6 +20,7 @@
 // out of order: its azimuth lay just behind the last one heard a second before).
 // Without numbering, a loss burst longer than the silence bound is taken for a silence (the
 // received stream is the same): its turns go uncounted. lidar/README.md "Silences".
+#include <algorithm>
 #include <cstdint>
 
 #include "sensor_rig/lidar/packet.hpp"
@@ -36,24 +37,56 @@ enum class IdsAcrossGap : std::uint8_t {
   kRestarted,  // numbered otherwise: begun again (a restart)
 };
 
-// The host's side of the rule: when the decoder last heard the sensor.
+// The host's side of the rule: when the decoder last heard the sensor, and the silence before a
+// packet rejected whole (a restarted sensor whose encoder is frozen: rig chaos seed 4, the left
+// OS-LEGACY's restart then stuck azimuth). Such a packet is heard (the sensor sends again), but no
+// decoder can judge a silence by it (no azimuth or ids to place it by): the silence is kept for the
+// next kept packet, which judges it, and the packets rejected after it are told apart from those
+// rejected before (their turns are the new stream's).
 class StreamGap {
  public:
-  // Every packet the decoder is handed, kept or rejected (DecoderPimpl::push, after decoding it).
-  void heard(Nanos rx_ns) noexcept {
+  // Every packet the decoder is handed, kept or rejected (DecoderPimpl::push, after decoding it),
+  // with the decoder's count of packets rejected since the last kept one before and after it: a
+  // rise is a packet rejected whole, a fall to 0 (or less than before) a kept packet.
+  void heard(Nanos rx_ns, std::uint32_t rejected_before, std::uint32_t rejected_after) noexcept {
+    const Nanos quiet = quiet_before(rx_ns);
+    if (rejected_after > rejected_before) {
+      if (quiet > pending_quiet_) {
+        pending_quiet_ = quiet;
+        rejected_before_quiet_ = rejected_before;
+      }
+    } else if (rejected_after == 0 || rejected_after < rejected_before) {
+      pending_quiet_ = 0;
+      rejected_before_quiet_ = 0;
+    }
     last_rx_ = rx_ns;
     heard_ = true;
   }
-  void forget() noexcept { heard_ = false; }
+  void forget() noexcept {
+    heard_ = false;
+    pending_quiet_ = 0;
+    rejected_before_quiet_ = 0;
+  }
 
-  // How long nothing was heard before a packet received at `rx_ns` (0: nothing heard yet). A
-  // decoder asks is_silence() only when this exceeds kSilenceTurns packets (a cheap first test: a
-  // turn is many packets), so the hot path pays one subtraction per packet.
-  [[nodiscard]] Nanos quiet_ns(Nanos rx_ns) const noexcept { return heard_ ? rx_ns - last_rx_ : 0; }
+  // How long nothing was heard before a packet received at `rx_ns`, or before the packets rejected
+  // whole since the last kept one if that was longer (0: nothing heard yet). A decoder asks
+  // is_silence() only when this exceeds kSilenceTurns packets (a cheap first test: a turn is many
+  // packets), so the hot path pays a subtraction and a comparison per packet.
+  [[nodiscard]] Nanos quiet_ns(Nanos rx_ns) const noexcept { return std::max(quiet_before(rx_ns), pending_quiet_); }
+
+  // Of the `rejected` packets rejected whole since the last kept one, those the sensor sent before
+  // the silence quiet_ns() measured (the rest came after it: the new stream's).
+  [[nodiscard]] std::uint32_t rejected_before_silence(Nanos rx_ns, std::uint32_t rejected) const noexcept {
+    return pending_quiet_ > quiet_before(rx_ns) ? std::min(rejected, rejected_before_quiet_) : rejected;
+  }
 
  private:
+  [[nodiscard]] Nanos quiet_before(Nanos rx_ns) const noexcept { return heard_ ? rx_ns - last_rx_ : 0; }
+
   Nanos last_rx_ = 0;
   bool heard_ = false;
+  Nanos pending_quiet_ = 0;                // the longest quiet before a packet rejected since the last kept one
+  std::uint32_t rejected_before_quiet_ = 0;  // packets rejected before that quiet
 };
 
 // The gap after `quiet_ns` of nothing heard is a silence: longer than kSilenceTurns turns of
@@ -86,6 +119,16 @@ class StreamGap {
   const double first = first_new < 1.0 ? 1.0 : first_new;
   if (static_cast<double>(rejected) < first) return 0;
   return 1 + static_cast<std::uint64_t>((static_cast<double>(rejected) - first) / per_turn);
+}
+
+// Scans the packets rejected whole after a silence (a restarted sensor, its encoder frozen) began
+// and ended before the first kept packet of the new stream: one for every cut between the first of
+// them and that packet. Counted back from that packet: the `back` packets before it in its own turn
+// are its scan's (the decoder ends that one partial); the rest lie in earlier turns, one a
+// `per_turn`. The count of scans_begun_while_rejected, read backwards.
+[[nodiscard]] constexpr std::uint64_t scans_ended_while_rejected(std::uint32_t rejected, double back,
+                                                                 double per_turn) noexcept {
+  return scans_begun_while_rejected(rejected, (back < 0.0 ? 0.0 : back) + 1.0, per_turn);
 }
 
 // A counter across a gap (UDP sequence, frame id; `mask`: its width) against the count the sensor
