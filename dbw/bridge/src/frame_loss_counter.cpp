@@ -17,10 +17,16 @@ double FrameLossCounter::slots_since_good(Nanos now) const noexcept {
   return static_cast<double>(now - last_good_arrival_) / period_ns_ - 1.0;
 }
 
-std::uint64_t FrameLossCounter::missing_while_frozen(Nanos now) const noexcept {
-  if (period_ns_ <= 0 || static_cast<double>(longest_silence_) / period_ns_ >= safety::counter_modulus(c_.profile) / 2.0) return 0;
-  const auto room = std::llround(slots_since_good(now));
-  return room > static_cast<long long>(arrivals_since_good_) ? static_cast<std::uint64_t>(room) - arrivals_since_good_ : 0;
+std::uint64_t FrameLossCounter::missing_while_frozen(const FrozenRun& run) const noexcept {
+  if (run.period_ns <= 0 || static_cast<double>(run.longest_silence) / run.period_ns >= safety::counter_modulus(c_.profile) / 2.0) return 0;
+  const auto room = std::llround(static_cast<double>(run.end - run.from) / run.period_ns - 1.0);
+  return room > static_cast<long long>(run.arrived) ? static_cast<std::uint64_t>(room) - run.arrived : 0;
+}
+
+void FrameLossCounter::settle_frozen() noexcept {
+  if (!frozen_.open) return;
+  lost_ += missing_while_frozen(frozen_);
+  frozen_ = {};
 }
 
 // Refused frames over half a counter turn or more since the last good one (a wrong CRC for a
@@ -50,7 +56,12 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
   last_repeated_ = st == E2eStatus::kRepeated;
   const int modulus = safety::counter_modulus(c_.profile);
   if (!safety::is_ok(st)) {
+    settle_frozen();
     ++arrivals_since_good_;
+    if (period_ns_ > 0) {  // the k-th refused frame after the last good one: sent k periods after it at least
+      const Nanos sent_by = now - static_cast<Nanos>(static_cast<double>(arrivals_since_good_) * period_ns_);
+      if (2 * static_cast<double>(last_good_sent_by_ - sent_by) > period_ns_) last_good_sent_by_ = sent_by;
+    }
     ++lost_;
     refused_since_ = true;
     // The value it carried (readable unless the layout is wrong): a position on the counter that is
@@ -64,6 +75,19 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
   const std::uint8_t counter = safety::read_counter(c_, payload);
   if (have_last_) {
     const int skipped = (counter - last_counter_ - 1 + 2 * modulus) % modulus;
+    if (frozen_.open) {
+      // A good frame in sequence after a frozen run: it was sent good_after periods after the run's
+      // first good frame, so that one was sent by its arrival less as many periods (by half a period
+      // earlier at least: a hold; less is the sender's jitter).
+      if (skipped == 0 && !refused_since_) {
+        ++frozen_.good_after;
+        const Nanos sent_by = now - static_cast<Nanos>(frozen_.good_after * frozen_.period_ns);
+        if (2 * static_cast<double>(frozen_.end - sent_by) > frozen_.period_ns) frozen_.end = sent_by;
+        if (frozen_.good_after >= kSettleFrames) settle_frozen();
+      } else {
+        settle_frozen();
+      }
+    }
     int on_bus = 0;  // skipped values no refused frame carried: lost on the bus
     for (int k = 1; k <= skipped; ++k)
       if ((refused_values_ & (1U << ((last_counter_ + k) % modulus))) == 0) ++on_bus;
@@ -73,7 +97,8 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
     // wrong-CRC run of a counter turn less one ends on the value it began after, as a frozen one does).
     const bool frozen_run = after_frozen && std::popcount(refused_values_) <= 1;
     if (skipped == 0 && frozen_run) {
-      lost_ += missing_while_frozen(now);  // the first good frame after a frozen run: only time can tell
+      // The first good frame after a frozen run: only time can tell (settled by the frames after it).
+      if (period_ns_ > 0) frozen_ = {true, last_good_sent_by_, now, arrivals_since_good_, longest_silence_, period_ns_, 0};
     } else if (const auto sent = frozen_run ? -1 : sent_across_refused_run(skipped, now, room, modulus); sent >= 0) {
       lost_ += static_cast<std::uint64_t>(sent) - arrivals_since_good_;  // the refused ones counted as they came
     } else if (on_bus > 0 && room > modulus - 1.5) {
@@ -90,8 +115,11 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
     // periods over its whole span (50 at 100 Hz for half a second), so the period must be exact to a
     // fraction of a percent: an exponential average of jittery intervals (a 1 ms-tick sender) was
     // ~1 % off at times, a frame too many over such a run. Halved when long, so drift is followed.
+    // Nor the short intervals of a burst after a network hold (its long interval is left out too):
+    // taken, ten holds shortened the period enough for a frame too many over a frozen second.
     const Nanos elapsed = longest_silence_;
-    if (skipped == 0 && !refused_since_ && elapsed > 0 && (period_ns_ == 0 || static_cast<double>(elapsed) < 3 * period_ns_)) {
+    const bool plausible = period_ns_ == 0 || (static_cast<double>(elapsed) < 3 * period_ns_ && 2 * static_cast<double>(elapsed) > period_ns_);
+    if (skipped == 0 && !refused_since_ && elapsed > 0 && plausible) {
       interval_sum_ns_ += static_cast<double>(elapsed);
       if (++intervals_ > 4096) {
         interval_sum_ns_ /= 2;
@@ -102,6 +130,7 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
   }
   have_last_ = true;
   last_good_arrival_ = now;
+  last_good_sent_by_ = now;
   arrivals_since_good_ = 0;
   last_counter_ = counter;
   longest_silence_ = 0;

@@ -11,7 +11,15 @@
 // silence with room for a whole counter turn (less a frame and a half of jitter) is counted as
 // `gaps_unknown`, never guessed.
 // A frozen counter (the same value repeated) cannot show a loss either: the frames a frozen run had
-// room for at the message's learned period, less those that arrived, are counted when it ends.
+// room for at the message's learned period, less those that arrived, are counted when it ends. Its
+// end is when the first good frame after it was sent, not when it arrived: a network hold across the
+// end delays that frame and the ones behind it, which then come in a burst (ten-minute campaign,
+// seed 4: 12 frames counted lost that were published). The next kSettleFrames good frames tell: the
+// least of (arrival - its place behind the first × period), taken only where it is more than half a
+// period earlier than the estimate before (a hold, not a sender's jitter: that one walks, and its
+// least was a frame too few). Until they came, lost() holds the estimate so far. Its start alike: a
+// hold across it delays the last good frame before it, and the refused frames after that one tell
+// (the k-th of them was sent k periods after it at the earliest, later if some were lost).
 // Refused frames over half a counter turn (a wrong CRC for a second) carry every value many times: the
 // frames sent across such a run are told by the counter modulo its turn and the time for the turn.
 #include <cstdint>
@@ -31,19 +39,34 @@ class FrameLossCounter {
   // A frame the bridge used but could not hand on (its queue full, the write failed).
   void on_not_delivered() noexcept { ++lost_; }
 
-  [[nodiscard]] std::uint64_t lost() const noexcept { return lost_; }
+  [[nodiscard]] std::uint64_t lost() const noexcept { return lost_ + (frozen_.open ? missing_while_frozen(frozen_) : 0); }
   [[nodiscard]] std::uint64_t gaps_unknown() const noexcept { return gaps_unknown_; }
   // False for a message without a counter: its losses cannot be seen.
   [[nodiscard]] bool countable() const noexcept { return c_.profile != safety::E2eProfile::kNone; }
 
  private:
+  // A frozen run from the last good frame before it (`from`) to the send of the first good one
+  // after it (`end`, the least estimate so far), with the frames that arrived in between.
+  struct FrozenRun {
+    bool open = false;
+    Nanos from = 0;
+    Nanos end = 0;
+    std::uint64_t arrived = 0;
+    Nanos longest_silence = 0;
+    double period_ns = 0;  // the learned period when it ended (the count's, as the frames after it are placed by)
+    int good_after = 0;    // good frames after the first one, each in sequence
+  };
+  static constexpr int kSettleFrames = 8;
+
   [[nodiscard]] double slots_since_good(Nanos now) const noexcept;
-  [[nodiscard]] std::uint64_t missing_while_frozen(Nanos now) const noexcept;
+  [[nodiscard]] std::uint64_t missing_while_frozen(const FrozenRun& run) const noexcept;
+  void settle_frozen() noexcept;
   [[nodiscard]] long long sent_across_refused_run(int skipped, Nanos now, double silence_room, int modulus) const noexcept;
 
   safety::E2eConfig c_;
   bool have_last_ = false;
   Nanos last_good_arrival_ = 0;
+  Nanos last_good_sent_by_ = 0;        // ... or earlier, as the refused frames after it tell
   std::uint64_t arrivals_since_good_ = 0;  // frames of the message (all refused) since the last good one
   std::uint8_t last_counter_ = 0;      // of the last good frame
   Nanos last_arrival_ = 0;             // of any frame of the message
@@ -56,6 +79,7 @@ class FrameLossCounter {
   std::uint64_t intervals_ = 0;
   std::uint64_t lost_ = 0;
   std::uint64_t gaps_unknown_ = 0;
+  FrozenRun frozen_;  // counted, not yet settled
 };
 
 }  // namespace sensor_rig::dbw
