@@ -72,7 +72,7 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
       // shown in the others' scans first (none is pending), and across the gap its arrivals say
       // nothing. Held as a possible step, a front LIDAR killed for a second and back 61 ms later in
       // the rotation had its first scan fused with the next rotation (ten-minute campaign, seed 2).
-      place_boundary(true);
+      place_boundary(true, &src);
       return;
     }
     src.offset = wrap_offset(src.offset + jump, p);
@@ -94,7 +94,7 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
       }
     } else if (++src.offset_scans > kOwnPhaseScans || step_refuted(src)) {
       for (auto& s : sources_) s.offset = 0;
-      place_boundary(true);
+      place_boundary(true, &src);
       return;
     }
   }
@@ -105,7 +105,7 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
   for (const auto& s : sources_) {
     if (&s == &src || s.offset == 0 || !step_refuted(s)) continue;
     for (auto& o : sources_) o.offset = 0;
-    place_boundary(true);
+    place_boundary(true, &s);
     return;
   }
 }
@@ -190,7 +190,7 @@ Nanos SweepMatcher::boundary_phase(const Source& s) const noexcept {
   return floor_mod(s.phase - s.offset, cfg_.period_ns);  // in the boundary's timeline
 }
 
-void SweepMatcher::place_boundary(bool anew) {
+void SweepMatcher::place_boundary(bool anew, const Source* moved) {
   const Nanos p = cfg_.period_ns;
   const bool any_at_rpm = std::any_of(sources_.begin(), sources_.end(), [](const Source& s) { return s.seen && !s.above_rpm; });
   std::vector<Nanos> phases;
@@ -216,7 +216,18 @@ void SweepMatcher::place_boundary(bool anew) {
     boundary_ = middle;
     boundary_set_ = true;
   } else if (anew || nearest < widest / 4) {
-    boundary_ += signed_circular(middle - boundary_, p);
+    Nanos move = signed_circular(middle - boundary_, p);
+    // Near half a turn either way round is the short one by the rounding of the phases, and the
+    // two number the sources on one side of the boundary a rotation apart. A source that moved
+    // keeps the number the old boundary gives its new scan (the one that groups it with the others'
+    // scans of its own turn): moved across its new phase, the front LIDAR back from 300 rpm on the
+    // left's phase had its first two scans fused with the turn before (ten-minute campaign, seed 4).
+    if (moved != nullptr && std::abs(move) > p / 2 - p / 8) {
+      const Nanos ph = boundary_phase(*moved);
+      const Nanos into = move > 0 ? floor_mod(ph - boundary_, p) : floor_mod(boundary_ - ph, p);
+      if (into > 0 && into < std::abs(move)) move += move > 0 ? -p : p;
+    }
+    boundary_ += move;
   }
 }
 

@@ -470,6 +470,48 @@ TEST(SweepMatcher, ALidarBackFromASlowerRpmOnAPhaseOfItsOwnIsTakenAtOnce) {
   EXPECT_TRUE(twelve->complete);
 }
 
+// Ten-minute campaign, seed 4 (lidar.rpm_change of the front to 300 rpm, 225.8-227.8 s): the left
+// LIDAR at 0 ms into the rotation, the right at 58.6, the front at 32.1 (300 rpm), back at 600 rpm on
+// the left's phase. The widest gap moves from 58.6-100 to 0-58.6: the boundary from 79.3 to 29.3 ms,
+// half a turn, the short way round decided by microseconds of the right's phase (it drifted 14 us
+// in between). Moved across the front's new phase, the front's first scans were numbered a
+// rotation lower and fused with the left's and right's scans of the turn before (two sweeps 100 ms
+// wide). A sweep's scans lie within the rig's spread (58.6 ms here), whichever way it rounds.
+// (The campaign's own scans: SweepMatcherReplay.ALidarBackFromSlowerOnAnothersPhaseIs...)
+TEST(SweepMatcher, ABoundaryMovedByHalfATurnKeepsTheMovedLidarsScanWithItsOwnTurn) {
+  constexpr Nanos left = 0, right = 58'600'000;
+  for (const Nanos back : {Nanos{-10'000}, Nanos{10'000}}) {  // the front's return, just before or after the left
+    for (const Nanos drift : {Nanos{-20'000}, Nanos{20'000}}) {  // the right's phase, before the return against after
+      SCOPED_TRACE("front back " + std::to_string(back) + " ns off the left, the right drifted " + std::to_string(drift) + " ns");
+      std::vector<TrueScan> scans;
+      for (std::int64_t n = 0; n < 50; ++n) {
+        const Nanos r = right + (n < 19 ? drift : 0);
+        scans.push_back({1, n, n * kPeriod + left, n * kPeriod + left + kDelivery, kPeriod - kMs});
+        scans.push_back({2, n, n * kPeriod + r, n * kPeriod + r + kDelivery, kPeriod - kMs});
+      }
+      const Nanos front = 32'100'000;
+      for (std::int64_t n = 0; n < 10; ++n) scans.push_back({0, n, n * kPeriod + front, n * kPeriod + front + kDelivery, kPeriod - kMs});
+      for (std::int64_t n = 10; n < 20; n += 2) {  // 300 rpm; the last turn cut by the return
+        const Nanos stamp = n * kPeriod + front;
+        const Nanos span = n < 18 ? 2 * kPeriod - kMs : 20 * kPeriod + back - stamp - kMs;
+        scans.push_back({0, n, stamp, stamp + span + 2 * kMs, span, 2});
+      }
+      for (std::int64_t n = 20; n < 50; ++n) {  // 600 rpm again, on the left's turn (10 us off it)
+        const Nanos stamp = n * kPeriod + left + back;
+        scans.push_back({0, n, stamp, stamp + kDelivery, kPeriod - kMs});
+      }
+      SimulatedRig run(3);
+      run.feed(scans);
+      for (const auto& e : run.emitted_) {
+        Nanos lo = e.scans[0].stamp, hi = lo;
+        for (const auto& t : e.scans) lo = std::min(lo, t.stamp), hi = std::max(hi, t.stamp);
+        EXPECT_LT(hi - lo, 60 * kMs) << "sweep emitted at " << e.at / kMs << " ms spans " << (hi - lo) / kMs << " ms";
+      }
+      EXPECT_LE(run.dropped_.size(), 2u);
+    }
+  }
+}
+
 // A LIDAR at 1200 rpm beside two at 600 for ten rotations (lidar.rpm_change, rpm=1200): two 50 ms
 // scans per rotation, its phase moving by half a turn every scan. Each scan joins the rotation its
 // stamp lies in by the rig's phases; of two in one rotation the second is repeated (dropped and

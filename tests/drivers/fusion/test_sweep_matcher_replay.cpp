@@ -92,5 +92,30 @@ TEST(SweepMatcherReplay, ALidarBackFromAKillIsNotFusedWithAnotherRotation) {
   EXPECT_LE(r.dropped.size(), 3u);
 }
 
+// The front LIDAR back from 300 rpm on the left's phase (0 ms; the right at 58.6): the widest gap
+// moves from 58.6-100 to 0-58.6 and the boundary from 79.3 to 29.3 ms, half a turn. The matcher fused
+// the front's first two scans with the left's and right's scans of the turn before (seed 4: two
+// sweeps "mix rotations", 100 ms wide). Judged by the boundary of the time: a sweep's scans lie in
+// one rotation of it, or the sweep straddles the move (its regrouping).
+TEST(SweepMatcherReplay, ALidarBackFromSlowerOnAnothersPhaseIsNotFusedWithTheTurnBefore) {
+  const Replayed r = run(replay::kFrontBackFromSlowOnTheLeftsPhase);
+  constexpr Nanos kBack = 1'150'000'000, kBefore = 79'300'000, kAfter = 29'300'000;
+  constexpr Nanos kPeriodsBeforeJudged = 200'000'000;
+  std::size_t judged = 0;
+  for (const auto& sweep : r.sweeps) {
+    Nanos lo = sweep.front().truth, hi = lo;
+    for (const auto& m : sweep) lo = std::min(lo, m.truth), hi = std::max(hi, m.truth);
+    if (lo < kPeriodsBeforeJudged) continue;  // the matcher's start: the front's slow phase not yet seen
+    EXPECT_LT(hi - lo, 60 * kMs) << describe(sweep);
+    const bool after = sweep.front().truth >= kBack;
+    if (std::any_of(sweep.begin(), sweep.end(), [&](const replay::Scan& m) { return (m.truth >= kBack) != after; })) continue;
+    const Nanos boundary = after ? kAfter : kBefore;
+    for (const auto& m : sweep) EXPECT_EQ(rotation(m.truth, boundary), rotation(sweep.front().truth, boundary)) << describe(sweep);
+    ++judged;
+  }
+  EXPECT_GE(judged, r.sweeps.size() - 4);
+  EXPECT_LE(r.dropped.size(), 2u);
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers

@@ -7,7 +7,9 @@
 // the middle of the widest gap between the sources' phases (a LIDAR above the rig's rpm, its scans
 // short of a turn, has none while another source has one), and a scan belongs to the rotation
 // floor((stamp - boundary) / P): the sweep whose scans lie closest together, whichever scan arrives
-// first or late. A clock step moves every source's phase alike: the boundary follows once each live
+// first or late. A move of the boundary by about half a turn (a LIDAR back on a phase across the
+// rig) goes the way that keeps the moved source's scan in the rotation the old boundary gave it. A
+// clock step moves every source's phase alike: the boundary follows once each live
 // source has shown it. A scan of a rotation whose sweep was emitted is late (dropped, counted); a
 // second scan of one source in one rotation is dropped and counted too.
 //
@@ -137,7 +139,7 @@ class SweepMatcher {
   void track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span, bool returning);
   [[nodiscard]] Nanos head_lost_turn_began(const Source& src, Nanos stamp, Nanos span) const noexcept;
   [[nodiscard]] Nanos timeline_step(const Source& src, Nanos stamp, Nanos arrival, Nanos span) const noexcept;
-  void place_boundary(bool anew);
+  void place_boundary(bool anew, const Source* moved = nullptr);  // moved: the source whose phase moved it
   [[nodiscard]] Nanos boundary_phase(const Source& s) const noexcept;  // the phase the boundary is placed by
   [[nodiscard]] bool step_refuted(const Source& moved) const noexcept;
   [[nodiscard]] bool settled(const Sweep& s) const noexcept;
