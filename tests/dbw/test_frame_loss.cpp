@@ -288,6 +288,35 @@ TEST(FrameLossCounter, AFrozenRunEndingInANetworkHoldCountsOnlyTheFramesReallyLo
   }
 }
 
+// A wrong CRC for a second with a frozen counter beginning inside it and outlasting it (ten-minute
+// campaign, seed 4, 510.6-512.2 s: dbw.bad_crc, then dbw.stuck_counter 0.66 s into it; 6 frames
+// counted lost that were published). The run's values differ (the CRC part counted on), so it is
+// no frozen run by its values; its tail is, and only time can tell what it hid.
+TEST(FrameLossCounter, AFrozenCounterBeginningInsideAWrongCrcRunIsCountedByTime) {
+  for (const int freeze_from : {66, 20, 95}) {    // frames into the wrong-CRC second
+    for (const int freeze_for : {100, 50, 10}) {  // frames frozen
+      SCOPED_TRACE("frozen from frame " + std::to_string(freeze_from) + " for " + std::to_string(freeze_for));
+      const auto c = p01();
+      s::E2eSender sender(c);
+      Receiver rx(c);
+      std::uint64_t made = 0;
+      for (int i = 0; i < 500; ++i) {
+        const Nanos t = i * 10 * kMs + (i % 3) * kMs;
+        const int k = i - 200;  // frames into the wrong-CRC second
+        const bool frozen = k >= freeze_from && k < freeze_from + freeze_for;
+        std::array<std::uint8_t, 8> d{};
+        const std::uint8_t value = sender.next_counter();
+        ASSERT_TRUE(sender.protect(d));
+        if (frozen) sender.set_counter(value);
+        ++made;
+        if (k >= 0 && k < 100) d[0] ^= 0x5A;  // a wrong CRC
+        rx.on(d, t);
+      }
+      EXPECT_EQ(rx.taken + rx.counter.lost(), made) << "taken " << rx.taken << ", counted " << rx.counter.lost();
+    }
+  }
+}
+
 TEST(FrameLossCounter, AMessageWithoutCounterIsNotCountable) {
   dbw::FrameLossCounter none(s::E2eConfig{});
   EXPECT_FALSE(none.countable());

@@ -21,7 +21,9 @@
 // hold across it delays the last good frame before it, and the refused frames after that one tell
 // (the k-th of them was sent k periods after it at the earliest, later if some were lost).
 // Refused frames over half a counter turn (a wrong CRC for a second) carry every value many times: the
-// frames sent across such a run are told by the counter modulo its turn and the time for the turn.
+// frames sent across such a run are told by the counter modulo its turn and the time for the turn,
+// unless the counter stood still inside it (a frozen counter beginning inside a wrong-CRC run): then
+// by time alone, as a frozen run.
 #include <cstdint>
 #include <span>
 
@@ -72,6 +74,8 @@ class FrameLossCounter {
   Nanos last_arrival_ = 0;             // of any frame of the message
   Nanos longest_silence_ = 0;          // between arrivals since the last good frame
   std::uint32_t refused_values_ = 0;   // bit per counter value the refused frames since then carried
+  std::uint8_t last_refused_value_ = 0;  // the value the last of them carried
+  bool stood_still_in_run_ = false;      // one of them carried its predecessor's value (a frozen counter)
   bool refused_since_ = false;
   bool last_repeated_ = false;         // the last frame repeated its predecessor's counter
   double period_ns_ = 0;               // the message's period, learned from consecutive good frames
