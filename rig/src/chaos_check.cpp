@@ -303,11 +303,16 @@ class Checker {
     }
 
     std::uint64_t not_published = 0;
+    // RIG_CHAOS_TRACE: every unit not published, to hold against the rig's count second by second
+    // (logs/monitor_lines.jsonl) where the counts disagree by number.
+    const bool trace = std::getenv("RIG_CHAOS_TRACE") != nullptr;
     for (UnitTruth& u : units) {
       if (!in_window(u.rec.acq_ns) || u.produced == 0) continue;
       ++t.sent;
       if (u.sample == nullptr) {
         ++not_published;
+        if (trace) std::fprintf(stderr, "unpublished %s %s %lld at %s s\n", topic.c_str(), log.header.unit.c_str(),
+                                static_cast<long long>(u.rec.unit), at_s(u.rec.acq_ns).c_str());
         continue;
       }
       const SampleRecord& s = *u.sample;

@@ -177,14 +177,24 @@ std::uint64_t slots_skipped_while_frozen(const truth::Log& log, Nanos begin, Nan
   for (const auto& f : log.faults)
     if (f.kind == "dbw.stuck_counter" && truth::injected(f)) frozen.push_back({f.at_ns, f.until_ns});
   if (frozen.empty()) return 0;
-  // Frames in the order the ECU made them, on its own clock (`dev`: monotonic, no host clock step
-  // moves it); `at` in vehicle time (its send), as the fault lines have it.
+  // Frames in the order they went on the bus, on the ECU's clock (`dev`: monotonic, no host clock
+  // step moves it) plus what a host.network_delay held each (its part's send less its making: the
+  // bus is what the bridge sees; a hold beginning inside a frozen run leaves a gap on the bus the
+  // rig cannot tell from lost frames: ten-minute campaign, seed 4, 5 frames at 391.9 s); `at` in
+  // vehicle time (its send), as the fault lines have it. A CAN frame is one part, written after its
+  // unit: paired by position.
   struct MadeFrame {
     Nanos dev, at;
   };
+  const bool paired = log.parts.size() == log.units.size();
   std::vector<MadeFrame> made;
   made.reserve(log.units.size());
-  for (const auto& u : log.units) made.push_back({u.dev_ns, u.acq_ns});
+  for (std::size_t i = 0; i < log.units.size(); ++i) {
+    const auto& u = log.units[i];
+    Nanos held = 0;
+    if (paired && log.parts[i].unit == u.unit && log.parts[i].tx_ns > 0) held = std::max<Nanos>(0, log.parts[i].tx_ns - log.parts[i].acq_ns);
+    made.push_back({u.dev_ns + held, u.acq_ns});
+  }
   if (made.size() < 3) return 0;
   std::sort(made.begin(), made.end(), [](const MadeFrame& a, const MadeFrame& b) { return a.dev < b.dev; });
   std::vector<Nanos> gaps;
