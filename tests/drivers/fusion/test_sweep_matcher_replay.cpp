@@ -73,47 +73,49 @@ TEST(SweepMatcherReplay, AScanAfterAStuckEncoderIsNotFusedWithTheNextRotation) {
   EXPECT_LE(r.dropped.size(), 2u);
 }
 
-// The front LIDAR back from a kill 61 ms later in its turn, its first scan 50 ms late: its phase is
-// its own (it was dead), so its scans join the rotation of their true acquisition. True phases
-// before: right 26.5, front 39.4, left 73.0 ms (the boundary at 99.75 ms); after: front 0 (49.75 ms).
-// Sweeps with scans from both sides of the move are its regrouping and not judged here.
-TEST(SweepMatcherReplay, ALidarBackFromAKillIsNotFusedWithAnotherRotation) {
-  const Replayed r = run(replay::kFrontKilled);
-  constexpr Nanos kBack = 1'900'000'000, kBefore = 99'750'000, kAfter = 49'750'000;
+// A LIDAR moved at `back` (true time): a sweep wholly before it holds one rotation of the boundary
+// `before`, one wholly after it one of `after`; sweeps with scans from both sides are the move's
+// regrouping and not judged. Sweeps with a scan before `from` (the matcher's start) are skipped.
+// Returns how many were judged.
+std::size_t judge_around_a_move(const Replayed& r, Nanos back, Nanos before, Nanos after, Nanos from = 0) {
   std::size_t judged = 0;
   for (const auto& sweep : r.sweeps) {
-    const bool after = sweep.front().truth >= kBack;
-    if (std::any_of(sweep.begin(), sweep.end(), [&](const replay::Scan& m) { return (m.truth >= kBack) != after; })) continue;
-    const Nanos boundary = after ? kAfter : kBefore;
+    if (std::any_of(sweep.begin(), sweep.end(), [&](const replay::Scan& m) { return m.truth < from; })) continue;
+    const bool later = sweep.front().truth >= back;
+    if (std::any_of(sweep.begin(), sweep.end(), [&](const replay::Scan& m) { return (m.truth >= back) != later; })) continue;
+    const Nanos boundary = later ? after : before;
     for (const auto& m : sweep) EXPECT_EQ(rotation(m.truth, boundary), rotation(sweep.front().truth, boundary)) << describe(sweep);
     ++judged;
   }
-  EXPECT_GE(judged, r.sweeps.size() - 2);
+  return judged;
+}
+
+// The front LIDAR back from a kill 61 ms later in its turn, its first scan 50 ms late: its phase is
+// its own (it was dead), so its scans join the rotation of their true acquisition. True phases
+// before: right 26.5, front 39.4, left 73.0 ms (the boundary at 99.75 ms); after: front 0 (49.75 ms).
+TEST(SweepMatcherReplay, ALidarBackFromAKillIsNotFusedWithAnotherRotation) {
+  const Replayed r = run(replay::kFrontKilled);
+  EXPECT_GE(judge_around_a_move(r, 1'900'000'000, 99'750'000, 49'750'000), r.sweeps.size() - 2);
   EXPECT_LE(r.dropped.size(), 3u);
 }
 
 // The front LIDAR back from 300 rpm on the left's phase (0 ms; the right at 58.6): the widest gap
 // moves from 58.6-100 to 0-58.6 and the boundary from 79.3 to 29.3 ms, half a turn. The matcher fused
 // the front's first two scans with the left's and right's scans of the turn before (seed 4: two
-// sweeps "mix rotations", 100 ms wide). Judged by the boundary of the time: a sweep's scans lie in
-// one rotation of it, or the sweep straddles the move (its regrouping).
+// sweeps "mix rotations", 100 ms wide). Every sweep's scans lie within the rig's spread, and in one
+// rotation of the boundary of their time (judged from 200 ms: before, the front's slow phase was
+// not yet seen).
 TEST(SweepMatcherReplay, ALidarBackFromSlowerOnAnothersPhaseIsNotFusedWithTheTurnBefore) {
   const Replayed r = run(replay::kFrontBackFromSlowOnTheLeftsPhase);
-  constexpr Nanos kBack = 1'150'000'000, kBefore = 79'300'000, kAfter = 29'300'000;
-  constexpr Nanos kPeriodsBeforeJudged = 200'000'000;
-  std::size_t judged = 0;
+  constexpr Nanos kFrom = 200'000'000;
   for (const auto& sweep : r.sweeps) {
     Nanos lo = sweep.front().truth, hi = lo;
     for (const auto& m : sweep) lo = std::min(lo, m.truth), hi = std::max(hi, m.truth);
-    if (lo < kPeriodsBeforeJudged) continue;  // the matcher's start: the front's slow phase not yet seen
-    EXPECT_LT(hi - lo, 60 * kMs) << describe(sweep);
-    const bool after = sweep.front().truth >= kBack;
-    if (std::any_of(sweep.begin(), sweep.end(), [&](const replay::Scan& m) { return (m.truth >= kBack) != after; })) continue;
-    const Nanos boundary = after ? kAfter : kBefore;
-    for (const auto& m : sweep) EXPECT_EQ(rotation(m.truth, boundary), rotation(sweep.front().truth, boundary)) << describe(sweep);
-    ++judged;
+    if (lo >= kFrom) {
+      EXPECT_LT(hi - lo, 60 * kMs) << describe(sweep);
+    }
   }
-  EXPECT_GE(judged, r.sweeps.size() - 4);
+  EXPECT_GE(judge_around_a_move(r, 1'150'000'000, 79'300'000, 29'300'000, kFrom), r.sweeps.size() - 4);
   EXPECT_LE(r.dropped.size(), 2u);
 }
 
