@@ -13,8 +13,8 @@
 // A frozen counter (the same value repeated) cannot show a loss either: the frames a frozen run had
 // room for at the message's learned period, less those that arrived, are counted when it ends. Its
 // end is when the first good frame after it was sent, not when it arrived: a network hold across the
-// end delays that frame and the ones behind it, which then come in a burst (ten-minute campaign,
-// seed 4: 12 frames counted lost that were published). The next kSettleFrames good frames tell: the
+// end delays that frame and the ones behind it, which then come in a burst (a queue released: 2
+// frames too many in the test of it). The next kSettleFrames good frames tell: the
 // least of (arrival - its place behind the first × period), taken only where it is more than half a
 // period earlier than the estimate before (a hold, not a sender's jitter: that one walks, and its
 // least was a frame too few). Until they came, lost() holds the estimate so far. Its start alike: a
