@@ -412,6 +412,23 @@ TEST(V4l2Chaos, StampModeEofStampsTheFramesEnd) {
   }
 }
 
+// Two stamp_mode faults overlapping (ten-minute campaign, seed 6: two identical ones planned 6 ms
+// apart): both act on the frames, both are recorded; the second was in no truth record.
+TEST(V4l2Chaos, OverlappingStampModeFaultsAreEachRecorded) {
+  test::ChaosFolder folder;
+  {
+    auto dev = device(folder, {"v4l2.stamp_mode:mode=eof@0+60", "v4l2.stamp_mode:mode=eof@0.006+3"});
+    V4l2Source src(yuyv(), dev);
+    src.open();
+    while (monotonic_now_ns() < folder.epoch() + kSec / 10) ASSERT_EQ(next_frame(src).status, CaptureStatus::kFrame);
+    src.close();
+  }
+  const auto log = truth::read(folder.truth());
+  std::set<std::uint64_t> ids;
+  for (const auto& f : log.faults) ids.insert(f.id);
+  EXPECT_EQ(ids, (std::set<std::uint64_t>{1, 2}));
+}
+
 // End-of-frame stamps with the exposure unset (auto): the device's own exposure is not known, the
 // fake's 10 ms is assumed with half the granted period of readout: the stamp lands on the truth.
 TEST(V4l2Chaos, StampModeEofWithAutoExposureLandsOnTheExposureStart) {
