@@ -116,7 +116,10 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
 Nanos SweepMatcher::head_lost_turn_began(const Source& src, Nanos stamp, Nanos span) const noexcept {
   const Nanos p = cfg_.period_ns, tolerance = p / 8;
   if (!src.seen || src.rotations != 1 || src.above_rpm || src.offset != 0 || span <= 0 || span >= p - p / 4) return stamp;
-  const Nanos turn = src.last_span >= p - p / 8 && src.last_span <= p + p / 8 ? src.last_span : p;
+  // The source's whole turn: its last scan's span where that was one (a scan cut short by the
+  // freeze, 92 ms, put the began end 8 ms off, as far as its stamp: seq 77 of a 30 s campaign of
+  // left-LIDAR freezes, fused with the next turn).
+  const Nanos turn = src.last_span >= p - p / 32 && src.last_span <= p + p / 8 ? src.last_span : p;
   const Nanos began = stamp + span - turn;
   // Its stamp is past the start of the turn after its predecessor's: scans above the rig's rpm
   // (following each other by half a turn) and a clock step back are not this.

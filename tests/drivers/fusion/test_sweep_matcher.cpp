@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <map>
 #include <set>
+#include <tuple>
 #include <vector>
 
 #include "sensor_rig/common/clock.hpp"
@@ -406,10 +407,16 @@ TEST(SweepMatcher, OneUnmovedWitnessRefutesAStepAtOnce) {
 TEST(SweepMatcher, AScanThatLostItsHeadIsPlacedAsTheTurnItIsTheTailOf) {
   // 76 ms of the turn lost; and 92 (its last 8 ms left, stamped 8 ms before the next turn: within
   // an eighth of a turn of the phase, it was taken for that turn's; ten-minute campaign, seed 4).
-  for (const auto& [lost, left] : {std::pair{75 * kMs, 24 * kMs}, std::pair{92 * kMs, 7 * kMs}}) {
-    SCOPED_TRACE(std::to_string(lost / kMs) + " ms of the turn lost");
+  // And the scan before the freeze cut short at 92 ms (published with what it had): its span is no
+  // turn to count back by (taken for one, the 92 ms case's end lay 8 ms off the phase, as far as its
+  // stamp, and the scan went with the next turn).
+  for (const auto& [lost, left, cut] : {std::tuple{75 * kMs, 24 * kMs, Nanos{0}}, std::tuple{92 * kMs, 7 * kMs, Nanos{0}},
+                                        std::tuple{Nanos{92'200'000}, Nanos{7'800'000}, Nanos{92'200'000}}}) {
+    SCOPED_TRACE(std::to_string(lost / kMs) + " ms of the turn lost, the scan before cut at " + std::to_string(cut / kMs) + " ms");
     auto scans = rig_scans(kPhases, 0, 40);
+    for (auto& t : scans) t.span = kPeriod - kMs;  // the node tells every scan's span
     erase_scans(scans, 0, 10, 15);
+    if (cut > 0) find_scan(scans, 0, 9).span = cut;
     TrueScan& tail = find_scan(scans, 0, 15);
     tail.stamp += lost;
     tail.span = left;
