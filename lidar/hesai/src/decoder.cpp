@@ -232,26 +232,15 @@ struct DecoderImpl {
     // scan's window and past it: the scans they began were made (stream_gap.hpp). A scan begins
     // where its window does (reset_raw); one whose window opened already is the lookahead, ended
     // below with the current one.
-    if (have_prev && turning_step >= 0.5) {
-      const double packet_arc = turning_step * groups;
-      int arc = detail::turn_step(prev_az, reset_raw);
-      if (arc == 0) arc = detail::kTurn;
-      const int visible = arc - detail::arc_outside(fov, prev_az, arc);
-      scans.lose_scans(scans_begun_while_rejected(before, std::ceil(visible / packet_arc), fov.length() / packet_arc));
-    }
+    if (have_prev && turning_step >= 0.5)
+      scans.lose_scans(detail::scans_begun_before_silence(fov, prev_az, reset_raw, turning_step * groups, before));
     scans.merge(out, end(false));
     if (scans.current().scan.packets > 0) scans.merge(out, end(false));
     scans.drop_next();
     restart();
     const double packet_arc = group_step * groups;
-    if (packet_arc > 0.5) {
-      // Those rejected after the silence are the new stream's: the turns they ended before this
-      // packet's were made (its own turn's are this scan's, begun partial).
-      const int arc = detail::turn_step(reset_raw, first_az);
-      const int visible = arc - detail::arc_outside(fov, reset_raw, arc);
-      scans.lose_scans(scans_ended_while_rejected(rejected - before, std::floor(visible / packet_arc),
-                                                  fov.length() / packet_arc));
-    }
+    // Those rejected after the silence are the new stream's: the turns they ended before this packet's.
+    if (packet_arc > 0.5) scans.lose_scans(detail::scans_ended_after_silence(fov, reset_raw, first_az, packet_arc, rejected - before));
     scans.current().from_cut = packet_arc > 0.5 && detail::turn_step(emit_raw, first_az) < packet_arc;
   }
   // One turn of the sensor (ns) from the last turning packet's azimuth rate; 0: not known yet.

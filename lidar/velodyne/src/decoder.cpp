@@ -330,24 +330,13 @@ struct DecoderImpl {
     // Packets rejected whole since the last kept one (a frozen encoder) turned on to the cut and
     // past it: the scans they began were made (stream_gap.hpp). Packet k after the last kept one
     // reaches the cut when its last group does.
-    if (have_prev && turning_step >= 0.5) {
-      const double packet_arc = turning_step * groups;
-      int arc = detail::turn_step(prev_az, cut);
-      if (arc == 0) arc = detail::kTurn;  // the last kept group began this scan at the cut
-      const int visible = arc - detail::arc_outside(fov, prev_az, arc);
-      scans.lose_scans(scans_begun_while_rejected(before, std::ceil(visible / packet_arc), fov.length() / packet_arc));
-    }
+    if (have_prev && turning_step >= 0.5)
+      scans.lose_scans(detail::scans_begun_before_silence(fov, prev_az, cut, turning_step * groups, before));
     std::optional<Scan> out = end(false);
     restart();
     const double packet_arc = group_step * groups;
-    if (packet_arc > 0.5) {
-      // Those rejected after the silence are the new stream's: the turns they ended before this
-      // packet's were made (its own turn's are this scan's, begun partial).
-      const int arc = detail::turn_step(cut, first_az);
-      const int visible = arc - detail::arc_outside(fov, cut, arc);
-      scans.lose_scans(scans_ended_while_rejected(rejected - before, std::floor(visible / packet_arc),
-                                                  fov.length() / packet_arc));
-    }
+    // Those rejected after the silence are the new stream's: the turns they ended before this packet's.
+    if (packet_arc > 0.5) scans.lose_scans(detail::scans_ended_after_silence(fov, cut, first_az, packet_arc, rejected - before));
     scans.current().from_cut = packet_arc > 0.5 && detail::turn_step(cut, first_az) < packet_arc;
     return out;
   }

@@ -11,6 +11,7 @@
 #include <cstdlib>
 
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/lidar/stream_gap.hpp"
 
 namespace sensor_rig::lidar::detail {
 
@@ -431,6 +432,26 @@ inline CutSplit split_missing_at_cut(const AzimuthFov& fov, int cut, int first_a
   const long past_only = crossing == CrossingGroup::kBoth ? b - 1 : b;
   return {missing - lost_wholly_within(past_only, groups_before_first, groups_per_packet, missing),
           lost_touching_within(b, groups_before_first, groups_per_packet, missing)};
+}
+
+// The scans the packets rejected whole around a silence made, for an azimuth model (stream_gap.hpp;
+// Velodyne and Hesai alike, `start` where their scans begin: the cut, the window's reset):
+// - before it, `rejected` packets of `packet_arc` after the last kept one at `prev_az` turned on to
+//   the start and past it: packet k reaches it when its last group does;
+// - after it, `rejected` packets before the kept one at `first_az` (the new stream's): the starts
+//   between the first of them and that packet, whose own turn's packets are its scan's.
+inline std::uint64_t scans_begun_before_silence(const AzimuthFov& fov, int prev_az, int start, double packet_arc,
+                                                std::uint32_t rejected) noexcept {
+  int arc = turn_step(prev_az, start);
+  if (arc == 0) arc = kTurn;  // the last kept group began this scan at the start
+  const int visible = arc - arc_outside(fov, prev_az, arc);
+  return scans_begun_while_rejected(rejected, std::ceil(visible / packet_arc), fov.length() / packet_arc);
+}
+inline std::uint64_t scans_ended_after_silence(const AzimuthFov& fov, int start, int first_az, double packet_arc,
+                                               std::uint32_t rejected) noexcept {
+  const int arc = turn_step(start, first_az);
+  const int visible = arc - arc_outside(fov, start, arc);
+  return scans_ended_while_rejected(rejected, std::floor(visible / packet_arc), fov.length() / packet_arc);
 }
 
 }  // namespace sensor_rig::lidar::detail
