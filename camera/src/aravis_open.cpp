@@ -243,6 +243,7 @@ void AravisSource::configure(State& st, AravisDetails& details) {
     check("feature " + assignment);
   }
   st.chunks.set_tick_hz(detail::timestamp_tick_hz(dev));  // ChunkTimestamp ticks -> ns
+  st.chunks.set_part_layout(dev);                         // multipart: where the chunk part holds them
   exposure_read_feature_.clear();
   // What the device has after the features (one may set ExposureTime, issue 27 item 9): the frame clock's exposure -> leader delay.
   for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {

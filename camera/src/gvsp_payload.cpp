@@ -3,12 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sensor_rig/common/log.hpp"
+
 namespace sensor_rig::camera::detail {
 namespace {
-
-std::uint32_t read_be32(const std::uint8_t* p) noexcept {
-  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
-}
 
 // Rows of `row` bytes `step` apart fit in `bytes` (the last row's padding may be absent).
 bool fits(std::size_t bytes, std::uint32_t row, std::uint32_t step, std::uint32_t height) noexcept {
@@ -33,16 +31,12 @@ LocatedImage from_region(ArvBuffer* b, const void* base, const void* image, std:
 }  // namespace
 
 std::size_t first_chunk_bytes(const std::uint8_t* data, std::size_t size) {
-  constexpr std::size_t kTag = 8;  // id, length
-  std::size_t end = size;          // one past the current chunk's tag
-  while (end >= kTag) {
-    const std::size_t length = read_be32(data + end - 4);
-    const std::size_t tag = end - kTag;
-    if (length > tag) return 0;  // does not add up: not chunk data
-    if (length == tag) return length;  // this chunk starts the buffer: the image
-    end = tag - length;
-  }
-  return 0;
+  std::size_t bytes = 0;
+  walk_chunks(data, size, [&](std::uint32_t, ChunkSpan chunk) {
+    if (chunk.data == data) bytes = chunk.size;  // this chunk starts the buffer: the image
+    return chunk.data == data;
+  });
+  return bytes;
 }
 
 const char* payload_name(ArvBuffer* b) {
@@ -119,7 +113,42 @@ void ChunkReader::reset() {
   has_timestamp_ = has_exposure_ = true;
 }
 
+void ChunkReader::set_part_layout(ArvDevice* device) {
+  ArvGc* gc = device != nullptr ? arv_device_get_genicam(device) : nullptr;
+  part_timestamp_ = resolve_chunk_field(gc, "ChunkTimestamp");
+  part_exposure_ = resolve_chunk_field(gc, "ChunkExposureTime");
+  part_warned_ = false;
+}
+
+Nanos ChunkReader::ticks_to_ns(std::int64_t ticks) const noexcept {
+  if (tick_hz_ == 0 || tick_hz_ == 1'000'000'000) return ticks;
+  return static_cast<Nanos>(static_cast<double>(ticks) * 1e9 / static_cast<double>(tick_hz_));
+}
+
+ChunkReader::Values ChunkReader::read_chunk_part(ArvBuffer* buffer) {
+  Values v;
+  for (guint part = 0; part < arv_buffer_get_n_parts(buffer); ++part) {
+    if (arv_buffer_get_part_data_type(buffer, part) != ARV_BUFFER_PART_DATA_TYPE_CHUNK_DATA) continue;
+    std::size_t size = 0;
+    const auto* data = static_cast<const std::uint8_t*>(arv_buffer_get_part_data(buffer, part, &size));
+    if (!part_warned_ && (!part_timestamp_.field || !part_exposure_.field)) {
+      part_warned_ = true;
+      log::warn("camera", "multipart chunk values: " + (part_timestamp_.field ? part_exposure_.why_not : part_timestamp_.why_not) +
+                              " (the exposure is then read over GVCP)");
+    }
+    const auto* ts = part_timestamp_.field ? &*part_timestamp_.field : nullptr;
+    const auto* ex = part_exposure_.field ? &*part_exposure_.field : nullptr;
+    if (const auto chunk = ts != nullptr ? find_chunk(data, size, ts->chunk_id) : std::nullopt)
+      if (const auto ticks = read_integer(*chunk, *ts)) v.timestamp_ns = ticks_to_ns(*ticks);
+    if (const auto chunk = ex != nullptr ? find_chunk(data, size, ex->chunk_id) : std::nullopt)
+      if (const auto us = read_float(*chunk, *ex); us && *us > 0 && std::isfinite(*us)) v.exposure_ns = static_cast<Nanos>(std::llround(*us * 1000.0));
+    break;  // one chunk part per buffer
+  }
+  return v;
+}
+
 ChunkReader::Values ChunkReader::read(ArvCamera* camera, ArvBuffer* buffer) {
+  if (arv_buffer_get_payload_type(buffer) == ARV_BUFFER_PAYLOAD_TYPE_MULTIPART) return read_chunk_part(buffer);
   Values v;
   if (!arv_buffer_has_chunks(buffer) || (!has_timestamp_ && !has_exposure_)) return v;
   if (parser_ == nullptr) {
@@ -136,10 +165,8 @@ ChunkReader::Values ChunkReader::read(ArvCamera* camera, ArvBuffer* buffer) {
     if (err != nullptr) {  // a camera without it: not asked again (each miss is a GLib warning)
       g_clear_error(&err);
       has_timestamp_ = false;
-    } else if (tick_hz_ == 0 || tick_hz_ == 1'000'000'000) {
-      v.timestamp_ns = ticks;
     } else {
-      v.timestamp_ns = static_cast<Nanos>(static_cast<double>(ticks) * 1e9 / static_cast<double>(tick_hz_));
+      v.timestamp_ns = ticks_to_ns(ticks);
     }
   }
   if (has_exposure_) {  // SFNC: a Float in us; some cameras an Integer

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <string>
 
+#include "chunk_layout.hpp"
 #include "sensor_rig/camera/pixel_format.hpp"
 #include "sensor_rig/common/clock.hpp"
 
@@ -45,8 +46,10 @@ std::uint64_t timestamp_tick_hz(ArvDevice* device);
 std::mutex& genicam_parse_mutex();
 
 // Per-frame chunk values through the camera's own GenICam chunk features (ChunkTimestamp in device
-// ticks, ChunkExposureTime in us): the parser is made from the device's XML once, at the first
-// buffer with chunks (no I/O: the XML is the one read at open).
+// ticks, ChunkExposureTime in us). Image and chunk-data buffers: Aravis' chunk parser, made from the
+// device's XML once, at the first buffer with chunks (no I/O: the XML is the one read at open).
+// Multipart buffers, which that parser cannot read: the chunk part, at the places the features'
+// registers give (chunk_layout.hpp), resolved at open.
 class ChunkReader {
  public:
   struct Values {
@@ -60,11 +63,19 @@ class ChunkReader {
 
   // `tick_hz`: the device's timestamp tick frequency (GevTimestampTickFrequency; 0: 1 GHz).
   void set_tick_hz(std::uint64_t tick_hz) noexcept { tick_hz_ = tick_hz; }
+  // Where ChunkTimestamp and ChunkExposureTime lie in a multipart buffer's chunk part, from the
+  // device's parsed GenICam (at open, on the thread that opened it).
+  void set_part_layout(ArvDevice* device);
   Values read(ArvCamera* camera, ArvBuffer* buffer);
   void reset();  // the camera was closed: its XML may differ after a reopen
 
  private:
+  Values read_chunk_part(ArvBuffer* buffer);
+  Nanos ticks_to_ns(std::int64_t ticks) const noexcept;
+
   ArvChunkParser* parser_ = nullptr;
+  ResolvedChunkField part_timestamp_, part_exposure_;
+  bool part_warned_ = false;  // a chunk part with a field that could not be resolved: said once
   std::uint64_t tick_hz_ = 0;
   bool has_timestamp_ = true, has_exposure_ = true;  // cleared at the first buffer that lacks them
 };

@@ -137,17 +137,27 @@ TEST_F(GigePayload, ChunkDataPayloadGivesEveryFrame) {
 }
 
 // camera.chunk_data with payload=multipart (0x000A, GigE Vision 2.1, extended-id packets): part 0
-// the chunks, part 1 the 2D image with padded rows. Every frame, the image found by its part's
-// data type and size, at the part's stride (the chunk part is not taken for the image); the
-// exposure is the GVCP read, as for a plain image (Aravis 0.8.26 reads no chunks of a multipart
-// buffer): known from the first read on, not for the very first frame.
-TEST_F(GigePayload, MultipartPayloadGivesEveryFrameFromItsImagePart) {
-  const auto frames = read_payload({"camera.chunk_data:payload=multipart@0+60", "camera.padded_rows:bytes=16@0+60"}, "multipart", 16);
+// the chunks, part 1 the 2D image with padded rows; the exposure varying per frame. Every frame,
+// the image found by its part's data type and size, at the part's stride (the chunk part is not
+// taken for the image), and its own ChunkTimestamp and ChunkExposureTime read from the chunk part
+// at the places the fake's GenICam registers give (Aravis 0.8's chunk parser reads no chunks of a
+// multipart buffer: before chunk_layout.cpp, no chunk timestamp and a GVCP read of an earlier
+// frame's exposure).
+TEST_F(GigePayload, MultipartPayloadGivesEveryFrameWithItsOwnChunkValues) {
+  const auto frames = read_payload(
+      {"camera.chunk_data:payload=multipart@0+60", "camera.padded_rows:bytes=16@0+60", "camera.auto_exposure@0+60"}, "multipart", 16);
   const auto truth = truth_by_id();
-  for (std::size_t k = 1; k < frames.size(); ++k) {
-    ASSERT_TRUE(truth.count(frames[k].seq));
-    EXPECT_EQ(frames[k].exposure_ns, truth.at(frames[k].seq).exposure_ns) << "frame " << frames[k].seq;
+  std::size_t exposures = 0;
+  for (const auto& f : frames) {
+    ASSERT_TRUE(truth.count(f.seq));
+    const auto& u = truth.at(f.seq);
+    ASSERT_GT(u.dev_ns, 0) << "the fake sent no timestamp chunk for frame " << f.seq;
+    EXPECT_EQ(f.chunk_timestamp_ns, u.dev_ns) << "frame " << f.seq;
+    EXPECT_EQ(f.exposure_seq, f.seq) << "the exposure of another frame";
+    EXPECT_EQ(f.exposure_ns, u.exposure_ns) << "frame " << f.seq;
+    exposures += f.exposure_ns != frames.front().exposure_ns ? 1 : 0;
   }
+  EXPECT_GT(exposures, 0u) << "auto exposure did not vary the exposure";
 }
 
 // camera.padded_rows: 64 bytes after each row (GVSP x_padding). The image must equal, pixel for
@@ -198,8 +208,14 @@ TEST_F(GigePayload, ChunkParseCostPerFrame) {
   on.features = {{"ChunkModeActive", "true"}};
   const double off_us = post_pop_us(off, 60), on_us = post_pop_us(on, 60);
   fake.stop(1000);
-  std::printf("next() after the pop: chunks off %.1f us, on %.1f us per frame (60 frames each)\n", off_us, on_us);
+  // Multipart: the chunk part read at the places resolved at open (chunk_layout.cpp), no parser.
+  auto multipart_fake = start({"camera.chunk_data:payload=multipart@0+60"});
+  const double multipart_us = post_pop_us(cfg(), 60);
+  multipart_fake.stop(1000);
+  std::printf("next() after the pop: chunks off %.1f us, on %.1f us, multipart %.1f us per frame (60 frames each)\n", off_us,
+              on_us, multipart_us);
   EXPECT_LT(on_us, 1000.0);
+  EXPECT_LT(multipart_us, 1000.0);
 }
 
 }  // namespace
