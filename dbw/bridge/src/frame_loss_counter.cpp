@@ -5,6 +5,17 @@
 #include <cmath>
 
 namespace sensor_rig::dbw {
+namespace {
+
+// A frame that arrived at `now` was sent `periods` periods after the one whose send time `sent`
+// estimates, so that one was sent by `now` less as many periods. Taken when it is earlier by half a
+// period at least (a network hold delayed both); less is the sender's jitter.
+void pull_back_send_estimate(Nanos& sent, Nanos now, double periods, double period_ns) noexcept {
+  const Nanos by = now - static_cast<Nanos>(periods * period_ns);
+  if (2 * static_cast<double>(sent - by) > period_ns) sent = by;
+}
+
+}  // namespace
 
 // While the counter is frozen it cannot show a loss; the message's period can. Counted once, over
 // the whole run from the last good frame to this one: the frames the span had room for at the
@@ -58,10 +69,8 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
   if (!safety::is_ok(st)) {
     settle_frozen();
     ++arrivals_since_good_;
-    if (period_ns_ > 0) {  // the k-th refused frame after the last good one: sent k periods after it at least
-      const Nanos sent_by = now - static_cast<Nanos>(static_cast<double>(arrivals_since_good_) * period_ns_);
-      if (2 * static_cast<double>(last_good_sent_by_ - sent_by) > period_ns_) last_good_sent_by_ = sent_by;
-    }
+    if (period_ns_ > 0)  // the k-th refused frame after the last good one: sent k periods after it at least
+      pull_back_send_estimate(last_good_sent_by_, now, static_cast<double>(arrivals_since_good_), period_ns_);
     ++lost_;
     refused_since_ = true;
     // The value it carried (readable unless the layout is wrong): a position on the counter that is
@@ -80,12 +89,10 @@ void FrameLossCounter::on_frame(std::span<const std::uint8_t> payload, safety::E
     const int skipped = (counter - last_counter_ - 1 + 2 * modulus) % modulus;
     if (frozen_.open) {
       // A good frame in sequence after a frozen run: it was sent good_after periods after the run's
-      // first good frame, so that one was sent by its arrival less as many periods (by half a period
-      // earlier at least: a hold; less is the sender's jitter).
+      // first good frame.
       if (skipped == 0 && !refused_since_) {
         ++frozen_.good_after;
-        const Nanos sent_by = now - static_cast<Nanos>(frozen_.good_after * frozen_.period_ns);
-        if (2 * static_cast<double>(frozen_.end - sent_by) > frozen_.period_ns) frozen_.end = sent_by;
+        pull_back_send_estimate(frozen_.end, now, frozen_.good_after, frozen_.period_ns);
         if (frozen_.good_after >= kSettleFrames) settle_frozen();
       } else {
         settle_frozen();
