@@ -196,8 +196,9 @@ Capture AravisSource::next(int timeout_ms) {
     if (c.status == CaptureStatus::kDisconnected) c.error = "aravis " + cfg_.device + ": control lost";
     return c;
   }
-  const Nanos real = vehicle_now_ns();
-  const Nanos mono = monotonic_now_ns();
+  const auto now = clock_pair_now();  // one instant: a preemption between two reads would shift the frame's stamp
+  const Nanos real = now.vehicle_ns;
+  const Nanos mono = now.monotonic_ns;
   const auto status = arv_buffer_get_status(b);
   count_missing_frames(arv_buffer_get_frame_id(b), static_cast<Nanos>(arv_buffer_get_timestamp(b)), mono,
                        status == ARV_BUFFER_STATUS_SUCCESS);

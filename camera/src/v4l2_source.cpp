@@ -372,8 +372,9 @@ Capture V4l2Source::next(int timeout_ms) {
     c.error = std::string("v4l2 ") + cfg_.device + ": " + std::strerror(-rc);
     return c;
   }
-  const Nanos real = vehicle_now_ns();
-  const Nanos mono = monotonic_now_ns();
+  const auto now = clock_pair_now();  // one instant: a preemption between two reads would shift the frame's stamp
+  const Nanos real = now.vehicle_ns;
+  const Nanos mono = now.monotonic_ns;
   count_sequence(b.sequence);
   if (b.index >= buffers_.size() || (b.flags & V4L2_BUF_FLAG_ERROR) != 0 || b.bytesused < image_bytes_) {
     ++stats_.incomplete;

@@ -102,7 +102,7 @@ class PlannedFaults {
       // The step's instant (e.now, monotonic) in vehicle time: the hold counts from it, and a clock
       // read here came after the step's sends, later by a preempted thread (a held frame's tx - made
       // read 49.3 ms under a 50 ms hold in a fresh-clone suite run).
-      const Nanos made = vehicle_now_ns() - (monotonic_now_ns() - e.now);
+      const Nanos made = e.now + clock_pair_now().vehicle_minus_monotonic();
       if (e.fate == mock::EmittedFrame::Fate::kDropped) {
         record_unit(e, false, made, made, made, 0);
       } else {

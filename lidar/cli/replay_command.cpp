@@ -139,8 +139,9 @@ std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::
       throw cli::UsageError(e.what());
     }
   }
-  const Nanos mono_now = monotonic_now_ns();
-  const Nanos vehicle_now = vehicle_now_ns();
+  const auto now = clock_pair_now();
+  const Nanos mono_now = now.monotonic_ns;
+  const Nanos vehicle_now = now.vehicle_ns;
   const bool faulted = !o.fault_plan.empty() || !o.fault_specs.empty();
   ReplayFaultInput fin{o.device, o.fault_plan, o.fault_specs, mono_now, 0, vehicle_now - mono_now,
                        o.duration_s > 0 ? o.duration_s : 86400.0};

@@ -310,9 +310,9 @@ int run(const Options& o) {
   CampaignDir dir(o.out_dir);
   const std::string exe = self_executable();
   // t = 0 of the plan: after the warm-up, on the clock every process shares and no step moves.
-  const Nanos mono_now = monotonic_now_ns(), vehicle_now = vehicle_now_ns();
-  plan.epoch_mono_ns = mono_now + static_cast<Nanos>(o.warmup_s * 1e9);
-  const Nanos epoch_vehicle = vehicle_now + static_cast<Nanos>(o.warmup_s * 1e9);
+  const auto now = clock_pair_now();
+  plan.epoch_mono_ns = now.monotonic_ns + static_cast<Nanos>(o.warmup_s * 1e9);
+  const Nanos epoch_vehicle = now.vehicle_ns + static_cast<Nanos>(o.warmup_s * 1e9);
   faults::write_plan((dir.path() / "plan.jsonl").string(), plan);
   std::map<std::string, std::uint64_t> planned;
   for (const auto& e : plan.events) ++planned[e.kind];

@@ -108,7 +108,8 @@ void HostTimeNode::stop() {
 void HostTimeNode::supervise(std::vector<dds::DriverStatus>& statuses) {
   auto& steps = impl_->steps;
   const std::uint64_t before = steps.steps();
-  steps.observe(vehicle_now_ns(), monotonic_now_ns());
+  const auto now = clock_pair_now();
+  steps.observe(now.vehicle_ns, now.monotonic_ns);
   if (steps.steps() != before)
     log::warn("rig", "host clock: CLOCK_REALTIME stepped by " + std::to_string(steps.last_step_ns()) +
                          " ns while running (stamps before and after differ by it)");

@@ -12,7 +12,7 @@ namespace sensor_rig::rig {
 MockFaults::MockFaults(const faults::Plan& plan, std::vector<MockProcess>& mocks, std::mutex& mutex, const std::string& truth_path)
     : epoch_mono_(plan.epoch_mono_ns),
       // The plan's epoch on the vehicle clock, as of now (the truth's times are vehicle time).
-      epoch_vehicle_(vehicle_now_ns() + (plan.epoch_mono_ns - monotonic_now_ns())),
+      epoch_vehicle_(plan.epoch_mono_ns + clock_pair_now().vehicle_minus_monotonic()),
       mocks_(mocks),
       mutex_(mutex),
       truth_(truth_path, truth::Header{"host", "host", "rig up", "", "", "CLOCK_REALTIME"}) {

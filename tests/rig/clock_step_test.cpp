@@ -15,7 +15,7 @@
 namespace sensor_rig::rig {
 namespace {
 
-Nanos offset_ns() { return vehicle_now_ns() - monotonic_now_ns(); }
+Nanos offset_ns() { return clock_pair_now().vehicle_minus_monotonic(); }
 
 class ClockStepTest : public ::testing::Test {
  protected:

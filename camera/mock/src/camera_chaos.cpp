@@ -34,7 +34,7 @@ bool CameraSchedule::has(std::string_view kind) const noexcept {
 
 Nanos CameraSchedule::vehicle_ns(double t_s) const noexcept {
   const Nanos mono = epoch_mono_ns_ + static_cast<Nanos>(std::llround(t_s * 1e9));
-  return mono + (vehicle_now_ns() - monotonic_now_ns());
+  return mono + clock_pair_now().vehicle_minus_monotonic();
 }
 
 std::string_view to_string(PtpState s) noexcept {

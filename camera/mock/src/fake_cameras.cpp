@@ -91,8 +91,9 @@ void fill_and_record(ArvBuffer* buffer, void* data, guint32 exposure_time_us, gu
   // The exposure starts now (the fake set the stamp microseconds ago): its end is waited for on
   // CLOCK_MONOTONIC from here. Waiting until stamp + exposure by CLOCK_REALTIME held the frame, and
   // the fake's stream, as long as a host clock step back between the two (issue 27).
-  const Nanos start_mono = monotonic_now_ns();
-  Nanos acq = vehicle_now_ns();
+  const auto now = clock_pair_now();  // the truth's acquisition: one instant on both clocks
+  const Nanos start_mono = now.monotonic_ns;
+  Nanos acq = now.vehicle_ns;
   const guint64 frame_id = arv_buffer_get_frame_id(buffer);
   paint(*ctx, buffer);
   const Nanos exposure = Nanos{exposure_time_us} * 1000;

@@ -313,7 +313,7 @@ bool FakeV4l2Device::fill_one(Nanos due) {
     std::memcpy(b.mem.data(), &seq, std::min<std::size_t>(sizeof seq, sizeimage_));
     b.sequence = seq;
     b.stamp_mono = due;
-    b.mono_to_stamp_clock = opt_.realtime_stamps ? vehicle_now_ns() - monotonic_now_ns() : 0;
+    b.mono_to_stamp_clock = opt_.realtime_stamps ? clock_pair_now().vehicle_minus_monotonic() : 0;
     b.stamp_source = V4L2_BUF_FLAG_TSTAMP_SRC_SOE;
     Nanos exposure_start = due;
     const auto* mode = schedule_.active("v4l2.stamp_mode", schedule_.seconds(due));
@@ -424,7 +424,7 @@ void FakeV4l2Device::record(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono, t
 }
 
 FakeV4l2Device::Buffer::Truth FakeV4l2Device::frame_truth(std::uint32_t seq, Nanos acq_mono, Nanos dev_mono) const {
-  const Nanos to_vehicle = vehicle_now_ns() - monotonic_now_ns();
+  const Nanos to_vehicle = clock_pair_now().vehicle_minus_monotonic();  // not two bare reads: see clock.hpp
   // The buffer's timestamp is a timeval: what the device says is whole microseconds.
   return {true, seq, acq_mono + to_vehicle, dev_mono / 1000 * 1000, vehicle_now_ns()};
 }

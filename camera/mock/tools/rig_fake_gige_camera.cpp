@@ -103,8 +103,9 @@ struct FillContext {
 // mapping carries the fake's lateness as a bias the truth does not have).
 void expose_then_fill(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 /*gain*/, ArvPixelFormat /*format*/) {
   auto* ctx = static_cast<FillContext*>(data);
-  sensor_rig::Nanos start_mono = sensor_rig::monotonic_now_ns();
-  sensor_rig::Nanos start = sensor_rig::vehicle_now_ns();
+  const auto now = sensor_rig::clock_pair_now();  // one instant: the leader leaves exposure after `start` exactly
+  sensor_rig::Nanos start_mono = now.monotonic_ns;
+  sensor_rig::Nanos start = now.vehicle_ns;
   const sensor_rig::Nanos trigger_rx = g_trigger_rx_ns.exchange(0);
   const bool at_trigger = arv_fake_camera_is_in_software_trigger_mode(ctx->camera) && trigger_rx > 0 &&
                           trigger_rx <= start && start - trigger_rx < kTriggerRxValidNs;
@@ -263,7 +264,7 @@ extern "C" gint64 g_get_real_time() {
     t_end_window = false;
     return std::numeric_limits<gint64>::max() / 2;
   }
-  static const sensor_rig::Nanos camera_clock_offset_ns = sensor_rig::vehicle_now_ns() - sensor_rig::monotonic_now_ns();
+  static const sensor_rig::Nanos camera_clock_offset_ns = sensor_rig::clock_pair_now().vehicle_minus_monotonic();
   return (sensor_rig::monotonic_now_ns() + camera_clock_offset_ns) / 1000;
 }
 

@@ -232,8 +232,9 @@ struct CameraDriver::Impl {
       std::lock_guard lock(mutex);
       open = true;
       state = "streaming";
-      last_frame_host_ns = vehicle_now_ns();  // the watchdog starts now
-      last_frame_mono_ns = monotonic_now_ns();
+      const auto now = clock_pair_now();  // the watchdog starts now
+      last_frame_host_ns = now.vehicle_ns;
+      last_frame_mono_ns = now.monotonic_ns;
       return true;
     } catch (const std::exception& e) {
       set_state("opening", e.what());
@@ -281,7 +282,7 @@ struct CameraDriver::Impl {
       switch (c.status) {
         case camera::CaptureStatus::kFrame:
           // Before the stamp: a step before this frame's dequeue is known when it is mapped.
-          clock.realtime_step(realtime_steps.observe(vehicle_now_ns(), monotonic_now_ns()));
+          if (const auto now = clock_pair_now(); true) clock.realtime_step(realtime_steps.observe(now.vehicle_ns, now.monotonic_ns));
           capture(c.frame);
           break;
         case camera::CaptureStatus::kIncomplete: {

@@ -314,7 +314,7 @@ void LidarTrigger::fire(Nanos target, Nanos aim) {
   std::unique_lock figures_lock(mutex_, std::defer_lock);
   {
     std::unique_lock lock(shot_mutex_);
-    shot_.aim_mono = monotonic_now_ns() + (aim - vehicle_now_ns());
+    shot_.aim_mono = aim - clock_pair_now().vehicle_minus_monotonic();
     std::fill(shot_.called.begin(), shot_.called.end(), 0);
     std::fill(shot_.accepted.begin(), shot_.accepted.end(), 0);
     std::fill(shot_.abandoned.begin(), shot_.abandoned.end(), 0);

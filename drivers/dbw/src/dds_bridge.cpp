@@ -186,8 +186,9 @@ class Runner {
           std::lock_guard<std::mutex> lock(mu_);
           // Read under the lock: no frame of the CAN thread goes out between this time (the time of
           // any event the command causes) and the frames it produces.
-          const Nanos mono = monotonic_now_ns();
-          taken = vehicle_now_ns();
+          const auto now = clock_pair_now();
+          const Nanos mono = now.monotonic_ns;
+          taken = now.vehicle_ns;
           const bool changed = core_.on_command(c, mono, taken);
           last_cmd_rx_ = mono;
           if (core_.transmit_due(mono, changed)) {
@@ -217,8 +218,9 @@ class Runner {
     while (!done()) {
       const auto st = bus_.receive(rx, 1);
       std::lock_guard<std::mutex> lock(mu_);
-      const Nanos mono = monotonic_now_ns();
-      const Nanos vnow = vehicle_now_ns();
+      const auto now = clock_pair_now();
+      const Nanos mono = now.monotonic_ns;
+      const Nanos vnow = now.vehicle_ns;
       const auto push = [this](const OutboxItem& it) { outbox_.push(it, false); };
       if (st == can::IoStatus::kOk) {
         if (raw_frames_.active()) raw_ring_.push(rx);  // one relaxed load when nobody records

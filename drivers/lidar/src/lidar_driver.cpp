@@ -440,7 +440,7 @@ struct LidarDriver::Impl {
     auto slots = arena.slots();
     while (!stop_flag.load() && !shutdown_requested()) {
       const auto r = receive(slots, 50);
-      if (const Nanos step = realtime_steps.observe(vehicle_now_ns(), monotonic_now_ns()); step != 0) {
+      if (const auto now = clock_pair_now(); const Nanos step = realtime_steps.observe(now.vehicle_ns, now.monotonic_ns)) {
         scan_monotonic.realtime_step(step);  // the mapping will follow it: hold the topics' stamps
         imu_monotonic.realtime_step(step);
         stamper.host_step(step, vehicle_now_ns());  // the arrivals' shift is the host's, not a held network

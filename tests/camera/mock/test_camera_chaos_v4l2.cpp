@@ -62,7 +62,7 @@ TEST(V4l2Chaos, FaultFreeTruthIsWhatV4l2Reads) {
   EXPECT_EQ(log.header.topic, "/sensors/camera/usb/image_raw");
   std::map<std::int64_t, truth::UnitRecord> units;
   for (const auto& u : log.units) units[u.unit] = u;
-  const double to_vehicle = static_cast<double>(vehicle_now_ns() - monotonic_now_ns());
+  const double to_vehicle = static_cast<double>(clock_pair_now().vehicle_minus_monotonic());
   for (const auto& [seq, dev] : read) {
     ASSERT_TRUE(units.count(static_cast<std::int64_t>(seq))) << "sequence " << seq;
     EXPECT_EQ(units[static_cast<std::int64_t>(seq)].dev_ns, dev);
@@ -404,7 +404,7 @@ TEST(V4l2Chaos, StampModeEofStampsTheFramesEnd) {
   const auto log = truth::read(folder.truth());
   std::map<std::int64_t, truth::UnitRecord> units;
   for (const auto& u : log.units) units[u.unit] = u;
-  const Nanos to_vehicle = vehicle_now_ns() - monotonic_now_ns();
+  const Nanos to_vehicle = clock_pair_now().vehicle_minus_monotonic();
   for (const auto& [seq, dev] : read) {
     const auto& u = units[static_cast<std::int64_t>(seq)];
     EXPECT_EQ(u.dev_ns - dev, 14'000'000);  // the source moved the EOF stamp back exposure + readout
@@ -450,7 +450,7 @@ TEST(V4l2Chaos, StampModeEofWithAutoExposureLandsOnTheExposureStart) {
   const auto log = truth::read(folder.truth());
   std::map<std::int64_t, truth::UnitRecord> units;
   for (const auto& u : log.units) units[u.unit] = u;
-  const Nanos to_vehicle = vehicle_now_ns() - monotonic_now_ns();
+  const Nanos to_vehicle = clock_pair_now().vehicle_minus_monotonic();
   for (const auto& [seq, dev] : read) {
     const auto& u = units[static_cast<std::int64_t>(seq)];
     EXPECT_NEAR(static_cast<double>(dev + to_vehicle - u.acq_ns), 0.0, 1e6) << seq;

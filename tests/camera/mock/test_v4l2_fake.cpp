@@ -59,7 +59,7 @@ TEST(V4l2Fake, NegotiatesStreamsAndStampsEveryFrame) {
     // sampled at this frame (the two clocks' offset now, not at open()).
     EXPECT_LE(m.device_ns, m.complete_mono_ns);
     EXPECT_LT(m.complete_mono_ns - m.device_ns, 100'000'000);
-    const Nanos offset_now = vehicle_now_ns() - monotonic_now_ns();
+    const Nanos offset_now = clock_pair_now().vehicle_minus_monotonic();
     EXPECT_NEAR(static_cast<double>(m.complete_ns - m.complete_mono_ns), static_cast<double>(offset_now), 5e6);
     if (i > 0) {
       EXPECT_GT(m.device_ns, last);

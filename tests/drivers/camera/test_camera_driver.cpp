@@ -408,8 +408,9 @@ class SlowTriggeredCamera : public camera::FrameSource {
     m.format = camera::PixelFormat::kMono8;
     m.domain = camera::TimeDomain::kDeviceTicks;
     m.device_ns = s.exposure_mono;
-    m.complete_ns = vehicle_now_ns();
-    m.complete_mono_ns = monotonic_now_ns();
+    const auto now = clock_pair_now();
+    m.complete_ns = now.vehicle_ns;
+    m.complete_mono_ns = now.monotonic_ns;
     m.first_rx_ns = m.complete_ns - (m.complete_mono_ns - s.arrival_mono);
     c.status = camera::CaptureStatus::kFrame;
     c.frame = camera::Frame(m, {pixels_.data(), pixels_.size()}, [] {});

@@ -419,7 +419,7 @@ TEST_F(CameraIsolation, AStreamsFirstFrameIsExposedAtItsTrigger) {
     std::lock_guard l(recorded.m);
     calls = recorded.accepted;
   }
-  const Nanos reboot = vehicle_now_ns() - (monotonic_now_ns() - epoch) + 2 * kSec;
+  const Nanos reboot = epoch + clock_pair_now().vehicle_minus_monotonic() + 2 * kSec;
   std::size_t before = 0, after = 0;
   for (const auto& part : truth::read(folder_[0].truth()).parts) {
     if (part.fate != truth::Fate::kSent) continue;

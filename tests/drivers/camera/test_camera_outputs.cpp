@@ -51,10 +51,11 @@ class BayerSceneSource : public camera::FrameSource {
     m.step = w_;
     m.format = camera::PixelFormat::kBayerBG8;
     m.domain = camera::TimeDomain::kMonotonic;
-    m.device_ns = monotonic_now_ns() - 1'000'000;
-    m.first_rx_ns = vehicle_now_ns();
+    const auto now = clock_pair_now();
+    m.device_ns = now.monotonic_ns - 1'000'000;
+    m.first_rx_ns = now.vehicle_ns;
     m.complete_ns = m.first_rx_ns;
-    m.complete_mono_ns = monotonic_now_ns();
+    m.complete_mono_ns = now.monotonic_ns;
     c.status = camera::CaptureStatus::kFrame;
     c.frame = camera::Frame(m, pool_.buffer(*idx), [this, i = *idx] { pool_.release(i); });
     ++stats_.completed;

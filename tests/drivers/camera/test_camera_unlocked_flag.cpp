@@ -145,7 +145,8 @@ TEST(CameraDriver, StampsBeforeTheClockMappingLocksAreFlaggedAfterEveryOpen) {
       if (const Nanos now = monotonic_now_ns(); due > now) ::usleep(static_cast<useconds_t>((due - now) / 1000));
       // The first packet arrives now: after the exposure and a transport delay of 0.3 ms, 2.5 ms
       // every fifth frame (a loaded host). The device stamped the exposure start in its ticks.
-      const Nanos rx = vehicle_now_ns(), rx_mono = monotonic_now_ns();
+      const auto rx_pair = clock_pair_now();
+      const Nanos rx = rx_pair.vehicle_ns, rx_mono = rx_pair.monotonic_ns;
       const Nanos delay = i % 5 == 4 ? 2'500'000 : 300'000;
       const Nanos exposure_mono = rx_mono - delay - FedCamera::kExposureNs;
       camera::FrameMeta m;

@@ -66,7 +66,8 @@ TEST(V4l2ClockStep, StampsAgainstTheFakesTruthThroughAStepBack) {
     while (monotonic_now_ns() < end) {
       auto c = src.next(50);
       if (c.status != camera::CaptureStatus::kFrame) continue;
-      clock.realtime_step(steps.observe(vehicle_now_ns(), monotonic_now_ns()));
+      const auto now = clock_pair_now();
+      clock.realtime_step(steps.observe(now.vehicle_ns, now.monotonic_ns));
       const auto st = clock.stamp(c.frame.meta());
       published.push_back({st.vehicle_ns, c.frame.meta().seq, st.slewed});
       if (published.size() == 10 && !stepped) {

@@ -50,7 +50,8 @@ Result run(const std::string& model, std::vector<SensorFault> sf, std::vector<Ne
   };
   Result r;
   ReplayOptions ro;
-  const Nanos mono = monotonic_now_ns(), veh = vehicle_now_ns();
+  const auto now = clock_pair_now();
+  const Nanos mono = now.monotonic_ns, veh = now.vehicle_ns;
   auto probe = make(SensorSetup{});
   // The run starts this far ahead: rendering the reference below takes milliseconds, more on a
   // loaded host, and a run that starts late sends its overdue packets at once (a fresh clone's
@@ -156,7 +157,8 @@ TEST(ReplayTruth, SentPartsAreOnDiskAsTheyAreSent) {
   };
   ReplayOptions ro;
   ro.batch = 4;  // at most 4 packets a sendmmsg: what may be on the wire and not yet on disk
-  const Nanos mono = monotonic_now_ns(), veh = vehicle_now_ns();
+  const auto now = clock_pair_now();
+  const Nanos mono = now.monotonic_ns, veh = now.vehicle_ns;
   const Nanos start = veh + 5 * kMs - make(SensorSetup{})->first_packet_offset_ns();
   ro.start_monotonic_ns = mono + 5 * kMs;
   ro.duration_ns = 600 * kMs;
