@@ -24,6 +24,7 @@ struct ChunkField {
   bool big_endian = false;   // GenICam's default byte order is little endian
   bool is_float = false;     // FloatReg: IEEE 754
   bool is_signed = false;    // IntReg Sign (default Unsigned)
+  bool operator==(const ChunkField&) const = default;
 };
 
 // One chunk's data.

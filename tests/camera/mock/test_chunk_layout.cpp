@@ -8,12 +8,20 @@
 
 #include <bit>
 #include <cstdint>
+#include <ostream>
 #include <string>
 #include <vector>
 
 #include "sensor_rig/camera/mock/fake_cameras.hpp"
 
 namespace sensor_rig::camera::detail {
+
+// How gtest shows a field (found by ADL: beside ChunkField, not in the anonymous namespace).
+void PrintTo(const ChunkField& f, std::ostream* os) {
+  *os << "{chunk " << std::hex << f.chunk_id << std::dec << ", offset " << f.offset << ", " << f.length << " bytes, "
+      << (f.big_endian ? "big" : "little") << " endian, " << (f.is_float ? "float" : f.is_signed ? "signed" : "unsigned") << "}";
+}
+
 namespace {
 
 // A chunk part: each chunk's data, then its id and length (big endian), in order.
@@ -146,16 +154,12 @@ TEST_F(ChunkResolve, TheFakeCamerasChunkFeaturesAreItsReshapersChunks) {
   parse(mock::chaos_chunk_genicam_xml(mock::fake_camera_genicam_xml()));
   const auto ts = resolve_chunk_field(gc_, "ChunkTimestamp");
   ASSERT_TRUE(ts.field) << ts.why_not;
-  EXPECT_EQ(ts.field->chunk_id, mock::kChaosChunkIdTimestamp);
-  EXPECT_EQ(ts.field->offset, 0u);
-  EXPECT_EQ(ts.field->length, 8u);
-  EXPECT_TRUE(ts.field->big_endian);
-  EXPECT_FALSE(ts.field->is_float);
+  EXPECT_EQ(*ts.field, (ChunkField{.chunk_id = mock::kChaosChunkIdTimestamp, .offset = 0, .length = 8, .big_endian = true,
+                                   .is_float = false, .is_signed = false}));
   const auto ex = resolve_chunk_field(gc_, "ChunkExposureTime");
   ASSERT_TRUE(ex.field) << ex.why_not;
-  EXPECT_EQ(ex.field->chunk_id, mock::kChaosChunkIdExposure);
-  EXPECT_TRUE(ex.field->is_float);
-  EXPECT_EQ(ex.field->length, 8u);
+  EXPECT_EQ(*ex.field, (ChunkField{.chunk_id = mock::kChaosChunkIdExposure, .offset = 0, .length = 8, .big_endian = true,
+                                   .is_float = true, .is_signed = false}));
 }
 
 // As many cameras have it: an Integer and a Float whose pValue is the chunk register, little
@@ -174,16 +178,12 @@ TEST_F(ChunkResolve, FeaturesBehindPValueAtAnOffsetInLittleEndian) {
 )"));
   const auto ts = resolve_chunk_field(gc_, "ChunkTimestamp");
   ASSERT_TRUE(ts.field) << ts.why_not;
-  EXPECT_EQ(ts.field->chunk_id, 0x1234ABCDu);
-  EXPECT_EQ(ts.field->offset, 4u);
-  EXPECT_EQ(ts.field->length, 4u);
-  EXPECT_FALSE(ts.field->big_endian);
-  EXPECT_TRUE(ts.field->is_signed);
+  EXPECT_EQ(*ts.field, (ChunkField{.chunk_id = 0x1234ABCD, .offset = 4, .length = 4, .big_endian = false, .is_float = false,
+                                   .is_signed = true}));
   const auto ex = resolve_chunk_field(gc_, "ChunkExposureTime");
   ASSERT_TRUE(ex.field) << ex.why_not;
-  EXPECT_EQ(ex.field->chunk_id, 0xBEEFu);
-  EXPECT_TRUE(ex.field->is_float);
-  EXPECT_FALSE(ex.field->big_endian);
+  EXPECT_EQ(*ex.field, (ChunkField{.chunk_id = 0xBEEF, .offset = 0, .length = 4, .big_endian = false, .is_float = true,
+                                   .is_signed = false}));
 
   const std::uint32_t exposure_bits = std::bit_cast<std::uint32_t>(812.5f);
   Part p;
