@@ -191,6 +191,18 @@ void BM_Synchronizer_PerSample(benchmark::State& state) {
 }
 BENCHMARK(BM_Synchronizer_PerSample)->ArgNames({"members", "bounded"})->Args({2, 0})->Args({2, 1})->Args({3, 1})->Args({10, 0})->Args({10, 1});
 
+// Turning a monotonic time into vehicle time: two bare clock reads (what every such place did)
+// against clock_pair_now() (common/clock.hpp: the realtime read bracketed by two monotonic ones).
+void BM_ClockOffset_TwoBareReads(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(sensor_rig::vehicle_now_ns() - sensor_rig::monotonic_now_ns());
+}
+BENCHMARK(BM_ClockOffset_TwoBareReads);
+
+void BM_ClockOffset_ClockPairNow(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(sensor_rig::clock_pair_now().vehicle_minus_monotonic());
+}
+BENCHMARK(BM_ClockOffset_ClockPairNow);
+
 }  // namespace
 
 BENCHMARK_MAIN();
