@@ -219,7 +219,20 @@ Nanos ClockMapper::confirm_span_ns(double resid, Nanos host_ns) const noexcept {
   // A step beyond jump_threshold confirms quickly; a smaller persistent shift (the estimate was
   // wrong, or the device stepped by less) only after reacquire_ns of consistent samples.
   const Nanos span = std::fabs(resid) > static_cast<double>(cfg_.jump_threshold_ns) ? cfg_.jump_confirm_ns : cfg_.reacquire_ns;
-  return is_late(resid, host_ns) ? std::max(span, cfg_.late_confirm_ns) : span;
+  if (!is_late(resid, host_ns)) return span;
+  return held_network_ ? std::numeric_limits<Nanos>::max() : std::max(span, cfg_.late_confirm_ns);
+}
+
+// The first sample of a late shift, `device_ns` and `resid` (cadence_tells_holds): its device time
+// a whole number of periods after the last accepted sample's, within an eighth of a period or 2 ms,
+// while the shift is no whole number of periods.
+bool ClockMapper::held_network(Nanos device_ns, double resid) const noexcept {
+  if (!cfg_.cadence_tells_holds || period_ns_ <= 0 || !(resid > 0)) return false;
+  const auto p = static_cast<double>(period_ns_);
+  const double tol = std::min(p / 8, 2e6);
+  const auto whole = [&](double x) { return std::fabs(x - std::round(x / p) * p) <= tol; };
+  const auto advanced = static_cast<double>(sat_sub(device_ns, counters_.last_device_ns));
+  return advanced >= p - tol && whole(advanced) && !whole(resid);
 }
 
 void ClockMapper::keep_candidate(const Candidate& c) noexcept {
@@ -260,6 +273,7 @@ ObserveResult ClockMapper::handle_deviation(Nanos device_ns, Nanos host_ns, Nano
       first_resid = resid;
     }
   }
+  if (candidates_.empty()) held_network_ = held_network(device_ns, resid);
   keep_candidate(Candidate{device_ns, host_ns, y_ns});
   ++counters_.outliers;
   const bool big = std::fabs(resid) > static_cast<double>(cfg_.jump_threshold_ns);
@@ -325,12 +339,15 @@ ObserveResult ClockMapper::observe(Nanos device_ns, Nanos host_ns) noexcept {
   const double limit = state_ == SyncState::kConverging ? jump : out;
   if (std::fabs(resid) > limit) return handle_deviation(device_ns, host_ns, y_ns, resid);
   candidates_.clear();
+  held_network_ = false;
   if (add_to_bucket(device_ns, y_ns) == BucketAdd::kStale) {
     ++counters_.stale;
     return ObserveResult::kStale;
   }
   push_residual(resid);
   ++counters_.accepted;
+  if (const Nanos interval = sat_sub(device_ns, counters_.last_device_ns); interval > 0 && (period_ns_ == 0 || interval < period_ns_))
+    period_ns_ = interval;
   counters_.last_device_ns = std::max(counters_.last_device_ns, device_ns);
   counters_.last_host_ns = std::max(counters_.last_host_ns, host_ns);
   return ObserveResult::kAccepted;

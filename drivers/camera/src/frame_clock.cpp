@@ -51,6 +51,9 @@ timesync::ClockMapperConfig mapper_config(Nanos /*exposure_ns*/) {
   // that step off, flagged, for 3 s. Worth it: a free-running camera's ticks step back only when it
   // restarts (by far more than 1 s: refused at once as before), a PTP camera's come with a lock
   // change (refused as before, doubt()), while a held network is what a car's switch does.
+  // And a hold longer than late_confirm_ns is told by the frames' cadence, not by time: across it
+  // the camera's ticks advance by whole frame periods (timesync/README.md item 5).
+  c.cadence_tells_holds = true;
   return c;
 }
 

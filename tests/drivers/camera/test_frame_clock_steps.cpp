@@ -202,6 +202,53 @@ TEST(FrameClock, AHeldNetworkDoesNotMoveTheExposureStamps) {
   }
 }
 
+// A hold far longer than late_confirm_ns (3 s): host.network_delay holds a GigE camera's GVSP 50 ms
+// for 26 s (with and without ±25 ms of jitter). Across it the camera's ticks advance by whole frame
+// periods, which a clock stepped back by 50 ms does not do: a held network, never confirmed as a
+// step. Before, after 3 s the mapper took the shift for the camera's clock stepped back and mapped
+// on it: every GigE camera's stamps 50 ms late, unflagged, until the hold ended (rig chaos, 30 s,
+// one 26 s hold: p50 50.1 ms).
+TEST(FrameClock, ANetworkHeldLongerThanTheLateConfirmationIsStillNoClockStep) {
+  const auto ticks = [](int, Nanos start, camera::FrameMeta& m) {
+    m.domain = camera::TimeDomain::kDeviceTicks;
+    m.device_ns = 5'000'000'000'000 + (start - kStepT0);
+  };
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<Nanos> jitter(-25'000'000, 25'000'000);
+  std::vector<Nanos> jittered(700);
+  for (auto& j : jittered) j = 50'000'000 + jitter(rng);
+  const auto held = [](int i) { return StepWorld{0, i >= 300 && i < 560 ? 50'000'000 : 0, 0}; };
+  const auto held_jittered = [&](int i) { return StepWorld{0, i >= 300 && i < 560 ? jittered[static_cast<std::size_t>(i)] : 0, 0}; };
+  const auto held_triggered = [](int i) { return StepWorld{0, i >= 300 && i < 560 ? 50'000'000 : 0, 300'000}; };
+  struct Case {
+    const char* what;
+    StepRun run;
+  };
+  for (const auto& c : {Case{"50 ms", run_frames_with(700, ticks, held)}, Case{"50 +- 25 ms", run_frames_with(700, ticks, held_jittered)},
+                        Case{"triggered, 50 ms", run_frames_with(700, ticks, held_triggered)}}) {
+    SCOPED_TRACE(c.what);
+    print(c.what, c.run);
+    int held_frames = 0, held_wrong = 0;
+    double worst_ms = 0;
+    for (std::size_t k = 0; k < c.run.frames.size(); ++k) {
+      const auto& f = c.run.frames[k];
+      const int i = static_cast<int>(k) + 100;
+      if (i < 300 || i >= 560) continue;
+      ++held_frames;
+      const double err_ms = static_cast<double>(std::llabs(f.stamp - f.truth)) * 1e-6;
+      worst_ms = std::max(worst_ms, err_ms);
+      held_wrong += err_ms > 1.0 ? 1 : 0;
+    }
+    std::printf("%s: held frames %d, beyond 1 ms %d (worst %.3f ms)\n", c.what, held_frames, held_wrong, worst_ms);
+    EXPECT_EQ(held_frames, 260);
+    EXPECT_EQ(held_wrong, 0);
+    EXPECT_EQ(c.run.wrong_unflagged, 0);
+    EXPECT_EQ(c.run.replaced, 0);
+    EXPECT_EQ(c.run.jumps, 0u);
+    EXPECT_EQ(c.run.right_at_end, 50);
+  }
+}
+
 // CLOCK_REALTIME stepped forward 200 ms (the node's RealtimeStepDetector tells the clock): every
 // arrival is 200 ms later against the device, which is no held network. The old line's stamps are
 // the step early: refused at once (the arrival less the exposure), the step confirmed at the normal

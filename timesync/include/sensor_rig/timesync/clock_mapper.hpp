@@ -39,6 +39,15 @@ struct ClockMapperConfig {
   // shift the host announced (host_step) confirm at once.
   Nanos late_confirm_ns = 3'000'000'000;
   Nanos late_shift_max_ns = 1'000'000'000;
+  // A periodic device (a camera's frames) can tell them apart, though: across a held network its
+  // device time advanced by whole periods while the arrivals jumped; across its clock stepped back
+  // by S, by whole periods less S. With this set, a late shift whose first sample lies a whole
+  // number of the device's periods (the shortest interval seen between accepted samples) after the
+  // last accepted one, and which is itself no whole number of periods (then the two look alike), is
+  // a held network: never confirmed as a step while it lasts, however long (a 26 s hold of a GigE
+  // camera's GVSP at 50 ms was taken for its clock stepped back after late_confirm_ns: stamps 50 ms
+  // late, unflagged, until the hold ended). Off for streams whose period is no cadence (LIDAR packets).
+  bool cadence_tells_holds = false;
   double max_drift_ppm = 500.0;           // fits beyond this are rejected (drift kept)
   // A new drift is taken only where the floor is seen: >= 3 bucket minima within this of the line
   // on each side of the window's mean (sparse prompt arrivals fit hundreds of ppm; README item 2).
@@ -162,6 +171,7 @@ class ClockMapper {
   void push_residual(double r) noexcept;
   [[nodiscard]] Nanos confirm_span_ns(double resid, Nanos host_ns) const noexcept;
   [[nodiscard]] bool is_late(double resid, Nanos host_ns) const noexcept;
+  [[nodiscard]] bool held_network(Nanos device_ns, double resid) const noexcept;
   void keep_candidate(const Candidate& c) noexcept;
 
   ClockMapperConfig cfg_;
@@ -188,6 +198,8 @@ class ClockMapper {
   Nanos announced_step_ns_ = 0;      // host_step(): the shift arrivals will show (0: none)
   Nanos announced_until_ns_ = 0;     // host time after which the announcement is forgotten
   std::size_t skipped_ = 0;          // later-than-the-shift samples in a row (handle_deviation)
+  Nanos period_ns_ = 0;              // shortest device-time interval between accepted samples (cadence_tells_holds)
+  bool held_network_ = false;        // the pending late shift began a whole number of periods on: a hold
   ClockMapperStatus counters_;
   std::vector<double> scratch_x_, scratch_y_, scratch_r_;  // reused by refit, no allocation
   std::vector<unsigned char> mask_;
