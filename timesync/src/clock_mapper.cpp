@@ -1,6 +1,7 @@
 #include "sensor_rig/timesync/clock_mapper.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -223,16 +224,27 @@ Nanos ClockMapper::confirm_span_ns(double resid, Nanos host_ns) const noexcept {
   return held_network_ ? std::numeric_limits<Nanos>::max() : std::max(span, cfg_.late_confirm_ns);
 }
 
-// The first sample of a late shift, `device_ns` and `resid` (cadence_tells_holds): its device time
-// a whole number of periods after the last accepted sample's, within an eighth of a period or 2 ms,
-// while the shift is no whole number of periods.
-bool ClockMapper::held_network(Nanos device_ns, double resid) const noexcept {
-  if (!cfg_.cadence_tells_holds || period_ns_ <= 0 || !(resid > 0)) return false;
-  const auto p = static_cast<double>(period_ns_);
-  const double tol = std::min(p / 8, 2e6);
+// Whether the late samples since the last accepted one are a held network (cadence_tells_holds):
+// most of those within a few periods of it lie a whole number of periods (within an eighth of a
+// period or outlier_threshold_ns) after it, and the shift is no whole number of periods. Only
+// those near it vote: the period is an estimate, and k periods on its error is k times as large.
+// Most, not the first: a device stamp may be a few ms off its grid (the GigE fakes restamp a frame
+// their loaded thread began late; judged by the first late frame alone, 2 of 7 cameras of a
+// campaign missed the hold).
+bool ClockMapper::held_network(Nanos device_ns, double first_resid) noexcept {
+  if (!cfg_.cadence_tells_holds || interval_count_ < 3 || !(first_resid > 0)) return false;
+  // The period: the median of the recent intervals (a lost frame's double one, a late-begun
+  // frame's short one do not move it; the shortest one did, by the lateness).
+  std::array<Nanos, kCadenceIntervals> recent{};
+  std::copy_n(intervals_.begin(), interval_count_, recent.begin());
+  const auto mid = recent.begin() + static_cast<std::ptrdiff_t>(interval_count_ / 2);
+  std::nth_element(recent.begin(), mid, recent.begin() + static_cast<std::ptrdiff_t>(interval_count_));
+  const auto p = static_cast<double>(*mid);
+  const double tol = std::min(p / 8, static_cast<double>(cfg_.outlier_threshold_ns));
   const auto whole = [&](double x) { return std::fabs(x - std::round(x / p) * p) <= tol; };
   const auto advanced = static_cast<double>(sat_sub(device_ns, counters_.last_device_ns));
-  return advanced >= p - tol && whole(advanced) && !whole(resid);
+  if (advanced <= kCadenceVotePeriods * p) ++(advanced >= p - tol && whole(advanced) ? cadence_whole_ : cadence_other_);
+  return cadence_whole_ > cadence_other_ && !whole(first_resid);
 }
 
 void ClockMapper::keep_candidate(const Candidate& c) noexcept {
@@ -273,7 +285,7 @@ ObserveResult ClockMapper::handle_deviation(Nanos device_ns, Nanos host_ns, Nano
       first_resid = resid;
     }
   }
-  if (candidates_.empty()) held_network_ = held_network(device_ns, resid);
+  held_network_ = held_network(device_ns, first_resid);
   keep_candidate(Candidate{device_ns, host_ns, y_ns});
   ++counters_.outliers;
   const bool big = std::fabs(resid) > static_cast<double>(cfg_.jump_threshold_ns);
@@ -339,15 +351,19 @@ ObserveResult ClockMapper::observe(Nanos device_ns, Nanos host_ns) noexcept {
   const double limit = state_ == SyncState::kConverging ? jump : out;
   if (std::fabs(resid) > limit) return handle_deviation(device_ns, host_ns, y_ns, resid);
   candidates_.clear();
-  held_network_ = false;
+  held_network_ = false;  // a new late episode, if one comes, is judged afresh
+  cadence_whole_ = cadence_other_ = 0;
   if (add_to_bucket(device_ns, y_ns) == BucketAdd::kStale) {
     ++counters_.stale;
     return ObserveResult::kStale;
   }
   push_residual(resid);
   ++counters_.accepted;
-  if (const Nanos interval = sat_sub(device_ns, counters_.last_device_ns); interval > 0 && (period_ns_ == 0 || interval < period_ns_))
-    period_ns_ = interval;
+  if (const Nanos interval = sat_sub(device_ns, counters_.last_device_ns); cfg_.cadence_tells_holds && interval > 0) {
+    intervals_[interval_head_] = interval;
+    interval_head_ = (interval_head_ + 1) % intervals_.size();
+    interval_count_ = std::min(interval_count_ + 1, intervals_.size());
+  }
   counters_.last_device_ns = std::max(counters_.last_device_ns, device_ns);
   counters_.last_host_ns = std::max(counters_.last_host_ns, host_ns);
   return ObserveResult::kAccepted;

@@ -3,6 +3,7 @@
 // Pure estimator: no clock reads; every time is an argument. Algorithm in timesync/README.md:
 // minimum-delay buckets over a sliding window, a trimmed lower-envelope (convex hull) line fit for
 // offset + drift, outlier rejection, jump detection with quick re-lock, holdover.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -41,12 +42,13 @@ struct ClockMapperConfig {
   Nanos late_shift_max_ns = 1'000'000'000;
   // A periodic device (a camera's frames) can tell them apart, though: across a held network its
   // device time advanced by whole periods while the arrivals jumped; across its clock stepped back
-  // by S, by whole periods less S. With this set, a late shift whose first sample lies a whole
-  // number of the device's periods (the shortest interval seen between accepted samples) after the
-  // last accepted one, and which is itself no whole number of periods (then the two look alike), is
-  // a held network: never confirmed as a step while it lasts, however long (a 26 s hold of a GigE
-  // camera's GVSP at 50 ms was taken for its clock stepped back after late_confirm_ns: stamps 50 ms
-  // late, unflagged, until the hold ended). Off for streams whose period is no cadence (LIDAR packets).
+  // by S, by whole periods less S. With this set, a late shift most of whose first samples lie a
+  // whole number of the device's periods (the median of the last 31 intervals between accepted
+  // samples) after the last accepted one, and which is itself no whole number of periods (then the
+  // two look alike), is a held network: never confirmed as a step while it lasts, however long (a
+  // 26 s hold of a GigE camera's GVSP at 50 ms was taken for its clock stepped back after
+  // late_confirm_ns: stamps 50 ms late, unflagged, until the hold ended). Off for streams whose
+  // period is no cadence (LIDAR packets).
   bool cadence_tells_holds = false;
   double max_drift_ppm = 500.0;           // fits beyond this are rejected (drift kept)
   // A new drift is taken only where the floor is seen: >= 3 bucket minima within this of the line
@@ -171,7 +173,7 @@ class ClockMapper {
   void push_residual(double r) noexcept;
   [[nodiscard]] Nanos confirm_span_ns(double resid, Nanos host_ns) const noexcept;
   [[nodiscard]] bool is_late(double resid, Nanos host_ns) const noexcept;
-  [[nodiscard]] bool held_network(Nanos device_ns, double resid) const noexcept;
+  bool held_network(Nanos device_ns, double first_resid) noexcept;  // counts the sample's cadence
   void keep_candidate(const Candidate& c) noexcept;
 
   ClockMapperConfig cfg_;
@@ -198,8 +200,12 @@ class ClockMapper {
   Nanos announced_step_ns_ = 0;      // host_step(): the shift arrivals will show (0: none)
   Nanos announced_until_ns_ = 0;     // host time after which the announcement is forgotten
   std::size_t skipped_ = 0;          // later-than-the-shift samples in a row (handle_deviation)
-  Nanos period_ns_ = 0;              // shortest device-time interval between accepted samples (cadence_tells_holds)
-  bool held_network_ = false;        // the pending late shift began a whole number of periods on: a hold
+  static constexpr std::size_t kCadenceIntervals = 31;
+  static constexpr double kCadenceVotePeriods = 5.5;  // late samples this near the last accepted one vote
+  std::array<Nanos, kCadenceIntervals> intervals_{};  // device time between accepted samples, newest last (cadence_tells_holds)
+  std::size_t interval_head_ = 0, interval_count_ = 0;
+  bool held_network_ = false;        // the late samples since the last accepted one are a held network
+  std::size_t cadence_whole_ = 0, cadence_other_ = 0;  // of those that voted: a whole number of periods on, or not
   ClockMapperStatus counters_;
   std::vector<double> scratch_x_, scratch_y_, scratch_r_;  // reused by refit, no allocation
   std::vector<unsigned char> mask_;
