@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <limits>
 
+#include "aravis_internal.hpp"  // take_error
+
 namespace sensor_rig::camera::detail {
 namespace {
 
@@ -37,12 +39,6 @@ ArvGcPropertyNode* child_property(ArvGcNode* node, ArvGcPropertyNodeType type) {
   for (ArvDomNode* c = arv_dom_node_get_first_child(ARV_DOM_NODE(node)); c != nullptr; c = arv_dom_node_get_next_sibling(c))
     if (ARV_IS_GC_PROPERTY_NODE(c) && arv_gc_property_node_get_node_type(ARV_GC_PROPERTY_NODE(c)) == type) return ARV_GC_PROPERTY_NODE(c);
   return nullptr;
-}
-
-std::string take(GError*& err) {
-  std::string text = err != nullptr && err->message != nullptr ? err->message : "unknown error";
-  g_clear_error(&err);
-  return text;
 }
 
 }  // namespace
@@ -100,7 +96,7 @@ ResolvedChunkField resolve_chunk_field(ArvGc* gc, const char* feature) {
   GError* err = nullptr;
   const char* id_text = arv_gc_property_node_get_string(id, &err);
   if (err != nullptr || id_text == nullptr) {
-    r.why_not = std::string(feature) + ": ChunkID: " + (err != nullptr ? take(err) : "empty");
+    r.why_not = std::string(feature) + ": ChunkID: " + (err != nullptr ? take_error(err) : "empty");
     return r;
   }
   char* end = nullptr;
@@ -115,7 +111,7 @@ ResolvedChunkField resolve_chunk_field(ArvGc* gc, const char* feature) {
   f.offset = arv_gc_register_get_address(ARV_GC_REGISTER(node), &err);
   const std::uint64_t length = err == nullptr ? arv_gc_register_get_length(ARV_GC_REGISTER(node), &err) : 0;
   if (err != nullptr) {
-    r.why_not = std::string(feature) + ": " + take(err);
+    r.why_not = std::string(feature) + ": " + take_error(err);
     return r;
   }
   if (length == 0 || length > 8 || (f.is_float && length != 4 && length != 8)) {
