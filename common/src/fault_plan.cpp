@@ -4,6 +4,7 @@
 #include <cctype>
 #include <array>
 #include <charconv>
+#include <cstdio>
 #include <cstdlib>
 #include <cmath>
 #include <fstream>
@@ -21,49 +22,49 @@ using DC = DeviceClass;
 // without '+' gets (0 = the fault touches one unit: a packet, a frame).
 constexpr std::array<KindInfo, 33> kKinds{{
     // LIDAR: what a real sensor and its network do to a packet stream.
-    {"lidar.reorder", DC::kLidar, "n=1,ms=0", 0, "one packet sent n positions (or ms) after its successors"},
-    {"lidar.duplicate_late", DC::kLidar, "n=5", 0, "one packet sent again n packets later"},
-    {"lidar.loss_burst", DC::kLidar, "packets=10,at_cut=0", 0, "packets consecutive packets lost (at_cut=1: straddling a scan cut)"},
+    {"lidar.reorder", DC::kLidar, "n=1,ms=0", 0, "one packet sent n positions (or ms) after its successors", "n=1..12,ms=0|0|2..30"},
+    {"lidar.duplicate_late", DC::kLidar, "n=5", 0, "one packet sent again n packets later", "n=1..60"},
+    {"lidar.loss_burst", DC::kLidar, "packets=10,at_cut=0", 0, "packets consecutive packets lost (at_cut=1: straddling a scan cut)", "packets=1..400,at_cut=0|1"},
     {"lidar.corrupt", DC::kLidar, "field=byte,offset=-1", 0,
-     "one packet with one field changed: time, azimuth, frame_id, column_status, udp_seq or byte (offset -1 = random)"},
-    {"lidar.second_sensor", DC::kLidar, "", 2, "a second sensor of the same model sends to the same port"},
-    {"lidar.restart", DC::kLidar, "", 1, "the sensor is silent, then comes back with its clock and ids jumped"},
-    {"lidar.stuck_azimuth", DC::kLidar, "", 0.5, "the azimuth field stops moving (encoder fault)"},
-    {"lidar.rpm_change", DC::kLidar, "rpm=300", 2, "the rotor runs at another speed"},
-    {"lidar.blind_sector", DC::kLidar, "from_deg=90,to_deg=180", 2, "no packets from a sector (restricted FOV)"},
+     "one packet with one field changed: time, azimuth, frame_id, column_status, udp_seq or byte (offset -1 = random)", "field=time|azimuth|frame_id|column_status|udp_seq|byte"},
+    {"lidar.second_sensor", DC::kLidar, "", 2, "a second sensor of the same model sends to the same port", "+1..5"},
+    {"lidar.restart", DC::kLidar, "", 1, "the sensor is silent, then comes back with its clock and ids jumped", "+0.3..4"},
+    {"lidar.stuck_azimuth", DC::kLidar, "", 0.5, "the azimuth field stops moving (encoder fault)", "+0.1..2"},
+    {"lidar.rpm_change", DC::kLidar, "rpm=300", 2, "the rotor runs at another speed", "rpm=300|900|1200,+1..8"},
+    {"lidar.blind_sector", DC::kLidar, "from_deg=90,to_deg=180", 2, "no packets from a sector (restricted FOV)", "from_deg=0..359,to_deg=0..359,+1..8"},
     // Cameras (GigE Vision through Aravis).
-    {"camera.never_answers", DC::kCamera, "", 0, "the camera never answers (whole run)"},
-    {"camera.slow_open", DC::kCamera, "s=3", 0, "the camera answers only s seconds after the first attempt"},
-    {"camera.dies", DC::kCamera, "", 2, "the camera stops streaming and answering, then returns"},
+    {"camera.never_answers", DC::kCamera, "", 0, "the camera never answers (whole run)", ""},
+    {"camera.slow_open", DC::kCamera, "s=3", 0, "the camera answers only s seconds after the first attempt", "s=0.5..8"},
+    {"camera.dies", DC::kCamera, "", 2, "the camera stops streaming and answering, then returns", "+0.3..6"},
     {"camera.ptp", DC::kCamera, "state=Master,tai_offset_s=37,step_ms=0", 3,
-     "PTP state (Disabled, Listening, Uncalibrated, Slave, Master, Faulty) with a TAI offset and a clock step"},
-    {"camera.exposure_change", DC::kCamera, "us=8000", 0, "exposure time changed while streaming"},
-    {"camera.auto_exposure", DC::kCamera, "", 3, "auto exposure on: exposure varies frame to frame"},
+     "PTP state (Disabled, Listening, Uncalibrated, Slave, Master, Faulty) with a TAI offset and a clock step", "state=Initializing|Faulty|Disabled|Listening|Master|Slave|Uncalibrated|cold_start,tai_offset_s=37|37|0,step_ms=0|-1000..1000,+1..10"},
+    {"camera.exposure_change", DC::kCamera, "us=8000", 0, "exposure time changed while streaming", "us=50..15000"},
+    {"camera.auto_exposure", DC::kCamera, "", 3, "auto exposure on: exposure varies frame to frame", "+1..10"},
     {"camera.chunk_data", DC::kCamera, "payload=image", 3,
-     "chunks (timestamp, exposure) appended to each frame: payload=image (0x4001, image + chunks), chunk (0x0004, the image its first chunk) or multipart (0x000A: a chunk part, then the image part)"},
-    {"camera.packet_loss", DC::kCamera, "p=0.01,resend=1", 2, "GVSP packets lost (resend=1: the camera answers resends)"},
-    {"camera.padded_rows", DC::kCamera, "bytes=64", 2, "rows padded to a stride wider than width x bytes per pixel"},
+     "chunks (timestamp, exposure) appended to each frame: payload=image (0x4001, image + chunks), chunk (0x0004, the image its first chunk) or multipart (0x000A: a chunk part, then the image part)", "payload=image|chunk|multipart,+1..10"},
+    {"camera.packet_loss", DC::kCamera, "p=0.01,resend=1", 2, "GVSP packets lost (resend=1: the camera answers resends)", "p=0.001..0.05,resend=0|1,+0.5..5"},
+    {"camera.padded_rows", DC::kCamera, "bytes=64", 2, "rows padded to a stride wider than width x bytes per pixel", "bytes=1..256,+0.5..5"},
     // USB cameras (V4L2).
-    {"v4l2.stamp_mode", DC::kV4l2, "mode=eof", 3, "buffer timestamps at end of frame (eof) or start of exposure (soe)"},
-    {"v4l2.sequence_gap", DC::kV4l2, "n=3", 0, "n frames skipped by the device (sequence jumps)"},
-    {"v4l2.disconnect", DC::kV4l2, "", 1, "the device disappears (ENODEV), then returns"},
+    {"v4l2.stamp_mode", DC::kV4l2, "mode=eof", 3, "buffer timestamps at end of frame (eof) or start of exposure (soe)", "mode=eof|soe,+1..10"},
+    {"v4l2.sequence_gap", DC::kV4l2, "n=3", 0, "n frames skipped by the device (sequence jumps)", "n=1..12"},
+    {"v4l2.disconnect", DC::kV4l2, "", 1, "the device disappears (ENODEV), then returns", "+0.2..4"},
     // Drive-by-wire (the mock Paravan ECU's faults, rig mock paravan --fault).
-    {"dbw.loss", DC::kDbw, "p=0.1", 2, "frames lost on the bus, both directions"},
-    {"dbw.bad_crc", DC::kDbw, "", 1, "ECU status frames with a wrong CRC"},
-    {"dbw.stuck_counter", DC::kDbw, "", 1, "ECU status frames with a frozen alive counter"},
-    {"dbw.override", DC::kDbw, "", 1, "the driver takes over (steering torque)"},
-    {"dbw.ecu_fault", DC::kDbw, "", 1, "the ECU reports a fault"},
-    {"dbw.bus_off", DC::kDbw, "", 1, "the bus goes off: nothing passes"},
-    {"dbw.no_status", DC::kDbw, "", 1, "the ECU stops sending status frames"},
+    {"dbw.loss", DC::kDbw, "p=0.1", 2, "frames lost on the bus, both directions", "p=0.01..0.5,+0.5..4"},
+    {"dbw.bad_crc", DC::kDbw, "", 1, "ECU status frames with a wrong CRC", "+0.2..3"},
+    {"dbw.stuck_counter", DC::kDbw, "", 1, "ECU status frames with a frozen alive counter", "+0.2..3"},
+    {"dbw.override", DC::kDbw, "", 1, "the driver takes over (steering torque)", "+0.2..3"},
+    {"dbw.ecu_fault", DC::kDbw, "", 1, "the ECU reports a fault", "+0.2..3"},
+    {"dbw.bus_off", DC::kDbw, "", 1, "the bus goes off: nothing passes", "+0.2..3"},
+    {"dbw.no_status", DC::kDbw, "", 1, "the ECU stops sending status frames", "+0.2..3"},
     // The host under the rig.
-    {"host.clock_step", DC::kHost, "ms=-500", 5, "CLOCK_REALTIME stepped by ms under the rig, stepped back when the fault ends"},
-    {"host.cpu_hog", DC::kHost, "threads=2", 3, "busy threads competing for the cores"},
-    {"host.kill_mock", DC::kHost, "restart_s=1", 0, "a mock device process killed (SIGKILL), restarted restart_s later"},
-    {"host.stall_mock", DC::kHost, "ms=300", 0, "a mock device process stopped (SIGSTOP) for ms"},
+    {"host.clock_step", DC::kHost, "ms=-500", 5, "CLOCK_REALTIME stepped by ms under the rig, stepped back when the fault ends", "ms=-37000|-2000|-500|-20|-2|2|20|500|2000|37000,+1..10"},
+    {"host.cpu_hog", DC::kHost, "threads=2", 3, "busy threads competing for the cores", "threads=1..4,+1..8"},
+    {"host.kill_mock", DC::kHost, "restart_s=1", 0, "a mock device process killed (SIGKILL), restarted restart_s later", "restart_s=0.1..3"},
+    {"host.stall_mock", DC::kHost, "ms=300", 0, "a mock device process stopped (SIGSTOP) for ms", "ms=20..2000"},
     {"host.network_delay", DC::kHost, "ms=50,jitter_ms=0", 1,
      "the devices' network held back by ms +-jitter_ms: netem on lo (LIDAR UDP only, may reorder), else in the mocks, "
      "in order, nothing lost: LIDAR datagrams, GigE fake cameras' GVSP, the mock ECU's CAN frames (not V4L2, not the "
-     "in-process Aravis fakes); camera stamps must not move, the dbw bridge's ECU watchdog trips only past ecu_timeout_ms"},
+     "in-process Aravis fakes); camera stamps must not move, the dbw bridge's ECU watchdog trips only past ecu_timeout_ms", "ms=1..150,jitter_ms=0|1..40,+0.5..30"},
 }};
 
 std::map<std::string, std::string> default_params(const KindInfo& k) {
@@ -114,6 +115,26 @@ void check_choice(std::string_view spec, std::string_view kind, std::string_view
     throw std::invalid_argument("'" + std::string(spec) + "': " + std::string(param) + "='" + std::string(value) +
                                 "' is not one of " + one_of);
   }
+}
+
+// A draw's text: one value, or LO..HI drawn uniformly (whole numbers when both ends are).
+std::string draw_alternative(std::string_view kind, std::string_view alt, std::mt19937_64& rng) {
+  const auto dots = alt.find("..");
+  if (dots == std::string_view::npos) return std::string(alt);
+  const std::string_view lo_text = alt.substr(0, dots), hi_text = alt.substr(dots + 2);
+  double lo = 0, hi = 0;
+  const auto a = std::from_chars(lo_text.data(), lo_text.data() + lo_text.size(), lo);
+  const auto b = std::from_chars(hi_text.data(), hi_text.data() + hi_text.size(), hi);
+  if (a.ec != std::errc{} || a.ptr != lo_text.data() + lo_text.size() || b.ec != std::errc{} ||
+      b.ptr != hi_text.data() + hi_text.size() || !(lo <= hi))
+    throw std::invalid_argument(std::string(kind) + ": draw '" + std::string(alt) + "' is not LO..HI with LO <= HI");
+  const bool whole = lo_text.find('.') == std::string_view::npos && hi_text.find('.') == std::string_view::npos;
+  if (whole)
+    return std::to_string(std::uniform_int_distribution<long long>(std::llround(lo), std::llround(hi))(rng));
+  const double v = std::uniform_real_distribution<double>(lo, hi)(rng);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);  // what the plan file and the truth records say
+  return buf;
 }
 
 // The next of the markers that end a spec's kind/params part.
@@ -254,8 +275,41 @@ std::vector<FaultEvent> expand(std::span<const FaultSpec> specs, std::span<const
   return out;
 }
 
+Drawn draw(const KindInfo& kind, std::mt19937_64& rng) {
+  Drawn d{default_params(kind), kind.default_duration_s};
+  std::string_view rest = kind.draws;
+  while (!rest.empty()) {
+    const auto comma = rest.find(',');
+    const std::string_view item = rest.substr(0, comma);
+    rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+    const bool duration = !item.empty() && item.front() == '+';
+    const auto eq = item.find('=');
+    if (!duration && (eq == std::string_view::npos || eq == 0))
+      throw std::invalid_argument(std::string(kind.name) + ": draw '" + std::string(item) + "' is not NAME=ALT|ALT or +LO..HI");
+    const std::string name(duration ? std::string_view{} : item.substr(0, eq));
+    if (!duration && !d.params.contains(name))
+      throw std::invalid_argument(std::string(kind.name) + ": draws '" + name + "', which is none of its parameters");
+    std::vector<std::string_view> alts;
+    for (std::string_view a = item.substr(duration ? 1 : eq + 1); !a.empty();) {
+      const auto bar = a.find('|');
+      alts.push_back(a.substr(0, bar));
+      a = bar == std::string_view::npos ? std::string_view{} : a.substr(bar + 1);
+    }
+    if (alts.empty()) throw std::invalid_argument(std::string(kind.name) + ": draw '" + std::string(item) + "' has no value");
+    const std::string_view alt = alts[std::uniform_int_distribution<std::size_t>(0, alts.size() - 1)(rng)];
+    const std::string value = draw_alternative(kind.name, alt, rng);
+    if (duration) {
+      d.duration_s = parse_seconds(value, "drawn duration", kind.draws);
+    } else {
+      check_choice(kind.draws, kind.name, name, value);
+      d.params[name] = value;
+    }
+  }
+  return d;
+}
+
 std::vector<FaultEvent> random_campaign(std::span<const std::string> allowed, std::span<const Device> devices,
-                                        double rate_per_min, double horizon_s, std::uint64_t seed) {
+                                        double rate_per_min, double horizon_s, std::uint64_t seed, bool draw_params) {
   std::mt19937_64 rng(seed);
   // The kinds a device here can take, in the vocabulary's order (a stable plan for a seed).
   std::vector<const KindInfo*> pool;
@@ -283,6 +337,14 @@ std::vector<FaultEvent> random_campaign(std::span<const std::string> allowed, st
   };
   // Leave the first and last seconds quiet: the rig starts and ends without a fault.
   const double lo = std::min(2.0, horizon_s * 0.1), hi = std::max(lo, horizon_s - std::min(3.0, horizon_s * 0.1));
+  // A drawn duration is at most a quarter of the horizon (a short campaign is not one long fault),
+  // or the kind's default where that is longer.
+  auto event_of = [&](const KindInfo& k, const std::string& device, double at) {
+    if (!draw_params) return FaultEvent{0, std::string(k.name), device, at, k.default_duration_s, default_params(k)};
+    Drawn d = draw(k, rng);
+    d.duration_s = std::min(d.duration_s, std::max(k.default_duration_s, horizon_s / 4));
+    return FaultEvent{0, std::string(k.name), device, at, d.duration_s, std::move(d.params)};
+  };
   std::vector<FaultEvent> out;
   // Every kind once, at random times (shuffled order), then Poisson arrivals of random kinds.
   std::vector<const KindInfo*> order = pool;
@@ -293,7 +355,9 @@ std::vector<FaultEvent> random_campaign(std::span<const std::string> allowed, st
       out.push_back(FaultEvent{0, std::string(k->name), device_for(*k), 0.0, 0.0, default_params(*k)});
       continue;
     }
-    out.push_back(FaultEvent{0, std::string(k->name), device_for(*k), when(rng), k->default_duration_s, default_params(*k)});
+    const std::string device = device_for(*k);
+    const double at = when(rng);
+    out.push_back(event_of(*k, device, at));
   }
   std::exponential_distribution<double> gap(rate_per_min / 60.0);
   std::vector<const KindInfo*> repeatable;
@@ -301,7 +365,7 @@ std::vector<FaultEvent> random_campaign(std::span<const std::string> allowed, st
     if (k->name != "camera.never_answers") repeatable.push_back(k);
   for (double t = lo + gap(rng); t < hi && !repeatable.empty(); t += gap(rng)) {
     const KindInfo* k = repeatable[std::uniform_int_distribution<std::size_t>(0, repeatable.size() - 1)(rng)];
-    out.push_back(FaultEvent{0, std::string(k->name), device_for(*k), t, k->default_duration_s, default_params(*k)});
+    out.push_back(event_of(*k, device_for(*k), t));
   }
   std::stable_sort(out.begin(), out.end(), [](const FaultEvent& a, const FaultEvent& b) { return a.at_s < b.at_s; });
   for (std::size_t i = 0; i < out.size(); ++i) out[i].id = i + 1;

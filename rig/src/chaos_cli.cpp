@@ -17,8 +17,10 @@ std::string kinds_help() {
     const auto* k = faults::find_kind(kind);
     if (k == nullptr) continue;
     out += "  " + std::string(k->name) + (k->params.empty() ? "" : " (" + std::string(k->params) + ")") + ": " +
-           std::string(k->what) + "\n";
+           std::string(k->what) + (k->draws.empty() ? "" : " [random: " + std::string(k->draws) + "]") + "\n";
   }
+  out += "A random fault draws its parameters and duration from the kind's [random: ...] ranges (docs/faults.md), "
+         "with --default-params it takes the defaults in (...).\n";
   return out;
 }
 
@@ -35,6 +37,9 @@ void register_chaos_cli(CLI::App& app, cli::Context& ctx) {
                   "Fault specs, ';'-separated or repeated: with @START a fault at that time, without a kind placed at random "
                   "(default: every kind the mocks inject; 'none': a baseline without faults)");
   cmd->add_option("--rate", o->rate_per_min, "Random faults per minute (on top of one of each kind)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_flag("--default-params", o->default_params,
+                "Random faults take each kind's default parameters and duration, not draws from its ranges (the plans "
+                "of seeds before 2026-12-01)");
   cmd->add_flag("--json", o->json, "Last line on stdout: {\"faults\":..,\"topics\":..,\"invariants\":..}");
   cmd->add_option("--out", o->out_dir, "Keep the campaign here: plan.jsonl, truth/*.jsonl, monitor.csv, fused_sets.jsonl, judge.json, logs/");
   cmd->add_option("--judge", o->judge_dir,

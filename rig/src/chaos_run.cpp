@@ -205,6 +205,7 @@ std::vector<faults::FaultEvent> make_plan(const Options& o, const std::vector<fa
   if (o.faults.size() == 1 && o.faults.front() == "none") return {};
   std::vector<faults::FaultSpec> timed;
   std::vector<std::string> kinds;
+  std::map<std::string, faults::FaultSpec> given;  // untimed kinds given with parameters or a duration keep them
   for (const auto& item : o.faults) {
     // A list may also come as one argument separated by ';' or ','.
     std::string rest = item;
@@ -219,13 +220,23 @@ std::vector<faults::FaultEvent> make_plan(const Options& o, const std::vector<fa
       const faults::FaultSpec s = faults::parse_spec(one);
       if (!injected(s.kind)) throw std::invalid_argument("'" + one + "': no mock injects " + s.kind + " yet");
       if (one.find('@') != std::string::npos || one.find('~') != std::string::npos) timed.push_back(s);
-      else kinds.push_back(s.kind);
+      else {
+        kinds.push_back(s.kind);
+        const std::string head = one.substr(0, one.find_first_of("@+~>"));
+        if (head.find(':') != std::string::npos || one.find('+') != std::string::npos) given[s.kind] = s;
+      }
     }
   }
   std::vector<faults::FaultEvent> events = faults::expand(timed, devices, o.duration_s);
   if (timed.empty() || !kinds.empty()) {
     const std::vector<std::string> pool = kinds.empty() ? injected_kinds() : kinds;
-    auto random = faults::random_campaign(pool, devices, o.rate_per_min, o.duration_s, o.seed);
+    auto random = faults::random_campaign(pool, devices, o.rate_per_min, o.duration_s, o.seed, !o.default_params);
+    for (auto& e : random) {
+      const auto it = given.find(e.kind);
+      if (it == given.end()) continue;
+      e.params = it->second.params;  // what was given, the kind's defaults for the rest
+      e.duration_s = it->second.duration_s;
+    }
     events.insert(events.end(), random.begin(), random.end());
   }
   fit_to_models(events, cfg);

@@ -18,6 +18,7 @@ struct Options {
   std::uint64_t seed = 1;
   std::vector<std::string> faults;  // specs; without '@' a kind placed at random (seeded) times
   double rate_per_min = 10;
+  bool default_params = false;  // random faults take the kinds' defaults, not draws from their ranges
   bool json = false;
   std::string out_dir;   // keep the campaign (plan, truth, monitor record, logs) here
   double warmup_s = 5;   // rig up and the monitor start, DDS discovers: no fault yet

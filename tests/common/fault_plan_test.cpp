@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <random>
+#include <cmath>
 #include <set>
 
 #include "sensor_rig/common/fault_plan.hpp"
@@ -87,6 +89,102 @@ TEST(FaultPlan, RandomCampaignIsSeededAndHasEveryKind) {
   }
   EXPECT_EQ(kinds.size(), allowed.size());
   EXPECT_GT(a.size(), 20u) << "~30 per minute";
+}
+
+// Every kind's ranges parse, and each draw is a spec the parser takes (a drawn value is never one the
+// kind refuses), within the stated ranges; over many draws every alternative and both ends of each
+// range's quarters occur, so a range written wrong (or never used) fails here.
+TEST(FaultPlan, EveryKindDrawsItsParametersFromItsRanges) {
+  std::mt19937_64 rng(11);
+  for (const auto& k : faults::kinds()) {
+    std::map<std::string, std::set<std::string>> seen;
+    double shortest = 1e9, longest = -1;
+    for (int i = 0; i < 400; ++i) {
+      const faults::Drawn d = faults::draw(k, rng);
+      std::string spec(k.name);
+      for (const auto& [name, value] : d.params) {
+        spec += ":" + name + "=" + value;
+        seen[name].insert(value);
+      }
+      spec += "@1+" + std::to_string(d.duration_s);
+      EXPECT_NO_THROW(faults::parse_spec(spec)) << spec;
+      shortest = std::min(shortest, d.duration_s);
+      longest = std::max(longest, d.duration_s);
+    }
+    const std::string draws(k.draws);
+    if (draws.find('+') == std::string::npos) {
+      EXPECT_EQ(shortest, k.default_duration_s) << k.name << ": no duration drawn, the default kept";
+      EXPECT_EQ(longest, k.default_duration_s) << k.name;
+    } else {
+      EXPECT_LT(shortest, longest) << k.name << ": the duration is drawn";
+    }
+    for (const auto& [name, values] : seen) {
+      const bool drawn = draws.find(name + "=") != std::string::npos;
+      if (!drawn) EXPECT_EQ(values.size(), 1u) << k.name << ": " << name << " is not drawn, its default kept";
+      else EXPECT_GT(values.size(), 1u) << k.name << ": " << name << " is drawn";
+    }
+  }
+}
+
+TEST(FaultPlan, DrawsStayInTheirRangesAndUseEveryAlternative) {
+  const faults::KindInfo* delay = faults::find_kind("host.network_delay");
+  ASSERT_NE(delay, nullptr);
+  EXPECT_NE(std::string(delay->draws).find("ms=1..150"), std::string::npos) << delay->draws;
+  std::mt19937_64 rng(3);
+  int jitter_zero = 0, jitter_wide = 0, long_holds = 0, ms_low = 0, ms_high = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const auto d = faults::draw(*delay, rng);
+    const double ms = std::stod(d.params.at("ms")), jitter = std::stod(d.params.at("jitter_ms"));
+    EXPECT_GE(ms, 1);
+    EXPECT_LE(ms, 150);
+    EXPECT_EQ(ms, std::floor(ms)) << "whole numbers when both ends are";
+    EXPECT_GE(jitter, 0);
+    EXPECT_LE(jitter, 40);
+    EXPECT_GE(d.duration_s, 0.5);
+    EXPECT_LE(d.duration_s, 30);
+    jitter_zero += jitter == 0;
+    jitter_wide += jitter > 30;
+    long_holds += d.duration_s > 20;  // longer than the cameras' late confirmation by far (stop 51's defect)
+    ms_low += ms < 38;
+    ms_high += ms > 113;
+  }
+  EXPECT_GT(jitter_zero, 800) << "half the draws pick the alternative 0";
+  EXPECT_LT(jitter_zero, 1200);
+  EXPECT_GT(jitter_wide, 100);
+  EXPECT_GT(long_holds, 400);
+  EXPECT_GT(ms_low, 300);
+  EXPECT_GT(ms_high, 300);
+
+  const faults::KindInfo* chunk = faults::find_kind("camera.chunk_data");
+  ASSERT_NE(chunk, nullptr);
+  std::map<std::string, int> payloads;
+  for (int i = 0; i < 300; ++i) ++payloads[faults::draw(*chunk, rng).params.at("payload")];
+  EXPECT_EQ(payloads.size(), 3u) << "image, chunk and multipart";
+  for (const auto& [p, n] : payloads) EXPECT_GT(n, 60) << p;
+}
+
+// A random campaign draws: the same seed gives the same parameters, faults of one kind differ, and a
+// drawn duration is at most a quarter of the horizon. With draws off it is the plan of before.
+TEST(FaultPlan, RandomCampaignDrawsParametersUnlessAskedForDefaults) {
+  const std::vector<faults::Device> devices{{"front", faults::DeviceClass::kLidar, true}, {"cam", faults::DeviceClass::kCamera, false}};
+  const std::vector<std::string> allowed{"host.network_delay", "camera.chunk_data", "lidar.loss_burst"};
+  const auto a = faults::random_campaign(allowed, devices, 60, 40, 5);
+  const auto b = faults::random_campaign(allowed, devices, 60, 40, 5);
+  ASSERT_EQ(a.size(), b.size());
+  std::map<std::string, std::set<std::map<std::string, std::string>>> params_of;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].params, b[i].params);
+    EXPECT_EQ(a[i].duration_s, b[i].duration_s);
+    EXPECT_LE(a[i].duration_s, 10.0) << a[i].kind << ": at most a quarter of 40 s";
+    params_of[a[i].kind].insert(a[i].params);
+  }
+  for (const auto& [kind, sets] : params_of) EXPECT_GT(sets.size(), 1u) << kind << ": its faults differ";
+  const auto fixed = faults::random_campaign(allowed, devices, 60, 40, 5, false);
+  for (const auto& e : fixed) {
+    const auto* k = faults::find_kind(e.kind);
+    EXPECT_EQ(e.duration_s, k->default_duration_s) << e.kind;
+    EXPECT_EQ(e.params, faults::parse_spec(std::string(k->name)).params) << e.kind;
+  }
 }
 
 TEST(FaultPlan, FileRoundTripAndBadLines) {

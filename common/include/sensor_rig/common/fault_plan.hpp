@@ -11,6 +11,7 @@
 // name (default: every device of the class). Pure: no clock, no I/O but the plan file helpers.
 #include <cstdint>
 #include <map>
+#include <random>
 #include <span>
 #include <string>
 #include <string_view>
@@ -24,13 +25,20 @@ enum class DeviceClass { kLidar, kCamera, kV4l2, kDbw, kHost };
 std::string_view to_string(DeviceClass c) noexcept;
 
 // A kind of the vocabulary: its name, device class, parameters with defaults ("n=1,ms=0"), default
-// duration and what it does (for --help and docs/faults.md).
+// duration, what it does (for --help and docs/faults.md), and the ranges a random campaign draws its
+// parameters and duration from:
+//   DRAWS := ITEM [',' ITEM]...     ITEM := NAME '=' ALT ['|' ALT]...  |  '+' RANGE
+//   ALT   := VALUE | RANGE          RANGE := LO '..' HI
+// An alternative is picked with equal weight (repeat one to weigh it), a range uniformly (whole
+// numbers when both ends are); '+' is the duration's range in seconds. A parameter with no draw
+// keeps its default. "n=1..12,ms=0|0|2..30": n from 1 to 12; ms 0 two times in three, else 2-30.
 struct KindInfo {
   std::string_view name;
   DeviceClass device_class;
   std::string_view params;
   double default_duration_s;
   std::string_view what;
+  std::string_view draws;
 };
 std::span<const KindInfo> kinds();
 const KindInfo* find_kind(std::string_view name) noexcept;  // nullptr when unknown
@@ -80,11 +88,21 @@ struct Device {
 std::vector<FaultEvent> expand(std::span<const FaultSpec> specs, std::span<const Device> devices, double horizon_s);
 
 // A random campaign: `rate_per_min` faults per minute on average (Poisson), each of a kind from
-// `allowed` (empty: every kind a device here can take) on a device of its class, parameters from the
-// kind's defaults. Every allowed kind occurs at least once when the horizon leaves room for it.
-// Same seed, same plan.
+// `allowed` (empty: every kind a device here can take) on a device of its class, its parameters and
+// duration drawn from the kind's `draws` (a duration at most a quarter of the horizon, or the kind's
+// default if that is longer), or the kind's defaults when `draw_params` is false. Every allowed kind
+// occurs at least once when the horizon leaves room for it. Same seed, same plan.
 std::vector<FaultEvent> random_campaign(std::span<const std::string> allowed, std::span<const Device> devices,
-                                        double rate_per_min, double horizon_s, std::uint64_t seed);
+                                        double rate_per_min, double horizon_s, std::uint64_t seed,
+                                        bool draw_params = true);
+
+// One draw of a kind's parameters and duration from its `draws` (the defaults where it draws none).
+// Throws std::invalid_argument when the kind's draws do not parse (a test holds every kind's).
+struct Drawn {
+  std::map<std::string, std::string> params;
+  double duration_s = 0.0;
+};
+Drawn draw(const KindInfo& kind, std::mt19937_64& rng);
 
 // Plan files: JSON Lines. First line {"fault_plan":1,"epoch_mono_ns":N}: CLOCK_MONOTONIC at t = 0
 // (every process of the rig on one host shares it, and it does not step with CLOCK_REALTIME); then one
