@@ -118,7 +118,7 @@ void check_choice(std::string_view spec, std::string_view kind, std::string_view
 }
 
 // A draw's text: one value, or LO..HI drawn uniformly (whole numbers when both ends are).
-std::string draw_alternative(std::string_view kind, std::string_view alt, std::mt19937_64& rng) {
+std::string draw_alternative(std::string_view kind, std::string_view alt, std::mt19937_64& rng, bool whole_allowed = true) {
   const auto dots = alt.find("..");
   if (dots == std::string_view::npos) return std::string(alt);
   const std::string_view lo_text = alt.substr(0, dots), hi_text = alt.substr(dots + 2);
@@ -128,7 +128,7 @@ std::string draw_alternative(std::string_view kind, std::string_view alt, std::m
   if (a.ec != std::errc{} || a.ptr != lo_text.data() + lo_text.size() || b.ec != std::errc{} ||
       b.ptr != hi_text.data() + hi_text.size() || !(lo <= hi))
     throw std::invalid_argument(std::string(kind) + ": draw '" + std::string(alt) + "' is not LO..HI with LO <= HI");
-  const bool whole = lo_text.find('.') == std::string_view::npos && hi_text.find('.') == std::string_view::npos;
+  const bool whole = whole_allowed && lo_text.find('.') == std::string_view::npos && hi_text.find('.') == std::string_view::npos;
   if (whole)
     return std::to_string(std::uniform_int_distribution<long long>(std::llround(lo), std::llround(hi))(rng));
   const double v = std::uniform_real_distribution<double>(lo, hi)(rng);
@@ -297,7 +297,7 @@ Drawn draw(const KindInfo& kind, std::mt19937_64& rng) {
     }
     if (alts.empty()) throw std::invalid_argument(std::string(kind.name) + ": draw '" + std::string(item) + "' has no value");
     const std::string_view alt = alts[std::uniform_int_distribution<std::size_t>(0, alts.size() - 1)(rng)];
-    const std::string value = draw_alternative(kind.name, alt, rng);
+    const std::string value = draw_alternative(kind.name, alt, rng, !duration);  // a duration is never whole seconds only
     if (duration) {
       d.duration_s = parse_seconds(value, "drawn duration", kind.draws);
     } else {

@@ -185,7 +185,7 @@ const std::map<std::string, ReaderFactory, std::less<>>& known_types() {
       // The cameras announce their JPEGs on /rig/stamps (drivers/camera image_outputs.cpp): the monitor
       // reads them to join each with its stamps, so a JPEG announced and never delivered is lost here.
       // (Not reading them would not make them lost: stamps of a topic without a reader are never
-      // counted, TopicStats::counting_since, but then nobody would count what the rig lost of them.)
+      // counted, TopicStats::counting, but then nobody would count what the rig lost of them.)
       // Copied by dds_take (header stamp, format, size; no view parser for CompressedImage): a JPEG
       // is a fraction of its image_raw frame, which the monitor reads in place.
       {"sensor_msgs::msg::dds_::CompressedImage_", factory<TypedReader<msg::CompressedImage>>()},
@@ -298,7 +298,7 @@ class Monitor {
           // its sequence numbers skip by design.
           auto [it, first] = next_seq_.try_emplace({name, info.publication_handle}, s.seq + 1);
           if (!first && name.rfind("/sensors/", 0) == 0) {
-            if (s.seq > it->second && s.publish_ns >= st.counting_since) {
+            if (s.seq > it->second && st.counting.admits(s.publish_ns)) {
               st.lost += s.seq - it->second;
               st.seq_gaps += s.seq - it->second;
             }
@@ -392,7 +392,7 @@ class Monitor {
       const ReaderFactory& make = copying != copying_types().end() ? copying->second : it->second;
       readers_.emplace(ros, make(participant_, ros, reader_qos(pub.reliability), waitset_));
       // Samples published before the new reader matches are not ours to count.
-      topic(ros).counting_since = vehicle_now_ns() + kMatchDelayNs;
+      topic(ros).counting.since = vehicle_now_ns() + kMatchDelayNs;
     }
   }
 

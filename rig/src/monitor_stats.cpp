@@ -41,7 +41,7 @@ void TopicStats::on_data(Nanos stamp, std::size_t size, const Arrival& a) {
 
 void TopicStats::on_stamps(const msg::SourceStamps& s, Nanos now) {
   has_stamps = true;
-  if (s.publish_ns < counting_since) return;
+  if (!counting.admits(s.publish_ns)) return;
   source_drops += s.dropped;
   missing_packets += s.missing_packets;
   SampleRecord r;
@@ -140,7 +140,7 @@ void TopicStats::expire(Nanos now, Nanos loss_timeout_ns) {
       ++it;
       continue;
     }
-    if (has_stamps && it->second.publish_ns >= counting_since) ++unstamped;  // its stamps were lost
+    if (has_stamps && counting.admits(it->second.publish_ns)) ++unstamped;  // its stamps were lost
     it = unmatched_data.erase(it);
   }
   // A sample later than 5 loss timeouts is not coming: forget it (bounded memory).

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "sample_record.hpp"
+#include "counting_gate.hpp"
 #include "sensor_rig/common/latency_window.hpp"
 #include "sensor_rig/dds/types.hpp"
 
@@ -77,7 +78,7 @@ struct TopicStats {
   std::map<std::uint64_t, SampleRecord> decided_by_seq;  // by seq, until the samples before are decided
   bool has_stamps = false;
   // Stamps published before this monitor subscribed to the data topic cannot be matched: ignored.
-  Nanos counting_since = std::numeric_limits<Nanos>::max();
+  CountingGate counting;
   // Called once per stamped sample, joined with its data or declared lost, in seq order: a sample
   // waits for the ones before it to be decided.
   std::function<void(const SampleRecord&)> on_record;

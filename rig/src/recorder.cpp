@@ -1,5 +1,7 @@
 #include "recorder.hpp"
 
+#include "counting_gate.hpp"
+
 #include <atomic>
 #include <cinttypes>
 #include <cstdio>
@@ -35,9 +37,9 @@ struct RecordTopic {
   // Of those received, how many came in an iceoryx chunk (recorded from the chunk itself): the
   // summary's proof that --transport shm took the shared-memory path, not the network.
   std::uint64_t from_shared_memory = 0;
-  // Announced on /rig/stamps from counting_since on (vehicle ns) and never received: what DDS lost
+  // Announced on /rig/stamps from counting.since on (vehicle ns) and never received: what DDS lost
   // without saying (record_gaps.hpp's AnnouncedSamples counts it: missed, unannounced, overflow).
-  Nanos counting_since = 0;
+  CountingGate counting;
   // Writer thread (read by the DDS thread for progress):
   std::atomic<std::uint64_t> written{0}, disk_dropped{0}, queued{0};
   std::size_t channel = 0;  // writer thread only
@@ -199,7 +201,7 @@ class Recorder {
     if (it == known_.end() || it->second == nullptr) return;
     // Samples written before this recorder's reader of the topic matched are not ours to miss (their
     // seq still tells where the topic's sequence stands).
-    announced_.on_announced(it->first, a->stamp, a->seq, now, a->publish_ns >= it->second->counting_since, a->published);
+    announced_.on_announced(it->first, a->stamp, a->seq, now, it->second->counting.admits(a->publish_ns), a->published);
   }
 
   void discover() {
@@ -239,7 +241,7 @@ class Recorder {
       RecordTopic& t = topics_.emplace_back();
       t.ros_name = ros;
       t.reliable = pub.reliability == dds::QosSpec::Reliability::kReliable;
-      t.counting_since = vehicle_now_ns() + kMatchDelayNs;
+      t.counting.since = vehicle_now_ns() + kMatchDelayNs;
       t.spec = {ros, type->schema_name, "ros2msg", type->schema, "cdr", {{"offered_qos_profiles", offered_qos_profiles({offered})}}};
       t.reader = std::make_unique<dds::RawReader>(participant_, pub.topic, *type, q);
       waitset_.attach_reader(t.reader->handle(), static_cast<std::int64_t>(topics_.size() - 1));

@@ -42,7 +42,7 @@ struct Recorded {
   std::vector<SampleRecord> rows;
   Recorded() {
     st.name = "/sensors/lidar/front/points";
-    st.counting_since = 0;
+    st.counting.since = 0;
     st.on_record = [this](const SampleRecord& r) { rows.push_back(r); };
   }
 };
@@ -166,12 +166,39 @@ TEST(CameraDrops, LostSamplesAreAttributedToWriterAndReaderFirst) {
 
 TEST(MonitorStats, StampsBeforeSubscribingAreNotCountedNorRecorded) {
   Recorded t;
-  t.st.counting_since = stamp_of(2);
+  t.st.counting.since = stamp_of(2);
   t.st.on_stamps(stamps(0), stamp_of(0));
   t.st.expire(stamp_of(0) + 10'000 * kMs, 2000 * kMs);
   EXPECT_EQ(t.st.lost, 0u);
   EXPECT_TRUE(t.rows.empty());
   EXPECT_TRUE(t.st.has_stamps);
+}
+
+// Once a stamp published after the reader matched has come, every later one counts: a host clock
+// stepped back further than the monitor had run put the publish times of every stamp during the step
+// before counting.since, and the monitor ignored them (a -37 s step: 50 scans of each LIDAR
+// "neither published nor counted lost").
+TEST(MonitorStats, AClockStepBackAfterCountingBeganStillCountsAndRecords) {
+  Recorded t;
+  t.st.counting.since = stamp_of(2);
+  t.st.on_stamps(stamps(2), stamp_of(2));
+  t.st.on_data(stamp_of(2), 1000, arrival(2));
+  ASSERT_EQ(t.rows.size(), 1u);
+  // The host clock steps back 37 s: the next stamps are published "before" counting began.
+  constexpr Nanos kStep = 37'000 * kMs;
+  for (std::uint64_t seq = 3; seq < 6; ++seq) {
+    auto s = stamps(seq);
+    s.publish_ns -= kStep;
+    s.written_ns -= kStep;
+    t.st.on_stamps(s, stamp_of(seq) - kStep);
+    if (seq != 4) t.st.on_data(stamp_of(seq), 1000, Arrival{arrival(seq).receive_ns - kStep, arrival(seq).publish_ns - kStep});
+  }
+  t.st.expire(stamp_of(4) - kStep + 10'000 * kMs, 2000 * kMs);
+  EXPECT_EQ(t.st.lost, 1u) << "seq 4 never came: lost, not ignored";
+  t.st.release_all();
+  ASSERT_EQ(t.rows.size(), 4u) << "seq 3 and 5 recorded, seq 4 recorded lost";
+  EXPECT_EQ(t.rows[1].seq, 3u);
+  EXPECT_EQ(t.rows[3].seq, 5u);
 }
 
 TEST(MonitorStats, ReleaseAllAtTheEndKeepsUndecidedOut) {

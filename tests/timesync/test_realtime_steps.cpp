@@ -37,6 +37,53 @@ TEST(MonotonicStamps, HeldStampsStayDistinct) {
   EXPECT_EQ(n.apply(5 * kMs), 5 * kMs + 1) << "an equal raw stamp is held 1 ns on";
 }
 
+// A step back undone by a step forward while its correction is still being slewed out: the forward
+// jump of the raw stamps takes the correction back at once, so the stamps are vehicle time again
+// (a -37 s step for 5 s left the LIDARs' and cameras' stamps 32.7 s, then 0.57 s, off and
+// unflagged for minutes: the forward jump only slewed a tenth of itself off the correction).
+TEST(MonotonicStamps, AStepBackUndoneTakesItsCorrectionBackAtOnce) {
+  for (const Nanos step : {500 * kMs, 37'000 * kMs}) {
+    MonotonicStamps m(0.1);
+    Nanos truth = 1000 * kMs, last = m.apply(truth);
+    m.realtime_step(-step);
+    for (int i = 0; i < 50; ++i) {  // 5 s of the step: the raw stamps are `step` behind the truth
+      truth += 100 * kMs;
+      const Nanos out = m.apply(truth - step);
+      EXPECT_GT(out, last);
+      last = out;
+    }
+    EXPECT_GT(m.status().correction_ns, step - 600 * kMs) << "held, then slewed at 0.1: about 0.5 s taken off";
+    m.realtime_step(step);  // undone
+    for (int i = 0; i < 10; ++i) {
+      truth += 100 * kMs;
+      const Nanos out = m.apply(truth);
+      EXPECT_GT(out, last) << "never backwards";
+      EXPECT_EQ(out, truth) << step << ": vehicle time again from the first stamp after the step forward, " << i;
+      last = out;
+    }
+    EXPECT_EQ(m.status().correction_ns, 0);
+  }
+  // The mapping follows the forward step a few stamps later (the detector saw it first): the same.
+  MonotonicStamps m(0.1);
+  Nanos truth = 1000 * kMs;
+  (void)m.apply(truth);
+  m.realtime_step(-2000 * kMs);
+  for (int i = 0; i < 20; ++i) (void)m.apply((truth += 100 * kMs) - 2000 * kMs);
+  m.realtime_step(2000 * kMs);
+  (void)m.apply((truth += 100 * kMs) - 2000 * kMs);
+  (void)m.apply((truth += 100 * kMs) - 2000 * kMs);
+  EXPECT_EQ(m.apply(truth += 100 * kMs), truth);
+  // A plain step forward with no correction standing passes as before, and a later step back is
+  // still absorbed.
+  MonotonicStamps f(0.1);
+  (void)f.apply(1000 * kMs);
+  f.realtime_step(3000 * kMs);
+  EXPECT_EQ(f.apply(4100 * kMs), 4100 * kMs);
+  f.realtime_step(-1000 * kMs);
+  EXPECT_EQ(f.apply(3200 * kMs), 4100 * kMs + 1);
+  EXPECT_EQ(f.status().backward_steps, 1u);
+}
+
 TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
   MonotonicStamps m(0.1);
   EXPECT_EQ(m.apply(1000 * kMs), 1000 * kMs);

@@ -16,16 +16,26 @@ void MonotonicStamps::reset() noexcept {
   have_ = false;
   st_.correction_ns = 0;
   allowance_ = 0;
+  forward_ = 0;
 }
 
 void MonotonicStamps::realtime_step(Nanos step_ns) noexcept {
-  if (step_ns >= 0) return;  // forward: the stamps jump forward, nothing to hold
-  allowance_ += -step_ns;
+  if (step_ns == 0) return;
+  if (step_ns > 0) {
+    // Forward: it first cancels a step back not yet absorbed; the rest may take back a correction
+    // still being slewed out, when the raw stamps jump (apply). The stamps jump forward by what is
+    // left, still monotonic.
+    const Nanos cancel = std::min(allowance_, step_ns);
+    allowance_ -= cancel;
+    forward_ += step_ns - cancel;
+  } else {
+    allowance_ += -step_ns;
+  }
   allowance_dated_ = false;  // dated by the next stamp (raw time, not the caller's clock)
 }
 
 Nanos MonotonicStamps::apply(Nanos raw) noexcept {
-  if (allowance_ > 0 && !allowance_dated_) {
+  if ((allowance_ > 0 || forward_ > 0) && !allowance_dated_) {
     allowance_until_ = raw + kAllowanceForNs;
     allowance_dated_ = true;
   }
@@ -35,9 +45,17 @@ Nanos MonotonicStamps::apply(Nanos raw) noexcept {
     last_raw_ = last_out_ = raw;
     return raw;
   }
-  const Nanos d = raw - last_raw_;
+  const Nanos d = raw - last_raw_, last_raw_before = last_raw_;
   last_raw_ = raw;
   Nanos& c = st_.correction_ns;
+  if (forward_ > 0 && d > threshold_ && d * 2 >= forward_) {  // a jump of about the step's size (at least half)
+    // The mapping follows a host step forward (a step back being undone): the correction that held
+    // the stamps through the step back goes with it, instead of being slewed out at slew_ of a jump
+    // it no longer needs (-37 s then +37 s left 36 s to slew: stamps 32.7 s off for minutes).
+    if (last_raw_before <= allowance_until_) c -= std::min({c, d, forward_});
+    forward_ = 0;
+  }
+  if (forward_ > 0 && raw > allowance_until_) forward_ = 0;  // the mapping never followed it
   if (d > 0 && c > 0) c -= std::min(c, static_cast<Nanos>(std::ceil(slew_ * static_cast<double>(d))));
   Nanos out = raw + c;
   if (out <= last_out_) {

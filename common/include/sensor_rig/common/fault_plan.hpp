@@ -30,8 +30,9 @@ std::string_view to_string(DeviceClass c) noexcept;
 //   DRAWS := ITEM [',' ITEM]...     ITEM := NAME '=' ALT ['|' ALT]...  |  '+' RANGE
 //   ALT   := VALUE | RANGE          RANGE := LO '..' HI
 // An alternative is picked with equal weight (repeat one to weigh it), a range uniformly (whole
-// numbers when both ends are); '+' is the duration's range in seconds. A parameter with no draw
-// keeps its default. "n=1..12,ms=0|0|2..30": n from 1 to 12; ms 0 two times in three, else 2-30.
+// numbers when both ends are); '+' is the duration's range in seconds (any number within it). A
+// parameter with no draw keeps its default. "n=1..12,ms=0|0|2..30": n from 1 to 12; ms 0 two times
+// in three, else 2-30.
 struct KindInfo {
   std::string_view name;
   DeviceClass device_class;

@@ -5,7 +5,8 @@
 // RealtimeStepDetector), this filter turns the backward jump of the mapped stamps into a
 // correction that is slewed out at `slew_fraction` of the elapsed time (0.1: stamps advance at
 // 0.9x real rate until they are vehicle time again; a 1 s step back takes 10 s). Steps forward
-// pass at once (stamps jump forward: still monotonic). Backward moves below the step threshold
+// pass at once (stamps jump forward: still monotonic), and first take back what is left of a
+// correction (a step back undone: the stamps are vehicle time again at once). Backward moves below the step threshold
 // (mapping refits) are held the same way; a large backward jump with no host step behind it is the
 // device's own (a glitch or a clock reset): passed through and counted, never slewed for seconds.
 // Pure: stamps in, stamps out.
@@ -29,7 +30,8 @@ class MonotonicStamps {
   // Throws std::invalid_argument unless 0 < slew_fraction < 1 and step_threshold_ns >= 0.
   explicit MonotonicStamps(double slew_fraction = 0.1, Nanos step_threshold_ns = 1'000'000);
   // CLOCK_REALTIME was stepped by `step_ns` (RealtimeStepDetector::observe()'s value); a step back
-  // lets the next backward jump of about its size be absorbed (within `kAllowanceForNs` of raw time).
+  // lets the next backward jump of about its size be absorbed, a step forward the next forward jump
+  // take back the correction (each within `kAllowanceForNs` of raw time).
   void realtime_step(Nanos step_ns) noexcept;
   // The stamp to publish for the raw (mapped) stamp `raw_ns`.
   Nanos apply(Nanos raw_ns) noexcept;
@@ -45,6 +47,7 @@ class MonotonicStamps {
   Nanos last_raw_ = 0;
   Nanos last_out_ = 0;
   Nanos allowance_ = 0;        // size of an announced step back not yet absorbed
+  Nanos forward_ = 0;          // size of an announced step forward not yet seen in the raw stamps
   Nanos allowance_until_ = 0;  // raw time it expires (set at the first stamp after the step)
   bool allowance_dated_ = false;
   MonotonicStampsStatus st_;
