@@ -64,7 +64,7 @@ void DiagnosticsLog::run() {
         256);
     reader.take(
         [&](const msg::DiagnosticArray& a, const dds_sample_info_t&) {
-          const Nanos t = msg::from_time(a.header.stamp);
+          const Nanos t = msg::from_time(a.header.stamp), received = monotonic_now_ns();
           for (std::uint32_t i = 0; i < a.status._length; ++i) {
             const auto& st = a.status._buffer[i];
             if (st.name != nullptr && st.message != nullptr && watched_message(st.name)) {
@@ -81,14 +81,14 @@ void DiagnosticsLog::run() {
               if (key == "topic") topic_value = kv.value;
               if (st.name != nullptr && watched_counter(st.name, key)) {
                 std::lock_guard lock(mutex_);
-                counters_[std::string(st.name) + "/" + kv.key].emplace_back(t, std::strtoull(kv.value, nullptr, 10));
+                counters_[std::string(st.name) + "/" + kv.key].emplace_back(received, std::strtoull(kv.value, nullptr, 10));
               }
             }
-            if (!flagged) continue;
             const std::string topic_name = status_topic(st.name != nullptr ? st.name : "", topic_value);
             if (topic_name.empty()) continue;
             std::lock_guard lock(mutex_);
-            flagged_[topic_name].push_back(t);
+            flagged_.on_status(topic_name, t, received, flagged);
+            if (!flagged) continue;
             const std::string message = st.message != nullptr ? st.message : "";
             if (auto& last = last_reason_[topic_name]; last != message) {
               last = message;
@@ -105,16 +105,19 @@ std::vector<FusedSet> DiagnosticsLog::fused_sets() const {
   return fused_sets_;
 }
 
-std::uint64_t DiagnosticsLog::counter_delta(const std::string& status, const std::string& key, Nanos begin, Nanos end) const {
-  std::lock_guard lock(mutex_);
-  const auto it = counters_.find(status + "/" + key);
-  if (it == counters_.end()) return 0;
+std::uint64_t counter_delta(const std::vector<std::pair<Nanos, std::uint64_t>>& statuses, Nanos begin, Nanos end) {
   std::uint64_t at_begin = 0, at_end = 0;
-  for (const auto& [t, v] : it->second) {
-    if (t <= begin) at_begin = v;
-    if (t <= end) at_end = v;
+  for (const auto& [received, v] : statuses) {
+    if (received <= begin) at_begin = v;
+    if (received <= end) at_end = v;
   }
   return at_end - std::min(at_end, at_begin);
+}
+
+std::uint64_t DiagnosticsLog::counter_delta(const std::string& status, const std::string& key, Nanos begin_mono, Nanos end_mono) const {
+  std::lock_guard lock(mutex_);
+  const auto it = counters_.find(status + "/" + key);
+  return it == counters_.end() ? 0 : chaos::counter_delta(it->second, begin_mono, end_mono);
 }
 
 std::vector<std::pair<Nanos, std::string>> DiagnosticsLog::messages(const std::string& status) const {
@@ -131,18 +134,38 @@ std::vector<DiagnosticsLog::FlagReason> DiagnosticsLog::flag_reasons() const {
   return flag_reasons_;
 }
 
-std::map<std::string, Intervals> DiagnosticsLog::unsynchronized() const {
-  std::lock_guard lock(mutex_);
+void FlagSpans::on_status(const std::string& topic, Nanos stamp, Nanos received_mono, bool flagged) {
+  // Reception is polled (100 ms) and DDS adds its latency: a difference beyond this is a step.
+  constexpr Nanos kStepSeen = 300'000'000;
+  const auto prev = last_.find(topic);
+  if (flagged) {
+    auto& spans = spans_[topic];
+    spans.emplace_back(stamp - kBefore, stamp + kAfter);
+    if (prev != last_.end()) {
+      const Nanos elapsed = received_mono - prev->second.mono, moved = stamp - prev->second.stamp;
+      if (elapsed > 0 && (moved - elapsed > kStepSeen || elapsed - moved > kStepSeen))
+        spans.emplace_back(prev->second.stamp, prev->second.stamp + elapsed);
+    }
+  }
+  last_.insert_or_assign(topic, Seen{stamp, received_mono});
+}
+
+std::map<std::string, Intervals> FlagSpans::intervals() const {
   std::map<std::string, Intervals> out;
-  for (auto [topic, stamps] : flagged_) {
-    std::sort(stamps.begin(), stamps.end());
+  for (auto [topic, spans] : spans_) {
+    std::sort(spans.begin(), spans.end());
     Intervals& iv = out[topic];
-    for (const Nanos t : stamps) {
-      if (!iv.empty() && t - kBefore <= iv.back().second) iv.back().second = std::max(iv.back().second, t + kAfter);
-      else iv.emplace_back(t - kBefore, t + kAfter);
+    for (const auto& [b, e] : spans) {
+      if (!iv.empty() && b <= iv.back().second) iv.back().second = std::max(iv.back().second, e);
+      else iv.emplace_back(b, e);
     }
   }
   return out;
+}
+
+std::map<std::string, Intervals> DiagnosticsLog::unsynchronized() const {
+  std::lock_guard lock(mutex_);
+  return flagged_.intervals();
 }
 
 }  // namespace sensor_rig::rig::chaos

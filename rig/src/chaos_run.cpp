@@ -443,7 +443,8 @@ int run(const Options& o) {
     write_fused_sets((dir.path() / "fused_sets.jsonl").string(), in.fused.sets);
     // Scans the fusion node dropped: its counter from the last status before the window to the
     // first one a status period after it (a scan is counted when it comes, reported within a period).
-    in.fused.scans_dropped = diagnostics.counter_delta("fusion", "scans_dropped", in.window_begin_ns, in.window_end_ns + 1'500'000'000);
+    in.fused.scans_dropped =
+        diagnostics.counter_delta("fusion", "scans_dropped", plan.epoch_mono_ns + kLead, plan.epoch_mono_ns + window_ns + 1'500'000'000);
   }
   // Kept with the campaign, so that `rig chaos --judge DIR` can judge it again.
   write_judge_input((dir.path() / "judge.json").string(), in, campaign_errors);

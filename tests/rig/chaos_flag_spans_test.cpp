@@ -1,0 +1,78 @@
+// What the judge reads from the rig's /diagnostics across host clock steps: when a topic was flagged
+// (FlagSpans: a status covers the period before it in the time before the step too), and a counter's
+// growth in the window (counter_delta: in the order the statuses came).
+#include <gtest/gtest.h>
+
+#include "chaos_diagnostics.hpp"
+
+namespace sensor_rig::rig::chaos {
+namespace {
+
+constexpr Nanos kMs = 1'000'000;
+constexpr Nanos kS = 1000 * kMs;
+
+bool covered(const Intervals& iv, Nanos t) {
+  for (const auto& [b, e] : iv)
+    if (t >= b && t < e) return true;
+  return false;
+}
+
+TEST(FlagSpans, AFlaggedStatusCoversThePeriodBeforeItAndHalfAfter) {
+  FlagSpans f;
+  f.on_status("/t", 10 * kS, 100 * kS, false);
+  f.on_status("/t", 11 * kS, 101 * kS, true);
+  f.on_status("/t", 12 * kS, 102 * kS, false);
+  const auto iv = f.intervals().at("/t");
+  EXPECT_FALSE(covered(iv, 9 * kS + 400 * kMs));
+  EXPECT_TRUE(covered(iv, 9 * kS + 600 * kMs));
+  EXPECT_TRUE(covered(iv, 11 * kS + 400 * kMs));
+  EXPECT_FALSE(covered(iv, 11 * kS + 600 * kMs));
+  EXPECT_EQ(f.intervals().count("/other"), 0u);
+}
+
+// The host clock 37 s back from 5 s to 10 s (stamps of statuses during the step read -32 .. -27 s):
+// the status after the step forward covers the last moments before it, in the stepped time.
+TEST(FlagSpans, AStatusAfterAStepForwardCoversTheTimeBeforeTheStep) {
+  FlagSpans f;
+  constexpr Nanos kStep = 37 * kS;
+  f.on_status("/t", 9 * kS + 100 * kMs - kStep, 109 * kS + 100 * kMs, true);  // during the step
+  f.on_status("/t", 10 * kS + 100 * kMs, 110 * kS + 120 * kMs, true);         // after it (polled 20 ms late)
+  const auto iv = f.intervals().at("/t");
+  // Published at 9.9 s host time during the step (-27.1 s): covered, as is 9.6 s after the step.
+  EXPECT_TRUE(covered(iv, 9 * kS + 900 * kMs - kStep));
+  EXPECT_TRUE(covered(iv, 9 * kS + 600 * kMs));
+  // Without the status after the step, 9.9 s - 37 s is not covered: the status during the step
+  // covers its half period after, up to 9.6 s - 37 s.
+  FlagSpans plain;
+  plain.on_status("/t", 9 * kS + 100 * kMs - kStep, 0, true);
+  EXPECT_FALSE(covered(plain.intervals().at("/t"), 9 * kS + 900 * kMs - kStep));
+  // No step: statuses a period apart, received a period apart, add nothing beyond their own spans.
+  FlagSpans steady;
+  steady.on_status("/t", 1 * kS, 50 * kS, true);
+  steady.on_status("/t", 2 * kS, 51 * kS + 90 * kMs, true);
+  EXPECT_EQ(steady.intervals().at("/t"), (Intervals{{-500 * kMs, 2 * kS + 500 * kMs}}));
+}
+
+// A step back between two statuses: the later status (stamped in the repeated time) covers the
+// time after the previous one too.
+TEST(FlagSpans, AStatusAfterAStepBackCoversTheTimeAfterThePreviousStatus) {
+  FlagSpans f;
+  f.on_status("/t", 20 * kS, 200 * kS, false);
+  f.on_status("/t", 21 * kS - 2 * kS, 201 * kS, true);  // the host stepped back 2 s in between
+  const auto iv = f.intervals().at("/t");
+  EXPECT_TRUE(covered(iv, 20 * kS + 800 * kMs)) << "published just before the step, flagged by the status after it";
+  EXPECT_TRUE(covered(iv, 18 * kS + 500 * kMs));
+}
+
+// The fusion's scans_dropped between the window's edges, by when each status came (CLOCK_MONOTONIC),
+// never by its stamp: statuses stamped while the host clock stood 37 s back came within the window.
+TEST(CounterDelta, GrowthBetweenTheStatusesThatCameAtTheEdges) {
+  const std::vector<std::pair<Nanos, std::uint64_t>> came{{1 * kS, 2}, {2 * kS, 3}, {3 * kS, 20}, {4 * kS, 40}, {5 * kS, 41}, {6 * kS, 41}};
+  EXPECT_EQ(counter_delta(came, 2 * kS, 10 * kS), 38u) << "from 3 (at 2 s) to 41";
+  EXPECT_EQ(counter_delta(came, 2 * kS + 500 * kMs, 4 * kS), 37u);
+  EXPECT_EQ(counter_delta(came, 0, 10 * kS), 41u);
+  EXPECT_EQ(counter_delta({}, 0, kS), 0u);
+}
+
+}  // namespace
+}  // namespace sensor_rig::rig::chaos
