@@ -120,6 +120,7 @@ namespace {
 // before the step), or the return of one forward at `until` (in the clock as it was), and its size.
 struct StepBack {
   Nanos at, step;
+  Nanos read_from;  // the earliest host time read before the step back: [max(at - step, read_from), at) is read twice
 };
 std::vector<StepBack> steps_back(const std::vector<truth::Log>& truths) {
   std::vector<StepBack> out;
@@ -129,8 +130,11 @@ std::vector<StepBack> steps_back(const std::vector<truth::Log>& truths) {
       const auto pos = f.detail.find("ms=");
       if (pos == std::string::npos) continue;
       const Nanos by = static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6);
-      if (by < 0) out.push_back({f.at_ns, -by});
-      if (by > 0) out.push_back({f.until_ns + by, by});
+      if (by < 0) out.push_back({f.at_ns, -by, f.at_ns + by});
+      // Forward at its start (from at_ns to at_ns + by, skipping what lies between), back at its
+      // end: only the time the host read during the step is read again (a +37 s step for 5 s
+      // doubles 5 s, not 37: the 32 s it skipped were judged "read twice" and left out).
+      if (by > 0) out.push_back({f.until_ns + by, by, f.at_ns + by});
     }
   return out;
 }
@@ -140,7 +144,7 @@ std::vector<StepBack> steps_back(const std::vector<truth::Log>& truths) {
 // The host's clock read [at - step, at) a second time after each step back.
 std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths) {
   std::vector<Interval> out;
-  for (const auto& s : steps_back(truths)) out.push_back({s.at - s.step, s.at});
+  for (const auto& s : steps_back(truths)) out.push_back({std::max(s.at - s.step, s.read_from), s.at});
   return out;
 }
 

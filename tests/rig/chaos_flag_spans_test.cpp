@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "chaos_diagnostics.hpp"
+#include "chaos_units.hpp"
 
 namespace sensor_rig::rig::chaos {
 namespace {
@@ -72,6 +73,25 @@ TEST(CounterDelta, GrowthBetweenTheStatusesThatCameAtTheEdges) {
   EXPECT_EQ(counter_delta(came, 2 * kS + 500 * kMs, 4 * kS), 37u);
   EXPECT_EQ(counter_delta(came, 0, 10 * kS), 41u);
   EXPECT_EQ(counter_delta({}, 0, kS), 0u);
+}
+
+// The host time read twice after a clock step: all of a step back's size when the host ran through
+// it before (a step back at its start), only what the host read during a step forward when that is
+// undone (a +37 s step for 5 s: 5 s read twice; the 32 s it skipped, read once, were left out of the
+// judge's counts and the LIDARs and cameras "never recovered").
+TEST(DoubledVehicleTime, AStepForwardUndoneDoublesOnlyTheTimeReadDuringIt) {
+  truth::Log log;
+  log.faults.push_back(truth::FaultRecord{1, "host.clock_step", 5 * kS, 10 * kS, -1, "ms=37000"});
+  log.faults.push_back(truth::FaultRecord{2, "host.clock_step", 100 * kS, 105 * kS, -1, "ms=-2000"});
+  log.faults.push_back(truth::FaultRecord{3, "host.clock_step", 200 * kS, 201 * kS, -1, "ms=3000"});
+  const auto doubled = doubled_vehicle_time({log});
+  ASSERT_EQ(doubled.size(), 3u);
+  EXPECT_EQ(doubled[0].begin, 42 * kS);
+  EXPECT_EQ(doubled[0].end, 47 * kS);
+  EXPECT_EQ(doubled[1].begin, 98 * kS) << "a step back at its start: the 2 s before it are read again";
+  EXPECT_EQ(doubled[1].end, 100 * kS);
+  EXPECT_EQ(doubled[2].begin, 203 * kS) << "a step of 3 s for 1 s: 1 s read again";
+  EXPECT_EQ(doubled[2].end, 204 * kS);
 }
 
 }  // namespace
