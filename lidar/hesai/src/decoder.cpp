@@ -104,6 +104,7 @@ struct DecoderImpl {
   bool window_open = false;  // between the window's start and the cut: points past the cut go to next()
   int prev_az = 0;
   Nanos prev_stamp = 0;  // the caller's
+  Nanos prev_rx = 0;  // the previous packet's receive time (0: none)
   // The caller's mapping of sensor time may move while the sensor's clock goes on (a host
   // CLOCK_REALTIME step: the mapping follows the host, a PTP-synced sensor does not): the stamps
   // jump, the tail times do not. That is no time jump (it cost the scan across it and a dropped
@@ -469,6 +470,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     // A late packet steps back in time too: placed when within the reorder window.
     const bool far_back = own < prev_own - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
+    in.dt_ns = sensor_step_within_receive(in.dt_ns, packet.rx_ns, prev_rx);  // nor one the receive times refute
     auto gap = detail::azimuth_gap(fov, in);
     if (gap.backwards) {  // the azimuth stepped back within the reorder window (packet_order.hpp)
       switch (judge_order({.steps_back = true,
@@ -572,6 +574,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   prev_stamp = stamp;
   prev_own = own;
   prev_sensor_us = sensor_us;
+  prev_rx = packet.rx_ns;
   scans.begin_packet();
   // Packets lost across the cut: those past it are the next scan's (issue 26 item 3).
   // Packets lost inside the cut's window have channels in both scans: missing in both, as a truth

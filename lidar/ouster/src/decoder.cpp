@@ -151,6 +151,7 @@ struct DecoderImpl {
   bool have_base = false;
   long prev_base = 0;          // measurement id of the previous packet's column 0
   std::uint64_t prev_ts = 0;   // its first valid column's sensor time
+  Nanos prev_rx = 0;           // ... and its receive time (0: none)
   long packets_per_frame = 1;
   LateHole hole;                // packet slots where the current scan last counted packets missing
   TimeJudge time_judge;
@@ -471,7 +472,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   bool opened = false;  // this packet opened a hole (a gap before it, inside its frame)
   if (n_valid > 0 && have_base && have_fid && !late) {
     const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
-    const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
+    const auto dt = sensor_step_within_receive(static_cast<std::int64_t>(first_ts - prev_ts), packet.rx_ns, prev_rx);
     const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
     if (dt <= 0) {  // a jump back in time (sensor restart, a looping replay): continuity starts over
       ++stats.implausible_steps;
@@ -518,6 +519,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     have_base = true;
     prev_base = base;
     prev_ts = first_ts;
+    prev_rx = packet.rx_ns;
   }
   PendingScan& cur = scans.current();
   if (late) {

@@ -100,6 +100,7 @@ struct DecoderImpl {
   int prev_az = 0;
   int last_gap = 0;  // azimuth advance of the last decoded block (hundredths of a degree)
   Nanos prev_stamp = 0;
+  Nanos prev_rx = 0;  // the previous packet's receive time (0: none)
   detail::AzimuthFov fov;
   int prev_trailing_bad = 0;       // groups after prev_az in the previous packet that were corrupt
   std::uint32_t prev_sensor_us = 0;  // the previous packet's own time (µs since the hour)
@@ -407,6 +408,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     // A late packet steps back in time too: placed when within the reorder window.
     const bool far_back = stamp < prev_stamp - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
+    in.dt_ns = sensor_step_within_receive(in.dt_ns, packet.rx_ns, prev_rx);  // nor one the receive times refute
     gap = detail::azimuth_gap(fov, in);
     if (gap.backwards) {  // the azimuth stepped back within the reorder window (packet_order.hpp)
       int last_good_k = groups - 1;
@@ -484,6 +486,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
 
   prev_stamp = stamp;
   prev_sensor_us = sensor_us;
+  prev_rx = packet.rx_ns;
   scans.begin_packet();
   if (fit.bad != 0) {
     const auto n = static_cast<std::uint32_t>(std::popcount(fit.bad));

@@ -1,7 +1,8 @@
 #pragma once
 // The LIDAR scan tests' stream: a synthetic sensor's genuine data packets (as the driver would
 // receive them, stamped with their first firing), and the scans and counters a decoder of the
-// registry makes of them, each packet received 0.1 ms after the last.
+// registry makes of them, each packet received 0.1 ms after the sensor sent it.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -20,6 +21,7 @@ struct Pkt {
   std::vector<std::byte> bytes;
   Nanos stamp = 0;  // first firing (what the driver's stamper gives)
   double rotor_deg = 0.0;
+  Nanos sent_ns = 0;  // when the sensor sent it (its truth; a test's changes to stamp or bytes leave it)
 };
 
 struct Stream {
@@ -47,7 +49,7 @@ inline Stream render(const std::string& model, double seconds, Nanos clock_ns = 
   while (s.pkts.size() < n) {
     const mock::SyntheticPacket p = s.sensor->next();
     if (!p.truth.data) continue;
-    s.pkts.push_back({std::vector<std::byte>(p.bytes.begin(), p.bytes.end()), p.truth.acq_ns, p.truth.rotor_deg});
+    s.pkts.push_back({std::vector<std::byte>(p.bytes.begin(), p.bytes.end()), p.truth.acq_ns, p.truth.rotor_deg, p.truth.acq_ns});
   }
   return s;
 }
@@ -75,9 +77,13 @@ struct Decoded {
 inline Decoded run(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
   const auto dec = make_decoder(o);
   Decoded r;
+  // Received 100 us after it was sent, in order (a packet moved later in the list arrives just after
+  // the one before it): the receive times bound the turns a gap in the sensor's time can hide
+  // (lidar/stream_gap.hpp turns_within_quiet), so they run at the sensor's pace, as a real stream's
+  // do. Packets without a send time (sent_ns 0), 0.1 ms after the last.
   Nanos rx = 1'000'000'000;
   for (const auto& p : pkts) {
-    rx += 100'000;
+    rx = p.sent_ns > 0 ? std::max(rx + 1, p.sent_ns + 100'000) : rx + 100'000;
     if (auto s = dec->push(PacketView{p.bytes, rx, 0}, p.stamp)) r.scans.push_back(std::move(*s));
   }
   r.st = dec->counters();
