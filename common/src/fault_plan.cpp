@@ -23,7 +23,7 @@ using DC = DeviceClass;
 constexpr std::array<KindInfo, 33> kKinds{{
     // LIDAR: what a real sensor and its network do to a packet stream.
     {"lidar.reorder", DC::kLidar, "n=1,ms=0", 0, "one packet sent n positions (or ms) after its successors", "n=1..12,ms=0|0|2..30"},
-    {"lidar.duplicate_late", DC::kLidar, "n=5", 0, "one packet sent again n packets later", "n=1..60"},
+    {"lidar.duplicate_late", DC::kLidar, "n=5", 0, "one packet sent again n packets later", "n=1..30"},
     {"lidar.loss_burst", DC::kLidar, "packets=10,at_cut=0", 0, "packets consecutive packets lost (at_cut=1: straddling a scan cut)", "packets=1..400,at_cut=0|1"},
     {"lidar.corrupt", DC::kLidar, "field=byte,offset=-1", 0,
      "one packet with one field changed: time, azimuth, frame_id, column_status, udp_seq or byte (offset -1 = random)", "field=time|azimuth|frame_id|column_status|udp_seq|byte"},

@@ -120,7 +120,7 @@ namespace {
 // before the step), or the return of one forward at `until` (in the clock as it was), and its size.
 struct StepBack {
   Nanos at, step;
-  Nanos read_from;  // the earliest host time read before the step back: [max(at - step, read_from), at) is read twice
+  Interval read_again;  // the host time read a second time after it
 };
 std::vector<StepBack> steps_back(const std::vector<truth::Log>& truths) {
   std::vector<StepBack> out;
@@ -130,21 +130,24 @@ std::vector<StepBack> steps_back(const std::vector<truth::Log>& truths) {
       const auto pos = f.detail.find("ms=");
       if (pos == std::string::npos) continue;
       const Nanos by = static_cast<Nanos>(std::strtod(f.detail.c_str() + pos + 3, nullptr) * 1e6);
-      if (by < 0) out.push_back({f.at_ns, -by, f.at_ns + by});
-      // Forward at its start (from at_ns to at_ns + by, skipping what lies between), back at its
-      // end: only the time the host read during the step is read again (a +37 s step for 5 s
-      // doubles 5 s, not 37: the 32 s it skipped were judged "read twice" and left out).
-      if (by > 0) out.push_back({f.until_ns + by, by, f.at_ns + by});
+      // Only the host time read again until the clock is stepped forward (the fault's end) is read
+      // twice: a step back of 37 s for 5 s doubles 5 s, not 37 (the first 20 s of a campaign,
+      // never read twice, were left out of the judge's counts: "no complete sample" after every
+      // fault there). A step forward (at its start, from at_ns to at_ns + by, skipping what lies
+      // between) then back at its end doubles the time read during it.
+      const Nanos span = f.until_ns - f.at_ns;
+      if (by < 0) out.push_back({f.at_ns, -by, {f.at_ns + by, f.at_ns + by + std::min(-by, span)}});
+      if (by > 0) out.push_back({f.until_ns + by, by, {std::max(f.at_ns + by, f.until_ns), f.until_ns + by}});
     }
   return out;
 }
 
 }  // namespace
 
-// The host's clock read [at - step, at) a second time after each step back.
+// The host time read a second time after each step back (StepBack::read_again).
 std::vector<Interval> doubled_vehicle_time(const std::vector<truth::Log>& truths) {
   std::vector<Interval> out;
-  for (const auto& s : steps_back(truths)) out.push_back({std::max(s.at - s.step, s.read_from), s.at});
+  for (const auto& s : steps_back(truths)) out.push_back(s.read_again);
   return out;
 }
 

@@ -75,20 +75,24 @@ TEST(CounterDelta, GrowthBetweenTheStatusesThatCameAtTheEdges) {
   EXPECT_EQ(counter_delta({}, 0, kS), 0u);
 }
 
-// The host time read twice after a clock step: all of a step back's size when the host ran through
-// it before (a step back at its start), only what the host read during a step forward when that is
-// undone (a +37 s step for 5 s: 5 s read twice; the 32 s it skipped, read once, were left out of the
-// judge's counts and the LIDARs and cameras "never recovered").
+// The host time read twice after a clock step: what the host read again until it was stepped
+// forward (a -37 s step for 5 s: 5 s, not 37; a +37 s step for 5 s, undone: the 5 s read during it).
+// Before, the whole step was taken as read twice, and what was made there was left out of the
+// judge's counts: the first 20 s of a campaign with a -37 s step at 20 s had "no complete sample"
+// after any fault, the 32 s a +37 s step skipped the same.
 TEST(DoubledVehicleTime, AStepForwardUndoneDoublesOnlyTheTimeReadDuringIt) {
   truth::Log log;
   log.faults.push_back(truth::FaultRecord{1, "host.clock_step", 5 * kS, 10 * kS, -1, "ms=37000"});
   log.faults.push_back(truth::FaultRecord{2, "host.clock_step", 100 * kS, 105 * kS, -1, "ms=-2000"});
   log.faults.push_back(truth::FaultRecord{3, "host.clock_step", 200 * kS, 201 * kS, -1, "ms=3000"});
+  log.faults.push_back(truth::FaultRecord{4, "host.clock_step", 300 * kS, 305 * kS, -1, "ms=-37000"});
   const auto doubled = doubled_vehicle_time({log});
-  ASSERT_EQ(doubled.size(), 3u);
+  ASSERT_EQ(doubled.size(), 4u);
+  EXPECT_EQ(doubled[3].begin, 263 * kS) << "a step back of 37 s for 5 s: the 5 s read during it";
+  EXPECT_EQ(doubled[3].end, 268 * kS);
   EXPECT_EQ(doubled[0].begin, 42 * kS);
   EXPECT_EQ(doubled[0].end, 47 * kS);
-  EXPECT_EQ(doubled[1].begin, 98 * kS) << "a step back at its start: the 2 s before it are read again";
+  EXPECT_EQ(doubled[1].begin, 98 * kS) << "a step back at its start for longer than itself: the 2 s before it are read again";
   EXPECT_EQ(doubled[1].end, 100 * kS);
   EXPECT_EQ(doubled[2].begin, 203 * kS) << "a step of 3 s for 1 s: 1 s read again";
   EXPECT_EQ(doubled[2].end, 204 * kS);

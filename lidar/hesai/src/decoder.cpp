@@ -458,7 +458,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .group_step = fit.step,
                         .groups_per_packet = groups,
                         .dt_ns = dt_us * 1000,
-                        .packet_period_ns = period_ns};
+                        .packet_period_ns = period_ns,
+                        .old_packet = detail::old_packet(-dt_us * 1000, period_ns, turn_ns())};
     const StampStep ts = stamp_step(is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns),
                                     is_time_jump(0, in.dt_ns, cfg.max_packet_gap_ns));
     const bool jumped = ts.jumped;

@@ -429,7 +429,10 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     // has a higher slot (it was taken for a new frame, and ended the one just begun). Negated as a
     // double: dt may be INT64_MIN.
     // Its column times are its position: no time of its own moves on while they step back.
-    switch (judge_order({.steps_back = dt <= 0 && -static_cast<double>(dt) <= reorder_ns,
+    // Farther back than that, within half a frame: an old packet all the same (sent again, or held),
+    // not a restart or a replay looping: lidar/detail/azimuth_continuity.hpp old_packet().
+    const bool old = dt < 0 && -2.0 * static_cast<double>(dt) < static_cast<double>(frame_ns());
+    switch (judge_order({.steps_back = (dt <= 0 && -static_cast<double>(dt) <= reorder_ns) || old,
                          .time_moved_on = false,
                          .fills_hole = fid == prev_fid && hole.holds(slot)})) {
       case Order::kNext: break;

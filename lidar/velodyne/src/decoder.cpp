@@ -401,7 +401,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .group_step = fit.step,
                         .groups_per_packet = groups,
                         .dt_ns = dt_us * 1000,
-                        .packet_period_ns = period_ns};
+                        .packet_period_ns = period_ns,
+                        .old_packet = detail::old_packet(-dt_us * 1000, period_ns, turn_ns(period_ns, groups))};
     // Its stamps are its sensor time (µs since the hour, mapped): both jump alike, no mapping step.
     const bool stamps_jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
     const bool jumped = stamp_step(stamps_jumped, stamps_jumped).jumped;

@@ -144,6 +144,26 @@ TEST_P(ScanFaults, LateDuplicateIsADropNotTheEndOfItsScan) {
   EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
 }
 
+// Sent again farther back than the reorder window (16 packets), within half a turn: still a duplicate,
+// dropped and counted, not a jump back that starts continuity over. A Pandar40P's packet sent again
+// 36 packets later, across the cut, ended the next scan 10 ms in with 20 packets "missing" that had
+// all arrived (rig chaos seed 25, a drawn lidar.duplicate_late n=36).
+TEST_P(ScanFaults, ADuplicateLaterThanTheReorderWindowIsStillADrop) {
+  const std::size_t cut = scan_start_near(s_, s_.pkts.size() / 2);
+  const auto half_turn = static_cast<std::size_t>(s_.sensor->packets_per_second() / 20.0);  // 600 rpm
+  for (const std::size_t later : {std::size_t{20}, std::min<std::size_t>(36, half_turn - 2), half_turn - 2}) {
+    for (const std::size_t at : {cut - 24, cut - 3, cut + 40}) {
+      auto pkts = s_.pkts;
+      pkts.insert(pkts.begin() + static_cast<std::ptrdiff_t>(at + later + 1), pkts[at]);
+      const Decoded r = run(s_.options, pkts);
+      EXPECT_EQ(r.scans.size(), clean_.scans.size()) << later << " " << at - cut;
+      EXPECT_EQ(r.missing(), 0U) << later << " " << at - cut;
+      EXPECT_EQ(r.dropped(), 1U) << later << " " << at - cut;
+      EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost) << later << " " << at - cut;
+    }
+  }
+}
+
 TEST_P(ScanFaults, OneCorruptedTimeIsADropNotAJump) {
   auto pkts = s_.pkts;
   const std::size_t at = pkts.size() / 2 + 5;

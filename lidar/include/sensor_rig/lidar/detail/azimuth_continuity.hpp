@@ -118,6 +118,9 @@ inline AzimuthFit fit_azimuths(const int* az, int n) noexcept {
   return f;
 }
 
+// How far back (in packets) a packet may step and still be a duplicate or a reordered one.
+inline constexpr int kReorderPackets = 16;
+
 // The step from the previous packet's last good group to this packet's first good group.
 struct GapInput {
   int prev_az = 0;             // last good group azimuth of the previous packet
@@ -127,7 +130,21 @@ struct GapInput {
   int groups_per_packet = 1;
   Nanos dt_ns = 0;             // sensor time step between the packets (0 or less: unknown / none)
   Nanos packet_period_ns = 0;  // sensor time per packet
+  // The packet's own time lies behind the previous packet's by more than the reorder window but
+  // less than half a turn (old_packet()): sent before it, however far its azimuth steps back.
+  bool old_packet = false;
 };
+
+// A packet sent again, or held, for longer than the reorder window but less than half a turn: its
+// own time (`back_ns` behind the previous packet's) says it is old. A restart's time goes back by
+// seconds or more, a looping replay's by its capture (a turn or more; a capture of one turn loops
+// back by just under one: hence half). Not placed (too late for its hole), dropped as out of order:
+// taken for a jump back, it ended the scan in progress and counted its packets after it missing (a
+// Pandar40P's packet sent again 36 packets later: "20 packets missing", rig chaos seed 25).
+[[nodiscard]] constexpr bool old_packet(Nanos back_ns, Nanos packet_period_ns, Nanos turn_ns) noexcept {
+  return packet_period_ns > 0 && turn_ns > 0 && back_ns > static_cast<Nanos>(kReorderPackets) * packet_period_ns &&
+         2 * back_ns < turn_ns;
+}
 struct GapResult {
   bool backwards = false;    // duplicate or late (reordered) packet: not decoded, counted
   bool resync = false;       // a jump back farther than reordering explains (sensor restart, a
@@ -140,12 +157,14 @@ struct GapResult {
   std::uint32_t turns = 0;   // whole turns the sensor time says passed beyond the azimuth's step
 };
 
-// How far back (in packets) a packet may step and still be a duplicate or a reordered one.
-inline constexpr int kReorderPackets = 16;
 
 inline GapResult azimuth_gap(const AzimuthFov& fov, const GapInput& in) noexcept {
   GapResult r;
   r.arc = turn_step(in.prev_az, in.first_az);
+  if (in.old_packet) {
+    r.backwards = true;
+    return r;
+  }
   // The sensor's clock went back farther than reordering explains: whatever the azimuth says.
   if (in.packet_period_ns > 0 && in.dt_ns < -static_cast<Nanos>(kReorderPackets) * in.packet_period_ns) {
     r.resync = true;
