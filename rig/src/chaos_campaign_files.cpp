@@ -71,6 +71,7 @@ void write_judge_input(const std::string& path, const Input& in, const std::vect
                    {"count_edge_ns", in.count_edge_ns},
                    {"counted_lost", in.counted_lost},
                    {"dbw_ecu_timeout_ns", in.dbw_ecu_timeout_ns},
+                   {"dbw_gaps_unknown", in.dbw_gaps_unknown},
                    {"campaign_errors", campaign_errors}};
   auto& monitor = j["monitor"] = nlohmann::json::object();
   for (const auto& [topic, m] : in.monitor) monitor[topic] = {{"received", m.received}, {"lost", m.lost}};
@@ -102,6 +103,7 @@ Input read_campaign(const fs::path& dir, std::vector<std::string>& campaign_erro
     in.count_edge_ns = j.at("count_edge_ns").get<Nanos>();
     in.counted_lost = j.at("counted_lost").get<std::map<std::string, std::uint64_t>>();
     in.dbw_ecu_timeout_ns = j.at("dbw_ecu_timeout_ns").get<Nanos>();
+    in.dbw_gaps_unknown = j.value("dbw_gaps_unknown", std::uint64_t{0});  // campaigns kept before 2026-12-01: none
     campaign_errors = j.at("campaign_errors").get<std::vector<std::string>>();
     for (const auto& [topic, m] : j.at("monitor").items()) in.monitor[topic] = {m.at("received").get<std::uint64_t>(), m.at("lost").get<std::uint64_t>()};
     for (const auto& [topic, e] : j.at("expected").items())

@@ -75,6 +75,10 @@ struct Input {
   // status dbw/bridge ("STATE (REASON)") as read, and the protocol's ecu_timeout_ms (0: not judged).
   std::vector<std::pair<Nanos, std::string>> dbw_bridge;
   Nanos dbw_ecu_timeout_ns = 0;
+  // Gaps in the ECU feedback's alive counter across a silence with room for a whole counter turn,
+  // which the bridge reports (dbw/vehicle_state gaps_unknown) instead of guessing k or k + a turn
+  // (FrameLossCounter): each may hide frames lost next to the silence that its count lacks.
+  std::uint64_t dbw_gaps_unknown = 0;
   Nanos window_begin_ns = 0;  // units are judged when their acquisition is in [begin, end)
   Nanos window_end_ns = 0;
   // How far the window of `counted_lost` may lie from [begin, end): the count is the difference of

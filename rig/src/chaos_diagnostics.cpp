@@ -15,8 +15,11 @@ namespace {
 constexpr Nanos kBefore = 1'500'000'000;
 constexpr Nanos kAfter = 500'000'000;
 
-// The counters the judge reads, as "status/key".
-bool watched_counter(std::string_view status, std::string_view key) { return status == "fusion" && key == "scans_dropped"; }
+// The counters the judge reads, as "status/key": the fusion's dropped scans, the dbw bridge's
+// feedback counter gaps it could not size.
+bool watched_counter(std::string_view status, std::string_view key) {
+  return (status == "fusion" && key == "scans_dropped") || (status == "dbw/vehicle_state" && key == "gaps_unknown");
+}
 // The statuses whose messages the judge reads: the bridge's state and reason (its ECU watchdog).
 bool watched_message(std::string_view status) { return status == "dbw/bridge"; }
 

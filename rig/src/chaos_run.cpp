@@ -433,6 +433,8 @@ int run(const Options& o) {
     } catch (const std::exception&) {
       // Warned about by expectations_of: the watchdog is not judged.
     }
+    in.dbw_gaps_unknown = diagnostics.counter_delta("dbw/vehicle_state", "gaps_unknown", plan.epoch_mono_ns + kLead,
+                                                    plan.epoch_mono_ns + window_ns + 1'500'000'000);
     std::fprintf(stderr, "chaos: dbw/bridge: %zu status reports read (its ECU watchdog is judged by them)\n", in.dbw_bridge.size());
   }
   if (cfg.fusion.enabled) {
