@@ -460,8 +460,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .dt_ns = dt_us * 1000,
                         .packet_period_ns = period_ns,
                         .old_packet = detail::old_packet(-dt_us * 1000, period_ns, turn_ns())};
-    const StampStep ts = stamp_step(is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns),
-                                    is_time_jump(0, in.dt_ns, cfg.max_packet_gap_ns));
+    const StampStep ts = stamp_step(is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx)),
+                                    is_time_jump(0, in.dt_ns, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx)));
     const bool jumped = ts.jumped;
     if (ts.mapping_moved) {  // the sensor went on: the scans begun keep their line
       line_shift += stamp - prev_stamp - in.dt_ns;

@@ -442,8 +442,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     }
   }
   if (n_valid > 0 && !late) {
-    const bool stamp_jumped = have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
-    const bool sensor_jumped = !on_line || is_time_jump(prev_own, own, cfg.max_packet_gap_ns);
+    const bool stamp_jumped = have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx));
+    const bool sensor_jumped = !on_line || is_time_jump(prev_own, own, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx));
     const StampStep ts = stamp_step(stamp_jumped, sensor_jumped);
     const bool jumped = ts.jumped;
     if (ts.mapping_moved) {

@@ -404,7 +404,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .packet_period_ns = period_ns,
                         .old_packet = detail::old_packet(-dt_us * 1000, period_ns, turn_ns(period_ns, groups))};
     // Its stamps are its sensor time (µs since the hour, mapped): both jump alike, no mapping step.
-    const bool stamps_jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns);
+    const bool stamps_jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx));
     const bool jumped = stamp_step(stamps_jumped, stamps_jumped).jumped;
     // A late packet steps back in time too: placed when within the reorder window.
     const bool far_back = stamp < prev_stamp - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
