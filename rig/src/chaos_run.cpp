@@ -18,6 +18,9 @@
 #include "chaos_diagnostics.hpp"
 #include "chaos_host_faults.hpp"
 #include "network_delay.hpp"
+#include "sensor_rig/lidar/mock/packet_fields.hpp"
+#include "sensor_rig/lidar/mock/scene.hpp"
+#include "sensor_rig/lidar/mock/synthetic_factory.hpp"
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/errors.hpp"
 #include "sensor_rig/common/log.hpp"
@@ -104,7 +107,7 @@ std::string seconds_arg(double s) {
 
 // What a model can do: an Ouster's rotor runs at its lidar mode's rate (a change is a reconfiguration,
 // not a fault), a Pandar40P at 600 or 1200 rpm only. A random rpm_change goes to a LIDAR that can
-// turn at another speed, at a speed it can turn at.
+// turn at another speed, at a speed it can turn at; a corrupt field is one its packets have.
 void fit_to_models(std::vector<faults::FaultEvent>& events, const RigConfig& cfg) {
   auto model_of = [&](const std::string& name) -> std::string {
     for (const auto& l : cfg.lidars)
@@ -127,6 +130,49 @@ void fit_to_models(std::vector<faults::FaultEvent>& events, const RigConfig& cfg
     for (const auto& l : cfg.lidars)
       if (l.name == e.device) base = l.mock.rpm;
     if (model.rfind("Pandar", 0) == 0 && rpm != 600 && rpm != 1200) e.params["rpm"] = base == 1200 ? "600" : "1200";
+  }
+  // lidar.corrupt of a field the model's packets lack (a VLP-32C has no UDP sequence, a Pandar40P no
+  // frame id): the next field in the vocabulary's order that they have. The mock refuses such a plan
+  // outright, and a drawn field=udp_seq left the front LIDAR's mock dead for the whole campaign
+  // (seed 7 with drawn parameters: 1,028 of ~6,000 scans). The plan records the field used.
+  std::map<std::string, std::unique_ptr<lidar::mock::SyntheticSensor>> sensors;
+  for (auto& e : events) {
+    if (e.kind != "lidar.corrupt") continue;
+    const std::string model = model_of(e.device);
+    if (model.empty()) continue;
+    auto& sensor = sensors[model];
+    if (!sensor) {
+      lidar::mock::SyntheticOptions o;
+      o.model = model;
+      try {
+        sensor = lidar::mock::make_synthetic_sensor(o, lidar::mock::Scene::standard());
+      } catch (const std::exception&) {
+        continue;  // the mock will say what is wrong with the model
+      }
+    }
+    const lidar::mock::PacketFields fields(*sensor);
+    const auto has = [&](lidar::mock::PacketField f) {
+      try {
+        (void)fields.locate(f);
+        return true;
+      } catch (const std::invalid_argument&) {
+        return false;
+      }
+    };
+    const auto drawn = lidar::mock::packet_field_from_name(e.text("field", "byte"));
+    if (!drawn || has(*drawn)) continue;
+    constexpr lidar::mock::PacketField kOrder[] = {lidar::mock::PacketField::kTime,         lidar::mock::PacketField::kAzimuth,
+                                                   lidar::mock::PacketField::kFrameId,      lidar::mock::PacketField::kColumnStatus,
+                                                   lidar::mock::PacketField::kUdpSeq,       lidar::mock::PacketField::kByte};
+    std::size_t at = 0;
+    while (kOrder[at] != *drawn) ++at;
+    for (std::size_t k = 1; k <= std::size(kOrder); ++k) {
+      const auto f = kOrder[(at + k) % std::size(kOrder)];
+      if (has(f)) {
+        e.params["field"] = std::string(lidar::mock::to_string(f));
+        break;
+      }
+    }
   }
 }
 
