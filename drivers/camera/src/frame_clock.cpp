@@ -166,6 +166,15 @@ void FrameClock::observe(const camera::FrameMeta& m, Nanos device) noexcept {
   while (pending_.size() > kMaxPending) pending_.pop_front();
 }
 
+Nanos FrameClock::trigger_reference(const camera::FrameMeta& m) const noexcept {
+  const Nanos by_arrival = m.first_rx_ns - (m.exposure_ns > 0 ? m.exposure_ns : exposure_ns_);  // the latest exposure known
+  if (m.domain != camera::TimeDomain::kDeviceTicks || m.device_ns == 0) return by_arrival;
+  const auto r = mapper_.map(m.device_ns);
+  if (!r.valid || (r.state != timesync::SyncState::kLocked && r.state != timesync::SyncState::kHoldover)) return by_arrival;
+  const Nanos by_device = r.vehicle_ns + kMappedExposureSlackNs;
+  return by_device < by_arrival && by_arrival - by_device < kArrivalWindowNs ? by_device : by_arrival;
+}
+
 FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
   if (host_step_ns_ != 0) {  // the first frame dequeued after the step: its arrival is the host time after it
     mapper_.host_step(host_step_ns_, m.first_rx_ns);

@@ -387,5 +387,39 @@ TEST(FrameClock, APtpDropAfterALongLockMapsWithAFreshLine) {
   EXPECT_LT(worst, 1e6);
 }
 
+
+// The tick a triggered frame is matched to (FrameClock::trigger_reference): before the tick after it
+// even when the network held the frame longer than the trigger period. By the arrival alone, a
+// 111 ms hold at 10 Hz matched every held frame to the next tick (rig chaos seed 7 with drawn
+// parameters: corner_front_left 99.95 ms off, unflagged).
+TEST(FrameClock, AFrameHeldLongerThanATriggerPeriodIsReferredToItsOwnTick) {
+  FrameClock clock(kStepExposure);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<Nanos> jitter(100'000, 2'000'000);
+  int held_frames = 0, by_arrival_late = 0;
+  for (int i = 0; i < 400; ++i) {
+    const Nanos start = kStepT0 + static_cast<Nanos>(i) * kStepPeriod;
+    const Nanos held = i >= 200 && i < 300 ? 111'000'000 : 0;
+    camera::FrameMeta m;
+    m.seq = static_cast<std::uint64_t>(i + 1);
+    m.domain = camera::TimeDomain::kDeviceTicks;
+    m.device_ns = 5'000'000'000'000 + (start - kStepT0);
+    m.first_rx_ns = start + held + kStepExposure + jitter(rng);
+    m.complete_ns = m.first_rx_ns + 2'000'000;
+    const Nanos ref = clock.trigger_reference(m);
+    if (i >= 120) {  // locked
+      // Its own tick (at its exposure start) is the latest before the reference, the next one not.
+      EXPECT_GE(ref, start) << i;
+      EXPECT_LT(ref, start + kStepPeriod) << i << ": the next tick";
+    }
+    if (held > 0) {
+      ++held_frames;
+      if (m.first_rx_ns - kStepExposure >= start + kStepPeriod) ++by_arrival_late;
+    }
+    (void)clock.stamp(m, start);
+  }
+  EXPECT_EQ(by_arrival_late, held_frames) << "by the arrival every held frame would take the next tick";
+}
+
 }  // namespace
 }  // namespace sensor_rig::drivers

@@ -77,9 +77,12 @@ class FrameClock {
   // (the packet leaves at exposure end). Not the arrival: when exposure + delivery exceed the
   // trigger period the next tick has fired by then (issue 27 item 12: stamps one period late, two
   // frames on one tick).
-  [[nodiscard]] Nanos trigger_reference(const camera::FrameMeta& m) const noexcept {
-    return m.first_rx_ns - (m.exposure_ns > 0 ? m.exposure_ns : exposure_ns_);  // the latest exposure known
-  }
+  // A free-running camera whose clock mapping is locked (or in holdover) says when it exposed,
+  // whatever the network did: its mapped exposure (and a slack for the mapping) where that is
+  // earlier. By the arrival alone, a frame held longer than the trigger period (111 ms at 10 Hz)
+  // came after the next tick and took it: stamps a period late, unflagged (rig chaos seed 7 with
+  // drawn parameters, the LIDAR-triggered corner_front_left).
+  [[nodiscard]] Nanos trigger_reference(const camera::FrameMeta& m) const noexcept;
   [[nodiscard]] const timesync::MonotonicStampsStatus& monotonic() const noexcept { return monotonic_.status(); }
   // CLOCK_REALTIME was stepped (the caller's RealtimeStepDetector; 0: not): a step back is absorbed;
   // the mapper is told with the next frame (its arrival is the host time after the step), so that
