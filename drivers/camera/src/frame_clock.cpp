@@ -275,7 +275,10 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
     // The tick is when the exposure was asked for; a locked device clock mapping says when it happened.
     // A mapped exposure after the frame arrived, or long before its trigger, is the mapping's
     // error, not the camera's: the tick then.
-    const bool near_tick = mapped && r.vehicle_ns >= tick_ns - kMappedExposureSlackNs;
+    // Nor one long after its trigger: a mapping begun while the network held every frame (a camera
+    // reopened during a 43 ms hold: stamps 43 ms late, unflagged, until the hold ended; rig chaos
+    // seed 4 with drawn parameters). A triggered camera exposes at its trigger.
+    const bool near_tick = mapped && r.vehicle_ns >= tick_ns - kMappedExposureSlackNs && r.vehicle_ns <= tick_ns + kMappedExposureSlackNs;
     // (A line that a clock stepped back put more than the slack early gives the tick: right.)
     if (near_tick) return {r.vehicle_ns, StampSource::kTriggerExposure, device, false, false, line.doubtful, floor_unseen};
     return {tick_ns, StampSource::kTriggerTick, device, false, replaced};
