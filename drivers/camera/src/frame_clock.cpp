@@ -12,6 +12,8 @@ constexpr Nanos kMappedExposureSlackNs = 5'000'000;
 // (a stalled fake by up to ~0.3 s in the campaigns), never by this much: an exposure start further
 // back is a clock error (a 37 s TAI offset, a camera clock from 1970).
 constexpr Nanos kArrivalWindowNs = 1'000'000'000;
+// A frame arriving later than its locked line by more than this was held (trigger_reference).
+constexpr Nanos kHeldBeyondNs = 20'000'000;
 
 constexpr std::size_t kMaxPending = 8;
 
@@ -171,8 +173,10 @@ Nanos FrameClock::trigger_reference(const camera::FrameMeta& m) const noexcept {
   if (m.domain != camera::TimeDomain::kDeviceTicks || m.device_ns == 0) return by_arrival;
   const auto r = mapper_.map(m.device_ns);
   if (!r.valid || (r.state != timesync::SyncState::kLocked && r.state != timesync::SyncState::kHoldover)) return by_arrival;
+  // Only for a frame the network held (its arrival later than its locked line by more than a
+  // transport's jitter): otherwise the arrival, as before.
   const Nanos by_device = r.vehicle_ns + kMappedExposureSlackNs;
-  return by_device < by_arrival && by_arrival - by_device < kArrivalWindowNs ? by_device : by_arrival;
+  return by_arrival - by_device > kHeldBeyondNs && by_arrival - by_device < kArrivalWindowNs ? by_device : by_arrival;
 }
 
 FrameStamp FrameClock::stamp(const camera::FrameMeta& m, Nanos tick_ns) noexcept {
@@ -275,10 +279,7 @@ FrameStamp FrameClock::device_stamp(const camera::FrameMeta& m, Nanos tick_ns) n
     // The tick is when the exposure was asked for; a locked device clock mapping says when it happened.
     // A mapped exposure after the frame arrived, or long before its trigger, is the mapping's
     // error, not the camera's: the tick then.
-    // Nor one long after its trigger: a mapping begun while the network held every frame (a camera
-    // reopened during a 43 ms hold: stamps 43 ms late, unflagged, until the hold ended; rig chaos
-    // seed 4 with drawn parameters). A triggered camera exposes at its trigger.
-    const bool near_tick = mapped && r.vehicle_ns >= tick_ns - kMappedExposureSlackNs && r.vehicle_ns <= tick_ns + kMappedExposureSlackNs;
+    const bool near_tick = mapped && r.vehicle_ns >= tick_ns - kMappedExposureSlackNs;
     // (A line that a clock stepped back put more than the slack early gives the tick: right.)
     if (near_tick) return {r.vehicle_ns, StampSource::kTriggerExposure, device, false, false, line.doubtful, floor_unseen};
     return {tick_ns, StampSource::kTriggerTick, device, false, replaced};
