@@ -476,7 +476,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     if (gap.backwards) {  // the azimuth stepped back within the reorder window (packet_order.hpp)
       switch (judge_order({.steps_back = true,
                            .time_moved_on = in.dt_ns > period_ns / 2 && !jumped,
-                           .fills_hole = hole.holds(az[first_good]) && !far_back})) {
+                           .fills_hole = hole.holds(az[first_good]) && (!far_back || in.old_packet)})) {
         case Order::kLate: place_late(p, az, fit, groups, n, mode, unit, own, packet.rx_ns); break;
         case Order::kFrozen: last = scans.drop(PacketStatus::kBadAzimuth); break;
         case Order::kNext:

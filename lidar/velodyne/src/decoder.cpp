@@ -416,7 +416,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       while ((fit.bad >> last_good_k) & 1U) --last_good_k;
       switch (judge_order({.steps_back = true,
                            .time_moved_on = in.dt_ns > period_ns / 2 && !jumped,
-                           .fills_hole = (hole.holds(na[first_good]) || hole.holds(na[last_good_k])) && !far_back})) {
+                           .fills_hole = (hole.holds(na[first_good]) || hole.holds(na[last_good_k])) && (!far_back || in.old_packet)})) {
         case Order::kLate: place_late(p, az, fit, groups, step, dual, single_type, stamp, packet.rx_ns); break;
         case Order::kFrozen: last = scans.drop(PacketStatus::kBadAzimuth); break;
         case Order::kNext:
