@@ -26,7 +26,9 @@ inline constexpr Nanos kBackwardsTolerance = 1'000'000;
   if (now_ns < prev_ns - kBackwardsTolerance) return true;
   if (now_ns <= prev_ns + max_gap_ns) return false;
   if (rx_gap_ns < 0) return true;
-  const Nanos step = now_ns - prev_ns, off = step > rx_gap_ns ? step - rx_gap_ns : rx_gap_ns - step;
+  Nanos step = 0;  // a corrupt time can lie a whole int64 away: no step then, a jump
+  if (__builtin_sub_overflow(now_ns, prev_ns, &step)) return true;
+  const Nanos off = step > rx_gap_ns ? step - rx_gap_ns : rx_gap_ns - step;
   return off > std::max<Nanos>(10'000'000, step / 10);
 }
 
