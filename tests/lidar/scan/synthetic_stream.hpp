@@ -79,7 +79,7 @@ inline Decoded run(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
   Decoded r;
   // Received 100 us after it was sent, in order (a packet moved later in the list arrives just after
   // the one before it): the receive times bound the turns a gap in the sensor's time can hide
-  // (lidar/stream_gap.hpp turns_within_quiet), so they run at the sensor's pace, as a real stream's
+  // (lidar/stream_gap.hpp sensor_step_within_receive), so they run at the sensor's pace, as a real stream's
   // do. Packets without a send time (sent_ns 0), 0.1 ms after the last.
   Nanos rx = 1'000'000'000;
   for (const auto& p : pkts) {

@@ -201,7 +201,7 @@ TEST_P(ScanFaults, OneCorruptedTimeIsADropNotAJump) {
 // moved back or ahead: no scan counted lost that was not. The OS-LEGACY took the corrupt time at its
 // frame's start for a jump, then the next packet's step from it for frames lost in between:
 // "66,033,013,710 scans lost" from one corrupt byte (rig chaos seed 25, a drawn lidar.corrupt
-// field=time); the receive times bound that now (turns_within_quiet).
+// field=time); the receive times bound that now (sensor_step_within_receive).
 TEST_P(ScanFaults, OneCorruptedTimeAtAScansStartCountsNoPhantomScans) {
   for (const std::size_t at : {scan_start_near(s_, s_.pkts.size() / 2), scan_start_near(s_, s_.pkts.size() / 2) + 1}) {
     for (const std::byte flip : {std::byte{0xA5}, std::byte{0x80}, std::byte{0x01}}) {
