@@ -139,7 +139,7 @@ std::unique_ptr<mock::PacketStream> make_stream(const ReplayCliOptions& o, std::
       throw cli::UsageError(e.what());
     }
   }
-  const auto now = clock_pair_now();
+  const auto now = mock_clock_pair_now();  // vehicle time, also when restarted under a host step
   const Nanos mono_now = now.monotonic_ns;
   const Nanos vehicle_now = now.vehicle_ns;
   const bool faulted = !o.fault_plan.empty() || !o.fault_specs.empty();

@@ -60,6 +60,19 @@ MockProcess* MockFaults::mock_of(const faults::FaultEvent& e) {
   return nullptr;
 }
 
+ChildOptions MockFaults::restart_options(const MockProcess& m) const {
+  // CLOCK_REALTIME stepped since the plan began (host.clock_step in force, rig chaos): told to the
+  // mock, which takes it off (mock_clock_pair_now). A millisecond of slack for the clock's own
+  // drift over a campaign; the smallest step the plans draw is 2 ms.
+  const Nanos step = clock_pair_now().vehicle_minus_monotonic() - (epoch_vehicle_ - epoch_mono_);
+  ChildOptions o = m.options;
+  if (step > kMs || step < -kMs) {
+    o.env.push_back(std::string(kMockHostStepEnv) + "=" + std::to_string(step));
+    log::info("chaos", "host.kill_mock: " + m.device + " restarted under a host clock step of " + std::to_string(step / kMs) + " ms");
+  }
+  return o;
+}
+
 void MockFaults::apply(const Action& a) {
   const faults::FaultEvent& e = *a.event;
   const Nanos at = vehicle_now_ns();
@@ -95,7 +108,7 @@ void MockFaults::apply(const Action& a) {
     }
     case Action::Kind::kRestart:
       if (m->child.running()) return;  // two kills of one mock overlapped: the first restart made it
-      m->child = ChildProcess(m->argv, m->options);
+      m->child = ChildProcess(m->argv, restart_options(*m));
       log::info("chaos", "host.kill_mock: restarted the mock of " + e.device + ": pid " + std::to_string(m->child.pid()));
       return;
   }

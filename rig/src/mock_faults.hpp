@@ -43,11 +43,13 @@ class MockFaults {
   bool sleep_until(Nanos mono);  // false when stopping
   void apply(const Action& a);
   MockProcess* mock_of(const faults::FaultEvent& e);
+  // The mock's options for a restart: with the host clock step in force, if any.
+  [[nodiscard]] ChildOptions restart_options(const MockProcess& m) const;
 
   std::vector<faults::FaultEvent> events_;
   std::vector<Action> actions_;  // by time
   Nanos epoch_mono_;
-  Nanos epoch_vehicle_;
+  Nanos epoch_vehicle_;  // the plan's epoch on CLOCK_REALTIME before any step: the steps since are measured by it
   std::vector<MockProcess>& mocks_;
   std::mutex& mutex_;
   truth::Writer truth_;
