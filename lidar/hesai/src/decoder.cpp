@@ -104,7 +104,7 @@ struct DecoderImpl {
   bool window_open = false;  // between the window's start and the cut: points past the cut go to next()
   int prev_az = 0;
   Nanos prev_stamp = 0;  // the caller's
-  Nanos prev_rx = 0;  // the previous packet's receive time (0: none)
+  RxTimes prev_rx;  // the previous packet's receive time (0: none)
   // The caller's mapping of sensor time may move while the sensor's clock goes on (a host
   // CLOCK_REALTIME step: the mapping follows the host, a PTP-synced sensor does not): the stamps
   // jump, the tail times do not. That is no time jump (it cost the scan across it and a dropped
@@ -225,10 +225,10 @@ struct DecoderImpl {
   // A silence before this packet (stream_gap.hpp): the scans in progress (and the lookahead past
   // the cut) end as partial, continuity and the UDP sequence start over at this packet; a first
   // group within a packet after the cut begins a whole scan.
-  void new_stream(std::optional<Scan>& out, int first_az, double group_step, int groups, Nanos rx_ns) noexcept {
+  void new_stream(std::optional<Scan>& out, int first_az, double group_step, int groups, RxTimes rx) noexcept {
     ++stats.silences;
     const std::uint32_t rejected = scans.rejected_since_kept();
-    const std::uint32_t before = gaps.rejected_before_silence(rx_ns, rejected);
+    const std::uint32_t before = gaps.rejected_before_silence(rx, rejected);
     // Packets rejected whole since the last kept one (a frozen encoder) turned on to the next
     // scan's window and past it: the scans they began were made (stream_gap.hpp). A scan begins
     // where its window does (reset_raw); one whose window opened already is the lookahead, ended
@@ -440,14 +440,14 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // Nothing heard for turns while the sensor's time moved on: silent, unless its UDP sequence went
   // on as its time did (then its packets were sent: a loss, counted below). Judged first: nothing
   // before a silence is this packet's order or loss (a restart's sequence begins again).
-  if (const Nanos quiet = gaps.quiet_ns(packet.rx_ns); have_prev && quiet > kSilenceTurns * period_ns) {
+  if (const Nanos quiet = gaps.quiet_ns(rx_times(packet)); have_prev && quiet > kSilenceTurns * period_ns) {
     const IdsAcrossGap ids =
         has_seq && have_seq
             ? ids_across_gap(prev_seq, seq, 0xFFFF'FFFFU,
                              std::llround(static_cast<double>(dt_us) * 1000.0 / static_cast<double>(period_ns)))
             : IdsAcrossGap::kNone;
     if (is_silence(quiet, turn_ns(), sensor_continues(dt_us * 1000, period_ns), ids)) {
-      new_stream(out, az[first_good], fit.step, groups, packet.rx_ns);
+      new_stream(out, az[first_good], fit.step, groups, rx_times(packet));
       to_caller_line();
     }
   }
@@ -460,8 +460,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .dt_ns = dt_us * 1000,
                         .packet_period_ns = period_ns,
                         .old_packet = detail::old_packet(-dt_us * 1000, period_ns, turn_ns())};
-    const StampStep ts = stamp_step(is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx)),
-                                    is_time_jump(0, in.dt_ns, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx)));
+    const StampStep ts = stamp_step(is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(rx_times(packet), prev_rx)),
+                                    is_time_jump(0, in.dt_ns, cfg.max_packet_gap_ns, receive_gap(rx_times(packet), prev_rx)));
     const bool jumped = ts.jumped;
     if (ts.mapping_moved) {  // the sensor went on: the scans begun keep their line
       line_shift += stamp - prev_stamp - in.dt_ns;
@@ -471,7 +471,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     // A late packet steps back in time too: placed when within the reorder window.
     const bool far_back = own < prev_own - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
-    in.dt_ns = sensor_step_within_receive(in.dt_ns, packet.rx_ns, prev_rx);  // nor one the receive times refute
+    in.dt_ns = sensor_step_within_receive(in.dt_ns, rx_times(packet), prev_rx);  // nor one the receive times refute
     auto gap = detail::azimuth_gap(fov, in);
     if (gap.backwards) {  // the azimuth stepped back within the reorder window (packet_order.hpp)
       switch (judge_order({.steps_back = true,
@@ -575,7 +575,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   prev_stamp = stamp;
   prev_own = own;
   prev_sensor_us = sensor_us;
-  prev_rx = packet.rx_ns;
+  prev_rx = rx_times(packet);
   scans.begin_packet();
   // Packets lost across the cut: those past it are the next scan's (issue 26 item 3).
   // Packets lost inside the cut's window have channels in both scans: missing in both, as a truth

@@ -182,6 +182,7 @@ bool RingSource::deliver(const std::byte* frame, PacketSlot& slot) noexcept {
   slot.truncated = f.payload.size() > slot.buffer.size();
   std::memcpy(slot.buffer.data(), f.payload.data(), slot.size);
   slot.rx_ns = r.rx_ns;
+  slot.rx_mono_ns = monotonic_receive_ns(r.rx_ns, drain_clocks_.vehicle_minus_monotonic(), drain_clocks_.monotonic_ns);
   slot.src_addr = f.src_ip;
   slot.src_port = f.src_port;
   slot.dst_addr = f.dst_ip;
@@ -226,7 +227,8 @@ RecvResult RingSource::receive(std::span<PacketSlot> out, int timeout_ms) noexce
   reassembler_.expire(start);
   stats_.reassembly = reassembler_.counters();
   for (bool polled = false;; polled = true) {
-    drain_mono_ns_ = polled ? monotonic_now_ns() : start;
+    drain_clocks_ = clock_pair_now();  // the drain's receive stamps on CLOCK_MONOTONIC too
+    drain_mono_ns_ = polled ? drain_clocks_.monotonic_ns : start;
     const std::size_t n = drain(out);
     stats_.reassembly = reassembler_.counters();
     if (n > 0) return {n, RecvStatus::kOk, 0};

@@ -92,6 +92,7 @@ RecvResult UdpSource::receive(std::span<PacketSlot> out, int timeout_ms) noexcep
   }
 
   Nanos fallback_ns = 0;
+  const ClockPair read = clock_pair_now();  // the batch's receive stamps on CLOCK_MONOTONIC too
   for (std::size_t i = 0; i < static_cast<std::size_t>(got); ++i) {
     PacketSlot& slot = out[i];
     const msghdr& h = msgs_[i].msg_hdr;
@@ -110,6 +111,7 @@ RecvResult UdpSource::receive(std::span<PacketSlot> out, int timeout_ms) noexcep
       slot.rx_ns = fallback_ns;
       ++stats_.missing_timestamps;
     }
+    slot.rx_mono_ns = monotonic_receive_ns(slot.rx_ns, read.vehicle_minus_monotonic(), read.monotonic_ns);
     if (slot.truncated) ++stats_.truncated;
     stats_.bytes += slot.size;
   }

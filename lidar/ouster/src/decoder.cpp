@@ -151,7 +151,7 @@ struct DecoderImpl {
   bool have_base = false;
   long prev_base = 0;          // measurement id of the previous packet's column 0
   std::uint64_t prev_ts = 0;   // its first valid column's sensor time
-  Nanos prev_rx = 0;           // ... and its receive time (0: none)
+  RxTimes prev_rx;             // ... and its receive time (0: none)
   long packets_per_frame = 1;
   LateHole hole;                // packet slots where the current scan last counted packets missing
   TimeJudge time_judge;
@@ -274,10 +274,10 @@ struct DecoderImpl {
 
   // A silence before this packet (stream_gap.hpp): the scan in progress ends as partial, frame
   // and packet continuity start over at this packet (a frame from its first column is whole).
-  std::optional<Scan> new_stream(long slot, Nanos rx_ns) noexcept {
+  std::optional<Scan> new_stream(long slot, RxTimes rx) noexcept {
     ++stats.silences;
     const std::uint32_t rejected = scans.rejected_since_kept();
-    const std::uint32_t before = gaps.rejected_before_silence(rx_ns, rejected);
+    const std::uint32_t before = gaps.rejected_before_silence(rx, rejected);
     const double per_frame = window_slots(-1, packets_per_frame);
     // Packets rejected whole since the last kept one (no column to place them by: frozen
     // measurement ids) filled the frame's window slots and went on into later frames: the frames
@@ -399,14 +399,14 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // Nothing heard for frames while the column times moved on: silent, unless the frame id went on
   // as the times did (then its frames were sent: a loss, counted below). Judged first: nothing
   // before a silence is this packet's order or loss (a restart's frame ids begin again).
-  if (const Nanos quiet = gaps.quiet_ns(packet.rx_ns);
+  if (const Nanos quiet = gaps.quiet_ns(rx_times(packet));
       n_valid > 0 && have_base && have_fid && quiet > kSilenceTurns * span_ns) {
     const auto dt = static_cast<std::int64_t>(first_ts - prev_ts);
     const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
     const long ahead = slot > prev_slot ? 0 : 1;
     const IdsAcrossGap ids = dt > 0 ? ids_across_gap(prev_fid, fid, 0xFFFFU, ahead + extra_frames(prev_slot, slot, ahead, dt))
                                     : IdsAcrossGap::kRestarted;
-    if (is_silence(quiet, frame_ns(), sensor_continues(dt, span_ns), ids)) out = new_stream(slot, packet.rx_ns);
+    if (is_silence(quiet, frame_ns(), sensor_continues(dt, span_ns), ids)) out = new_stream(slot, rx_times(packet));
   }
   // The packet on the current scan's line (unsigned: a corrupt column time wraps, as the ids' do).
   // A packet without column times (0) has only the caller's stamp.
@@ -442,8 +442,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     }
   }
   if (n_valid > 0 && !late) {
-    const bool stamp_jumped = have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx));
-    const bool sensor_jumped = !on_line || is_time_jump(prev_own, own, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx));
+    const bool stamp_jumped = have_stamp && is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(rx_times(packet), prev_rx));
+    const bool sensor_jumped = !on_line || is_time_jump(prev_own, own, cfg.max_packet_gap_ns, receive_gap(rx_times(packet), prev_rx));
     const StampStep ts = stamp_step(stamp_jumped, sensor_jumped);
     const bool jumped = ts.jumped;
     if (ts.mapping_moved) {
@@ -475,7 +475,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   bool opened = false;  // this packet opened a hole (a gap before it, inside its frame)
   if (n_valid > 0 && have_base && have_fid && !late) {
     const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
-    const auto dt = sensor_step_within_receive(static_cast<std::int64_t>(first_ts - prev_ts), packet.rx_ns, prev_rx);
+    const auto dt = sensor_step_within_receive(static_cast<std::int64_t>(first_ts - prev_ts), rx_times(packet), prev_rx);
     const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
     if (dt <= 0) {  // a jump back in time (sensor restart, a looping replay): continuity starts over
       ++stats.implausible_steps;
@@ -529,7 +529,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     have_base = true;
     prev_base = base;
     prev_ts = first_ts;
-    prev_rx = packet.rx_ns;
+    prev_rx = rx_times(packet);
   }
   PendingScan& cur = scans.current();
   if (late) {

@@ -100,7 +100,7 @@ struct DecoderImpl {
   int prev_az = 0;
   int last_gap = 0;  // azimuth advance of the last decoded block (hundredths of a degree)
   Nanos prev_stamp = 0;
-  Nanos prev_rx = 0;  // the previous packet's receive time (0: none)
+  RxTimes prev_rx;  // the previous packet's receive time (0: none)
   detail::AzimuthFov fov;
   int prev_trailing_bad = 0;       // groups after prev_az in the previous packet that were corrupt
   std::uint32_t prev_sensor_us = 0;  // the previous packet's own time (µs since the hour)
@@ -324,10 +324,10 @@ struct DecoderImpl {
 
   // A silence before this packet (stream_gap.hpp): the scan in progress ends as partial, continuity
   // starts over at this packet; a first group within a packet after the cut begins a whole scan.
-  std::optional<Scan> new_stream(int first_az, double group_step, int groups, Nanos rx_ns) noexcept {
+  std::optional<Scan> new_stream(int first_az, double group_step, int groups, RxTimes rx) noexcept {
     ++stats.silences;
     const std::uint32_t rejected = scans.rejected_since_kept();
-    const std::uint32_t before = gaps.rejected_before_silence(rx_ns, rejected);
+    const std::uint32_t before = gaps.rejected_before_silence(rx, rejected);
     // Packets rejected whole since the last kept one (a frozen encoder) turned on to the cut and
     // past it: the scans they began were made (stream_gap.hpp). Packet k after the last kept one
     // reaches the cut when its last group does.
@@ -391,9 +391,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   if (dt_us < -kHourUs / 2) dt_us += kHourUs;
   // Nothing heard for turns while the sensor's time moved on: it was silent, not a loss (no ids
   // to say otherwise). Judged first: nothing before a silence is this packet's order or loss.
-  if (const Nanos quiet = gaps.quiet_ns(packet.rx_ns); have_prev && quiet > kSilenceTurns * period_ns &&
+  if (const Nanos quiet = gaps.quiet_ns(rx_times(packet)); have_prev && quiet > kSilenceTurns * period_ns &&
       is_silence(quiet, turn_ns(period_ns, groups), sensor_continues(dt_us * 1000, period_ns), IdsAcrossGap::kNone))
-    out = new_stream(na[first_good], fit.step, groups, packet.rx_ns);
+    out = new_stream(na[first_good], fit.step, groups, rx_times(packet));
   if (have_prev) {
     detail::GapInput in{.prev_az = prev_az,
                         .groups_since_prev = prev_trailing_bad + first_good + 1,
@@ -404,12 +404,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                         .packet_period_ns = period_ns,
                         .old_packet = detail::old_packet(-dt_us * 1000, period_ns, turn_ns(period_ns, groups))};
     // Its stamps are its sensor time (µs since the hour, mapped): both jump alike, no mapping step.
-    const bool stamps_jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(packet.rx_ns, prev_rx));
+    const bool stamps_jumped = is_time_jump(prev_stamp, stamp, cfg.max_packet_gap_ns, receive_gap(rx_times(packet), prev_rx));
     const bool jumped = stamp_step(stamps_jumped, stamps_jumped).jumped;
     // A late packet steps back in time too: placed when within the reorder window.
     const bool far_back = stamp < prev_stamp - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
-    in.dt_ns = sensor_step_within_receive(in.dt_ns, packet.rx_ns, prev_rx);  // nor one the receive times refute
+    in.dt_ns = sensor_step_within_receive(in.dt_ns, rx_times(packet), prev_rx);  // nor one the receive times refute
     gap = detail::azimuth_gap(fov, in);
     if (gap.backwards) {  // the azimuth stepped back within the reorder window (packet_order.hpp)
       int last_good_k = groups - 1;
@@ -487,7 +487,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
 
   prev_stamp = stamp;
   prev_sensor_us = sensor_us;
-  prev_rx = packet.rx_ns;
+  prev_rx = rx_times(packet);
   scans.begin_packet();
   if (fit.bad != 0) {
     const auto n = static_cast<std::uint32_t>(std::popcount(fit.bad));

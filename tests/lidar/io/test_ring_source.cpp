@@ -38,6 +38,7 @@ struct Received {
   Bytes bytes;
   Nanos rx_ns;
   std::uint32_t src;
+  Nanos rx_mono_ns = 0;
   std::uint16_t dst_port = 0;
   Bytes headers;  // the captured IPv4 + UDP headers
 };
@@ -57,7 +58,7 @@ std::vector<Received> receive_all(RingSource& src, std::size_t want, int idle_li
     idle = 0;
     for (std::size_t i = 0; i < r.count; ++i) {
       const auto& s = arena.slots()[i];
-      got.push_back({Bytes(s.bytes().begin(), s.bytes().end()), s.rx_ns, s.src_addr, s.dst_port,
+      got.push_back({Bytes(s.bytes().begin(), s.bytes().end()), s.rx_ns, s.src_addr, s.rx_mono_ns, s.dst_port,
                      Bytes(s.captured_headers().begin(), s.captured_headers().end())});
     }
   }
@@ -89,7 +90,7 @@ TEST(RingSource, LoopbackFilterStampsAndCounters) {
   if (!ring) GTEST_SKIP() << why;
   const std::vector<Endpoint> dst{{"127.0.0.1", taker.port()}, {"127.0.0.1", other.port()}};
   UdpSender tx(dst);
-  const Nanos before = vehicle_now_ns();
+  const Nanos before = vehicle_now_ns(), before_mono = monotonic_now_ns();
   std::vector<Bytes> sent;
   for (unsigned k = 0; k < 20; ++k) {
     sent.push_back(ring_payload(k == 7 ? 60000 : 1206, k));  // one larger than any Ethernet frame
@@ -97,12 +98,14 @@ TEST(RingSource, LoopbackFilterStampsAndCounters) {
     ASSERT_EQ(tx.send(ring_payload(1206, 99), 1).sent, 1u);  // another port: the kernel filter drops it
   }
   const auto got = receive_all(*ring, sent.size());
-  const Nanos after = vehicle_now_ns();
+  const Nanos after = vehicle_now_ns(), after_mono = monotonic_now_ns();
   ASSERT_EQ(got.size(), sent.size());
   for (std::size_t i = 0; i < got.size(); ++i) {
     EXPECT_EQ(got[i].bytes, sent[i]) << "datagram " << i;
     EXPECT_GE(got[i].rx_ns, before);
     EXPECT_LE(got[i].rx_ns, after);
+    EXPECT_GE(got[i].rx_mono_ns, before_mono) << "the same instant on CLOCK_MONOTONIC";
+    EXPECT_LE(got[i].rx_mono_ns, after_mono);
     EXPECT_EQ(got[i].src, 0x7f000001u);
   }
   ring->refresh_kernel_stats();

@@ -29,7 +29,7 @@ std::vector<std::byte> payload(std::size_t size, std::uint8_t tag) {
 
 // Receives until `want` packets arrived or a receive times out.
 std::size_t drain(UdpSource& src, std::span<PacketSlot> slots, std::size_t want, std::vector<Nanos>* stamps = nullptr,
-                  std::vector<std::size_t>* sizes = nullptr) {
+                  std::vector<std::size_t>* sizes = nullptr, std::vector<Nanos>* mono = nullptr) {
   std::size_t got = 0;
   while (got < want) {
     const RecvResult r = src.receive(slots, 200);
@@ -37,6 +37,7 @@ std::size_t drain(UdpSource& src, std::span<PacketSlot> slots, std::size_t want,
     for (std::size_t i = 0; i < r.count; ++i) {
       if (stamps) stamps->push_back(slots[i].rx_ns);
       if (sizes) sizes->push_back(slots[i].size);
+      if (mono) mono->push_back(slots[i].rx_mono_ns);
     }
     got += r.count;
   }
@@ -59,15 +60,15 @@ TEST(UdpSource, ReceivesBatchWithKernelTimestamps) {
   UdpSender tx(std::span<const Endpoint>(&dst, 1));
   SlotArena arena(64);
 
-  const Nanos before = vehicle_now_ns();
+  const Nanos before = vehicle_now_ns(), before_mono = monotonic_now_ns();
   constexpr std::size_t kCount = 40;
   std::vector<std::vector<std::byte>> packets;
   for (std::size_t i = 0; i < kCount; ++i) packets.push_back(payload(1206, static_cast<std::uint8_t>(i)));
   for (const auto& p : packets) ASSERT_EQ(tx.send(p).sent, 1u);
-  std::vector<Nanos> stamps;
+  std::vector<Nanos> stamps, mono;
   std::vector<std::size_t> sizes;
-  ASSERT_EQ(drain(src, arena.slots(), kCount, &stamps, &sizes), kCount);
-  const Nanos after = vehicle_now_ns();
+  ASSERT_EQ(drain(src, arena.slots(), kCount, &stamps, &sizes, &mono), kCount);
+  const Nanos after = vehicle_now_ns(), after_mono = monotonic_now_ns();
 
   // All 40 were already queued, so recvmmsg returns them in few calls.
   EXPECT_LE(src.stats().batches, 2u);
@@ -79,6 +80,10 @@ TEST(UdpSource, ReceivesBatchWithKernelTimestamps) {
     EXPECT_EQ(sizes[i], 1206u);
     EXPECT_GE(stamps[i], before);
     EXPECT_LE(stamps[i], after);
+    // The same instant on CLOCK_MONOTONIC (the receive gaps a host clock step does not move).
+    EXPECT_GE(mono[i], before_mono);
+    EXPECT_LE(mono[i], after_mono);
+    EXPECT_NEAR(static_cast<double>(stamps[i] - mono[i]), static_cast<double>(before - before_mono), 1e6);
     if (i > 0) {
       EXPECT_GE(stamps[i], stamps[i - 1]);
     }

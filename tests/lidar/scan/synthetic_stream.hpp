@@ -74,7 +74,14 @@ struct Decoded {
   }
 };
 
-inline Decoded run(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
+// The host's CLOCK_REALTIME stepped by `by` from packet `at` on: their kernel receive stamps move,
+// their CLOCK_MONOTONIC receive times do not (PacketView::rx_mono_ns).
+struct HostStep {
+  std::size_t at = 0;
+  Nanos by = 0;
+};
+
+inline Decoded run(const DecoderOptions& o, const std::vector<Pkt>& pkts, HostStep host = {}) {
   const auto dec = make_decoder(o);
   Decoded r;
   // Received 100 us after it was sent, in order (a packet moved later in the list arrives just after
@@ -82,9 +89,11 @@ inline Decoded run(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
   // (lidar/stream_gap.hpp sensor_step_within_receive), so they run at the sensor's pace, as a real stream's
   // do. Packets without a send time (sent_ns 0), 0.1 ms after the last.
   Nanos rx = 1'000'000'000;
-  for (const auto& p : pkts) {
+  for (std::size_t i = 0; i < pkts.size(); ++i) {
+    const Pkt& p = pkts[i];
     rx = p.sent_ns > 0 ? std::max(rx + 1, p.sent_ns + 100'000) : rx + 100'000;
-    if (auto s = dec->push(PacketView{p.bytes, rx, 0}, p.stamp)) r.scans.push_back(std::move(*s));
+    const Nanos real = rx + (host.by != 0 && i >= host.at ? host.by : 0);
+    if (auto s = dec->push(PacketView{p.bytes, real, 0, rx}, p.stamp)) r.scans.push_back(std::move(*s));
   }
   r.st = dec->counters();
   return r;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "sensor_rig/lidar/scan_assembler.hpp"
+#include "sensor_rig/lidar/stream_gap.hpp"
 
 namespace sensor_rig::lidar {
 namespace {
@@ -241,6 +242,33 @@ TEST(ScanAssembler, TimeJumps) {
   EXPECT_TRUE(is_time_jump(5'000'000'000, 6'000'000'001, kGap));
   EXPECT_FALSE(is_time_jump(5'000'000'000, 4'999'000'000, kGap));  // 1 ms back: jitter
   EXPECT_TRUE(is_time_jump(5'000'000'000, 4'998'999'999, kGap));
+}
+
+// Receive times across a host clock step: the step between two packets is CLOCK_MONOTONIC's where
+// both have it, so a freeze's 1.44 s stays 1.44 s with CLOCK_REALTIME stepped 37 s under it.
+TEST(ScanAssembler, ReceiveGapsAreMonotonicWhereKnown) {
+  constexpr Nanos kStep = 37'000'000'000;
+  const RxTimes before{100 * kSec, 10 * kSec}, after{100 * kSec + 1'440'000'000 - kStep, 10 * kSec + 1'440'000'000};
+  EXPECT_EQ(receive_gap(after, before), 1'440'000'000);
+  EXPECT_FALSE(is_time_jump(0, 1'440'000'000, kSec, receive_gap(after, before))) << "a freeze the receive times confirm";
+  EXPECT_EQ(sensor_step_within_receive(1'440'000'000, after, before), 1'440'000'000);
+  // Without the monotonic times (a capture): CLOCK_REALTIME's, unknown when it stepped back.
+  EXPECT_EQ(receive_gap(RxTimes{after.real, 0}, RxTimes{before.real, 0}), -1);
+  EXPECT_EQ(receive_gap(RxTimes{before.real + 5, 0}, RxTimes{before.real, 0}), 5);
+  EXPECT_EQ(receive_gap(RxTimes{after.real, after.mono}, RxTimes{before.real, 0}), -1) << "one unknown: CLOCK_REALTIME's, stepped back";
+  EXPECT_EQ(receive_gap(RxTimes{1, 5}, RxTimes{1, 9}), -1) << "monotonic never steps back: unknown";
+  // One corrupt time still bounded by the receive step.
+  EXPECT_EQ(sensor_step_within_receive(3'600 * kSec, RxTimes{0, 10 * kSec + 1'000'000}, RxTimes{0, 10 * kSec}), 2'000'000);
+}
+
+// A kernel stamp on CLOCK_MONOTONIC by the clocks as read after it: unknown (0) when a step between
+// the two puts it after the read or more than 2 s before.
+TEST(ScanAssembler, MonotonicReceiveTimeByTheReadsClocks) {
+  constexpr Nanos kOffset = 1'000 * kSec;  // realtime - monotonic at the read
+  EXPECT_EQ(monotonic_receive_ns(kOffset + 50 * kSec - 300'000, kOffset, 50 * kSec), 50 * kSec - 300'000);
+  EXPECT_EQ(monotonic_receive_ns(kOffset + 50 * kSec + 2'000'000, kOffset, 50 * kSec), 0) << "after the read: stepped back since";
+  EXPECT_EQ(monotonic_receive_ns(kOffset + 47 * kSec, kOffset, 50 * kSec), 0) << "3 s before: stepped forward since";
+  EXPECT_EQ(monotonic_receive_ns(0, kOffset, 50 * kSec), 0);
 }
 
 }  // namespace

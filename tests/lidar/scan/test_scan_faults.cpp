@@ -448,16 +448,21 @@ TEST_P(FrozenAzimuth, NoShortScansTurnsCountedLostPacketsDroppedOnce) {
   Stream s = render(GetParam(), 4.0);
   const Decoded clean = run(s.options, s.pkts);
   const mock::PacketFields fields(*s.sensor);
-  // Frozen mid-scan, from a scan's first packet on, and from its predecessor's last.
+  // Frozen mid-scan, from a scan's first packet on, and from its predecessor's last. Also with the
+  // host's clock stepped 37 s either way in the middle of the freeze (its receive stamps moved, not
+  // the stream: rig chaos seed 9 with drawn parameters, an OS-LEGACY frozen 1.44 s under a step:
+  // taken for a time jump, 14 turns neither published nor counted lost).
+  for (const Nanos host_step : {Nanos{0}, -37 * kSec, 37 * kSec})
   for (const double seconds : {0.25, 1.8})
   for (const std::size_t from : {s.pkts.size() / 4, scan_start_near(s, s.pkts.size() / 4),
                                  scan_start_near(s, s.pkts.size() / 4) - 1}) {
     SCOPED_TRACE(seconds);
+    SCOPED_TRACE("host step " + std::to_string(host_step / kSec) + " s");
     auto pkts = s.pkts;
     const auto n = static_cast<std::size_t>(s.sensor->packets_per_second() * seconds);
     const std::vector<std::byte> frozen = pkts[from].bytes;
     for (std::size_t i = from; i < from + n; ++i) fields.freeze_azimuth(pkts[i].bytes, frozen);
-    const Decoded r = run(s.options, pkts);
+    const Decoded r = run(s.options, pkts, {from + n / 2, host_step});
     std::string seen;
     for (const auto& sc : r.scans)
       seen += std::to_string(sc.packets) + "/" + std::to_string((sc.stamp - s.pkts[0].stamp) / 1'000'000) + " ";

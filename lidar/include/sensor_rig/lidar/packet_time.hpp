@@ -10,6 +10,7 @@
 #include <cstdint>
 
 #include "sensor_rig/common/clock.hpp"
+#include "sensor_rig/lidar/packet.hpp"
 
 namespace sensor_rig::lidar {
 
@@ -36,6 +37,21 @@ inline constexpr Nanos kBackwardsTolerance = 1'000'000;
 // clock they are on stepped back between them.
 [[nodiscard]] constexpr Nanos receive_gap(Nanos rx_ns, Nanos prev_rx_ns) noexcept {
   return rx_ns > 0 && prev_rx_ns > 0 && rx_ns >= prev_rx_ns ? rx_ns - prev_rx_ns : -1;
+}
+
+// A packet's receive time on both clocks (PacketView::rx_ns, rx_mono_ns). Their step is taken on
+// CLOCK_MONOTONIC where both packets have it: a host clock step moves the CLOCK_REALTIME stamps, not
+// the stream. An OS-LEGACY's encoder frozen 1.44 s while the host stood stepped 37 s forward was
+// taken for a time jump (receive step unknown), and its 14 turns were neither published nor counted
+// lost (rig chaos seed 9 with drawn parameters). Else CLOCK_REALTIME's step, as before.
+struct RxTimes {
+  Nanos real = 0;
+  Nanos mono = 0;
+};
+[[nodiscard]] constexpr RxTimes rx_times(const PacketView& p) noexcept { return {p.rx_ns, p.rx_mono_ns}; }
+[[nodiscard]] constexpr Nanos receive_gap(RxTimes now, RxTimes prev) noexcept {
+  if (now.mono > 0 && prev.mono > 0) return now.mono >= prev.mono ? now.mono - prev.mono : -1;
+  return receive_gap(now.real, prev.real);
 }
 
 // The caller's stamps against the sensor's own time. A time jump is both jumping; stamps that jump

@@ -91,6 +91,7 @@ class RingSource {
   std::uint32_t packets_left_ = 0;      // in the block being read
   const std::byte* next_ = nullptr;     // next frame of the block being read; null = no block open
   Ipv4Reassembler reassembler_;
+  ClockPair drain_clocks_;   // both clocks at the drain: each datagram's stamp on CLOCK_MONOTONIC
   Nanos drain_mono_ns_ = 0;  // CLOCK_MONOTONIC of the drain: the reassembly timeout's clock
   Nanos last_stats_ns_ = 0;
   RingSourceStats stats_;

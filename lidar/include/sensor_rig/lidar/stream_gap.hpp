@@ -24,6 +24,7 @@
 #include <cstdint>
 
 #include "sensor_rig/lidar/packet.hpp"
+#include "sensor_rig/lidar/packet_time.hpp"
 
 namespace sensor_rig::lidar {
 
@@ -48,8 +49,8 @@ class StreamGap {
   // Every packet the decoder is handed, kept or rejected (DecoderPimpl::push, after decoding it),
   // with the decoder's count of packets rejected since the last kept one before and after it: a
   // rise is a packet rejected whole, a fall to 0 (or less than before) a kept packet.
-  void heard(Nanos rx_ns, std::uint32_t rejected_before, std::uint32_t rejected_after) noexcept {
-    const Nanos quiet = quiet_before(rx_ns);
+  void heard(RxTimes rx, std::uint32_t rejected_before, std::uint32_t rejected_after) noexcept {
+    const Nanos quiet = quiet_before(rx);
     if (rejected_after > rejected_before) {
       if (quiet > pending_quiet_) {
         pending_quiet_ = quiet;
@@ -59,7 +60,7 @@ class StreamGap {
       pending_quiet_ = 0;
       rejected_before_quiet_ = 0;
     }
-    last_rx_ = rx_ns;
+    last_rx_ = rx;
     heard_ = true;
   }
   void forget() noexcept {
@@ -68,22 +69,25 @@ class StreamGap {
     rejected_before_quiet_ = 0;
   }
 
-  // How long nothing was heard before a packet received at `rx_ns`, or before the packets rejected
+  // How long nothing was heard before a packet received at `rx`, or before the packets rejected
   // whole since the last kept one if that was longer (0: nothing heard yet). A decoder asks
   // is_silence() only when this exceeds kSilenceTurns packets (a cheap first test: a turn is many
   // packets), so the hot path pays a subtraction and a comparison per packet.
-  [[nodiscard]] Nanos quiet_ns(Nanos rx_ns) const noexcept { return std::max(quiet_before(rx_ns), pending_quiet_); }
+  // Measured on CLOCK_MONOTONIC where known (receive_gap): a host clock step forward is no silence
+  // (a VLP frozen 0.25 s under a +37 s step was taken for a silent sensor, a turn counted twice).
+  [[nodiscard]] Nanos quiet_ns(RxTimes rx) const noexcept { return std::max(quiet_before(rx), pending_quiet_); }
 
   // Of the `rejected` packets rejected whole since the last kept one, those the sensor sent before
   // the silence quiet_ns() measured (the rest came after it: the new stream's).
-  [[nodiscard]] std::uint32_t rejected_before_silence(Nanos rx_ns, std::uint32_t rejected) const noexcept {
-    return pending_quiet_ > quiet_before(rx_ns) ? std::min(rejected, rejected_before_quiet_) : rejected;
+  [[nodiscard]] std::uint32_t rejected_before_silence(RxTimes rx, std::uint32_t rejected) const noexcept {
+    return pending_quiet_ > quiet_before(rx) ? std::min(rejected, rejected_before_quiet_) : rejected;
   }
 
  private:
-  [[nodiscard]] Nanos quiet_before(Nanos rx_ns) const noexcept { return heard_ ? rx_ns - last_rx_ : 0; }
+  // -1 when not known (CLOCK_REALTIME stepped back between the two, no monotonic times): no silence.
+  [[nodiscard]] Nanos quiet_before(RxTimes rx) const noexcept { return heard_ ? receive_gap(rx, last_rx_) : 0; }
 
-  Nanos last_rx_ = 0;
+  RxTimes last_rx_;
   bool heard_ = false;
   Nanos pending_quiet_ = 0;                // the longest quiet before a packet rejected since the last kept one
   std::uint32_t rejected_before_quiet_ = 0;  // packets rejected before that quiet
@@ -104,11 +108,11 @@ class StreamGap {
 // common/network_hold.hpp). One corrupt time byte otherwise made its step to the next packet's a
 // count of turns and packets lost: "66,033,013,710 scans lost" by an OS-LEGACY (rig chaos seed 25,
 // a drawn lidar.corrupt field=time), 15,269 scans and 1,000,000 packets by a VLP-32C
-// (ScanFaults.OneCorruptedTimeAtAScansStartCountsNoPhantomScans). Receive times unknown (0) or
-// stepped back (a host clock step): the sensor's step as it is.
-[[nodiscard]] constexpr std::int64_t sensor_step_within_receive(std::int64_t sensor_step_ns, Nanos rx_ns, Nanos prev_rx_ns) noexcept {
-  if (rx_ns <= 0 || prev_rx_ns <= 0 || rx_ns < prev_rx_ns) return sensor_step_ns;
-  return std::min<std::int64_t>(sensor_step_ns, 2 * (rx_ns - prev_rx_ns));
+// (ScanFaults.OneCorruptedTimeAtAScansStartCountsNoPhantomScans). The receive step is receive_gap's
+// (CLOCK_MONOTONIC where known); unknown or stepped back: the sensor's step as it is.
+[[nodiscard]] constexpr std::int64_t sensor_step_within_receive(std::int64_t sensor_step_ns, RxTimes rx, RxTimes prev_rx) noexcept {
+  const Nanos gap = receive_gap(rx, prev_rx);
+  return gap < 0 ? sensor_step_ns : std::min<std::int64_t>(sensor_step_ns, 2 * gap);
 }
 
 // The sensor's time from one packet to the next is that of a packet or two later (with half a

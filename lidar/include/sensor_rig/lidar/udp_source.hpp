@@ -35,6 +35,7 @@ struct PacketSlot {
   std::span<std::byte> buffer;
   std::size_t size = 0;       // bytes stored (a truncated datagram fills the whole buffer)
   Nanos rx_ns = 0;            // kernel receive time, CLOCK_REALTIME ns
+  Nanos rx_mono_ns = 0;       // the same on CLOCK_MONOTONIC (0: unknown): monotonic_receive_ns
   bool truncated = false;     // the datagram was larger than the buffer
   std::uint32_t src_addr = 0; // IPv4, host byte order
   std::uint16_t src_port = 0;
@@ -125,7 +126,7 @@ class UdpSource {
 
 // The decoder's view of a received slot.
 inline PacketView view(const PacketSlot& slot, std::uint16_t dst_port) noexcept {
-  return PacketView{slot.bytes(), slot.rx_ns, dst_port};
+  return PacketView{slot.bytes(), slot.rx_ns, dst_port, slot.rx_mono_ns};
 }
 
 }  // namespace sensor_rig::lidar

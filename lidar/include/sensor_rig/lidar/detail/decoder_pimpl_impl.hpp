@@ -30,7 +30,7 @@ std::optional<Scan> DecoderPimpl<Impl, Config, Stats>::push(PacketView packet, N
   std::optional<Scan> out;
   const std::uint32_t rejected = d.scans.rejected_since_kept();
   if (d.scans.accept(d.last)) out = d.decode(packet, packet_stamp);
-  d.gaps.heard(packet.rx_ns, rejected, d.scans.rejected_since_kept());  // after: decode judged the gap before this packet
+  d.gaps.heard(rx_times(packet), rejected, d.scans.rejected_since_kept());  // after: decode judged the gap before this packet
   return out;
 }
 template <class Impl, class Config, class Stats>
