@@ -112,7 +112,7 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
 
 // Where the turn began that a scan is the tail of, when its head was lost: a scan short of its turn
 // (one rotation, the rig's rpm) whose stamp is off the source's phase while its end lies where a
-// whole turn from the phase ends. Else its stamp.
+// whole turn from the phase ends, or lies wholly inside a turn from the phase. Else its stamp.
 Nanos SweepMatcher::head_lost_turn_began(const Source& src, Nanos stamp, Nanos span) const noexcept {
   const Nanos p = cfg_.period_ns, tolerance = p / 8;
   if (!src.seen || src.rotations != 1 || src.above_rpm || src.offset != 0 || span <= 0 || span >= p - p / 4) return stamp;
@@ -130,8 +130,14 @@ Nanos SweepMatcher::head_lost_turn_began(const Source& src, Nanos stamp, Nanos s
   // scans (ten-minute campaign, seed 4, the left LIDAR at 358.6 s).
   const Nanos stamp_off = std::abs(signed_circular(stamp - src.phase, p));
   const Nanos began_off = std::abs(signed_circular(began - src.phase, p));
-  if (began_off > tolerance || stamp_off <= began_off) return stamp;
-  return began;
+  if (began_off <= tolerance && stamp_off > began_off) return began;
+  // Head and tail lost: a scan that lies inside one turn from the phase, off it at both ends (a
+  // blind sector across the cut: a VLP-32C seeing only 272-301 deg sends scans of 8 ms stamped
+  // 75 ms into their turn, fused with the others' next rotation: rig chaos seed 9 with drawn
+  // parameters, 179 sweeps). Its turn began on the phase before its stamp.
+  const Nanos into = floor_mod(stamp - src.phase, p);
+  if (into > tolerance && into + span <= p + tolerance) return stamp - into;
+  return stamp;
 }
 
 // A step of the vehicle clock shows in every source's scans that begin after it. The moved source's

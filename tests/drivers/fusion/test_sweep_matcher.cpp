@@ -287,6 +287,29 @@ TEST(SweepMatcher, AScanThatLostItsHeadIsPlacedAsTheTurnItIsTheTailOf) {
   EXPECT_EQ(mixed_sweeps(run2), 0u);
 }
 
+// A LIDAR that sees only 29 deg of its turn for 2.5 s (a blind sector from 301 to 272 deg, across the
+// cut): each scan is 8 ms of points stamped 75 ms into its turn, its head and its tail lost. By its
+// stamp every one lay past the boundary, fused with the others' next rotation (rig chaos seed 9 with
+// drawn parameters: 179 sweeps mixing rotations). Each is placed as the turn it lies in.
+TEST(SweepMatcher, AScanInsideItsTurnOffThePhaseAtBothEndsIsPlacedAsThatTurn) {
+  auto scans = rig_scans(kPhases, 0, 40);
+  for (auto& t : scans) t.span = kPeriod - kMs;
+  for (std::int64_t n = 15; n < 40; ++n) {
+    TrueScan& sliver = find_scan(scans, 0, n);
+    sliver.stamp += 75 * kMs;
+    sliver.span = 8 * kMs;
+  }
+  SimulatedRig run(3);
+  run.feed(scans);
+  run.expect_truth(scans.size());
+  EXPECT_EQ(mixed_sweeps(run), 0u);
+  EXPECT_EQ(run.m_.counters().head_lost_scans, 25u);
+  for (std::int64_t n = 16; n < 39; ++n) {
+    ASSERT_NE(run.sweep_of(n), nullptr) << n;
+    EXPECT_TRUE(run.sweep_of(n)->complete) << n;
+  }
+}
+
 TEST(SweepMatcher, UnknownSourceIsDroppedAndConfigChecked) {
   SweepMatcher m({2, kPeriod, kTimeout});
   EXPECT_TRUE(m.push(7, 0, kDelivery).late);

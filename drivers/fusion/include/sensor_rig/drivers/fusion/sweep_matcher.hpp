@@ -68,7 +68,7 @@ struct SweepCounters {
   std::uint64_t clock_steps_back = 0;    // a source's stamps went back (a new timeline)
   std::uint64_t phase_steps = 0;         // a source's phase jumped (a clock step, or its own phase changed)
   std::uint64_t covered = 0;             // sources absent from a sweep whose rotation their last (slower) scan spans
-  std::uint64_t head_lost_scans = 0;     // placed where their turn began: short of it, their stamp off the phase, their end on it
+  std::uint64_t head_lost_scans = 0;     // placed where their turn began: short of it, their stamp off the phase, their end on it or inside that turn
   std::uint64_t unsynchronized_scans = 0;  // their LIDAR flagged their stamps: their phase did not place the boundary
   std::uint64_t resynchronized = 0;        // a source's stamps synchronized again (its phase places the boundary again)
   std::vector<std::uint64_t> missing;    // per source: emitted sweeps without its scan
