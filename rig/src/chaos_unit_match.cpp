@@ -105,14 +105,14 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
   return best;
 }
 
-UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s) {
+UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos reach) {
   if (s.first_rx_ns == 0) return nullptr;
   UnitTruth* best = nullptr;
   for (auto& u : units) {
     if ((static_cast<std::uint64_t>(u.rec.unit) & 0xffff) != (s.seq & 0xffff)) continue;
     if (best == nullptr || std::llabs(u.rec.acq_ns - s.first_rx_ns) < std::llabs(best->rec.acq_ns - s.first_rx_ns)) best = &u;
   }
-  return best != nullptr && std::llabs(best->rec.acq_ns - s.first_rx_ns) <= kSecond ? best : nullptr;
+  return best != nullptr && std::llabs(best->rec.acq_ns - s.first_rx_ns) <= reach ? best : nullptr;
 }
 
 UnitTruth* unit_by_send(std::vector<UnitTruth>& units, Nanos t) {

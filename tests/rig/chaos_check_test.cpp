@@ -553,6 +553,53 @@ TEST(ChaosCheck, CameraFramesAreTheirUnitsByFrameIdSoSlewedStampsAreStampErrors)
   EXPECT_EQ(r.topics.at(topic).stamps_flagged, 24u);  // 240..10 ms off (the last one is exact)
 }
 
+// A GigE camera under a host clock step of -2 s for 6 s: its truth (host time) runs 2 s behind
+// meanwhile. The frame made just before the step was undone arrived after it, 2.01 s after its
+// acquisition by the host's clock; its stamp was slewed far off (flagged). Held to 1 s, its frame
+// id matched nothing, and by its stamp it took another frame: "published twice" (rig chaos seed 9
+// with drawn parameters). The reach of a frame id covers the campaign's largest host step.
+TEST(ChaosCheck, AFrameArrivingAcrossAHostStepsUndoIsItsUnitByFrameId) {
+  const std::string topic = "/sensors/camera/cam/image_raw";
+  constexpr int kFrames = 120;
+  constexpr Nanos kStep = -2 * kSec, kStepAt = kT0 + 30 * kPeriod + 5'000'000, kStepFor = 6 * kSec;
+  const auto host = [&](Nanos t) { return t >= kStepAt && t < kStepAt + kStepFor ? t + kStep : t; };
+  Input in;
+  truth::Log log, host_log;
+  log.header = truth::Header{"cam", "camera", "fake", topic, "frame", "CLOCK_REALTIME"};
+  host_log.header = truth::Header{"host", "host", "", "", "", "CLOCK_REALTIME"};
+  host_log.faults.push_back(truth::FaultRecord{1, "host.clock_step", kStepAt, kStepAt + kStepFor, -1, "ms=-2000, back after the fault"});
+  const int last_in_step = static_cast<int>((kStepAt + kStepFor - kT0 - 1) / kPeriod);
+  for (int u = 0; u < kFrames; ++u) {
+    const Nanos made = kT0 + u * kPeriod, acq = host(made);
+    log.units.push_back(truth::UnitRecord{u, acq, acq, 1});
+    log.parts.push_back(truth::PartRecord{static_cast<std::uint64_t>(u), u, acq, acq, acq, truth::Fate::kSent, 0});
+    SampleRecord s;
+    s.topic = topic;
+    s.seq = static_cast<std::uint64_t>(u);
+    s.acquisition_ns = acq;
+    s.first_rx_ns = host(made + 10'000'000);
+    if (u == last_in_step) {
+      ASSERT_GT(s.first_rx_ns - acq, 2 * kSec) << "arrives after the undo";
+      s.acquisition_ns = kT0 + 100 * kPeriod;  // slewed: another frame's time
+    }
+    s.publish_ns = s.first_rx_ns + 5'000'000;
+    s.received_ns = s.publish_ns + 1'000'000;
+    s.packets = 1;
+    in.samples.push_back(s);
+  }
+  in.truths = {log, host_log};
+  in.unsynchronized[topic] = {{kT0 + 50 * kPeriod, kT0 + 110 * kPeriod}};
+  in.monitor[topic] = MonitorTotals{kFrames, 0};
+  in.expected[topic] = TopicExpectation{"cam", 10.0, {}};
+  in.epoch_vehicle_ns = kT0;
+  in.window_begin_ns = kT0;
+  in.window_end_ns = kT0 + kFrames * kPeriod;
+  const Result r = check(in);
+  EXPECT_EQ(r.topics.at(topic).published_twice, 0u) << result_text(r);
+  EXPECT_EQ(r.topics.at(topic).unaccounted, 0u) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+}
+
 TEST(ChaosCheck, AStarvedHealthyDeviceBreaksIsolation) {
   Input in = honest();
   in.expected[kTopic].rate_hz = 10.0;
