@@ -26,10 +26,10 @@ TEST(MonotonicStamps, HeldStampsStayDistinct) {
   MonotonicStamps m(0.1);
   EXPECT_EQ(m.apply(1000 * kMs), 1000 * kMs);
   m.realtime_step(-500 * kMs);
-  const Nanos a = m.apply(600 * kMs);   // held: the step back
-  const Nanos b = m.apply(600 * kMs + 1);  // 1 ns of raw time: slewed by ceil(0.1) = 1 ns, held again
+  const Nanos a = m.apply(600 * kMs);   // the step back, taken whole: 600 + 500 ms
+  const Nanos b = m.apply(600 * kMs + 1);  // 1 ns of raw time: slewed by ceil(0.1) = 1 ns, held
   const Nanos c = m.apply(600 * kMs + 1);  // the same raw stamp again
-  EXPECT_EQ(a, 1000 * kMs + 1);
+  EXPECT_EQ(a, 1100 * kMs);
   EXPECT_GT(b, a);
   EXPECT_GT(c, b);
   MonotonicStamps n(0.1);
@@ -80,7 +80,7 @@ TEST(MonotonicStamps, AStepBackUndoneTakesItsCorrectionBackAtOnce) {
   f.realtime_step(3000 * kMs);
   EXPECT_EQ(f.apply(4100 * kMs), 4100 * kMs);
   f.realtime_step(-1000 * kMs);
-  EXPECT_EQ(f.apply(3200 * kMs), 4100 * kMs + 1);
+  EXPECT_EQ(f.apply(3200 * kMs), 4200 * kMs) << "the step whole: vehicle time as it ran before it";
   EXPECT_EQ(f.status().backward_steps, 1u);
 }
 
@@ -91,13 +91,15 @@ TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
   EXPECT_EQ(m.apply(2100 * kMs), 2100 * kMs);  // forward step: at once
   EXPECT_EQ(m.status().backward_steps, 0u);
   m.realtime_step(-1000 * kMs);                // the host's CLOCK_REALTIME went back 1 s
-  EXPECT_EQ(m.apply(1200 * kMs), 2100 * kMs + 1);  // the mapping follows (+0.1 s elapsed): held 1 ns on
+  // The mapping follows (+0.1 s elapsed): the announced second added whole, so the 0.1 s since the
+  // last stamp stays in the stamp (held at the last output, it was stamped 0.1 s early).
+  EXPECT_EQ(m.apply(1200 * kMs), 2200 * kMs);
   EXPECT_EQ(m.status().backward_steps, 1u);
-  EXPECT_EQ(m.status().correction_ns, 900 * kMs + 1);
+  EXPECT_EQ(m.status().correction_ns, 1000 * kMs);
   EXPECT_EQ(m.status().last_backward_ns, 900 * kMs);
-  // Then 0.9x real rate until the correction is gone (9 s for 0.9 s), never backwards.
-  Nanos last = 2100 * kMs + 1, raw = 1200 * kMs;
-  for (int i = 0; i < 95; ++i) {
+  // Then 0.9x real rate until the correction is gone (10 s for 1 s), never backwards.
+  Nanos last = 2200 * kMs, raw = 1200 * kMs;
+  for (int i = 0; i < 105; ++i) {
     raw += 100 * kMs;
     const Nanos out = m.apply(raw);
     EXPECT_GT(out, last) << i;
@@ -106,7 +108,7 @@ TEST(MonotonicStamps, ForwardPassesBackwardIsHeldAndSlewedOut) {
   }
   EXPECT_EQ(m.status().correction_ns, 0);
   EXPECT_EQ(m.apply(raw + 100 * kMs), raw + 100 * kMs);
-  EXPECT_EQ(m.status().max_correction_ns, 900 * kMs + 1);
+  EXPECT_EQ(m.status().max_correction_ns, 1000 * kMs);
   // A small backward wobble (a refit) is held, not counted as a step.
   (void)m.apply(raw + 99 * kMs);
   EXPECT_EQ(m.status().backward_steps, 1u);
@@ -185,8 +187,8 @@ void run_steps(DeviceTimeKind kind) {
   // Before the step, 10 s after it (slewed out) and after the forward step: vehicle time.
   for (std::size_t k : {std::size_t{40}, std::size_t{170}, std::size_t{190}, std::size_t{230}, out_scans.size() - 1})
     EXPECT_NEAR(static_cast<double>(out_scans[k] - truth[k]), 0.0, 1e6) << "scan " << k;
-  // During the slew, stamps advance at 0.9x: held 0.9 s (the step less one scan), 3 s later 0.6 s left.
-  EXPECT_NEAR(static_cast<double>(out_scans[80] - truth[80]), 0.6e9, 0.05e9);
+  // During the slew, stamps advance at 0.9x: the step taken whole (1 s), 3 s later 0.7 s left.
+  EXPECT_NEAR(static_cast<double>(out_scans[80] - truth[80]), 0.7e9, 0.05e9);
 }
 
 TEST(RealtimeSteps, VelodyneStampsStayMonotonicThroughHostClockSteps) { run_steps(DeviceTimeKind::kMicrosSinceHour); }
