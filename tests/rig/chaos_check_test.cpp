@@ -670,6 +670,23 @@ TEST(ChaosCheck, RecoveryIsTheFirstCompleteScanAfterTheFault) {
   EXPECT_NEAR(r.topics.at(kTopic).recovery_max_s, 0.1, 1e-6);
 }
 
+// A host clock step of +1.5 s from 0.5 s, undone at 2.0 s: the host time from 2.0 to 3.5 s is read a
+// second time, and its units are reconciled by number, not matched to samples. Recovery from the
+// step is judged from where that time ends: from the fault's end, it found no complete sample
+// within the LIDAR's second (rig chaos seed 9 with drawn parameters: front and left "not back" after a
+// +2 s step whose scans were all complete).
+TEST(ChaosCheck, RecoveryIntoDoubledHostTimeIsJudgedFromWhereItEnds) {
+  Input in = honest();
+  truth::Log host;
+  host.header = truth::Header{"host", "host", "", "", "", "CLOCK_REALTIME"};
+  host.faults.push_back(truth::FaultRecord{2, "host.clock_step", kT0 + 5 * kPeriod, kT0 + 20 * kPeriod, -1, "ms=1500, back after the fault"});
+  in.truths.push_back(host);
+  in.events.push_back(faults::FaultEvent{2, "host.clock_step", "", 0.5, 1.5, {{"ms", "1500"}}});
+  const Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("recovery")) << result_text(r);
+  EXPECT_NEAR(r.topics.at(kTopic).recovery_max_s, 0.0, 1e-6) << "back at 3.5 s, the first scan judged";
+}
+
 // A camera planned dead for the whole run has no recovery to judge, not even from its trigger
 // LIDAR's faults (the whole-rig campaign reported stereo_right "not back" after an rpm change).
 TEST(ChaosCheck, ACameraThatNeverAnswersHasNoRecoveryToJudge) {
