@@ -681,7 +681,7 @@ TEST(ChaosCheck, RecoveryIntoDoubledHostTimeIsJudgedFromWhereItEnds) {
   host.header = truth::Header{"host", "host", "", "", "", "CLOCK_REALTIME"};
   host.faults.push_back(truth::FaultRecord{2, "host.clock_step", kT0 + 5 * kPeriod, kT0 + 20 * kPeriod, -1, "ms=1500, back after the fault"});
   in.truths.push_back(host);
-  in.events.push_back(faults::FaultEvent{2, "host.clock_step", "", 0.5, 1.5, {{"ms", "1500"}}});
+  in.events.push_back(faults::FaultEvent{2, "host.clock_step", "", 0.5, 1.497, {{"ms", "1500"}}});  // undone 3 ms after its plan
   const Result r = check(in);
   EXPECT_TRUE(r.invariants.at("recovery")) << result_text(r);
   EXPECT_NEAR(r.topics.at(kTopic).recovery_max_s, 0.0, 1e-6) << "back at 3.5 s, the first scan judged";

@@ -530,7 +530,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                               detail::turn_step(prev_az, emit_raw) <= detail::turn_step(prev_az, a0);
       // Rejected packets (a frozen azimuth) filled these slots first: dropped, not missing too.
       const auto take = [&](std::uint32_t k) { return scans.missing_beyond_rejected(k); };
-      scans.add_missing(take(detail::packets_on_arc(fov, prev_az, emit_raw, fit.step, groups)));
+      // Every group across the gap, the lost packets' by the sensor's time: their step, for where the
+      // boundaries fall (turns_group_step).
+      const double gstep = detail::turns_group_step(fov, prev_az, a0, gap.turns,
+                                                    prev_trailing_bad + first_good + 1 + static_cast<long>(gap.missing) * groups, fit.step);
+      scans.add_missing(take(detail::lost_before(fov, prev_az, emit_raw, gstep, groups, prev_trailing_bad)));
       scans.merge(out, end(scans.current().from_cut));
       scans.drop_next();
       window_hole.open = 0;
@@ -540,7 +544,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       scans.current().from_cut = 2 * detail::turn_step(emit_raw, a0) < fov.length();
       (void)take(static_cast<std::uint32_t>(std::lround((gap.turns - (az_crosses ? 0 : 1)) * fov.length() /
                                                         std::max(1.0, fit.step * groups))));
-      scans.add_missing(take(detail::packets_on_arc(fov, emit_raw, a0, fit.step, groups)));
+      scans.add_missing(take(detail::lost_after(fov, reset_raw, a0, gstep, groups, first_good + 1)));
       scans.lose_scans(gap.turns + (az_crosses ? 1U : 0U) - 1U);
       to_caller_line();
       have_prev = false;
@@ -554,7 +558,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       if (missing >= 2) {
         // The gap's packets, the first one group past the last kept.
         const detail::GapPackets lacked{prev_az + fit.step, fit.step * groups, missing};
-        if (blind.is_blind(prev_az, az[first_good], tol, detail::kTurn, tol / 2, lacked)) {
+        if (blind.ended_inside(prev_az, az[first_good], tol, detail::kTurn) ||
+            blind.is_blind(prev_az, az[first_good], tol, detail::kTurn, tol / 2, lacked)) {
           missing = 0;
         } else if (const auto* arc = blind.learned_within(prev_az, az[first_good], tol, detail::kTurn)) {
           // A loss burst beside the blind sector: only the burst is loss.

@@ -489,7 +489,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
         if (missing_before >= 2 && scans.rejected_since_kept() == 0) {
           // Packet slots: the gap's packets are the slots after the last kept one, a slot each.
           const detail::GapPackets lacked{static_cast<double>(prev_slot + 1), 1.0, missing_before};
-          if (blind.is_blind(prev_slot, slot, 2, packets_per_frame, 0, lacked)) {
+          if (blind.ended_inside(prev_slot, slot, 2, packets_per_frame) ||
+              blind.is_blind(prev_slot, slot, 2, packets_per_frame, 0, lacked)) {
             missing_before = 0;
           } else if (const auto* arc = blind.learned_within(prev_slot, slot, 2, packets_per_frame)) {
             // A loss burst beside the blind sector: only the burst is loss.

@@ -452,14 +452,18 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       const bool az_crosses = detail::turn_step(prev_az, cut) > 0 && detail::turn_step(prev_az, cut) <= detail::turn_step(prev_az, a0);
       // Rejected packets (a frozen azimuth) filled these slots first: dropped, not missing too.
       const auto take = [&](std::uint32_t k) { return scans.missing_beyond_rejected(k); };
-      if (!early_cut) scans.add_missing(take(detail::packets_on_arc(fov, prev_az, cut, fit.step, groups)));
+      // Every group across the gap, the lost packets' by the sensor's time: their step, for where the
+      // boundaries fall (turns_group_step).
+      const double gstep = detail::turns_group_step(fov, prev_az, a0, gap.turns,
+                                                    prev_trailing_bad + first_good + 1 + static_cast<long>(gap.missing) * groups, fit.step);
+      if (!early_cut) scans.add_missing(take(detail::lost_before(fov, prev_az, cut, gstep, groups, prev_trailing_bad)));
       // The next scan starts at the cut when it lacks less than half its turn; otherwise its
       // stamp (its first packet) would lie nearer the next turn's: not published, a lost scan.
       const bool next_whole = 2 * detail::turn_step(cut, a0) < fov.length();
       out = end(scans.current().from_cut, next_whole);
       (void)take(static_cast<std::uint32_t>(std::lround((gap.turns - (az_crosses ? 0 : 1)) * fov.length() /
                                                         std::max(1.0, fit.step * groups))));
-      scans.add_missing(take(detail::packets_on_arc(fov, cut, a0, fit.step, groups)));
+      scans.add_missing(take(detail::lost_after(fov, cut, a0, gstep, groups, first_good + 1)));
       scans.lose_scans(gap.turns + (az_crosses ? 1U : 0U) - 1U);
       have_prev = false;  // the cut is done: the first group opens the new scan
       gap = {};
@@ -471,7 +475,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       if (gap.missing >= 2) {
         // The gap's packets, the first one group past the last kept.
         const detail::GapPackets lacked{prev_az + fit.step, fit.step * groups, gap.missing};
-        if (blind.is_blind(prev_az, na[first_good], tol, detail::kTurn, tol / 2, lacked)) {
+        if (blind.ended_inside(prev_az, na[first_good], tol, detail::kTurn) ||
+            blind.is_blind(prev_az, na[first_good], tol, detail::kTurn, tol / 2, lacked)) {
           gap.missing = 0;
         } else if (const auto* arc = blind.learned_within(prev_az, na[first_good], tol, detail::kTurn)) {
           // A loss burst beside the blind sector: only the burst is loss.

@@ -291,6 +291,31 @@ TEST_P(ScanFaults, BlindSectorIsLearnedAfterOneTurn) {
   EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
 }
 
+// A learned sector that ends while the rotor is inside it (the sensor sends again from 135 deg, half
+// way through 90-180): the gap from the sector's start to there was never sent either. Counted
+// missing before (rig chaos seed 9 with drawn parameters: a VLP-32C's 331-degree sector ending
+// mid-turn, 23 packets never sent counted missing).
+TEST_P(ScanFaults, ABlindSectorEndingMidArcCountsNothingMissing) {
+  std::vector<Pkt> pkts;
+  const Nanos t0 = s_.pkts.front().stamp;
+  for (const auto& p : s_.pkts) {
+    const Nanos t = p.stamp - t0;
+    const bool blind = (t >= 250'000'000 && t < 650'000'000 && p.rotor_deg >= 90.0 && p.rotor_deg < 180.0) ||
+                       (t >= 650'000'000 && t < 760'000'000 && p.rotor_deg >= 90.0 && p.rotor_deg < 135.0);
+    if (!blind) pkts.push_back(p);
+  }
+  const Decoded r = run(s_.options, pkts);
+  EXPECT_EQ(r.scans.size(), clean_.scans.size());
+  std::size_t incomplete = 0;
+  std::string per_scan;
+  for (const auto& sc : r.scans) {
+    incomplete += sc.missing_packets > 0 ? 1 : 0;
+    per_scan += std::to_string(sc.missing_packets) + " ";
+  }
+  EXPECT_EQ(incomplete, 1U) << per_scan << "the blind sector's first turn only";
+  EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
+}
+
 // The same for a sector across the cut (from 300 deg to 60 deg, and from 279 deg to 160 deg: more
 // than half the turn): its missing packets lie at the end of one scan and the start of the next.
 // The OS-LEGACY never learned such a sector (its gap across the frame's end was not held against
@@ -489,7 +514,11 @@ TEST_P(FrozenAzimuth, NoShortScansTurnsCountedLostPacketsDroppedOnce) {
     } else {
       EXPECT_EQ(accounted, clean.scans.size()) << from << ": " << seen << " lost " << r.st.scans_lost;
     }
-    EXPECT_LE(r.missing() + r.dropped(), n + 2) << from << ": each frozen packet counted once";
+    // Each frozen packet counted once, but those in a Pandar40P's cut window (its channels straddle
+    // the cut: about 3 packets) are in both scans there, as the truth's units; each scan counts
+    // them (lidar/detail/azimuth_continuity.hpp lost_before, lost_after).
+    const std::size_t in_both = std::string(GetParam()) == "Pandar40P" ? 3 : 0;
+    EXPECT_LE(r.missing() + r.dropped(), n + 2 + in_both) << from << ": each frozen packet counted once";
     EXPECT_GE(r.missing() + r.dropped(), n / 4) << from;
   }
 }
