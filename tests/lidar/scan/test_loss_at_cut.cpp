@@ -137,11 +137,14 @@ TEST_P(LossAtCut, EachScanLacksTheLostPacketsTheTruthGivesIt) {
 // Loss bursts longer than a turn (rig chaos seed 9 with drawn parameters: 340 packets of a VLP-32C,
 // 2.2 turns: "13 packets of scan 891 lost, 12 counted" and 3 scans neither published nor counted
 // lost). Every scan the truth made is published, with the packets the truth says it lacks counted
-// missing, or counted lost whole; nothing more.
+// missing, or counted lost whole; nothing more. Up to 2.9 turns: from kSilenceTurns (3) on, nothing
+// heard is a silence (stream_gap.hpp), and a model without packet numbers cannot tell a sensor that
+// stopped sending from one whose packets were all lost (open: rig chaos seed 9, a 310-packet burst
+// of the front VLP-32C at 900 rpm, 3.07 turns: 2 of its 4 scans neither published nor counted).
 TEST_P(LossAtCut, ABurstLongerThanATurnIsCountedScanByScan) {
   const Case& c = GetParam();
-  const Rendered r = render_with_units(c.model, c.rpm, c.returns, 200.0, 7.5);
-  const std::size_t per_turn = r.pkts.size() * 2 / 15;  // about
+  const Rendered r = render_with_units(c.model, c.rpm, c.returns, 200.0, 8.5);
+  const std::size_t per_turn = r.pkts.size() * 2 / 17;  // about
   ScanStats clean_stats;
   const std::vector<Scan> clean = decode(r.options, r.pkts, 0, 0, &clean_stats);
   const Nanos quantum = is_ouster_model(c.model) ? 1 : 1000;
@@ -151,7 +154,7 @@ TEST_P(LossAtCut, ABurstLongerThanATurnIsCountedScanByScan) {
   std::map<std::int64_t, std::uint32_t> clean_units;
   for (const Scan& s : clean) clean_units[unit_of(s)] = s.missing_packets;
   int cases = 0;
-  for (const double turns : {1.0, 1.3, 2.24, 2.6})
+  for (const double turns : {1.0, 1.3, 2.24, 2.6, 2.9})
     for (int at = 0; at < 8; ++at) {
       const auto burst = static_cast<std::size_t>(turns * static_cast<double>(per_turn));
       const std::size_t from = per_turn + per_turn * static_cast<std::size_t>(at) / 8;
@@ -194,6 +197,7 @@ INSTANTIATE_TEST_SUITE_P(Models, LossAtCut,
                                          Case{"VLP-16", 600, ReturnSelection::kStrongest, 4.78},
                                          Case{"VLP-32C", 600, ReturnSelection::kStrongest, 2.39},
                                          Case{"VLP-32C", 1200, ReturnSelection::kDual, 2.39},
+                                         Case{"VLP-32C", 900, ReturnSelection::kStrongest, 2.39},
                                          Case{"OS-LEGACY", 600, ReturnSelection::kStrongest, 5.625}),
                          [](const testing::TestParamInfo<Case>& i) {
                            std::string n = std::string(i.param.model) + "_" + std::to_string(static_cast<int>(i.param.rpm)) +
