@@ -103,7 +103,7 @@ struct TopicResult {
   std::uint64_t stamps_outside = 0;        // stamp error beyond the bound, the topic not flagged
   std::uint64_t stamps_flagged = 0;        // beyond the bound while the rig flagged it unsynchronized
   std::uint64_t mixes_flagged = 0;         // fused sweeps regrouped by member stamps the rig flagged (mixing rotations, or whole without a scan of the true one)
-  std::uint64_t mixes_regrouped = 0;       // fused sweeps one rotation by the boundary a rotation before or after (a LIDAR's phase moved)
+  std::uint64_t mixes_regrouped = 0;       // fused sweeps one rotation by the boundary a rotation before or after (a LIDAR's phase moved), or by the boundary in a gap as wide (a tie)
   // |stamp - truth| over the judged samples. With fewer than 100 samples p99 is the largest but
   // one or the largest: a frame the host held is in it; the median is the stamps' body.
   double stamp_error_p50_ms = 0;

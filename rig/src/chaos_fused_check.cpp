@@ -61,6 +61,7 @@ struct Phases {
   std::vector<char> above;               // per LIDAR: its latest scan then was above the rig's rpm
   std::vector<Nanos> sorted;
   Nanos widest = -1, middle = 0;
+  Nanos second = -1, second_middle = 0;  // the next widest gap (tied_boundary)
 };
 Phases phases_between(const std::vector<Lidar>& lidars, Nanos period, Nanos from, Nanos to) {
   Phases ph;
@@ -78,12 +79,32 @@ Phases phases_between(const std::vector<Lidar>& lidars, Nanos period, Nanos from
   std::sort(ph.sorted.begin(), ph.sorted.end());
   for (std::size_t i = 0; i < ph.sorted.size(); ++i) {
     const Nanos next = i + 1 < ph.sorted.size() ? ph.sorted[i + 1] : ph.sorted[0] + period;
-    if (next - ph.sorted[i] > ph.widest) {
-      ph.widest = next - ph.sorted[i];
-      ph.middle = floor_mod(ph.sorted[i] + ph.widest / 2, period);
+    const Nanos gap = next - ph.sorted[i], middle = floor_mod(ph.sorted[i] + gap / 2, period);
+    if (gap > ph.widest) {
+      ph.second = ph.widest;
+      ph.second_middle = ph.middle;
+      ph.widest = gap;
+      ph.middle = middle;
+    } else if (gap > ph.second) {
+      ph.second = gap;
+      ph.second_middle = middle;
     }
   }
   return ph;
+}
+
+Nanos signed_mod(Nanos x, Nanos period);  // below
+
+// Two gaps between the phases within a sixteenth of a rotation of each other (phases half a turn
+// apart: 30, 31 and 80 ms leave 49 and 50): either is where the scans lie closest together, and the
+// matcher may keep its boundary in the one the judge did not take (its own quarter-gap rule, its
+// moment of placing). The boundary in the other gap, near `b`; nullopt when there is no tie.
+// (Rig chaos seed 9 with drawn parameters: the front back from 1200 rpm half a turn from the others,
+// 311 sweeps "mixed rotations", each one rotation by the other gap.)
+std::optional<Nanos> tied_boundary(const Phases& ph, Nanos b, Nanos period) {
+  if (ph.second < period / 4 || ph.widest - ph.second > period / 16) return std::nullopt;
+  const Nanos to_widest = signed_mod(ph.middle - b, period), to_second = signed_mod(ph.second_middle - b, period);
+  return b + (std::llabs(to_widest) >= std::llabs(to_second) ? to_widest : to_second);
 }
 
 // x in [-period/2, period/2).
@@ -179,6 +200,17 @@ class FusedJudge {
     return boundaries_[static_cast<std::size_t>(i)];
   }
   std::int64_t rotation(Nanos acq) const { return floor_div(acq - boundary_at(acq), period_); }
+  // Whether the members are one rotation by the tied boundary of the piece `at` lies in.
+  bool one_rotation_by_tie(const std::vector<Member>& members, Nanos at) const {
+    if (tied_.empty()) return false;
+    const std::int64_t i = std::clamp<std::int64_t>(floor_div(at - pieces_from_, piece_), 0, static_cast<std::int64_t>(tied_.size()) - 1);
+    const auto& tie = tied_[static_cast<std::size_t>(i)];
+    if (!tie) return false;
+    std::set<std::int64_t> rotations;
+    for (const auto& m : members)
+      if (m.truth != nullptr && !short_of_a_turn(m)) rotations.insert(floor_div(m.truth->acq - *tie, period_));
+    return rotations.size() == 1;
+  }
   // Where rotation n begins (its boundary's piece found from the first piece's numbering, once refined).
   Nanos rotation_start(std::int64_t n) const {
     Nanos start = boundary_at(pieces_from_) + n * period_;
@@ -215,6 +247,7 @@ class FusedJudge {
       since_move = a_lidar_moved(before, ph, period_) ? 0 : since_move + 1;
       b = rotation_boundary(ph, since_move <= kSettlingPieces, period_, b);
       boundaries_.push_back(b.value_or(0));
+      tied_.push_back(b ? tied_boundary(ph, *b, period_) : std::nullopt);
 
       // A LIDAR silent in this piece keeps the phase it was last on (the matcher keeps a dead
       // source's): its return on another phase is a move.
@@ -346,7 +379,7 @@ class FusedJudge {
       if (!short_of_a_turn(m)) rotations.emplace(rotation(m.truth->acq), &m);
       if (earliest == nullptr || m.truth->acq < earliest->truth->acq) earliest = &m;
     }
-    if (rotations.size() > 1 && one_rotation_while_regrouping(members, earliest)) {
+    if (rotations.size() > 1 && (one_rotation_while_regrouping(members, earliest) || one_rotation_by_tie(members, earliest->truth->acq))) {
       ++t_.mixes_regrouped;
     } else if (rotations.size() > 1) {
       std::string what = sweep + " mixes rotations:";
@@ -651,6 +684,7 @@ class FusedJudge {
   const Nanos period_;
   Nanos pieces_from_ = 0;
   std::vector<Nanos> boundaries_;  // per piece of piece_ from pieces_from_ (not wrapped)
+  std::vector<std::optional<Nanos>> tied_;  // per piece: the boundary in a gap as wide (tied_boundary)
   std::vector<Lidar> lidars_;
   std::map<std::string, std::size_t> lidar_of_;
   std::map<std::uint64_t, const SampleRecord*> clouds_;                          // fused clouds by seq
