@@ -95,14 +95,15 @@ Phases phases_between(const std::vector<Lidar>& lidars, Nanos period, Nanos from
 
 Nanos signed_mod(Nanos x, Nanos period);  // below
 
-// Two gaps between the phases within a sixteenth of a rotation of each other (phases half a turn
-// apart: 30, 31 and 80 ms leave 49 and 50): either is where the scans lie closest together, and the
+// Two gaps between the phases within a fiftieth of a rotation of each other (2 ms at 600 rpm: phases
+// half a turn apart, 30, 31 and 80 ms, leave 49 and 50): either is where the scans lie closest
+// together (a few ms apart they are not: 36 against 41 ms is the judge's to decide), and the
 // matcher may keep its boundary in the one the judge did not take (its own quarter-gap rule, its
 // moment of placing). The boundary in the other gap, near `b`; nullopt when there is no tie.
 // (Rig chaos seed 9 with drawn parameters: the front back from 1200 rpm half a turn from the others,
 // 311 sweeps "mixed rotations", each one rotation by the other gap.)
 std::optional<Nanos> tied_boundary(const Phases& ph, Nanos b, Nanos period) {
-  if (ph.second < period / 4 || ph.widest - ph.second > period / 16) return std::nullopt;
+  if (ph.second < period / 4 || ph.widest - ph.second > period / 50) return std::nullopt;
   const Nanos to_widest = signed_mod(ph.middle - b, period), to_second = signed_mod(ph.second_middle - b, period);
   return b + (std::llabs(to_widest) >= std::llabs(to_second) ? to_widest : to_second);
 }
