@@ -7,9 +7,9 @@
 // (see scan_assembler.hpp for why those stay visible to the compiler).
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/lidar/stream_gap.hpp"
@@ -456,7 +456,9 @@ inline std::uint32_t lost_touching_within(long b, int groups_before_first, int g
 // packet's fitted step is off by up to ~1/groups of a 0.01° from its rounded azimuths, which over a
 // burst of lost packets adds up to a fraction of a group (a VLP-32C, 19.9 hundredths of a degree per
 // group: 5 lost packets placed ~0.05° off, one of them charged to the wrong scan at the cut). `fit_step` when the gap
-// disagrees with it by half a group or more (packets rejected inside it, a blind arc).
+// disagrees with it by half a group or more, or by a 256th of its groups where that is more (the
+// fitted step's error grows with the gap: 7 groups over a turn of a VLP-32C); packets rejected
+// inside it or a blind arc make it disagree by far more.
 inline double gap_group_step(const AzimuthFov& fov, int prev_az, int first_az, long groups, double fit_step) noexcept {
   if (groups <= 0 || fit_step <= 0.5) return fit_step;
   const int arc = turn_step(prev_az, first_az);
