@@ -232,8 +232,8 @@ class Checker {
     // neighbour, and the judge would report a scan published twice and another unaccounted instead
     // of the stamp's error. No such unit (no arrival in the record): by the stamp.
     const bool by_frame_id = t.device_class == "camera" || t.device_class == "v4l2";
-    Nanos frame_id_reach = kSecond;
-    for (const auto& step : slews_) frame_id_reach = std::max(frame_id_reach, kSecond + step.step);
+    std::vector<Nanos> host_steps;  // their sizes: how far a frame's arrival may lie from it across one
+    for (const auto& step : slews_) host_steps.push_back(step.step);
     const bool by_arrival = t.device_class == "lidar";
     // A CAN frame is its unit by the send that brackets its kernel receive stamp (unit_by_send).
     const bool by_send = t.device_class == "dbw";
@@ -252,7 +252,7 @@ class Checker {
       const bool in_order = previous != nullptr && s->seq > previous->seq;
       UnitTruth* u = by_arrival    ? unit_by_arrival(units, *s, tolerance, held_, in_order ? previous_unit : std::numeric_limits<std::int64_t>::min(),
                                                      doubled(s->first_rx_ns))
-                     : by_frame_id ? unit_by_frame_id(units, *s, frame_id_reach)
+                     : by_frame_id ? unit_by_frame_id(units, *s, host_steps)
                      : by_send     ? unit_by_send(units, s->acquisition_ns)
                                    : nullptr;
       if (u != nullptr && by_arrival) {

@@ -105,14 +105,26 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
   return best;
 }
 
-UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos reach) {
+UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s, const std::vector<Nanos>& host_steps) {
   if (s.first_rx_ns == 0) return nullptr;
-  UnitTruth* best = nullptr;
-  for (auto& u : units) {
-    if ((static_cast<std::uint64_t>(u.rec.unit) & 0xffff) != (s.seq & 0xffff)) continue;
-    if (best == nullptr || std::llabs(u.rec.acq_ns - s.first_rx_ns) < std::llabs(best->rec.acq_ns - s.first_rx_ns)) best = &u;
-  }
-  return best != nullptr && std::llabs(best->rec.acq_ns - s.first_rx_ns) <= reach ? best : nullptr;
+  // The nearest unit of its id by `distance`, within 1 s: first as the clocks read, then (none
+  // there) beyond a host step between them, its size taken off. In that order: a unit 37.06 s away
+  // beside a -37 s step is nearer by the second than the frame's own 0.3 s away.
+  const auto nearest = [&](const auto& distance) -> UnitTruth* {
+    UnitTruth* best = nullptr;
+    for (auto& u : units) {
+      if ((static_cast<std::uint64_t>(u.rec.unit) & 0xffff) != (s.seq & 0xffff)) continue;
+      if (best == nullptr || distance(u) < distance(*best)) best = &u;
+    }
+    return best != nullptr && distance(*best) <= kSecond ? best : nullptr;
+  };
+  const auto apart = [&](const UnitTruth& u) { return std::llabs(u.rec.acq_ns - s.first_rx_ns); };
+  if (UnitTruth* u = nearest(apart)) return u;
+  return nearest([&](const UnitTruth& u) {
+    Nanos off = std::numeric_limits<Nanos>::max();
+    for (const Nanos step : host_steps) off = std::min<Nanos>(off, std::llabs(apart(u) - step));
+    return off;
+  });
 }
 
 UnitTruth* unit_by_send(std::vector<UnitTruth>& units, Nanos t) {

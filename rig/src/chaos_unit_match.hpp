@@ -18,12 +18,15 @@ UnitTruth* unit_by_arrival(std::vector<UnitTruth>& units, const SampleRecord& s,
                            const std::vector<HeldInterval>& held, std::int64_t after_unit, bool doubled_arrival = false);
 
 // The unit with the sample's frame id (a camera's 16-bit GVSP block id, a V4L2 sequence: the low
-// 16 bits of the truth's unit) nearest its first packet's arrival, within `reach`: 1 s, plus the
-// largest host clock step of the campaign (the truth's acquisition and the arrival are host times;
-// a frame made just before a -2 s step was undone arrived "2.01 s" after it, matched by its slewed
-// stamp to a frame 31 s later: "published twice", rig chaos seed 9 with drawn parameters). Ids
-// repeat after 65,535 frames (109 min at 10 Hz), or after a camera's restart: the nearest wins.
-UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s, Nanos reach = kSecond);
+// 16 bits of the truth's unit) nearest its first packet's arrival, within 1 s, or within 1 s of
+// one of the campaign's host clock steps (`host_steps`, their sizes) from it: the truth's
+// acquisition and the arrival are host times, and a frame made just before a -2 s step was undone
+// arrived "2.01 s" after it (matched by its slewed stamp to a frame 31 s later: "published twice",
+// rig chaos seed 9 with drawn parameters). Not within the largest step whatever the distance: a
+// camera's ids begin again after a restart, and a frame 20 s after another of its id took that
+// one's unit (seed 4: "published twice (seq 248 and 248)"). Ids repeat after 65,535 frames (109 min
+// at 10 Hz), or after a restart: the nearest wins.
+UnitTruth* unit_by_frame_id(std::vector<UnitTruth>& units, const SampleRecord& s, const std::vector<Nanos>& host_steps = {});
 
 // The one unit whose send brackets `t`: its acquisition (the clock read just before the send) at or
 // before it, its part's send return (`last_tx`) at or after it. A CAN frame's sample is stamped by

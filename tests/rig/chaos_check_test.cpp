@@ -553,21 +553,24 @@ TEST(ChaosCheck, CameraFramesAreTheirUnitsByFrameIdSoSlewedStampsAreStampErrors)
   EXPECT_EQ(r.topics.at(topic).stamps_flagged, 24u);  // 240..10 ms off (the last one is exact)
 }
 
-// A GigE camera under a host clock step of -2 s for 6 s: its truth (host time) runs 2 s behind
-// meanwhile. The frame made just before the step was undone arrived after it, 2.01 s after its
+// A GigE camera under a host clock step of -5 s for 6 s: its truth (host time) runs 5 s behind
+// meanwhile. The frame made just before the step was undone arrived after it, 5.01 s after its
 // acquisition by the host's clock; its stamp was slewed far off (flagged). Held to 1 s, its frame
 // id matched nothing, and by its stamp it took another frame: "published twice" (rig chaos seed 9
-// with drawn parameters). The reach of a frame id covers the campaign's largest host step.
+// with drawn parameters). A frame id reaches across a host step of the campaign (its size, within
+// 1 s), not over any distance up to the largest: a camera's ids begin again after a restart, and a
+// frame 3 s after another of its id is its own, not that one (seed 4: "published twice (seq 248
+// and 248)" with a reach of 1 s plus the largest step).
 TEST(ChaosCheck, AFrameArrivingAcrossAHostStepsUndoIsItsUnitByFrameId) {
   const std::string topic = "/sensors/camera/cam/image_raw";
-  constexpr int kFrames = 120;
-  constexpr Nanos kStep = -2 * kSec, kStepAt = kT0 + 30 * kPeriod + 5'000'000, kStepFor = 6 * kSec;
+  constexpr int kFrames = 160;
+  constexpr Nanos kStep = -5 * kSec, kStepAt = kT0 + 30 * kPeriod + 5'000'000, kStepFor = 6 * kSec;
   const auto host = [&](Nanos t) { return t >= kStepAt && t < kStepAt + kStepFor ? t + kStep : t; };
   Input in;
   truth::Log log, host_log;
   log.header = truth::Header{"cam", "camera", "fake", topic, "frame", "CLOCK_REALTIME"};
   host_log.header = truth::Header{"host", "host", "", "", "", "CLOCK_REALTIME"};
-  host_log.faults.push_back(truth::FaultRecord{1, "host.clock_step", kStepAt, kStepAt + kStepFor, -1, "ms=-2000, back after the fault"});
+  host_log.faults.push_back(truth::FaultRecord{1, "host.clock_step", kStepAt, kStepAt + kStepFor, -1, "ms=-5000, back after the fault"});
   const int last_in_step = static_cast<int>((kStepAt + kStepFor - kT0 - 1) / kPeriod);
   for (int u = 0; u < kFrames; ++u) {
     const Nanos made = kT0 + u * kPeriod, acq = host(made);
@@ -579,16 +582,17 @@ TEST(ChaosCheck, AFrameArrivingAcrossAHostStepsUndoIsItsUnitByFrameId) {
     s.acquisition_ns = acq;
     s.first_rx_ns = host(made + 10'000'000);
     if (u == last_in_step) {
-      ASSERT_GT(s.first_rx_ns - acq, 2 * kSec) << "arrives after the undo";
+      ASSERT_GT(s.first_rx_ns - acq, 5 * kSec) << "arrives after the undo";
       s.acquisition_ns = kT0 + 100 * kPeriod;  // slewed: another frame's time
     }
+    if (u == 140) s.seq = 110;  // the camera's ids began again: frame 140 has frame 110's id
     s.publish_ns = s.first_rx_ns + 5'000'000;
     s.received_ns = s.publish_ns + 1'000'000;
     s.packets = 1;
     in.samples.push_back(s);
   }
   in.truths = {log, host_log};
-  in.unsynchronized[topic] = {{kT0 + 50 * kPeriod, kT0 + 110 * kPeriod}};
+  in.unsynchronized[topic] = {{kT0 + 50 * kPeriod, kT0 + 105 * kPeriod}};
   in.monitor[topic] = MonitorTotals{kFrames, 0};
   in.expected[topic] = TopicExpectation{"cam", 10.0, {}};
   in.epoch_vehicle_ns = kT0;
