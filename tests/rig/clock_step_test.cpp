@@ -16,7 +16,7 @@
 #include "rig_cli.hpp"
 #include "rig_process.hpp"
 #include "sensor_rig/common/fault_plan.hpp"
-#include "sensor_rig/lidar/udp_source.hpp"
+#include "velodyne_mock_receiver.hpp"
 
 namespace sensor_rig::rig {
 namespace {
@@ -82,38 +82,21 @@ TEST_F(ClockStepTest, AStepLeftByAKilledCampaignIsUndoneByTheNext) {
 // 37 s later, 25 neither published nor counted lost at the campaign's end).
 TEST_F(ClockStepTest, AMockRestartedDuringAHostStepKeepsVehicleTime) {
   if (test::rig_bin_or_empty().empty()) GTEST_SKIP() << "RIG_BIN is not set (ctest sets it)";
-  lidar::UdpSourceConfig cfg;
-  cfg.bind = {"127.0.0.1", 0};
-  cfg.receive_buffer_bytes = 16 << 20;
-  lidar::UdpSource source(cfg);
+  test::VelodyneMockReceiver receiver;
   faults::Plan plan;
   plan.epoch_mono_ns = monotonic_now_ns();
   plan.events = {faults::FaultEvent{1, "host.kill_mock", "front", 0.6, 0.0, {{"restart_s", "0.3"}}}};
-  // The Velodyne's time: µs since the top of the hour (little endian at byte 1200 of 1206).
-  const std::vector<std::string> argv{test::rig_bin_or_empty(), "lidar", "replay", "--synthetic", "VLP-16",
-                                      "--to", "127.0.0.1:" + std::to_string(source.port())};
-  ChildOptions co;
-  co.log_file = (dir_.path / "mock.log").string();
-  std::vector<MockProcess> mocks;
-  mocks.push_back(MockProcess{"front", argv, co, ChildProcess(argv, co)});
+  std::vector<MockProcess> mocks = receiver.start_front(receiver.mock_argv(), (dir_.path / "mock.log").string());
   std::mutex mutex;
   struct Rx {
     std::int64_t sensor_us;
     Nanos mono;
   };
   std::vector<Rx> rx;
-  lidar::SlotArena arena(64);
   const auto receive_until = [&](Nanos mono) {
-    while (monotonic_now_ns() < mono) {
-      const lidar::RecvResult r = source.receive(arena.slots(), 20);
-      for (std::size_t i = 0; i < r.count; ++i) {
-        const auto b = arena.slots()[i].bytes();
-        if (b.size() != 1206) continue;
-        std::int64_t us = 0;
-        for (int k = 3; k >= 0; --k) us = (us << 8) | std::to_integer<std::int64_t>(b[1200 + static_cast<std::size_t>(k)]);
-        rx.push_back({us, monotonic_now_ns()});
-      }
-    }
+    while (monotonic_now_ns() < mono)
+      for (const auto& p : receiver.receive(20))
+        if (p.bytes == test::kVelodynePacket) rx.push_back({p.sensor_us, p.mono});
   };
   {
     MockFaults kills(plan, mocks, mutex, (dir_.path / "host_mocks.jsonl").string());

@@ -19,19 +19,12 @@
 #include "sensor_rig/common/clock.hpp"
 #include "sensor_rig/common/fault_plan.hpp"
 #include "sensor_rig/common/truth_record.hpp"
-#include "sensor_rig/lidar/udp_source.hpp"
+#include "velodyne_mock_receiver.hpp"
 
 namespace sensor_rig::rig {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr std::size_t kVelodynePacket = 1206, kTimestampAt = 1200;  // µs since the hour, little endian
-
-std::uint32_t sensor_us(std::span<const std::byte> b) {
-  std::uint32_t v = 0;
-  for (int i = 3; i >= 0; --i) v = (v << 8) | std::to_integer<std::uint32_t>(b[kTimestampAt + static_cast<std::size_t>(i)]);
-  return v;
-}
 
 faults::FaultEvent burst(std::uint64_t id, double at_s, int packets) {
   return faults::FaultEvent{id, "lidar.loss_burst", "front", at_s, 0.0, {{"packets", std::to_string(packets)}}};
@@ -50,10 +43,7 @@ TEST(MockRestart, ARestartedLidarMockFiresEachOneShotFaultOnceAndRecordsTheOneTh
   const fs::path dir = fs::temp_directory_path() / ("rig_mock_restart_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  lidar::UdpSourceConfig cfg;
-  cfg.bind = {"127.0.0.1", 0};
-  cfg.receive_buffer_bytes = 16 << 20;
-  lidar::UdpSource source(cfg);
+  test::VelodyneMockReceiver receiver;
 
   // 0.8 s: a burst the first run fires; 1.2 s: the kill (restart 0.4 s later); 1.4 s: a burst while
   // the mock is dead; 2.3 s: a burst of the restarted run.
@@ -64,27 +54,20 @@ TEST(MockRestart, ARestartedLidarMockFiresEachOneShotFaultOnceAndRecordsTheOneTh
                  burst(3, 1.4, 5), burst(4, 2.3, 3)};
   const std::string plan_path = (dir / "plan.jsonl").string(), truth_path = (dir / "front.jsonl").string();
   faults::write_plan(plan_path, plan);
-  const std::vector<std::string> argv{test::rig_bin_or_empty(), "lidar", "replay", "--synthetic", "VLP-16", "--to",
-                                      "127.0.0.1:" + std::to_string(source.port()), "--device", "front", "--truth", truth_path,
-                                      "--fault-plan", plan_path};
-  ChildOptions co;
-  co.log_file = (dir / "mock.log").string();
-  std::vector<MockProcess> mocks;
-  mocks.push_back(MockProcess{"front", argv, co, ChildProcess(argv, co)});
+  std::vector<MockProcess> mocks = receiver.start_front(
+      receiver.mock_argv({"--device", "front", "--truth", truth_path, "--fault-plan", plan_path}), (dir / "mock.log").string());
   std::mutex mutex;
   std::vector<std::int64_t> rx_us;  // sensor times of what arrived, in arrival order
   Nanos first_rx_mono = 0;
-  lidar::SlotArena arena(64);
   const auto receive = [&](int timeout_ms) {
-    const lidar::RecvResult r = source.receive(arena.slots(), timeout_ms);
-    for (std::size_t i = 0; i < r.count; ++i) {
-      const auto b = arena.slots()[i].bytes();
-      EXPECT_EQ(b.size(), kVelodynePacket);
-      if (b.size() != kVelodynePacket) continue;
-      rx_us.push_back(sensor_us(b));
-      if (first_rx_mono == 0) first_rx_mono = monotonic_now_ns();
+    const auto arrived = receiver.receive(timeout_ms);
+    for (const auto& p : arrived) {
+      EXPECT_EQ(p.bytes, test::kVelodynePacket);
+      if (p.bytes != test::kVelodynePacket) continue;
+      rx_us.push_back(p.sensor_us);
+      if (first_rx_mono == 0) first_rx_mono = p.mono;
     }
-    return r.count;
+    return arrived.size();
   };
   {
     MockFaults kills(plan, mocks, mutex, (dir / "host_mocks.jsonl").string());
@@ -96,7 +79,7 @@ TEST(MockRestart, ARestartedLidarMockFiresEachOneShotFaultOnceAndRecordsTheOneTh
   }
   while (receive(50) > 0) {
   }  // what it sent before it ended
-  EXPECT_EQ(source.stats().kernel_drops, 0u);
+  EXPECT_EQ(receiver.source().stats().kernel_drops, 0u);
   ASSERT_GT(first_rx_mono, 0) << "nothing arrived";
   ASSERT_LT(first_rx_mono, plan.epoch_mono_ns + 700 * kMs) << "the first run started too late to fire the first burst";
 

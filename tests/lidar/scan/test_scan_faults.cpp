@@ -35,6 +35,20 @@ std::size_t scan_start_near(const Stream& s, std::size_t from) {
   return from;
 }
 
+// The scans with packets counted missing, and each scan's count for a failure's message.
+struct Incomplete {
+  std::size_t scans = 0;
+  std::string per_scan;
+};
+Incomplete incomplete_scans(const Decoded& d) {
+  Incomplete in;
+  for (const auto& sc : d.scans) {
+    in.scans += sc.missing_packets > 0 ? 1 : 0;
+    in.per_scan += std::to_string(sc.missing_packets) + " ";
+  }
+  return in;
+}
+
 class ScanFaults : public ::testing::TestWithParam<const char*> {
  protected:
   void SetUp() override {
@@ -281,13 +295,8 @@ TEST_P(ScanFaults, BlindSectorIsLearnedAfterOneTurn) {
   pkts.erase(pkts.begin() + static_cast<std::ptrdiff_t>(after_blind));  // a loss inside the sector, sending again
   const Decoded r = run(s_.options, pkts);
   EXPECT_EQ(r.scans.size(), clean_.scans.size());
-  std::size_t incomplete = 0;
-  std::string per_scan;
-  for (const auto& sc : r.scans) {
-    incomplete += sc.missing_packets > 0 ? 1 : 0;
-    per_scan += std::to_string(sc.missing_packets) + " ";
-  }
-  EXPECT_EQ(incomplete, 2U) << per_scan << "the blind sector's first turn, and the loss after it sends again";
+  const Incomplete incomplete = incomplete_scans(r);
+  EXPECT_EQ(incomplete.scans, 2U) << incomplete.per_scan << "the blind sector's first turn, and the loss after it sends again";
   EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
 }
 
@@ -306,13 +315,8 @@ TEST_P(ScanFaults, ABlindSectorEndingMidArcCountsNothingMissing) {
   }
   const Decoded r = run(s_.options, pkts);
   EXPECT_EQ(r.scans.size(), clean_.scans.size());
-  std::size_t incomplete = 0;
-  std::string per_scan;
-  for (const auto& sc : r.scans) {
-    incomplete += sc.missing_packets > 0 ? 1 : 0;
-    per_scan += std::to_string(sc.missing_packets) + " ";
-  }
-  EXPECT_EQ(incomplete, 1U) << per_scan << "the blind sector's first turn only";
+  const Incomplete incomplete = incomplete_scans(r);
+  EXPECT_EQ(incomplete.scans, 1U) << incomplete.per_scan << "the blind sector's first turn only";
   EXPECT_EQ(r.st.scans_lost, clean_.st.scans_lost);
 }
 
@@ -365,15 +369,10 @@ TEST_P(ScanFaults, LossBurstBesideALearnedBlindSectorLeavesItLearned) {
   ASSERT_EQ(burst, 3U);
   const Decoded r = run(s_.options, pkts);
   EXPECT_EQ(r.scans.size(), clean_.scans.size());
-  std::size_t incomplete = 0, with_burst = 0;
-  std::string per_scan;
-  for (const auto& sc : r.scans) {
-    incomplete += sc.missing_packets > 0 ? 1 : 0;
-    with_burst += sc.missing_packets == 3 ? 1 : 0;
-    per_scan += std::to_string(sc.missing_packets) + " ";
-  }
-  EXPECT_EQ(incomplete, 2U) << per_scan << "the blind sector's first turn, and the burst";
-  EXPECT_EQ(with_burst, 1U) << per_scan;
+  const Incomplete incomplete = incomplete_scans(r);
+  const auto with_burst = std::count_if(r.scans.begin(), r.scans.end(), [](const auto& sc) { return sc.missing_packets == 3; });
+  EXPECT_EQ(incomplete.scans, 2U) << incomplete.per_scan << "the blind sector's first turn, and the burst";
+  EXPECT_EQ(with_burst, 1) << incomplete.per_scan;
 }
 
 // A loss burst right beside a learned blind sector, on either side (lidar.blind_sector with a
