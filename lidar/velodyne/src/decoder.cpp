@@ -97,6 +97,7 @@ struct DecoderImpl {
   // The scan was already ended after the previous packet (its next block was predicted to cross
   // the cut): the crossing seen at the next packet's first block is not a second cut.
   bool early_cut = false;
+  bool skip_to_cut = false;  // this packet's groups before the cut belong to a turn counted lost whole
   int prev_az = 0;
   int last_gap = 0;  // azimuth advance of the last decoded block (hundredths of a degree)
   Nanos prev_stamp = 0;
@@ -450,6 +451,14 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       // lacks to there, the turns between are lost scans, the next starts with what it lacks.
       const int a0 = na[first_good];
       const bool az_crosses = detail::turn_step(prev_az, cut) > 0 && detail::turn_step(prev_az, cut) <= detail::turn_step(prev_az, a0);
+      // The gap ended just before a cut this packet crosses: the turn it ended in is lost whole
+      // (all but this packet's groups before the cut, left out), the next scan begins at the cut.
+      // Begun at a0 instead, that scan held the lost turn's tail, went unpublished as not begun at
+      // a cut, and its turn was counted nowhere (a burst of 1.05 turns from 2 packets before a cut).
+      int last_good_k = groups - 1;
+      while ((fit.bad >> last_good_k) & 1U) --last_good_k;
+      const bool cut_in_packet = !az_crosses && detail::turn_step(a0, cut) > 0 &&
+                                 detail::turn_step(a0, cut) <= detail::turn_step(a0, na[last_good_k]);
       // Rejected packets (a frozen azimuth) filled these slots first: dropped, not missing too.
       const auto take = [&](std::uint32_t k) { return scans.missing_beyond_rejected(k); };
       // Every group across the gap, the lost packets' by the sensor's time: their step, for where the
@@ -459,12 +468,13 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       if (!early_cut) scans.add_missing(take(detail::lost_before(fov, prev_az, cut, gstep, groups, prev_trailing_bad)));
       // The next scan starts at the cut when it lacks less than half its turn; otherwise its
       // stamp (its first packet) would lie nearer the next turn's: not published, a lost scan.
-      const bool next_whole = 2 * detail::turn_step(cut, a0) < fov.length();
+      const bool next_whole = cut_in_packet || 2 * detail::turn_step(cut, a0) < fov.length();
       out = end(scans.current().from_cut, next_whole);
       (void)take(static_cast<std::uint32_t>(std::lround((gap.turns - (az_crosses ? 0 : 1)) * fov.length() /
                                                         std::max(1.0, fit.step * groups))));
-      scans.add_missing(take(detail::lost_after(fov, cut, a0, gstep, groups, first_good + 1)));
-      scans.lose_scans(gap.turns + (az_crosses ? 1U : 0U) - 1U);
+      if (!cut_in_packet) scans.add_missing(take(detail::lost_after(fov, cut, a0, gstep, groups, first_good + 1)));
+      scans.lose_scans(gap.turns + (az_crosses || cut_in_packet ? 1U : 0U) - 1U);
+      skip_to_cut = cut_in_packet;
       have_prev = false;  // the cut is done: the first group opens the new scan
       gap = {};
     } else if (have_prev) {
@@ -507,6 +517,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     const int a = az[k];
     // For the cut, 360.00° is the last position of the revolution (VeloView splits after it).
     const int a_cut = a == kAzimuthCount ? kAzimuthCount - 1 : a;
+    if (skip_to_cut && detail::turn_step(na[first_good], a_cut) < detail::turn_step(na[first_good], cut)) continue;
+    skip_to_cut = false;
     if (have_prev && !out) {
       // The first group's step was judged by azimuth_gap (forward, whatever its length: lost
       // packets, the FOV's blind arc); later steps inside a packet are on the fitted line.

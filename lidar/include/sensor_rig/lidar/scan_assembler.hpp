@@ -210,6 +210,12 @@ class ScanAssembler {
   std::optional<Scan> end_scan(bool complete, bool next_from_cut = false) noexcept;
   // Discards the lookahead scan (counted as discarded if it had packets).
   void drop_next() noexcept;
+  // Discards the lookahead scan uncounted: its turn is one the caller counts lost whole (a loss
+  // burst from inside the cut's window over the next turn).
+  void forget_next() noexcept {
+    recycle(std::move(nxt_.scan.points));
+    nxt_ = fresh();
+  }
   // `later` ended in the same packet as `out` (a time jump, then a cut): keeps `later`; the
   // earlier one is un-counted as emitted and counted as discarded.
   void merge(std::optional<Scan>& out, std::optional<Scan>&& later) noexcept;
