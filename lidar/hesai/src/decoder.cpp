@@ -535,10 +535,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       const double gstep = detail::turns_group_step(fov, prev_az, a0, gap.turns,
                                                     prev_trailing_bad + first_good + 1 + static_cast<long>(gap.missing) * groups, fit.step);
       scans.add_missing(take(detail::lost_before(fov, prev_az, emit_raw, gstep, groups, prev_trailing_bad)));
-      // A burst begun inside the cut's window: the lookahead scan's turn is lost (counted below, or
-      // as the partial scan the next packets end), not the scan those packets go on. Made current
-      // by the end, it took the next turn's packets too (a Pandar40P scan of 106 packets and 81
-      // missing, one turn lacks 180).
+      // Begun inside the cut's window, the lookahead's turn is lost (lidar/README.md "Whole turns").
       scans.forget_next();
       scans.merge(out, end(scans.current().from_cut));
       window_hole.open = 0;
