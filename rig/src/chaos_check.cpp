@@ -9,6 +9,7 @@
 
 #include "chaos_count.hpp"
 #include "chaos_fused_check.hpp"
+#include "chaos_mock_back.hpp"
 #include "chaos_unit_match.hpp"
 #include "chaos_units.hpp"
 
@@ -511,7 +512,7 @@ class Checker {
         out.push_back({in_.window_begin_ns, in_.window_end_ns});
         continue;
       }
-      const Nanos end = event_end(e);
+      const Nanos end = back_after(in_, e, event_end(e));
       Nanos until = end + seconds_ns(in_.bounds.settle_s);
       if (!e.device.empty() && e.device != "lo") {  // aimed at it (or its trigger LIDAR, a killed mock): not host-wide
         Nanos back = end + seconds_ns(recovery_s);
@@ -570,7 +571,8 @@ class Checker {
       // Units in host time read a second time have no sample matched (they are reconciled by
       // number): a fault that ends there is judged from where that time ends (a +2 s step undone
       // left 2 s of them: front and left "not back within 1 s", their scans all complete).
-      const Nanos end = past_doubled(event_end(e), seconds_ns(bound_s)), deadline = end + seconds_ns(bound_s);
+      // A killed mock is judged from when its device was back (chaos_mock_back.hpp).
+      const Nanos end = past_doubled(back_after(in_, e, event_end(e)), seconds_ns(bound_s)), deadline = end + seconds_ns(bound_s);
       if (deadline >= in_.window_end_ns || end < in_.window_begin_ns) continue;
       // Judged only when nothing else touches the device before the deadline.
       const bool overlapped = std::any_of(in_.events.begin(), in_.events.end(), [&](const faults::FaultEvent& o) {

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "chaos_fused_rotations.hpp"
+#include "chaos_mock_back.hpp"
 #include "sensor_rig/common/floor_div.hpp"
 
 namespace sensor_rig::rig::chaos {
@@ -451,7 +452,10 @@ class FusedJudge {
       return false;
     };
     auto begin_of = [&](const faults::FaultEvent& e) { return in_.epoch_vehicle_ns + static_cast<Nanos>(e.at_s * 1e9); };
-    auto end_of = [&](const faults::FaultEvent& e) { return in_.epoch_vehicle_ns + static_cast<Nanos>((e.at_s + stop_span_s(e)) * 1e9); };
+    // A killed mock from when its LIDAR was back on the wire (chaos_mock_back.hpp).
+    auto end_of = [&](const faults::FaultEvent& e) {
+      return back_after(in_, e, in_.epoch_vehicle_ns + static_cast<Nanos>((e.at_s + stop_span_s(e)) * 1e9));
+    };
     std::sort(whole_.begin(), whole_.end());
     for (const auto& e : in_.events) {
       if (!stops_a_lidar(e) || e.device.empty() || !fused_device(e)) continue;

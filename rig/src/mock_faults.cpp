@@ -48,6 +48,11 @@ void MockFaults::run() {
   // Stopping: never leave a stopped process behind (a restart that is not due is not made).
   for (; next < actions_.size(); ++next)
     if (actions_[next].kind == Action::Kind::kContinue) apply(actions_[next]);
+  {
+    std::lock_guard lock(mutex_);
+    for (const auto& e : events_)  // killed, not back before the rig stopped: recorded as planned
+      if (const auto k = killed_.find(e.id); k != killed_.end()) record_kill(e, k->second.planned, "not restarted: the rig stopped first");
+  }
   // This thread stays until the rig stops: the mocks it restarted have it as their parent thread, and
   // PR_SET_PDEATHSIG (ChildProcess) sends them SIGTERM when that thread ends. Returning here stopped
   // every restarted mock after the campaign's last kill or stall (the mock ECU left the bus for good).
@@ -73,10 +78,19 @@ ChildOptions MockFaults::restart_options(const MockProcess& m) const {
   return o;
 }
 
+void MockFaults::record_kill(const faults::FaultEvent& e, Nanos until, const std::string& how) {
+  const auto k = killed_.find(e.id);
+  if (k == killed_.end()) return;
+  truth_.fault({e.id, e.kind, k->second.at, until, -1, k->second.what + ", " + how});
+  truth_.flush();
+  killed_.erase(k);
+}
+
 void MockFaults::apply(const Action& a) {
   const faults::FaultEvent& e = *a.event;
-  const Nanos at = vehicle_now_ns();
+  const Nanos woke = monotonic_now_ns();
   std::lock_guard lock(mutex_);
+  const Nanos locked = monotonic_now_ns(), at = plan_vehicle_now();
   MockProcess* m = mock_of(e);
   if (m == nullptr) {
     if (a.kind == Action::Kind::kKill || a.kind == Action::Kind::kStop)
@@ -99,18 +113,31 @@ void MockFaults::apply(const Action& a) {
       const bool alive = m->child.running();
       m->child.signal(SIGKILL);
       m->child.wait_exit(2000);
-      truth_.fault({e.id, e.kind, at, at + restart, -1,
-                    e.device + (alive ? " killed" : " not running (an earlier kill's restart pending)") + ", restarted after " +
-                        std::to_string(restart / 1'000'000) + " ms"});
-      truth_.flush();
+      killed_[e.id] = {at, at + restart, e.device + (alive ? " killed" : " not running (an earlier kill's restart pending)")};
       log::info("chaos", "host.kill_mock: killed the mock of " + e.device);
       return;
     }
-    case Action::Kind::kRestart:
-      if (m->child.running()) return;  // two kills of one mock overlapped: the first restart made it
+    case Action::Kind::kRestart: {
+      const Nanos planned = killed_.contains(e.id) ? killed_[e.id].planned : at;
+      if (m->child.running()) {  // two kills of one mock overlapped: the first restart made it
+        const auto r = last_restart_.find(e.device);
+        record_kill(e, r != last_restart_.end() ? r->second : at, "back by an earlier kill's restart");
+        return;
+      }
       m->child = ChildProcess(m->argv, restart_options(*m));
-      log::info("chaos", "host.kill_mock: restarted the mock of " + e.device + ": pid " + std::to_string(m->child.pid()));
+      const Nanos started = monotonic_now_ns(), back = plan_vehicle_now();
+      last_restart_[e.device] = back;
+      const auto ms = [](Nanos ns) { return std::to_string(ns / 1'000'000); };
+      record_kill(e, back, "restarted " + ms(back - planned) + " ms after its planned time");
+      // Where a late restart's time went: this thread's wake-up, the mocks' lock, the fork.
+      const std::string timing = "woke " + ms(woke - a.mono) + " ms late, lock " + ms(locked - woke) + " ms, start " + ms(started - locked) + " ms";
+      const std::string line = "host.kill_mock: restarted the mock of " + e.device + ": pid " + std::to_string(m->child.pid()) + " (" + timing + ")";
+      if (back - planned > 50 * kMs)
+        log::warn("chaos", line);
+      else
+        log::info("chaos", line);
       return;
+    }
   }
 }
 

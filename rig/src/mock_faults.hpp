@@ -1,8 +1,11 @@
 #pragma once
 // The host's faults on mock processes under `rig chaos` (host.kill_mock, host.stall_mock): `rig up`
 // owns its mocks, so it kills (SIGKILL) and restarts, or stops (SIGSTOP) and continues them at the
-// plan's times, and records each in the truth record DIR/truth/host_mocks.jsonl.
+// plan's times, and records each in the truth record DIR/truth/host_mocks.jsonl. A kill's line is
+// written when its mock is back: its "until" is the real restart, which the judge measures recovery
+// from (a restart 488 ms late, plus the mock's own start, was charged to the rig: seed 25, right).
 #include <atomic>
+#include <map>
 #include <cstdint>
 #include <mutex>
 #include <string>
@@ -45,6 +48,11 @@ class MockFaults {
   MockProcess* mock_of(const faults::FaultEvent& e);
   // The mock's options for a restart: with the host clock step in force, if any.
   [[nodiscard]] ChildOptions restart_options(const MockProcess& m) const;
+  // Vehicle time on the plan's clock: CLOCK_MONOTONIC from the plan's epoch, so that a host clock
+  // step in force does not move the truth's times (the mocks take it off theirs alike).
+  [[nodiscard]] Nanos plan_vehicle_now() const { return epoch_vehicle_ + (monotonic_now_ns() - epoch_mono_); }
+  // The kill's truth line, once its mock is back (or the rig stops first): `until` is then.
+  void record_kill(const faults::FaultEvent& e, Nanos until, const std::string& how);
 
   std::vector<faults::FaultEvent> events_;
   std::vector<Action> actions_;  // by time
@@ -53,6 +61,13 @@ class MockFaults {
   std::vector<MockProcess>& mocks_;
   std::mutex& mutex_;
   truth::Writer truth_;
+  struct Killed {
+    Nanos at = 0;      // the SIGKILL (plan vehicle time)
+    Nanos planned = 0;  // its restart as planned
+    std::string what;  // "right killed", "right not running (...)"
+  };
+  std::map<std::uint64_t, Killed> killed_;          // by event id: kills whose line waits for the restart
+  std::map<std::string, Nanos> last_restart_;       // by device: when its mock was last started again
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

@@ -177,6 +177,53 @@ TEST(ChaosCheck, RecoveryIsTheFirstCompleteScanAfterTheFault) {
   EXPECT_NEAR(r.topics.at(kTopic).recovery_max_s, 0.1, 1e-6);
 }
 
+// A killed mock is judged from when its device was back, not from the plan's restart: the kill at
+// 1.0 s with a 1 s restart, made 0.8 s late (its host truth line, written at the restart, says
+// 2.8 s); the restarted LIDAR's first packet 0.4 s later, at 3.2 s. A rig that publishes that first
+// scan recovered at once; from the plan's end (2.0 s) it broke, as the whole-rig campaign of stop 54
+// did (seed 25, right). One that publishes nothing for 1.3 s after the packets resumed breaks still,
+// and so does a mock that never came back (its line says so, its end stays the plan's).
+TEST(ChaosCheck, RecoveryAfterAKilledMockIsJudgedFromWhenItsDeviceWasBack) {
+  constexpr int kDeadFrom = 10, kBackAt = 32;
+  auto killed = [&](Nanos restarted, const std::string& how) {
+    Input in = honest();
+    auto& units = in.truths[0].units;
+    auto& parts = in.truths[0].parts;
+    units.erase(units.begin() + kDeadFrom, units.begin() + kBackAt);  // the dead mock made nothing
+    parts.erase(parts.begin() + kDeadFrom * kParts, parts.begin() + kBackAt * kParts);
+    in.samples.erase(in.samples.begin() + kDeadFrom, in.samples.begin() + kBackAt);
+    in.monitor[kTopic] = MonitorTotals{kScans - (kBackAt - kDeadFrom), 0};
+    in.events.push_back(faults::FaultEvent{1, "host.kill_mock", "front", 1.0, 0.0, {{"restart_s", "1"}}});
+    truth::Log host;
+    host.header = truth::Header{"host", "host", "rig up", "", "", "CLOCK_REALTIME"};
+    host.faults.push_back(truth::FaultRecord{1, "host.kill_mock", kT0 + 10 * kPeriod, restarted, -1, "front killed, " + how});
+    in.truths.push_back(host);
+    return in;
+  };
+  const Input late = killed(kT0 + 28 * kPeriod, "restarted 800 ms after its planned time");
+  Result r = check(late);
+  EXPECT_TRUE(r.invariants.at("recovery")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("isolation")) << result_text(r);
+  EXPECT_NEAR(r.topics.at(kTopic).recovery_max_s, 0.0, 1e-6) << "its first scan after its first packet, at once";
+
+  Input slow = late;  // the rig publishes nothing until 4.5 s: 1.3 s after the packets resumed
+  slow.samples.erase(slow.samples.begin() + kDeadFrom, slow.samples.begin() + kDeadFrom + 13);
+  slow.counted_lost[kTopic] = 13;
+  slow.monitor[kTopic] = MonitorTotals{kScans - (kBackAt - kDeadFrom) - 13, 13};
+  r = check(slow);
+  EXPECT_FALSE(r.invariants.at("recovery")) << result_text(r);
+  EXPECT_TRUE(r.invariants.at("accounted")) << result_text(r);
+
+  // Never back: no packet after the restart the plan made, and the line says so.
+  Input gone = killed(kT0 + 20 * kPeriod, "not restarted: the rig stopped first");
+  gone.truths[0].units.resize(kDeadFrom);
+  gone.truths[0].parts.resize(kDeadFrom * kParts);
+  gone.samples.resize(kDeadFrom);
+  gone.monitor[kTopic] = MonitorTotals{kDeadFrom, 0};
+  r = check(gone);
+  EXPECT_FALSE(r.invariants.at("recovery")) << result_text(r);
+}
+
 // A host clock step of +1.5 s from 0.5 s, undone at 2.0 s: the host time from 2.0 to 3.5 s is read a
 // second time, and its units are reconciled by number, not matched to samples. Recovery from the
 // step is judged from where that time ends: from the fault's end, it found no complete sample
