@@ -2,13 +2,16 @@
 
 #include <dirent.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <sched.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
@@ -47,6 +50,90 @@ std::vector<char*> c_strings(std::vector<std::string>& v) {
   for (auto& s : v) out.push_back(s.data());
   out.push_back(nullptr);
   return out;
+}
+
+// What the child needs between clone and exec, all made before: it shares our memory and may not
+// allocate, lock or unwind.
+struct SpawnArgs {
+  char* const* argv = nullptr;
+  char* const* envp = nullptr;
+  pid_t parent = 0;
+  bool set_group = false;
+  pid_t group = 0;
+  int stdin_fd = -1, stdout_fd = -1, stderr_fd = -1;  // -1: inherited
+  int rt_priority = 0;
+  sigset_t mask{};  // the caller's signal mask, restored just before exec
+};
+
+// The kernel's struct sigaction (x86-64, arm64): what rt_sigaction reads and writes.
+struct KernelSigaction {
+  void* handler = nullptr;
+  unsigned long flags = 0;
+  void* restorer = nullptr;
+  unsigned long mask = 0;
+};
+constexpr long kKernelSigsetBytes = 8;
+
+// fd on `target` for the program, kept across exec (dup3 clears close-on-exec; a descriptor that is
+// already `target` keeps its flag, so it is cleared by hand).
+void place_fd(int fd, int target) {
+  if (fd < 0) return;
+  if (fd == target)
+    ::syscall(SYS_fcntl, fd, F_SETFD, 0);
+  else
+    ::syscall(SYS_dup3, fd, target, 0);
+}
+
+// The child until exec, in our memory on a stack of its own: system calls only, made directly, and
+// no sanitizer's hooks (they would write the sanitizer's state of this thread, shared with us: a
+// sigaction through TSan's would have reset our own handler table).
+__attribute__((no_sanitize("address", "thread", "undefined"))) int child_main(void* p) {
+  const SpawnArgs& a = *static_cast<const SpawnArgs*>(p);
+  // Every signal is blocked here (spawn). A handler of ours must not run in the child: those with
+  // one go back to the default first, SIGINT and SIGTERM also when we ignore them (the child
+  // installs its own shutdown handlers); what we ignore (SIGPIPE) stays ignored, as across fork.
+  KernelSigaction dfl;  // SIG_DFL is a null handler
+  for (int sig = 1; sig < 65; ++sig) {
+    KernelSigaction cur;
+    if (::syscall(SYS_rt_sigaction, sig, nullptr, &cur, kKernelSigsetBytes) != 0) continue;
+    const bool ignored = reinterpret_cast<std::uintptr_t>(cur.handler) == 1;  // SIG_IGN
+    if (sig == SIGINT || sig == SIGTERM || (cur.handler != nullptr && !ignored))
+      ::syscall(SYS_rt_sigaction, sig, &dfl, nullptr, kKernelSigsetBytes);
+  }
+  // If this process dies without stopping its children (SIGKILL, crash), they get SIGTERM:
+  // no orphaned mock device keeps a port or a bus socket, no orphaned RouDi its shared memory.
+  ::syscall(SYS_prctl, PR_SET_PDEATHSIG, SIGTERM, 0, 0, 0);
+  if (::syscall(SYS_getppid) != a.parent) ::syscall(SYS_exit_group, 126);  // the parent died between clone and prctl
+  if (a.set_group) ::syscall(SYS_setpgid, 0, a.group);
+  place_fd(a.stdin_fd, 0);
+  place_fd(a.stdout_fd, 1);
+  place_fd(a.stderr_fd, 2);
+  if (a.rt_priority > 0) {
+    sched_param sp{};
+    sp.sched_priority = a.rt_priority;
+    ::syscall(SYS_sched_setscheduler, 0, SCHED_FIFO, &sp);  // kept across exec; refused without privilege: fine
+  }
+  ::syscall(SYS_rt_sigprocmask, SIG_SETMASK, &a.mask, nullptr, kKernelSigsetBytes);
+  ::syscall(SYS_execve, a.argv[0], a.argv, a.envp);
+  ::syscall(SYS_exit_group, 127);
+  return 127;
+}
+
+// clone(CLONE_VM | CLONE_VFORK), as posix_spawn does, not fork: fork copied the page tables of the
+// whole rig (50 threads, 1.5 GB mapped) and write-protected its memory for copy-on-write, so that a
+// mock restarted under load (host.kill_mock) started 370-490 ms late and every thread of the rig
+// took a page fault per page it wrote next. This thread waits until the child has exec'd.
+pid_t spawn(SpawnArgs& a) {
+  constexpr std::size_t kStackBytes = 64 * 1024;
+  std::vector<char> stack(kStackBytes);
+  sigset_t all;
+  ::sigfillset(&all);
+  ::pthread_sigmask(SIG_SETMASK, &all, &a.mask);
+  const pid_t pid = ::clone(child_main, stack.data() + kStackBytes, CLONE_VM | CLONE_VFORK | SIGCHLD, &a);
+  const int err = errno;
+  ::pthread_sigmask(SIG_SETMASK, &a.mask, nullptr);
+  errno = err;
+  return pid;
 }
 
 }  // namespace
@@ -88,35 +175,20 @@ ChildProcess::ChildProcess(std::vector<std::string> argv, const ChildOptions& o)
     if (log_fd < 0) throw sys_error(("open " + o.log_file).c_str());
   }
   UniqueFd log(log_fd);
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid < 0) throw sys_error("fork");
-  if (pid == 0) {
-    // Default signal dispositions in the child; its own shutdown handlers are installed by it.
-    std::signal(SIGINT, SIG_DFL);
-    std::signal(SIGTERM, SIG_DFL);
-    // If this process dies without stopping its children (SIGKILL, crash), they get SIGTERM:
-    // no orphaned mock device keeps a port or a bus socket, no orphaned RouDi its shared memory.
-    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
-    if (::getppid() != parent) ::_exit(126);  // the parent died between fork and prctl
-    if (o.process_group) ::setpgid(0, *o.process_group);
-    if (o.pipe_stdio) {
-      ::dup2(child_in.get(), 0);
-      ::dup2(child_out.get(), 1);
-    } else if (log.valid()) {
-      const int null_fd = ::open("/dev/null", O_RDONLY);
-      if (null_fd >= 0) ::dup2(null_fd, 0);
-      ::dup2(log.get(), 1);
-    }
-    if (log.valid()) ::dup2(log.get(), 2);
-    if (o.rt_priority > 0) {
-      sched_param sp{};
-      sp.sched_priority = o.rt_priority;
-      ::sched_setscheduler(0, SCHED_FIFO, &sp);  // kept across exec; refused without privilege: fine
-    }
-    ::execve(args[0], args.data(), envp.data());
-    ::_exit(127);
-  }
+  const int null_fd = !o.pipe_stdio && log.valid() ? ::open("/dev/null", O_RDONLY | O_CLOEXEC) : -1;
+  UniqueFd null_in(null_fd);
+  SpawnArgs a;
+  a.argv = args.data();
+  a.envp = envp.data();
+  a.parent = ::getpid();
+  a.set_group = o.process_group.has_value();
+  a.group = o.process_group.value_or(0);
+  a.stdin_fd = o.pipe_stdio ? child_in.get() : null_in.get();
+  a.stdout_fd = o.pipe_stdio ? child_out.get() : log.get();
+  a.stderr_fd = log.get();
+  a.rt_priority = o.rt_priority;
+  const pid_t pid = spawn(a);
+  if (pid < 0) throw sys_error("clone");
   pid_ = last_pid_ = pid;
   if (o.process_group) ::setpgid(pid, *o.process_group);  // also here: no race with the first signal
   if (out_) ::fcntl(out_.get(), F_SETFL, O_NONBLOCK);

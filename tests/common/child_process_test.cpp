@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "sensor_rig/common/child_process.hpp"
 #include "sensor_rig/common/clock.hpp"
@@ -84,6 +85,50 @@ TEST(ChildProcess, AProgramThatCannotRunExits127AndUsageIsReadable) {
   EXPECT_TRUE(listed());
   EXPECT_EQ(sleeper.stop(2000), 128 + SIGTERM);
   EXPECT_THROW(ChildProcess(std::vector<std::string>{}), std::invalid_argument);
+}
+
+// The child is started by clone(CLONE_VM | CLONE_VFORK) in our memory: it must leave with the
+// signal state a fork would give it (our handlers gone, what we ignore still ignored, our mask), our
+// handlers untouched, and PR_SET_PDEATHSIG set (its parent thread's end stops it).
+std::uint64_t status_mask(const std::vector<std::string>& lines, const std::string& field) {
+  for (const auto& l : lines)
+    if (l.rfind(field + ":", 0) == 0) return std::stoull(l.substr(field.size() + 1), nullptr, 16);
+  ADD_FAILURE() << field << " not in the child's /proc status";
+  return 0;
+}
+std::uint64_t bit(int sig) { return std::uint64_t{1} << (sig - 1); }
+void on_usr1(int) {}
+
+TEST(ChildProcess, TheChildHasTheSignalStateAForkWouldGiveAndOursIsUntouched) {
+  std::signal(SIGPIPE, SIG_IGN);
+  struct sigaction ours{};
+  ours.sa_handler = on_usr1;
+  ASSERT_EQ(::sigaction(SIGUSR1, &ours, nullptr), 0);
+  sigset_t usr2, before;
+  ::sigemptyset(&usr2);
+  ::sigaddset(&usr2, SIGUSR2);
+  ::pthread_sigmask(SIG_BLOCK, &usr2, &before);
+  ChildOptions o;
+  o.pipe_stdio = true;
+  ChildProcess c({"/bin/cat", "/proc/self/status"}, o);
+  ::pthread_sigmask(SIG_SETMASK, &before, nullptr);
+  const auto lines = read_lines_until_eof(c, 5000);
+  ASSERT_TRUE(c.wait_exit(5000));
+  EXPECT_EQ(c.exit_status(), 0);
+  EXPECT_EQ(status_mask(lines, "SigCgt") & bit(SIGUSR1), 0u) << "our handler does not reach the program";
+  EXPECT_NE(status_mask(lines, "SigIgn") & bit(SIGPIPE), 0u) << "what we ignore stays ignored, as across fork";
+  EXPECT_NE(status_mask(lines, "SigBlk") & bit(SIGUSR2), 0u) << "the caller's mask, as across fork";
+  struct sigaction now{};
+  ASSERT_EQ(::sigaction(SIGUSR1, nullptr, &now), 0);
+  EXPECT_EQ(now.sa_handler, &on_usr1) << "the child reset its own dispositions, not ours";
+  std::signal(SIGUSR1, SIG_DFL);
+}
+
+TEST(ChildProcess, TheEndOfItsParentThreadStopsTheChild) {
+  ChildProcess c;
+  std::thread([&c] { c = ChildProcess({"/bin/sleep", "30"}); }).join();
+  ASSERT_TRUE(c.wait_exit(5000)) << "PR_SET_PDEATHSIG: SIGTERM when the thread that started it ended";
+  EXPECT_EQ(c.exit_status(), 128 + SIGTERM);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 #pragma once
-// Children this process started (mock devices, nodes, iox-roudi, `rig perf` nodes): fork/exec,
+// Children this process started (mock devices, nodes, iox-roudi, `rig perf` nodes): clone/exec,
 // stopped with SIGTERM then SIGKILL after a grace period. Only ever signals PIDs it created itself
 // and has not reaped yet. A child gets SIGTERM when this process dies without stopping it.
 #include <sys/resource.h>
@@ -37,7 +37,7 @@ struct ExitInfo {
 class ChildProcess {
  public:
   ChildProcess() = default;
-  // argv[0] is the program path; throws std::system_error when fork or a pipe fails (a program that
+  // argv[0] is the program path; throws std::system_error when clone or a pipe fails (a program that
   // cannot be executed exits with status 127).
   explicit ChildProcess(std::vector<std::string> argv, int rt_priority = 0);
   ChildProcess(std::vector<std::string> argv, const ChildOptions& options);
