@@ -129,7 +129,7 @@ void MockFaults::apply(const Action& a) {
       last_restart_[e.device] = back;
       const auto ms = [](Nanos ns) { return std::to_string(ns / 1'000'000); };
       record_kill(e, back, "restarted " + ms(back - planned) + " ms after its planned time");
-      // Where a late restart's time went: this thread's wake-up, the mocks' lock, the fork.
+      // Where a late restart's time went: this thread's wake-up, the mocks' lock, the child's start.
       const std::string timing = "woke " + ms(woke - a.mono) + " ms late, lock " + ms(locked - woke) + " ms, start " + ms(started - locked) + " ms";
       const std::string line = "host.kill_mock: restarted the mock of " + e.device + ": pid " + std::to_string(m->child.pid()) + " (" + timing + ")";
       if (back - planned > 50 * kMs)
