@@ -465,6 +465,12 @@ class FusedJudge {
         return &o != &e && fused_device(o) && begin_of(o) < deadline && end_of(o) > begin_of(e);
       });
       if (overlapped) continue;
+      // Back to what was: a cloud not whole in the bound before the fault has no whole to return to
+      // (the slew after a +37 s host step, the members' stamps and the cloud flagged, left it partial
+      // for minutes: seed 9, 5 faults "not whole again" in the 370 s after two steps). Its partial
+      // sweeps are still counted (published_incomplete), and a fault it was whole before is judged.
+      const auto before = std::lower_bound(whole_.begin(), whole_.end(), std::make_pair(begin_of(e) - bound, std::uint64_t{0}));
+      if (before == whole_.end() || before->first >= begin_of(e)) continue;
       const auto it = std::lower_bound(whole_.begin(), whole_.end(), std::make_pair(end, std::uint64_t{0}));
       if (it == whole_.end() || it->first > deadline) {
         ctx_.violation("recovery", kFusedCloudTopic, e.kind + " on " + e.device + " ended at " + ctx_.at_s(end) +
