@@ -93,7 +93,7 @@ __attribute__((no_sanitize("address", "thread", "undefined"))) int child_main(vo
   // one go back to the default first, SIGINT and SIGTERM also when we ignore them (the child
   // installs its own shutdown handlers); what we ignore (SIGPIPE) stays ignored, as across fork.
   KernelSigaction dfl;  // SIG_DFL is a null handler
-  for (int sig = 1; sig < 65; ++sig) {
+  for (int sig = 1; sig < _NSIG; ++sig) {
     KernelSigaction cur;
     if (::syscall(SYS_rt_sigaction, sig, nullptr, &cur, kKernelSigsetBytes) != 0) continue;
     const bool ignored = reinterpret_cast<std::uintptr_t>(cur.handler) == 1;  // SIG_IGN

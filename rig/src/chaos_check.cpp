@@ -9,7 +9,7 @@
 
 #include "chaos_count.hpp"
 #include "chaos_fused_check.hpp"
-#include "chaos_mock_back.hpp"
+#include "chaos_fault_end.hpp"
 #include "chaos_unit_match.hpp"
 #include "chaos_units.hpp"
 
@@ -34,16 +34,6 @@ double recovery_bound_s(const std::string& cls, const Bounds& b) {
   return b.other_recovery_s;
 }
 
-// How long after its start a fault keeps its device from delivering: its duration, a killed mock's
-// restart, a stopped mock's pause.
-double fault_span_s(const faults::FaultEvent& e) {
-  double span = e.duration_s;
-  if (e.kind == "host.kill_mock") span += e.number("restart_s", 1.0);
-  if (e.kind == "host.stall_mock") span += e.number("ms", 300.0) * 1e-3;
-  if (e.kind == "camera.slow_open") span += e.number("s", 3.0);
-  return span;
-}
-
 // The event touches this device: aimed at it, at a device it depends on, or at the whole host.
 bool touches(const faults::FaultEvent& e, const std::string& device, const std::vector<std::string>& depends_on) {
   // "lo": host.network_delay by netem on the loopback (rig chaos gives it no mock), the whole host's.
@@ -55,7 +45,11 @@ bool touches(const faults::FaultEvent& e, const std::string& device, const std::
 class Checker {
  public:
   explicit Checker(const Input& in)
-      : in_(in), doubled_(doubled_vehicle_time(in.truths)), held_(netem_delays(in.truths)), slews_(slews_after_steps_back(in.truths)) {}
+      : in_(in),
+        doubled_(doubled_vehicle_time(in.truths)),
+        held_(netem_delays(in.truths)),
+        slews_(slews_after_steps_back(in.truths)),
+        ends_(in) {}
 
   Result run() {
     for (const auto& name : kInvariants) r_.invariants[name] = true;
@@ -88,7 +82,8 @@ class Checker {
                            [this](const std::string& topic, std::uint64_t seq) -> const UnitMatch* {
                              const auto it = matched_.find({topic, seq});
                              return it == matched_.end() ? nullptr : &it->second;
-                           }};
+                           },
+                           [this](const faults::FaultEvent& e) { return ends_.end(e); }};
     check_fused(in_, ctx, r_);
     const auto e = in_.expected.find(kFusedCloudTopic);
     if (e != in_.expected.end()) check_isolation(kFusedCloudTopic, r_.topics[kFusedCloudTopic], samples, e->second.rate_hz, e->second.depends_on);
@@ -512,7 +507,7 @@ class Checker {
         out.push_back({in_.window_begin_ns, in_.window_end_ns});
         continue;
       }
-      const Nanos end = back_after(in_, e, event_end(e));
+      const Nanos end = ends_.end(e);
       Nanos until = end + seconds_ns(in_.bounds.settle_s);
       if (!e.device.empty() && e.device != "lo") {  // aimed at it (or its trigger LIDAR, a killed mock): not host-wide
         Nanos back = end + seconds_ns(recovery_s);
@@ -571,8 +566,8 @@ class Checker {
       // Units in host time read a second time have no sample matched (they are reconciled by
       // number): a fault that ends there is judged from where that time ends (a +2 s step undone
       // left 2 s of them: front and left "not back within 1 s", their scans all complete).
-      // A killed mock is judged from when its device was back (chaos_mock_back.hpp).
-      const Nanos end = past_doubled(back_after(in_, e, event_end(e)), seconds_ns(bound_s)), deadline = end + seconds_ns(bound_s);
+      // A killed mock is judged from when its device was back (chaos_fault_end.hpp).
+      const Nanos end = past_doubled(ends_.end(e), seconds_ns(bound_s)), deadline = end + seconds_ns(bound_s);
       if (deadline >= in_.window_end_ns || end < in_.window_begin_ns) continue;
       // Judged only when nothing else touches the device before the deadline.
       const bool overlapped = std::any_of(in_.events.begin(), in_.events.end(), [&](const faults::FaultEvent& o) {
@@ -636,6 +631,7 @@ class Checker {
   const std::vector<Interval> doubled_;
   const std::vector<HeldInterval> held_;
   const std::vector<SlewSpan> slews_;        // host clock steps back whose slew may still run
+  const FaultEnds ends_;                     // when each fault ended for its device (a killed mock: when back)
   Result r_;
   std::map<std::pair<std::string, std::uint64_t>, UnitMatch> matched_;  // (topic, seq) -> its truth unit
 };

@@ -10,7 +10,6 @@
 #include <set>
 
 #include "chaos_fused_rotations.hpp"
-#include "chaos_mock_back.hpp"
 #include "sensor_rig/common/floor_div.hpp"
 
 namespace sensor_rig::rig::chaos {
@@ -31,13 +30,6 @@ std::string fmt(double v) {
 }
 
 
-// How long after its start a fault keeps its device from delivering (as chaos_check.cpp's fault_span_s).
-double stop_span_s(const faults::FaultEvent& e) {
-  double span = e.duration_s;
-  if (e.kind == "host.kill_mock") span += e.number("restart_s", 1.0);
-  if (e.kind == "host.stall_mock") span += e.number("ms", 300.0) * 1e-3;
-  return span;
-}
 // The faults that stop a LIDAR and let it return: after them the fused cloud must be whole again.
 bool stops_a_lidar(const faults::FaultEvent& e) {
   return e.kind == "lidar.restart" || e.kind == "host.kill_mock" || e.kind == "host.stall_mock";
@@ -452,10 +444,8 @@ class FusedJudge {
       return false;
     };
     auto begin_of = [&](const faults::FaultEvent& e) { return in_.epoch_vehicle_ns + static_cast<Nanos>(e.at_s * 1e9); };
-    // A killed mock from when its LIDAR was back on the wire (chaos_mock_back.hpp).
-    auto end_of = [&](const faults::FaultEvent& e) {
-      return back_after(in_, e, in_.epoch_vehicle_ns + static_cast<Nanos>((e.at_s + stop_span_s(e)) * 1e9));
-    };
+    // A killed mock from when its LIDAR was back on the wire (chaos_fault_end.hpp).
+    const auto& end_of = ctx_.fault_end;
     std::sort(whole_.begin(), whole_.end());
     for (const auto& e : in_.events) {
       if (!stops_a_lidar(e) || e.device.empty() || !fused_device(e)) continue;

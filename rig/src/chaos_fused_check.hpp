@@ -23,6 +23,7 @@ struct JudgeContext {
   std::function<std::string(Nanos)> at_s;    // a vehicle time as seconds into the plan
   std::function<void(const std::string& invariant, const std::string& topic, const std::string& what)> violation;
   std::function<const UnitMatch*(const std::string& topic, std::uint64_t seq)> truth_of;  // nullptr: not matched
+  std::function<Nanos(const faults::FaultEvent&)> fault_end;  // when a fault ended for its device (chaos_fault_end.hpp)
 };
 
 // Fills r.topics[kFusedCloudTopic] (sent = the fused LIDARs' scans published in the window) and

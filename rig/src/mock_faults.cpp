@@ -118,7 +118,8 @@ void MockFaults::apply(const Action& a) {
       return;
     }
     case Action::Kind::kRestart: {
-      const Nanos planned = killed_.contains(e.id) ? killed_[e.id].planned : at;
+      const auto k = killed_.find(e.id);
+      const Nanos planned = k != killed_.end() ? k->second.planned : at;
       if (m->child.running()) {  // two kills of one mock overlapped: the first restart made it
         const auto r = last_restart_.find(e.device);
         record_kill(e, r != last_restart_.end() ? r->second : at, "back by an earlier kill's restart");

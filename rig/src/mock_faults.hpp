@@ -5,8 +5,8 @@
 // written when its mock is back: its "until" is the real restart, which the judge measures recovery
 // from (a restart 488 ms late, plus the mock's own start, was charged to the rig: seed 25, right).
 #include <atomic>
-#include <map>
 #include <cstdint>
+#include <map>
 #include <mutex>
 #include <string>
 #include <thread>
