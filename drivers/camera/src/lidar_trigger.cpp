@@ -324,7 +324,9 @@ void LidarTrigger::fire(Nanos target, Nanos aim) {
     const std::uint64_t gen = ++shot_.generation;
     t.generation = gen;
     shot_cv_.notify_all();
-    const auto deadline = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(shot_.aim_mono + kMemberDeadlineNs));
+    // From the aim, or from now for a crossing fired late: the members get their full time.
+    const Nanos waited_from = std::max(shot_.aim_mono, monotonic_now_ns());
+    const auto deadline = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(waited_from + kMemberDeadlineNs));
     (void)shot_cv_.wait_until(lock, deadline, [&] {
       return std::all_of(shot_.reported.begin(), shot_.reported.end(), [&](std::uint64_t r) { return r == gen; });
     });
@@ -366,23 +368,46 @@ void LidarTrigger::fire(Nanos target, Nanos aim) {
   }
 }
 
+NextCrossing choose_next_crossing(const std::function<std::optional<Nanos>(Nanos)>& crossing_after, Nanos last_target,
+                                  Nanos hittable, Nanos period) {
+  if (last_target == 0 || period <= 0) return {crossing_after(hittable), 0};
+  // The crossing after the one just fired (not that one twice), even when the trigger thread woke
+  // after it: a loaded host, a sleep's overshoot, a partner's call held to its deadline. Fired late
+  // it is a frame stamped by its own call (counted late); skipped, it was a frame lost by every
+  // member with nothing counting it (chaos campaign seed 25: 17-43 stereo frames of ~450 in 45 s,
+  // the trigger thread waking 0.4-12 ms after the crossing it had slept towards).
+  const auto following = crossing_after(last_target + period / 2);
+  if (!following || *following >= hittable - period / 4) return {following, 0};
+  // More than a quarter turn past: the camera would see another sector than the LIDAR's crossing.
+  // The next one that can be hit instead; the ones passed are counted.
+  const auto hit = crossing_after(hittable);
+  if (!hit) return {hit, 0};
+  const auto turns = std::llround(static_cast<double>(*hit - last_target) / static_cast<double>(period));
+  return {hit, turns > 1 ? static_cast<std::uint64_t>(turns - 1) : 0};
+}
+
 void LidarTrigger::run() {
-  Nanos last_target = 0;
+  Nanos last_target = 0;  // the crossing fired last; 0: none since the prediction (re)appeared
   while (!stop_.load()) {
     const Nanos now = vehicle_now_ns();
     std::optional<Nanos> target;
     {
       std::lock_guard lock(mutex_);
-      const Nanos period = phase_.period_ns();
-      // A crossing sooner than the latency cannot be hit; the one just fired is not fired twice.
-      Nanos after = now + latency_ns_;
-      if (last_target != 0 && period > 0) after = std::max(after, last_target + period / 2);
-      target = phase_.next_crossing(cfg_.azimuth_deg, after, now);
+      // A crossing sooner than the latency cannot be hit on time.
+      const auto next = choose_next_crossing([&](Nanos after) { return phase_.next_crossing(cfg_.azimuth_deg, after, now); },
+                                             last_target, now + latency_ns_, phase_.period_ns());
+      target = next.target;
+      figures_.skipped += next.skipped;
+      // Counted once: the passed crossings are behind the one aimed at now.
+      if (next.skipped > 0) last_target = *target - phase_.period_ns();
       if (!target && figures_.predicting) ++figures_.prediction_lost;
       figures_.predicting = target.has_value();
     }
     if (!target) {
-      sleep_until_vehicle(now + 10'000'000);  // no prediction: no trigger (counted, in status)
+      // No prediction: no trigger (counted, in status). The crossings of the outage are not
+      // skipped ones: the next shot is the first crossing that can be hit.
+      last_target = 0;
+      sleep_until_vehicle(now + 10'000'000);
       continue;
     }
     const Nanos aim = *target - latency_ns_;
@@ -391,7 +416,7 @@ void LidarTrigger::run() {
       sleep_until_vehicle(std::min(aim - kApproachNs, now + kMaxSleepNs));
       continue;
     }
-    fire(*target, aim);
+    fire(*target, aim);  // an aim already passed fires at once (counted late)
     last_target = *target;
   }
 }
@@ -439,6 +464,7 @@ void LidarTrigger::add_status(dds::DriverStatus& s, std::size_t member) const {
   s.add_number("triggers_timed_out", f.timed_out);
   s.add_number("trigger_calls_left", f.calls_left);
   s.add_number("triggers_late", f.late);
+  s.add_number("triggers_skipped", f.skipped);
   s.add_number("trigger_prediction_lost", f.prediction_lost);
   // The phase figure's exposure start: the camera's own report, or the trigger call + latency.
   s.add("phase_from", f.from_device ? "device_exposure" : "trigger_call");

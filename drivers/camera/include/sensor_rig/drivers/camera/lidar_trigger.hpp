@@ -17,6 +17,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <thread>
@@ -51,6 +52,9 @@ struct LidarTriggerFigures {
   // fired afresh from the next shot on.
   std::uint64_t calls_left = 0;
   std::uint64_t late = 0;            // fired more than 1 ms after the aimed time (woke late)
+  // Crossings passed unfired: the trigger thread woke more than a quarter turn after them (a frame
+  // of every member that never was). Not counted: those of a lost prediction (prediction_lost).
+  std::uint64_t skipped = 0;
   std::uint64_t prediction_lost = 0; // times the prediction went away (LIDAR stopped / lost lock)
   std::uint64_t measured = 0;        // this camera's triggers in the phase figure below
   std::uint64_t unmeasured = 0;      // the LIDAR's samples never covered the crossing (gap, stop)
@@ -71,6 +75,18 @@ struct LidarTriggerFigures {
   Nanos spread_p99_ns = 0;
   Nanos spread_max_ns = 0;
 };
+
+// The crossing a LIDAR trigger fires next: the one after `last_target` (the crossing it fired
+// last; 0: none yet), even if already up to a quarter `period` past `hittable` (now + the camera's
+// latency: fired at once, late), else the first after `hittable` with the crossings passed counted
+// in `skipped`. `crossing_after(t)`: the predicted first crossing after t; none without a
+// prediction.
+struct NextCrossing {
+  std::optional<Nanos> target;
+  std::uint64_t skipped = 0;
+};
+[[nodiscard]] NextCrossing choose_next_crossing(const std::function<std::optional<Nanos>(Nanos)>& crossing_after,
+                                                Nanos last_target, Nanos hittable, Nanos period);
 
 class LidarTrigger : public TriggerSource, public timesync::SweepObserver {
  public:
