@@ -24,6 +24,8 @@
 // frames sent across such a run are told by the counter modulo its turn and the time for the turn,
 // unless the counter stood still inside it (a frozen counter beginning inside a wrong-CRC run): then
 // by time alone, as a frozen run.
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 
@@ -59,10 +61,14 @@ class FrameLossCounter {
     int good_after = 0;    // good frames after the first one, each in sequence
   };
   static constexpr int kSettleFrames = 8;
+  // The latest intervals between back-to-back good frames, whose median says which are plausible.
+  static constexpr std::size_t kRecent = 31;
+  static constexpr std::size_t kMinRecent = 9;  // no period before
 
   [[nodiscard]] double slots_since_good(Nanos now) const noexcept;
   [[nodiscard]] std::uint64_t missing_while_frozen(const FrozenRun& run) const noexcept;
   void settle_frozen() noexcept;
+  void learn_period(Nanos interval) noexcept;
   [[nodiscard]] long long sent_across_refused_run(int skipped, Nanos now, double silence_room, int modulus) const noexcept;
 
   safety::E2eConfig c_;
@@ -81,6 +87,9 @@ class FrameLossCounter {
   double period_ns_ = 0;               // the message's period, learned from consecutive good frames
   double interval_sum_ns_ = 0;         // ... as their mean interval
   std::uint64_t intervals_ = 0;
+  std::array<Nanos, kRecent> recent_{};
+  std::size_t recent_n_ = 0;
+  std::size_t recent_next_ = 0;
   std::uint64_t lost_ = 0;
   std::uint64_t gaps_unknown_ = 0;
   FrozenRun frozen_;  // counted, not yet settled
