@@ -1,4 +1,5 @@
-// Hot paths of the dbw stack: signal decode, candump parsing, E2E, and the bridge's per-command work.
+// Hot paths of the dbw stack: signal decode, candump parsing, E2E, the feedback loss count, and the
+// bridge's per-command work.
 #include <benchmark/benchmark.h>
 
 #include <array>
@@ -6,6 +7,7 @@
 
 #include "sensor_rig/dbw/bridge/defaults.hpp"
 #include "sensor_rig/dbw/bridge/bridge_core.hpp"
+#include "sensor_rig/dbw/bridge/frame_loss_counter.hpp"
 #include "sensor_rig/dbw/can/candump.hpp"
 #include "sensor_rig/dbw/dbc/codec.hpp"
 #include "sensor_rig/dbw/dbc/parser.hpp"
@@ -54,6 +56,26 @@ void BM_E2eP01ProtectAndCheck(benchmark::State& st) {
   }
 }
 BENCHMARK(BM_E2eP01ProtectAndCheck);
+
+// One feedback frame's loss accounting (checked, then counted): every good frame learns the period
+// from the median of the latest intervals.
+void BM_FrameLossCounterOnFrame(benchmark::State& st) {
+  dbw::safety::E2eConfig c;
+  c.profile = dbw::safety::E2eProfile::kP01;
+  c.data_id = 0x181;
+  dbw::safety::E2eSender tx(c);
+  dbw::safety::E2eChecker rx(c);
+  dbw::FrameLossCounter counter(c);
+  std::array<std::uint8_t, 8> d{};
+  sensor_rig::Nanos t = 0;
+  for (auto _ : st) {
+    tx.protect(d);
+    t += 10'000'000 + (t / 7) % 1'000'000;  // a 10 ms period with jitter
+    counter.on_frame(d, rx.check(d), t);
+  }
+  benchmark::DoNotOptimize(counter.lost());
+}
+BENCHMARK(BM_FrameLossCounterOnFrame);
 
 // One command through validation, safety, encoding and E2E into the three frames of the protocol.
 void BM_BridgeCommandToFrames(benchmark::State& st) {

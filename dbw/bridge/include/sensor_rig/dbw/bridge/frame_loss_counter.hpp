@@ -64,6 +64,7 @@ class FrameLossCounter {
   // The latest intervals between back-to-back good frames, whose median says which are plausible.
   static constexpr std::size_t kRecent = 31;
   static constexpr std::size_t kMinRecent = 9;  // no period before
+  static constexpr std::size_t kMedianEvery = 8;  // intervals between two medians
 
   [[nodiscard]] double slots_since_good(Nanos now) const noexcept;
   [[nodiscard]] std::uint64_t missing_while_frozen(const FrozenRun& run) const noexcept;
@@ -90,6 +91,7 @@ class FrameLossCounter {
   std::array<Nanos, kRecent> recent_{};
   std::size_t recent_n_ = 0;
   std::size_t recent_next_ = 0;
+  double median_ns_ = 0;  // of recent_, taken every kMedianEvery intervals
   std::uint64_t lost_ = 0;
   std::uint64_t gaps_unknown_ = 0;
   FrozenRun frozen_;  // counted, not yet settled
