@@ -43,10 +43,15 @@ void BM_CandumpParseLine(benchmark::State& st) {
 }
 BENCHMARK(BM_CandumpParseLine);
 
-void BM_E2eP01ProtectAndCheck(benchmark::State& st) {
+dbw::safety::E2eConfig p01(std::uint16_t data_id) {
   dbw::safety::E2eConfig c;
   c.profile = dbw::safety::E2eProfile::kP01;
-  c.data_id = 0x100;
+  c.data_id = data_id;
+  return c;
+}
+
+void BM_E2eP01ProtectAndCheck(benchmark::State& st) {
+  const auto c = p01(0x100);
   dbw::safety::E2eSender tx(c);
   dbw::safety::E2eChecker rx(c);
   std::array<std::uint8_t, 8> d{};
@@ -60,9 +65,7 @@ BENCHMARK(BM_E2eP01ProtectAndCheck);
 // One feedback frame's loss accounting (checked, then counted): every good frame learns the period
 // from the median of the latest intervals.
 void BM_FrameLossCounterOnFrame(benchmark::State& st) {
-  dbw::safety::E2eConfig c;
-  c.profile = dbw::safety::E2eProfile::kP01;
-  c.data_id = 0x181;
+  const auto c = p01(0x181);
   dbw::safety::E2eSender tx(c);
   dbw::safety::E2eChecker rx(c);
   dbw::FrameLossCounter counter(c);

@@ -393,13 +393,14 @@ void LidarTrigger::run() {
     std::optional<Nanos> target;
     {
       std::lock_guard lock(mutex_);
+      const Nanos period = phase_.period_ns();
       // A crossing sooner than the latency cannot be hit on time.
       const auto next = choose_next_crossing([&](Nanos after) { return phase_.next_crossing(cfg_.azimuth_deg, after, now); },
-                                             last_target, now + latency_ns_, phase_.period_ns());
+                                             last_target, now + latency_ns_, period);
       target = next.target;
       figures_.skipped += next.skipped;
       // Counted once: the passed crossings are behind the one aimed at now.
-      if (next.skipped > 0) last_target = *target - phase_.period_ns();
+      if (next.skipped > 0) last_target = *target - period;
       if (!target && figures_.predicting) ++figures_.prediction_lost;
       figures_.predicting = target.has_value();
     }
