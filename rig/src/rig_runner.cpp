@@ -161,6 +161,11 @@ int run_rig(const RigConfig& config, const RunOptions& opt) {
     log::info("rig", "removed " + a + " from lo: added by a process that ended without removing it");
   // A synthetic Ouster without configured metadata: its mock's metadata, for both driver and mock.
   RigConfig cfg = config;
+  if (const char* d = std::getenv("RIG_LOG_DIR"); d != nullptr && *d != '\0' && cfg.fusion.enabled) {
+    std::error_code ec;
+    std::filesystem::create_directories(d, ec);
+    cfg.fusion.matcher_log = (std::filesystem::path(d) / "fusion_matcher.csv").string();
+  }
   std::optional<SyntheticMetadataDir> metadata_dir;
   try {
     for (auto& l : cfg.lidars) {

@@ -16,6 +16,8 @@
 #include "sensor_rig/drivers/fusion/scan_filter.hpp"
 #include "sensor_rig/drivers/fusion/sweep_matcher.hpp"
 
+#include "matcher_log.hpp"
+
 namespace sensor_rig::drivers {
 namespace {
 
@@ -85,6 +87,7 @@ struct FusionNode::Impl {
   std::vector<Input> inputs;
   std::vector<ScanFilter> filters;  // thread only
   SweepMatcher matcher;             // thread only
+  MatcherLog matcher_log;           // thread only
   std::vector<SweepSlot> slots;     // thread only: one per open sweep, reused
   // Thread only, per source: packets a whole scan of it holds (its last scan's packets + missing),
   // what a sweep without it is missing; 0 until it delivered.
@@ -116,7 +119,7 @@ struct FusionNode::Impl {
   std::string last_error;
 
   Impl(const FusionConfig& c, const std::vector<LidarConfig>& lidars, const dds::Participant& p, dds::StampsWriter& s)
-      : cfg(c), inputs(lidars.size()), matcher(matcher_config(c, lidars.size())), expected_packets(lidars.size(), 0),
+      : cfg(c), inputs(lidars.size()), matcher(matcher_config(c, lidars.size())), matcher_log(c.matcher_log), expected_packets(lidars.size(), 0),
         topic(p, kFusedTopic, c.qos), writer(p, topic, c.qos), members_topic(p, kFusedSetsTopic, members_qos()),
         members_writer(p, members_topic, members_qos()), stamps(s), filter_counters(lidars.size()) {
     for (std::size_t i = 0; i < lidars.size(); ++i) {
@@ -175,6 +178,8 @@ struct FusionNode::Impl {
     std::uint32_t span = 0;
     for (const auto& pt : in.points) span = std::max(span, pt.t);
     const auto place = matcher.push(in.source, in.stamp, in.arrival_ns, static_cast<Nanos>(span), in.stamp_unsynchronized);
+    matcher_log.scan(in.source, in.seq, in.stamp, in.arrival_ns, static_cast<Nanos>(span), in.stamp_unsynchronized,
+                     place.late ? -1 : static_cast<std::int64_t>(place.sweep));
     expected_packets[in.source] = in.packets + in.missing_packets;
     if (!place.late) {
       auto& slot = slot_for(place.sweep);
@@ -191,7 +196,11 @@ struct FusionNode::Impl {
   }
 
   void emit_ready() {
-    while (auto closed = matcher.ready(monotonic_now_ns())) emit(*closed);
+    const Nanos now = monotonic_now_ns();
+    while (auto closed = matcher.ready(now)) {
+      matcher_log.sweep(now, closed->id, closed->complete);
+      emit(*closed);
+    }
   }
 
   // A closed sweep's parts as one cloud: stamp = the earliest scan's, each point's t re-based on it.

@@ -36,6 +36,9 @@ struct FusionConfig {
   // waits behind other work for milliseconds after the last scan arrived.
   int realtime_priority = 0;
   dds::QosSpec qos = lidar_qos();
+  // Not in the YAML: where the node logs what its sweep matcher was handed and closed (empty: not
+  // logged). `rig up` sets $RIG_LOG_DIR/fusion_matcher.csv: every `rig chaos` campaign keeps it.
+  std::string matcher_log;
 };
 
 // Parses the `fusion:` map (the rig config checks that every LIDAR has extrinsics).
