@@ -70,6 +70,8 @@ class Checker {
  private:
   void violation(const std::string& invariant, const std::string& topic, const std::string& what) {
     r_.invariants[invariant] = false;
+    // RIG_CHAOS_TRACE: every violation, not only the first examples the report keeps.
+    if (std::getenv("RIG_CHAOS_TRACE") != nullptr) std::fprintf(stderr, "violation %s %s: %s\n", invariant.c_str(), topic.c_str(), what.c_str());
     const auto n = std::count_if(r_.examples.begin(), r_.examples.end(), [&](const Example& e) { return e.invariant == invariant; });
     if (static_cast<std::size_t>(n) < kExamplesPerInvariant) r_.examples.push_back(Example{invariant, topic, what});
   }

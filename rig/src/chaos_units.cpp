@@ -24,7 +24,56 @@ std::uint32_t median_parts(const std::vector<UnitTruth>& units) {
   return parts[parts.size() / 2];
 }
 
+// The median of the positive steps between successive values (0 without any).
+Nanos median_step(const std::vector<Nanos>& at) {
+  std::vector<Nanos> steps;
+  for (std::size_t i = 1; i < at.size(); ++i)
+    if (at[i] > at[i - 1]) steps.push_back(at[i] - at[i - 1]);
+  if (steps.empty()) return 0;
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  return steps[steps.size() / 2];
+}
+
 }  // namespace
+
+// A blind arc is a run of parts not sent, consecutive in the device's order; one across a scan cut
+// is one arc with its parts in two scans. It is new unless the same arc lay one turn earlier: a run
+// that began and ended a turn before this one's ends, each within kBlindArcJitter parts (the packet
+// grid moves against the turn). Judged per unit before ("the previous unit lacked a different
+// number"), an arc across the cut that first showed whole in one turn had its head in the next unit,
+// where the same count as the unit before called it old: the rig's count of the first whole arc was
+// taken for phantom loss (rig chaos, lidar.blind_sector from_deg=201 to_deg=65 on the OS-LEGACY: 12
+// of its 40 packets). Where two arcs stand at once (overlapping faults), each is held against its own.
+std::vector<NotSentRun> new_blind_arcs(const truth::Log& log) {
+  std::vector<NotSentRun> runs;
+  for (std::size_t k = 0; k < log.parts.size(); ++k) {
+    if (log.parts[k].fate != truth::Fate::kNotSent) continue;
+    if (!runs.empty() && runs.back().last + 1 == k && log.parts[k - 1].seq + 1 == log.parts[k].seq) {
+      runs.back().last = k;
+      continue;
+    }
+    runs.push_back({k, k});
+  }
+  std::vector<Nanos> unit_at, part_at;
+  for (const auto& u : log.units) unit_at.push_back(u.acq_ns);
+  for (const auto& p : log.parts) part_at.push_back(p.acq_ns);
+  std::sort(unit_at.begin(), unit_at.end());
+  std::sort(part_at.begin(), part_at.end());
+  const Nanos turn = median_step(unit_at);
+  const Nanos tol = (2 * static_cast<Nanos>(kBlindArcJitter) + 1) * median_step(part_at) / 2;
+  std::vector<NotSentRun> fresh;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Nanos begin = log.parts[runs[i].first].acq_ns, end = log.parts[runs[i].last].acq_ns;
+    bool seen = false;
+    for (std::size_t j = i; j-- > 0 && !seen;) {
+      const Nanos b = log.parts[runs[j].first].acq_ns, e = log.parts[runs[j].last].acq_ns;
+      if (b < begin - turn - tol) break;  // runs are in time order
+      seen = std::abs(begin - b - turn) <= tol && std::abs(end - e - turn) <= tol;
+    }
+    if (!seen) fresh.push_back(runs[i]);
+  }
+  return fresh;
+}
 
 std::vector<UnitTruth> units_of(const truth::Log& log) {
   std::vector<UnitTruth> units;
@@ -57,7 +106,9 @@ std::vector<UnitTruth> units_of(const truth::Log& log) {
   }
   for (const auto& p : log.parts) {
     if (p.fate == truth::Fate::kNotSent) {
-      if (const auto it = index.find(p.unit); it != index.end()) ++units[it->second].not_sent;
+      // Across a scan cut it is in both scans, as a lost packet is (the rig counts it in both).
+      for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id)
+        if (const auto it = index.find(id); it != index.end()) ++units[it->second].not_sent;
       continue;
     }
     // A packet across a scan cut has data in (and is counted by) every unit it touches.
@@ -97,12 +148,13 @@ std::vector<UnitTruth> units_of(const truth::Log& log) {
       u.produced = 1;
       u.first_intact_acq = u.rec.acq_ns;
     }
+  for (const NotSentRun& r : new_blind_arcs(log))
+    for (std::size_t k = r.first; k <= r.last; ++k) {
+      const auto& p = log.parts[k];
+      for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id)
+        if (const auto it = index.find(id); it != index.end()) ++units[it->second].new_blind;
+    }
   std::sort(units.begin(), units.end(), [](const UnitTruth& a, const UnitTruth& b) { return a.rec.acq_ns < b.rec.acq_ns; });
-  for (std::size_t i = 0; i < units.size(); ++i) {
-    const std::uint32_t before = i > 0 ? units[i - 1].not_sent : 0;
-    const std::uint32_t now = units[i].not_sent;
-    if (now > 0 && (before == 0 || now > before + kBlindArcJitter || before > now + kBlindArcJitter)) units[i].new_blind = now;
-  }
   return units;
 }
 

@@ -37,7 +37,7 @@ struct UnitTruth {
   Nanos first_intact_tx = 0;
   Nanos first_intact_sent_acq = 0;
   // Parts the device did not send (a blind sector, a restart), and of those the ones a rig may count
-  // missing: a blind arc new this turn (the previous unit lacked none, or a different number).
+  // missing: a blind arc new this turn (new_blind_arcs). A part across a scan cut is in both.
   // Nothing in a LIDAR's packets tells the first turn of a new blind sector from a loss burst at the
   // same place (no packet sequence on these models: the received stream is the same), so counting it
   // missing is the honest reading; the same arc a second turn in a row is the sensor's, not loss.
@@ -52,6 +52,14 @@ struct UnitTruth {
   std::uint32_t never_made = 0;
   const SampleRecord* sample = nullptr;
 };
+
+// A run of parts not sent: log.parts[first..last], consecutive in the device's order.
+struct NotSentRun {
+  std::size_t first = 0, last = 0;
+};
+// The runs that are a new blind arc, not the same arc as a turn earlier (a rig may count those
+// missing: see UnitTruth::not_sent).
+std::vector<NotSentRun> new_blind_arcs(const truth::Log& log);
 
 struct Interval {
   Nanos begin, end;

@@ -507,6 +507,48 @@ TEST(ChaosCheck, ANewBlindArcMayBeCountedMissingOnceNotTheNextTurn) {
   EXPECT_FALSE(check(in).invariants.at("no_phantom_loss"));
 }
 
+// A blind arc across the scan cut (lidar.blind_sector from_deg=201 to_deg=65): its parts lie at the
+// end of one scan and the start of the next, and it is judged as one arc, held against the arc a
+// turn before, not scan by scan. Here the fault begins inside the sector (scan 20 lacks its last part
+// and scan 21 its first two: 3 parts), the whole arc shows first from scan 21's part 5 to scan 22's
+// part 1 (7 parts), and again from scan 22 on. The rig counts each new arc where its parts lie: scan
+// 22's two are the first whole arc's head, not the arc of the turn before, though scan 21 lacked 7
+// parts too (judged by scan, they were phantom: the OS-LEGACY's 12 of 40). Counting scan 23's head,
+// the same arc again, is a phantom.
+TEST(ChaosCheck, ABlindArcAcrossTheCutIsJudgedAsOneArc) {
+  Input in = honest();
+  drop_part(in, 20, kParts - 1, truth::Fate::kNotSent);
+  for (int u = 21; u < 26; ++u) {
+    for (std::uint32_t p = 0; p < 2; ++p) drop_part(in, u, p, truth::Fate::kNotSent);
+    if (u < 25)
+      for (std::uint32_t p = 5; p < kParts; ++p) drop_part(in, u, p, truth::Fate::kNotSent);
+  }
+  in.samples[20].missing_packets = 1;
+  in.samples[21].missing_packets = 7;  // the cut-short arc's 2, the first whole arc's 5
+  in.samples[22].missing_packets = 2;  // the first whole arc's head
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  in.samples[23].missing_packets = 2;  // the same arc a turn later
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss"));
+  EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 2u);
+}
+
+// A part not sent across the cut (its firings in two scans, `u2`) is in both, as a lost one is: the
+// rig counts the first turn of a new arc there in both scans (rig chaos, the VLP-32C's new arcs from
+// 245 to 30 degrees: one packet more than the judge's count in each scan).
+TEST(ChaosCheck, APartNotSentAcrossTheCutIsInBothScans) {
+  Input in = honest();
+  in.truths[0].parts[20 * kParts + kParts - 1].unit_last = 21;
+  for (std::uint32_t p = kParts - 3; p < kParts; ++p) drop_part(in, 20, p, truth::Fate::kNotSent);
+  in.samples[20].missing_packets = 3;
+  in.samples[21].missing_packets = 1;
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  in.samples[21].missing_packets = 2;
+  EXPECT_FALSE(check(in).invariants.at("no_phantom_loss"));
+}
+
 TEST(ChaosCheck, StampErrorQuantilesOfFewSamplesSeparateTheBodyFromOneLateFrame) {
   std::vector<double> errors(69, 0.06);
   errors.insert(errors.begin() + 10, 2.42);
