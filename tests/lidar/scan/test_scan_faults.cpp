@@ -349,6 +349,32 @@ TEST_P(ScanFaults, BlindSectorAcrossTheCutIsLearnedAfterOneTurn) {
   }
 }
 
+// While a sector across the cut is blind (338 to 188 degrees: 150 degrees sent a turn), each scan
+// holds its turn's 150 degrees and nothing of the next turn. The group that crosses the cut is in
+// both scans (Hesai); after a gap across the cut it was lost, and the first packet after the gap is
+// the next scan's alone. Put in both, a Pandar's scans of 41.7 ms spanned 100 ms (its last points
+// the next turn's first packet, in two scans), and the fused cloud joined them to the next rotation.
+TEST_P(ScanFaults, AfterAGapAcrossTheCutNoScanHoldsTheNextTurnsFirstPacket) {
+  std::vector<Pkt> pkts;
+  const Nanos t0 = s_.pkts.front().stamp;
+  for (const auto& p : s_.pkts) {
+    const Nanos t = p.stamp - t0;
+    if (t >= 250'000'000 && t < 750'000'000 && (p.rotor_deg >= 338.0 || p.rotor_deg < 188.0)) continue;
+    pkts.push_back(p);
+  }
+  const Decoded r = run(s_.options, pkts);
+  std::size_t inside = 0;
+  for (const auto& sc : r.scans) {
+    const Nanos at = sc.stamp - t0;
+    if (at < 300'000'000 || at >= 700'000'000) continue;  // scans wholly inside the blind time
+    std::uint32_t span = 0;
+    for (const auto& pt : sc.points) span = std::max(span, pt.t);
+    EXPECT_LT(span, 44'000'000U) << "scan at " << at / 1'000'000 << " ms: 41.7 ms of data a turn";
+    ++inside;
+  }
+  EXPECT_GE(inside, 3U);
+}
+
 // A learned blind sector and, in one turn, a loss burst elsewhere (lidar.blind_sector with a
 // lidar.loss_burst): the burst is counted, and the sector stays learned; before, the burst's gap
 // took the blind arc's place and the next turn counted the sector missing again (rig chaos,
@@ -605,3 +631,4 @@ TEST(ScanFaults, EveryPacketFieldTheMockKnowsIsAFaultChoice) {
 
 }  // namespace
 }  // namespace sensor_rig::lidar
+
