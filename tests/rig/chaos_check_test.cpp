@@ -534,6 +534,28 @@ TEST(ChaosCheck, ABlindArcAcrossTheCutIsJudgedAsOneArc) {
   EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 2u);
 }
 
+// A sector narrower than two packets (lidar.blind_sector from_deg=126 to_deg=127 on a VLP-32C) lacks
+// one packet in some turns, in two turns in a row now and then. One packet missing at one place two
+// turns running is no evidence of a sector (a lossy network does it), so the decoders count a gap
+// of one packet missing: the judge holds them to that, and to no more. Two parts two turns running
+// are an arc, and counting them the second time is a phantom.
+TEST(ChaosCheck, AOnePartArcIsNewEveryTurn) {
+  Input in = honest();
+  for (int u = 20; u < 23; ++u) drop_part(in, u, 4, truth::Fate::kNotSent);
+  for (std::size_t u = 20; u < 23; ++u) in.samples[u].missing_packets = 1;
+  Result r = check(in);
+  EXPECT_TRUE(r.invariants.at("no_phantom_loss")) << result_text(r);
+  in.samples[21].missing_packets = 2;  // more than the turn lacked
+  EXPECT_FALSE(check(in).invariants.at("no_phantom_loss"));
+  in = honest();
+  for (int u = 20; u < 23; ++u)
+    for (std::uint32_t p = 4; p < 6; ++p) drop_part(in, u, p, truth::Fate::kNotSent);
+  for (std::size_t u = 20; u < 22; ++u) in.samples[u].missing_packets = 2;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss"));
+  EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 2u);
+}
+
 // A part not sent across the cut (its firings in two scans, `u2`) is in both, as a lost one is: the
 // rig counts the first turn of a new arc there in both scans (rig chaos, the VLP-32C's new arcs from
 // 245 to 30 degrees: one packet more than the judge's count in each scan).
