@@ -534,7 +534,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       // boundaries fall (turns_group_step).
       const double gstep = detail::turns_group_step(fov, prev_az, a0, gap.turns,
                                                     prev_trailing_bad + first_good + 1 + static_cast<long>(gap.missing) * groups, fit.step);
-      scans.add_missing(take(detail::lost_before(fov, prev_az, emit_raw, gstep, groups, prev_trailing_bad)));
+      scans.add_missing(take(detail::lost_before(fov, prev_az, emit_raw, gstep, groups, prev_trailing_bad, detail::CrossingGroup::kBoth)));
       // Begun inside the cut's window, the lookahead's turn is lost (lidar/README.md "Whole turns").
       scans.forget_next();
       scans.merge(out, end(scans.current().from_cut));

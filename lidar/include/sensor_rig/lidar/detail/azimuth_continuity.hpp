@@ -500,13 +500,18 @@ inline CutSplit split_missing_at_cut(const AzimuthFov& fov, int cut, int first_a
 // the boundary is in both. Before, each was its arc in whole packets, rounded down: a VLP-32C's
 // 340-packet burst (2.2 turns) left one packet out of the ending scan, whatever the model
 // (LossAtCut.ABurstLongerThanATurnIsCountedScanByScan; rig chaos seed 9 with drawn parameters).
+// `crossing`: whether the group that crosses `end` (the first at or past it) is the ending scan's
+// too (Hesai: it touches both scans). Left out, a lost packet that began with that group was
+// missing from the ending scan's count (rig chaos, lidar.loss_burst on a Pandar40P: "72 packets of
+// scan 882 lost, 71 counted"; LossAtCut...AtEveryPhaseOfThePacketGrid).
 inline std::uint32_t lost_before(const AzimuthFov& fov, int prev_az, int end, double group_step, int groups_per_packet,
-                                 int trailing_bad) noexcept {
+                                 int trailing_bad, CrossingGroup crossing = CrossingGroup::kNextOnly) noexcept {
   if (group_step <= 0.5) return 0;
   const int arc = turn_step(prev_az, end);
   const int visible = arc - arc_outside(fov, prev_az, arc);
-  // Groups j >= 1 with round(j * step) < visible: lost packet k holds groups trailing_bad + (k-1)g + 1 ..
-  const long groups = static_cast<long>(std::ceil((visible - 0.5) / group_step)) - 1;
+  // Groups j >= 1 with round(j * step) < visible (and the crossing one, the next, where it is in
+  // both): lost packet k holds groups trailing_bad + (k-1)g + 1 ..
+  const long groups = static_cast<long>(std::ceil((visible - 0.5) / group_step)) - (crossing == CrossingGroup::kBoth ? 0 : 1);
   const long first_lost = trailing_bad + 1;
   return groups < first_lost ? 0U : static_cast<std::uint32_t>((groups - first_lost) / groups_per_packet + 1);
 }
