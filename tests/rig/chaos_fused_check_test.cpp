@@ -113,6 +113,18 @@ TEST(ChaosFusedCheck, ASweepMixingRotationsByStampsTheRigFlaggedIsItsOwnWarning)
   r = check(in);
   EXPECT_TRUE(r.all_held()) << result_text(r);
   EXPECT_EQ(r.topics.at(kFusedCloudTopic).mixes_flagged, 1u);
+  // The front's scan in it lost its head to a blind sector (its first part not sent): stamped at its
+  // first part that arrived, rightly, and unflagged. Its stamp is no reason the sweep mixed.
+  in.truths[0].parts[10 * kParts].fate = truth::Fate::kNotSent;
+  const Nanos head_lost = acq(0, 10) + kPeriod / kParts;
+  for (auto& s : in.samples)
+    if (s.topic == topic_of(0) && s.seq == seq_of(0, 10)) s.acquisition_ns = head_lost, s.missing_packets = 1, s.packets = kParts - 1;
+  in.fused.sets[10].members[0].stamp = head_lost;
+  cloud_of(in, 10).missing_packets = 1;
+  cloud_of(in, 10).packets -= 1;
+  r = check(in);
+  EXPECT_TRUE(r.all_held()) << result_text(r);
+  EXPECT_EQ(r.topics.at(kFusedCloudTopic).mixes_flagged, 1u);
 }
 
 // Sweeps that pair the front's scan of rotation u - `front_back` with the left's and right's of u.
