@@ -621,39 +621,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     ++scans.scan().dropped;
   }
 
-  // The scan ends at the cut: out, and the scan begun at the cut takes what was lost past it.
-  const auto end_at_cut = [&] {
-    scans.merge(out, end(scans.current().from_cut));
-    window_open = false;
-    if (line_shift != 0) {  // the scan on the old line is out: the next moves onto the caller's
-      PendingScan& next = scans.current();
-      if (next.started) next.scan.stamp += line_shift;
-      prev_own += line_shift;
-      to_caller_line();
-    }
-    // The scan begun at the cut lacks what was lost past it and, counted in it while it was the
-    // lookahead, what was lost inside the window: a late packet from there is placed in it (its
-    // channels past the cut; rig chaos seed 7, a Pandar40P packet of the window one position late
-    // behind the packet that closed it: the scan after the cut counted it missing and dropped).
-    if (missing_next > 0 || window_hole.open > 0) {
-      hole = window_hole.open > 0
-                 ? LateHole{window_hole.from, missing_next > 0 ? az[first_good] : window_hole.to, detail::kTurn,
-                            window_hole.open + missing_next}
-                 : LateHole{gap_from, az[first_good], detail::kTurn, missing_next};
-      hole_after_cut = true;
-    }
-    if (missing_next > 0) {
-      scans.add_missing(missing_next);
-      missing_next = 0;
-    }
-    window_hole.open = 0;
-  };
   for (int g = 0; g < groups; ++g) {
     if ((fit.bad >> g) & 1U) continue;
     const std::uint8_t* blk = p + mi->first_block + static_cast<std::size_t>(g * n) * mi->block_size;
     const int a = az[g];
     const Nanos group_stamp = own + static_cast<Nanos>(mi->group_period_ns) * g;
-    bool cut_here = false;
+    bool cut_here = false, crossing_lost = false;
     if (have_prev) {
       const int step = az_step(prev_az, a);
       const bool judged = g == first_good;  // the step from the previous packet (forward, any length)
@@ -665,23 +638,50 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       // The group that crosses the cut is in both scans; after a gap across the cut that group was
       // lost, and this one, groups past it, is the next scan's alone (as the truth's units say). Put
       // in both, the first packet after a blind sector across the cut went into the scan before it
-      // too: a Pandar40P's scans of 41 ms of data spanned 100 ms, their last points the next turn's,
+      // too: a Pandar40P's scans of 41.7 ms of data spanned 100 ms, their last points the next turn's,
       // and the fused cloud joined them to the next rotation (rig chaos, lidar.blind_sector 338-188).
-      if (cut_here && judged && step > static_cast<int>(std::lround(1.5 * fit.step))) {
-        end_at_cut();
-        cut_here = false;
-      }
+      crossing_lost = cut_here && judged && step > static_cast<int>(std::lround(1.5 * fit.step));
     } else {
       // First block (or after a time jump) inside the window: the window's start was not seen
       // (channels that passed the cut before it are not in the next scan: it is partial).
       window_open = in_sector(reset_raw, emit_raw, a) && a != emit_raw;
     }
-    const bool overlap = window_open || cut_here;
-    if (overlap) scans.next().touch(group_stamp, packet.rx_ns);
-    scans.current().touch(group_stamp, packet.rx_ns);
-
-    put_group(blk, a, group_stamp, overlap, n, mode, unit);
-    if (cut_here) end_at_cut();
+    if (!crossing_lost) {
+      const bool overlap = window_open || cut_here;
+      if (overlap) scans.next().touch(group_stamp, packet.rx_ns);
+      scans.current().touch(group_stamp, packet.rx_ns);
+      put_group(blk, a, group_stamp, overlap, n, mode, unit);
+    }
+    if (cut_here) {
+      scans.merge(out, end(scans.current().from_cut));
+      window_open = false;
+      if (line_shift != 0) {  // the scan on the old line is out: the next moves onto the caller's
+        PendingScan& next = scans.current();
+        if (next.started) next.scan.stamp += line_shift;
+        prev_own += line_shift;
+        to_caller_line();
+      }
+      // The scan begun at the cut lacks what was lost past it and, counted in it while it was the
+      // lookahead, what was lost inside the window: a late packet from there is placed in it (its
+      // channels past the cut; rig chaos seed 7, a Pandar40P packet of the window one position late
+      // behind the packet that closed it: the scan after the cut counted it missing and dropped).
+      if (missing_next > 0 || window_hole.open > 0) {
+        hole = window_hole.open > 0
+                   ? LateHole{window_hole.from, missing_next > 0 ? az[first_good] : window_hole.to, detail::kTurn,
+                              window_hole.open + missing_next}
+                   : LateHole{gap_from, az[first_good], detail::kTurn, missing_next};
+        hole_after_cut = true;
+      }
+      if (missing_next > 0) {
+        scans.add_missing(missing_next);
+        missing_next = 0;
+      }
+      window_hole.open = 0;
+    }
+    if (crossing_lost) {  // after the cut: the next scan's alone
+      scans.current().touch(group_stamp, packet.rx_ns);
+      put_group(blk, a, group_stamp, false, n, mode, unit);
+    }
     have_prev = true;
     prev_az = a;
   }
