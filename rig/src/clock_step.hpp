@@ -16,7 +16,8 @@ class ClockStep {
  public:
   // Empty when this process may step the clock, else why not.
   static std::string not_permitted();
-  // Steps CLOCK_REALTIME by `step_ns` now. Throws std::runtime_error (clock_settime refused).
+  // Steps CLOCK_REALTIME by `step_ns` now, in one step of the kernel (no time lost between a read and
+  // a set). Throws std::runtime_error (clock_adjtime refused).
   explicit ClockStep(Nanos step_ns);
   ~ClockStep();  // steps back and removes the record
   ClockStep(const ClockStep&) = delete;
