@@ -44,7 +44,7 @@ std::int64_t SweepMatcher::rotation_of(const Source& src, Nanos stamp) const noe
 // of the vehicle clock reaches the sources one scan after another: until every live source has
 // shown it, the ones that stepped keep their offset (their scans then match each other's, never
 // an unstepped scan of another rotation); then the boundary moves by the step.
-void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span, bool returning) {
+void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span, bool returning, bool own_mapping) {
   const Nanos p = cfg_.period_ns, tolerance = p / 8;
   const Nanos phase = floor_mod(stamp, p);
   if (!src.seen) {
@@ -64,7 +64,7 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
   if (std::abs(jump) > tolerance) {
     ++counters_.phase_steps;
     const bool none_pending = std::all_of(sources_.begin(), sources_.end(), [](const Source& s) { return s.offset == 0; });
-    if ((std::abs(unexplained) <= tolerance || returning) && none_pending) {
+    if ((std::abs(unexplained) <= tolerance || returning || own_mapping) && none_pending) {
       // Its own phase, told by the arrivals at once: the boundary is placed anew now. Held as a
       // possible clock step, the scans of the whole-rig campaign's front LIDAR returning from
       // 300 to 600 rpm (a turn cut to 165 ms) were fused with the rotation before their own.
@@ -72,6 +72,11 @@ void SweepMatcher::track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos sp
       // shown in the others' scans first (none is pending), and across the gap its arrivals say
       // nothing. Held as a possible step, a front LIDAR killed for a second and back 61 ms later in
       // the rotation had its first scan fused with the next rotation (ten-minute campaign, seed 2).
+      // Or its stamps are flagged, this scan's or the one before: they move with the LIDAR's own
+      // mapping (slewing, or back on its sync source), not with the vehicle clock, whose step the
+      // others would show. Held as a possible step, the left and right LIDARs' stamps stepping back
+      // 85 ms to their truth after a network hold kept the held timeline for three scans: three
+      // sweeps fused them with the front's next turn (ten-minute campaign, seed 9, 198.9 s).
       place_boundary(true, &src);
       return;
     }
@@ -300,8 +305,9 @@ SweepMatcher::Placement SweepMatcher::push(std::uint32_t source, Nanos stamp_ns,
   // stamps come back to. (Placed anew when they did, the boundary could move by the jitter of the
   // phases and split a sweep; a phase that really changed meanwhile is a move, taken as any is.)
   const bool resynchronized = src.seen && src.flagged && !unsynchronized;
+  const bool own_mapping = src.seen && (src.flagged || unsynchronized);
   src.flagged = unsynchronized;
-  track_phase(src, stamp_ns, arrival_ns, span_ns, returning);
+  track_phase(src, stamp_ns, arrival_ns, span_ns, returning, own_mapping);
   src.flagged = unsynchronized;  // (a source's first scan made its state anew)
   if (unsynchronized) {
     ++counters_.unsynchronized_scans;

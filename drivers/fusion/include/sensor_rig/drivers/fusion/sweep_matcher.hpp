@@ -136,7 +136,8 @@ class SweepMatcher {
   };
 
   [[nodiscard]] std::int64_t rotation_of(const Source& src, Nanos stamp) const noexcept;
-  void track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span, bool returning);
+  // own_mapping: the source's stamps are flagged (this scan's or the one before): a jump is its own.
+  void track_phase(Source& src, Nanos stamp, Nanos arrival, Nanos span, bool returning, bool own_mapping);
   [[nodiscard]] Nanos head_lost_turn_began(const Source& src, Nanos stamp, Nanos span) const noexcept;
   [[nodiscard]] Nanos timeline_step(const Source& src, Nanos stamp, Nanos arrival, Nanos span) const noexcept;
   void place_boundary(bool anew, const Source* moved = nullptr);  // moved: the source whose phase moved it
