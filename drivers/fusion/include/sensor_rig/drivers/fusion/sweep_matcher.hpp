@@ -40,7 +40,8 @@
 // synchronized phase while it is flagged. Followed, the flagged stamps of two LIDARs slewing across
 // the turn carried the boundary into a narrower gap (46.5 ms beside 52.5), where the quarter-gap rule
 // kept it once they were back: 1,115 sweeps mixed rotations after the host clock steps of the
-// ten-minute campaign, seed 3.
+// ten-minute campaign, seed 3. A flagged source's phase jump (its mapping slewing, or back on its
+// sync source) is its own at once, never held as a possible step of the vehicle clock.
 
 #include <cstdint>
 #include <deque>
