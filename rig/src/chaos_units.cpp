@@ -111,18 +111,17 @@ std::vector<UnitTruth> units_of(const truth::Log& log) {
       if (id == p.unit) units.back().own_first_acq = p.acq_ns;
     }
   }
+  // Every unit a part has data in: a packet across a scan cut is in (and counted by) each.
+  const auto each_unit_of = [&](const truth::PartRecord& p, auto&& f) {
+    for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id)
+      if (const auto it = index.find(id); it != index.end()) f(units[it->second]);
+  };
   for (const auto& p : log.parts) {
-    if (p.fate == truth::Fate::kNotSent) {
-      // Across a scan cut it is in both scans, as a lost packet is (the rig counts it in both).
-      for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id)
-        if (const auto it = index.find(id); it != index.end()) ++units[it->second].not_sent;
+    if (p.fate == truth::Fate::kNotSent) {  // in both scans across a cut, as a lost packet is
+      each_unit_of(p, [](UnitTruth& u) { ++u.not_sent; });
       continue;
     }
-    // A packet across a scan cut has data in (and is counted by) every unit it touches.
-    for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id) {
-      const auto it = index.find(id);
-      if (it == index.end()) continue;
-      UnitTruth& u = units[it->second];
+    each_unit_of(p, [&](UnitTruth& u) {
       ++u.produced;
       if (p.fate == truth::Fate::kDropped) {
         ++u.lost;
@@ -142,7 +141,7 @@ std::vector<UnitTruth> units_of(const truth::Log& log) {
         u.first_intact_tx = p.tx_ns;
         u.first_intact_sent_acq = p.acq_ns;
       }
-    }
+    });
   }
   for (auto& u : units)
     for (const Nanos tx : u.delayed_tx) u.late += tx > u.last_tx ? 1U : 0U;
@@ -156,11 +155,7 @@ std::vector<UnitTruth> units_of(const truth::Log& log) {
       u.first_intact_acq = u.rec.acq_ns;
     }
   for (const NotSentRun& r : new_blind_arcs(log))
-    for (std::size_t k = r.first; k <= r.last; ++k) {
-      const auto& p = log.parts[k];
-      for (std::int64_t id = p.unit; id <= std::max(p.unit, p.unit_last); ++id)
-        if (const auto it = index.find(id); it != index.end()) ++units[it->second].new_blind;
-    }
+    for (std::size_t k = r.first; k <= r.last; ++k) each_unit_of(log.parts[k], [](UnitTruth& u) { ++u.new_blind; });
   std::sort(units.begin(), units.end(), [](const UnitTruth& a, const UnitTruth& b) { return a.rec.acq_ns < b.rec.acq_ns; });
   return units;
 }
