@@ -70,6 +70,7 @@ void write_judge_input(const std::string& path, const Input& in, const std::vect
                    {"window_end_ns", in.window_end_ns},
                    {"count_edge_ns", in.count_edge_ns},
                    {"counted_lost", in.counted_lost},
+                   {"unheard", in.unheard},
                    {"dbw_ecu_timeout_ns", in.dbw_ecu_timeout_ns},
                    {"dbw_gaps_unknown", in.dbw_gaps_unknown},
                    {"campaign_errors", campaign_errors}};
@@ -102,6 +103,8 @@ Input read_campaign(const fs::path& dir, std::vector<std::string>& campaign_erro
     in.window_end_ns = j.at("window_end_ns").get<Nanos>();
     in.count_edge_ns = j.at("count_edge_ns").get<Nanos>();
     in.counted_lost = j.at("counted_lost").get<std::map<std::string, std::uint64_t>>();
+    // Campaigns judged before LIDARs counted unheard turns have none.
+    if (j.contains("unheard")) in.unheard = j.at("unheard").get<std::map<std::string, std::uint64_t>>();
     in.dbw_ecu_timeout_ns = j.at("dbw_ecu_timeout_ns").get<Nanos>();
     in.dbw_gaps_unknown = j.value("dbw_gaps_unknown", std::uint64_t{0});  // campaigns kept before 2026-12-01: none
     campaign_errors = j.at("campaign_errors").get<std::vector<std::string>>();

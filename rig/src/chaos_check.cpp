@@ -398,7 +398,19 @@ class Checker {
       constexpr std::uint64_t kMostPerUnknownGap = 15;
       facts.unseeable += std::min(not_published, in_.dbw_gaps_unknown * kMostPerUnknownGap);
     }
+    // A LIDAR's turns unheard: they cover its units lost whole in silences, within the count's window.
+    if (const auto unheard = in_.unheard.find(topic); unheard != in_.unheard.end()) {
+      facts.rig_unheard = unheard->second;
+      const Unheard truth = unheard_of(log, units, in_.window_begin_ns - in_.count_edge_ns, in_.window_end_ns + in_.count_edge_ns);
+      facts.unheard_units = truth.units;
+      facts.turns_unmade = truth.turns_unmade;
+    }
     const CountVerdict count = reconcile_count(facts);
+    if (count.over_unheard)
+      violation("no_phantom_loss", topic, "the rig heard nothing in " + std::to_string(facts.rig_unheard) + " turns; " +
+                                              std::to_string(facts.unheard_units) + " " + log.header.unit +
+                                              "s were lost whole in a silence and " + std::to_string(facts.turns_unmade) +
+                                              " turns made nothing");
     // Units and the rig's count are reconciled by number: in doubled time, and wherever the rig
     // counts a loss by the gap it sees, which units the count missed is not known. Said so: "17 of
     // them made while the host clock read a time twice" sent a reader to the doubled second, while the
@@ -416,6 +428,7 @@ class Checker {
     const std::uint64_t unaccounted_all = count.unaccounted_all;
     t.unaccounted = count.unaccounted;
     t.counted_lost = count.counted_lost;
+    t.counted_unheard = count.counted_unheard;
     if (unaccounted_all > 0) {
       std::string first = "none: all in the time the host clock read twice";
       for (const UnitTruth& u : units)
@@ -615,7 +628,7 @@ class Checker {
       const Nanos at = j != judged_at.end() ? j->second : s->acquisition_ns;
       if (at >= a && at < b && !doubled(at)) ++(s->lost() ? lost : received);
     }
-    const std::uint64_t counted = t.counted_lost;
+    const std::uint64_t counted = t.counted_lost + t.counted_unheard;
     t.monitor_expected = made;
     if (made == 0 && samples.empty()) return;
     if (samples.empty()) {
@@ -624,7 +637,7 @@ class Checker {
     }
     if (received + lost + counted != made)
       violation("monitor_agrees", topic, "monitor: received " + std::to_string(received) + " + lost " + std::to_string(lost) +
-                                             " + counted lost by the rig " + std::to_string(counted) + " = " +
+                                             " + counted lost or unheard by the rig " + std::to_string(counted) + " = " +
                                              std::to_string(received + lost + counted) + "; the device made " +
                                              std::to_string(made) + " while it watched");
   }

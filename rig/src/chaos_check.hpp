@@ -66,6 +66,9 @@ struct Input {
   std::vector<SampleRecord> samples;       // the monitor's record: every stamped sample the rig published
   std::map<std::string, MonitorTotals> monitor;
   std::map<std::string, std::uint64_t> counted_lost;  // units the rig counted lost in the window, by topic
+  // Turns a LIDAR heard nothing in within the window (its `unheard`: lost or never made, a model
+  // without numbering cannot tell; lidar/include/sensor_rig/lidar/stream_gap.hpp), by topic.
+  std::map<std::string, std::uint64_t> unheard;
   std::map<std::string, TopicExpectation> expected;   // by topic
   // Vehicle-time intervals in which the rig flagged a topic's stamps unsynchronized (/diagnostics
   // stamp_sync): a stamp outside its bound then is the rig's own warning, not a lie.
@@ -95,6 +98,7 @@ struct TopicResult {
   std::uint64_t published_complete = 0;
   std::uint64_t published_incomplete = 0;  // published, its missing packets counted
   std::uint64_t counted_lost = 0;          // not published, counted lost by the rig
+  std::uint64_t counted_unheard = 0;       // not published, lost whole in a silence the rig counted unheard
   std::uint64_t unaccounted = 0;           // neither published nor counted
   std::uint64_t phantom_missing = 0;       // packets counted missing that arrived intact
   std::uint64_t hidden_missing = 0;        // packets lost that the published unit does not count

@@ -11,11 +11,15 @@ CountVerdict reconcile_count(const CountFacts& f) {
   const std::uint64_t least = f.not_published - std::min(f.edge_in + f.unseeable, f.not_published) + v.doubled_lost;
   v.most = f.not_published + f.edge_out + v.doubled_lost + f.silent_slots;
   v.over_counted = f.rig_counted > v.most;
-  const std::uint64_t counted = std::min(f.rig_counted, v.most);
+  v.over_unheard = f.rig_unheard > f.unheard_units + f.turns_unmade;
+  const std::uint64_t unheard = std::min(f.rig_unheard, f.unheard_units);
+  const std::uint64_t counted = std::min(f.rig_counted + unheard, v.most);
   v.unaccounted_all = least > counted ? least - counted : 0;
   // What the count leaves open is the judged units' first (`sent` leaves doubled time out).
   v.unaccounted = std::min(f.not_published, v.unaccounted_all);
-  v.counted_lost = f.not_published - v.unaccounted;
+  const std::uint64_t covered = f.not_published - v.unaccounted;
+  v.counted_unheard = std::min(unheard, covered);
+  v.counted_lost = covered - v.counted_unheard;
   return v;
 }
 

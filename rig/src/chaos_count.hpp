@@ -23,6 +23,12 @@ struct CountFacts {
   // a disconnect, before it was dequeued: vb2 answers EIO before its done list): among
   // not_published, an honest count may have them or not.
   std::uint64_t unseeable = 0;
+  // A LIDAR's turns it heard nothing in (its `unheard`, stream_gap.hpp: lost or never made, it cannot
+  // tell), and what they may honestly be (chaos_units.hpp Unheard): units lost whole in a silence,
+  // which they cover, and turns the device made nothing in, which they may hold besides.
+  std::uint64_t rig_unheard = 0;
+  std::uint64_t unheard_units = 0;
+  std::uint64_t turns_unmade = 0;
 };
 
 struct CountVerdict {
@@ -31,12 +37,15 @@ struct CountVerdict {
   bool over_counted = false;          // the rig counted more than `most`: phantom loss
   std::uint64_t unaccounted_all = 0;  // losses neither published nor counted (doubled time's included)
   std::uint64_t unaccounted = 0;      // of the judged units: sent = published + counted_lost + unaccounted
-  std::uint64_t counted_lost = 0;     // of the judged units
+  std::uint64_t counted_lost = 0;     // of the judged units, counted lost
+  std::uint64_t counted_unheard = 0;  // of the judged units, covered by the rig's unheard turns
+  bool over_unheard = false;          // more turns unheard than units lost whole there and turns unmade
 };
 
 // An honest count lies in [not_published - edge_in - unseeable + doubled_lost, not_published +
 // edge_out + doubled_lost + silent_slots]; below it the rest is unaccounted (judged units first),
-// above it phantom.
+// above it phantom. The rig's unheard turns cover as many units as were lost whole in silences;
+// more than those and the turns nothing was made in are phantom too.
 CountVerdict reconcile_count(const CountFacts& f);
 
 }  // namespace sensor_rig::rig::chaos

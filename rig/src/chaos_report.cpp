@@ -18,6 +18,7 @@ std::string result_json(const Result& r) {
                           {"published_complete", t.published_complete},
                           {"published_incomplete", t.published_incomplete},
                           {"counted_lost", t.counted_lost},
+                          {"counted_unheard", t.counted_unheard},
                           {"unaccounted", t.unaccounted},
                           {"phantom_missing", t.phantom_missing},
                           {"hidden_missing", t.hidden_missing},
@@ -48,14 +49,14 @@ std::string result_text(const Result& r) {
   for (const auto& [k, n] : r.faults) o << ' ' << k << '=' << n;
   o << '\n';
   char line[320];
-  std::snprintf(line, sizeof line, "%-40s %6s %8s %8s %6s %6s %7s %7s %8s %7s\n", "topic", "sent", "complete", "incompl",
-                "lost", "unacc", "phantom", "hidden", "stamp99", "healthy");
+  std::snprintf(line, sizeof line, "%-40s %6s %8s %8s %6s %7s %6s %7s %7s %8s %7s\n", "topic", "sent", "complete", "incompl",
+                "lost", "unheard", "unacc", "phantom", "hidden", "stamp99", "healthy");
   o << line;
   for (const auto& [topic, t] : r.topics) {
-    std::snprintf(line, sizeof line, "%-40s %6llu %8llu %8llu %6llu %6llu %7llu %7llu %8.3f %6.1f%%\n", topic.c_str(),
+    std::snprintf(line, sizeof line, "%-40s %6llu %8llu %8llu %6llu %7llu %6llu %7llu %7llu %8.3f %6.1f%%\n", topic.c_str(),
                   static_cast<unsigned long long>(t.sent), static_cast<unsigned long long>(t.published_complete),
                   static_cast<unsigned long long>(t.published_incomplete), static_cast<unsigned long long>(t.counted_lost),
-                  static_cast<unsigned long long>(t.unaccounted), static_cast<unsigned long long>(t.phantom_missing),
+                  static_cast<unsigned long long>(t.counted_unheard), static_cast<unsigned long long>(t.unaccounted), static_cast<unsigned long long>(t.phantom_missing),
                   static_cast<unsigned long long>(t.hidden_missing), t.stamp_error_p99_ms, 100 * t.healthy_rate_share);
     o << line;
   }

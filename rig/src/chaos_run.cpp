@@ -78,24 +78,31 @@ struct MonitorLine {
   std::string text;
 };
 
-// The monitor's last --json line per topic (what it says at the end), and the units the rig itself
-// counted lost within the judged window: its cumulative `counted_lost` at the window's end minus at
-// its start (a driver that knows a scan or frame never completed; issue 26's monitor publishes it).
+// The monitor's last --json line per topic (what it says at the end), and what the rig itself
+// counted within the judged window: its cumulative `counted_lost` (units a driver knows never
+// completed; issue 26's monitor publishes it) and `unheard` (a LIDAR's turns it heard nothing in) at
+// the window's end minus at its start.
 std::map<std::string, MonitorTotals> monitor_totals(const std::vector<MonitorLine>& lines, Nanos begin_mono, Nanos end_mono,
-                                                    std::map<std::string, std::uint64_t>& counted_lost) {
+                                                    std::map<std::string, std::uint64_t>& counted_lost,
+                                                    std::map<std::string, std::uint64_t>& unheard) {
   std::map<std::string, MonitorTotals> out;
-  std::map<std::string, std::uint64_t> at_begin, at_end;
+  std::map<std::string, std::uint64_t> at_begin[2], at_end[2];
+  std::map<std::string, std::uint64_t>* const within[2] = {&counted_lost, &unheard};
   for (const auto& line : lines) {
     const auto j = nlohmann::json::parse(line.text, nullptr, false);
     if (j.is_discarded() || !j.is_object() || !j.contains("topic")) continue;
     const std::string topic = j["topic"].get<std::string>();
     out[topic] = MonitorTotals{j.value("received", std::uint64_t{0}), j.value("lost", std::uint64_t{0})};
-    if (!j.contains("counted_lost")) continue;
-    const auto n = j["counted_lost"].get<std::uint64_t>();
-    if (line.mono_ns <= begin_mono) at_begin[topic] = n;
-    if (line.mono_ns <= end_mono) at_end[topic] = n;
+    for (int k = 0; k < 2; ++k) {
+      const char* key = k == 0 ? "counted_lost" : "unheard";
+      if (!j.contains(key)) continue;
+      const auto n = j[key].get<std::uint64_t>();
+      if (line.mono_ns <= begin_mono) at_begin[k][topic] = n;
+      if (line.mono_ns <= end_mono) at_end[k][topic] = n;
+    }
   }
-  for (const auto& [topic, n] : at_end) counted_lost[topic] = n - std::min(n, at_begin[topic]);
+  for (int k = 0; k < 2; ++k)
+    for (const auto& [topic, n] : at_end[k]) (*within[k])[topic] = n - std::min(n, at_begin[k][topic]);
   return out;
 }
 
@@ -462,7 +469,7 @@ int run(const Options& o) {
   const Nanos window_ns = static_cast<Nanos>((o.duration_s - 2.5) * 1e9);
   in.window_begin_ns = epoch_vehicle + kLead;
   in.window_end_ns = epoch_vehicle + window_ns;
-  in.monitor = monitor_totals(monitor_lines, plan.epoch_mono_ns + kLead, plan.epoch_mono_ns + window_ns, in.counted_lost);
+  in.monitor = monitor_totals(monitor_lines, plan.epoch_mono_ns + kLead, plan.epoch_mono_ns + window_ns, in.counted_lost, in.unheard);
   in.count_edge_ns = 1'000'000'000 + static_cast<Nanos>(cfg.diagnostics_period_ms) * 1'000'000;  // a line, a period
   in.expected = expectations_of(cfg);
   in.unsynchronized = diagnostics.unsynchronized();

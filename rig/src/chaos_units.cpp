@@ -7,6 +7,8 @@
 #include <set>
 #include <string>
 
+#include "sensor_rig/lidar/stream_gap.hpp"
+
 namespace sensor_rig::rig::chaos {
 namespace {
 
@@ -158,6 +160,33 @@ std::vector<UnitTruth> units_of(const truth::Log& log) {
     for (std::size_t k = r.first; k <= r.last; ++k) each_unit_of(log.parts[k], [](UnitTruth& u) { ++u.new_blind; });
   std::sort(units.begin(), units.end(), [](const UnitTruth& a, const UnitTruth& b) { return a.rec.acq_ns < b.rec.acq_ns; });
   return units;
+}
+
+Unheard unheard_of(const truth::Log& log, const std::vector<UnitTruth>& units, Nanos begin, Nanos end) {
+  Unheard out;
+  // When the rig heard the device: every part on the wire, intact or not (a corrupt packet still
+  // shows the sensor sending), by its acquisition (a LIDAR sends each packet as it fires).
+  std::vector<Nanos> heard;
+  for (const auto& p : log.parts)
+    if (p.fate != truth::Fate::kDropped && p.fate != truth::Fate::kNotSent) heard.push_back(p.acq_ns);
+  std::sort(heard.begin(), heard.end());
+  for (std::size_t i = 2; i + 1 < units.size(); ++i) {
+    const UnitTruth& u = units[i];
+    const Nanos at = u.rec.acq_ns;
+    if (at < begin || at >= end) continue;
+    // A turn here, from the unit's neighbours (the rpm may change: a VLP-32C at 900 rpm turns in
+    // 67 ms); across a gap in the units, the step before it.
+    const Nanos step = at - units[i - 1].rec.acq_ns;
+    const Nanos before = units[i - 1].rec.acq_ns - units[i - 2].rec.acq_ns;
+    if (before > 0 && step * 2 > 3 * before)
+      out.turns_unmade += static_cast<std::uint64_t>(std::ceil(static_cast<double>(step) / static_cast<double>(before))) - 1;
+    const Nanos turn = std::min(step, units[i + 1].rec.acq_ns - at);
+    if (u.sample != nullptr || u.produced == 0 || u.lost < u.produced || heard.empty() || turn <= 0) continue;
+    const auto next = std::upper_bound(heard.begin(), heard.end(), at);
+    if (next == heard.begin() || next == heard.end()) continue;
+    if (*next - *std::prev(next) > lidar::kSilenceTurns * turn) ++out.units;
+  }
+  return out;
 }
 
 Nanos match_tolerance(const std::vector<UnitTruth>& units) {

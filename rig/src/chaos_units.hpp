@@ -97,6 +97,18 @@ std::vector<SlewSpan> slews_after_steps_back(const std::vector<truth::Log>& trut
 // How late a stamp at t may be by those slews: the steps whose slew may still run at t, summed.
 Nanos slew_bound(const std::vector<SlewSpan>& slews, Nanos t);
 
+// What a LIDAR's `scans_unheard` may cover (lidar/include/sensor_rig/lidar/stream_gap.hpp): its
+// units in [begin, end) neither published nor with one part that reached the rig, inside a stretch
+// longer than lidar::kSilenceTurns of their turns in which nothing at all did (a loss burst that
+// long, which a model without numbering cannot tell from a silent sensor), and the turns the device
+// made nothing in there (its mock killed or restarting: gaps between its units' acquisitions of more
+// than one and a half turns). `units` in acquisition order, matched to their samples.
+struct Unheard {
+  std::uint64_t units = 0;        // made, lost whole in a silence: an honest `unheard` covers them
+  std::uint64_t turns_unmade = 0;  // no unit made: an honest `unheard` may have them, no more
+};
+Unheard unheard_of(const truth::Log& log, const std::vector<UnitTruth>& units, Nanos begin, Nanos end);
+
 // Slots of a CAN message's period in which the ECU made no frame while its alive counter stood still
 // (dbw.stuck_counter), the later frame of each such silence in [begin, end). On the bus a silent slot
 // and a frame lost there are the same: a frozen counter shows no jump, only the period shows the gap,

@@ -336,10 +336,12 @@ class Monitor {
         16);
   }
 
-  // Units a node counted lost itself (`counted_lost`, `scans_lost`, `frames_lost`), on its topic.
+  // Units a node counted lost itself (`counted_lost`, `scans_lost`, `frames_lost`), and the turns a
+  // LIDAR heard nothing in (`scans_unheard`), on its topic.
   void take_counted_lost(const msg::DiagnosticStatus& st) {
     const char* topic_name = nullptr;
     const char* lost = nullptr;
+    const char* unheard = nullptr;
     for (std::uint32_t k = 0; k < st.values._length; ++k) {
       const auto& kv = st.values._buffer[k];
       if (kv.key == nullptr || kv.value == nullptr) continue;
@@ -347,9 +349,13 @@ class Monitor {
       if (key == "topic") topic_name = kv.value;
       // A node's own total: counted_lost (camera nodes), else scans_lost (LIDAR) or frames_lost.
       if (key == "counted_lost" || ((key == "scans_lost" || key == "frames_lost") && lost == nullptr)) lost = kv.value;
+      if (key == "scans_unheard") unheard = kv.value;
     }
-    if (topic_name == nullptr || lost == nullptr) return;
-    if (auto it = stats_.find(topic_name); it != stats_.end()) it->second.on_counted_lost(std::strtoull(lost, nullptr, 10));
+    if (topic_name == nullptr) return;
+    const auto it = stats_.find(topic_name);
+    if (it == stats_.end()) return;
+    if (lost != nullptr) it->second.on_counted_lost(std::strtoull(lost, nullptr, 10));
+    if (unheard != nullptr) it->second.on_unheard(std::strtoull(unheard, nullptr, 10));
   }
 
   // A camera's drops by stage (its node's counters), on its image_raw topic if this monitor reads it.
@@ -402,6 +408,7 @@ class Monitor {
       nlohmann::json j{{"topic", name},         {"duration_s", run_s},
                        {"received", st.received}, {"lost", st.lost},
                        {"source_drops", st.source_drops}, {"missing_packets", st.missing_packets},
+                       {"counted_lost", st.counted_lost()}, {"unheard", st.unheard()},
                        {"size_bytes", st.last_size}};
       if (st.malformed > 0) j["malformed"] = st.malformed;
       j["drops_by_stage"] = drops_json(st);
@@ -464,6 +471,7 @@ class Monitor {
                      {"lost", st.lost},     {"source_drops", st.source_drops},
                      {"missing_packets", st.missing_packets},
                      {"counted_lost", st.counted_lost()},
+                     {"unheard", st.unheard()},
                      {"info", st.info},     {"latency_ms", lat}};
     if (st.seq_gaps > 0) j["seq_gaps"] = st.seq_gaps;
     if (st.malformed > 0) j["malformed"] = st.malformed;
@@ -481,7 +489,9 @@ class Monitor {
                static_cast<unsigned long long>(st.lost), static_cast<unsigned long long>(st.source_drops),
                miss.c_str(), cell(kSensor).c_str(), cell(kProcess).c_str(), cell(kDds).c_str(),
                cell(kTotal).c_str()) +
-           (p[kEcu].n == 0 ? std::string() : "ecu " + cell(kEcu) + " ms  ") + st.info + "\n";
+           (p[kEcu].n == 0 ? std::string() : "ecu " + cell(kEcu) + " ms  ") +
+           // Turns nothing was heard in, lost or never made: the node cannot tell (stream_gap.hpp).
+           (st.unheard() == 0 ? std::string() : "unheard " + std::to_string(st.unheard()) + " turns  ") + st.info + "\n";
   }
 
   // Synchronized sets, below the topics: rate, spread p50/p99/max, incomplete (from /diagnostics).

@@ -7,17 +7,17 @@
 
 namespace sensor_rig::rig {
 
-void TopicStats::on_counted_lost(std::uint64_t cumulative) {
-  if (!counted_lost_seen) {
-    counted_lost_seen = true;
-    counted_lost_first = counted_lost_last = cumulative;
+void NodeTotal::on(std::uint64_t cumulative) {
+  if (!seen) {
+    seen = true;
+    first = last = cumulative;
     return;
   }
-  if (cumulative < counted_lost_last) {  // the node restarted: its count starts again from 0
-    counted_lost_before_restart = counted_lost();
-    counted_lost_first = 0;
+  if (cumulative < last) {  // the node restarted: its count starts again from 0
+    before_restart = total();
+    first = 0;
   }
-  counted_lost_last = cumulative;
+  last = cumulative;
 }
 
 void TopicStats::on_data(Nanos stamp, std::size_t size, const Arrival& a) {

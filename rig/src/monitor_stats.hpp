@@ -1,6 +1,7 @@
 #pragma once
 // What `rig monitor` knows per topic and per synchronized set, fed by its readers; no DDS here
 // beyond the message structs.
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <limits>
@@ -42,6 +43,15 @@ struct CameraDrops {
   [[nodiscard]] std::uint64_t write_errors() const { return since_start(kKeys.size() - 1); }
 };
 
+// A node's cumulative counter from /diagnostics, counted since this monitor's first status (what
+// came before is not its to count) and across a restart of the node (which counts from 0 again).
+struct NodeTotal {
+  std::uint64_t first = 0, last = 0, before_restart = 0;
+  bool seen = false;
+  void on(std::uint64_t cumulative);
+  [[nodiscard]] std::uint64_t total() const { return before_restart + last - std::min(last, first); }
+};
+
 // One topic: data samples and their source stamps, joined by header stamp (either may come first).
 struct TopicStats {
   std::string name;
@@ -55,13 +65,15 @@ struct TopicStats {
   std::uint64_t before_match = 0;
   bool data_seen = false;
   // Units the rig itself counted lost (issue 26 item 10): the node's /diagnostics `scans_lost` or
-  // `frames_lost` (cumulative, since this monitor's first status; a restarted node counts from 0).
-  std::uint64_t counted_lost_first = 0, counted_lost_last = 0, counted_lost_before_restart = 0;
-  bool counted_lost_seen = false;
-  void on_counted_lost(std::uint64_t cumulative);
-  [[nodiscard]] std::uint64_t counted_lost() const {
-    return counted_lost_before_restart + counted_lost_last - std::min(counted_lost_last, counted_lost_first);
-  }
+  // `frames_lost`.
+  NodeTotal counted_lost_total;
+  void on_counted_lost(std::uint64_t cumulative) { counted_lost_total.on(cumulative); }
+  [[nodiscard]] std::uint64_t counted_lost() const { return counted_lost_total.total(); }
+  // Turns a LIDAR without packet numbering heard nothing in, lost or never made (its node's
+  // `scans_unheard`, lidar/include/sensor_rig/lidar/stream_gap.hpp): neither received nor lost.
+  NodeTotal unheard_total;
+  void on_unheard(std::uint64_t cumulative) { unheard_total.on(cumulative); }
+  [[nodiscard]] std::uint64_t unheard() const { return unheard_total.total(); }
   // Samples whose stamps never came either: gaps in SourceStamps.seq per writer, counted in `lost`.
   std::uint64_t seq_gaps = 0;
   CameraDrops camera;  // camera image_raw topics: the node's drops by stage

@@ -37,6 +37,7 @@ Input starved() {
   Input in = honest();
   in.samples.erase(in.samples.begin() + 3, in.samples.end());
   in.counted_lost[kTopic] = 47;
+  in.unheard[kTopic] = 2;
   in.monitor[kTopic] = MonitorTotals{3, 47};
   in.expected[kTopic] = TopicExpectation{"front", 10.0, {"left", "right"}};
   in.events.push_back(faults::FaultEvent{1, "camera.dies", "corner", 0.5, 1.0, {{"ms", "300"}}});
@@ -71,6 +72,7 @@ TEST(ChaosCampaignFiles, AKeptCampaignReadsBackToTheInputAndItsVerdict) {
   EXPECT_EQ(back.window_end_ns, in.window_end_ns);
   EXPECT_EQ(back.count_edge_ns, in.count_edge_ns);
   EXPECT_EQ(back.counted_lost, in.counted_lost);
+  EXPECT_EQ(back.unheard, in.unheard);
   EXPECT_EQ(back.monitor.at(kTopic).received, 3u);
   EXPECT_EQ(back.monitor.at(kTopic).lost, 47u);
   EXPECT_EQ(back.expected.at(kTopic).depends_on, (std::vector<std::string>{"left", "right"}));

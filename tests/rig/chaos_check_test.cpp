@@ -88,6 +88,58 @@ TEST(ChaosCheck, AScanCutByAKilledMockIsStampedInsideItsFirstPacketAndMayCountTh
   EXPECT_EQ(r.topics.at(kTopic).phantom_missing, 1u);
 }
 
+// A loss burst of 3.2 turns on a LIDAR without packet numbering (rig chaos seed 9, ten minutes: a
+// VLP-32C at 900 rpm, 3.07 turns): nothing arrived for longer than the silence bound, so the rig
+// cannot tell it from a silent sensor. It counts the scans at the burst's ends lost and the 2 whole
+// turns inside unheard (lost or never made): accounted. Said of a shorter burst, or of more turns
+// than were lost whole or made nothing, unheard is a phantom; and it covers no loss elsewhere.
+TEST(ChaosCheck, TurnsUnheardCoverScansLostWholeInASilence) {
+  Input in = honest();
+  for (std::uint32_t p = 4; p < 3 * kParts + 6; ++p) drop_part(in, 20 + static_cast<int>(p / kParts), p % kParts);
+  in.samples.erase(in.samples.begin() + 20, in.samples.begin() + 24);
+  in.monitor[kTopic] = MonitorTotals{kScans - 4, 0};
+  in.counted_lost[kTopic] = 2;
+  Result r = check(in);
+  EXPECT_FALSE(r.invariants.at("accounted")) << "2 scans neither published nor counted";
+  EXPECT_FALSE(r.invariants.at("monitor_agrees"));
+  in.unheard[kTopic] = 2;
+  r = check(in);
+  for (const char* held : {"accounted", "no_phantom_loss", "monitor_agrees"}) EXPECT_TRUE(r.invariants.at(held)) << held << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).counted_lost, 2u);
+  EXPECT_EQ(r.topics.at(kTopic).counted_unheard, 2u);
+  EXPECT_EQ(r.topics.at(kTopic).unaccounted, 0u);
+  in.unheard[kTopic] = 3;  // one turn more than the silence held
+  EXPECT_FALSE(check(in).invariants.at("no_phantom_loss"));
+  // The same 2 turns unheard beside a burst of 2.6 turns: no silence, the rig heard the sensor
+  // within 3 turns; its scans are lost, not unheard.
+  in = honest();
+  for (std::uint32_t p = 4; p < 3 * kParts; ++p) drop_part(in, 20 + static_cast<int>(p / kParts), p % kParts);
+  in.samples.erase(in.samples.begin() + 20, in.samples.begin() + 23);
+  in.monitor[kTopic] = MonitorTotals{kScans - 3, 0};
+  in.counted_lost[kTopic] = 2;
+  in.unheard[kTopic] = 1;
+  r = check(in);
+  EXPECT_FALSE(r.invariants.at("accounted")) << result_text(r);
+  EXPECT_FALSE(r.invariants.at("no_phantom_loss")) << result_text(r);
+}
+
+// A mock killed for 5 turns (host.kill_mock): it made nothing, and the rig, which cannot tell that
+// from a loss, counts them unheard. Honest up to the 5 turns; no scan was lost.
+TEST(ChaosCheck, TurnsUnheardWhileTheDeviceMadeNothingAreNoPhantoms) {
+  Input in = honest();
+  auto& log = in.truths[0];
+  log.units.erase(log.units.begin() + 30, log.units.begin() + 35);
+  log.parts.erase(log.parts.begin() + 30 * kParts, log.parts.begin() + 35 * kParts);
+  in.samples.erase(in.samples.begin() + 30, in.samples.begin() + 35);
+  in.monitor[kTopic] = MonitorTotals{kScans - 5, 0};
+  in.unheard[kTopic] = 4;
+  Result r = check(in);
+  for (const char* held : {"accounted", "no_phantom_loss", "monitor_agrees"}) EXPECT_TRUE(r.invariants.at(held)) << held << result_text(r);
+  EXPECT_EQ(r.topics.at(kTopic).counted_unheard, 0u);
+  in.unheard[kTopic] = 6;
+  EXPECT_FALSE(check(in).invariants.at("no_phantom_loss"));
+}
+
 TEST(ChaosCheck, ARigThatHidesALossIsCaught) {
   Input in = honest();
   drop_part(in, 12, 3);

@@ -76,5 +76,31 @@ TEST(ChaosCount, UnitsOfTimeReadTwiceAreHeldByNumberAndNotChargedToJudgedUnits) 
   EXPECT_TRUE(reconcile_count(f).over_counted);
 }
 
+// A LIDAR without numbering counts the whole turns of a silence unheard (stream_gap.hpp): lost or
+// never made. They cover the units lost whole in a silence, no others (a loss elsewhere stays
+// unaccounted), and beyond those and the turns the device made nothing in they are phantom.
+TEST(ChaosCount, UnheardTurnsCoverUnitsLostWholeInASilenceOnly) {
+  auto f = facts(2, 4);  // a 3.07-turn burst: the scans at its ends counted lost, 2 whole turns inside
+  EXPECT_EQ(reconcile_count(f).unaccounted, 2U) << "before: the rig said nothing of the 2 turns";
+  f.rig_unheard = 2;
+  f.unheard_units = 2;
+  auto v = reconcile_count(f);
+  EXPECT_EQ(v.unaccounted, 0U);
+  EXPECT_EQ(v.counted_lost, 2U);
+  EXPECT_EQ(v.counted_unheard, 2U);
+  EXPECT_FALSE(v.over_unheard);
+  // A killed mock's silence elsewhere: 20 turns unheard, none made. They do not cover a loss the
+  // rig hid beside them.
+  f.rig_unheard = 22;
+  f.turns_unmade = 20;
+  f.not_published = 5;
+  v = reconcile_count(f);
+  EXPECT_FALSE(v.over_unheard);
+  EXPECT_EQ(v.unaccounted, 1U);
+  // More unheard than lost whole and unmade: phantom.
+  f.rig_unheard = 23;
+  EXPECT_TRUE(reconcile_count(f).over_unheard);
+}
+
 }  // namespace
 }  // namespace sensor_rig::rig::chaos

@@ -227,6 +227,11 @@ TEST(MonitorStats, CountedLostFollowsTheNodeAcrossARestart) {
   EXPECT_EQ(st.counted_lost(), 3U);
   st.on_counted_lost(4);
   EXPECT_EQ(st.counted_lost(), 6U);
+  // A LIDAR's unheard turns are counted alike, on their own.
+  st.on_unheard(3);
+  st.on_unheard(5);
+  EXPECT_EQ(st.unheard(), 2U);
+  EXPECT_EQ(st.counted_lost(), 6U);
 }
 
 TEST(SampleRecord, StageLatenciesNeedBothStamps) {

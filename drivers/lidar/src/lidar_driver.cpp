@@ -604,6 +604,10 @@ dds::DriverStatus LidarDriver::status() const {
   s.add_number("scans_lost", d.scans_lost);
   // Gaps the sensor was silent (off, restarting, cut off): a new stream followed, nothing counted lost.
   s.add_number("silences", d.silences);
+  // Whole turns inside those silences, from a model without numbering: lost on the way or never
+  // made, it cannot tell (a loss burst longer than the silence bound looks the same): rig monitor's
+  // `unheard`, never in scans_lost.
+  s.add_number("scans_unheard", d.scans_unheard);
   s.add_number("foreign_packets", impl_->foreign_packets);
   if (impl_->ring) {
     add_ring_counters(s, impl_->ring_stats);

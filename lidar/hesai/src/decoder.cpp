@@ -189,10 +189,20 @@ struct DecoderImpl {
   // A silence before this packet (stream_gap.hpp): the scans in progress (and the lookahead past
   // the cut) end as partial, continuity and the UDP sequence start over at this packet; a first
   // group within a packet after the cut begins a whole scan.
-  void new_stream(std::optional<Scan>& out, int first_az, double group_step, int groups, RxTimes rx) noexcept {
+  // `unheard_ns`: the silence as the sensor turned (silence_elapsed) where its numbering cannot say
+  // whether it sent (IdsAcrossGap::kNone), else 0.
+  void new_stream(std::optional<Scan>& out, int first_az, double group_step, int groups, RxTimes rx, Nanos unheard_ns) noexcept {
     ++stats.silences;
     const std::uint32_t rejected = scans.rejected_since_kept();
     const std::uint32_t before = gaps.rejected_before_silence(rx, rejected);
+    // The whole turns between the last group heard and this packet's first (no rejected packets in
+    // between: those are counted by the scans they began, below). A lookahead past the cut was
+    // heard: its scan ends below, counted lost, and is no unheard one.
+    if (have_prev && rejected == 0 && unheard_ns > 0) {
+      const int to_cut = detail::turn_step(prev_az, emit_raw);
+      const std::uint64_t n = scans_unheard(unheard_ns, turn_ns(), detail::turn_step(prev_az, first_az), to_cut == 0 ? detail::kTurn : to_cut);
+      stats.scans_unheard += n - std::min<std::uint64_t>(n, scans.next().scan.packets > 0 ? 1 : 0);
+    }
     // Packets rejected whole since the last kept one (a frozen encoder) turned on to the next
     // scan's window and past it: the scans they began were made (stream_gap.hpp). A scan begins
     // where its window does (reset_raw); one whose window opened already is the lookahead, ended
@@ -411,7 +421,8 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
                              std::llround(static_cast<double>(dt_us) * 1000.0 / static_cast<double>(period_ns)))
             : IdsAcrossGap::kNone;
     if (is_silence(quiet, turn_ns(), sensor_continues(dt_us * 1000, period_ns), ids)) {
-      new_stream(out, az[first_good], fit.step, groups, rx_times(packet));
+      const Nanos unheard_ns = ids == IdsAcrossGap::kNone ? silence_elapsed(dt_us * 1000, quiet, turn_ns()) : 0;
+      new_stream(out, az[first_good], fit.step, groups, rx_times(packet), unheard_ns);
       to_caller_line();
     }
   }

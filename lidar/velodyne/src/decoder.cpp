@@ -325,10 +325,17 @@ struct DecoderImpl {
 
   // A silence before this packet (stream_gap.hpp): the scan in progress ends as partial, continuity
   // starts over at this packet; a first group within a packet after the cut begins a whole scan.
-  std::optional<Scan> new_stream(int first_az, double group_step, int groups, RxTimes rx) noexcept {
+  // `elapsed_ns`: the silence as the sensor turned (silence_elapsed), `turn`: one turn (ns).
+  std::optional<Scan> new_stream(int first_az, double group_step, int groups, RxTimes rx, Nanos elapsed_ns, Nanos turn) noexcept {
     ++stats.silences;
     const std::uint32_t rejected = scans.rejected_since_kept();
     const std::uint32_t before = gaps.rejected_before_silence(rx, rejected);
+    // The whole turns between the last group heard and this packet's first (no rejected packets
+    // in between: those are counted by the scans they began, below).
+    if (have_prev && rejected == 0) {
+      const int to_cut = detail::turn_step(prev_az, cut);
+      stats.scans_unheard += scans_unheard(elapsed_ns, turn, detail::turn_step(prev_az, first_az), to_cut == 0 ? detail::kTurn : to_cut);
+    }
     // Packets rejected whole since the last kept one (a frozen encoder) turned on to the cut and
     // past it: the scans they began were made (stream_gap.hpp). Packet k after the last kept one
     // reaches the cut when its last group does.
@@ -393,8 +400,10 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // Nothing heard for turns while the sensor's time moved on: it was silent, not a loss (no ids
   // to say otherwise). Judged first: nothing before a silence is this packet's order or loss.
   if (const Nanos quiet = gaps.quiet_ns(rx_times(packet)); have_prev && quiet > kSilenceTurns * period_ns &&
-      is_silence(quiet, turn_ns(period_ns, groups), sensor_continues(dt_us * 1000, period_ns), IdsAcrossGap::kNone))
-    out = new_stream(na[first_good], fit.step, groups, rx_times(packet));
+      is_silence(quiet, turn_ns(period_ns, groups), sensor_continues(dt_us * 1000, period_ns), IdsAcrossGap::kNone)) {
+    const Nanos turn = turn_ns(period_ns, groups);
+    out = new_stream(na[first_good], fit.step, groups, rx_times(packet), silence_elapsed(dt_us * 1000, quiet, turn), turn);
+  }
   if (have_prev) {
     detail::GapInput in{.prev_az = prev_az,
                         .groups_since_prev = prev_trailing_bad + first_good + 1,

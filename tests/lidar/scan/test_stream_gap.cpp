@@ -44,14 +44,15 @@ struct Model {
   DecoderOptions options;
 };
 
-Model model(const char* name) {
+Model model(const char* name, double rpm = 600.0) {
   Model m;
   m.name = name;
   const std::string n = name;
   if (n == "Pandar40P+seq") {  // the optional UDP sequence of a Pandar40P
     m.numbered = true;
-    m.make = [](Nanos start, double rotor_deg) -> std::unique_ptr<mock::SyntheticSensor> {
+    m.make = [rpm](Nanos start, double rotor_deg) -> std::unique_ptr<mock::SyntheticSensor> {
       mock::SyntheticHesaiConfig c;
+      c.rpm = rpm;
       c.start_ns = start;
       c.start_azimuth_deg = rotor_deg;
       c.udp_sequence = true;
@@ -61,9 +62,10 @@ Model model(const char* name) {
     return m;
   }
   m.numbered = n == "PandarXT32" || mock::is_ouster_model(n);
-  m.make = [n](Nanos start, double rotor_deg) {
+  m.make = [n, rpm](Nanos start, double rotor_deg) {
     mock::SyntheticOptions o;
     o.model = n;
+    o.rpm = rpm;
     o.ouster_imu_period_ns = 0;
     o.start_ns = start;
     o.start_rotor_deg = rotor_deg;
@@ -73,6 +75,7 @@ Model model(const char* name) {
   if (mock::is_ouster_model(n)) {
     mock::SyntheticOptions o;
     o.model = n;
+    o.rpm = rpm;
     m.options.metadata_text = mock::metadata_json(mock::synthetic_ouster_metadata(o));
     m.options.metadata_name = "synthetic";
   }
@@ -91,12 +94,13 @@ struct Recorded {
   std::vector<mock::ClosedUnit> units;  // made and closed before the run's end (mid-turn)
 };
 
-enum class Fault { kNone, kSilence, kLossBurst, kFrozenThenSilence, kSilenceThenFrozen, kFrozenAcrossSilence };
+enum class Fault { kNone, kSilence, kLossBurst, kUnheardLossBurst, kFrozenThenSilence, kSilenceThenFrozen, kFrozenAcrossSilence };
 
 // 2.45 s of a sensor; from 0.65 s on (mid-turn), `gap_s` of `fault`: silent then a new sensor
 // (counters from 0, the rotor 2° behind where it fell silent: a restarted Pandar40P's first packets
 // were taken for late ones), or its packets lost (nothing received where the sensor numbers its
-// packets, else every one damaged on the way: 64 bytes). kFrozenThenSilence: the encoder frozen
+// packets, else every one damaged on the way: 64 bytes); kUnheardLossBurst: lost, nothing received
+// whatever the model (a link down for a while: rig chaos lidar.loss_burst). kFrozenThenSilence: the encoder frozen
 // for `frozen_s` before the silence, every azimuth field at one value (sent, rejected); the fault
 // from `from_s`. kSilenceThenFrozen: the restarted sensor's first `frozen_s` frozen at its first
 // packet's azimuth fields. kFrozenAcrossSilence: `frozen_s` before the silence and after it, at
@@ -108,7 +112,7 @@ Recorded record(const Model& m, Fault fault, double gap_s, double frozen_s = 0.0
   std::vector<std::byte> frozen;
   mock::UnitTracker tracker(sensor->unit_rule());
   const Nanos from = kT0 + static_cast<Nanos>(from_s * 1e9), until = from + static_cast<Nanos>(gap_s * 1e9);
-  const bool silence = fault != Fault::kNone && fault != Fault::kLossBurst;
+  const bool silence = fault != Fault::kNone && fault != Fault::kLossBurst && fault != Fault::kUnheardLossBurst;
   const bool frozen_before = fault == Fault::kFrozenThenSilence || fault == Fault::kFrozenAcrossSilence;
   const bool frozen_after = fault == Fault::kSilenceThenFrozen || fault == Fault::kFrozenAcrossSilence;
   bool restarted = false;
@@ -124,9 +128,9 @@ Recorded record(const Model& m, Fault fault, double gap_s, double frozen_s = 0.0
       continue;
     }
     last_rotor_deg = p.truth.rotor_deg;
-    const bool lost = fault == Fault::kLossBurst && p.time_ns >= from && p.time_ns < until;
+    const bool lost = (fault == Fault::kLossBurst || fault == Fault::kUnheardLossBurst) && p.time_ns >= from && p.time_ns < until;
     (void)tracker.add(p.truth, true);
-    if (lost && m.numbered) continue;
+    if (lost && (m.numbered || fault == Fault::kUnheardLossBurst)) continue;
     Pkt k{{p.bytes.begin(), p.bytes.end()}, p.truth.acq_ns, p.time_ns + 20'000};
     if (lost) k.bytes.resize(64);
     if (frozen_before && !restarted && p.time_ns >= from - static_cast<Nanos>(frozen_s * 1e9)) {
@@ -158,9 +162,9 @@ Decoded decode(const DecoderOptions& o, const std::vector<Pkt>& pkts) {
 }
 
 // Every scan made is published (each once: the scan made last before its stamp, give or take
-// 1 ms; a scan whose first packets were lost is stamped at its first that came) or counted lost;
-// none counted more.
-void expect_accounted(const Recorded& run, const Decoded& d, const std::string& what) {
+// 1 ms; a scan whose first packets were lost is stamped at its first that came) or counted lost
+// (or, `with_unheard`, counted unheard: lost or never sent, stream_gap.hpp); none counted more.
+void expect_accounted(const Recorded& run, const Decoded& d, const std::string& what, bool with_unheard = false) {
   std::vector<bool> taken(run.units.size(), false);
   for (const Scan& s : d.scans) {
     std::size_t best = run.units.size();
@@ -173,9 +177,10 @@ void expect_accounted(const Recorded& run, const Decoded& d, const std::string& 
         << " s is no scan the sensor made (or one published twice)";
     taken[best] = true;
   }
-  EXPECT_EQ(d.scans.size() + d.st.scans_lost, run.units.size())
-      << what << ": " << d.scans.size() << " published + " << d.st.scans_lost << " counted lost, the sensor made "
-      << run.units.size();
+  const std::uint64_t unheard = with_unheard ? d.st.scans_unheard : 0;
+  EXPECT_EQ(d.scans.size() + d.st.scans_lost + unheard, run.units.size())
+      << what << ": " << d.scans.size() << " published + " << d.st.scans_lost << " counted lost"
+      << (with_unheard ? " + " + std::to_string(unheard) + " unheard" : std::string{}) << ", the sensor made " << run.units.size();
 }
 
 class StreamGap : public ::testing::TestWithParam<const char*> {};
@@ -192,6 +197,9 @@ TEST_P(StreamGap, ASilentSensorsTurnsAreNotLostScansAndItsRestartDropsNothing) {
     const Decoded d = decode(m.options, run.pkts);
     expect_accounted(run, d, what);
     EXPECT_EQ(d.st.silences, 1U) << what;
+    // Unheard turns are turns the sensor may have made: no more than the silence lasted.
+    EXPECT_LE(d.st.scans_unheard, static_cast<std::uint64_t>(gap_s * 10.0)) << what;
+    EXPECT_EQ(d.st.scans_unheard > 0, !m.numbered) << what << ": only a model without numbering cannot tell";
     EXPECT_EQ(d.st.dropped(), 0U) << what << ": every packet sent was valid (out of order: "
                                   << d.st.by_status[static_cast<std::size_t>(PacketStatus::kOutOfOrder)]
                                   << ", bad time: " << d.st.by_status[static_cast<std::size_t>(PacketStatus::kBadTime)]
@@ -208,6 +216,36 @@ TEST_P(StreamGap, ALossBurstOfTheSameLengthIsCountedScanByScan) {
   expect_accounted(run, d, "0.5 s of packets lost");
   EXPECT_EQ(d.st.silences, 0U);
   EXPECT_GE(d.st.scans_lost, 4U) << "the turns inside the burst";
+}
+
+// rig chaos seed 9, ten minutes: a VLP-32C at 900 rpm lost 3.07 turns of packets on the way, nothing
+// at all arrived; taken for a silence (no numbering to say otherwise), 2 of its 4 scans were neither
+// published nor counted. The rig cannot tell such a burst from a sensor that sent nothing, so it
+// says so: the whole turns nothing was heard in are counted unheard (scans_unheard), lost or not
+// sent. Where the model numbers its packets, they are lost scans, as any burst's.
+TEST_P(StreamGap, ALossBurstNothingOfWhichArrivedIsCountedLostOrUnheard) {
+  const std::string name = GetParam();
+  const bool velodyne = name.rfind("VLP", 0) == 0;
+  for (const double rpm : {600.0, velodyne ? 900.0 : 1200.0}) {
+    const Model m = model(GetParam(), rpm);
+    const double turn_s = 60.0 / rpm;
+    for (const double turns : {3.07, 4.5}) {
+      for (const double phase : {0.0, 0.013, 0.31, 0.5, 0.77, 0.985}) {
+        const double from_s = 0.6 + phase * turn_s;
+        const std::string what = std::to_string(rpm) + " rpm, " + std::to_string(turns) + " turns lost from " + std::to_string(from_s) + " s";
+        const Recorded run = record(m, Fault::kUnheardLossBurst, turns * turn_s, 0.0, from_s);
+        const Decoded d = decode(m.options, run.pkts);
+        expect_accounted(run, d, what, true);
+        if (m.numbered) {
+          EXPECT_EQ(d.st.silences, 0U) << what;
+          EXPECT_EQ(d.st.scans_unheard, 0U) << what << ": its numbering says they were sent";
+        } else {
+          EXPECT_EQ(d.st.silences, 1U) << what;
+          EXPECT_GE(d.st.scans_unheard, 2U) << what << ": the whole turns inside the burst";
+        }
+      }
+    }
+  }
 }
 
 // rig chaos seed 5 (lidar.stuck_azimuth 7.16-7.66 s, host.kill_mock of the front at 7.43 s): the

@@ -45,6 +45,9 @@ struct ScanStats {
   // Silences (stream_gap.hpp): nothing heard for turns and the sensor's time or numbering moved on
   // or began again; a new stream followed, its turns not counted lost (the sensor made none).
   std::uint64_t silences = 0;
+  // Whole turns inside silences of a model without numbering (stream_gap.hpp scans_unheard): lost
+  // on the way or never made, the decoder cannot tell which. Neither published nor in scans_lost.
+  std::uint64_t scans_unheard = 0;
   [[nodiscard]] std::uint64_t dropped() const noexcept { return packets - packets_used; }
 };
 
