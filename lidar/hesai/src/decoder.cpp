@@ -68,6 +68,7 @@ struct DecoderImpl {
   bool window_open = false;  // between the window's start and the cut: points past the cut go to next()
   int prev_az = 0;
   Nanos prev_stamp = 0;  // the caller's
+  ArrivalLateness lateness;  // how late the last kept packet came (a held network's queue drains at once)
   RxTimes prev_rx;  // the previous packet's receive time (0: none)
   // The caller's mapping of sensor time may move while the sensor's clock goes on (a host
   // CLOCK_REALTIME step: the mapping follows the host, a PTP-synced sensor does not): the stamps
@@ -426,6 +427,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
       to_caller_line();
     }
   }
+  Nanos lateness_step = -1;  // the sensor's step from the previous kept packet, as loss counts it (-1: none)
   if (have_prev) {
     detail::GapInput in{.prev_az = prev_az,
                         .groups_since_prev = prev_trailing_bad + first_good + 1,
@@ -446,7 +448,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     // A late packet steps back in time too: placed when within the reorder window.
     const bool far_back = own < prev_own - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
-    in.dt_ns = sensor_step_within_receive(in.dt_ns, rx_times(packet), prev_rx);  // nor one the receive times refute
+    // nor one the receive times refute
+    in.dt_ns = sensor_step_within_receive(in.dt_ns, rx_times(packet), prev_rx, lateness.above_floor());
+    lateness_step = jumped ? -1 : in.dt_ns;
     auto gap = detail::azimuth_gap(fov, in);
     if (gap.backwards) {  // the azimuth stepped back within the reorder window (packet_order.hpp)
       switch (judge_order({.steps_back = true,
@@ -553,6 +557,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     have_seq = true;
   }
 
+  if (lateness_step >= 0) {
+    lateness.step(lateness_step, receive_gap(rx_times(packet), prev_rx));
+  } else {
+    lateness.reset();
+  }
   prev_stamp = stamp;
   prev_own = own;
   prev_sensor_us = sensor_us;

@@ -157,6 +157,7 @@ struct DecoderImpl {
   TimeJudge time_judge;
   detail::BlindArc blind;  // packet slots the sensor stopped sending (learned, not loss)
   StreamGap gaps;  // when the sensor was last heard (a silence is no loss)
+  ArrivalLateness lateness;  // how late the last kept packet came (a held network's queue drains at once)
 
   // Packet slots strictly between slot `from` and slot `to` of one frame (to > from) that hold
   // columns of the column window (the sensor's FOV: only those can be missing).
@@ -473,9 +474,12 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   bool new_frame = have_fid && fid != prev_fid && !late;
   std::uint32_t missing_before = 0, missing_after = 0;
   bool opened = false;  // this packet opened a hole (a gap before it, inside its frame)
+  Nanos lateness_step = -1;  // the sensor's step from the previous kept packet, as loss counts it (-1: none)
   if (n_valid > 0 && have_base && have_fid && !late) {
     const long prev_slot = prev_base >= 0 ? prev_base / cpp : 0;
-    const auto dt = sensor_step_within_receive(static_cast<std::int64_t>(first_ts - prev_ts), rx_times(packet), prev_rx);
+    const auto dt = sensor_step_within_receive(static_cast<std::int64_t>(first_ts - prev_ts), rx_times(packet), prev_rx,
+                                               lateness.above_floor());
+    lateness_step = dt > 0 ? dt : -1;
     const long ahead = slot > prev_slot ? 0 : 1;  // frames ahead by the measurement ids
     if (dt <= 0) {  // a jump back in time (sensor restart, a looping replay): continuity starts over
       ++stats.implausible_steps;
@@ -527,6 +531,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   if (!late) scans.clear_rejected();
   if (!late && n_valid > 0) blind.seen(slot, packets_per_frame);
   if (n_valid > 0 && !late) {
+    if (lateness_step >= 0) {
+      lateness.step(lateness_step, receive_gap(rx_times(packet), prev_rx));
+    } else {
+      lateness.reset();
+    }
     have_base = true;
     prev_base = base;
     prev_ts = first_ts;

@@ -110,6 +110,7 @@ struct DecoderImpl {
   bool turning = false;  // the last good packet's azimuth advanced: a frozen one is a fault
   detail::BlindArc blind;  // a sector the sensor stopped sending (learned, not loss)
   StreamGap gaps;           // when the sensor was last heard (a silence is no loss)
+  ArrivalLateness lateness;  // how late the last kept packet came (a held network's queue drains at once)
   double turning_step = 0;  // azimuth per group of the last turning packet (0.01°): the turn's length
 
   explicit DecoderImpl(DecoderConfig config)
@@ -391,6 +392,7 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   // the end of its scan (issue 26 item 1). Then one packet whose time jumps while its azimuth
   // continues is corrupt (item 2); only a sustained step ends the scan.
   std::optional<Scan> out;
+  Nanos lateness_step = -1;  // the sensor's step from the previous kept packet, as loss counts it (-1: none)
   detail::GapResult gap{};
   std::uint32_t gap_slots = 0;  // packet slots of the gap: lost and rejected
   const Nanos period_ns = static_cast<Nanos>(block_ns) * groups;
@@ -419,7 +421,9 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
     // A late packet steps back in time too: placed when within the reorder window.
     const bool far_back = stamp < prev_stamp - std::max(kBackwardsTolerance, period_ns * detail::kReorderPackets);
     if (jumped) in.dt_ns = 0;  // a corrupt time must not decide order or loss
-    in.dt_ns = sensor_step_within_receive(in.dt_ns, rx_times(packet), prev_rx);  // nor one the receive times refute
+    // nor one the receive times refute
+    in.dt_ns = sensor_step_within_receive(in.dt_ns, rx_times(packet), prev_rx, lateness.above_floor());
+    lateness_step = jumped ? -1 : in.dt_ns;
     gap = detail::azimuth_gap(fov, in);
     if (gap.backwards) {  // the azimuth stepped back within the reorder window (packet_order.hpp)
       int last_good_k = groups - 1;
@@ -509,6 +513,11 @@ std::optional<Scan> DecoderImpl::decode(const PacketView& packet, Nanos stamp) n
   if (turning) turning_step = fit.step;
   blind.seen(na[first_good], detail::kTurn);
 
+  if (lateness_step >= 0) {
+    lateness.step(lateness_step, receive_gap(rx_times(packet), prev_rx));
+  } else {
+    lateness.reset();
+  }
   prev_stamp = stamp;
   prev_sensor_us = sensor_us;
   prev_rx = rx_times(packet);
