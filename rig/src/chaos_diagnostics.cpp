@@ -14,6 +14,8 @@ namespace {
 // configs): a flag covers the period before its status, and half of one after.
 constexpr Nanos kBefore = 1'500'000'000;
 constexpr Nanos kAfter = 500'000'000;
+// A status older than this no longer says anything (ROS diagnostic_aggregator's default stale timeout).
+constexpr Nanos kStaleAfter = 5'000'000'000;
 
 // The counters the judge reads, as "status/key": the fusion's dropped scans, the dbw bridge's
 // feedback counter gaps it could not size.
@@ -148,9 +150,15 @@ void FlagSpans::on_status(const std::string& topic, Nanos stamp, Nanos received_
       const Nanos elapsed = received_mono - prev->second.mono, moved = stamp - prev->second.stamp;
       if (elapsed > 0 && (moved - elapsed > kStepSeen || elapsed - moved > kStepSeen))
         spans.emplace_back(prev->second.stamp, prev->second.stamp + elapsed);
+      // Flagged, and flagged in the status before with none between: flagged throughout, as a
+      // diagnostics consumer shows the last status until the next (a ROS aggregator calls it stale
+      // after 5 s). The rig's statuses came 2.5 s apart once, no fault near (ten-minute campaign,
+      // seed 9: every node's, around a camera's reopen), and the samples published in the second
+      // between two flagged statuses were judged unflagged (27.8 s off, slewing out a -37 s step).
+      if (prev->second.flagged && moved > 0 && moved <= kStaleAfter) spans.emplace_back(prev->second.stamp, stamp);
     }
   }
-  last_.insert_or_assign(topic, Seen{stamp, received_mono});
+  last_.insert_or_assign(topic, Seen{stamp, received_mono, flagged});
 }
 
 std::map<std::string, Intervals> FlagSpans::intervals() const {

@@ -39,6 +39,7 @@ class FlagSpans {
  private:
   struct Seen {
     Nanos stamp, mono;
+    bool flagged;
   };
   std::map<std::string, Seen> last_;
   std::map<std::string, Intervals> spans_;

@@ -31,6 +31,24 @@ TEST(FlagSpans, AFlaggedStatusCoversThePeriodBeforeItAndHalfAfter) {
   EXPECT_EQ(f.intervals().count("/other"), 0u);
 }
 
+// Two flagged statuses 2.5 s apart, none between (the rig's statuses came late once, ten-minute
+// campaign seed 9): flagged throughout, as a diagnostics consumer shows the last status until the
+// next. Not after an unflagged one, nor across more than 5 s (stale).
+TEST(FlagSpans, TwoFlaggedStatusesWithNoneBetweenCoverTheTimeBetween) {
+  FlagSpans f;
+  f.on_status("/t", 10 * kS, 100 * kS, true);
+  f.on_status("/t", 12 * kS + 500 * kMs, 102 * kS + 500 * kMs, true);
+  EXPECT_TRUE(covered(f.intervals().at("/t"), 10 * kS + 800 * kMs));
+  FlagSpans after_ok;
+  after_ok.on_status("/t", 10 * kS, 100 * kS, false);
+  after_ok.on_status("/t", 12 * kS + 500 * kMs, 102 * kS + 500 * kMs, true);
+  EXPECT_FALSE(covered(after_ok.intervals().at("/t"), 10 * kS + 800 * kMs));
+  FlagSpans stale;
+  stale.on_status("/t", 10 * kS, 100 * kS, true);
+  stale.on_status("/t", 16 * kS, 106 * kS, true);
+  EXPECT_FALSE(covered(stale.intervals().at("/t"), 12 * kS));
+}
+
 // The host clock 37 s back from 5 s to 10 s (stamps of statuses during the step read -32 .. -27 s):
 // the status after the step forward covers the last moments before it, in the stepped time.
 TEST(FlagSpans, AStatusAfterAStepForwardCoversTheTimeBeforeTheStep) {
